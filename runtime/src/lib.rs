@@ -1,0 +1,1 @@
+//! Stereo walkthrough runtime.

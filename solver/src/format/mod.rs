@@ -1,0 +1,120 @@
+//! The solution file: the contract between the solver and the runtime.
+//!
+//! The byte layout is specified in `docs/solution-format.md`; this module holds the
+//! in-memory form ([`Solution`]), the atomic writer and the memory-mapped,
+//! validating reader. Positions are re-centred scene units stored as f32; radiance
+//! is linear RGB (W·sr⁻¹·m⁻²). Vertices come in batches, one per representation
+//! (SH order L, or D discrete directions), so the runtime can draw each batch with
+//! a loop bound fixed per draw.
+
+use crate::camera::{Camera, UpAxis};
+use serde::{Deserialize, Serialize};
+
+/// How a batch stores each vertex's outgoing radiance.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "lowercase")]
+pub enum Representation {
+    /// Real orthonormal spherical harmonics up to order `order` inclusive:
+    /// `(order + 1)²` coefficients per channel, index `l² + l + m`.
+    Sh { order: u32 },
+    /// 001's global cube: radiance on `directions` fixed directions per channel.
+    Cube { directions: u32 },
+}
+
+impl Representation {
+    /// Coefficients per colour channel per vertex.
+    pub fn coefficients_per_channel(self) -> u64 {
+        match self {
+            Representation::Sh { order } => (order as u64 + 1) * (order as u64 + 1),
+            Representation::Cube { directions } => directions as u64,
+        }
+    }
+}
+
+/// How coefficients are stored on disk. In memory ([`Batch::coefficients`]) they
+/// are always f32 radiance; `F16` stores `value / scale` as IEEE half so that bright
+/// emitters fit the half range.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "lowercase")]
+pub enum ScalarType {
+    F32,
+    F16 { scale: f32 },
+}
+
+/// Whether the stored radiance is a finished solution or a checkpoint mid-solve.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum SolveMode {
+    #[default]
+    Diffuse,
+    Directional,
+}
+
+/// One mesh vertex as the runtime uploads it: 36 bytes, tightly packed.
+///
+/// The frame (design notes, "Local frames and SH"): `normal` is n, `tangent` is t,
+/// the bitangent is `b = n × t`; SH directions are θ from n and φ from t toward b.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Default, Serialize, Deserialize)]
+pub struct Vertex {
+    pub position: [f32; 3],
+    pub normal: [f32; 3],
+    pub tangent: [f32; 3],
+}
+
+/// Convergence figures of the solve that wrote the file.
+#[derive(Clone, Copy, Debug, PartialEq, Default, Serialize, Deserialize)]
+pub struct SolveStats {
+    pub shots: u64,
+    pub rays: u64,
+    pub seconds: f64,
+    /// Total unshot power divided by total emitted power when the file was written.
+    pub unshot_fraction: f64,
+    /// Total emitted power, W (per channel, summed over channels).
+    pub emitted_power: f64,
+    /// The ambient radiance term (Cohen et al. 1988) for partial solutions, RGB;
+    /// zero when the solve converged or the ambient term is off.
+    pub ambient: [f32; 3],
+}
+
+/// Everything in the file except the vertex data.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Header {
+    /// Scene units per metre: XR poses, walking speed and IPD are scaled by it.
+    pub units_per_metre: f64,
+    pub up_axis: UpAxis,
+    /// Subtracted from scene coordinates (in f64) before storing positions.
+    pub recentre_offset: [f64; 3],
+    /// The initial camera, in the scene's original (not re-centred) coordinates.
+    pub camera: Camera,
+    /// Bounds of the stored (re-centred) positions.
+    pub bounds_min: [f32; 3],
+    pub bounds_max: [f32; 3],
+    /// Set on files written mid-solve (checkpoints a viewer can watch).
+    pub partial: bool,
+    pub mode: SolveMode,
+    pub stats: SolveStats,
+    /// The solver settings that produced this file, as JSON text.
+    pub settings_json: String,
+}
+
+/// Vertices that share one representation, with the triangles drawn from them.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Batch {
+    pub representation: Representation,
+    pub scalar: ScalarType,
+    pub vertices: Vec<Vertex>,
+    /// `vertices.len() × coefficients_per_channel × 3`, laid out vertex-major, then
+    /// coefficient, then RGB: `coefficients[(v * n + k) * 3 + c]`.
+    pub coefficients: Vec<f32>,
+    /// Triangle list, indices into this batch's `vertices`, counter-clockwise seen
+    /// from the side the normal points to.
+    pub indices: Vec<u32>,
+}
+
+/// A whole solution in memory.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Solution {
+    pub header: Header,
+    pub batches: Vec<Batch>,
+}
