@@ -28,4 +28,6 @@ pub mod mesh;
 #[cfg(feature = "solve")]
 pub mod scene;
 #[cfg(feature = "solve")]
+pub mod settings;
+#[cfg(feature = "solve")]
 pub mod solve;

@@ -41,9 +41,10 @@ pub enum ScalarType {
     F16 { scale: f32 },
 }
 
-/// Whether the stored radiance is a finished solution or a checkpoint mid-solve.
+/// Which transport the solve modelled: diffuse only, or directional (glossy) SH.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
 #[serde(rename_all = "lowercase")]
+#[cfg_attr(feature = "solve", derive(clap::ValueEnum))]
 pub enum SolveMode {
     #[default]
     Diffuse,

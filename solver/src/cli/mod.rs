@@ -1,0 +1,41 @@
+//! The `solver` command line: argument parsing and dispatch. Files, terminals and
+//! flags live here and in the files beside it, never in the solver core.
+
+use clap::{Parser, Subcommand};
+use std::process::ExitCode;
+
+pub mod info;
+pub mod solve;
+
+/// Progressive-refinement radiosity solver: a scene in, a view-independent
+/// solution file out.
+#[derive(Parser, Debug)]
+#[command(name = "solver", version, about, long_about = None)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+pub enum Command {
+    /// Solve a scene (.obj, .toml or legacy geometry file) into a solution file.
+    Solve(solve::SolveArgs),
+    /// Print a solution file's header (text, or JSON with --json).
+    Info(info::InfoArgs),
+}
+
+/// Runs the command line; errors are printed with their context chain.
+pub fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Solve(args) => solve::run(args),
+        Command::Info(args) => info::run(args),
+    };
+    match result {
+        Ok(code) => code,
+        Err(err) => {
+            eprintln!("solver: error: {err:#}");
+            ExitCode::FAILURE
+        }
+    }
+}

@@ -1,0 +1,370 @@
+//! Solver settings, quality presets and their precedence.
+//!
+//! Precedence, highest first (design notes): command-line flags, the TOML scene
+//! config, the legacy display file, the preset's defaults. Every source but the
+//! preset produces a [`SettingsPatch`] (all fields optional); [`SolverSettings::resolve`]
+//! applies them in order. The presets live in `config/presets.toml`, embedded at
+//! build time so the binary never depends on the working directory.
+
+use crate::format::SolveMode;
+use serde::{Deserialize, Serialize};
+
+/// The presets file, embedded.
+pub const PRESETS_TOML: &str = include_str!("../../config/presets.toml");
+
+/// A named quality preset.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+#[cfg_attr(feature = "solve", derive(clap::ValueEnum))]
+pub enum Preset {
+    Draft,
+    #[default]
+    Medium,
+    Final,
+}
+
+impl Preset {
+    pub fn name(self) -> &'static str {
+        match self {
+            Preset::Draft => "draft",
+            Preset::Medium => "medium",
+            Preset::Final => "final",
+        }
+    }
+}
+
+/// How the point-to-source form factor is computed (design notes, "Form factors").
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+#[cfg_attr(feature = "solve", derive(clap::ValueEnum))]
+pub enum FormFactorMethod {
+    /// Exact unoccluded point-to-polygon factor × visible fraction of the rays.
+    #[default]
+    Analytic,
+    /// 000 eq. 3.1 (disc approximation per sample), kept to measure against.
+    Wallace,
+}
+
+/// Every knob of a solve, fully resolved.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SolverSettings {
+    pub preset: Preset,
+    pub mode: SolveMode,
+    pub form_factors: FormFactorMethod,
+    /// Visibility rays per (receiving vertex, source patch).
+    pub samples: u32,
+    /// Trace visibility rays at all (000 appendix D `-t` turns them off).
+    pub shadows: bool,
+    /// Stop when total unshot power < threshold × total emitted power.
+    pub threshold: f64,
+    /// Stop after this many shots whatever the unshot power.
+    pub max_shots: u64,
+    pub seed: u64,
+    /// Worker threads; `None` uses every core. Results do not depend on it.
+    pub threads: Option<usize>,
+    /// Default N × N patches per polygon when the scene does not set it.
+    pub patches: u32,
+    /// Adaptive subdivision after each shot (000 §3.3).
+    pub adaptive: bool,
+    /// Split an ordinary edge when |ΔL| exceeds this fraction of the local radiance.
+    pub edge_threshold: f64,
+    /// The same on shadow-boundary edges (tighter).
+    pub shadow_threshold: f64,
+    /// Smallest element, as a fraction of its polygon's area.
+    pub min_element_area: f64,
+    /// Deepest quadtree level below a patch.
+    pub max_depth: u32,
+    /// Write a checkpoint (and a `partial` solution) every this many shots.
+    pub checkpoint_every: u64,
+    /// Estimate unshot light with Cohen et al.'s ambient term for display.
+    pub ambient: bool,
+    /// Relative L2 error target of a glossy lobe's Legendre fit; sets L per material.
+    pub sh_error_target: f64,
+    /// Highest SH order a material may get; a lobe that needs more is capped with a warning.
+    pub max_sh_order: u32,
+    /// Scene units per metre (scene config or flag).
+    pub units_per_metre: f64,
+    /// Turn import warnings (Kd + Ks > 1, …) into errors.
+    pub strict: bool,
+}
+
+/// A partial set of settings from one source (flags, TOML config, display file, preset).
+#[derive(Clone, Debug, PartialEq, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SettingsPatch {
+    pub mode: Option<SolveMode>,
+    pub form_factors: Option<FormFactorMethod>,
+    pub samples: Option<u32>,
+    pub shadows: Option<bool>,
+    pub threshold: Option<f64>,
+    pub max_shots: Option<u64>,
+    pub seed: Option<u64>,
+    pub threads: Option<usize>,
+    pub patches: Option<u32>,
+    pub adaptive: Option<bool>,
+    pub edge_threshold: Option<f64>,
+    pub shadow_threshold: Option<f64>,
+    pub min_element_area: Option<f64>,
+    pub max_depth: Option<u32>,
+    pub checkpoint_every: Option<u64>,
+    pub ambient: Option<bool>,
+    pub sh_error_target: Option<f64>,
+    pub max_sh_order: Option<u32>,
+    pub units_per_metre: Option<f64>,
+    pub strict: Option<bool>,
+}
+
+/// A setting whose value is out of its range.
+#[derive(Debug, thiserror::Error, PartialEq)]
+#[error("setting `{name}` = {value} is out of range: {expected}")]
+pub struct SettingsError {
+    pub name: &'static str,
+    pub value: String,
+    pub expected: &'static str,
+}
+
+impl SolverSettings {
+    /// The built-in defaults that every preset patches (independent of any file).
+    fn base() -> Self {
+        SolverSettings {
+            preset: Preset::Medium,
+            mode: SolveMode::Diffuse,
+            form_factors: FormFactorMethod::Analytic,
+            samples: 16,
+            shadows: true,
+            threshold: 0.005,
+            max_shots: 20_000,
+            seed: 1,
+            threads: None,
+            patches: 4,
+            adaptive: true,
+            edge_threshold: 0.3,
+            shadow_threshold: 0.1,
+            min_element_area: 5e-5,
+            max_depth: 6,
+            checkpoint_every: 500,
+            ambient: true,
+            sh_error_target: 1e-3,
+            max_sh_order: 64,
+            units_per_metre: 1.0,
+            strict: false,
+        }
+    }
+
+    /// The preset's settings, read from the embedded `config/presets.toml`.
+    pub fn preset(preset: Preset) -> Self {
+        let mut settings = Self::base();
+        settings.preset = preset;
+        // The embedded file is part of the binary and checked by a unit test, so a
+        // parse failure here is a build defect; fall back to the base settings
+        // rather than panic.
+        if let Ok(table) =
+            toml::from_str::<std::collections::BTreeMap<String, SettingsPatch>>(PRESETS_TOML)
+        {
+            if let Some(patch) = table.get(preset.name()) {
+                settings.apply(patch);
+            }
+        }
+        settings
+    }
+
+    /// Overwrites every field that `patch` sets.
+    pub fn apply(&mut self, patch: &SettingsPatch) {
+        macro_rules! take {
+            ($($field:ident),*) => {$(
+                if let Some(v) = patch.$field.clone() { self.$field = v; }
+            )*};
+        }
+        take!(
+            mode,
+            form_factors,
+            samples,
+            shadows,
+            threshold,
+            max_shots,
+            seed,
+            patches,
+            adaptive,
+            edge_threshold,
+            shadow_threshold,
+            min_element_area,
+            max_depth,
+            checkpoint_every,
+            ambient,
+            sh_error_target,
+            max_sh_order,
+            units_per_metre,
+            strict
+        );
+        if patch.threads.is_some() {
+            self.threads = patch.threads;
+        }
+    }
+
+    /// Preset defaults, then each patch from lowest to highest precedence:
+    /// `[display_file, scene_config, flags]`.
+    pub fn resolve(
+        preset: Preset,
+        patches_low_to_high: &[&SettingsPatch],
+    ) -> Result<Self, SettingsError> {
+        let mut settings = Self::preset(preset);
+        for patch in patches_low_to_high {
+            settings.apply(patch);
+        }
+        settings.validate()?;
+        Ok(settings)
+    }
+
+    /// Checks every range; the error names the setting and the value.
+    pub fn validate(&self) -> Result<(), SettingsError> {
+        fn check(
+            ok: bool,
+            name: &'static str,
+            value: impl ToString,
+            expected: &'static str,
+        ) -> Result<(), SettingsError> {
+            if ok {
+                Ok(())
+            } else {
+                Err(SettingsError {
+                    name,
+                    value: value.to_string(),
+                    expected,
+                })
+            }
+        }
+        check(
+            self.samples >= 1 && self.samples <= 4096,
+            "samples",
+            self.samples,
+            "1 to 4096",
+        )?;
+        check(
+            self.threshold.is_finite() && self.threshold > 0.0 && self.threshold < 1.0,
+            "threshold",
+            self.threshold,
+            "0 < threshold < 1",
+        )?;
+        check(
+            self.patches >= 1 && self.patches <= 256,
+            "patches",
+            self.patches,
+            "1 to 256",
+        )?;
+        check(
+            self.edge_threshold.is_finite() && self.edge_threshold > 0.0,
+            "edge_threshold",
+            self.edge_threshold,
+            "> 0",
+        )?;
+        check(
+            self.shadow_threshold.is_finite() && self.shadow_threshold > 0.0,
+            "shadow_threshold",
+            self.shadow_threshold,
+            "> 0",
+        )?;
+        check(
+            self.min_element_area.is_finite()
+                && self.min_element_area > 0.0
+                && self.min_element_area <= 1.0,
+            "min_element_area",
+            self.min_element_area,
+            "0 < fraction <= 1",
+        )?;
+        check(self.max_depth <= 16, "max_depth", self.max_depth, "0 to 16")?;
+        check(
+            self.checkpoint_every >= 1,
+            "checkpoint_every",
+            self.checkpoint_every,
+            ">= 1",
+        )?;
+        check(
+            self.sh_error_target.is_finite()
+                && self.sh_error_target > 0.0
+                && self.sh_error_target < 1.0,
+            "sh_error_target",
+            self.sh_error_target,
+            "0 < target < 1",
+        )?;
+        check(
+            self.max_sh_order <= 100,
+            "max_sh_order",
+            self.max_sh_order,
+            "0 to 100",
+        )?;
+        check(
+            self.units_per_metre.is_finite() && self.units_per_metre > 0.0,
+            "units_per_metre",
+            self.units_per_metre,
+            "a finite number > 0",
+        )?;
+        check(
+            self.threads.is_none_or(|t| (1..=1024).contains(&t)),
+            "threads",
+            format!("{:?}", self.threads),
+            "1 to 1024",
+        )?;
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn presets_file_parses_and_every_preset_is_valid() {
+        let table: std::collections::BTreeMap<String, SettingsPatch> =
+            toml::from_str(PRESETS_TOML).expect("config/presets.toml must parse");
+        for preset in [Preset::Draft, Preset::Medium, Preset::Final] {
+            assert!(
+                table.contains_key(preset.name()),
+                "missing preset {}",
+                preset.name()
+            );
+            SolverSettings::preset(preset).validate().unwrap();
+        }
+        // Finer presets must cost more: more samples and a lower threshold.
+        let (d, m, f) = (
+            SolverSettings::preset(Preset::Draft),
+            SolverSettings::preset(Preset::Medium),
+            SolverSettings::preset(Preset::Final),
+        );
+        assert!(d.samples < m.samples && m.samples < f.samples);
+        assert!(d.threshold > m.threshold && m.threshold > f.threshold);
+    }
+
+    #[test]
+    fn precedence_is_flags_over_config_over_display_over_preset() {
+        let display = SettingsPatch {
+            samples: Some(3),
+            threshold: Some(0.3),
+            seed: Some(7),
+            ..Default::default()
+        };
+        let config = SettingsPatch {
+            samples: Some(5),
+            threshold: Some(0.2),
+            ..Default::default()
+        };
+        let flags = SettingsPatch {
+            samples: Some(9),
+            ..Default::default()
+        };
+        let s = SolverSettings::resolve(Preset::Draft, &[&display, &config, &flags]).unwrap();
+        assert_eq!(s.samples, 9);
+        assert_eq!(s.threshold, 0.2);
+        assert_eq!(s.seed, 7);
+        assert_eq!(s.patches, SolverSettings::preset(Preset::Draft).patches);
+    }
+
+    #[test]
+    fn out_of_range_setting_is_named() {
+        let flags = SettingsPatch {
+            samples: Some(0),
+            ..Default::default()
+        };
+        let err = SolverSettings::resolve(Preset::Draft, &[&flags]).unwrap_err();
+        assert_eq!(err.name, "samples");
+    }
+}
