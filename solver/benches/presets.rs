@@ -1,0 +1,4 @@
+//! Preset benchmark (written once the solver core lands).
+fn main() {
+    eprintln!("benches/presets: waiting for the solver core");
+}

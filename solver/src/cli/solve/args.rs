@@ -1,0 +1,310 @@
+//! The flags of `solver solve` and the settings patch they make.
+
+use crate::format::SolveMode;
+use crate::settings::{FormFactorMethod, Preset, SettingsPatch};
+use std::path::PathBuf;
+
+/// Exit code of a solve stopped by Ctrl-C after saving its checkpoint (128 + SIGINT,
+/// as shells report an interrupted program).
+pub const EXIT_INTERRUPTED: u8 = 130;
+
+const AFTER_LONG_HELP: &str = "\
+Settings come from four places; a higher one overrides a lower one key by key:
+  1. these flags
+  2. the TOML scene config (when SCENE is a .toml file)
+  3. the legacy display file (--display, 000 appendix A)
+  4. the preset (--preset, default medium; config/presets.toml)
+
+No lost work: every --checkpoint-every shots the solver saves OUT.checkpoint and
+rewrites OUT as a valid solution marked partial, which a viewer can watch. Ctrl-C
+stops after the current shot, saves both and exits with code 130; run the same
+command again with --resume to continue. A solve that ends at its shot budget
+before reaching the threshold keeps its checkpoint too, so --resume with a larger
+--max-shots carries on. The checkpoint is removed once the solve converges.
+
+Exit codes: 0 done, 1 error, 2 bad command line, 130 interrupted (resumable).";
+
+/// `solver solve SCENE -o OUT …`: flags map one to one onto [`SettingsPatch`].
+#[derive(clap::Args, Debug, Clone)]
+#[command(after_long_help = AFTER_LONG_HELP)]
+pub struct SolveArgs {
+    /// The scene: `.obj` (+ `.mtl`), `.toml` scene config or a legacy geometry file.
+    #[arg(value_name = "SCENE")]
+    pub scene: PathBuf,
+
+    /// Where to write the solution file.
+    #[arg(short, long, value_name = "OUT")]
+    pub out: PathBuf,
+
+    /// Quality preset: draft, medium (default) or final.
+    #[arg(
+        long,
+        value_enum,
+        value_name = "PRESET",
+        long_help = "Quality preset: a full set of defaults from config/presets.toml. \
+            draft: few samples, a coarse mesh and a loose threshold, seconds for the \
+            Cornell box, visible noise in penumbrae. medium (default): balanced. final: \
+            many samples, a fine mesh and a tight threshold, several times slower. Any \
+            other flag overrides the preset's value."
+    )]
+    pub preset: Option<Preset>,
+
+    /// Visibility rays per receiving vertex and source patch.
+    #[arg(
+        long,
+        value_name = "N",
+        long_help = "Visibility rays per receiving vertex and source patch (1 to 4096). \
+            More rays give smoother penumbrae and less shadow noise; time grows about \
+            linearly with N."
+    )]
+    pub samples: Option<u32>,
+
+    /// Stop when unshot power falls below this fraction of emitted power.
+    #[arg(
+        long,
+        value_name = "X",
+        long_help = "Stop when the total unshot power falls below X times the total \
+            emitted power (0 < X < 1). Smaller is more accurate (more interreflected \
+            light is accounted for) and costs more shots; halving X costs roughly a \
+            constant number of extra shots per halving."
+    )]
+    pub threshold: Option<f64>,
+
+    /// Stop after this many shots whatever the unshot power.
+    #[arg(
+        long,
+        value_name = "N",
+        long_help = "Stop after N shots whatever the unshot power: a time budget. The \
+            result is then less converged than the threshold asks; the checkpoint is \
+            kept so that --resume with a larger N continues."
+    )]
+    pub max_shots: Option<u64>,
+
+    /// Seed of the jittered sample positions.
+    #[arg(
+        long,
+        value_name = "S",
+        long_help = "Seed of the stratified, jittered visibility samples. The same seed \
+            and settings give the same solution bit for bit, with any thread count; \
+            another seed gives other (equally valid) shadow noise."
+    )]
+    pub seed: Option<u64>,
+
+    /// Worker threads (default: every core).
+    #[arg(
+        long,
+        value_name = "N",
+        long_help = "Worker threads (1 to 1024; default every core). Speed only: the \
+            result does not depend on it."
+    )]
+    pub threads: Option<usize>,
+
+    /// Trace no visibility rays: no shadows, much faster.
+    #[arg(
+        long,
+        long_help = "Trace no visibility rays (000 appendix D `-t`): every vertex sees \
+            every source, so there are no shadows. Much faster; for checking a scene, \
+            not for results."
+    )]
+    pub no_shadows: bool,
+
+    /// Point-to-source form factor: analytic (default) or wallace.
+    #[arg(
+        long,
+        value_enum,
+        value_name = "METHOD",
+        long_help = "How the point-to-source form factor is computed. analytic \
+            (default): the exact point-to-polygon factor times the visible fraction of \
+            the rays; correct near the source and in corners. wallace: 000 eq. 3.1's \
+            disc approximation per sample, slightly cheaper, dark near shared edges \
+            (kept to measure against)."
+    )]
+    pub form_factors: Option<FormFactorMethod>,
+
+    /// diffuse (default) or directional (glossy, spherical harmonics).
+    #[arg(
+        long,
+        value_enum,
+        value_name = "MODE",
+        long_help = "diffuse (default): one radiance per vertex; MTL Ks is ignored with \
+            a note. directional: glossy surfaces store outgoing radiance as spherical \
+            harmonics (order chosen per material from its glossiness); highlights \
+            follow the viewer, at a cost in time and file size that grows with the \
+            square of the order."
+    )]
+    pub mode: Option<SolveMode>,
+
+    /// Scene units per metre (e.g. 1000 for millimetres).
+    #[arg(
+        long,
+        value_name = "U",
+        long_help = "How many scene units make a metre (default 1, or the scene \
+            config's). Stored in the solution so that the runtime scales head \
+            tracking, walking speed and eye separation; it does not change the \
+            lighting."
+    )]
+    pub units_per_metre: Option<f64>,
+
+    /// Make import warnings errors.
+    #[arg(
+        long,
+        long_help = "Turn import warnings (Kd + Ks > 1 scaled down, degenerate or \
+            non-planar faces, …) into errors, for scenes that must import cleanly."
+    )]
+    pub strict: bool,
+
+    /// Save a checkpoint and a partial solution every K shots.
+    #[arg(
+        long,
+        value_name = "K",
+        long_help = "Every K shots (K >= 1) save OUT.checkpoint and rewrite OUT as a \
+            partial solution. Smaller K loses less work on a crash and lets a viewer \
+            follow the solve more closely; each save costs the time to write the \
+            whole mesh."
+    )]
+    pub checkpoint_every: Option<u64>,
+
+    /// Do not add the ambient estimate of unshot light to partial solutions.
+    #[arg(
+        long,
+        long_help = "Do not add Cohen et al.'s ambient term (the estimated light not yet \
+            shot, 000 appendix A line 8) to partial solutions. With it, early partial \
+            solutions look about as bright as the converged one; without it they show \
+            only the light shot so far."
+    )]
+    pub no_ambient: bool,
+
+    /// Continue the solve saved in OUT.checkpoint.
+    #[arg(
+        long,
+        long_help = "Continue the solve saved in OUT.checkpoint (after Ctrl-C, a crash \
+            or a shot budget). The scene and the result-affecting settings must be the \
+            same as those of the saved solve, or the checkpoint is refused; \
+            --max-shots, --threshold, --threads and --checkpoint-every may change. The \
+            final solution equals that of an uninterrupted solve."
+    )]
+    pub resume: bool,
+
+    /// Legacy display parameter file (000 appendix A).
+    #[arg(
+        long,
+        value_name = "FILE",
+        long_help = "A legacy display parameter file (000 appendix A): its camera is used \
+            by --preview and stored in the solution when the scene names none; its \
+            ambient and threshold lines become settings of the lowest precedence."
+    )]
+    pub display: Option<PathBuf>,
+
+    /// Also write a tone-mapped PNG rendering of the solution.
+    #[arg(
+        long,
+        value_name = "PNG",
+        long_help = "Also render the finished solution on the CPU from the scene \
+            config's camera (else the display file's, else the solution's default) and \
+            write it as a tone-mapped sRGB PNG of the camera's image size."
+    )]
+    pub preview: Option<PathBuf>,
+
+    /// Write the closing summary as JSON.
+    #[arg(
+        long,
+        value_name = "FILE",
+        long_help = "Write the closing summary as one JSON object with the keys \
+            elements, vertices, shots, rays, seconds, rays_per_second, threads and \
+            unshot_fraction."
+    )]
+    pub stats_json: Option<PathBuf>,
+}
+
+impl SolveArgs {
+    /// The preset, medium when none is named.
+    pub fn preset(&self) -> Preset {
+        self.preset.unwrap_or_default()
+    }
+
+    /// The settings these flags set; everything else is left to lower sources.
+    pub fn patch(&self) -> SettingsPatch {
+        SettingsPatch {
+            mode: self.mode,
+            form_factors: self.form_factors,
+            samples: self.samples,
+            shadows: self.no_shadows.then_some(false),
+            threshold: self.threshold,
+            max_shots: self.max_shots,
+            seed: self.seed,
+            threads: self.threads,
+            checkpoint_every: self.checkpoint_every,
+            ambient: self.no_ambient.then_some(false),
+            units_per_metre: self.units_per_metre,
+            strict: self.strict.then_some(true),
+            ..SettingsPatch::default()
+        }
+    }
+}
+
+#[allow(dead_code)] // Used once the solve is wired in.
+/// Which flag sets a setting, for error messages (`samples` → `--samples`).
+pub fn flag_name(setting: &str) -> String {
+    match setting {
+        "shadows" => "--no-shadows".into(),
+        "ambient" => "--no-ambient".into(),
+        other => format!("--{}", other.replace('_', "-")),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::Parser;
+
+    #[derive(Parser)]
+    struct Wrapper {
+        #[command(flatten)]
+        args: SolveArgs,
+    }
+
+    fn parse(extra: &[&str]) -> SolveArgs {
+        let mut argv = vec!["solver", "scene.obj", "-o", "out.sol"];
+        argv.extend_from_slice(extra);
+        Wrapper::try_parse_from(argv).unwrap().args
+    }
+
+    #[test]
+    fn unset_flags_leave_the_patch_empty() {
+        assert_eq!(parse(&[]).patch(), SettingsPatch::default());
+    }
+
+    #[test]
+    fn flags_become_the_patch() {
+        let args = parse(&[
+            "--samples",
+            "9",
+            "--threshold",
+            "0.25",
+            "--no-shadows",
+            "--no-ambient",
+            "--strict",
+            "--form-factors",
+            "wallace",
+            "--mode",
+            "directional",
+            "--threads",
+            "3",
+        ]);
+        let p = args.patch();
+        assert_eq!(p.samples, Some(9));
+        assert_eq!(p.threshold, Some(0.25));
+        assert_eq!(p.shadows, Some(false));
+        assert_eq!(p.ambient, Some(false));
+        assert_eq!(p.strict, Some(true));
+        assert_eq!(p.form_factors, Some(FormFactorMethod::Wallace));
+        assert_eq!(p.mode, Some(SolveMode::Directional));
+        assert_eq!(p.threads, Some(3));
+    }
+
+    #[test]
+    fn flag_names_match_the_command_line() {
+        assert_eq!(flag_name("max_shots"), "--max-shots");
+        assert_eq!(flag_name("shadows"), "--no-shadows");
+    }
+}

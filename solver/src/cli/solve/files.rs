@@ -1,0 +1,88 @@
+//! Small file helpers for the `solve` command: atomic writes and derived paths.
+//!
+//! Every file the command writes (checkpoint, stats JSON, preview PNG) goes through
+//! [`write_atomic`], so a crash or Ctrl-C never leaves a half-written file under its
+//! final name (brief, "Standards"). The solution file itself is written by
+//! `format::write_solution`, which is atomic in the same way.
+
+use anyhow::Context;
+use std::ffi::OsString;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+/// Writes `bytes` to `path` atomically: a temporary file in the same folder (so the
+/// rename never crosses a file system), flushed to disk, then renamed over `path`.
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
+    let tmp = temp_path(path);
+    let result = (|| -> std::io::Result<()> {
+        let mut file = std::fs::File::create(&tmp)?;
+        file.write_all(bytes)?;
+        file.sync_all()?;
+        drop(file);
+        std::fs::rename(&tmp, path)
+    })();
+    if result.is_err() {
+        // Best effort: a failed write must not leave the temporary file behind.
+        let _ = std::fs::remove_file(&tmp);
+    }
+    result.with_context(|| format!("writing {}", path.display()))
+}
+
+/// `dir/.name.tmp-PID`: hidden, unique per process, in the target's folder.
+fn temp_path(path: &Path) -> PathBuf {
+    let mut name = OsString::from(".");
+    name.push(path.file_name().unwrap_or_else(|| "output".as_ref()));
+    name.push(format!(".tmp-{}", std::process::id()));
+    path.with_file_name(name)
+}
+
+/// `OUT.checkpoint`: the full output name with `.checkpoint` appended, so that
+/// `box.sol` and `box.sol2` never share a checkpoint.
+pub fn checkpoint_path(out: &Path) -> PathBuf {
+    let mut name = out.as_os_str().to_owned();
+    name.push(".checkpoint");
+    PathBuf::from(name)
+}
+
+/// Creates the folder that will hold `path`, if it has one and it is missing.
+pub fn ensure_parent(path: &Path) -> anyhow::Result<()> {
+    if let Some(parent) = path.parent() {
+        if !parent.as_os_str().is_empty() && !parent.exists() {
+            std::fs::create_dir_all(parent)
+                .with_context(|| format!("creating folder {}", parent.display()))?;
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn atomic_write_replaces_and_leaves_no_temp_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("a.json");
+        write_atomic(&path, b"first").unwrap();
+        write_atomic(&path, b"second").unwrap();
+        assert_eq!(std::fs::read(&path).unwrap(), b"second");
+        let names: Vec<_> = std::fs::read_dir(dir.path()).unwrap().collect();
+        assert_eq!(names.len(), 1, "only the final file remains");
+    }
+
+    #[test]
+    fn atomic_write_into_missing_folder_names_the_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("missing").join("a.json");
+        let err = write_atomic(&path, b"x").unwrap_err();
+        assert!(format!("{err:#}").contains("a.json"), "{err:#}");
+    }
+
+    #[test]
+    fn checkpoint_path_appends_suffix() {
+        assert_eq!(
+            checkpoint_path(Path::new("out/box.sol")),
+            PathBuf::from("out/box.sol.checkpoint")
+        );
+    }
+}
