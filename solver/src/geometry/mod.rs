@@ -1,1 +1,21 @@
-//! (module under construction)
+//! The geometry core of the diffuse solver: exact and sampled form factors,
+//! sampling of source polygons, polygon helpers (clipping, triangulation,
+//! ray/triangle) and the occlusion BVH that answers visibility rays.
+//!
+//! * [`formfactor`]: the exact unoccluded point-to-polygon form factor (Lambert's
+//!   contour formula, Baum et al. 1989) and 000's sampled disc formula (eq. 3.1),
+//!   kept to measure against (design notes, "Form factors").
+//! * [`sampling`]: a small deterministic PRNG whose streams do not depend on the
+//!   thread count, and stratified, jittered points on a convex polygon (000 §6.2).
+//! * [`polygon`]: clipping against a plane, triangulation, ray/triangle tests.
+//! * [`visibility`]: [`visibility::Occluder`], an any-hit BVH over the input
+//!   polygons for segment visibility, with a shared-origin packet path.
+//!
+//! Everything works in f64 at the interface; the BVH stores its triangles in f32
+//! relative to the scene's own centre, with a scale-aware epsilon
+//! ([`visibility::Occluder::scene_epsilon`]) that absorbs the f32 rounding.
+
+pub mod formfactor;
+pub mod polygon;
+pub mod sampling;
+pub mod visibility;

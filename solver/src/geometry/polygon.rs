@@ -1,0 +1,247 @@
+//! Planar polygon helpers in f64: Newell's normal, clipping against a plane,
+//! triangulation (fan for convex polygons, ear clipping otherwise) and a
+//! ray/triangle test.
+//!
+//! Polygons are slices of vertices, counter-clockwise seen from their front
+//! (design notes, "Units and conventions"), implicitly closed.
+
+use glam::{DVec2, DVec3};
+
+/// Newell's normal, not normalised: its length is twice the polygon's area, so
+/// a degenerate polygon gives (near) zero. Robust for slightly non-planar input.
+pub fn newell_normal(polygon: &[DVec3]) -> DVec3 {
+    let mut n = DVec3::ZERO;
+    let count = polygon.len();
+    for (i, a) in polygon.iter().enumerate() {
+        let b = polygon[(i + 1) % count];
+        n += a.cross(b);
+    }
+    n
+}
+
+/// Area of a planar polygon by Newell's formula.
+pub fn area(polygon: &[DVec3]) -> f64 {
+    0.5 * newell_normal(polygon).length()
+}
+
+/// Clips `polygon` to the closed half-space `normal · (x − origin) ≥ 0`
+/// (Sutherland–Hodgman against one plane) and writes the result into `out`
+/// (cleared first). `normal` need not be unit length.
+///
+/// For a non-convex polygon the result may contain edges that run back and forth
+/// along the clipping line; they cancel in contour integrals and in signed
+/// areas, which is all the form-factor code needs. Output may have fewer than 3
+/// vertices when nothing (or only a point/segment) is in front.
+pub fn clip_to_halfspace(polygon: &[DVec3], origin: DVec3, normal: DVec3, out: &mut Vec<DVec3>) {
+    out.clear();
+    let count = polygon.len();
+    if count == 0 {
+        return;
+    }
+    let mut prev = polygon[count - 1];
+    let mut prev_d = normal.dot(prev - origin);
+    for &cur in polygon {
+        let cur_d = normal.dot(cur - origin);
+        if (prev_d > 0.0 && cur_d < 0.0) || (prev_d < 0.0 && cur_d > 0.0) {
+            // The edge crosses the plane strictly: add the crossing point. The
+            // parameter is in (0, 1) because the distances have opposite signs.
+            let t = prev_d / (prev_d - cur_d);
+            out.push(prev + (cur - prev) * t);
+        }
+        if cur_d >= 0.0 {
+            out.push(cur);
+        }
+        prev = cur;
+        prev_d = cur_d;
+    }
+}
+
+/// Whether a planar polygon is convex (all turns the same way around its
+/// Newell normal; collinear vertices allowed).
+pub fn is_convex(polygon: &[DVec3]) -> bool {
+    let count = polygon.len();
+    if count < 4 {
+        return true;
+    }
+    let n = newell_normal(polygon);
+    let scale = n.length();
+    for i in 0..count {
+        let a = polygon[i];
+        let b = polygon[(i + 1) % count];
+        let c = polygon[(i + 2) % count];
+        // A reflex turn has a cross product against the normal; allow rounding
+        // relative to the polygon's own size.
+        if (b - a).cross(c - b).dot(n) < -1e-12 * scale * scale {
+            return false;
+        }
+    }
+    true
+}
+
+/// Triangulates a simple planar polygon into `out` (appended) as index triples
+/// into `polygon`, each counter-clockwise like the polygon. Convex polygons get a
+/// fan from vertex 0; others are ear-clipped in the plane of their dominant
+/// normal axis (O(n²), fine for input polygons). Degenerate (zero-area) polygons
+/// produce nothing.
+pub fn triangulate(polygon: &[DVec3], out: &mut Vec<[usize; 3]>) {
+    let count = polygon.len();
+    if count < 3 {
+        return;
+    }
+    let n = newell_normal(polygon);
+    if n.length_squared() == 0.0 {
+        return;
+    }
+    if is_convex(polygon) {
+        for i in 1..count - 1 {
+            out.push([0, i, i + 1]);
+        }
+        return;
+    }
+    // Project onto the plane that drops the normal's dominant axis, keeping the
+    // orientation counter-clockwise.
+    let abs = n.abs();
+    let project = |v: DVec3| -> DVec2 {
+        if abs.x >= abs.y && abs.x >= abs.z {
+            if n.x > 0.0 {
+                DVec2::new(v.y, v.z)
+            } else {
+                DVec2::new(v.z, v.y)
+            }
+        } else if abs.y >= abs.z {
+            if n.y > 0.0 {
+                DVec2::new(v.z, v.x)
+            } else {
+                DVec2::new(v.x, v.z)
+            }
+        } else if n.z > 0.0 {
+            DVec2::new(v.x, v.y)
+        } else {
+            DVec2::new(v.y, v.x)
+        }
+    };
+    let points: Vec<DVec2> = polygon.iter().map(|&v| project(v)).collect();
+    let mut remaining: Vec<usize> = (0..count).collect();
+    let cross = |a: DVec2, b: DVec2, c: DVec2| (b - a).perp_dot(c - a);
+    let mut guard = 0;
+    while remaining.len() > 3 && guard < 2 * count * count {
+        guard += 1;
+        let m = remaining.len();
+        let mut clipped = false;
+        for k in 0..m {
+            let (ia, ib, ic) = (
+                remaining[(k + m - 1) % m],
+                remaining[k],
+                remaining[(k + 1) % m],
+            );
+            let (a, b, c) = (points[ia], points[ib], points[ic]);
+            if cross(a, b, c) <= 0.0 {
+                continue; // reflex or collinear corner: not an ear
+            }
+            let contains_other = remaining.iter().any(|&j| {
+                if j == ia || j == ib || j == ic {
+                    return false;
+                }
+                let p = points[j];
+                cross(a, b, p) >= 0.0 && cross(b, c, p) >= 0.0 && cross(c, a, p) >= 0.0
+            });
+            if contains_other {
+                continue;
+            }
+            out.push([ia, ib, ic]);
+            remaining.remove(k);
+            clipped = true;
+            break;
+        }
+        if !clipped {
+            // Not simple (or numerically degenerate): fall back to a fan over
+            // what is left rather than loop forever.
+            break;
+        }
+    }
+    for i in 1..remaining.len().saturating_sub(1) {
+        out.push([remaining[0], remaining[i], remaining[i + 1]]);
+    }
+}
+
+/// Ray/triangle intersection (Möller–Trumbore) in f64: the parameter `t` of
+/// `origin + t · dir` where the ray meets the triangle, if it does (either side;
+/// edges and vertices count as hits). Returns `None` for rays parallel to the
+/// triangle's plane.
+pub fn ray_triangle(origin: DVec3, dir: DVec3, v0: DVec3, v1: DVec3, v2: DVec3) -> Option<f64> {
+    let e1 = v1 - v0;
+    let e2 = v2 - v0;
+    let pvec = dir.cross(e2);
+    let det = e1.dot(pvec);
+    if det == 0.0 || !det.is_finite() {
+        return None;
+    }
+    let inv = 1.0 / det;
+    let tvec = origin - v0;
+    let u = tvec.dot(pvec) * inv;
+    if !(0.0..=1.0).contains(&u) {
+        return None;
+    }
+    let qvec = tvec.cross(e1);
+    let v = dir.dot(qvec) * inv;
+    if v < 0.0 || u + v > 1.0 {
+        return None;
+    }
+    Some(e2.dot(qvec) * inv)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn square() -> Vec<DVec3> {
+        vec![
+            DVec3::new(0.0, 0.0, 0.0),
+            DVec3::new(1.0, 0.0, 0.0),
+            DVec3::new(1.0, 1.0, 0.0),
+            DVec3::new(0.0, 1.0, 0.0),
+        ]
+    }
+
+    #[test]
+    fn clipping_a_square_in_half_keeps_half_its_area() {
+        let mut out = Vec::new();
+        clip_to_halfspace(&square(), DVec3::new(0.5, 0.0, 0.0), DVec3::X, &mut out);
+        assert!((area(&out) - 0.5).abs() < 1e-15, "area {}", area(&out));
+        clip_to_halfspace(&square(), DVec3::new(2.0, 0.0, 0.0), DVec3::X, &mut out);
+        assert!(out.len() < 3);
+    }
+
+    #[test]
+    fn ear_clipping_an_l_shape_preserves_area_and_orientation() {
+        // An L of area 3 (three unit squares), counter-clockwise about +z.
+        let l = vec![
+            DVec3::new(0.0, 0.0, 0.0),
+            DVec3::new(2.0, 0.0, 0.0),
+            DVec3::new(2.0, 1.0, 0.0),
+            DVec3::new(1.0, 1.0, 0.0),
+            DVec3::new(1.0, 2.0, 0.0),
+            DVec3::new(0.0, 2.0, 0.0),
+        ];
+        assert!(!is_convex(&l));
+        let mut tris = Vec::new();
+        triangulate(&l, &mut tris);
+        assert_eq!(tris.len(), 4);
+        let mut total = 0.0;
+        for t in &tris {
+            let n = newell_normal(&[l[t[0]], l[t[1]], l[t[2]]]);
+            assert!(n.z > 0.0, "triangle {t:?} is clockwise");
+            total += 0.5 * n.length();
+        }
+        assert!((total - 3.0).abs() < 1e-12, "area {total}");
+    }
+
+    #[test]
+    fn ray_hits_square_triangle() {
+        let s = square();
+        let t = ray_triangle(DVec3::new(0.2, 0.2, 1.0), -DVec3::Z, s[0], s[1], s[2]);
+        assert_eq!(t, Some(1.0));
+        let miss = ray_triangle(DVec3::new(0.2, 0.8, 1.0), -DVec3::Z, s[0], s[1], s[2]);
+        assert_eq!(miss, None);
+    }
+}
