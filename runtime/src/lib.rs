@@ -1,1 +1,14 @@
-//! Stereo walkthrough runtime.
+//! Stereo walkthrough runtime: loads a solution file and renders it per eye with
+//! Vulkan, evaluating each vertex's spherical harmonics toward the eye in the
+//! vertex shader (design notes, "The system in one paragraph").
+//!
+//! * [`gpu`]: the Vulkan context and resource wrappers (ash).
+//! * [`render`]: the stereo renderer (multiview, with the per-view workaround for
+//!   lavapipe's multiview clipping bug), exposure and tone mapping.
+//! * [`session`]: the session trait the frame loop is written against, and the
+//!   mock session (scripted head poses, offscreen swapchain).
+//! * [`cli`]: `runtime screenshot` and `runtime bench`.
+
+pub mod gpu;
+pub mod render;
+pub mod session;

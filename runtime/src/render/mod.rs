@@ -1,0 +1,874 @@
+//! The stereo renderer: draws a solution for one or two views into an sRGB
+//! output image (a swapchain image) with exposure and tone mapping, keeping the
+//! linear radiance in a half-float image that screenshots read back as EXR.
+//!
+//! Per frame ([`StereoRenderer::render`]): wait for the previous frame's fence,
+//! write the views' view-projection matrices and eye positions into the uniform
+//! buffer, then one multiview render pass draws both eyes (view mask 0b11) —
+//! or, where the driver has the multiview clipping bug (`multiview`), one pass
+//! per view (masks 0b01 then 0b10) with the same shaders. Batches are drawn by
+//! increasing SH order: order 0 with the trivial `scene_l0.vert`, the rest with
+//! `scene_sh.vert` whose loop bound is the batch's order (push constant).
+//!
+//! Conventions: positions are in file (re-centred) coordinates; views are
+//! `solver::camera::EyeView`s, projected with `EyeView::view_projection` and the
+//! clip planes of `solver::camera::clip_planes_for`, exactly as the CPU
+//! reference rasterizer does.
+
+pub mod multiview;
+mod passes;
+pub mod scene;
+pub mod tonemap;
+pub mod truncation;
+
+pub use multiview::MultiviewMode;
+pub use scene::{CoefficientStorage, GpuScene, SceneError};
+pub use tonemap::{ToneCurve, ToneSettings};
+
+use crate::gpu::{
+    Buffer, BufferDesc, Fence, Gpu, GpuError, Image, ImageDesc, MemoryLocation, VkContext,
+};
+use ash::vk;
+use glam::DVec3;
+use passes::{BatchConstants, Layouts, PassDesc, PassSet};
+use solver::camera::{clip_planes_for, EyeView};
+use solver::format::Solution;
+use std::sync::Arc;
+
+/// Options of the renderer.
+#[derive(Clone, Debug)]
+pub struct RendererDesc {
+    /// Image size per eye.
+    pub width: u32,
+    pub height: u32,
+    /// The most samples per pixel to use; the device's limit lowers it, and 1
+    /// turns MSAA off.
+    pub max_samples: u32,
+    pub multiview: MultiviewMode,
+    pub storage: CoefficientStorage,
+    /// Cap on the evaluated SH order (`--max-order`).
+    pub max_order: Option<u32>,
+    pub tone: ToneSettings,
+}
+
+impl Default for RendererDesc {
+    fn default() -> Self {
+        RendererDesc {
+            width: 512,
+            height: 512,
+            max_samples: 4,
+            multiview: MultiviewMode::Auto,
+            storage: CoefficientStorage::default(),
+            max_order: None,
+            tone: ToneSettings::default(),
+        }
+    }
+}
+
+/// The images a renderer draws into: one per swapchain image, each with one
+/// array layer per view (layer 0 = left, 1 = right).
+#[derive(Clone, Debug)]
+pub struct SwapchainDesc {
+    pub images: Vec<vk::Image>,
+    /// An sRGB format (the tone map writes display values and relies on the
+    /// attachment's sRGB encoding).
+    pub format: vk::Format,
+    pub width: u32,
+    pub height: u32,
+    pub layers: u32,
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum RenderError {
+    #[error(transparent)]
+    Gpu(#[from] GpuError),
+    #[error(transparent)]
+    Scene(#[from] SceneError),
+    #[error("{0}")]
+    Usage(String),
+}
+
+/// One eye's read-back images.
+#[derive(Clone, Debug)]
+pub struct EyeImage {
+    pub width: u32,
+    pub height: u32,
+    /// Exposed, tone-mapped, sRGB-encoded RGBA8, row 0 at the top.
+    pub srgb: Vec<u8>,
+    /// Linear radiance RGB (W·sr⁻¹·m⁻²), row-major, row 0 at the top.
+    pub radiance: Vec<f32>,
+}
+
+/// Per-swapchain-image state: the output view and one framebuffer per pass set.
+struct Target {
+    framebuffers: Vec<vk::Framebuffer>,
+    output: Image,
+}
+
+/// The stereo renderer. Fields are declared newest-first; `Drop` waits for the
+/// device before they are destroyed.
+pub struct StereoRenderer {
+    targets: Vec<Target>,
+    tonemap_set: vk::DescriptorSet,
+    batch_sets: Vec<vk::DescriptorSet>,
+    descriptor_pool: vk::DescriptorPool,
+    command_buffer: vk::CommandBuffer,
+    fence: Fence,
+    uniforms: Buffer,
+    msaa: Option<Image>,
+    linear: Image,
+    depth: Image,
+    /// One per pass of a stereo frame, then (if not among them) the mono pass.
+    pass_sets: Vec<PassSet>,
+    layouts: Layouts,
+    scene: GpuScene,
+    desc: RendererDesc,
+    samples: vk::SampleCountFlags,
+    path: multiview::MultiviewPath,
+    bounds: (DVec3, DVec3),
+    swapchain: SwapchainDesc,
+    gpu_shared: Arc<crate::gpu::DeviceShared>,
+    queue: vk::Queue,
+    command_pool: vk::CommandPool,
+}
+
+const UNIFORM_SIZE: u64 = 2 * 64 + 2 * 16;
+
+fn sample_count(gpu: &Gpu, max: u32) -> vk::SampleCountFlags {
+    let limits = &gpu.info.limits;
+    let supported = limits.framebuffer_color_sample_counts & limits.framebuffer_depth_sample_counts;
+    for (n, flag) in [
+        (8, vk::SampleCountFlags::TYPE_8),
+        (4, vk::SampleCountFlags::TYPE_4),
+        (2, vk::SampleCountFlags::TYPE_2),
+    ] {
+        if n <= max && supported.contains(flag) {
+            return flag;
+        }
+    }
+    vk::SampleCountFlags::TYPE_1
+}
+
+fn depth_format(gpu: &Gpu) -> Result<vk::Format, GpuError> {
+    for format in [
+        vk::Format::D32_SFLOAT,
+        vk::Format::X8_D24_UNORM_PACK32,
+        vk::Format::D16_UNORM,
+    ] {
+        // SAFETY: plain query of a physical device of this instance.
+        let props = unsafe {
+            gpu.instance()
+                .get_physical_device_format_properties(gpu.physical, format)
+        };
+        if props
+            .optimal_tiling_features
+            .contains(vk::FormatFeatureFlags::DEPTH_STENCIL_ATTACHMENT)
+        {
+            return Ok(format);
+        }
+    }
+    Err(GpuError::Unsupported("no depth format".into()))
+}
+
+impl StereoRenderer {
+    /// Uploads `solution` and prepares to draw into `swapchain`'s images.
+    pub fn new(
+        gpu: &Gpu,
+        solution: &Solution,
+        desc: RendererDesc,
+        swapchain: &SwapchainDesc,
+    ) -> Result<StereoRenderer, RenderError> {
+        if swapchain.width != desc.width || swapchain.height != desc.height {
+            return Err(RenderError::Usage(format!(
+                "swapchain images are {}x{} but the renderer was asked for {}x{}",
+                swapchain.width, swapchain.height, desc.width, desc.height
+            )));
+        }
+        if swapchain.layers < 2 || swapchain.images.is_empty() {
+            return Err(RenderError::Usage(
+                "the swapchain needs at least one image with two layers".into(),
+            ));
+        }
+        let path = multiview::resolve(gpu, desc.multiview);
+        let samples = sample_count(gpu, desc.max_samples);
+        let depth_format = depth_format(gpu)?;
+        let scene = GpuScene::new(gpu, solution, desc.storage, desc.max_order)?;
+        let layouts = Layouts::new(gpu)?;
+        let mut pass_sets = Vec::new();
+        let mut masks: Vec<u32> = path.stereo_masks().to_vec();
+        if !masks.contains(&0b01) {
+            masks.push(0b01);
+        }
+        for mask in masks {
+            pass_sets.push(PassSet::new(
+                gpu,
+                &layouts,
+                PassDesc {
+                    view_mask: mask,
+                    samples,
+                    depth_format,
+                    output_format: swapchain.format,
+                    storage: desc.storage,
+                },
+            )?);
+        }
+        let image = |format, samples, usage, aspect| {
+            Image::new(
+                gpu,
+                ImageDesc {
+                    width: desc.width,
+                    height: desc.height,
+                    layers: 2,
+                    format,
+                    samples,
+                    usage,
+                    aspect,
+                },
+            )
+        };
+        let depth = image(
+            depth_format,
+            samples,
+            vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT,
+            vk::ImageAspectFlags::DEPTH,
+        )?;
+        let linear = image(
+            passes::LINEAR_FORMAT,
+            vk::SampleCountFlags::TYPE_1,
+            vk::ImageUsageFlags::COLOR_ATTACHMENT
+                | vk::ImageUsageFlags::INPUT_ATTACHMENT
+                | vk::ImageUsageFlags::TRANSFER_SRC,
+            vk::ImageAspectFlags::COLOR,
+        )?;
+        let msaa = if samples == vk::SampleCountFlags::TYPE_1 {
+            None
+        } else {
+            Some(image(
+                passes::LINEAR_FORMAT,
+                samples,
+                vk::ImageUsageFlags::COLOR_ATTACHMENT,
+                vk::ImageAspectFlags::COLOR,
+            )?)
+        };
+        let uniforms = Buffer::new(
+            gpu,
+            BufferDesc {
+                size: UNIFORM_SIZE,
+                usage: vk::BufferUsageFlags::UNIFORM_BUFFER,
+                location: MemoryLocation::Mapped,
+            },
+        )?;
+        let fence = Fence::new(gpu, true)?;
+        let device = gpu.device();
+        let alloc = vk::CommandBufferAllocateInfo::default()
+            .command_pool(gpu.command_pool())
+            .level(vk::CommandBufferLevel::PRIMARY)
+            .command_buffer_count(1);
+        // SAFETY: the pool belongs to this device; freed in Drop.
+        let command_buffer =
+            unsafe { device.allocate_command_buffers(&alloc) }.ctx("vkAllocateCommandBuffers")?[0];
+
+        let mut renderer = StereoRenderer {
+            targets: Vec::new(),
+            tonemap_set: vk::DescriptorSet::null(),
+            batch_sets: Vec::new(),
+            descriptor_pool: vk::DescriptorPool::null(),
+            command_buffer,
+            fence,
+            uniforms,
+            msaa,
+            linear,
+            depth,
+            pass_sets,
+            layouts,
+            scene,
+            desc,
+            samples,
+            path,
+            bounds: (
+                DVec3::from(solution.header.bounds_min.map(f64::from)),
+                DVec3::from(solution.header.bounds_max.map(f64::from)),
+            ),
+            swapchain: swapchain.clone(),
+            gpu_shared: gpu.shared.clone(),
+            queue: gpu.queue,
+            command_pool: gpu.command_pool(),
+        };
+        renderer.create_descriptors()?;
+        for &raw in &swapchain.images {
+            renderer.add_target(gpu, raw)?;
+        }
+        Ok(renderer)
+    }
+
+    fn create_descriptors(&mut self) -> Result<(), GpuError> {
+        let device = &self.gpu_shared.device;
+        let batches = self.scene.draws.len() as u32;
+        let sizes = [
+            vk::DescriptorPoolSize::default()
+                .ty(vk::DescriptorType::UNIFORM_BUFFER)
+                .descriptor_count(batches.max(1)),
+            vk::DescriptorPoolSize::default()
+                .ty(vk::DescriptorType::STORAGE_BUFFER)
+                .descriptor_count(batches.max(1)),
+            vk::DescriptorPoolSize::default()
+                .ty(vk::DescriptorType::INPUT_ATTACHMENT)
+                .descriptor_count(1),
+        ];
+        let info = vk::DescriptorPoolCreateInfo::default()
+            .max_sets(batches + 1)
+            .pool_sizes(&sizes);
+        // SAFETY: valid device and create info; destroyed in Drop.
+        self.descriptor_pool =
+            unsafe { device.create_descriptor_pool(&info, None) }.ctx("vkCreateDescriptorPool")?;
+        let mut layouts = vec![self.layouts.scene_set; batches as usize];
+        layouts.push(self.layouts.tonemap_set);
+        let alloc = vk::DescriptorSetAllocateInfo::default()
+            .descriptor_pool(self.descriptor_pool)
+            .set_layouts(&layouts);
+        // SAFETY: the pool was sized for exactly these sets.
+        let mut sets =
+            unsafe { device.allocate_descriptor_sets(&alloc) }.ctx("vkAllocateDescriptorSets")?;
+        self.tonemap_set = sets.pop().unwrap_or_default();
+        self.batch_sets = sets;
+        let uniform_info = [vk::DescriptorBufferInfo::default()
+            .buffer(self.uniforms.raw)
+            .range(UNIFORM_SIZE)];
+        let storage_infos: Vec<[vk::DescriptorBufferInfo; 1]> = self
+            .scene
+            .draws
+            .iter()
+            .map(|d| {
+                [vk::DescriptorBufferInfo::default()
+                    .buffer(self.scene.coefficients.raw)
+                    .offset(d.coeff_offset)
+                    .range(d.coeff_bytes)]
+            })
+            .collect();
+        let image_info = [vk::DescriptorImageInfo::default()
+            .image_view(self.linear.view)
+            .image_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)];
+        let mut writes = Vec::new();
+        for (set, storage) in self.batch_sets.iter().zip(&storage_infos) {
+            writes.push(
+                vk::WriteDescriptorSet::default()
+                    .dst_set(*set)
+                    .dst_binding(0)
+                    .descriptor_type(vk::DescriptorType::UNIFORM_BUFFER)
+                    .buffer_info(&uniform_info),
+            );
+            writes.push(
+                vk::WriteDescriptorSet::default()
+                    .dst_set(*set)
+                    .dst_binding(1)
+                    .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
+                    .buffer_info(storage),
+            );
+        }
+        writes.push(
+            vk::WriteDescriptorSet::default()
+                .dst_set(self.tonemap_set)
+                .dst_binding(0)
+                .descriptor_type(vk::DescriptorType::INPUT_ATTACHMENT)
+                .image_info(&image_info),
+        );
+        // SAFETY: every write refers to live sets, buffers and views; no set is in
+        // use by a pending command buffer yet.
+        unsafe { device.update_descriptor_sets(&writes, &[]) };
+        Ok(())
+    }
+
+    fn add_target(&mut self, gpu: &Gpu, raw: vk::Image) -> Result<(), GpuError> {
+        let output = Image::borrowed(
+            gpu,
+            raw,
+            ImageDesc {
+                width: self.desc.width,
+                height: self.desc.height,
+                layers: 2,
+                format: self.swapchain.format,
+                samples: vk::SampleCountFlags::TYPE_1,
+                usage: vk::ImageUsageFlags::COLOR_ATTACHMENT,
+                aspect: vk::ImageAspectFlags::COLOR,
+            },
+        )?;
+        let mut target = Target {
+            framebuffers: Vec::new(),
+            output,
+        };
+        for set in &self.pass_sets {
+            let mut views = vec![self.depth.view, self.linear.view, target.output.view];
+            if let Some(msaa) = &self.msaa {
+                views.push(msaa.view);
+            }
+            let info = vk::FramebufferCreateInfo::default()
+                .render_pass(set.render_pass)
+                .attachments(&views)
+                .width(self.desc.width)
+                .height(self.desc.height)
+                .layers(1);
+            // SAFETY: views and render pass are live; with multiview the
+            // framebuffer has one layer and the views carry the array layers.
+            let fb = unsafe { gpu.device().create_framebuffer(&info, None) };
+            match fb {
+                Ok(fb) => target.framebuffers.push(fb),
+                Err(result) => {
+                    self.destroy_target(target);
+                    return Err(GpuError::Vulkan {
+                        call: "vkCreateFramebuffer",
+                        result,
+                    });
+                }
+            }
+        }
+        self.targets.push(target);
+        Ok(())
+    }
+
+    fn destroy_target(&self, target: Target) {
+        for fb in target.framebuffers {
+            // SAFETY: callers ensured the GPU no longer uses the framebuffer.
+            unsafe { self.gpu_shared.device.destroy_framebuffer(fb, None) };
+        }
+    }
+
+    /// The multiview path in use (single pass or one pass per view).
+    pub fn multiview_path(&self) -> multiview::MultiviewPath {
+        self.path
+    }
+
+    /// Samples per pixel in use.
+    pub fn samples(&self) -> u32 {
+        self.samples.as_raw()
+    }
+
+    pub fn scene(&self) -> &GpuScene {
+        &self.scene
+    }
+
+    pub fn desc(&self) -> &RendererDesc {
+        &self.desc
+    }
+
+    /// Changes exposure and curve for the next frames.
+    pub fn set_tone(&mut self, tone: ToneSettings) {
+        self.desc.tone = tone;
+    }
+
+    /// Near and far planes for an eye, shared with the CPU reference
+    /// (`solver::camera::clip_planes_for` over the header's bounds).
+    pub fn clip_planes(&self, view: &EyeView) -> (f64, f64) {
+        clip_planes_for(view.position, self.bounds.0, self.bounds.1)
+    }
+
+    /// Draws `views` (one: mono into layer 0; two: left into layer 0, right into
+    /// layer 1) into swapchain image `image`, submits, and waits until the GPU has
+    /// finished (so the next call may rewrite the uniforms, and read-back may
+    /// follow).
+    pub fn render(&mut self, views: &[EyeView], image: usize) -> Result<(), RenderError> {
+        if views.is_empty() || views.len() > 2 {
+            return Err(RenderError::Usage(format!(
+                "render takes one or two views, got {}",
+                views.len()
+            )));
+        }
+        if image >= self.targets.len() {
+            return Err(RenderError::Usage(format!(
+                "swapchain image {image} does not exist ({} images)",
+                self.targets.len()
+            )));
+        }
+        for v in views {
+            if v.width != self.desc.width || v.height != self.desc.height {
+                return Err(RenderError::Usage(format!(
+                    "view is {}x{} but the renderer draws {}x{}",
+                    v.width, v.height, self.desc.width, self.desc.height
+                )));
+            }
+        }
+        self.fence.wait()?;
+        self.fence.reset()?;
+        self.write_uniforms(views);
+        self.record(views.len(), image)?;
+        let cmds = [self.command_buffer];
+        let submit = [vk::SubmitInfo::default().command_buffers(&cmds)];
+        // SAFETY: the command buffer was just recorded; the fence was reset and is
+        // not in use by another submission.
+        unsafe {
+            self.gpu_shared
+                .device
+                .queue_submit(self.queue, &submit, self.fence.raw)
+        }
+        .ctx("vkQueueSubmit")?;
+        self.fence.wait()?;
+        Ok(())
+    }
+
+    fn write_uniforms(&mut self, views: &[EyeView]) {
+        let mut bytes = Vec::with_capacity(UNIFORM_SIZE as usize);
+        let mut eyes = Vec::new();
+        for i in 0..2 {
+            // Mono: layer 1 is not drawn; repeat the view so the data is defined.
+            let view = &views[i.min(views.len() - 1)];
+            let (near, far) = self.clip_planes(view);
+            let m = view.view_projection(near, far).as_mat4();
+            for f in m.to_cols_array() {
+                bytes.extend_from_slice(&f.to_le_bytes());
+            }
+            eyes.push(view.position.as_vec3());
+        }
+        for e in eyes {
+            for f in [e.x, e.y, e.z, 1.0] {
+                bytes.extend_from_slice(&f.to_le_bytes());
+            }
+        }
+        self.uniforms.write(0, &bytes);
+    }
+
+    fn record(&self, view_count: usize, image: usize) -> Result<(), GpuError> {
+        let device = &self.gpu_shared.device;
+        let cmd = self.command_buffer;
+        let target = &self.targets[image];
+        let begin = vk::CommandBufferBeginInfo::default()
+            .flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
+        // SAFETY: the fence wait in `render` guarantees the buffer is not pending;
+        // the pool was created with RESET_COMMAND_BUFFER.
+        unsafe {
+            device
+                .reset_command_buffer(cmd, vk::CommandBufferResetFlags::empty())
+                .ctx("vkResetCommandBuffer")?;
+            device
+                .begin_command_buffer(cmd, &begin)
+                .ctx("vkBeginCommandBuffer")?;
+        }
+        // Discard last frame's contents: UNDEFINED → each attachment's layout.
+        let mut barriers = vec![
+            layout_barrier(&self.depth, passes::DEPTH_LAYOUT),
+            layout_barrier(&self.linear, passes::LINEAR_LAYOUT),
+            layout_barrier(&target.output, passes::OUTPUT_LAYOUT),
+        ];
+        if let Some(msaa) = &self.msaa {
+            barriers.push(layout_barrier(msaa, passes::MSAA_LAYOUT));
+        }
+        // SAFETY: recording; the barriers name live images of this device.
+        unsafe {
+            device.cmd_pipeline_barrier(
+                cmd,
+                vk::PipelineStageFlags::ALL_COMMANDS,
+                vk::PipelineStageFlags::ALL_COMMANDS,
+                vk::DependencyFlags::empty(),
+                &[],
+                &[],
+                &barriers,
+            )
+        };
+        let masks: Vec<u32> = if view_count == 1 {
+            vec![0b01]
+        } else {
+            self.path.stereo_masks().to_vec()
+        };
+        for mask in masks {
+            let (index, set) = self
+                .pass_sets
+                .iter()
+                .enumerate()
+                .find(|(_, s)| s.desc.view_mask == mask)
+                .ok_or_else(|| GpuError::Unsupported(format!("no pass for view mask {mask:#b}")))?;
+            self.record_pass(cmd, set, target.framebuffers[index]);
+        }
+        // SAFETY: recording.
+        unsafe { device.end_command_buffer(cmd) }.ctx("vkEndCommandBuffer")
+    }
+
+    fn record_pass(&self, cmd: vk::CommandBuffer, set: &PassSet, framebuffer: vk::Framebuffer) {
+        let device = &self.gpu_shared.device;
+        let (w, h) = (self.desc.width, self.desc.height);
+        let black = vk::ClearValue {
+            color: vk::ClearColorValue {
+                float32: [0.0, 0.0, 0.0, 1.0],
+            },
+        };
+        let mut clear = vec![
+            vk::ClearValue {
+                depth_stencil: vk::ClearDepthStencilValue {
+                    depth: 1.0,
+                    stencil: 0,
+                },
+            },
+            black,
+            black,
+        ];
+        if self.msaa.is_some() {
+            clear.push(black);
+        }
+        let area = vk::Rect2D {
+            offset: vk::Offset2D { x: 0, y: 0 },
+            extent: vk::Extent2D {
+                width: w,
+                height: h,
+            },
+        };
+        let begin = vk::RenderPassBeginInfo::default()
+            .render_pass(set.render_pass)
+            .framebuffer(framebuffer)
+            .render_area(area)
+            .clear_values(&clear);
+        let viewport = [vk::Viewport {
+            x: 0.0,
+            y: 0.0,
+            width: w as f32,
+            height: h as f32,
+            min_depth: 0.0,
+            max_depth: 1.0,
+        }];
+        let tone_gain = self.desc.tone.exposure / self.scene.radiance_scale;
+        let mut tone_push = [0u8; 8];
+        tone_push[0..4].copy_from_slice(&tone_gain.to_le_bytes());
+        tone_push[4..8].copy_from_slice(&self.desc.tone.curve.code().to_le_bytes());
+        // SAFETY: recording outside a render pass; every handle is live and owned
+        // by this renderer; draws stay within the buffers (indices were checked
+        // against their batch's vertex count at upload).
+        unsafe {
+            device.cmd_begin_render_pass(cmd, &begin, vk::SubpassContents::INLINE);
+            device.cmd_set_viewport(cmd, 0, &viewport);
+            device.cmd_set_scissor(cmd, 0, &[area]);
+            device.cmd_bind_vertex_buffers(cmd, 0, &[self.scene.vertices.raw], &[0]);
+            device.cmd_bind_index_buffer(cmd, self.scene.indices.raw, 0, vk::IndexType::UINT32);
+            let mut bound = None;
+            for (draw, &ds) in self.scene.draws.iter().zip(&self.batch_sets) {
+                let pipeline = if draw.order == 0 {
+                    set.scene_l0
+                } else {
+                    set.scene_sh
+                };
+                if bound != Some(pipeline) {
+                    device.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, pipeline);
+                    bound = Some(pipeline);
+                }
+                device.cmd_bind_descriptor_sets(
+                    cmd,
+                    vk::PipelineBindPoint::GRAPHICS,
+                    self.layouts.scene_pipeline,
+                    0,
+                    &[ds],
+                    &[],
+                );
+                let constants = BatchConstants {
+                    order: draw.order,
+                    vertex_base: draw.vertex_base,
+                    coeff_base: 0,
+                    stride: draw.stride,
+                    scale: draw.storage_scale * self.scene.radiance_scale,
+                };
+                device.cmd_push_constants(
+                    cmd,
+                    self.layouts.scene_pipeline,
+                    vk::ShaderStageFlags::VERTEX,
+                    0,
+                    &constants.bytes(),
+                );
+                device.cmd_draw_indexed(
+                    cmd,
+                    draw.index_count,
+                    1,
+                    draw.first_index,
+                    draw.vertex_base as i32,
+                    0,
+                );
+            }
+            device.cmd_next_subpass(cmd, vk::SubpassContents::INLINE);
+            device.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, set.tonemap);
+            device.cmd_bind_descriptor_sets(
+                cmd,
+                vk::PipelineBindPoint::GRAPHICS,
+                self.layouts.tonemap_pipeline,
+                0,
+                &[self.tonemap_set],
+                &[],
+            );
+            device.cmd_push_constants(
+                cmd,
+                self.layouts.tonemap_pipeline,
+                vk::ShaderStageFlags::FRAGMENT,
+                0,
+                &tone_push,
+            );
+            device.cmd_draw(cmd, 3, 1, 0, 0);
+            device.cmd_end_render_pass(cmd);
+        }
+    }
+
+    /// Reads back the last frame drawn into swapchain image `image`: `views`
+    /// layers (1 or 2) of the sRGB output and of the linear radiance.
+    pub fn read_back(
+        &self,
+        gpu: &Gpu,
+        image: usize,
+        views: usize,
+    ) -> Result<Vec<EyeImage>, RenderError> {
+        let target = self
+            .targets
+            .get(image)
+            .ok_or_else(|| RenderError::Usage(format!("swapchain image {image} does not exist")))?;
+        let views = views.clamp(1, 2) as u32;
+        let (w, h) = (self.desc.width, self.desc.height);
+        let pixels = u64::from(w) * u64::from(h);
+        let srgb_bytes = pixels * 4;
+        let linear_bytes = pixels * 8;
+        let per_layer = srgb_bytes + linear_bytes;
+        let buffer = Buffer::new(
+            gpu,
+            BufferDesc {
+                size: per_layer * u64::from(views),
+                usage: vk::BufferUsageFlags::TRANSFER_DST,
+                location: MemoryLocation::Mapped,
+            },
+        )?;
+        gpu.one_shot(|device, cmd| {
+            let to_src = [
+                transition(
+                    &target.output,
+                    passes::OUTPUT_LAYOUT,
+                    vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                ),
+                transition(
+                    &self.linear,
+                    passes::LINEAR_LAYOUT,
+                    vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                ),
+            ];
+            let back = [
+                transition(
+                    &target.output,
+                    vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                    passes::OUTPUT_LAYOUT,
+                ),
+                transition(
+                    &self.linear,
+                    vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                    passes::LINEAR_LAYOUT,
+                ),
+            ];
+            let mut regions_out = Vec::new();
+            let mut regions_lin = Vec::new();
+            for layer in 0..views {
+                let base = u64::from(layer) * per_layer;
+                let region = |offset| {
+                    vk::BufferImageCopy::default()
+                        .buffer_offset(offset)
+                        .image_subresource(vk::ImageSubresourceLayers {
+                            aspect_mask: vk::ImageAspectFlags::COLOR,
+                            mip_level: 0,
+                            base_array_layer: layer,
+                            layer_count: 1,
+                        })
+                        .image_extent(vk::Extent3D {
+                            width: w,
+                            height: h,
+                            depth: 1,
+                        })
+                };
+                regions_out.push(region(base));
+                regions_lin.push(region(base + srgb_bytes));
+            }
+            // SAFETY: recording; images are live, the buffer holds every region,
+            // and the frame's fence was waited for in `render`.
+            unsafe {
+                device.cmd_pipeline_barrier(
+                    cmd,
+                    vk::PipelineStageFlags::ALL_COMMANDS,
+                    vk::PipelineStageFlags::TRANSFER,
+                    vk::DependencyFlags::empty(),
+                    &[],
+                    &[],
+                    &to_src,
+                );
+                device.cmd_copy_image_to_buffer(
+                    cmd,
+                    target.output.raw,
+                    vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                    buffer.raw,
+                    &regions_out,
+                );
+                device.cmd_copy_image_to_buffer(
+                    cmd,
+                    self.linear.raw,
+                    vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                    buffer.raw,
+                    &regions_lin,
+                );
+                device.cmd_pipeline_barrier(
+                    cmd,
+                    vk::PipelineStageFlags::TRANSFER,
+                    vk::PipelineStageFlags::ALL_COMMANDS,
+                    vk::DependencyFlags::empty(),
+                    &[],
+                    &[],
+                    &back,
+                );
+            }
+        })?;
+        let data = buffer.read();
+        let unscale = 1.0 / self.scene.radiance_scale;
+        let mut eyes = Vec::new();
+        for layer in 0..views as u64 {
+            let base = (layer * per_layer) as usize;
+            let srgb = data[base..base + srgb_bytes as usize].to_vec();
+            let lin = &data[base + srgb_bytes as usize..base + per_layer as usize];
+            let mut radiance = Vec::with_capacity(pixels as usize * 3);
+            for px in lin.chunks_exact(8) {
+                for c in 0..3 {
+                    let h = half::f16::from_bits(u16::from_le_bytes([px[2 * c], px[2 * c + 1]]));
+                    radiance.push(h.to_f32() * unscale);
+                }
+            }
+            eyes.push(EyeImage {
+                width: w,
+                height: h,
+                srgb,
+                radiance,
+            });
+        }
+        Ok(eyes)
+    }
+}
+
+fn layout_barrier(image: &Image, layout: vk::ImageLayout) -> vk::ImageMemoryBarrier<'static> {
+    transition(image, vk::ImageLayout::UNDEFINED, layout)
+}
+
+fn transition(
+    image: &Image,
+    from: vk::ImageLayout,
+    to: vk::ImageLayout,
+) -> vk::ImageMemoryBarrier<'static> {
+    vk::ImageMemoryBarrier::default()
+        .src_access_mask(vk::AccessFlags::MEMORY_WRITE)
+        .dst_access_mask(vk::AccessFlags::MEMORY_READ | vk::AccessFlags::MEMORY_WRITE)
+        .old_layout(from)
+        .new_layout(to)
+        .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+        .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+        .image(image.raw)
+        .subresource_range(image.range())
+}
+
+impl Drop for StereoRenderer {
+    fn drop(&mut self) {
+        let device = &self.gpu_shared.device;
+        // SAFETY: wait for the queue, then destroy what this struct created
+        // directly (framebuffers, pool, command buffer); the wrapper fields are
+        // destroyed after this, newest first, in declaration order.
+        unsafe {
+            let _ = self.fence.wait();
+            let _ = device.queue_wait_idle(self.queue);
+            for target in &self.targets {
+                for &fb in &target.framebuffers {
+                    device.destroy_framebuffer(fb, None);
+                }
+            }
+            device.destroy_descriptor_pool(self.descriptor_pool, None);
+            device.free_command_buffers(self.command_pool, &[self.command_buffer]);
+        }
+    }
+}

@@ -1,0 +1,540 @@
+//! Render passes and pipelines, one set per multiview view mask.
+//!
+//! Each pass has two subpasses: (0) the scene, Gouraud-shaded linear radiance into
+//! a (multisampled) half-float colour target with depth, resolved into a
+//! single-sample half-float image; (1) exposure and tone map, reading the resolved
+//! image as an input attachment and writing the sRGB output image (a swapchain
+//! image). With multiview both subpasses draw every view in the mask, each into
+//! its own array layer.
+//!
+//! Layouts: every attachment's initial and final layout are the same, so a pass
+//! for view mask 0b10 preserves what a pass for 0b01 wrote into layer 0 (the
+//! per-view workaround, `super::multiview`). The frame starts with barriers from
+//! `UNDEFINED` into those layouts.
+
+use super::scene::CoefficientStorage;
+use crate::gpu::{shaders, Gpu, GpuError, VkContext};
+use ash::vk;
+use std::sync::Arc;
+
+/// The linear colour target's format: half float with the scene's radiance
+/// scale (see `GpuScene::radiance_scale`) keeps any emitter in range with 11-bit
+/// precision, and every Vulkan device can render, blend and resolve it.
+pub const LINEAR_FORMAT: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
+
+pub const MSAA_LAYOUT: vk::ImageLayout = vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL;
+pub const DEPTH_LAYOUT: vk::ImageLayout = vk::ImageLayout::DEPTH_STENCIL_ATTACHMENT_OPTIMAL;
+pub const LINEAR_LAYOUT: vk::ImageLayout = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
+pub const OUTPUT_LAYOUT: vk::ImageLayout = vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL;
+
+/// Push constants of the scene pipelines (`scene_common.glsl`, `Batch`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default)]
+pub struct BatchConstants {
+    pub order: u32,
+    pub vertex_base: u32,
+    pub coeff_base: u32,
+    pub stride: u32,
+    pub scale: f32,
+}
+
+impl BatchConstants {
+    pub const SIZE: u32 = 20;
+
+    pub fn bytes(&self) -> [u8; 20] {
+        let mut out = [0u8; 20];
+        out[0..4].copy_from_slice(&self.order.to_le_bytes());
+        out[4..8].copy_from_slice(&self.vertex_base.to_le_bytes());
+        out[8..12].copy_from_slice(&self.coeff_base.to_le_bytes());
+        out[12..16].copy_from_slice(&self.stride.to_le_bytes());
+        out[16..20].copy_from_slice(&self.scale.to_le_bytes());
+        out
+    }
+}
+
+/// Layouts shared by every pass set.
+pub struct Layouts {
+    // Newest first.
+    pub tonemap_pipeline: vk::PipelineLayout,
+    pub scene_pipeline: vk::PipelineLayout,
+    pub tonemap_set: vk::DescriptorSetLayout,
+    pub scene_set: vk::DescriptorSetLayout,
+    device: Arc<crate::gpu::DeviceShared>,
+}
+
+impl Layouts {
+    pub fn new(gpu: &Gpu) -> Result<Layouts, GpuError> {
+        let device = gpu.device();
+        let scene_bindings = [
+            vk::DescriptorSetLayoutBinding::default()
+                .binding(0)
+                .descriptor_type(vk::DescriptorType::UNIFORM_BUFFER)
+                .descriptor_count(1)
+                .stage_flags(vk::ShaderStageFlags::VERTEX),
+            vk::DescriptorSetLayoutBinding::default()
+                .binding(1)
+                .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
+                .descriptor_count(1)
+                .stage_flags(vk::ShaderStageFlags::VERTEX),
+        ];
+        let tonemap_bindings = [vk::DescriptorSetLayoutBinding::default()
+            .binding(0)
+            .descriptor_type(vk::DescriptorType::INPUT_ATTACHMENT)
+            .descriptor_count(1)
+            .stage_flags(vk::ShaderStageFlags::FRAGMENT)];
+        let mut layouts = Layouts {
+            tonemap_pipeline: vk::PipelineLayout::null(),
+            scene_pipeline: vk::PipelineLayout::null(),
+            tonemap_set: vk::DescriptorSetLayout::null(),
+            scene_set: vk::DescriptorSetLayout::null(),
+            device: gpu.shared.clone(),
+        };
+        // SAFETY: create infos point to locals; every handle is stored in
+        // `layouts` as soon as it exists, so Drop destroys it on any later error.
+        unsafe {
+            layouts.scene_set = device
+                .create_descriptor_set_layout(
+                    &vk::DescriptorSetLayoutCreateInfo::default().bindings(&scene_bindings),
+                    None,
+                )
+                .ctx("vkCreateDescriptorSetLayout")?;
+            layouts.tonemap_set = device
+                .create_descriptor_set_layout(
+                    &vk::DescriptorSetLayoutCreateInfo::default().bindings(&tonemap_bindings),
+                    None,
+                )
+                .ctx("vkCreateDescriptorSetLayout")?;
+            let scene_push = [vk::PushConstantRange::default()
+                .stage_flags(vk::ShaderStageFlags::VERTEX)
+                .size(BatchConstants::SIZE)];
+            let sets = [layouts.scene_set];
+            layouts.scene_pipeline = device
+                .create_pipeline_layout(
+                    &vk::PipelineLayoutCreateInfo::default()
+                        .set_layouts(&sets)
+                        .push_constant_ranges(&scene_push),
+                    None,
+                )
+                .ctx("vkCreatePipelineLayout")?;
+            let tonemap_push = [vk::PushConstantRange::default()
+                .stage_flags(vk::ShaderStageFlags::FRAGMENT)
+                .size(8)];
+            let sets = [layouts.tonemap_set];
+            layouts.tonemap_pipeline = device
+                .create_pipeline_layout(
+                    &vk::PipelineLayoutCreateInfo::default()
+                        .set_layouts(&sets)
+                        .push_constant_ranges(&tonemap_push),
+                    None,
+                )
+                .ctx("vkCreatePipelineLayout")?;
+        }
+        Ok(layouts)
+    }
+}
+
+impl Drop for Layouts {
+    fn drop(&mut self) {
+        // SAFETY: owners wait for the device before dropping; null handles are
+        // ignored by the destroy calls.
+        unsafe {
+            let d = &self.device.device;
+            d.destroy_pipeline_layout(self.tonemap_pipeline, None);
+            d.destroy_pipeline_layout(self.scene_pipeline, None);
+            d.destroy_descriptor_set_layout(self.tonemap_set, None);
+            d.destroy_descriptor_set_layout(self.scene_set, None);
+        }
+    }
+}
+
+/// What a pass set is built for.
+#[derive(Clone, Copy, Debug)]
+pub struct PassDesc {
+    pub view_mask: u32,
+    pub samples: vk::SampleCountFlags,
+    pub depth_format: vk::Format,
+    pub output_format: vk::Format,
+    pub storage: CoefficientStorage,
+}
+
+/// A render pass for one view mask with its three pipelines.
+pub struct PassSet {
+    // Newest first.
+    pub tonemap: vk::Pipeline,
+    pub scene_sh: vk::Pipeline,
+    pub scene_l0: vk::Pipeline,
+    pub render_pass: vk::RenderPass,
+    pub desc: PassDesc,
+    device: Arc<crate::gpu::DeviceShared>,
+}
+
+impl Drop for PassSet {
+    fn drop(&mut self) {
+        // SAFETY: owners wait for the device before dropping; null handles are
+        // ignored.
+        unsafe {
+            let d = &self.device.device;
+            d.destroy_pipeline(self.tonemap, None);
+            d.destroy_pipeline(self.scene_sh, None);
+            d.destroy_pipeline(self.scene_l0, None);
+            d.destroy_render_pass(self.render_pass, None);
+        }
+    }
+}
+
+/// Shader modules, destroyed once the pipelines exist.
+struct Modules<'a> {
+    device: &'a ash::Device,
+    handles: Vec<vk::ShaderModule>,
+}
+
+impl Modules<'_> {
+    fn load(&mut self, gpu: &Gpu, spirv: &[u8]) -> Result<vk::ShaderModule, GpuError> {
+        let m = shaders::create_module(gpu, spirv)?;
+        self.handles.push(m);
+        Ok(m)
+    }
+}
+
+impl Drop for Modules<'_> {
+    fn drop(&mut self) {
+        for &m in &self.handles {
+            // SAFETY: modules may be destroyed once pipelines using them exist.
+            unsafe { self.device.destroy_shader_module(m, None) };
+        }
+    }
+}
+
+impl PassSet {
+    pub fn new(gpu: &Gpu, layouts: &Layouts, desc: PassDesc) -> Result<PassSet, GpuError> {
+        let mut set = PassSet {
+            tonemap: vk::Pipeline::null(),
+            scene_sh: vk::Pipeline::null(),
+            scene_l0: vk::Pipeline::null(),
+            render_pass: vk::RenderPass::null(),
+            desc,
+            device: gpu.shared.clone(),
+        };
+        set.render_pass = create_render_pass(gpu, &desc)?;
+        let mut modules = Modules {
+            device: gpu.device(),
+            handles: Vec::new(),
+        };
+        let (l0_spv, sh_spv) = match desc.storage {
+            CoefficientStorage::F32 => (shaders::SCENE_L0_F32_VERT, shaders::SCENE_SH_F32_VERT),
+            CoefficientStorage::F16 => (shaders::SCENE_L0_F16_VERT, shaders::SCENE_SH_F16_VERT),
+        };
+        let l0 = modules.load(gpu, l0_spv)?;
+        let sh = modules.load(gpu, sh_spv)?;
+        let frag = modules.load(gpu, shaders::SCENE_FRAG)?;
+        let tm_vert = modules.load(gpu, shaders::TONEMAP_VERT)?;
+        let tm_frag = modules.load(gpu, shaders::TONEMAP_FRAG)?;
+        set.scene_l0 = scene_pipeline(gpu, layouts, &set, l0, frag)?;
+        set.scene_sh = scene_pipeline(gpu, layouts, &set, sh, frag)?;
+        set.tonemap = tonemap_pipeline(gpu, layouts, &set, tm_vert, tm_frag)?;
+        Ok(set)
+    }
+}
+
+fn create_render_pass(gpu: &Gpu, desc: &PassDesc) -> Result<vk::RenderPass, GpuError> {
+    let msaa = desc.samples != vk::SampleCountFlags::TYPE_1;
+    let mut attachments = Vec::new();
+    // 0: depth.
+    attachments.push(
+        vk::AttachmentDescription::default()
+            .format(desc.depth_format)
+            .samples(desc.samples)
+            .load_op(vk::AttachmentLoadOp::CLEAR)
+            .store_op(vk::AttachmentStoreOp::DONT_CARE)
+            .stencil_load_op(vk::AttachmentLoadOp::DONT_CARE)
+            .stencil_store_op(vk::AttachmentStoreOp::DONT_CARE)
+            .initial_layout(DEPTH_LAYOUT)
+            .final_layout(DEPTH_LAYOUT),
+    );
+    // 1: linear radiance, single sample (resolve target, or the colour target
+    // itself without MSAA).
+    attachments.push(
+        vk::AttachmentDescription::default()
+            .format(LINEAR_FORMAT)
+            .samples(vk::SampleCountFlags::TYPE_1)
+            .load_op(if msaa {
+                vk::AttachmentLoadOp::DONT_CARE
+            } else {
+                vk::AttachmentLoadOp::CLEAR
+            })
+            .store_op(vk::AttachmentStoreOp::STORE)
+            .initial_layout(LINEAR_LAYOUT)
+            .final_layout(LINEAR_LAYOUT),
+    );
+    // 2: the sRGB output.
+    attachments.push(
+        vk::AttachmentDescription::default()
+            .format(desc.output_format)
+            .samples(vk::SampleCountFlags::TYPE_1)
+            .load_op(vk::AttachmentLoadOp::DONT_CARE)
+            .store_op(vk::AttachmentStoreOp::STORE)
+            .initial_layout(OUTPUT_LAYOUT)
+            .final_layout(OUTPUT_LAYOUT),
+    );
+    // 3: the multisampled colour target.
+    if msaa {
+        attachments.push(
+            vk::AttachmentDescription::default()
+                .format(LINEAR_FORMAT)
+                .samples(desc.samples)
+                .load_op(vk::AttachmentLoadOp::CLEAR)
+                .store_op(vk::AttachmentStoreOp::DONT_CARE)
+                .initial_layout(MSAA_LAYOUT)
+                .final_layout(MSAA_LAYOUT),
+        );
+    }
+    let depth_ref = vk::AttachmentReference::default()
+        .attachment(0)
+        .layout(DEPTH_LAYOUT);
+    let scene_color = [vk::AttachmentReference::default()
+        .attachment(if msaa { 3 } else { 1 })
+        .layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)];
+    let scene_resolve = [vk::AttachmentReference::default()
+        .attachment(1)
+        .layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)];
+    let tonemap_input = [vk::AttachmentReference::default()
+        .attachment(1)
+        .layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)];
+    let tonemap_color = [vk::AttachmentReference::default()
+        .attachment(2)
+        .layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)];
+    let mut scene_subpass = vk::SubpassDescription::default()
+        .pipeline_bind_point(vk::PipelineBindPoint::GRAPHICS)
+        .color_attachments(&scene_color)
+        .depth_stencil_attachment(&depth_ref);
+    if msaa {
+        scene_subpass = scene_subpass.resolve_attachments(&scene_resolve);
+    }
+    let subpasses = [
+        scene_subpass,
+        vk::SubpassDescription::default()
+            .pipeline_bind_point(vk::PipelineBindPoint::GRAPHICS)
+            .input_attachments(&tonemap_input)
+            .color_attachments(&tonemap_color),
+    ];
+    let attachment_stages = vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT
+        | vk::PipelineStageFlags::EARLY_FRAGMENT_TESTS
+        | vk::PipelineStageFlags::LATE_FRAGMENT_TESTS;
+    let attachment_access = vk::AccessFlags::COLOR_ATTACHMENT_WRITE
+        | vk::AccessFlags::COLOR_ATTACHMENT_READ
+        | vk::AccessFlags::DEPTH_STENCIL_ATTACHMENT_WRITE
+        | vk::AccessFlags::DEPTH_STENCIL_ATTACHMENT_READ;
+    let dependencies = [
+        // Earlier passes (the other view's, or the previous frame's tone map and
+        // read-back) before this pass's attachment writes.
+        vk::SubpassDependency::default()
+            .src_subpass(vk::SUBPASS_EXTERNAL)
+            .dst_subpass(0)
+            .src_stage_mask(
+                attachment_stages
+                    | vk::PipelineStageFlags::FRAGMENT_SHADER
+                    | vk::PipelineStageFlags::TRANSFER,
+            )
+            .dst_stage_mask(attachment_stages)
+            .src_access_mask(attachment_access | vk::AccessFlags::TRANSFER_READ)
+            .dst_access_mask(attachment_access),
+        // The resolved radiance, read by the tone map in the same pixel and view.
+        vk::SubpassDependency::default()
+            .src_subpass(0)
+            .dst_subpass(1)
+            .src_stage_mask(vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT)
+            .dst_stage_mask(vk::PipelineStageFlags::FRAGMENT_SHADER)
+            .src_access_mask(vk::AccessFlags::COLOR_ATTACHMENT_WRITE)
+            .dst_access_mask(vk::AccessFlags::INPUT_ATTACHMENT_READ)
+            .dependency_flags(vk::DependencyFlags::BY_REGION | vk::DependencyFlags::VIEW_LOCAL),
+        // Output and radiance before later passes, copies and presentation.
+        vk::SubpassDependency::default()
+            .src_subpass(1)
+            .dst_subpass(vk::SUBPASS_EXTERNAL)
+            .src_stage_mask(
+                vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT
+                    | vk::PipelineStageFlags::FRAGMENT_SHADER,
+            )
+            .dst_stage_mask(
+                attachment_stages
+                    | vk::PipelineStageFlags::FRAGMENT_SHADER
+                    | vk::PipelineStageFlags::TRANSFER,
+            )
+            .src_access_mask(
+                vk::AccessFlags::COLOR_ATTACHMENT_WRITE | vk::AccessFlags::INPUT_ATTACHMENT_READ,
+            )
+            .dst_access_mask(attachment_access | vk::AccessFlags::TRANSFER_READ),
+    ];
+    let view_masks = [desc.view_mask, desc.view_mask];
+    let correlation = [desc.view_mask];
+    let mut multiview = vk::RenderPassMultiviewCreateInfo::default()
+        .view_masks(&view_masks)
+        .correlation_masks(&correlation);
+    let info = vk::RenderPassCreateInfo::default()
+        .attachments(&attachments)
+        .subpasses(&subpasses)
+        .dependencies(&dependencies)
+        .push_next(&mut multiview);
+    // SAFETY: the create info points to locals alive for the call.
+    unsafe { gpu.device().create_render_pass(&info, None) }.ctx("vkCreateRenderPass")
+}
+
+fn scene_pipeline(
+    gpu: &Gpu,
+    layouts: &Layouts,
+    set: &PassSet,
+    vert: vk::ShaderModule,
+    frag: vk::ShaderModule,
+) -> Result<vk::Pipeline, GpuError> {
+    let stages = [
+        vk::PipelineShaderStageCreateInfo::default()
+            .stage(vk::ShaderStageFlags::VERTEX)
+            .module(vert)
+            .name(c"main"),
+        vk::PipelineShaderStageCreateInfo::default()
+            .stage(vk::ShaderStageFlags::FRAGMENT)
+            .module(frag)
+            .name(c"main"),
+    ];
+    // solver::format::Vertex: position, normal, tangent, 3 × f32 each, 36 bytes.
+    let bindings = [vk::VertexInputBindingDescription::default()
+        .binding(0)
+        .stride(std::mem::size_of::<solver::format::Vertex>() as u32)
+        .input_rate(vk::VertexInputRate::VERTEX)];
+    let attributes: Vec<_> = (0..3)
+        .map(|i| {
+            vk::VertexInputAttributeDescription::default()
+                .location(i)
+                .binding(0)
+                .format(vk::Format::R32G32B32_SFLOAT)
+                .offset(12 * i)
+        })
+        .collect();
+    let vertex_input = vk::PipelineVertexInputStateCreateInfo::default()
+        .vertex_binding_descriptions(&bindings)
+        .vertex_attribute_descriptions(&attributes);
+    let assembly = vk::PipelineInputAssemblyStateCreateInfo::default()
+        .topology(vk::PrimitiveTopology::TRIANGLE_LIST);
+    // Front faces are counter-clockwise seen from the normal's side; after the
+    // projection's y flip they stay counter-clockwise in Vulkan's framebuffer
+    // convention (solver/src/camera.rs), so back faces are culled as in the CPU
+    // rasterizer.
+    let raster = vk::PipelineRasterizationStateCreateInfo::default()
+        .polygon_mode(vk::PolygonMode::FILL)
+        .cull_mode(vk::CullModeFlags::BACK)
+        .front_face(vk::FrontFace::COUNTER_CLOCKWISE)
+        .line_width(1.0);
+    let multisample =
+        vk::PipelineMultisampleStateCreateInfo::default().rasterization_samples(set.desc.samples);
+    let depth = vk::PipelineDepthStencilStateCreateInfo::default()
+        .depth_test_enable(true)
+        .depth_write_enable(true)
+        .depth_compare_op(vk::CompareOp::LESS);
+    let blend_attachments = [vk::PipelineColorBlendAttachmentState::default()
+        .color_write_mask(vk::ColorComponentFlags::RGBA)];
+    let blend = vk::PipelineColorBlendStateCreateInfo::default().attachments(&blend_attachments);
+    graphics_pipeline(
+        gpu,
+        set.render_pass,
+        0,
+        layouts.scene_pipeline,
+        &stages,
+        &vertex_input,
+        &assembly,
+        &raster,
+        &multisample,
+        &depth,
+        &blend,
+    )
+}
+
+fn tonemap_pipeline(
+    gpu: &Gpu,
+    layouts: &Layouts,
+    set: &PassSet,
+    vert: vk::ShaderModule,
+    frag: vk::ShaderModule,
+) -> Result<vk::Pipeline, GpuError> {
+    let stages = [
+        vk::PipelineShaderStageCreateInfo::default()
+            .stage(vk::ShaderStageFlags::VERTEX)
+            .module(vert)
+            .name(c"main"),
+        vk::PipelineShaderStageCreateInfo::default()
+            .stage(vk::ShaderStageFlags::FRAGMENT)
+            .module(frag)
+            .name(c"main"),
+    ];
+    let vertex_input = vk::PipelineVertexInputStateCreateInfo::default();
+    let assembly = vk::PipelineInputAssemblyStateCreateInfo::default()
+        .topology(vk::PrimitiveTopology::TRIANGLE_LIST);
+    let raster = vk::PipelineRasterizationStateCreateInfo::default()
+        .polygon_mode(vk::PolygonMode::FILL)
+        .cull_mode(vk::CullModeFlags::NONE)
+        .line_width(1.0);
+    let multisample = vk::PipelineMultisampleStateCreateInfo::default()
+        .rasterization_samples(vk::SampleCountFlags::TYPE_1);
+    let depth = vk::PipelineDepthStencilStateCreateInfo::default();
+    let blend_attachments = [vk::PipelineColorBlendAttachmentState::default()
+        .color_write_mask(vk::ColorComponentFlags::RGBA)];
+    let blend = vk::PipelineColorBlendStateCreateInfo::default().attachments(&blend_attachments);
+    graphics_pipeline(
+        gpu,
+        set.render_pass,
+        1,
+        layouts.tonemap_pipeline,
+        &stages,
+        &vertex_input,
+        &assembly,
+        &raster,
+        &multisample,
+        &depth,
+        &blend,
+    )
+}
+
+#[allow(clippy::too_many_arguments)]
+fn graphics_pipeline(
+    gpu: &Gpu,
+    render_pass: vk::RenderPass,
+    subpass: u32,
+    layout: vk::PipelineLayout,
+    stages: &[vk::PipelineShaderStageCreateInfo<'_>],
+    vertex_input: &vk::PipelineVertexInputStateCreateInfo<'_>,
+    assembly: &vk::PipelineInputAssemblyStateCreateInfo<'_>,
+    raster: &vk::PipelineRasterizationStateCreateInfo<'_>,
+    multisample: &vk::PipelineMultisampleStateCreateInfo<'_>,
+    depth: &vk::PipelineDepthStencilStateCreateInfo<'_>,
+    blend: &vk::PipelineColorBlendStateCreateInfo<'_>,
+) -> Result<vk::Pipeline, GpuError> {
+    // Viewport and scissor are dynamic: one pipeline serves every image size.
+    let viewport = vk::PipelineViewportStateCreateInfo::default()
+        .viewport_count(1)
+        .scissor_count(1);
+    let dynamic_states = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
+    let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic_states);
+    let info = [vk::GraphicsPipelineCreateInfo::default()
+        .stages(stages)
+        .vertex_input_state(vertex_input)
+        .input_assembly_state(assembly)
+        .viewport_state(&viewport)
+        .rasterization_state(raster)
+        .multisample_state(multisample)
+        .depth_stencil_state(depth)
+        .color_blend_state(blend)
+        .dynamic_state(&dynamic)
+        .layout(layout)
+        .render_pass(render_pass)
+        .subpass(subpass)];
+    // SAFETY: every state struct points to locals alive for the call; the render
+    // pass and layout are live handles of this device.
+    let pipelines = unsafe {
+        gpu.device()
+            .create_graphics_pipelines(vk::PipelineCache::null(), &info, None)
+    }
+    .map_err(|(_, result)| GpuError::Vulkan {
+        call: "vkCreateGraphicsPipelines",
+        result,
+    })?;
+    Ok(pipelines[0])
+}

@@ -1,0 +1,46 @@
+// Shared declarations of the scene vertex shaders (included by scene_sh.vert and
+// scene_l0.vert). Conventions: runtime/src/render/mod.rs and solver/src/camera.rs.
+
+// Per-frame data: one view-projection matrix and eye position per view, indexed
+// by gl_ViewIndex (0 = left, 1 = right), in file (re-centred) coordinates.
+layout(std140, set = 0, binding = 0) uniform Frame {
+    mat4 view_projection[2];
+    vec4 eye_position[2];
+} frame;
+
+// Coefficients of every batch, laid out as in the solution file:
+// coefficients[(v * n + k) * 3 + c], v relative to the batch's first vertex.
+#ifdef COEFF_F16
+// Two IEEE halves per 32-bit word (low half first), read with unpackHalf2x16:
+// no 16-bit storage feature is needed.
+layout(std430, set = 0, binding = 1) readonly buffer Coefficients { uint words[]; } coeffs;
+float coefficient(uint i) {
+    vec2 pair = unpackHalf2x16(coeffs.words[i >> 1]);
+    return (i & 1u) == 0u ? pair.x : pair.y;
+}
+#else
+layout(std430, set = 0, binding = 1) readonly buffer Coefficients { float values[]; } coeffs;
+float coefficient(uint i) { return coeffs.values[i]; }
+#endif
+
+// Per-batch data (20 bytes).
+layout(push_constant) uniform Batch {
+    // SH order evaluated for this batch (the file's order, capped by --max-order).
+    uint order;
+    // Index of the batch's first vertex in the shared vertex buffer.
+    uint vertex_base;
+    // Index of the batch's first scalar in the coefficient buffer.
+    uint coeff_base;
+    // Scalars per vertex: (file order + 1)^2 * 3 (the stride does not change with
+    // the cap: dropped bands are simply not read).
+    uint stride;
+    // Multiplies every coefficient: the f16 storage scale times the renderer's
+    // radiance scale (which keeps half-float colour targets in range).
+    float scale;
+} batch;
+
+layout(location = 0) in vec3 in_position;
+layout(location = 1) in vec3 in_normal;
+layout(location = 2) in vec3 in_tangent;
+
+layout(location = 0) out vec3 out_radiance;
