@@ -1,0 +1,307 @@
+//! Shared helpers of the runtime's GPU tests: the Vulkan device (lavapipe unless
+//! the caller chose another ICD), synthetic solutions with known coefficients,
+//! and image comparison with failure artefacts.
+#![allow(dead_code)]
+
+use glam::DVec3;
+use runtime::gpu::{Gpu, GpuDesc};
+use solver::camera::{Camera, UpAxis};
+use solver::format::{Batch, Header, Representation, ScalarType, Solution, SolveMode, Vertex};
+use std::path::PathBuf;
+use std::sync::Once;
+
+/// Points the Vulkan loader at lavapipe when the caller did not choose an ICD
+/// (scripts/test.sh exports the same), so tests behave alike on every machine.
+pub fn use_lavapipe_unless_chosen() {
+    static ONCE: Once = Once::new();
+    ONCE.call_once(|| {
+        if std::env::var_os("VK_ICD_FILENAMES").is_none()
+            && std::env::var_os("VK_DRIVER_FILES").is_none()
+        {
+            for dir in ["/usr/share/vulkan/icd.d", "/etc/vulkan/icd.d"] {
+                if let Ok(entries) = std::fs::read_dir(dir) {
+                    let mut found: Vec<PathBuf> = entries
+                        .flatten()
+                        .map(|e| e.path())
+                        .filter(|p| {
+                            p.file_name()
+                                .and_then(|n| n.to_str())
+                                .is_some_and(|n| n.starts_with("lvp_icd"))
+                        })
+                        .collect();
+                    found.sort();
+                    if let Some(icd) = found.first() {
+                        // Set before any test thread loads Vulkan (inside Once).
+                        std::env::set_var("VK_ICD_FILENAMES", icd);
+                        return;
+                    }
+                }
+            }
+        }
+    });
+}
+
+/// The GPU, with validation on. A missing device fails the test with the
+/// message that names the Debian packages (never a skip).
+pub fn gpu() -> Gpu {
+    use_lavapipe_unless_chosen();
+    match Gpu::new(&GpuDesc { validation: true }) {
+        Ok(gpu) => gpu,
+        Err(e) => panic!("no Vulkan device for the GPU tests: {e}"),
+    }
+}
+
+/// Asserts the validation layer said nothing.
+pub fn assert_validation_clean(gpu: &Gpu) {
+    assert!(gpu.validation_enabled(), "validation layer not active");
+    let log = gpu.validation_log();
+    assert_eq!(
+        log.count(),
+        0,
+        "validation messages:\n{}",
+        log.messages().join("\n")
+    );
+}
+
+pub fn header(bounds_min: [f32; 3], bounds_max: [f32; 3], camera: Camera) -> Header {
+    Header {
+        units_per_metre: 1.0,
+        up_axis: UpAxis::PosY,
+        recentre_offset: [0.0; 3],
+        camera,
+        bounds_min,
+        bounds_max,
+        partial: false,
+        mode: SolveMode::Diffuse,
+        stats: Default::default(),
+        settings_json: String::new(),
+    }
+}
+
+/// A planar rectangle `corner + u·s + v·t` (s, t in 0..1) subdivided `n × n`,
+/// counter-clockwise seen from `normal = normalize(u × v)`, tangent `u`.
+pub struct Quad {
+    pub corner: DVec3,
+    pub u: DVec3,
+    pub v: DVec3,
+    pub n: usize,
+}
+
+impl Quad {
+    pub fn vertices_and_indices(&self) -> (Vec<Vertex>, Vec<u32>) {
+        let normal = self.u.cross(self.v).normalize();
+        let tangent = self.u.normalize();
+        let mut vertices = Vec::new();
+        for j in 0..=self.n {
+            for i in 0..=self.n {
+                let p = self.corner
+                    + self.u * (i as f64 / self.n as f64)
+                    + self.v * (j as f64 / self.n as f64);
+                vertices.push(Vertex {
+                    position: p.as_vec3().to_array(),
+                    normal: normal.as_vec3().to_array(),
+                    tangent: tangent.as_vec3().to_array(),
+                });
+            }
+        }
+        let row = self.n as u32 + 1;
+        let mut indices = Vec::new();
+        for j in 0..self.n as u32 {
+            for i in 0..self.n as u32 {
+                let a = j * row + i;
+                indices.extend_from_slice(&[a, a + 1, a + row + 1, a, a + row + 1, a + row]);
+            }
+        }
+        (vertices, indices)
+    }
+}
+
+/// Diffuse radiance of the test room at a point: smooth and different per
+/// channel, so interpolation and channel order both matter.
+pub fn diffuse_radiance(p: DVec3) -> [f64; 3] {
+    [
+        0.6 + 0.3 * (0.7 * p.x).sin(),
+        0.5 + 0.2 * (0.5 * p.z).cos(),
+        0.3 + 0.1 * p.y,
+    ]
+}
+
+/// The test room, in file coordinates: floor y = 0 over x, z ∈ [−4, 4], a back
+/// wall at z = −4 and side walls at x = ±4 (height 3), all facing inward.
+pub fn room_quads(n: usize) -> Vec<Quad> {
+    vec![
+        // Floor: normal +y = u × v with u = +x, v = −z.
+        Quad {
+            corner: DVec3::new(-4.0, 0.0, 4.0),
+            u: DVec3::new(8.0, 0.0, 0.0),
+            v: DVec3::new(0.0, 0.0, -8.0),
+            n,
+        },
+        // Back wall: normal +z.
+        Quad {
+            corner: DVec3::new(-4.0, 0.0, -4.0),
+            u: DVec3::new(8.0, 0.0, 0.0),
+            v: DVec3::new(0.0, 3.0, 0.0),
+            n,
+        },
+        // Left wall x = −4: normal +x = u × v with u = −z... (0,0,−8)×(0,3,0) = (24,0,0).
+        Quad {
+            corner: DVec3::new(-4.0, 0.0, 4.0),
+            u: DVec3::new(0.0, 0.0, -8.0),
+            v: DVec3::new(0.0, 3.0, 0.0),
+            n,
+        },
+        // Right wall x = +4: normal −x: (0,0,8)×(0,3,0) = (−24,0,0).
+        Quad {
+            corner: DVec3::new(4.0, 0.0, -4.0),
+            u: DVec3::new(0.0, 0.0, 8.0),
+            v: DVec3::new(0.0, 3.0, 0.0),
+            n,
+        },
+    ]
+}
+
+pub const ROOM_MIN: [f32; 3] = [-4.0, 0.0, -4.0];
+pub const ROOM_MAX: [f32; 3] = [4.0, 3.0, 4.0];
+
+/// A camera inside the room whose view crosses the image edges, and whose floor
+/// passes under the eye, through the near plane.
+pub fn room_camera(width: u32, height: u32) -> Camera {
+    Camera {
+        eye: [0.3, 1.2, 2.5],
+        target: [-0.4, 0.6, -2.0],
+        up: [0.0, 1.0, 0.0],
+        fov_y_deg: 70.0,
+        width,
+        height,
+    }
+}
+
+/// A diffuse (L = 0) room: c00 = radiance / Y00 per vertex.
+pub fn diffuse_room(n: usize) -> Solution {
+    let mut batch = Batch {
+        representation: Representation::Sh { order: 0 },
+        scalar: ScalarType::F32,
+        vertices: Vec::new(),
+        coefficients: Vec::new(),
+        indices: Vec::new(),
+    };
+    for quad in room_quads(n) {
+        let (vertices, indices) = quad.vertices_and_indices();
+        let base = batch.vertices.len() as u32;
+        for v in &vertices {
+            let l = diffuse_radiance(DVec3::from(v.position.map(f64::from)));
+            batch
+                .coefficients
+                .extend(l.iter().map(|x| (x / solver::sh::Y00) as f32));
+        }
+        batch.vertices.extend(vertices);
+        batch.indices.extend(indices.iter().map(|i| i + base));
+    }
+    Solution {
+        header: header(ROOM_MIN, ROOM_MAX, room_camera(256, 256)),
+        batches: vec![batch],
+    }
+}
+
+/// The light the glossy floor reflects.
+pub const LIGHT: DVec3 = DVec3::new(0.0, 2.8, -3.0);
+
+/// A glossy floor of order `order` (a lobe about the mirror direction of
+/// [`LIGHT`] at each vertex, from the exact Legendre expansion of a Phong-like
+/// lobe), plus the diffuse walls as a second batch.
+pub fn glossy_room(n: usize, order: u32) -> Solution {
+    let quads = room_quads(n);
+    let mut floor = Batch {
+        representation: Representation::Sh { order },
+        scalar: ScalarType::F32,
+        vertices: Vec::new(),
+        coefficients: Vec::new(),
+        indices: Vec::new(),
+    };
+    let (vertices, indices) = quads[0].vertices_and_indices();
+    // Zonal lobe g(μ) = μ^e for μ > 0: Legendre coefficients by quadrature.
+    let exponent = 12.0;
+    let (mu, w) = solver::sh::gauss_legendre(64);
+    let mut legendre = vec![0.0; order as usize + 1];
+    let mut p = vec![0.0; order as usize + 1];
+    for (x, wx) in mu.iter().zip(&w) {
+        let g = if *x > 0.0 { x.powf(exponent) } else { 0.0 };
+        solver::sh::legendre_all(order, *x, &mut p);
+        for l in 0..=order as usize {
+            legendre[l] += (2 * l + 1) as f64 / 2.0 * g * p[l] * wx;
+        }
+    }
+    let zonal = solver::sh::zonal_from_legendre(&legendre);
+    let count = solver::sh::coefficient_count(order);
+    let mut rotated = vec![0.0; count];
+    for v in &vertices {
+        let pos = DVec3::from(v.position.map(f64::from));
+        let to_light = (LIGHT - pos).normalize();
+        // Mirror direction in the floor's frame (n = +y, t = +x, b = n × t = −z).
+        let (nrm, tan) = (DVec3::Y, DVec3::X);
+        let r = 2.0 * to_light.dot(nrm) * nrm - to_light;
+        let local = solver::sh::to_local(r, nrm, tan);
+        solver::sh::zonal_rotated(order, &zonal, local, &mut rotated);
+        let base = diffuse_radiance(pos);
+        for k in 0..count {
+            for c in 0..3 {
+                let diffuse = if k == 0 {
+                    0.3 * base[c] / solver::sh::Y00
+                } else {
+                    0.0
+                };
+                floor.coefficients.push((diffuse + 2.0 * rotated[k]) as f32);
+            }
+        }
+    }
+    floor.vertices = vertices;
+    floor.indices = indices;
+    let mut walls = diffuse_room(n);
+    // Drop the diffuse floor (the first quad's vertices and triangles).
+    let floor_vertices = (n + 1) * (n + 1);
+    let floor_triangles = 6 * n * n;
+    let w = &mut walls.batches[0];
+    w.vertices.drain(..floor_vertices);
+    w.coefficients.drain(..floor_vertices * 3);
+    w.indices.drain(..floor_triangles);
+    for i in &mut w.indices {
+        *i -= floor_vertices as u32;
+    }
+    let mut solution = walls;
+    solution.header.mode = SolveMode::Directional;
+    solution.batches.push(floor);
+    solution
+}
+
+/// Writes actual/expected/difference images into a temp folder and returns its
+/// path (for failure messages).
+pub fn write_failure_images(
+    name: &str,
+    width: u32,
+    height: u32,
+    actual: &[f32],
+    expected: &[f32],
+) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("runtime-test-{name}-{}", std::process::id()));
+    let _ = std::fs::create_dir_all(&dir);
+    let save = |file: &str, data: &[f32], gain: f32| {
+        let mut img = image::RgbImage::new(width, height);
+        for (i, px) in img.pixels_mut().enumerate() {
+            for c in 0..3 {
+                let v = data[i * 3 + c] * gain;
+                px.0[c] = (runtime::render::tonemap::srgb_encode(v) * 255.0).round() as u8;
+            }
+        }
+        let _ = img.save(dir.join(file));
+    };
+    let diff: Vec<f32> = actual
+        .iter()
+        .zip(expected)
+        .map(|(a, e)| (a - e).abs())
+        .collect();
+    save("actual.png", actual, 1.0);
+    save("expected.png", expected, 1.0);
+    save("difference-x10.png", &diff, 10.0);
+    dir
+}
