@@ -9,6 +9,7 @@
 //!   mock session (scripted head poses, offscreen swapchain).
 //! * [`cli`]: `runtime screenshot` and `runtime bench`.
 
+pub mod cli;
 pub mod gpu;
 pub mod render;
 pub mod session;

@@ -1,0 +1,198 @@
+//! `runtime bench`: offscreen stereo frames through the mock session.
+
+use super::{load_solution, open_gpu, parse_size, report_truncation, RenderOptions};
+use crate::render::{RendererDesc, StereoRenderer, ToneSettings};
+use crate::session::{run_frame, HeadPath, MockDesc, MockSession, Session};
+use anyhow::Result;
+use glam::DVec3;
+use serde::Serialize;
+use std::path::PathBuf;
+use std::time::Instant;
+
+#[derive(clap::Args, Debug, Clone)]
+pub struct BenchArgs {
+    /// The solution file.
+    pub solution: PathBuf,
+    /// Stereo frames to time (after the warm-up frames).
+    #[arg(long, value_name = "N", default_value_t = 60)]
+    pub frames: u32,
+    /// Untimed frames first (pipeline and cache warm-up).
+    #[arg(long, value_name = "N", default_value_t = 3)]
+    pub warmup: u32,
+    /// Image size per eye, WIDTHxHEIGHT.
+    #[arg(long, value_name = "WxH", value_parser = parse_size, default_value = "1024x1024")]
+    pub size: (u32, u32),
+    /// Head path (`t x y z yaw pitch` per line, scene coordinates, degrees);
+    /// default: an orbit around the scene at the header camera's eye height.
+    #[arg(long, value_name = "FILE")]
+    pub walk: Option<PathBuf>,
+    /// Interpupillary distance, metres.
+    #[arg(long, value_name = "METRES", default_value_t = 0.064)]
+    pub ipd: f64,
+    /// Print one JSON object instead of text.
+    #[arg(long)]
+    pub json: bool,
+    #[command(flatten)]
+    pub render: RenderOptions,
+}
+
+/// What `runtime bench` measures.
+#[derive(Clone, Debug, Serialize)]
+pub struct BenchReport {
+    /// Median and 99th-percentile wall time per stereo frame (record, submit and
+    /// wait for the GPU), milliseconds.
+    pub median_ms: f64,
+    pub p99_ms: f64,
+    pub frames: u32,
+    pub width: u32,
+    pub height: u32,
+    pub vertices: u64,
+    pub triangles: u64,
+    /// Vertex SH evaluations (one per vertex per eye, any order) per second at
+    /// the median frame time.
+    pub sh_evals_per_second: f64,
+    /// Basis-function terms `(L+1)²` summed over vertices and eyes, per second.
+    pub sh_terms_per_second: f64,
+    pub device: String,
+    pub multiview: String,
+    pub samples: u32,
+    pub coefficients: String,
+    pub max_order: Option<u32>,
+}
+
+fn percentile(sorted: &[f64], p: f64) -> f64 {
+    if sorted.is_empty() {
+        return 0.0;
+    }
+    let rank = (p / 100.0 * (sorted.len() - 1) as f64).round() as usize;
+    sorted[rank.min(sorted.len() - 1)]
+}
+
+pub fn run(args: &BenchArgs) -> Result<BenchReport> {
+    args.render.check()?;
+    anyhow::ensure!(args.frames > 0, "--frames must be at least 1");
+    let solution = load_solution(&args.solution)?;
+    report_truncation(&solution, args.render.max_order);
+    let header = &solution.header;
+    let offset = DVec3::from(header.recentre_offset);
+    let path = match &args.walk {
+        Some(file) => HeadPath::load(file)?,
+        None => {
+            let lo = DVec3::from(header.bounds_min.map(f64::from)) + offset;
+            let hi = DVec3::from(header.bounds_max.map(f64::from)) + offset;
+            let centre = 0.5 * (lo + hi);
+            let eye = DVec3::from(header.camera.eye);
+            let up = DVec3::from(header.up_axis.vector());
+            let flat = |v: DVec3| v - up * v.dot(up);
+            let mut radius = flat(eye - centre).length();
+            if !(radius > 0.0 && radius.is_finite()) {
+                radius = 0.5 * (hi - lo).length().max(1e-3);
+            }
+            HeadPath::orbit(centre, eye, radius, 10.0, header.up_axis)
+        }
+    };
+    let (width, height) = args.size;
+    let gpu = open_gpu(args.render.validation)?;
+    let total = u64::from(args.warmup + args.frames);
+    let mut session = MockSession::new(
+        &gpu,
+        MockDesc {
+            width,
+            height,
+            images: 3,
+            path,
+            ipd_m: args.ipd,
+            units_per_metre: header.units_per_metre,
+            up_axis: header.up_axis,
+            recentre_offset: offset,
+            fov_y_deg: header.camera.fov_y_deg,
+            frame_rate: 90.0,
+            frames: Some(total),
+        },
+    )?;
+    let desc = RendererDesc {
+        width,
+        height,
+        max_samples: args.render.samples,
+        multiview: args.render.multiview,
+        storage: args.render.coefficients,
+        max_order: args.render.max_order,
+        tone: ToneSettings {
+            exposure: args.render.exposure,
+            curve: args.render.tonemap,
+        },
+    };
+    let mut renderer = StereoRenderer::new(&gpu, &solution, desc, &session.swapchain())?;
+    let mut times = Vec::new();
+    while !session.should_exit() {
+        let start = Instant::now();
+        let report = run_frame(&mut session, &mut renderer)?;
+        let ms = start.elapsed().as_secs_f64() * 1e3;
+        if report.timing.index >= u64::from(args.warmup) {
+            times.push(ms);
+        }
+    }
+    times.sort_by(f64::total_cmp);
+    let median_ms = percentile(&times, 50.0);
+    let p99_ms = percentile(&times, 99.0);
+    let scene = renderer.scene();
+    let evals: u64 = scene
+        .draws
+        .iter()
+        .map(|d| u64::from(d.vertex_count) * 2)
+        .sum();
+    let terms: u64 = scene
+        .draws
+        .iter()
+        .map(|d| u64::from(d.vertex_count) * 2 * (u64::from(d.order) + 1).pow(2))
+        .sum();
+    let per_second = |count: u64| {
+        if median_ms > 0.0 {
+            count as f64 / (median_ms / 1e3)
+        } else {
+            0.0
+        }
+    };
+    let report = BenchReport {
+        median_ms,
+        p99_ms,
+        frames: args.frames,
+        width,
+        height,
+        vertices: scene.vertex_count,
+        triangles: scene.triangle_count,
+        sh_evals_per_second: per_second(evals),
+        sh_terms_per_second: per_second(terms),
+        device: gpu.info.describe(),
+        multiview: format!("{:?}", renderer.multiview_path()),
+        samples: renderer.samples(),
+        coefficients: format!("{:?}", args.render.coefficients),
+        max_order: args.render.max_order,
+    };
+    if args.json {
+        println!("{}", serde_json::to_string(&report)?);
+    } else {
+        println!(
+            "{} stereo frames of {}x{} per eye on {} ({:?} multiview, {}x MSAA, {:?} coefficients)",
+            report.frames,
+            width,
+            height,
+            report.device,
+            renderer.multiview_path(),
+            report.samples,
+            args.render.coefficients
+        );
+        println!(
+            "median {:.2} ms, p99 {:.2} ms per stereo frame; {} vertices, {} triangles; {:.3e} SH evaluations/s ({:.3e} basis terms/s)",
+            median_ms, p99_ms, report.vertices, report.triangles, report.sh_evals_per_second,
+            report.sh_terms_per_second
+        );
+    }
+    let log = gpu.validation_log();
+    anyhow::ensure!(
+        log.count() == 0,
+        "{} Vulkan validation messages (printed above)",
+        log.count()
+    );
+    Ok(report)
+}

@@ -1,0 +1,125 @@
+//! The `runtime` command line: `screenshot` and `bench`.
+
+mod bench;
+mod output;
+mod screenshot;
+
+pub use bench::{BenchArgs, BenchReport};
+pub use output::{write_exr, write_png};
+pub use screenshot::ScreenshotArgs;
+
+use anyhow::{bail, Context, Result};
+use clap::{Parser, Subcommand};
+use std::path::Path;
+
+#[derive(Parser, Debug)]
+#[command(
+    name = "runtime",
+    version,
+    about = "Renders a radiosity solution file in stereo with Vulkan (offscreen screenshots, benchmarks)."
+)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+pub enum Command {
+    /// Renders one stereo pair (or one mono image) to PNG (exposed, sRGB) and EXR
+    /// (linear radiance).
+    Screenshot(ScreenshotArgs),
+    /// Renders offscreen stereo frames along a scripted walk and prints timings.
+    Bench(BenchArgs),
+}
+
+/// Runs a parsed command line.
+pub fn run(cli: Cli) -> Result<()> {
+    match cli.command {
+        Command::Screenshot(args) => screenshot::run(&args),
+        Command::Bench(args) => bench::run(&args).map(|_| ()),
+    }
+}
+
+/// Options shared by the commands that render.
+#[derive(clap::Args, Debug, Clone)]
+pub struct RenderOptions {
+    /// Cap on the SH order evaluated; bands above it are dropped and the error
+    /// that costs (Parseval) is printed per batch.
+    #[arg(long, value_name = "L")]
+    pub max_order: Option<u32>,
+    /// Exposure: a linear multiplier of radiance before the tone curve.
+    #[arg(long, value_name = "E", default_value_t = 1.0)]
+    pub exposure: f32,
+    /// Tone curve after exposure.
+    #[arg(long, value_enum, default_value_t = crate::render::ToneCurve::Reinhard)]
+    pub tonemap: crate::render::ToneCurve,
+    /// Most samples per pixel (MSAA); the device may allow fewer; 1 turns it off.
+    #[arg(long, value_name = "N", default_value_t = 4)]
+    pub samples: u32,
+    /// How the two eyes are drawn (auto: one pass per view on lavapipe, whose
+    /// multiview clipping is broken; a single multiview pass elsewhere).
+    #[arg(long, value_enum, default_value_t = crate::render::MultiviewMode::Auto)]
+    pub multiview: crate::render::MultiviewMode,
+    /// GPU storage of SH coefficients.
+    #[arg(long, value_enum, default_value_t = crate::render::CoefficientStorage::F32)]
+    pub coefficients: crate::render::CoefficientStorage,
+    /// Enable the Vulkan validation layer (also: RUNTIME_VALIDATION=1).
+    #[arg(long)]
+    pub validation: bool,
+}
+
+impl RenderOptions {
+    pub fn check(&self) -> Result<()> {
+        if !(self.exposure.is_finite() && self.exposure > 0.0) {
+            bail!(
+                "--exposure {} must be a positive, finite number",
+                self.exposure
+            );
+        }
+        Ok(())
+    }
+}
+
+/// Parses `WxH` (e.g. `1024x768`).
+pub fn parse_size(text: &str) -> Result<(u32, u32), String> {
+    let (w, h) = text
+        .split_once(['x', 'X'])
+        .ok_or_else(|| format!("size {text:?} is not WIDTHxHEIGHT (e.g. 1024x1024)"))?;
+    let parse = |s: &str| {
+        s.trim()
+            .parse::<u32>()
+            .ok()
+            .filter(|&v| (1..=solver::camera::MAX_IMAGE_SIDE).contains(&v))
+            .ok_or_else(|| {
+                format!(
+                    "size {text:?}: {s:?} is not a whole number of pixels in 1..={}",
+                    solver::camera::MAX_IMAGE_SIDE
+                )
+            })
+    };
+    Ok((parse(w)?, parse(h)?))
+}
+
+/// Reads and validates a solution file, with the reader's one-line error.
+pub fn load_solution(path: &Path) -> Result<solver::format::Solution> {
+    solver::format::read_solution(path).map_err(anyhow::Error::new)
+}
+
+/// Creates the GPU context, reporting a missing device with the packages to
+/// install.
+pub fn open_gpu(validation: bool) -> Result<crate::gpu::Gpu> {
+    crate::gpu::Gpu::new(&crate::gpu::GpuDesc { validation }).context("cannot start Vulkan")
+}
+
+/// Prints what a `--max-order` cap costs, per batch.
+pub fn report_truncation(solution: &solver::format::Solution, cap: Option<u32>) {
+    if let Some(cap) = cap {
+        let lines = crate::render::truncation::truncation_report(&solution.batches, cap);
+        if lines.is_empty() {
+            eprintln!("--max-order {cap}: no batch has a higher order; nothing dropped");
+        }
+        for line in lines {
+            eprintln!("--max-order {cap}: {line}");
+        }
+    }
+}

@@ -1,0 +1,119 @@
+//! `runtime screenshot`: one stereo pair (or a mono image) to PNG and EXR.
+
+use super::{
+    load_solution, open_gpu, parse_size, report_truncation, write_exr, write_png, RenderOptions,
+};
+use crate::render::{RendererDesc, StereoRenderer, ToneSettings};
+use crate::session::OffscreenSwapchain;
+use anyhow::{Context, Result};
+use glam::DVec3;
+use solver::camera::Camera;
+use std::path::PathBuf;
+
+#[derive(clap::Args, Debug, Clone)]
+pub struct ScreenshotArgs {
+    /// The solution file.
+    pub solution: PathBuf,
+    /// Eye position, scene coordinates (default: the header's camera).
+    #[arg(long, num_args = 3, value_names = ["X", "Y", "Z"], allow_negative_numbers = true)]
+    pub eye: Option<Vec<f64>>,
+    /// Point looked at, scene coordinates (default: the header's camera).
+    #[arg(long, num_args = 3, value_names = ["X", "Y", "Z"], allow_negative_numbers = true)]
+    pub target: Option<Vec<f64>>,
+    /// Up direction (default: the header's camera).
+    #[arg(long, num_args = 3, value_names = ["X", "Y", "Z"], allow_negative_numbers = true)]
+    pub up: Option<Vec<f64>>,
+    /// Vertical field of view, degrees (default: the header's camera).
+    #[arg(long, value_name = "DEG")]
+    pub fov_y: Option<f64>,
+    /// Image size per eye, WIDTHxHEIGHT (default: the header's camera).
+    #[arg(long, value_name = "WxH", value_parser = parse_size)]
+    pub size: Option<(u32, u32)>,
+    /// Interpupillary distance in metres (scaled by the header's units_per_metre).
+    #[arg(long, value_name = "METRES", default_value_t = 0.064)]
+    pub ipd: f64,
+    /// One image from the eye itself instead of a stereo pair.
+    #[arg(long)]
+    pub mono: bool,
+    /// Output prefix: PREFIX-left/-right .png and .exr, or PREFIX.png/.exr with --mono.
+    #[arg(long, value_name = "PREFIX")]
+    pub out: PathBuf,
+    #[command(flatten)]
+    pub render: RenderOptions,
+}
+
+fn vec3(v: &Option<Vec<f64>>, default: [f64; 3]) -> [f64; 3] {
+    match v {
+        Some(v) if v.len() == 3 => [v[0], v[1], v[2]],
+        _ => default,
+    }
+}
+
+pub fn run(args: &ScreenshotArgs) -> Result<()> {
+    args.render.check()?;
+    if !(args.ipd.is_finite() && args.ipd >= 0.0) {
+        anyhow::bail!(
+            "--ipd {} must be a finite, non-negative distance in metres",
+            args.ipd
+        );
+    }
+    let solution = load_solution(&args.solution)?;
+    let header = &solution.header;
+    let (width, height) = args
+        .size
+        .unwrap_or((header.camera.width, header.camera.height));
+    let camera = Camera {
+        eye: vec3(&args.eye, header.camera.eye),
+        target: vec3(&args.target, header.camera.target),
+        up: vec3(&args.up, header.camera.up),
+        fov_y_deg: args.fov_y.unwrap_or(header.camera.fov_y_deg),
+        width,
+        height,
+    };
+    camera.validate().context("invalid camera")?;
+    report_truncation(&solution, args.render.max_order);
+    let offset = DVec3::from(header.recentre_offset);
+    let views = if args.mono {
+        vec![camera.mono_view(offset)]
+    } else {
+        camera
+            .stereo_views(args.ipd * header.units_per_metre, offset)
+            .to_vec()
+    };
+
+    let gpu = open_gpu(args.render.validation)?;
+    let swapchain = OffscreenSwapchain::new(&gpu, width, height, 1)?;
+    let desc = RendererDesc {
+        width,
+        height,
+        max_samples: args.render.samples,
+        multiview: args.render.multiview,
+        storage: args.render.coefficients,
+        max_order: args.render.max_order,
+        tone: ToneSettings {
+            exposure: args.render.exposure,
+            curve: args.render.tonemap,
+        },
+    };
+    let mut renderer = StereoRenderer::new(&gpu, &solution, desc, &swapchain.desc())?;
+    renderer.render(&views, 0)?;
+    let eyes = renderer.read_back(&gpu, 0, views.len())?;
+    let names: Vec<String> = if args.mono {
+        vec![String::new()]
+    } else {
+        vec!["-left".into(), "-right".into()]
+    };
+    for (eye, suffix) in eyes.iter().zip(names) {
+        let base = args.out.as_os_str().to_string_lossy().into_owned() + &suffix;
+        let png = PathBuf::from(format!("{base}.png"));
+        let exr = PathBuf::from(format!("{base}.exr"));
+        write_png(&png, eye.width, eye.height, &eye.srgb)?;
+        write_exr(&exr, eye.width, eye.height, &eye.radiance)?;
+        println!("wrote {} and {}", png.display(), exr.display());
+    }
+    let log = gpu.validation_log();
+    if log.count() > 0 {
+        anyhow::bail!("{} Vulkan validation messages (printed above)", log.count());
+    }
+    Ok(())
+}
