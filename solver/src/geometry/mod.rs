@@ -15,6 +15,7 @@
 //! relative to the scene's own centre, with a scale-aware epsilon
 //! ([`visibility::Occluder::scene_epsilon`]) that absorbs the f32 rounding.
 
+mod bvh;
 pub mod formfactor;
 pub mod polygon;
 pub mod sampling;

@@ -2,15 +2,28 @@
 //! input polygons (000 §3.4: rays are tested against the input polygons, never
 //! against the hundreds of mesh elements each one becomes).
 //!
-//! Precision: the occluder stores triangles in f32 relative to the centre of
-//! its own bounding box (subtracted in f64), so a scene far from the origin
+//! **Structure.** The polygons are triangulated and put in a 4-wide BVH
+//! (binned SAH, collapsed; see [`super::bvh`]). Every query is traced as a
+//! *packet* of up to 64 segments that share their origin (one receiving
+//! vertex's samples of a source): the packet walks the tree once, each node's
+//! four child boxes are culled for the whole packet at once by interval
+//! arithmetic on the rays' inverse directions plus the packet's bounding box,
+//! and only at leaves are rays tested one by one, eight at a time in SIMD lanes
+//! (AVX2 when the CPU has it, chosen at run time; plain code otherwise). With a
+//! shared origin the Möller–Trumbore test needs three dot products per ray per
+//! triangle; everything else is computed once per triangle and packet. Rays
+//! leave the packet as soon as they are blocked.
+//!
+//! **Precision.** The occluder stores triangles in f32 relative to the centre
+//! of its own bounding box (subtracted in f64), so a scene far from the origin
 //! (translated by 1e6) answers exactly like the same scene at the origin. f32
-//! rounding of a vertex is then ≤ 6e-8 of the scene's half-diagonal; the
+//! rounding of a vertex is then ≤ 6e-8 of the scene's half-diagonal. The
 //! [`Occluder::scene_epsilon`] of 1e-5 of the diagonal, node boxes padded by
-//! 1e-6 of the diagonal and barycentric tests widened by 1e-5 keep the tests
-//! conservative: a ray that passes within rounding of an edge counts as
-//! blocked, never as leaking through a closed surface.
+//! 1e-6 of the diagonal and barycentric tests widened by [`BARY_EPSILON`] keep
+//! the tests conservative: a ray that passes within rounding of an edge counts
+//! as blocked, never as leaking through a closed surface.
 
+use super::bvh::{self, Aabb, Node4, EMPTY_SLOT, LEAF_BIT};
 use super::polygon::triangulate;
 use glam::DVec3;
 
@@ -19,34 +32,33 @@ use glam::DVec3;
 pub const SCENE_EPSILON: f64 = 1e-5;
 
 /// Node boxes are padded by this fraction of the diagonal, far above f32
-/// rounding of the relative coordinates (≈ 6e-8 of the half-diagonal), so the
-/// f32 slab test never misses a box that a triangle's hit lies in.
+/// rounding of the relative coordinates (≈ 6e-8 of the half-diagonal) and of
+/// the slab test's products, so the f32 box tests never miss a box that a
+/// triangle's hit lies in.
 const BOX_PADDING: f64 = 1e-6;
 
-/// Barycentric tolerance of the f32 triangle test: hits within this fraction of
-/// a triangle's extent outside its edges count, so shared edges never leak.
-const BARY_EPSILON: f32 = 1e-5;
+/// Barycentric tolerance of the f32 triangle test (a fraction of the triangle's
+/// own parametrisation): hits this close outside an edge count, so edges shared
+/// by two triangles never leak through f32 rounding.
+pub const BARY_EPSILON: f32 = 2e-6;
 
-/// Leaves hold at most this many triangles.
-const MAX_LEAF: usize = 4;
+/// The most segments traced together; longer target lists are split.
+pub const MAX_PACKET: usize = 64;
 
-/// A triangle prepared for the Möller–Trumbore test: one vertex and two edges,
-/// in f32, relative to the occluder's centre.
+/// SIMD width of the per-ray tests.
+const LANES: usize = 8;
+const CHUNKS: usize = MAX_PACKET / LANES;
+
+/// A triangle prepared for the shared-origin Möller–Trumbore test, in f32
+/// relative to the occluder's centre: one vertex, two edges and their cross
+/// product (the unnormalised geometric normal).
 #[derive(Clone, Copy, Debug)]
+#[repr(C)]
 struct Triangle {
     v0: [f32; 3],
     e1: [f32; 3],
     e2: [f32; 3],
-}
-
-/// A binary BVH node. Inner nodes (`count == 0`) have their children at
-/// `first` and `first + 1`; leaves hold `count` triangles from `first`.
-#[derive(Clone, Copy, Debug)]
-struct Node {
-    lo: [f32; 3],
-    first: u32,
-    hi: [f32; 3],
-    count: u32,
+    n: [f32; 3],
 }
 
 /// An any-hit occlusion structure over a scene's polygons. `Send + Sync`:
@@ -55,23 +67,26 @@ struct Node {
 pub struct Occluder {
     centre: DVec3,
     epsilon: f64,
-    nodes: Vec<Node>,
+    nodes: Vec<Node4>,
     triangles: Vec<Triangle>,
     /// For each stored triangle, the index of the input polygon it came from.
     polygon_of: Vec<u32>,
+    /// Whether the AVX2 + FMA path can run on this CPU (checked once).
+    avx2: bool,
 }
 
 impl Occluder {
     /// Builds the occluder over `polygons` (planar, simple, counter-clockwise;
     /// convex or not). Each polygon is triangulated (fan or ear clipping);
-    /// degenerate polygons contribute nothing. An empty scene gives an occluder
-    /// that blocks nothing.
+    /// degenerate polygons and polygons with non-finite vertices contribute
+    /// nothing. An empty scene gives an occluder that blocks nothing.
     pub fn new<P: AsRef<[DVec3]>>(polygons: &[P]) -> Self {
         let mut lo = DVec3::splat(f64::INFINITY);
         let mut hi = DVec3::splat(f64::NEG_INFINITY);
         for p in polygons {
-            for &v in p.as_ref() {
-                if v.is_finite() {
+            let p = p.as_ref();
+            if p.iter().all(|v| v.is_finite()) {
+                for &v in p {
                     lo = lo.min(v);
                     hi = hi.max(v);
                 }
@@ -91,6 +106,7 @@ impl Occluder {
 
         let mut triangles = Vec::new();
         let mut polygon_of = Vec::new();
+        let mut boxes = Vec::new();
         let mut tris = Vec::new();
         for (index, p) in polygons.iter().enumerate() {
             let p = p.as_ref();
@@ -100,27 +116,33 @@ impl Occluder {
             tris.clear();
             triangulate(p, &mut tris);
             for t in &tris {
-                let v0 = p[t[0]] - centre;
-                let v1 = p[t[1]] - centre;
-                let v2 = p[t[2]] - centre;
+                let v = [p[t[0]] - centre, p[t[1]] - centre, p[t[2]] - centre];
+                let v32 = v.map(to_f32);
+                let e1 = sub(v32[1], v32[0]);
+                let e2 = sub(v32[2], v32[0]);
                 triangles.push(Triangle {
-                    v0: to_f32(v0),
-                    e1: to_f32(v1 - v0),
-                    e2: to_f32(v2 - v0),
+                    v0: v32[0],
+                    e1,
+                    e2,
+                    n: cross(e1, e2),
                 });
+                let mut b = Aabb::EMPTY;
+                v32.iter().for_each(|&x| b.grow_point(x));
+                boxes.push(b);
                 polygon_of.push(index as u32);
             }
         }
         let padding = (BOX_PADDING * diagonal) as f32;
-        let (nodes, order) = build_bvh(&triangles, padding);
-        let triangles = order.iter().map(|&i| triangles[i as usize]).collect();
-        let polygon_of = order.iter().map(|&i| polygon_of[i as usize]).collect();
+        let tree = bvh::build(&boxes, padding);
+        let triangles = tree.order.iter().map(|&i| triangles[i as usize]).collect();
+        let polygon_of = tree.order.iter().map(|&i| polygon_of[i as usize]).collect();
         Occluder {
             centre,
             epsilon,
-            nodes,
+            nodes: tree.nodes,
             triangles,
             polygon_of,
+            avx2: has_avx2(),
         }
     }
 
@@ -131,8 +153,8 @@ impl Occluder {
     }
 
     /// A scale-aware offset: 1e-5 of the scene's bounding-box diagonal. Start
-    /// rays this far off a surface (along its normal) and it is far above the
-    /// occluder's f32 rounding; segment ends closer than this to a surface are
+    /// rays this far off a surface (along its normal): it is far above the
+    /// occluder's f32 rounding. Segment ends closer than this to a surface are
     /// not blocked by it.
     pub fn scene_epsilon(&self) -> f64 {
         self.epsilon
@@ -154,54 +176,108 @@ impl Occluder {
     /// not blocked by those surfaces. Segments shorter than two epsilons are
     /// visible.
     pub fn visible(&self, from: DVec3, to: DVec3) -> bool {
-        match SegmentRay::new(self, from, to) {
-            Some(ray) => !self.any_hit(&ray),
-            None => true,
-        }
+        self.trace(from, std::slice::from_ref(&to)) & 1 == 1
     }
 
     /// How many of the segments from `origin` to each of `targets` are
-    /// unobstructed; the same answers as calling [`Occluder::visible`] for each.
-    /// One receiver's samples of a source share their origin, which this path
-    /// exploits.
+    /// unobstructed; the same answers as calling [`Occluder::visible`] for each,
+    /// but traced together as packets (the fast path).
     pub fn count_visible(&self, origin: DVec3, targets: &[DVec3]) -> u32 {
-        targets.iter().filter(|&&t| self.visible(origin, t)).count() as u32
+        targets
+            .chunks(MAX_PACKET)
+            .map(|chunk| self.trace(origin, chunk).count_ones())
+            .sum()
     }
 
     /// Per-target visibility from a shared origin into `out` (cleared first),
     /// the δ_i of 000 eq. 3.1; the same answers as [`Occluder::visible`].
     pub fn visible_each(&self, origin: DVec3, targets: &[DVec3], out: &mut Vec<bool>) {
         out.clear();
-        out.extend(targets.iter().map(|&t| self.visible(origin, t)));
+        for chunk in targets.chunks(MAX_PACKET) {
+            let bits = self.trace(origin, chunk);
+            out.extend((0..chunk.len()).map(|i| bits >> i & 1 == 1));
+        }
     }
 
-    fn any_hit(&self, ray: &SegmentRay) -> bool {
-        if self.nodes.is_empty() {
-            return false;
+    /// Traces up to [`MAX_PACKET`] segments from `origin`; bit i of the result
+    /// is set when segment i is unobstructed.
+    fn trace(&self, origin: DVec3, targets: &[DVec3]) -> u64 {
+        debug_assert!(targets.len() <= MAX_PACKET);
+        let mut packet = Packet::new(self, origin, targets);
+        if packet.alive != 0 && !self.nodes.is_empty() {
+            #[cfg(target_arch = "x86_64")]
+            if self.avx2 {
+                // SAFETY: `avx2` is true only when the running CPU reported AVX2
+                // and FMA support (has_avx2), which is all that the
+                // target-feature function requires.
+                unsafe { self.traverse_avx2(&mut packet) };
+                return packet.visible();
+            }
+            self.traverse(&mut packet);
         }
-        let mut stack = [0u32; 64];
+        packet.visible()
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    fn traverse_avx2(&self, packet: &mut Packet) {
+        // The same code as the portable path, compiled with AVX2 so that the
+        // eight-lane loops become single instructions.
+        self.traverse(packet);
+    }
+
+    /// Walks the tree once for the whole packet, clearing `packet.alive` bits
+    /// of blocked rays; stops early when every ray is blocked.
+    #[inline(always)]
+    fn traverse(&self, packet: &mut Packet) {
+        let mut stack = [0u32; 256];
         let mut top = 1;
         stack[0] = 0;
         while top > 0 {
             top -= 1;
             let node = &self.nodes[stack[top] as usize];
-            if !ray.hits_box(node) {
+            let (hit_mask, near) = packet.cull_children(node);
+            if hit_mask == 0 {
                 continue;
             }
-            if node.count > 0 {
-                let first = node.first as usize;
-                for tri in &self.triangles[first..first + node.count as usize] {
-                    if ray.hits_triangle(tri) {
-                        return true;
+            // Visit the children nearest the origin first: a blocker there ends
+            // the rays soonest. Leaves are tested near-to-far now; inner
+            // children are pushed far-to-near so the nearest is popped next.
+            let mut order = [0usize, 1, 2, 3];
+            order.sort_unstable_by(|&a, &b| near[a].total_cmp(&near[b]));
+            for &k in &order {
+                let child = node.child[k];
+                if hit_mask & (1 << k) != 0 && child & LEAF_BIT != 0 {
+                    let first = (child & !LEAF_BIT) as usize;
+                    let leaf = &self.triangles[first..first + node.count[k] as usize];
+                    let rays = packet.rays_in_box(node, k);
+                    if rays != 0 && packet.intersect_leaf(leaf, rays) {
+                        return;
                     }
                 }
-            } else {
-                // Depth is bounded by the builder (≤ 60 levels), see build_bvh.
-                stack[top] = node.first;
-                stack[top + 1] = node.first + 1;
-                top += 2;
+            }
+            for &k in order.iter().rev() {
+                let child = node.child[k];
+                if hit_mask & (1 << k) != 0 && child & LEAF_BIT == 0 {
+                    // The tree is at most ~70 binary levels deep (bvh::build:
+                    // median splits below depth 48), and each 4-wide level
+                    // pushes at most 3 more entries than it pops: 256 is ample.
+                    stack[top] = child;
+                    top += 1;
+                }
             }
         }
+    }
+}
+
+/// Whether this CPU can run the AVX2 + FMA path.
+fn has_avx2() -> bool {
+    #[cfg(target_arch = "x86_64")]
+    {
+        std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
         false
     }
 }
@@ -210,93 +286,15 @@ fn to_f32(v: DVec3) -> [f32; 3] {
     [v.x as f32, v.y as f32, v.z as f32]
 }
 
-/// A segment as an f32 ray relative to the occluder's centre, with its
-/// parameter window [t_min, t_max] excluding the ends.
-struct SegmentRay {
-    origin: [f32; 3],
-    dir: [f32; 3],
-    inv_dir: [f32; 3],
-    t_min: f32,
-    t_max: f32,
-}
-
-impl SegmentRay {
-    fn new(occ: &Occluder, from: DVec3, to: DVec3) -> Option<Self> {
-        let d = to - from;
-        let len = d.length();
-        if !(len > 2.0 * occ.epsilon) || !len.is_finite() {
-            return None;
-        }
-        let t_eps = occ.epsilon / len;
-        let origin = to_f32(from - occ.centre);
-        let dir = to_f32(d);
-        let inv = |c: f32| {
-            // A zero component would make 0 · ∞ = NaN in the slab test; a huge
-            // finite inverse gives the same answer without NaN.
-            let c = if c.abs() < 1e-30 {
-                1e-30f32.copysign(c)
-            } else {
-                c
-            };
-            1.0 / c
-        };
-        Some(SegmentRay {
-            origin,
-            dir,
-            inv_dir: [inv(dir[0]), inv(dir[1]), inv(dir[2])],
-            t_min: t_eps as f32,
-            t_max: (1.0 - t_eps) as f32,
-        })
-    }
-
-    #[inline]
-    fn hits_box(&self, node: &Node) -> bool {
-        let mut t0 = self.t_min;
-        let mut t1 = self.t_max;
-        for a in 0..3 {
-            let ta = (node.lo[a] - self.origin[a]) * self.inv_dir[a];
-            let tb = (node.hi[a] - self.origin[a]) * self.inv_dir[a];
-            t0 = t0.max(ta.min(tb));
-            t1 = t1.min(ta.max(tb));
-        }
-        t0 <= t1
-    }
-
-    /// Möller–Trumbore in f32 with widened barycentric bounds.
-    #[inline]
-    fn hits_triangle(&self, tri: &Triangle) -> bool {
-        let d = self.dir;
-        let (e1, e2) = (tri.e1, tri.e2);
-        let p = cross(d, e2);
-        let det = dot(e1, p);
-        if det == 0.0 {
-            return false;
-        }
-        let inv = 1.0 / det;
-        let s = sub(self.origin, tri.v0);
-        let u = dot(s, p) * inv;
-        if !(-BARY_EPSILON..=1.0 + BARY_EPSILON).contains(&u) {
-            return false;
-        }
-        let q = cross(s, e1);
-        let v = dot(d, q) * inv;
-        if v < -BARY_EPSILON || u + v > 1.0 + BARY_EPSILON {
-            return false;
-        }
-        let t = dot(e2, q) * inv;
-        t > self.t_min && t < self.t_max
-    }
-}
-
-#[inline]
+#[inline(always)]
 fn sub(a: [f32; 3], b: [f32; 3]) -> [f32; 3] {
     [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
 }
-#[inline]
+#[inline(always)]
 fn dot(a: [f32; 3], b: [f32; 3]) -> f32 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
-#[inline]
+#[inline(always)]
 fn cross(a: [f32; 3], b: [f32; 3]) -> [f32; 3] {
     [
         a[1] * b[2] - a[2] * b[1],
@@ -305,215 +303,252 @@ fn cross(a: [f32; 3], b: [f32; 3]) -> [f32; 3] {
     ]
 }
 
-/// Axis-aligned box in f32 used by the builder.
-#[derive(Clone, Copy, Debug)]
-struct Aabb {
-    lo: [f32; 3],
-    hi: [f32; 3],
+/// Eight f32 lanes; plain arrays whose element-wise loops the compiler turns
+/// into vector instructions.
+type F8 = [f32; LANES];
+
+/// The bits of lanes where `cond` holds.
+#[inline(always)]
+fn lane_mask(cond: impl Fn(usize) -> bool) -> u64 {
+    let mut m = 0u64;
+    for i in 0..LANES {
+        m |= (cond(i) as u64) << i;
+    }
+    m
 }
 
-impl Aabb {
-    const EMPTY: Aabb = Aabb {
-        lo: [f32::INFINITY; 3],
-        hi: [f32::NEG_INFINITY; 3],
-    };
-    fn grow_point(&mut self, p: [f32; 3]) {
-        for a in 0..3 {
-            self.lo[a] = self.lo[a].min(p[a]);
-            self.hi[a] = self.hi[a].max(p[a]);
-        }
-    }
-    fn grow(&mut self, b: &Aabb) {
-        for a in 0..3 {
-            self.lo[a] = self.lo[a].min(b.lo[a]);
-            self.hi[a] = self.hi[a].max(b.hi[a]);
-        }
-    }
-    fn half_area(&self) -> f32 {
-        let d = [
-            self.hi[0] - self.lo[0],
-            self.hi[1] - self.lo[1],
-            self.hi[2] - self.lo[2],
-        ];
-        if d[0] < 0.0 {
-            return 0.0;
-        }
-        d[0] * d[1] + d[1] * d[2] + d[2] * d[0]
-    }
-    fn of_triangle(t: &Triangle) -> Aabb {
-        let mut b = Aabb::EMPTY;
-        b.grow_point(t.v0);
-        b.grow_point([t.v0[0] + t.e1[0], t.v0[1] + t.e1[1], t.v0[2] + t.e1[2]]);
-        b.grow_point([t.v0[0] + t.e2[0], t.v0[1] + t.e2[1], t.v0[2] + t.e2[2]]);
-        b
-    }
+/// Up to 64 segments sharing an origin, structure-of-arrays in f32 relative to
+/// the occluder's centre, with the packet-wide bounds used to cull nodes.
+struct Packet {
+    origin: [f32; 3],
+    /// Direction (target − origin, so t ∈ [0, 1] spans the segment) per axis
+    /// and chunk of eight rays.
+    dir: [[F8; CHUNKS]; 3],
+    inv: [[F8; CHUNKS]; 3],
+    t_min: [F8; CHUNKS],
+    t_max: [F8; CHUNKS],
+    /// Rays not (yet) found blocked; bit i is ray i. Rays shorter than two
+    /// epsilons start visible and are never traced.
+    alive: u64,
+    /// Rays that exist in this packet.
+    valid: u64,
+    chunks: usize,
+    /// Bounding box of all traced segments.
+    box_lo: [f32; 3],
+    box_hi: [f32; 3],
+    /// Per axis: the range of the traced rays' inverse directions, meaningful
+    /// when all have the same sign (`same_sign`), and that sign.
+    inv_lo: [f32; 3],
+    inv_hi: [f32; 3],
+    same_sign: [bool; 3],
+    positive: [bool; 3],
+    /// Union of the rays' parameter windows.
+    t_lo: f32,
+    t_hi: f32,
 }
 
-/// Binned-SAH build (16 bins on centroids). Returns the nodes (root first) and
-/// the triangle order of the leaves. Depth stays far below the traversal
-/// stack: each split leaves at least one triangle on each side, and splits
-/// fall back to the median when binning cannot separate centroids, so the
-/// depth is ≤ log2(n) + O(1) for median splits; SAH splits of pathological
-/// inputs are capped at depth 48 by forcing median splits there.
-fn build_bvh(triangles: &[Triangle], padding: f32) -> (Vec<Node>, Vec<u32>) {
-    let mut order: Vec<u32> = (0..triangles.len() as u32).collect();
-    if triangles.is_empty() {
-        return (Vec::new(), order);
-    }
-    let boxes: Vec<Aabb> = triangles.iter().map(Aabb::of_triangle).collect();
-    let centroids: Vec<[f32; 3]> = boxes
-        .iter()
-        .map(|b| {
-            [
-                0.5 * (b.lo[0] + b.hi[0]),
-                0.5 * (b.lo[1] + b.hi[1]),
-                0.5 * (b.lo[2] + b.hi[2]),
-            ]
-        })
-        .collect();
-    let mut nodes = Vec::with_capacity(2 * triangles.len() / MAX_LEAF + 1);
-    nodes.push(Node {
-        lo: [0.0; 3],
-        first: 0,
-        hi: [0.0; 3],
-        count: 0,
-    });
-    // (node index, start, end, depth)
-    let mut work = vec![(0usize, 0usize, triangles.len(), 0u32)];
-    while let Some((node_index, start, end, depth)) = work.pop() {
-        let mut bounds = Aabb::EMPTY;
-        let mut cbounds = Aabb::EMPTY;
-        for &i in &order[start..end] {
-            bounds.grow(&boxes[i as usize]);
-            cbounds.grow_point(centroids[i as usize]);
+impl Packet {
+    fn new(occ: &Occluder, origin: DVec3, targets: &[DVec3]) -> Packet {
+        let o = to_f32(origin - occ.centre);
+        let mut p = Packet {
+            origin: o,
+            dir: [[[0.0; LANES]; CHUNKS]; 3],
+            inv: [[[0.0; LANES]; CHUNKS]; 3],
+            // Padding lanes get an empty window so they never hit.
+            t_min: [[1.0; LANES]; CHUNKS],
+            t_max: [[0.0; LANES]; CHUNKS],
+            alive: 0,
+            valid: 0,
+            chunks: targets.len().div_ceil(LANES),
+            box_lo: o,
+            box_hi: o,
+            inv_lo: [f32::INFINITY; 3],
+            inv_hi: [f32::NEG_INFINITY; 3],
+            same_sign: [true; 3],
+            positive: [true; 3],
+            t_lo: 1.0,
+            t_hi: 0.0,
+        };
+        let mut any_negative = [false; 3];
+        let mut any_positive = [false; 3];
+        for (i, &target) in targets.iter().enumerate() {
+            p.valid |= 1 << i;
+            let d = target - origin;
+            let len = d.length();
+            if !(len > 2.0 * occ.epsilon) || !len.is_finite() {
+                continue; // too short to be blocked (or not a segment): visible
+            }
+            p.alive |= 1 << i;
+            let (c, l) = (i / LANES, i % LANES);
+            let t_eps = occ.epsilon / len;
+            let t_min = t_eps as f32;
+            let t_max = (1.0 - t_eps) as f32;
+            p.t_min[c][l] = t_min;
+            p.t_max[c][l] = t_max;
+            p.t_lo = p.t_lo.min(t_min);
+            p.t_hi = p.t_hi.max(t_max);
+            let d32 = to_f32(d);
+            let end = to_f32(target - occ.centre);
+            for a in 0..3 {
+                // A zero component would give 0 · ∞ = NaN in the slab test; a
+                // huge finite inverse of the same sign answers the same.
+                let da = if d32[a].abs() < 1e-30 {
+                    1e-30f32.copysign(d32[a])
+                } else {
+                    d32[a]
+                };
+                let inv = 1.0 / da;
+                p.dir[a][c][l] = d32[a];
+                p.inv[a][c][l] = inv;
+                p.inv_lo[a] = p.inv_lo[a].min(inv);
+                p.inv_hi[a] = p.inv_hi[a].max(inv);
+                if inv < 0.0 {
+                    any_negative[a] = true;
+                } else {
+                    any_positive[a] = true;
+                }
+                p.box_lo[a] = p.box_lo[a].min(end[a]);
+                p.box_hi[a] = p.box_hi[a].max(end[a]);
+            }
         }
-        let node = &mut nodes[node_index];
         for a in 0..3 {
-            node.lo[a] = bounds.lo[a] - padding;
-            node.hi[a] = bounds.hi[a] + padding;
+            p.same_sign[a] = !(any_negative[a] && any_positive[a]);
+            p.positive[a] = !any_negative[a];
         }
-        let count = end - start;
-        if count <= MAX_LEAF {
-            node.first = start as u32;
-            node.count = count as u32;
-            continue;
-        }
-        let mid = split(
-            &mut order[start..end],
-            &boxes,
-            &centroids,
-            &cbounds,
-            depth >= 48,
-        )
-        .map(|m| start + m)
-        .unwrap_or(start + count / 2);
-        let left = nodes.len();
-        nodes[node_index].first = left as u32;
-        nodes[node_index].count = 0;
-        nodes.push(Node {
-            lo: [0.0; 3],
-            first: 0,
-            hi: [0.0; 3],
-            count: 0,
-        });
-        nodes.push(Node {
-            lo: [0.0; 3],
-            first: 0,
-            hi: [0.0; 3],
-            count: 0,
-        });
-        work.push((left, start, mid, depth + 1));
-        work.push((left + 1, mid, end, depth + 1));
+        p
     }
-    (nodes, order)
-}
 
-/// Partitions `order` by the best binned-SAH plane and returns the split
-/// position (1..len-1), or sorts by the widest centroid axis and returns the
-/// median when binning fails or `median` is forced.
-fn split(
-    order: &mut [u32],
-    boxes: &[Aabb],
-    centroids: &[[f32; 3]],
-    cbounds: &Aabb,
-    median: bool,
-) -> Option<usize> {
-    const BINS: usize = 16;
-    let extent = [
-        cbounds.hi[0] - cbounds.lo[0],
-        cbounds.hi[1] - cbounds.lo[1],
-        cbounds.hi[2] - cbounds.lo[2],
-    ];
-    let widest = if extent[0] >= extent[1] && extent[0] >= extent[2] {
-        0
-    } else if extent[1] >= extent[2] {
-        1
-    } else {
-        2
-    };
-    let mut best: Option<(f32, usize, usize)> = None; // (cost, axis, bin boundary)
-    if !median {
-        for axis in 0..3 {
-            if !(extent[axis] > 0.0) {
+    /// Bits of the rays found unobstructed.
+    fn visible(&self) -> u64 {
+        self.valid & self.alive
+    }
+
+    /// Culls a node's four children for the whole packet: a child survives when
+    /// its box overlaps the packet's bounding box and, on every axis where all
+    /// rays' directions share a sign, the interval-arithmetic slab test over
+    /// the rays' inverse directions leaves a non-empty parameter range.
+    /// Conservative: a child that any ray enters survives. Returns the mask of
+    /// surviving children and a lower bound of their entry parameter.
+    #[inline(always)]
+    fn cull_children(&self, node: &Node4) -> (u32, [f32; 4]) {
+        let mut near = [self.t_lo; 4];
+        let mut far = [self.t_hi; 4];
+        let mut overlap = [true; 4];
+        for a in 0..3 {
+            for k in 0..4 {
+                overlap[k] &= node.lo[a][k] <= self.box_hi[a] && node.hi[a][k] >= self.box_lo[a];
+            }
+            if !self.same_sign[a] {
                 continue;
             }
-            let scale = BINS as f32 / extent[axis];
-            let bin_of = |c: f32| (((c - cbounds.lo[axis]) * scale) as usize).min(BINS - 1);
-            let mut bin_box = [Aabb::EMPTY; BINS];
-            let mut bin_count = [0usize; BINS];
-            for &i in order.iter() {
-                let b = bin_of(centroids[i as usize][axis]);
-                bin_box[b].grow(&boxes[i as usize]);
-                bin_count[b] += 1;
+            let (il, ih) = (self.inv_lo[a], self.inv_hi[a]);
+            for k in 0..4 {
+                let lo = node.lo[a][k] - self.origin[a];
+                let hi = node.hi[a][k] - self.origin[a];
+                // Positive directions enter through lo and leave through hi;
+                // negative ones the other way round.
+                let (entry, exit) = if self.positive[a] { (lo, hi) } else { (hi, lo) };
+                near[k] = near[k].max((entry * il).min(entry * ih));
+                far[k] = far[k].min((exit * il).max(exit * ih));
             }
-            let mut right_area = [0.0f32; BINS];
-            let mut acc = Aabb::EMPTY;
-            let mut acc_count = 0;
-            let mut right_count = [0usize; BINS];
-            for b in (1..BINS).rev() {
-                acc.grow(&bin_box[b]);
-                acc_count += bin_count[b];
-                right_area[b] = acc.half_area();
-                right_count[b] = acc_count;
+        }
+        let mut mask = 0;
+        for k in 0..4 {
+            if overlap[k] && near[k] <= far[k] && node.child[k] != EMPTY_SLOT {
+                mask |= 1 << k;
             }
-            let mut acc = Aabb::EMPTY;
-            let mut acc_count = 0;
-            for b in 1..BINS {
-                acc.grow(&bin_box[b - 1]);
-                acc_count += bin_count[b - 1];
-                if acc_count == 0 || right_count[b] == 0 {
+        }
+        (mask, near)
+    }
+
+    /// The alive rays that enter child `k`'s box within their windows (exact
+    /// per-ray slab test).
+    #[inline(always)]
+    fn rays_in_box(&self, node: &Node4, k: usize) -> u64 {
+        let mut rays = 0;
+        let lo = [
+            node.lo[0][k] - self.origin[0],
+            node.lo[1][k] - self.origin[1],
+            node.lo[2][k] - self.origin[2],
+        ];
+        let hi = [
+            node.hi[0][k] - self.origin[0],
+            node.hi[1][k] - self.origin[1],
+            node.hi[2][k] - self.origin[2],
+        ];
+        for c in 0..self.chunks {
+            let live = (self.alive >> (c * LANES)) & 0xFF;
+            if live == 0 {
+                continue;
+            }
+            let mut t0 = self.t_min[c];
+            let mut t1 = self.t_max[c];
+            for a in 0..3 {
+                let inv = &self.inv[a][c];
+                for l in 0..LANES {
+                    let ta = lo[a] * inv[l];
+                    let tb = hi[a] * inv[l];
+                    t0[l] = t0[l].max(ta.min(tb));
+                    t1[l] = t1[l].min(ta.max(tb));
+                }
+            }
+            rays |= (lane_mask(|l| t0[l] <= t1[l]) & live) << (c * LANES);
+        }
+        rays
+    }
+
+    /// Tests `rays` against a leaf's triangles, clearing the blocked ones from
+    /// `alive`. Returns true when no ray of the packet is left alive.
+    ///
+    /// Shared-origin Möller–Trumbore: with s = o − v0, q = s × e1, r = e2 × s
+    /// and n = e1 × e2 (all per triangle), a ray d has det = −d·n, u·det = d·r,
+    /// v·det = d·q and t·det = e2·q (the last per triangle too).
+    #[inline(always)]
+    fn intersect_leaf(&mut self, leaf: &[Triangle], mut rays: u64) -> bool {
+        for tri in leaf {
+            let s = sub(self.origin, tri.v0);
+            let q = cross(s, tri.e1);
+            let r = cross(tri.e2, s);
+            let t_det = dot(tri.e2, q);
+            let n = tri.n;
+            for c in 0..self.chunks {
+                let live = (rays >> (c * LANES)) & 0xFF;
+                if live == 0 {
                     continue;
                 }
-                let cost =
-                    acc.half_area() * acc_count as f32 + right_area[b] * right_count[b] as f32;
-                if best.is_none_or(|(c, _, _)| cost < c) {
-                    best = Some((cost, axis, b));
+                let (dx, dy, dz) = (&self.dir[0][c], &self.dir[1][c], &self.dir[2][c]);
+                let (t_min, t_max) = (&self.t_min[c], &self.t_max[c]);
+                let hit = lane_mask(|l| {
+                    let det = -(dx[l] * n[0] + dy[l] * n[1] + dz[l] * n[2]);
+                    let u = dx[l] * r[0] + dy[l] * r[1] + dz[l] * r[2];
+                    let v = dx[l] * q[0] + dy[l] * q[1] + dz[l] * q[2];
+                    // Make det positive by flipping signs with its sign bit.
+                    let sign = det.to_bits() & 0x8000_0000;
+                    let flip = |x: f32| f32::from_bits(x.to_bits() ^ sign);
+                    let (a, u, v, t) = (det.abs(), flip(u), flip(v), flip(t_det));
+                    let tol = BARY_EPSILON * a;
+                    a > 0.0
+                        && u >= -tol
+                        && v >= -tol
+                        && u + v <= a + tol
+                        && t > t_min[l] * a
+                        && t < t_max[l] * a
+                }) & live;
+                if hit != 0 {
+                    let bits = hit << (c * LANES);
+                    rays &= !bits;
+                    self.alive &= !bits;
                 }
             }
-        }
-    }
-    if let Some((_, axis, boundary)) = best {
-        let scale = BINS as f32 / extent[axis];
-        let lo = cbounds.lo[axis];
-        let goes_left = |i: u32| {
-            ((((centroids[i as usize][axis] - lo) * scale) as usize).min(BINS - 1)) < boundary
-        };
-        let mut left = 0;
-        for k in 0..order.len() {
-            if goes_left(order[k]) {
-                order.swap(left, k);
-                left += 1;
+            if self.alive == 0 {
+                return true;
+            }
+            if rays == 0 {
+                break;
             }
         }
-        if left > 0 && left < order.len() {
-            return Some(left);
-        }
+        false
     }
-    let mid = order.len() / 2;
-    order.select_nth_unstable_by(mid, |&a, &b| {
-        centroids[a as usize][widest].total_cmp(&centroids[b as usize][widest])
-    });
-    Some(mid)
 }
 
 #[cfg(test)]
