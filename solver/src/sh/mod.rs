@@ -150,50 +150,87 @@ pub fn eval_basis(order: u32, dir: DVec3, out: &mut [f64]) {
         out.len()
     );
     let d = dir.try_normalize().unwrap_or(DVec3::Z);
-    let (x, y, z) = (d.x, d.y, d.z);
-    let cached = order <= CACHED_ORDER;
-    let table = if cached { factor_table() } else { &[][..] };
-    let fac = |l: u32, m: u32| {
-        if cached {
-            table[tri(l, m)]
-        } else {
-            factors(l, m)
-        }
-    };
-    let sqrt2 = std::f64::consts::SQRT_2;
+    if order <= 16 {
+        eval_on_stack::<17>(order, d, out);
+    } else if order <= 40 {
+        eval_on_stack::<41>(order, d, out);
+    } else if order <= CACHED_ORDER {
+        eval_on_stack::<{ CACHED_ORDER as usize + 1 }>(order, d, out);
+    } else {
+        let n = order as usize + 1;
+        let mut rows = vec![0.0f64; 4 * n];
+        let (c, rest) = rows.split_at_mut(n);
+        let (s, rest) = rest.split_at_mut(n);
+        let (q1, q2) = rest.split_at_mut(n);
+        eval_rows(order, d, factors, c, s, q1, q2, out);
+    }
+}
 
-    // (C_m, S_m) = (x + iy)^m, and Q_mm.
-    let (mut c, mut s) = (1.0_f64, 0.0_f64);
-    let mut q_mm = Y00;
-    for m in 0..=order {
-        if m > 0 {
-            q_mm *= fac(m, m).0;
-            let c_next = x * c - y * s;
-            s = x * s + y * c;
-            c = c_next;
+/// [`eval_rows`] with its four rows on the stack (`N ≥ order + 1`, a size tier so
+/// that a low order does not pay for zeroing rows sized for order 128).
+fn eval_on_stack<const N: usize>(order: u32, d: DVec3, out: &mut [f64]) {
+    let n = order as usize + 1;
+    let mut rows = [[0.0f64; N]; 4];
+    let [c, s, q1, q2] = &mut rows;
+    let table = factor_table();
+    eval_rows(
+        order,
+        d,
+        |l, m| table[tri(l, m)],
+        &mut c[..n],
+        &mut s[..n],
+        &mut q1[..n],
+        &mut q2[..n],
+        out,
+    );
+}
+
+/// The recurrences of [`eval_basis`], degree by degree so that each degree's
+/// `2l + 1` outputs are written contiguously. `q1`/`q2` hold the rows `l − 1` and
+/// `l − 2` of `Q̃_lm` (`Q_lm`, times √2 for m ≥ 1, folded in at the first diagonal
+/// step); `c`/`s` hold `(x + iy)^m`.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn eval_rows<'q>(
+    order: u32,
+    d: DVec3,
+    fac: impl Fn(u32, u32) -> (f64, f64),
+    c: &mut [f64],
+    s: &mut [f64],
+    mut q1: &'q mut [f64],
+    mut q2: &'q mut [f64],
+    out: &mut [f64],
+) {
+    let (x, y, z) = (d.x, d.y, d.z);
+    c[0] = 1.0;
+    s[0] = 0.0;
+    for m in 1..=order as usize {
+        c[m] = x * c[m - 1] - y * s[m - 1];
+        s[m] = x * s[m - 1] + y * c[m - 1];
+    }
+    q1[0] = Y00;
+    out[0] = Y00;
+    for l in 1..=order {
+        let lu = l as usize;
+        // m ≤ l − 2: the three-term recurrence, written over row l − 2 in place.
+        for m in 0..lu.saturating_sub(1) {
+            let (a, b) = fac(l, m as u32);
+            q2[m] = a * (z * q1[m] - b * q2[m]);
         }
-        let mi = m as i32;
-        let mut write = |l: u32, q: f64| {
-            if m == 0 {
-                out[index(l, 0)] = q;
-            } else {
-                out[index(l, mi)] = sqrt2 * q * c;
-                out[index(l, -mi)] = sqrt2 * q * s;
-            }
-        };
-        write(m, q_mm);
-        if m == order {
-            break;
+        // m = l − 1 and m = l from the previous diagonal.
+        let diag = q1[lu - 1];
+        q2[lu - 1] = fac(l, l - 1).0 * z * diag;
+        let mut d_fac = fac(l, l).0;
+        if l == 1 {
+            d_fac *= std::f64::consts::SQRT_2;
         }
-        let mut q_prev = q_mm;
-        let mut q = fac(m + 1, m).0 * z * q_mm;
-        write(m + 1, q);
-        for l in m + 2..=order {
-            let (a, b) = fac(l, m);
-            let q_next = a * (z * q - b * q_prev);
-            q_prev = q;
-            q = q_next;
-            write(l, q);
+        q2[lu] = d_fac * diag;
+        std::mem::swap(&mut q1, &mut q2);
+        let centre = lu * lu + lu;
+        out[centre] = q1[0];
+        for m in 1..=lu {
+            out[centre + m] = q1[m] * c[m];
+            out[centre - m] = q1[m] * s[m];
         }
     }
 }
