@@ -77,6 +77,8 @@ void main() {
             if (m > 0) radiance += coefficient_rgb(base, kl - uint(m)) * (q * ws);
         }
     }
-    out_radiance = radiance * batch.scale;
+    // Negative radiance (ringing of a truncated lobe) carries no light: clamp per
+    // vertex before interpolation, as solver::raster does.
+    out_radiance = max(radiance * batch.scale, vec3(0.0));
     gl_Position = frame.view_projection[gl_ViewIndex] * vec4(in_position, 1.0);
 }

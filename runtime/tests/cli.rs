@@ -154,3 +154,26 @@ fn bad_solution_files_are_refused_with_one_clear_line() {
     }
     assert!(!dir.path().join("x-left.png").exists());
 }
+
+#[test]
+fn no_vulkan_device_fails_with_the_package_names() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = write_room(dir.path(), "room.sol", &common::diffuse_room(2));
+    // An ICD list naming no real driver: the loader finds no device.
+    let out = Command::new(env!("CARGO_BIN_EXE_runtime"))
+        .env("VK_ICD_FILENAMES", dir.path().join("no-such-icd.json"))
+        .env_remove("VK_DRIVER_FILES")
+        .arg("screenshot")
+        .arg(&file)
+        .arg("--out")
+        .arg(dir.path().join("x"))
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(
+        stderr.contains("libvulkan1 mesa-vulkan-drivers"),
+        "error does not name the packages: {stderr}"
+    );
+    assert!(!stderr.contains("panicked"), "{stderr}");
+}

@@ -118,7 +118,7 @@ pub fn run(args: &BenchArgs) -> Result<BenchReport> {
         storage: args.render.coefficients,
         max_order: args.render.max_order,
         tone: ToneSettings {
-            exposure: args.render.exposure,
+            exposure_stops: args.render.exposure,
             curve: args.render.tonemap,
         },
     };

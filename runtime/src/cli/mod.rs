@@ -47,11 +47,17 @@ pub struct RenderOptions {
     /// that costs (Parseval) is printed per batch.
     #[arg(long, value_name = "L")]
     pub max_order: Option<u32>,
-    /// Exposure: a linear multiplier of radiance before the tone curve.
-    #[arg(long, value_name = "E", default_value_t = 1.0)]
+    /// Exposure in stops: radiance is multiplied by 2^E before the tone curve
+    /// (PNG only; the EXR holds unexposed radiance).
+    #[arg(
+        long,
+        value_name = "E",
+        default_value_t = 0.0,
+        allow_negative_numbers = true
+    )]
     pub exposure: f32,
     /// Tone curve after exposure.
-    #[arg(long, value_enum, default_value_t = crate::render::ToneCurve::Reinhard)]
+    #[arg(long, value_enum, default_value_t = crate::render::ToneCurve::Clamp)]
     pub tonemap: crate::render::ToneCurve,
     /// Most samples per pixel (MSAA); the device may allow fewer; 1 turns it off.
     #[arg(long, value_name = "N", default_value_t = 4)]
@@ -70,9 +76,9 @@ pub struct RenderOptions {
 
 impl RenderOptions {
     pub fn check(&self) -> Result<()> {
-        if !(self.exposure.is_finite() && self.exposure > 0.0) {
+        if !(self.exposure.is_finite() && self.exposure.abs() <= 64.0) {
             bail!(
-                "--exposure {} must be a positive, finite number",
+                "--exposure {} must be a finite number of stops in -64..=64",
                 self.exposure
             );
         }

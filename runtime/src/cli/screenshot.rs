@@ -91,7 +91,7 @@ pub fn run(args: &ScreenshotArgs) -> Result<()> {
         storage: args.render.coefficients,
         max_order: args.render.max_order,
         tone: ToneSettings {
-            exposure: args.render.exposure,
+            exposure_stops: args.render.exposure,
             curve: args.render.tonemap,
         },
     };

@@ -621,7 +621,7 @@ impl StereoRenderer {
             min_depth: 0.0,
             max_depth: 1.0,
         }];
-        let tone_gain = self.desc.tone.exposure / self.scene.radiance_scale;
+        let tone_gain = self.desc.tone.gain() / self.scene.radiance_scale;
         let mut tone_push = [0u8; 8];
         tone_push[0..4].copy_from_slice(&tone_gain.to_le_bytes());
         tone_push[4..8].copy_from_slice(&self.desc.tone.curve.code().to_le_bytes());
