@@ -2,31 +2,288 @@
 //! flags, the terminal, checkpoints and Ctrl-C.
 //!
 //! The flow: load the scene (and display file), resolve the settings (flags > TOML
-//! config > display file > preset), start or resume a [`Solver`], shoot until it is
-//! done or interrupted while saving a checkpoint and a partial solution every K
-//! shots, then write the solution, the stats and the preview.
+//! config > display file > preset), start or resume the solver inside a rayon pool
+//! of `--threads` workers, shoot until done or interrupted while saving a
+//! checkpoint and a partial solution every K shots ([`session`]), then write the
+//! solution, the stats and the preview.
 
 mod args;
-#[allow(dead_code)] // Wired in when the solver core lands.
 mod checkpoint;
-#[allow(dead_code)] // Wired in when the solver core lands.
 mod eta;
-#[allow(dead_code)] // Wired in when the solver core lands.
 mod files;
-#[allow(dead_code)] // Wired in when the solver core lands.
+mod preview;
 mod progress;
-#[allow(dead_code)] // Wired in when the solver core lands.
+mod session;
 mod stats;
 
 pub use args::{SolveArgs, EXIT_INTERRUPTED};
 pub use stats::RunStats;
 
+use crate::camera::Camera;
+use crate::scene::{DisplayParams, ImportOptions, Scene};
+use crate::settings::{SettingsPatch, SolverSettings};
+use crate::solve::{Checkpoint, Solver};
+use anyhow::{bail, Context};
+use session::{Outcome, Session};
+use std::path::Path;
 use std::process::ExitCode;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
 
-/// Runs the command (placeholder until the importers and the solver core land).
+/// Runs the command; `Ok` carries the exit code (0, or 130 when interrupted).
 pub fn run(args: SolveArgs) -> anyhow::Result<ExitCode> {
-    anyhow::bail!(
-        "`solver solve {}`: the solver is not built yet",
-        args.scene.display()
-    )
+    let checkpoint_path = files::checkpoint_path(&args.out);
+    check_checkpoint_state(&args, &checkpoint_path)?;
+
+    // The display file named on the command line, then the scene.
+    let display_flag = match &args.display {
+        Some(path) => {
+            let display = crate::scene::load_display_file(path)
+                .with_context(|| format!("reading display file {}", path.display()))?;
+            print_warnings(&display.warnings);
+            Some(display)
+        }
+        None => None,
+    };
+    let options = ImportOptions {
+        strict: args.strict,
+        units_per_metre: args.units_per_metre,
+        ..Default::default()
+    };
+    let loaded = crate::scene::load_scene(&args.scene, &options)
+        .with_context(|| format!("loading scene {}", args.scene.display()))?;
+    let mut scene = loaded.scene;
+    print_warnings(&scene.warnings);
+    // `--display` stands in for a display file that a TOML config names.
+    let display = display_flag.or(loaded.display);
+    adopt_display_camera(&mut scene, display.as_ref(), args.display.is_some());
+
+    let display_patch = display
+        .as_ref()
+        .map(|d| d.settings.clone())
+        .unwrap_or_default();
+    let settings = resolve_settings(&args, &display_patch, &loaded.settings, &args.patch())?;
+    scene.fill_default_patches(settings.patches);
+
+    let threads = settings.threads.unwrap_or_else(|| {
+        std::thread::available_parallelism()
+            .map(|n| n.get())
+            .unwrap_or(1)
+    });
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .context("starting the worker threads")?;
+    files::ensure_parent(&args.out)?;
+    let interrupted = install_ctrlc();
+    let session = Session {
+        out: &args.out,
+        checkpoint_path: checkpoint_path.clone(),
+        meta: checkpoint::Meta {
+            scene_fingerprint: checkpoint::scene_fingerprint(&scene),
+            scene_path: args.scene.display().to_string(),
+            settings: checkpoint::result_settings(&settings),
+            seconds: 0.0,
+            shots: 0,
+        },
+        threshold: settings.threshold,
+        max_shots: settings.max_shots,
+        checkpoint_every: settings.checkpoint_every,
+        threads,
+        interrupted: &interrupted,
+    };
+    let outcome = pool.install(|| solve(&args, &scene, &settings, &session))?;
+    finish(&args, &settings, &checkpoint_path, outcome, scene.camera)
+}
+
+/// Refuses, before any work, a resume without a checkpoint and a fresh solve that
+/// would overwrite one (the saved work would be lost).
+fn check_checkpoint_state(args: &SolveArgs, checkpoint_path: &Path) -> anyhow::Result<()> {
+    if args.resume && !checkpoint_path.exists() {
+        bail!(
+            "--resume: there is no checkpoint {} to continue (it is removed when a solve \
+             converges); run without --resume to start a new solve",
+            checkpoint_path.display()
+        );
+    }
+    if !args.resume && checkpoint_path.exists() {
+        bail!(
+            "{} holds the checkpoint of an unfinished solve into {}; add --resume to \
+             continue it, or delete the checkpoint to start over",
+            checkpoint_path.display(),
+            args.out.display()
+        );
+    }
+    Ok(())
+}
+
+/// The display file's camera becomes the scene's when the scene names none, or
+/// when the scene's camera came from a config-named display file that `--display`
+/// replaces.
+fn adopt_display_camera(scene: &mut Scene, display: Option<&DisplayParams>, from_flag: bool) {
+    let Some(display) = display else { return };
+    if scene.camera.is_none() || from_flag {
+        scene.camera = Some(display.camera);
+    }
+}
+
+/// Resolves settings and names the source of an out-of-range value.
+fn resolve_settings(
+    args: &SolveArgs,
+    display: &SettingsPatch,
+    config: &SettingsPatch,
+    flags: &SettingsPatch,
+) -> anyhow::Result<SolverSettings> {
+    SolverSettings::resolve(args.preset(), &[display, config, flags]).map_err(|err| {
+        let sets = |patch: &SettingsPatch| {
+            serde_json::to_value(patch)
+                .ok()
+                .and_then(|v| v.get(err.name).cloned())
+                .is_some_and(|v| !v.is_null())
+        };
+        let source = if sets(flags) {
+            format!("flag {}", args::flag_name(err.name))
+        } else if sets(config) {
+            format!("scene config {}", args.scene.display())
+        } else if sets(display) {
+            let file = args
+                .display
+                .as_deref()
+                .unwrap_or(Path::new("(named by the config)"));
+            format!("display file {}", file.display())
+        } else {
+            format!("preset {}", args.preset().name())
+        };
+        anyhow::Error::new(err).context(format!("bad setting from {source}"))
+    })
+}
+
+/// Prints each import warning once (`file:line (item): message`).
+fn print_warnings(warnings: &[crate::scene::Warning]) {
+    let mut seen = std::collections::HashSet::new();
+    for warning in warnings {
+        let line = warning.to_string();
+        if seen.insert(line.clone()) {
+            eprintln!("solver: warning: {line}");
+        }
+    }
+}
+
+/// Sets a flag on Ctrl-C; the loop checks it between shots. If the handler cannot
+/// be installed, Ctrl-C kills the process as usual and only the last periodic
+/// checkpoint survives, which is said once.
+fn install_ctrlc() -> Arc<AtomicBool> {
+    let flag = Arc::new(AtomicBool::new(false));
+    let handler_flag = Arc::clone(&flag);
+    if let Err(err) = ctrlc::set_handler(move || handler_flag.store(true, Ordering::SeqCst)) {
+        eprintln!("solver: note: Ctrl-C will stop without a final checkpoint ({err})");
+    }
+    flag
+}
+
+/// Starts or resumes the solver core and runs the session.
+fn solve(
+    args: &SolveArgs,
+    scene: &Scene,
+    settings: &SolverSettings,
+    session: &Session,
+) -> anyhow::Result<Outcome> {
+    if args.resume {
+        let (meta, state) = session.load::<Checkpoint>()?;
+        let solver = Solver::resume(scene, settings, state)
+            .with_context(|| format!("resuming from {}", session.checkpoint_path.display()))?;
+        eprintln!(
+            "solver: resuming {} at shot {} ({:.1} s spent before)",
+            args.scene.display(),
+            meta.shots,
+            meta.seconds
+        );
+        session.run(solver, meta.seconds)
+    } else {
+        let solver = Solver::new(scene, settings)
+            .with_context(|| format!("setting up the solve of {}", args.scene.display()))?;
+        session.run(solver, 0.0)
+    }
+}
+
+impl session::Shooter for Solver {
+    type State = Checkpoint;
+    fn step(&mut self) -> bool {
+        Solver::step(self).is_some()
+    }
+    fn is_done(&self) -> bool {
+        Solver::is_done(self)
+    }
+    fn snapshot(&self) -> progress::Snapshot {
+        let p = self.progress();
+        progress::Snapshot {
+            shots: p.shots,
+            rays: p.rays,
+            unshot_fraction: p.unshot_fraction,
+            elements: p.elements as u64,
+            vertices: p.vertices as u64,
+        }
+    }
+    fn solution(&self, partial: bool) -> crate::format::Solution {
+        self.to_solution(partial)
+    }
+    fn state(&self) -> Checkpoint {
+        self.checkpoint()
+    }
+}
+
+/// Writes the final (or interrupted) outputs and says what happened.
+fn finish(
+    args: &SolveArgs,
+    settings: &SolverSettings,
+    checkpoint_path: &Path,
+    outcome: Outcome,
+    scene_camera: Option<Camera>,
+) -> anyhow::Result<ExitCode> {
+    let Outcome {
+        solution,
+        stats,
+        interrupted,
+        converged,
+    } = outcome;
+    if !interrupted {
+        crate::format::write_solution(&args.out, &solution)
+            .with_context(|| format!("writing solution {}", args.out.display()))?;
+    }
+    eprintln!("solver: {}", stats.summary(settings.threshold));
+    if let Some(path) = &args.stats_json {
+        files::write_atomic(path, stats.to_json().as_bytes())
+            .with_context(|| format!("writing stats {}", path.display()))?;
+    }
+    if interrupted {
+        eprintln!(
+            "solver: interrupted after shot {}; saved {} and the partial solution {}.\n\
+             solver: to continue, run the same command again with --resume",
+            stats.shots,
+            checkpoint_path.display(),
+            args.out.display()
+        );
+        return Ok(ExitCode::from(EXIT_INTERRUPTED));
+    }
+    eprintln!("solver: solution written to {}", args.out.display());
+    if let Some(path) = &args.preview {
+        let camera = preview::choose_camera(scene_camera, &solution);
+        preview::write_preview(path, &solution, &camera)?;
+        eprintln!("solver: preview written to {}", path.display());
+    }
+    if converged {
+        if checkpoint_path.exists() {
+            std::fs::remove_file(checkpoint_path)
+                .with_context(|| format!("removing {}", checkpoint_path.display()))?;
+        }
+    } else {
+        eprintln!(
+            "solver: stopped after {} shots (budget {}) above the threshold; {} is kept: \
+             run the same command with --resume and a larger --max-shots to continue",
+            stats.shots,
+            settings.max_shots,
+            checkpoint_path.display()
+        );
+    }
+    Ok(ExitCode::SUCCESS)
 }

@@ -242,7 +242,6 @@ impl SolveArgs {
     }
 }
 
-#[allow(dead_code)] // Used once the solve is wired in.
 /// Which flag sets a setting, for error messages (`samples` → `--samples`).
 pub fn flag_name(setting: &str) -> String {
     match setting {

@@ -121,23 +121,10 @@ impl Reporter {
         }
     }
 
-    /// Prints a line without tearing the bar.
-    pub fn note(&self, line: &str) {
-        match &self.output {
-            Output::Bar(bar) => bar.suspend(|| eprintln!("{line}")),
-            Output::Plain { .. } => eprintln!("{line}"),
-        }
-    }
-
     /// Removes the bar (the summary follows as plain text).
     pub fn finish(&self) {
         if let Output::Bar(bar) = &self.output {
             bar.finish_and_clear();
         }
-    }
-
-    /// Rays per second over this session, for the summary.
-    pub fn session_rays_per_second(&self, now: &Snapshot) -> f64 {
-        self.rays_per_second(now)
     }
 }

@@ -1,0 +1,332 @@
+//! End-to-end tests of `solver solve`: the binary on small scenes written by the
+//! tests themselves (a 1 m room with a ceiling light and a floating blocker), so
+//! they need no files outside the crate and each runs in about a second.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn solver() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_solver"))
+}
+
+/// A closed unit room (normals inward), a 0.2 m square light just under the
+/// ceiling and a floating square at half height that shadows the floor.
+/// `emission` is the light's radiance, so two values make two different scenes.
+fn write_room(dir: &Path, name: &str, emission: f64) -> PathBuf {
+    let mtl = format!(
+        "newmtl white\nKd 0.6 0.6 0.6\n\
+         newmtl red\nKd 0.6 0.1 0.1\n\
+         newmtl light\nKd 0.5 0.5 0.5\nKe {emission} {emission} {emission}\n"
+    );
+    std::fs::write(dir.join(format!("{name}.mtl")), mtl).unwrap();
+    // Each quad is counter-clockwise seen from inside the room (design notes).
+    let obj = format!(
+        "mtllib {name}.mtl\n\
+         v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n\
+         v 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n\
+         v 0.4 0.99 0.4\nv 0.6 0.99 0.4\nv 0.6 0.99 0.6\nv 0.4 0.99 0.6\n\
+         v 0.3 0.5 0.3\nv 0.3 0.5 0.7\nv 0.7 0.5 0.7\nv 0.7 0.5 0.3\n\
+         usemtl white\n\
+         f 1 5 6 2\n\
+         f 4 3 7 8\n\
+         f 1 2 3 4\n\
+         f 5 8 7 6\n\
+         f 2 6 7 3\n\
+         usemtl red\n\
+         f 1 4 8 5\n\
+         usemtl light\n\
+         f 9 10 11 12\n\
+         usemtl white\n\
+         f 13 14 15 16\n"
+    );
+    let path = dir.join(format!("{name}.obj"));
+    std::fs::write(&path, obj).unwrap();
+    path
+}
+
+fn run(cmd: &mut Command) -> Output {
+    let out = cmd.output().expect("the solver binary runs");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !stderr.contains("panicked"),
+        "the solver panicked:\n{stderr}"
+    );
+    out
+}
+
+fn stderr(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+fn assert_ok(out: &Output) {
+    assert!(out.status.success(), "solver failed: {}", stderr(out));
+}
+
+/// The solve flags every test shares: the draft preset, two threads (the
+/// machine's cores) and a fixed seed.
+fn draft(scene: &Path, out: &Path) -> Command {
+    draft_on(scene, out, 2)
+}
+
+fn draft_on(scene: &Path, out: &Path, threads: u32) -> Command {
+    let mut cmd = solver();
+    cmd.arg("solve")
+        .arg(scene)
+        .arg("-o")
+        .arg(out)
+        .args(["--preset", "draft", "--seed", "7", "--threads"])
+        .arg(threads.to_string());
+    cmd
+}
+
+fn read(path: &Path) -> solver::format::Solution {
+    solver::format::read_solution(path).expect("a valid solution file")
+}
+
+/// Radiance and geometry must be identical; the header may differ only in the
+/// wall-clock seconds and in the settings text (the runs had different shot
+/// budgets and checkpoint intervals).
+fn assert_same_result(a: &solver::format::Solution, b: &solver::format::Solution) {
+    assert_eq!(a.batches.len(), b.batches.len());
+    for (x, y) in a.batches.iter().zip(&b.batches) {
+        assert_eq!(x.representation, y.representation);
+        assert_eq!(x.vertices, y.vertices, "vertex positions and frames");
+        assert_eq!(x.indices, y.indices, "triangles");
+        // Bit-exact radiance: the checkpoint carries every f64 exactly.
+        let bits = |c: &[f32]| c.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&x.coefficients), bits(&y.coefficients), "radiance");
+    }
+    let (mut ha, mut hb) = (a.header.clone(), b.header.clone());
+    for h in [&mut ha, &mut hb] {
+        h.stats.seconds = 0.0;
+        h.settings_json.clear();
+    }
+    assert_eq!(ha, hb, "headers apart from seconds and settings text");
+}
+
+#[test]
+fn solve_writes_solution_and_stats() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = write_room(dir.path(), "room", 10.0);
+    let out = dir.path().join("room.sol");
+    let stats_path = dir.path().join("stats.json");
+    let result = run(draft(&scene, &out).arg("--stats-json").arg(&stats_path));
+    assert_ok(&result);
+
+    let solution = read(&out);
+    assert!(!solution.header.partial, "a finished solve is not partial");
+    let stats: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&stats_path).unwrap()).unwrap();
+    let mut keys: Vec<&str> = stats
+        .as_object()
+        .unwrap()
+        .keys()
+        .map(|k| k.as_str())
+        .collect();
+    keys.sort();
+    assert_eq!(
+        keys,
+        [
+            "elements",
+            "rays",
+            "rays_per_second",
+            "seconds",
+            "shots",
+            "threads",
+            "unshot_fraction",
+            "vertices"
+        ]
+    );
+    let num = |k: &str| stats[k].as_f64().unwrap();
+    // The draft threshold is 2% of emitted power (config/presets.toml) and the run
+    // converged (no shot budget hit), so the remaining unshot power is below it.
+    assert!(num("unshot_fraction") < 0.02, "{stats}");
+    assert_eq!(
+        num("unshot_fraction"),
+        solution.header.stats.unshot_fraction
+    );
+    assert_eq!(num("shots") as u64, solution.header.stats.shots);
+    assert_eq!(num("rays") as u64, solution.header.stats.rays);
+    assert_eq!(num("threads"), 2.0);
+    // 8 input polygons make at least 8 elements.
+    assert!(num("shots") >= 1.0 && num("rays") > 0.0 && num("elements") >= 8.0);
+    assert!(num("vertices") >= 4.0);
+    // rays_per_second is rays / seconds, to the precision JSON prints.
+    let rate = num("rays") / num("seconds");
+    assert!((num("rays_per_second") - rate).abs() <= 1e-9 * rate);
+    // Converged: the checkpoint is gone and the summary was printed.
+    assert!(!dir.path().join("room.sol.checkpoint").exists());
+    assert!(stderr(&result).contains("shots"), "{}", stderr(&result));
+}
+
+#[test]
+fn resume_after_a_stop_equals_an_uninterrupted_solve() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = write_room(dir.path(), "room", 10.0);
+    let whole = dir.path().join("whole.sol");
+    assert_ok(&run(&mut draft(&scene, &whole)));
+
+    // Stop at a shot budget of 3 with checkpoints every 2 shots: the solve is not
+    // converged, so the checkpoint is kept for --resume.
+    let split = dir.path().join("split.sol");
+    let checkpoint = dir.path().join("split.sol.checkpoint");
+    let first = run(draft(&scene, &split).args(["--max-shots", "3", "--checkpoint-every", "2"]));
+    assert_ok(&first);
+    assert!(checkpoint.exists(), "{}", stderr(&first));
+    assert!(stderr(&first).contains("--resume"), "{}", stderr(&first));
+    assert_eq!(read(&split).header.stats.shots, 3);
+
+    // Starting over without --resume would lose the saved work: refused.
+    let refused = run(&mut draft(&scene, &split));
+    assert!(!refused.status.success());
+    assert!(
+        stderr(&refused).contains("--resume"),
+        "{}",
+        stderr(&refused)
+    );
+
+    // Resume with another thread count and checkpoint interval (neither may
+    // change the result) to the end.
+    let mut resume = draft_on(&scene, &split, 1);
+    resume.args(["--resume", "--checkpoint-every", "5"]);
+    assert_ok(&run(&mut resume));
+    assert!(!checkpoint.exists(), "removed once converged");
+    assert_same_result(&read(&whole), &read(&split));
+}
+
+#[test]
+fn checkpoint_of_another_scene_or_settings_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = write_room(dir.path(), "room", 10.0);
+    let brighter = write_room(dir.path(), "brighter", 20.0);
+    let out = dir.path().join("room.sol");
+    assert_ok(&run(draft(&scene, &out).args(["--max-shots", "1"])));
+
+    let other_scene = run(draft(&brighter, &out).arg("--resume"));
+    assert!(!other_scene.status.success());
+    let message = stderr(&other_scene);
+    assert!(
+        message.contains("different scene") && message.contains("room.sol.checkpoint"),
+        "{message}"
+    );
+
+    let other_settings = run(draft(&scene, &out).args(["--resume", "--samples", "9"]));
+    assert!(!other_settings.status.success());
+    let message = stderr(&other_settings);
+    assert!(message.contains("samples"), "{message}");
+
+    // Nothing was lost: the checkpoint is still there.
+    assert!(dir.path().join("room.sol.checkpoint").exists());
+
+    // --resume with no checkpoint says which file is missing.
+    let nothing = run(draft(&scene, &dir.path().join("none.sol")).arg("--resume"));
+    assert!(!nothing.status.success());
+    let message = stderr(&nothing);
+    assert!(message.contains("none.sol.checkpoint"), "{message}");
+}
+
+#[test]
+fn bad_input_gives_clear_messages() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("x.sol");
+
+    let missing = dir.path().join("no-such-scene.obj");
+    let result = run(&mut draft(&missing, &out));
+    assert!(!result.status.success());
+    let message = stderr(&result);
+    assert!(message.contains("no-such-scene.obj"), "{message}");
+
+    let scene = write_room(dir.path(), "room", 10.0);
+    // A value clap cannot parse: usage error (exit 2) naming the flag and value.
+    let result = run(draft(&scene, &out).args(["--samples", "lots"]));
+    assert_eq!(result.status.code(), Some(2));
+    let message = stderr(&result);
+    assert!(
+        message.contains("lots") && message.contains("--samples"),
+        "{message}"
+    );
+    let result = run(draft(&scene, &out).args(["--mode", "glossy"]));
+    assert_eq!(result.status.code(), Some(2));
+    assert!(stderr(&result).contains("glossy"), "{}", stderr(&result));
+    // Values out of range: named with their flag and value.
+    let result = run(draft(&scene, &out).args(["--threshold", "1.5"]));
+    assert_eq!(result.status.code(), Some(1));
+    let message = stderr(&result);
+    assert!(
+        message.contains("--threshold") && message.contains("1.5"),
+        "{message}"
+    );
+    let result = run(draft(&scene, &out).args(["--samples", "0"]));
+    assert_eq!(result.status.code(), Some(1));
+    assert!(stderr(&result).contains("--samples"), "{}", stderr(&result));
+    assert!(!out.exists(), "no solution from failed runs");
+}
+
+#[test]
+fn preview_has_the_display_files_image_size() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = write_room(dir.path(), "room", 10.0);
+    // 000 appendix A: comment, eye/lookat, up, fov, near/far, resolution,
+    // diameter, ambient, threshold. The eye is inside the room, looking at the
+    // far wall, so every pixel sees a lit surface.
+    let display = dir.path().join("room.display");
+    std::fs::write(
+        &display,
+        "inside the room, toward +z\n\
+         eye 0.5 0.4 0.05 lookat 0.5 0.4 1\n\
+         up 0 1 0\n\
+         fovx 53 fovy 40\n\
+         near 0.01 far 10\n\
+         xres 64 yres 48\n\
+         diameter 2\n\
+         ambient 1\n\
+         threshold 20\n",
+    )
+    .unwrap();
+    let out = dir.path().join("room.sol");
+    let png = dir.path().join("room.png");
+    let result = run(draft(&scene, &out)
+        .arg("--display")
+        .arg(&display)
+        .arg("--preview")
+        .arg(&png));
+    assert_ok(&result);
+    let image = image::open(&png).expect("a decodable PNG").to_rgb8();
+    assert_eq!(image.dimensions(), (64, 48));
+    // Every pixel looks at a wall, floor or ceiling that receives light (directly
+    // or by one bounce), so after exposure almost none may be black; the 10% slack
+    // covers pixels on the light's and blocker's silhouettes.
+    let black = image.pixels().filter(|p| p.0 == [0, 0, 0]).count();
+    assert!(black * 10 < 64 * 48, "{black} black pixels of {}", 64 * 48);
+}
+
+#[test]
+fn help_explains_every_flag() {
+    let result = run(solver().args(["solve", "--help"]));
+    assert_ok(&result);
+    let help = String::from_utf8_lossy(&result.stdout);
+    for flag in [
+        "--out",
+        "--preset",
+        "--samples",
+        "--threshold",
+        "--max-shots",
+        "--seed",
+        "--threads",
+        "--no-shadows",
+        "--form-factors",
+        "--mode",
+        "--units-per-metre",
+        "--strict",
+        "--checkpoint-every",
+        "--no-ambient",
+        "--resume",
+        "--display",
+        "--preview",
+        "--stats-json",
+    ] {
+        assert!(help.contains(flag), "--help does not mention {flag}");
+    }
+    // The knobs say what they trade.
+    assert!(help.contains("faster") && help.contains("slower"), "{help}");
+}
