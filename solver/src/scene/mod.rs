@@ -7,8 +7,34 @@
 //! (W·sr⁻¹·m⁻², linear RGB), `kd`/`ks` are reflectances in [0, 1].
 
 use crate::camera::{Camera, UpAxis};
+use crate::settings::SettingsPatch;
 use glam::DVec3;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
+
+mod clean;
+mod config;
+mod display;
+mod error;
+mod legacy;
+mod mtl;
+mod obj;
+mod planar;
+mod raw;
+mod recentre;
+mod text;
+mod weld;
+
+#[cfg(test)]
+mod tests;
+
+pub use clean::{
+    COLLINEAR_TOLERANCE, PLANARITY_TOLERANCE, REPEATED_VERTEX_TOLERANCE, SMOOTH_NORMAL_DEGREES,
+    ZERO_AREA_TOLERANCE,
+};
+pub use display::{load_display_file, DisplayParams};
+pub use error::SceneError;
+pub use mtl::alpha_from_ns;
+pub use weld::WELD_TOLERANCE;
 
 /// Where a piece of input came from, for warnings and errors.
 #[derive(Clone, Debug, PartialEq, Eq, Default)]
@@ -117,4 +143,125 @@ pub struct Scene {
     /// The bounding-box centre subtracted (in f64) from every input position.
     pub recentre_offset: DVec3,
     pub warnings: Vec<Warning>,
+}
+
+/// `Polygon::patches` of a polygon whose input did not set a subdivision; the
+/// solver replaces it with its resolved `patches` setting through
+/// [`Scene::fill_default_patches`].
+pub const PATCHES_UNSET: u32 = 0;
+
+impl Scene {
+    /// Gives every polygon whose input left the patch subdivision unset
+    /// ([`PATCHES_UNSET`]) `patches` × `patches` patches. Call it with the
+    /// resolved [`crate::settings::SolverSettings::patches`], after the settings
+    /// precedence (flags > TOML config > display file > preset) is applied.
+    pub fn fill_default_patches(&mut self, patches: u32) {
+        for polygon in &mut self.polygons {
+            if polygon.patches == PATCHES_UNSET {
+                polygon.patches = patches;
+            }
+        }
+    }
+}
+
+/// Choices the caller makes about an import.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ImportOptions {
+    /// Turn every import warning into an error ([`SceneError::Strict`]). A TOML
+    /// config's `[solver] strict = true` turns it on as well.
+    pub strict: bool,
+    /// Patch subdivision for polygons whose input sets none; [`PATCHES_UNSET`]
+    /// (the default) leaves them for [`Scene::fill_default_patches`].
+    pub default_patches: u32,
+    /// Scene units per metre from the command line; wins over the TOML config's.
+    /// Neither given: 1.
+    pub units_per_metre: Option<f64>,
+}
+
+impl Default for ImportOptions {
+    fn default() -> Self {
+        ImportOptions {
+            strict: false,
+            default_patches: PATCHES_UNSET,
+            units_per_metre: None,
+        }
+    }
+}
+
+/// A scene with the settings its input carries.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LoadedScene {
+    pub scene: Scene,
+    /// Settings from the TOML config (`[solver]`, `mode`, `units_per_metre`);
+    /// empty for OBJ and legacy files. Precedence: above the display file's
+    /// settings, below command-line flags.
+    pub settings: SettingsPatch,
+    /// The display file a TOML config names (its `settings` rank below the
+    /// config's). Its camera is already in [`Scene::camera`] unless the config's
+    /// `[camera]` replaced it.
+    pub display: Option<DisplayParams>,
+}
+
+/// Imports a scene, choosing the reader by extension (case-insensitive):
+/// `.obj` (with its MTL libraries), `.toml` (a scene config naming geometry
+/// files), anything else (e.g. `.geom`) the legacy geometry file of 000
+/// appendix B. Positions are re-centred in f64, polygons cleaned and welded;
+/// see [`Scene::warnings`] for what was changed.
+pub fn load_scene(path: &Path, options: &ImportOptions) -> Result<LoadedScene, SceneError> {
+    if let Some(u) = options.units_per_metre {
+        if !(u.is_finite() && u > 0.0) {
+            return Err(SceneError::at(
+                path,
+                None,
+                "",
+                format!("units_per_metre must be finite and > 0, is {u}"),
+            ));
+        }
+    }
+    let extension = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    let mut build = clean::BuildOptions {
+        strict: options.strict,
+        default_patches: options.default_patches,
+        units_per_metre: options.units_per_metre.unwrap_or(1.0),
+        up_axis: UpAxis::default(),
+        camera: None,
+    };
+    let (raw, settings, display) = match extension.as_deref() {
+        Some("toml") => {
+            let c = config::load_config(path)?;
+            build.strict |= c.settings.strict == Some(true);
+            build.units_per_metre = options.units_per_metre.or(c.units_per_metre).unwrap_or(1.0);
+            build.up_axis = c.up_axis;
+            build.camera = c.camera;
+            (c.raw, c.settings, c.display)
+        }
+        Some("obj") => (obj::parse_obj(path)?, SettingsPatch::default(), None),
+        Some("mtl") => {
+            return Err(SceneError::at(
+                path,
+                None,
+                "",
+                "an MTL file holds materials only: load the OBJ file that names it in `mtllib`",
+            ))
+        }
+        Some("display") => {
+            return Err(SceneError::at(
+                path,
+                None,
+                "",
+                "this is a display parameter file (000 appendix A), not a scene: name it as \
+                 `display = ...` in a TOML scene config, or pass it to the solver separately",
+            ))
+        }
+        _ => (legacy::parse_legacy(path)?, SettingsPatch::default(), None),
+    };
+    let scene = clean::build_scene(raw, &build)?;
+    Ok(LoadedScene {
+        scene,
+        settings,
+        display,
+    })
 }

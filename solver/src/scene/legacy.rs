@@ -1,0 +1,555 @@
+//! The legacy geometry file of 000 appendix B (the "AFIT geom" format with
+//! 000's additions), also accepted with the extension `.geom`.
+//!
+//! ```text
+//! line 1   title (free text)
+//! line 2   [ccw] [cw] [purge] [nopurge]           (may be empty or left out)
+//! line 3   points N patches M attributes K        (`polygons` is accepted for `patches`)
+//! N lines  x y z [normal nx ny nz]
+//! M lines  n i1 … in attribute a [patch p]        (000 writes n = 4; 3 or more accepted)
+//! K lines  color r g b [emit r g b] [material m]
+//! ```
+//!
+//! Conventions chosen where appendix B is silent, stated here so that files can be
+//! written for it: point, polygon and attribute indices are 1-based; `patch p`
+//! asks for p × p patches (left out: the solver's default); `color` is the
+//! diffuse reflectance Kd and `emit` the emitted radiance (design notes); `cw`
+//! means polygons are listed clockwise seen from their front, and they are
+//! reversed on import; `purge`/`nopurge` are accepted and have no effect (import
+//! merges coincident vertices when welding anyway). An attribute line becomes the
+//! material `attribute K`; with `material m` it also answers to `material m` in the
+//! TOML config's `[materials]` (where Ks and α can be given: appendix F's
+//! reflectance files are not read). Blank lines and lines starting with `#` after
+//! the title are skipped. Every malformed line is an error naming the file, the
+//! line and what is wrong.
+
+use super::raw::{RawMaterial, RawPolygon, RawScene};
+use super::text::{numbered_lines, parse_count, parse_real, parse_vec3, read_text};
+use super::{SceneError, SourceRef};
+use glam::DVec3;
+use std::path::Path;
+
+/// The largest polygon-line vertex count accepted (000 uses 4).
+const MAX_POLYGON_VERTICES: u64 = 1024;
+/// The largest `patch p` accepted (as the solver's `patches` setting).
+pub(crate) const MAX_PATCHES: u32 = 256;
+
+/// Parses a legacy geometry file.
+pub(crate) fn parse_legacy(path: &Path) -> Result<RawScene, SceneError> {
+    let text = read_text(path)?;
+    parse_legacy_text(path, &text)
+}
+
+struct Point {
+    position: DVec3,
+    normal: Option<DVec3>,
+}
+
+struct PolygonLine {
+    line: usize,
+    indices: Vec<usize>,
+    attribute: usize,
+    patches: Option<u32>,
+}
+
+pub(crate) fn parse_legacy_text(path: &Path, text: &str) -> Result<RawScene, SceneError> {
+    let err = |line: usize, item: String, message: String| {
+        SceneError::at(path, Some(line), item, message)
+    };
+    if text.trim().is_empty() {
+        return Err(SceneError::Empty(format!("{} is empty", path.display())));
+    }
+    let mut lines = numbered_lines(text);
+    lines.next(); // the title
+                  // Everything after the title, less blank and comment lines.
+    let mut content = lines.filter_map(|(no, line)| {
+        let tokens: Vec<&str> = line.split_whitespace().collect();
+        match tokens.first() {
+            None => None,
+            Some(t) if t.starts_with('#') => None,
+            Some(_) => Some((no, tokens)),
+        }
+    });
+    let eof = |what: &str| SceneError::at(path, None, "", format!("the file ends before {what}"));
+
+    // Line 2 (optional) and line 3.
+    let (mut no, mut tokens) = content
+        .next()
+        .ok_or_else(|| eof("the `points N patches M attributes K` line"))?;
+    let mut clockwise = false;
+    if tokens[0] != "points" {
+        let (mut ccw, mut cw) = (false, false);
+        for t in &tokens {
+            match *t {
+                "ccw" => ccw = true,
+                "cw" => cw = true,
+                "purge" | "nopurge" => {}
+                other => {
+                    return Err(err(
+                        no,
+                        String::new(),
+                        format!("attribute selection line: unknown word `{other}` (expected ccw, cw, purge or nopurge)"),
+                    ))
+                }
+            }
+        }
+        if ccw && cw {
+            return Err(err(
+                no,
+                String::new(),
+                "attribute selection line: both `ccw` and `cw`".to_owned(),
+            ));
+        }
+        clockwise = cw;
+        (no, tokens) = content
+            .next()
+            .ok_or_else(|| eof("the `points N patches M attributes K` line"))?;
+    }
+    let counts_error = || {
+        err(
+            no,
+            String::new(),
+            format!(
+                "expected `points N patches M attributes K`, found `{}`",
+                tokens.join(" ")
+            ),
+        )
+    };
+    if tokens.len() != 6
+        || tokens[0] != "points"
+        || !matches!(tokens[2], "patches" | "polygons")
+        || tokens[4] != "attributes"
+    {
+        return Err(counts_error());
+    }
+    let count = |t: &str, what: &str| parse_count(t, what).map_err(|m| err(no, String::new(), m));
+    let n_points = count(tokens[1], "number of points")?;
+    let n_polygons = count(tokens[3], "number of polygons")?;
+    let n_attributes = count(tokens[5], "number of attributes")?;
+
+    // Counts come from the file: nothing is allocated from them up front; the
+    // vectors grow only as lines are actually read.
+    let mut points = Vec::new();
+    for k in 0..n_points {
+        let (no, tokens) = content
+            .next()
+            .ok_or_else(|| eof(&format!("point {} of {n_points}", k + 1)))?;
+        let item = format!("point {}", k + 1);
+        let position = parse_vec3(&tokens, "position").map_err(|m| err(no, item.clone(), m))?;
+        let normal = match tokens.len() {
+            3 => None,
+            7 if tokens[3] == "normal" => {
+                let n = parse_vec3(&tokens[4..], "normal").map_err(|m| err(no, item.clone(), m))?;
+                Some(DVec3::from(n))
+            }
+            _ => {
+                return Err(err(
+                    no,
+                    item,
+                    format!(
+                        "expected `x y z` or `x y z normal nx ny nz`, found `{}`",
+                        tokens.join(" ")
+                    ),
+                ))
+            }
+        };
+        points.push(Point {
+            position: DVec3::from(position),
+            normal,
+        });
+    }
+
+    let mut polygon_lines = Vec::new();
+    for k in 0..n_polygons {
+        let (no, tokens) = content
+            .next()
+            .ok_or_else(|| eof(&format!("polygon {} of {n_polygons}", k + 1)))?;
+        let item = format!("polygon {}", k + 1);
+        let e = |m: String| err(no, item.clone(), m);
+        let n = parse_count(tokens[0], "vertex count").map_err(&e)?;
+        if !(3..=MAX_POLYGON_VERTICES).contains(&n) {
+            return Err(e(format!(
+                "vertex count {n} is out of range (3 to {MAX_POLYGON_VERTICES}; 000 writes 4)"
+            )));
+        }
+        let n = n as usize;
+        if tokens.len() < 1 + n {
+            return Err(e(format!(
+                "vertex count {n} but only {} point indices follow",
+                tokens.len() - 1
+            )));
+        }
+        let mut indices = Vec::with_capacity(n);
+        for t in &tokens[1..=n] {
+            let i = parse_count(t, "point index").map_err(&e)?;
+            if i == 0 || i > n_points {
+                return Err(e(format!(
+                    "point index {i} is out of range: points are numbered 1 to {n_points}"
+                )));
+            }
+            indices.push(i as usize - 1);
+        }
+        let (mut attribute, mut patches) = (None, None);
+        let mut rest = tokens[1 + n..].iter();
+        while let Some(&key) = rest.next() {
+            let value = rest
+                .next()
+                .ok_or_else(|| e(format!("`{key}` without a value")))?;
+            match key {
+                "attribute" => {
+                    let a = parse_count(value, "attribute").map_err(&e)?;
+                    if a == 0 || a > n_attributes {
+                        return Err(e(format!(
+                            "attribute {a} is out of range: attributes are numbered 1 to {n_attributes}"
+                        )));
+                    }
+                    attribute = Some(a as usize - 1);
+                }
+                "patch" => {
+                    let p = parse_count(value, "patch").map_err(&e)?;
+                    if p == 0 || p > u64::from(MAX_PATCHES) {
+                        return Err(e(format!("patch {p} is out of range (1 to {MAX_PATCHES})")));
+                    }
+                    patches = Some(p as u32);
+                }
+                other => {
+                    if other.parse::<f64>().is_ok() {
+                        return Err(e(format!(
+                            "vertex count {n} but more point indices follow (`{other}`)"
+                        )));
+                    }
+                    return Err(e(format!(
+                        "unknown word `{other}` (expected `attribute a` or `patch p`)"
+                    )));
+                }
+            }
+        }
+        let attribute = attribute.ok_or_else(|| e("missing `attribute a`".to_owned()))?;
+        polygon_lines.push(PolygonLine {
+            line: no,
+            indices,
+            attribute,
+            patches,
+        });
+    }
+
+    let mut materials = Vec::new();
+    for k in 0..n_attributes {
+        let (no, tokens) = content
+            .next()
+            .ok_or_else(|| eof(&format!("attribute {} of {n_attributes}", k + 1)))?;
+        let item = format!("attribute {}", k + 1);
+        let e = |m: String| err(no, item.clone(), m);
+        let (mut colour, mut emit, mut number) = (None, DVec3::ZERO, None);
+        let mut i = 0;
+        while i < tokens.len() {
+            match tokens[i] {
+                "color" | "colour" | "emit" => {
+                    let what = if tokens[i] == "emit" {
+                        "emit (emitted radiance)"
+                    } else {
+                        "color (diffuse reflectance)"
+                    };
+                    let v = tokens
+                        .get(i + 1..i + 4)
+                        .ok_or_else(|| e(format!("{what}: expected 3 numbers")))
+                        .and_then(|t| {
+                            let mut v = [0.0; 3];
+                            for (c, (slot, tok)) in v.iter_mut().zip(t).enumerate() {
+                                *slot = parse_real(
+                                    tok,
+                                    &format!("{what} {}", ["red", "green", "blue"][c]),
+                                )
+                                .map_err(&e)?;
+                            }
+                            Ok(DVec3::from(v))
+                        })?;
+                    if v.min_element() < 0.0 {
+                        return Err(e(format!("{what} must not be negative")));
+                    }
+                    if tokens[i] == "emit" {
+                        emit = v;
+                    } else {
+                        colour = Some(v);
+                    }
+                    i += 4;
+                }
+                "material" => {
+                    let m = tokens
+                        .get(i + 1)
+                        .ok_or_else(|| e("`material` without a number".to_owned()))?;
+                    number = Some(parse_count(m, "material").map_err(&e)?);
+                    i += 2;
+                }
+                other => {
+                    return Err(e(format!(
+                    "unknown word `{other}` (expected `color r g b`, `emit r g b` or `material m`)"
+                )))
+                }
+            }
+        }
+        let kd = colour.ok_or_else(|| e("missing `color r g b`".to_owned()))?;
+        let name = format!("attribute {}", k + 1);
+        materials.push(RawMaterial {
+            name: name.clone(),
+            aliases: number
+                .map(|m| format!("material {m}"))
+                .into_iter()
+                .collect(),
+            kd,
+            ks: DVec3::ZERO,
+            alpha: 1.0,
+            emission: emit,
+            source: SourceRef {
+                file: path.to_path_buf(),
+                line: Some(no),
+                item: format!("material {name}"),
+            },
+            overridden_at: None,
+            undefined: None,
+        });
+    }
+    if let Some((no, tokens)) = content.next() {
+        return Err(err(
+            no,
+            String::new(),
+            format!(
+                "unexpected `{}` after the last attribute line (the header declares {n_points} points, {n_polygons} polygons, {n_attributes} attributes)",
+                tokens.join(" ")
+            ),
+        ));
+    }
+
+    let polygons = polygon_lines
+        .into_iter()
+        .enumerate()
+        .map(|(k, p)| {
+            let mut order = p.indices;
+            if clockwise {
+                order.reverse();
+            }
+            let vertices = order.iter().map(|&i| points[i].position).collect();
+            let normals = order
+                .iter()
+                .map(|&i| points[i].normal)
+                .collect::<Option<Vec<_>>>();
+            RawPolygon {
+                vertices,
+                normals,
+                material: p.attribute,
+                patches: p.patches,
+                object: None,
+                source: SourceRef {
+                    file: path.to_path_buf(),
+                    line: Some(p.line),
+                    item: format!("polygon {}", k + 1),
+                },
+            }
+        })
+        .collect();
+    Ok(RawScene {
+        polygons,
+        materials,
+        warnings: Vec::new(),
+        files: vec![path.to_path_buf()],
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const HEADER: &str = "title\nccw\npoints 4 patches 1 attributes 1\n";
+    const POINTS: &str = "0 0 0 normal 0 0 1\n1 0 0 normal 0 0 1\n1 1 0 normal 0 0 1\n0 1 0\n";
+
+    fn parse(text: &str) -> Result<RawScene, SceneError> {
+        parse_legacy_text(Path::new("room.geom"), text)
+    }
+
+    #[test]
+    fn reads_points_polygons_and_attributes() {
+        let text = format!(
+            "{HEADER}{POINTS}4 1 2 3 4 attribute 1 patch 3\ncolor 0.5 0.25 0.125 emit 1 2 3 material 7\n"
+        );
+        let raw = parse(&text).unwrap();
+        assert_eq!(raw.polygons.len(), 1);
+        let p = &raw.polygons[0];
+        assert_eq!(p.vertices[2], DVec3::new(1.0, 1.0, 0.0));
+        assert_eq!(p.patches, Some(3));
+        assert_eq!(p.source.line, Some(8));
+        // Point 4 has no normal, so the polygon has no vertex normals.
+        assert!(p.normals.is_none());
+        let m = &raw.materials[0];
+        assert_eq!(m.kd, DVec3::new(0.5, 0.25, 0.125));
+        assert_eq!(m.emission, DVec3::new(1.0, 2.0, 3.0));
+        assert!(m.answers_to("attribute 1") && m.answers_to("material 7"));
+    }
+
+    #[test]
+    fn cw_reverses_and_attribute_line_may_be_left_out() {
+        let cw = format!(
+            "title\ncw purge\npoints 4 patches 1 attributes 1\n{POINTS}4 1 2 3 4 attribute 1\ncolor 1 1 1\n"
+        );
+        let raw = parse(&cw).unwrap();
+        assert_eq!(raw.polygons[0].vertices[0], DVec3::new(0.0, 1.0, 0.0));
+        let bare = format!("title\npoints 4 polygons 1 attributes 1\n\n# comment\n{POINTS}3 1 2 3 attribute 1\ncolor 1 1 1\n");
+        let raw = parse(&bare).unwrap();
+        assert_eq!(raw.polygons[0].vertices.len(), 3);
+        assert_eq!(raw.polygons[0].patches, None);
+    }
+
+    #[test]
+    fn every_malformed_line_names_file_line_and_what() {
+        let poly = "4 1 2 3 4 attribute 1 patch 2\n";
+        let attr = "color 1 1 1\n";
+        let cases: Vec<(String, Option<usize>, &str)> = vec![
+            (
+                "title\nccw sideways\n".into(),
+                Some(2),
+                "unknown word `sideways`",
+            ),
+            ("title\nccw cw\n".into(), Some(2), "both `ccw` and `cw`"),
+            (
+                "title\nccw\npoints 4 patches\n".into(),
+                Some(3),
+                "expected `points N patches M attributes K`",
+            ),
+            (
+                "title\nccw\npoints -4 patches 1 attributes 1\n".into(),
+                Some(3),
+                "number of points",
+            ),
+            (
+                format!("{HEADER}0 0 0\n1 0\n"),
+                Some(5),
+                "expected 3 numbers",
+            ),
+            (
+                format!("{HEADER}0 0 0\n1 0 x\n"),
+                Some(5),
+                "position component z",
+            ),
+            (
+                format!("{HEADER}0 0 0\n1 0 inf\n"),
+                Some(5),
+                "not a finite number",
+            ),
+            (
+                format!("{HEADER}0 0 0\n1 0 0 normal 1 0\n"),
+                Some(5),
+                "expected `x y z` or `x y z normal nx ny nz`",
+            ),
+            (
+                format!("{HEADER}0 0 0\n1 0 0 normal 1 nan 0\n"),
+                Some(5),
+                "not a finite",
+            ),
+            (
+                format!("{HEADER}{POINTS}4 1 2 3\n{attr}"),
+                Some(8),
+                "only 3 point indices follow",
+            ),
+            (
+                format!("{HEADER}{POINTS}2 1 2 attribute 1\n{attr}"),
+                Some(8),
+                "vertex count 2 is out of range",
+            ),
+            (
+                format!("{HEADER}{POINTS}4 1 2 3 5 attribute 1\n{attr}"),
+                Some(8),
+                "point index 5 is out of range",
+            ),
+            (
+                format!("{HEADER}{POINTS}4 0 1 2 3 attribute 1\n{attr}"),
+                Some(8),
+                "point index 0 is out of range",
+            ),
+            (
+                format!("{HEADER}{POINTS}4 1 2 3 4 attribute 2\n{attr}"),
+                Some(8),
+                "attribute 2 is out of range",
+            ),
+            (
+                format!("{HEADER}{POINTS}4 1 2 3 4 patch 2\n{attr}"),
+                Some(8),
+                "missing `attribute a`",
+            ),
+            (
+                format!("{HEADER}{POINTS}4 1 2 3 4 attribute 1 patch 0\n{attr}"),
+                Some(8),
+                "patch 0 is out of range",
+            ),
+            (
+                format!("{HEADER}{POINTS}4 1 2 3 4 attribute 1 patch\n{attr}"),
+                Some(8),
+                "`patch` without a value",
+            ),
+            (
+                format!("{HEADER}{POINTS}4 1 2 3 4 attribute 1 colour 2\n{attr}"),
+                Some(8),
+                "unknown word `colour`",
+            ),
+            (
+                format!("{HEADER}{POINTS}4 1 2 3 4 4 attribute 1\n{attr}"),
+                Some(8),
+                "more point indices follow",
+            ),
+            (
+                format!("{HEADER}{POINTS}{poly}emit 1 1 1\n"),
+                Some(9),
+                "missing `color r g b`",
+            ),
+            (
+                format!("{HEADER}{POINTS}{poly}color 1 1\n"),
+                Some(9),
+                "expected 3 numbers",
+            ),
+            (
+                format!("{HEADER}{POINTS}{poly}color 1 1 -1\n"),
+                Some(9),
+                "must not be negative",
+            ),
+            (
+                format!("{HEADER}{POINTS}{poly}color 1 1 1 emit 1 x 1\n"),
+                Some(9),
+                "emit (emitted radiance) green",
+            ),
+            (
+                format!("{HEADER}{POINTS}{poly}color 1 1 1 material\n"),
+                Some(9),
+                "`material` without a number",
+            ),
+            (
+                format!("{HEADER}{POINTS}{poly}color 1 1 1 shiny 3\n"),
+                Some(9),
+                "unknown word `shiny`",
+            ),
+            (
+                format!("{HEADER}{POINTS}{poly}{attr}extra line\n"),
+                Some(10),
+                "after the last attribute line",
+            ),
+            (
+                format!("{HEADER}{POINTS}{poly}"),
+                None,
+                "before attribute 1 of 1",
+            ),
+            (format!("{HEADER}0 0 0\n"), None, "before point 2 of 4"),
+        ];
+        for (text, line, fragment) in cases {
+            let message = parse(&text).unwrap_err().to_string();
+            let prefix = match line {
+                Some(l) => format!("room.geom:{l}"),
+                None => "room.geom".to_owned(),
+            };
+            assert!(
+                message.starts_with(&prefix),
+                "{message:?} should start with {prefix:?}"
+            );
+            assert!(
+                message.contains(fragment),
+                "{message:?} should say {fragment:?}"
+            );
+        }
+    }
+}

@@ -1,0 +1,94 @@
+//! The parsers' common output before cleaning: polygons in the input's original
+//! f64 coordinates, materials as written, and where each came from. The TOML
+//! config edits this form (overrides) before [`super::clean`] turns it into a
+//! [`super::Scene`].
+
+use super::{SourceRef, Warning};
+use glam::DVec3;
+use std::path::PathBuf;
+
+/// Diffuse reflectance given to a material that the input uses but never defines
+/// (MTL's customary default, and what modelling tools show for such faces).
+pub(crate) const DEFAULT_KD: f64 = 0.8;
+
+/// A material as the input file wrote it.
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct RawMaterial {
+    pub name: String,
+    /// Other names a TOML override may use (a legacy attribute's `material N`).
+    pub aliases: Vec<String>,
+    pub kd: DVec3,
+    pub ks: DVec3,
+    pub alpha: f64,
+    pub emission: DVec3,
+    /// Where it was defined (MTL `newmtl` line, legacy attribute line).
+    pub source: SourceRef,
+    /// Where a TOML override last changed it.
+    pub overridden_at: Option<SourceRef>,
+    /// A warning to give if nothing defines this material (a `usemtl` name missing
+    /// from every MTL file, or faces with no `usemtl`); a TOML override clears it.
+    pub undefined: Option<Warning>,
+}
+
+impl RawMaterial {
+    /// A material that the input uses but does not define.
+    pub fn undefined(name: &str, source: SourceRef, message: String) -> Self {
+        RawMaterial {
+            name: name.to_owned(),
+            aliases: Vec::new(),
+            kd: DVec3::splat(DEFAULT_KD),
+            ks: DVec3::ZERO,
+            alpha: 1.0,
+            emission: DVec3::ZERO,
+            source: source.clone(),
+            overridden_at: None,
+            undefined: Some(Warning { source, message }),
+        }
+    }
+
+    /// Whether a TOML override key addresses this material.
+    pub fn answers_to(&self, key: &str) -> bool {
+        self.name == key || self.aliases.iter().any(|a| a == key)
+    }
+}
+
+/// A polygon as the input file wrote it, in original coordinates.
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct RawPolygon {
+    pub vertices: Vec<DVec3>,
+    /// One shading normal per vertex when the input gave them (OBJ `vn`, legacy
+    /// `normal`), not yet normalised or compared with the facet.
+    pub normals: Option<Vec<DVec3>>,
+    /// Index into [`RawScene::materials`].
+    pub material: usize,
+    /// Patch subdivision the input asked for (legacy `patch N`, TOML overrides).
+    pub patches: Option<u32>,
+    /// OBJ object or group name, for TOML `[objects.NAME]` overrides.
+    pub object: Option<String>,
+    pub source: SourceRef,
+}
+
+/// Everything parsed from one or more files.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub(crate) struct RawScene {
+    pub polygons: Vec<RawPolygon>,
+    pub materials: Vec<RawMaterial>,
+    pub warnings: Vec<Warning>,
+    /// The geometry files read, for messages about the scene as a whole.
+    pub files: Vec<PathBuf>,
+}
+
+impl RawScene {
+    /// Appends `other`, re-indexing its polygons' materials.
+    pub fn append(&mut self, other: RawScene) {
+        let offset = self.materials.len();
+        self.materials.extend(other.materials);
+        self.polygons
+            .extend(other.polygons.into_iter().map(|mut p| {
+                p.material += offset;
+                p
+            }));
+        self.warnings.extend(other.warnings);
+        self.files.extend(other.files);
+    }
+}
