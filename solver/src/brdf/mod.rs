@@ -389,11 +389,12 @@ impl GlossyLobe {
         let order = self.order();
         sh::eval_basis(order, mirror(omega_i), scratch);
         let scale = irradiance * self.table.c_r(mu_i);
-        for l in 0..=order {
-            let s = scale * self.sh_scale[l as usize];
-            for m in -(l as i32)..=l as i32 {
-                let k = sh::index(l, m);
-                out[k] += s * scratch[k];
+        for l in 0..=order as usize {
+            let s = scale * self.sh_scale[l];
+            // Degree l occupies indices l² .. (l+1)², contiguous.
+            let band = l * l..(l + 1) * (l + 1);
+            for (o, y) in out[band.clone()].iter_mut().zip(&scratch[band]) {
+                *o += s * y;
             }
         }
     }

@@ -100,8 +100,8 @@ pub fn normalization(ks: f64, a: &[f64], mu_i: f64) -> f64 {
 /// its rim), so the rule only has to resolve the narrow peak: θ runs over the band
 /// within θ_cut of the mirror direction, where `g(θ_cut) = e^{−40}` (the neglected
 /// rest is < 1e-17 of the total), and φ over the part of that band inside the cut;
-/// both are split into panels no wider than α/2 with 16 nodes each (≥ 32 nodes per
-/// width of the lobe). Relative accuracy ~1e-12 (test: doubling the panels).
+/// both are split into panels no wider than α/2 of arc (α/(2 sin θ) in φ, at most
+/// 0.1 rad) with 16 nodes each (≥ 32 nodes per width of the lobe). Relative accuracy ~1e-12 (test: doubling the panels).
 pub fn exact_hemisphere_integral(alpha: f64, mu_i: f64) -> f64 {
     exact_hemisphere_integral_with(alpha, mu_i, 1)
 }
@@ -115,7 +115,7 @@ pub(crate) fn exact_hemisphere_integral_with(alpha: f64, mu_i: f64, refine: usiz
     let cos_cut = theta_cut.cos();
     let h_max = (0.5 * alpha).min(0.1);
     let (x, w) = sh::gauss_legendre(16);
-    let panel_rule = |a: f64, b: f64, mut f: Box<dyn FnMut(f64) -> f64 + '_>| -> f64 {
+    let panel_rule = |a: f64, b: f64, h_max: f64, mut f: Box<dyn FnMut(f64) -> f64 + '_>| -> f64 {
         if b <= a {
             return 0.0;
         }
@@ -162,9 +162,15 @@ pub(crate) fn exact_hemisphere_integral_with(alpha: f64, mu_i: f64, refine: usiz
                 (-one_minus / (alpha * alpha * (1.0 + mu0))).exp()
             }
         };
-        2.0 * cos_t * sin_t * panel_rule(0.0, phi_max, Box::new(inner))
+        // A step dφ moves sin θ·dφ on the sphere: panels of α/2 in arc length.
+        let h_phi = if sin_t > 1e-12 {
+            (h_max / sin_t).min(0.1)
+        } else {
+            0.1
+        };
+        2.0 * cos_t * sin_t * panel_rule(0.0, phi_max, h_phi, Box::new(inner))
     };
-    panel_rule(theta_lo, theta_hi, Box::new(outer))
+    panel_rule(theta_lo, theta_hi, h_max, Box::new(outer))
 }
 
 /// `C_R(μ_i)` tabulated on a uniform grid of μ_i ∈ [0, 1] and interpolated by

@@ -421,7 +421,9 @@ fn reflected_sh_carries_exactly_ks_of_the_irradiance() {
     // formula), must return Ks for every incidence and window. Tolerance 2e-6: the
     // normalization table's stated 1e-6 (×1.5, see above) plus rounding.
     for window in Window::ALL {
-        let lobe = GlossyLobe::new(0.15, 0.6, 1e-3, 64, window).unwrap();
+        // Order ≤ 24: the plain lobe meets the target at 16, windowed ones are capped
+        // at 24, which is enough to test their energy.
+        let lobe = GlossyLobe::new(0.15, 0.6, 1e-3, 24, window).unwrap();
         let order = lobe.order();
         let mut c = vec![0.0; sh::coefficient_count(order)];
         let mut scratch = vec![0.0; sh::coefficient_count(order)];
