@@ -5,13 +5,23 @@ mod common;
 
 use glam::{DVec2, DVec3};
 use runtime::gpu::Gpu;
-use runtime::render::{EyeImage, MultiviewMode, RendererDesc, StereoRenderer};
+use runtime::render::{CoefficientStorage, EyeImage, MultiviewMode, RendererDesc, StereoRenderer};
 use runtime::session::OffscreenSwapchain;
 use solver::camera::{Camera, EyeView};
 use solver::format::Solution;
 use solver::raster;
 
 fn render(gpu: &Gpu, solution: &Solution, views: &[EyeView], samples: u32) -> Vec<EyeImage> {
+    render_with(gpu, solution, views, samples, CoefficientStorage::F32)
+}
+
+fn render_with(
+    gpu: &Gpu,
+    solution: &Solution,
+    views: &[EyeView],
+    samples: u32,
+    storage: CoefficientStorage,
+) -> Vec<EyeImage> {
     let (w, h) = (views[0].width, views[0].height);
     let swapchain = OffscreenSwapchain::new(gpu, w, h, 1).unwrap();
     let desc = RendererDesc {
@@ -19,6 +29,7 @@ fn render(gpu: &Gpu, solution: &Solution, views: &[EyeView], samples: u32) -> Ve
         height: h,
         max_samples: samples,
         multiview: MultiviewMode::Auto,
+        storage,
         ..RendererDesc::default()
     };
     let mut renderer = StereoRenderer::new(gpu, solution, desc, &swapchain.desc()).unwrap();
@@ -40,6 +51,7 @@ fn check_against_reference(
     name: &str,
     solution: &Solution,
     samples: u32,
+    storage: CoefficientStorage,
     mean_tol: f64,
     p99_tol: f64,
     fraction_tol: f64,
@@ -47,7 +59,7 @@ fn check_against_reference(
     let gpu = common::gpu();
     let camera: Camera = common::room_camera(96, 80);
     let views = camera.stereo_views(0.3, DVec3::ZERO);
-    let eyes = render(&gpu, solution, &views, samples);
+    let eyes = render_with(&gpu, solution, &views, samples, storage);
     for (eye, (view, label)) in eyes.iter().zip(views.iter().zip(["left", "right"])) {
         let expected = raster::render(solution, view, &raster::RenderOptions::default()).unwrap();
         let actual = as_raster(eye);
@@ -96,19 +108,63 @@ fn check_against_reference(
 #[test]
 fn diffuse_room_matches_cpu_reference_in_both_eyes() {
     let solution = common::diffuse_room(4);
-    check_against_reference("diffuse", &solution, 1, 2e-3, 5e-3, 0.01);
+    check_against_reference(
+        "diffuse",
+        &solution,
+        1,
+        CoefficientStorage::F32,
+        2e-3,
+        5e-3,
+        0.01,
+    );
 }
 
 #[test]
 fn glossy_room_matches_cpu_reference_in_both_eyes() {
     let solution = common::glossy_room(12, 6);
-    check_against_reference("glossy", &solution, 1, 2e-3, 5e-3, 0.01);
+    check_against_reference(
+        "glossy",
+        &solution,
+        1,
+        CoefficientStorage::F32,
+        2e-3,
+        5e-3,
+        0.01,
+    );
 }
 
 #[test]
 fn msaa_image_stays_close_to_cpu_reference() {
     let solution = common::glossy_room(8, 4);
-    check_against_reference("glossy-msaa", &solution, 4, 2.5e-2, 1.0, 0.05);
+    check_against_reference(
+        "glossy-msaa",
+        &solution,
+        4,
+        CoefficientStorage::F32,
+        2.5e-2,
+        1.0,
+        0.05,
+    );
+}
+
+#[test]
+fn order_16_floor_matches_cpu_reference_with_f32_and_f16_coefficients() {
+    // The storage choice (docs/benchmarks.md, "Runtime"): f16 rounds each
+    // coefficient to 2⁻¹¹ relative (per-batch scale keeps them normal), and the
+    // radiance sums (L+1)² = 289 such terms whose signs vary, so its error is a
+    // few 1e-4 of the lobe's peak; the bounds are those of the f32 case.
+    let solution = common::glossy_room(12, 16);
+    for storage in [CoefficientStorage::F32, CoefficientStorage::F16] {
+        check_against_reference(
+            &format!("glossy-L16-{storage:?}"),
+            &solution,
+            1,
+            storage,
+            2e-3,
+            5e-3,
+            0.01,
+        );
+    }
 }
 
 /// Centroid (framebuffer coordinates) of pixels whose red channel exceeds

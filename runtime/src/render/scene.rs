@@ -155,7 +155,7 @@ impl GpuScene {
                     ),
                 });
             }
-            if batch.indices.len() % 3 != 0 {
+            if !batch.indices.len().is_multiple_of(3) {
                 return Err(SceneError::Inconsistent {
                     batch: i,
                     what: format!(
@@ -223,7 +223,7 @@ impl GpuScene {
                         let h = half::f16::from_f32(c / scale);
                         coeff_data.extend_from_slice(&h.to_bits().to_le_bytes());
                     }
-                    if batch.coefficients.len() % 2 == 1 {
+                    if !batch.coefficients.len().is_multiple_of(2) {
                         coeff_data.extend_from_slice(&[0, 0]);
                     }
                     scale

@@ -244,14 +244,14 @@ pub fn glossy_room(n: usize, order: u32) -> Solution {
         let local = solver::sh::to_local(r, nrm, tan);
         solver::sh::zonal_rotated(order, &zonal, local, &mut rotated);
         let base = diffuse_radiance(pos);
-        for k in 0..count {
-            for c in 0..3 {
+        for (k, lobe) in rotated.iter().enumerate() {
+            for b in base {
                 let diffuse = if k == 0 {
-                    0.3 * base[c] / solver::sh::Y00
+                    0.3 * b / solver::sh::Y00
                 } else {
                     0.0
                 };
-                floor.coefficients.push((diffuse + 2.0 * rotated[k]) as f32);
+                floor.coefficients.push((diffuse + 2.0 * lobe) as f32);
             }
         }
     }
