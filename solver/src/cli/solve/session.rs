@@ -102,7 +102,7 @@ impl Session<'_> {
             }
             let now = shooter.snapshot();
             reporter.update(&now);
-            if now.shots % self.checkpoint_every == 0 {
+            if now.shots.is_multiple_of(self.checkpoint_every) {
                 self.save(&shooter, reporter.total_seconds())?;
             }
         }
