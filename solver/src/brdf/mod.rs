@@ -360,14 +360,15 @@ impl GlossyLobe {
 
     /// The BRDF `f_s(ω_i, ω_o) = C_R(μ_i) · Σ_l w_l a_l P_l(ω_o·r)` in the local frame
     /// (z = normal), with r the mirror of ω_i (both unit, pointing away from the
-    /// surface). Evaluated from the expansion, so it includes the truncation.
+    /// surface). Evaluated from the expansion, so it includes the truncation, and
+    /// clamped at 0 where the truncated series rings negative.
     pub fn brdf(&self, omega_i: DVec3, omega_o: DVec3) -> f64 {
         let r = mirror(omega_i);
         let mu0 = omega_o.dot(r).clamp(-1.0, 1.0);
         let mut p = vec![0.0; self.coefficients.len()];
         sh::legendre_all(self.order(), mu0, &mut p);
         let series: f64 = self.coefficients.iter().zip(&p).map(|(a, p)| a * p).sum();
-        self.table.c_r(omega_i.z) * series
+        (self.table.c_r(omega_i.z) * series).max(0.0)
     }
 
     /// Adds the SH of the reflected lobe for irradiance `irradiance` (ΔE, per

@@ -358,6 +358,14 @@ pub fn eval_rgb_with(
     rgb
 }
 
+/// [`eval_rgb`] clamped at zero per channel: what the renderer shows. A truncated
+/// glossy lobe rings slightly negative (at most 6.6e-4 of its peak at the default
+/// error target, docs/sh-bands.md); clamping never increases the error against the
+/// true lobe and adds at most that negative share of light.
+pub fn eval_rgb_clamped(order: u32, coefficients: &[f32], dir: DVec3) -> [f64; 3] {
+    eval_rgb(order, coefficients, dir).map(|v| v.max(0.0))
+}
+
 /// World direction to the local frame `(x, y, z) = (d·t, d·b, d·n)`, `b = n × t`.
 ///
 /// `normal` and `tangent` must be unit length and orthogonal (the solver builds them

@@ -388,6 +388,12 @@ fn eval_rgb_uses_the_file_layout() {
     assert!((rgb[0] - 2.0 * Y00).abs() < 1e-15);
     assert_eq!(rgb[1], 0.0);
     assert!((rgb[2] - (3.0 / (4.0 * PI)).sqrt() * 0.6).abs() < 1e-15);
+    // Clamped evaluation: a negative channel shows as 0, positive ones unchanged.
+    let mut neg = c.clone();
+    neg[index(0, 0) * 3 + 1] = -1.0;
+    let clamped = eval_rgb_clamped(order, &neg, d);
+    assert_eq!(clamped[1], 0.0);
+    assert_eq!(clamped[0], eval_rgb(order, &neg, d)[0]);
     // A short slice is not a panic: missing coefficients count as zero.
     let short = eval_rgb(order, &c[..3], d);
     assert!((short[0] - 2.0 * Y00).abs() < 1e-15 && short[2] == 0.0);
