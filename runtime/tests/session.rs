@@ -80,4 +80,11 @@ fn mock_session_walks_a_scripted_path_with_zero_validation_messages() {
         assert!(lit > (w * h / 2) as usize, "only {lit} lit pixels");
     }
     common::assert_validation_clean(&gpu);
+    // Teardown (renderer, session images, device, instance) is clean too: the
+    // layer reports leaked or in-use objects when the device is destroyed.
+    let log = gpu.validation_log_handle();
+    drop(renderer);
+    drop(session);
+    drop(gpu);
+    assert_eq!(log.count(), 0, "{}", log.messages().join("\n"));
 }

@@ -372,6 +372,12 @@ impl Gpu {
         &self.shared.log
     }
 
+    /// A handle on the validation log that outlives the device: messages sent
+    /// while the device and instance are destroyed (leaked objects) land here too.
+    pub fn validation_log_handle(&self) -> Arc<ValidationLog> {
+        self.shared.log.clone()
+    }
+
     /// Whether the validation layer is active.
     pub fn validation_enabled(&self) -> bool {
         self.shared.debug.is_some()
