@@ -330,3 +330,60 @@ fn help_explains_every_flag() {
     // The knobs say what they trade.
     assert!(help.contains("faster") && help.contains("slower"), "{help}");
 }
+
+/// A real Ctrl-C (SIGINT) mid-solve: exit code 130 with the resume hint, a
+/// checkpoint and a partial solution on disk; resuming to a shot budget gives the
+/// same file as an uninterrupted solve to that budget.
+#[cfg(unix)]
+#[test]
+fn ctrl_c_saves_a_resumable_checkpoint() {
+    use std::time::{Duration, Instant};
+    let dir = tempfile::tempdir().unwrap();
+    let scene = write_room(dir.path(), "room", 10.0);
+    let out = dir.path().join("room.sol");
+    let checkpoint = dir.path().join("room.sol.checkpoint");
+    // A threshold of 1e-7 needs hundreds of shots, far more than happen between
+    // the first checkpoint and the signal, so the solve is still running when the
+    // signal arrives.
+    let long = ["--threshold", "1e-7"];
+    let mut child = draft(&scene, &out)
+        .args(long)
+        .args(["--max-shots", "1000000", "--checkpoint-every", "1"])
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let start = Instant::now();
+    while !checkpoint.exists() {
+        assert!(
+            start.elapsed() < Duration::from_secs(30),
+            "no checkpoint appeared"
+        );
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    let kill = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(kill.success());
+    let result = child.wait_with_output().unwrap();
+    let message = stderr(&result);
+    assert_eq!(result.status.code(), Some(130), "{message}");
+    assert!(message.contains("--resume"), "{message}");
+    let partial = read(&out);
+    assert!(partial.header.partial);
+    let shots = partial.header.stats.shots;
+
+    // Resume to 3 shots past the interruption, and solve the same budget in one go.
+    let budget = (shots + 3).to_string();
+    let resumed = run(draft(&scene, &out)
+        .args(long)
+        .args(["--resume", "--max-shots", &budget]));
+    assert_ok(&resumed);
+    let whole = dir.path().join("whole.sol");
+    assert_ok(&run(draft(&scene, &whole)
+        .args(long)
+        .args(["--max-shots", &budget])));
+    let (a, b) = (read(&out), read(&whole));
+    assert_eq!(a.header.stats.shots, shots + 3);
+    assert_same_result(&a, &b);
+}
