@@ -78,6 +78,17 @@ pub struct GpuDesc {
     pub validation: bool,
 }
 
+/// Extra Vulkan extensions to enable (the mirror window's surface and
+/// swapchain; see [`Gpu::with_extensions`]).
+#[derive(Clone, Debug, Default)]
+pub struct GpuExtensions {
+    /// Instance extensions (e.g. `VK_KHR_surface` and the platform's surface).
+    pub instance: Vec<&'static CStr>,
+    /// Device extensions (e.g. `VK_KHR_swapchain`); devices without all of them
+    /// are not chosen.
+    pub device: Vec<&'static CStr>,
+}
+
 /// Validation messages received so far (warnings and errors; info and verbose
 /// messages are not counted).
 #[derive(Debug, Default)]
@@ -235,6 +246,12 @@ impl Gpu {
     /// Device choice: Vulkan ≥ 1.1 with a graphics queue; discrete before
     /// integrated before virtual before CPU, first listed among equals.
     pub fn new(desc: &GpuDesc) -> Result<Gpu, GpuError> {
+        Gpu::with_extensions(desc, &GpuExtensions::default())
+    }
+
+    /// As [`Gpu::new`], also enabling `extensions` (a device that lacks one of the
+    /// device extensions is passed over, and named in the error if none is left).
+    pub fn with_extensions(desc: &GpuDesc, wanted: &GpuExtensions) -> Result<Gpu, GpuError> {
         let validation = desc.validation || validation_from_env();
         // SAFETY: loading the Vulkan loader runs its initialisers; ash requires the
         // library to be a conforming Vulkan loader, which libvulkan.so.1 is.
@@ -253,7 +270,8 @@ impl Gpu {
         }
 
         let mut layers = Vec::new();
-        let mut extensions = Vec::new();
+        let mut extensions: Vec<*const std::ffi::c_char> =
+            wanted.instance.iter().map(|e| e.as_ptr()).collect();
         if validation {
             // SAFETY: plain query on a loaded entry.
             let available = unsafe { entry.enumerate_instance_layer_properties() }
@@ -319,7 +337,9 @@ impl Gpu {
             guard.debug = Some((loader, messenger));
         }
 
-        let (physical, queue_family, info) = pick_device(guard.instance())?;
+        let (physical, queue_family, info) = pick_device(guard.instance(), &wanted.device)?;
+        let device_extensions: Vec<*const std::ffi::c_char> =
+            wanted.device.iter().map(|e| e.as_ptr()).collect();
 
         let priorities = [1.0f32];
         let queue_info = [vk::DeviceQueueCreateInfo::default()
@@ -328,6 +348,7 @@ impl Gpu {
         let mut multiview = vk::PhysicalDeviceMultiviewFeatures::default().multiview(true);
         let device_info = vk::DeviceCreateInfo::default()
             .queue_create_infos(&queue_info)
+            .enabled_extension_names(&device_extensions)
             .push_next(&mut multiview);
         // SAFETY: `physical` came from this instance; the create info points to
         // locals alive for the call.
@@ -365,6 +386,11 @@ impl Gpu {
 
     pub fn instance(&self) -> &ash::Instance {
         &self.shared.instance
+    }
+
+    /// The loaded Vulkan entry points (for extension loaders such as surfaces).
+    pub fn entry(&self) -> &ash::Entry {
+        &self.shared._entry
     }
 
     /// Validation messages received (empty, with count 0, when validation is off).
@@ -477,6 +503,7 @@ impl Drop for InstanceGuard {
 
 fn pick_device(
     instance: &ash::Instance,
+    device_extensions: &[&CStr],
 ) -> Result<(vk::PhysicalDevice, u32, DeviceInfo), GpuError> {
     // SAFETY: plain query on a valid instance.
     let devices =
@@ -507,6 +534,24 @@ fn pick_device(
         if multiview.multiview == vk::FALSE {
             rejected.push(format!("{name}: no multiview"));
             continue;
+        }
+        if !device_extensions.is_empty() {
+            // SAFETY: plain query on a physical device of this instance.
+            let available = unsafe { instance.enumerate_device_extension_properties(physical) }
+                .unwrap_or_default();
+            let missing: Vec<String> = device_extensions
+                .iter()
+                .filter(|want| {
+                    !available
+                        .iter()
+                        .any(|e| e.extension_name_as_c_str() == Ok(**want))
+                })
+                .map(|want| want.to_string_lossy().into_owned())
+                .collect();
+            if !missing.is_empty() {
+                rejected.push(format!("{name}: no {}", missing.join(", ")));
+                continue;
+            }
         }
         let driver_id = if props.api_version >= vk::API_VERSION_1_2 {
             let mut driver = vk::PhysicalDeviceDriverProperties::default();
