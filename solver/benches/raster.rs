@@ -119,7 +119,9 @@ fn main() {
         let view = scene.header.camera.mono_view(DVec3::ZERO);
         let floor = &scene.batches[0];
         let shade = median_seconds(5, || {
-            black_box(shade_vertices(floor, floor_order, view.position, true));
+            black_box(
+                shade_vertices(floor, floor_order, view.position, true).expect("valid batch"),
+            );
         });
         let options = RenderOptions::default();
         let mut covered = 0;

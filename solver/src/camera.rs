@@ -461,6 +461,22 @@ impl Camera {
         [self.eye_at(-half, offset), self.eye_at(half, offset)]
     }
 
+    /// [`Camera::stereo_views`] after [`Camera::validate`] and a check that the
+    /// IPD is finite and non-negative: for cameras and IPDs from user input.
+    pub fn try_stereo_views(
+        &self,
+        ipd_scene_units: f64,
+        offset: DVec3,
+    ) -> Result<[EyeView; 2], CameraError> {
+        self.validate()?;
+        if !(ipd_scene_units.is_finite() && ipd_scene_units >= 0.0) {
+            return Err(CameraError::Ipd {
+                ipd: ipd_scene_units,
+            });
+        }
+        Ok(self.stereo_views(ipd_scene_units, offset))
+    }
+
     fn eye_at(&self, shift_right: f64, offset: DVec3) -> EyeView {
         let (right, up, forward) = self.basis();
         // Subtract the offset first, in f64, so that a camera far from the origin
@@ -658,6 +674,12 @@ mod eye_view_tests {
         let mut cam = camera();
         cam.width = 0;
         assert!(matches!(cam.validate(), Err(CameraError::ImageSize { .. })));
+        assert!(matches!(
+            camera().try_stereo_views(-0.1, DVec3::ZERO),
+            Err(CameraError::Ipd { .. })
+        ));
+        assert!(camera().try_stereo_views(f64::NAN, DVec3::ZERO).is_err());
+        assert!(camera().try_stereo_views(0.064, DVec3::ZERO).is_ok());
         let mut cam = camera();
         cam.eye[1] = f64::INFINITY;
         assert!(matches!(

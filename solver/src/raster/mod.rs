@@ -63,7 +63,7 @@ pub use tonemap::{
 };
 
 use crate::camera::{clip_planes_for, EyeView, MAX_IMAGE_SIDE};
-use crate::format::{Batch, Representation, Solution};
+use crate::format::{Batch, Header, Representation, Solution};
 use crate::sh;
 use glam::{DVec3, DVec4};
 use pipeline::{ClipVertex, Rasterizer};
@@ -205,13 +205,9 @@ pub fn render(
     options: &RenderOptions,
 ) -> Result<Image, RenderError> {
     check_view(view)?;
-    let (near, far) = options.clip_planes.unwrap_or_else(|| {
-        clip_planes_for(
-            view.position,
-            DVec3::from(solution.header.bounds_min.map(f64::from)),
-            DVec3::from(solution.header.bounds_max.map(f64::from)),
-        )
-    });
+    let (near, far) = options
+        .clip_planes
+        .unwrap_or_else(|| default_clip_planes(&solution.header, view));
     if !(near > 0.0 && near.is_finite() && far > near) {
         return Err(RenderError::ClipPlanes { near, far });
     }
@@ -224,13 +220,8 @@ pub fn render(
     let mut image = Image::new(view.width, view.height);
     let mut rasterizer = Rasterizer::new(&mut image, options.cull_back_faces);
     for batch in &solution.batches {
-        let order = match batch.representation {
-            Representation::Sh { order } => order,
-            // Refused by `check_batch` above.
-            Representation::Cube { .. } => continue,
-        };
-        let order = options.max_order.map_or(order, |cap| cap.min(order));
-        let radiance = shade_vertices(batch, order, view.position, options.clamp_negative);
+        let order = options.max_order.unwrap_or(u32::MAX);
+        let radiance = shade_vertices(batch, order, view.position, options.clamp_negative)?;
         let clip: Vec<DVec4> = batch
             .vertices
             .iter()
@@ -248,6 +239,17 @@ pub fn render(
         }
     }
     Ok(image)
+}
+
+/// The clip planes both renderers use for `view` when none are given:
+/// [`clip_planes_for`] from the eye to the header's (file-coordinate) bounds. Each
+/// eye of a stereo pair gets its own pair (its position differs).
+pub fn default_clip_planes(header: &Header, view: &EyeView) -> (f64, f64) {
+    clip_planes_for(
+        view.position,
+        DVec3::from(header.bounds_min.map(f64::from)),
+        DVec3::from(header.bounds_max.map(f64::from)),
+    )
 }
 
 fn check_view(view: &EyeView) -> Result<(), RenderError> {
@@ -280,24 +282,8 @@ fn check_view(view: &EyeView) -> Result<(), RenderError> {
 }
 
 fn check_batch(index: usize, batch: &Batch) -> Result<(), RenderError> {
-    if let Representation::Cube { directions } = batch.representation {
-        return Err(RenderError::UnsupportedRepresentation {
-            batch: index,
-            directions,
-        });
-    }
+    check_coefficients(index, batch)?;
     let vertices = batch.vertices.len();
-    let expected = (vertices as u64)
-        .saturating_mul(batch.representation.coefficients_per_channel())
-        .saturating_mul(3);
-    if batch.coefficients.len() as u64 != expected {
-        return Err(RenderError::CoefficientCount {
-            batch: index,
-            vertices,
-            expected,
-            found: batch.coefficients.len(),
-        });
-    }
     if !batch.indices.len().is_multiple_of(3) {
         return Err(RenderError::IndexCount {
             batch: index,
@@ -320,18 +306,47 @@ fn check_batch(index: usize, batch: &Batch) -> Result<(), RenderError> {
     Ok(())
 }
 
+fn check_coefficients(index: usize, batch: &Batch) -> Result<(), RenderError> {
+    if let Representation::Cube { directions } = batch.representation {
+        return Err(RenderError::UnsupportedRepresentation {
+            batch: index,
+            directions,
+        });
+    }
+    let vertices = batch.vertices.len();
+    let expected = (vertices as u64)
+        .saturating_mul(batch.representation.coefficients_per_channel())
+        .saturating_mul(3);
+    if batch.coefficients.len() as u64 != expected {
+        return Err(RenderError::CoefficientCount {
+            batch: index,
+            vertices,
+            expected,
+            found: batch.coefficients.len(),
+        });
+    }
+    Ok(())
+}
+
 /// Work (vertices × coefficients) above which vertex shading is spread over threads.
 const PARALLEL_SHADING_WORK: usize = 1 << 16;
 
 /// The vertex stage: each vertex's radiance toward `eye`, in f64, stored as f32
 /// (what the vertex shader hands to the rasterizer). `order` may be below the
-/// batch's (a cap); the batch must have passed [`check_batch`].
+/// batch's (a cap; above it, the batch's own order is used). Refuses a
+/// discrete-direction batch or a coefficient array of the wrong length.
 pub fn shade_vertices(
     batch: &Batch,
     order: u32,
     eye: DVec3,
     clamp_negative: bool,
-) -> Vec<[f32; 3]> {
+) -> Result<Vec<[f32; 3]>, RenderError> {
+    // Batch index 0: callers that know the index report it themselves.
+    check_coefficients(0, batch)?;
+    let order = match batch.representation {
+        Representation::Sh { order: stored } => order.min(stored),
+        Representation::Cube { .. } => 0,
+    };
     let stored = batch.representation.coefficients_per_channel() as usize;
     let used = sh::coefficient_count(order).min(stored);
     let n = batch.vertices.len();
@@ -384,5 +399,5 @@ pub fn shade_vertices(
             }
         });
     }
-    out
+    Ok(out)
 }

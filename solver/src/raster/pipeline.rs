@@ -179,7 +179,27 @@ impl<'a> Rasterizer<'a> {
             // the clipper's comparisons.
             return;
         }
-        let polygon = clip(triangle);
+        // Outcodes: bit p set when a vertex is outside plane p. Most triangles are
+        // wholly inside (drawn unclipped) or wholly outside one plane (dropped).
+        let outcode = |v: &ClipVertex| {
+            (0..6).fold(0u8, |code, plane| {
+                code | (((plane_distance(plane, v.position) < 0.0) as u8) << plane)
+            })
+        };
+        let codes = triangle.each_ref().map(outcode);
+        if codes[0] & codes[1] & codes[2] != 0 {
+            return;
+        }
+        let polygon = if codes[0] | codes[1] | codes[2] == 0 {
+            let mut p = Polygon {
+                vertices: [triangle[0]; 9],
+                len: 3,
+            };
+            p.vertices[..3].copy_from_slice(&triangle);
+            p
+        } else {
+            clip(triangle)
+        };
         if polygon.len < 3 {
             return;
         }
