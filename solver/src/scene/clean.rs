@@ -45,8 +45,11 @@ pub const COLLINEAR_TOLERANCE: f64 = 1e-6;
 /// diagonal has zero area (a bow-tie that cancels, a sliver of rounding).
 pub const ZERO_AREA_TOLERANCE: f64 = 1e-10;
 /// Vertex normals within this angle of the facet normal at every corner mean a
-/// flat polygon: they are dropped and the facet normal is used.
-pub const SMOOTH_NORMAL_DEGREES: f64 = 1.0;
+/// flat polygon: they are dropped and the facet normal is used. 0.1° is far above
+/// the rounding of normals written with 6 decimals (about 1e-6 rad) and below the
+/// half-facet angle of any tessellation meant to look smooth (a sphere's facets
+/// would have to span under 0.2°, some 1800 segments around, to come under it).
+pub const SMOOTH_NORMAL_DEGREES: f64 = 0.1;
 
 /// Scene-wide inputs that do not come from the geometry files.
 pub(crate) struct BuildOptions {

@@ -21,7 +21,7 @@
 
 use super::mtl::parse_mtl;
 use super::raw::{RawMaterial, RawPolygon, RawScene};
-use super::text::{numbered_lines, parse_real, read_text};
+use super::text::{numbered_lines, parse_real, parse_real_lazy, read_text};
 use super::{SceneError, SourceRef, Warning};
 use glam::DVec3;
 use std::collections::HashMap;
@@ -299,10 +299,9 @@ fn prepass(path: &Path, text: &str) -> Result<Prepass, SceneError> {
                 }
                 let mut xyz = [0.0; 3];
                 for (k, slot) in xyz.iter_mut().enumerate() {
-                    *slot = parse_real(
-                        values[k],
-                        &format!("vertex {} {}", positions + 1, ["x", "y", "z"][k]),
-                    )
+                    *slot = parse_real_lazy(values[k], || {
+                        format!("vertex {} {}", positions + 1, ["x", "y", "z"][k])
+                    })
                     .map_err(|m| err(String::new(), m))?;
                 }
                 if values.len() == 4 || values.len() == 7 {
@@ -322,9 +321,12 @@ fn prepass(path: &Path, text: &str) -> Result<Prepass, SceneError> {
                             format!("vertex {} / w is not finite", positions + 1),
                         ));
                     }
+                    // `{:?}` prints the shortest string that reads back to the same f64.
+                    keep = format!("v {:?} {:?} {:?}", xyz[0], xyz[1], xyz[2]);
+                } else {
+                    // tobj parses the same tokens to the same f64s checked above.
+                    keep = ["v", values[0], values[1], values[2]].join(" ");
                 }
-                // `{:?}` prints the shortest string that reads back to the same f64.
-                keep = format!("v {:?} {:?} {:?}", xyz[0], xyz[1], xyz[2]);
                 positions += 1;
             }
             Some("vn") => {
@@ -334,15 +336,13 @@ fn prepass(path: &Path, text: &str) -> Result<Prepass, SceneError> {
                         format!("`vn` needs 3 numbers, found {}", tokens.len() - 1),
                     ));
                 }
-                let mut n = [0.0; 3];
-                for (k, slot) in n.iter_mut().enumerate() {
-                    *slot = parse_real(
-                        tokens[k + 1],
-                        &format!("normal {} {}", normals + 1, ["x", "y", "z"][k]),
-                    )
+                for (k, token) in tokens[1..].iter().enumerate() {
+                    parse_real_lazy(token, || {
+                        format!("normal {} {}", normals + 1, ["x", "y", "z"][k])
+                    })
                     .map_err(|m| err(String::new(), m))?;
                 }
-                keep = format!("vn {:?} {:?} {:?}", n[0], n[1], n[2]);
+                keep = tokens.join(" ");
                 normals += 1;
             }
             Some("f") | Some("fo") => {

@@ -570,7 +570,7 @@ fn real_files_in_other_tools_styles_import_as_a_user_expects() {
     let centre = DVec3::new(0.5, 0.4, -0.5) - scene.recentre_offset;
     for p in &balls {
         // Smooth: the given normals differ from the facet normal by up to half a facet's
-        // angular size (11° to 15° here), far beyond 1°, so they are kept.
+        // angular size (11° to 15° here), far beyond 0.1°, so they are kept.
         let normals = p
             .vertex_normals
             .as_ref()

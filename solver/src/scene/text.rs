@@ -42,6 +42,15 @@ pub(crate) fn parse_real(token: &str, what: &str) -> Result<f64, String> {
     }
 }
 
+/// As [`parse_real`], building the description only when there is an error (the
+/// OBJ reader parses millions of numbers).
+pub(crate) fn parse_real_lazy(token: &str, what: impl FnOnce() -> String) -> Result<f64, String> {
+    match token.parse::<f64>() {
+        Ok(v) if v.is_finite() => Ok(v),
+        _ => parse_real(token, &what()),
+    }
+}
+
 /// Parses a non-negative integer that fits `u32`.
 pub(crate) fn parse_count(token: &str, what: &str) -> Result<u64, String> {
     token
