@@ -3,6 +3,10 @@
 //! boxes are stored structure-of-arrays in f32, so one node's four children
 //! are tested together.
 
+// Per-axis and per-child loops index several arrays in lockstep; written as
+// index loops they stay readable and vectorise.
+#![allow(clippy::needless_range_loop)]
+
 /// Axis-aligned box in f32.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct Aabb {
@@ -37,7 +41,7 @@ impl Aabb {
             self.hi[1] - self.lo[1],
             self.hi[2] - self.lo[2],
         ];
-        if !(d[0] >= 0.0) {
+        if d[0].is_nan() || d[0] < 0.0 {
             return 0.0;
         }
         d[0] * d[1] + d[1] * d[2] + d[2] * d[0]
@@ -55,6 +59,9 @@ impl Aabb {
 /// Leaves of the binary tree (and so of the 4-wide one) hold at most this many
 /// primitives.
 pub(crate) const MAX_LEAF: usize = 4;
+
+/// SAH cost of visiting one more node, relative to one primitive test.
+const TRAVERSAL_COST: f32 = 1.0;
 
 /// A node of the binary tree: inner nodes (`count == 0`) have their children
 /// at `first` and `first + 1`; leaves hold `count` primitives from `first` in
@@ -187,19 +194,26 @@ fn build_binary(boxes: &[Aabb]) -> (Vec<BinaryNode>, Vec<u32>) {
         }
         nodes[node_index].bounds = bounds;
         let count = end - start;
-        if count <= MAX_LEAF {
-            nodes[node_index].first = start as u32;
-            nodes[node_index].count = count as u32;
-            continue;
-        }
-        let mid = start
-            + split(
+        // Small nodes stay leaves unless the SAH says splitting them pays.
+        let leaf_cost = (count <= MAX_LEAF).then(|| count as f32 * bounds.half_area());
+        let split_at = if count < 2 {
+            None
+        } else {
+            split(
                 &mut order[start..end],
                 boxes,
                 &centroids,
                 &cbounds,
                 depth >= 48,
-            );
+                leaf_cost,
+            )
+        };
+        let Some(offset) = split_at else {
+            nodes[node_index].first = start as u32;
+            nodes[node_index].count = count as u32;
+            continue;
+        };
+        let mid = start + offset;
         let left = nodes.len();
         nodes[node_index].first = left as u32;
         nodes[node_index].count = 0;
@@ -222,13 +236,19 @@ fn build_binary(boxes: &[Aabb]) -> (Vec<BinaryNode>, Vec<u32>) {
 /// Partitions `order` (at least 2 entries) by the best binned-SAH plane and
 /// returns the split position in 1..len, or partitions at the median of the
 /// widest centroid axis when binning fails or `median` is forced.
+///
+/// With `leaf_cost` (the SAH cost of keeping the node a leaf: primitives ×
+/// area, one unit per primitive test), returns `None` without partitioning
+/// when no split beats it; a split costs [`TRAVERSAL_COST`] × area for the
+/// extra node visit plus its children's costs.
 fn split(
     order: &mut [u32],
     boxes: &[Aabb],
     centroids: &[[f32; 3]],
     cbounds: &Aabb,
     median: bool,
-) -> usize {
+    leaf_cost: Option<f32>,
+) -> Option<usize> {
     const BINS: usize = 16;
     let extent = [
         cbounds.hi[0] - cbounds.lo[0],
@@ -249,7 +269,7 @@ fn split(
     let mut best: Option<(f32, usize, usize)> = None; // (cost, axis, first bin on the right)
     if !median {
         for axis in 0..3 {
-            if !(extent[axis] > 0.0) {
+            if extent[axis].is_nan() || extent[axis] <= 0.0 {
                 continue;
             }
             let mut bin_box = [Aabb::EMPTY; BINS];
@@ -285,6 +305,15 @@ fn split(
             }
         }
     }
+    if let (Some(leaf), Some((cost, _, _))) = (leaf_cost, best) {
+        let mut bounds = Aabb::EMPTY;
+        order.iter().for_each(|&i| bounds.grow(&boxes[i as usize]));
+        if cost + TRAVERSAL_COST * bounds.half_area() >= leaf {
+            return None;
+        }
+    } else if leaf_cost.is_some() {
+        return None; // binning cannot separate them: keep the small leaf
+    }
     if let Some((_, axis, boundary)) = best {
         let mut left = 0;
         for k in 0..order.len() {
@@ -294,14 +323,14 @@ fn split(
             }
         }
         if left > 0 && left < order.len() {
-            return left;
+            return Some(left);
         }
     }
     let mid = order.len() / 2;
     order.select_nth_unstable_by(mid, |&a, &b| {
         centroids[a as usize][widest].total_cmp(&centroids[b as usize][widest])
     });
-    mid
+    Some(mid)
 }
 
 #[cfg(test)]

@@ -118,7 +118,7 @@ pub fn stratified_points(polygon: &[DVec3], n: u32, rng: &mut Rng, out: &mut Vec
         total += twice;
         cum[i - 1] = total;
     }
-    if !(total > 0.0) || !total.is_finite() {
+    if !total.is_finite() || total <= 0.0 {
         let centre = polygon.iter().copied().sum::<DVec3>() / count as f64;
         out.extend(std::iter::repeat_n(centre, n as usize));
         return;

@@ -23,9 +23,14 @@
 //! the tests conservative: a ray that passes within rounding of an edge counts
 //! as blocked, never as leaking through a closed surface.
 
+// Lane loops index several arrays in lockstep (directions, inverses, windows);
+// written as index loops they are what the compiler turns into vector code.
+#![allow(clippy::needless_range_loop)]
+
 use super::bvh::{self, Aabb, Node4, EMPTY_SLOT, LEAF_BIT};
 use super::polygon::triangulate;
 use glam::DVec3;
+use std::mem::MaybeUninit;
 
 /// Relative size of [`Occluder::scene_epsilon`]: a fraction of the scene's
 /// bounding-box diagonal.
@@ -92,7 +97,7 @@ impl Occluder {
                 }
             }
         }
-        if !(lo.x <= hi.x) {
+        if lo.x.is_nan() || lo.x > hi.x {
             lo = DVec3::ZERO;
             hi = DVec3::ZERO;
         }
@@ -200,42 +205,72 @@ impl Occluder {
     }
 
     /// Traces up to [`MAX_PACKET`] segments from `origin`; bit i of the result
-    /// is set when segment i is unobstructed.
+    /// is set when segment i is unobstructed. The packet is sized to the
+    /// number of targets (1, 2, 4 or 8 chunks of eight lanes).
     fn trace(&self, origin: DVec3, targets: &[DVec3]) -> u64 {
         debug_assert!(targets.len() <= MAX_PACKET);
-        let mut packet = Packet::new(self, origin, targets);
+        match targets.len().div_ceil(LANES) {
+            0 => 0,
+            1 => self.trace_n::<1>(origin, targets),
+            2 => self.trace_n::<2>(origin, targets),
+            3 | 4 => self.trace_n::<4>(origin, targets),
+            _ => self.trace_n::<CHUNKS>(origin, targets),
+        }
+    }
+
+    fn trace_n<const C: usize>(&self, origin: DVec3, targets: &[DVec3]) -> u64 {
+        #[cfg(target_arch = "x86_64")]
+        if self.avx2 {
+            // SAFETY: `avx2` is true only when the running CPU reported AVX2
+            // and FMA support (has_avx2), which is all that the target-feature
+            // function requires.
+            return unsafe { self.trace_avx2::<C>(origin, targets) };
+        }
+        self.trace_impl::<C>(origin, targets)
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    fn trace_avx2<const C: usize>(&self, origin: DVec3, targets: &[DVec3]) -> u64 {
+        // The same code as the portable path, compiled with AVX2 so that the
+        // eight-lane loops become single instructions.
+        self.trace_impl::<C>(origin, targets)
+    }
+
+    #[inline(always)]
+    fn trace_impl<const C: usize>(&self, origin: DVec3, targets: &[DVec3]) -> u64 {
+        let mut packet = Packet::<C>::new(self, origin, targets);
         if packet.alive != 0 && !self.nodes.is_empty() {
-            #[cfg(target_arch = "x86_64")]
-            if self.avx2 {
-                // SAFETY: `avx2` is true only when the running CPU reported AVX2
-                // and FMA support (has_avx2), which is all that the
-                // target-feature function requires.
-                unsafe { self.traverse_avx2(&mut packet) };
-                return packet.visible();
-            }
             self.traverse(&mut packet);
         }
         packet.visible()
     }
 
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2,fma")]
-    fn traverse_avx2(&self, packet: &mut Packet) {
-        // The same code as the portable path, compiled with AVX2 so that the
-        // eight-lane loops become single instructions.
-        self.traverse(packet);
-    }
-
     /// Walks the tree once for the whole packet, clearing `packet.alive` bits
     /// of blocked rays; stops early when every ray is blocked.
+    ///
+    /// Each stack entry carries the rays that entered the node's box, so a
+    /// subtree is only tested against the rays that can reach it; children
+    /// are first culled for the whole packet at once (cheap), then per ray.
     #[inline(always)]
-    fn traverse(&self, packet: &mut Packet) {
-        let mut stack = [0u32; 256];
+    fn traverse<const C: usize>(&self, packet: &mut Packet<C>) {
+        // The tree is at most ~70 binary levels deep (bvh::build: median
+        // splits below depth 48), and each 4-wide level pushes at most 3 more
+        // entries than it pops: 256 is ample. Left uninitialised: zeroing 4 KiB
+        // per query would cost more than a short query itself.
+        let mut stack = [const { MaybeUninit::<(u32, u64)>::uninit() }; 256];
         let mut top = 1;
-        stack[0] = 0;
+        stack[0].write((0, packet.alive));
         while top > 0 {
             top -= 1;
-            let node = &self.nodes[stack[top] as usize];
+            // SAFETY: entries below `top` were all written (push writes at
+            // `top` before incrementing it), so entry `top` is initialised.
+            let (index, mask) = unsafe { stack[top].assume_init() };
+            let mask = mask & packet.alive;
+            if mask == 0 {
+                continue;
+            }
+            let node = &self.nodes[index as usize];
             let (hit_mask, near) = packet.cull_children(node);
             if hit_mask == 0 {
                 continue;
@@ -243,28 +278,32 @@ impl Occluder {
             // Visit the children nearest the origin first: a blocker there ends
             // the rays soonest. Leaves are tested near-to-far now; inner
             // children are pushed far-to-near so the nearest is popped next.
-            let mut order = [0usize, 1, 2, 3];
-            order.sort_unstable_by(|&a, &b| near[a].total_cmp(&near[b]));
+            let order = sort4(near);
+            let mut inner = [(0u32, 0u64); 4];
+            let mut inner_count = 0;
             for &k in &order {
+                if hit_mask & (1 << k) == 0 {
+                    continue;
+                }
+                let rays = packet.rays_in_box(node, k, mask & packet.alive);
+                if rays == 0 {
+                    continue;
+                }
                 let child = node.child[k];
-                if hit_mask & (1 << k) != 0 && child & LEAF_BIT != 0 {
+                if child & LEAF_BIT != 0 {
                     let first = (child & !LEAF_BIT) as usize;
                     let leaf = &self.triangles[first..first + node.count[k] as usize];
-                    let rays = packet.rays_in_box(node, k);
-                    if rays != 0 && packet.intersect_leaf(leaf, rays) {
+                    if packet.intersect_leaf(leaf, rays) {
                         return;
                     }
+                } else {
+                    inner[inner_count] = (child, rays);
+                    inner_count += 1;
                 }
             }
-            for &k in order.iter().rev() {
-                let child = node.child[k];
-                if hit_mask & (1 << k) != 0 && child & LEAF_BIT == 0 {
-                    // The tree is at most ~70 binary levels deep (bvh::build:
-                    // median splits below depth 48), and each 4-wide level
-                    // pushes at most 3 more entries than it pops: 256 is ample.
-                    stack[top] = child;
-                    top += 1;
-                }
+            for &entry in inner[..inner_count].iter().rev() {
+                stack[top].write(entry);
+                top += 1;
             }
         }
     }
@@ -317,22 +356,21 @@ fn lane_mask(cond: impl Fn(usize) -> bool) -> u64 {
     m
 }
 
-/// Up to 64 segments sharing an origin, structure-of-arrays in f32 relative to
-/// the occluder's centre, with the packet-wide bounds used to cull nodes.
-struct Packet {
+/// Up to 8·C segments sharing an origin, structure-of-arrays in f32 relative
+/// to the occluder's centre, with the packet-wide bounds used to cull nodes.
+struct Packet<const C: usize> {
     origin: [f32; 3],
     /// Direction (target − origin, so t ∈ [0, 1] spans the segment) per axis
     /// and chunk of eight rays.
-    dir: [[F8; CHUNKS]; 3],
-    inv: [[F8; CHUNKS]; 3],
-    t_min: [F8; CHUNKS],
-    t_max: [F8; CHUNKS],
+    dir: [[F8; C]; 3],
+    inv: [[F8; C]; 3],
+    t_min: [F8; C],
+    t_max: [F8; C],
     /// Rays not (yet) found blocked; bit i is ray i. Rays shorter than two
     /// epsilons start visible and are never traced.
     alive: u64,
     /// Rays that exist in this packet.
     valid: u64,
-    chunks: usize,
     /// Bounding box of all traced segments.
     box_lo: [f32; 3],
     box_hi: [f32; 3],
@@ -347,19 +385,34 @@ struct Packet {
     t_hi: f32,
 }
 
-impl Packet {
-    fn new(occ: &Occluder, origin: DVec3, targets: &[DVec3]) -> Packet {
+impl<const C: usize> Packet<C> {
+    #[inline(always)]
+    fn new(occ: &Occluder, origin: DVec3, targets: &[DVec3]) -> Self {
         let o = to_f32(origin - occ.centre);
+        let mut dir = [[[0.0f32; LANES]; C]; 3];
+        // Differences in f64 (exact enough however far the scene is from the
+        // origin), then rounded once to f32.
+        for (i, &target) in targets.iter().enumerate() {
+            let d = target - origin;
+            let (c, l) = (i / LANES, i % LANES);
+            dir[0][c][l] = d.x as f32;
+            dir[1][c][l] = d.y as f32;
+            dir[2][c][l] = d.z as f32;
+        }
+        let valid = if targets.len() >= 64 {
+            u64::MAX
+        } else {
+            (1u64 << targets.len()) - 1
+        };
+        let eps = occ.epsilon as f32;
         let mut p = Packet {
             origin: o,
-            dir: [[[0.0; LANES]; CHUNKS]; 3],
-            inv: [[[0.0; LANES]; CHUNKS]; 3],
-            // Padding lanes get an empty window so they never hit.
-            t_min: [[1.0; LANES]; CHUNKS],
-            t_max: [[0.0; LANES]; CHUNKS],
+            dir,
+            inv: [[[0.0; LANES]; C]; 3],
+            t_min: [[1.0; LANES]; C],
+            t_max: [[0.0; LANES]; C],
             alive: 0,
-            valid: 0,
-            chunks: targets.len().div_ceil(LANES),
+            valid,
             box_lo: o,
             box_hi: o,
             inv_lo: [f32::INFINITY; 3],
@@ -369,51 +422,74 @@ impl Packet {
             t_lo: 1.0,
             t_hi: 0.0,
         };
-        let mut any_negative = [false; 3];
-        let mut any_positive = [false; 3];
-        for (i, &target) in targets.iter().enumerate() {
-            p.valid |= 1 << i;
-            let d = target - origin;
-            let len = d.length();
-            if !(len > 2.0 * occ.epsilon) || !len.is_finite() {
-                continue; // too short to be blocked (or not a segment): visible
+        // Everything else lane by lane, so that it vectorises.
+        let mut neg = [[false; LANES]; 3];
+        let mut pos = [[false; LANES]; 3];
+        let mut inv_lo = [[f32::INFINITY; LANES]; 3];
+        let mut inv_hi = [[f32::NEG_INFINITY; LANES]; 3];
+        let mut box_lo = [[f32::INFINITY; LANES]; 3];
+        let mut box_hi = [[f32::NEG_INFINITY; LANES]; 3];
+        let mut t_lo = [1.0f32; LANES];
+        let mut t_hi = [0.0f32; LANES];
+        for c in 0..C {
+            let (dx, dy, dz) = (&p.dir[0][c], &p.dir[1][c], &p.dir[2][c]);
+            let mut len = [0.0f32; LANES];
+            for l in 0..LANES {
+                len[l] = (dx[l] * dx[l] + dy[l] * dy[l] + dz[l] * dz[l]).sqrt();
             }
-            p.alive |= 1 << i;
-            let (c, l) = (i / LANES, i % LANES);
-            let t_eps = occ.epsilon / len;
-            let t_min = t_eps as f32;
-            let t_max = (1.0 - t_eps) as f32;
-            p.t_min[c][l] = t_min;
-            p.t_max[c][l] = t_max;
-            p.t_lo = p.t_lo.min(t_min);
-            p.t_hi = p.t_hi.max(t_max);
-            let d32 = to_f32(d);
-            let end = to_f32(target - occ.centre);
+            let in_packet = (valid >> (c * LANES)) & 0xFF;
+            // Too short to be blocked (or not a finite segment): visible, and
+            // never traced. Padding lanes have length 0 and stay out too.
+            let traced = lane_mask(|l| len[l] > 2.0 * eps && len[l] < f32::INFINITY) & in_packet;
+            p.alive |= traced << (c * LANES);
+            for l in 0..LANES {
+                let on = traced >> l & 1 == 1;
+                let t_eps = eps / len[l];
+                p.t_min[c][l] = if on { t_eps } else { 1.0 };
+                p.t_max[c][l] = if on { 1.0 - t_eps } else { 0.0 };
+                t_lo[l] = t_lo[l].min(p.t_min[c][l]);
+                t_hi[l] = t_hi[l].max(p.t_max[c][l]);
+            }
             for a in 0..3 {
-                // A zero component would give 0 · ∞ = NaN in the slab test; a
-                // huge finite inverse of the same sign answers the same.
-                let da = if d32[a].abs() < 1e-30 {
-                    1e-30f32.copysign(d32[a])
-                } else {
-                    d32[a]
-                };
-                let inv = 1.0 / da;
-                p.dir[a][c][l] = d32[a];
-                p.inv[a][c][l] = inv;
-                p.inv_lo[a] = p.inv_lo[a].min(inv);
-                p.inv_hi[a] = p.inv_hi[a].max(inv);
-                if inv < 0.0 {
-                    any_negative[a] = true;
-                } else {
-                    any_positive[a] = true;
+                for l in 0..LANES {
+                    let on = traced >> l & 1 == 1;
+                    let d = p.dir[a][c][l];
+                    // A zero component would give 0 · ∞ = NaN in the slab
+                    // test; a huge finite inverse of the same sign answers
+                    // the same.
+                    let safe = if d.abs() < 1e-30 {
+                        1e-30f32.copysign(d)
+                    } else {
+                        d
+                    };
+                    let inv = 1.0 / safe;
+                    p.inv[a][c][l] = inv;
+                    neg[a][l] |= on && inv < 0.0;
+                    pos[a][l] |= on && inv >= 0.0;
+                    inv_lo[a][l] = inv_lo[a][l].min(if on { inv } else { f32::INFINITY });
+                    inv_hi[a][l] = inv_hi[a][l].max(if on { inv } else { f32::NEG_INFINITY });
+                    let end = o[a] + d;
+                    box_lo[a][l] = box_lo[a][l].min(if on { end } else { f32::INFINITY });
+                    box_hi[a][l] = box_hi[a][l].max(if on { end } else { f32::NEG_INFINITY });
                 }
-                p.box_lo[a] = p.box_lo[a].min(end[a]);
-                p.box_hi[a] = p.box_hi[a].max(end[a]);
             }
         }
+        for l in 0..LANES {
+            p.t_lo = p.t_lo.min(t_lo[l]);
+            p.t_hi = p.t_hi.max(t_hi[l]);
+        }
         for a in 0..3 {
-            p.same_sign[a] = !(any_negative[a] && any_positive[a]);
-            p.positive[a] = !any_negative[a];
+            let (mut any_neg, mut any_pos) = (false, false);
+            for l in 0..LANES {
+                any_neg |= neg[a][l];
+                any_pos |= pos[a][l];
+                p.inv_lo[a] = p.inv_lo[a].min(inv_lo[a][l]);
+                p.inv_hi[a] = p.inv_hi[a].max(inv_hi[a][l]);
+                p.box_lo[a] = p.box_lo[a].min(box_lo[a][l]);
+                p.box_hi[a] = p.box_hi[a].max(box_hi[a][l]);
+            }
+            p.same_sign[a] = !(any_neg && any_pos);
+            p.positive[a] = !any_neg;
         }
         p
     }
@@ -461,10 +537,10 @@ impl Packet {
         (mask, near)
     }
 
-    /// The alive rays that enter child `k`'s box within their windows (exact
-    /// per-ray slab test).
+    /// The rays of `mask` that enter child `k`'s box within their windows
+    /// (exact per-ray slab test).
     #[inline(always)]
-    fn rays_in_box(&self, node: &Node4, k: usize) -> u64 {
+    fn rays_in_box(&self, node: &Node4, k: usize, mask: u64) -> u64 {
         let mut rays = 0;
         let lo = [
             node.lo[0][k] - self.origin[0],
@@ -476,8 +552,8 @@ impl Packet {
             node.hi[1][k] - self.origin[1],
             node.hi[2][k] - self.origin[2],
         ];
-        for c in 0..self.chunks {
-            let live = (self.alive >> (c * LANES)) & 0xFF;
+        for c in 0..C {
+            let live = (mask >> (c * LANES)) & 0xFF;
             if live == 0 {
                 continue;
             }
@@ -502,30 +578,47 @@ impl Packet {
     ///
     /// Shared-origin Möller–Trumbore: with s = o − v0, q = s × e1, r = e2 × s
     /// and n = e1 × e2 (all per triangle), a ray d has det = −d·n, u·det = d·r,
-    /// v·det = d·q and t·det = e2·q (the last per triangle too).
+    /// v·det = d·q and t·det = e2·q (the last per triangle too). The per-
+    /// triangle terms are computed once; then each chunk of eight rays is
+    /// tested against every triangle while its directions stay in registers.
     #[inline(always)]
-    fn intersect_leaf(&mut self, leaf: &[Triangle], mut rays: u64) -> bool {
-        for tri in leaf {
+    fn intersect_leaf(&mut self, leaf: &[Triangle], rays: u64) -> bool {
+        let mut pre = [[0.0f32; 10]; bvh::MAX_LEAF];
+        for (p, tri) in pre.iter_mut().zip(leaf) {
             let s = sub(self.origin, tri.v0);
             let q = cross(s, tri.e1);
             let r = cross(tri.e2, s);
-            let t_det = dot(tri.e2, q);
-            let n = tri.n;
-            for c in 0..self.chunks {
-                let live = (rays >> (c * LANES)) & 0xFF;
-                if live == 0 {
-                    continue;
-                }
-                let (dx, dy, dz) = (&self.dir[0][c], &self.dir[1][c], &self.dir[2][c]);
-                let (t_min, t_max) = (&self.t_min[c], &self.t_max[c]);
-                let hit = lane_mask(|l| {
-                    let det = -(dx[l] * n[0] + dy[l] * n[1] + dz[l] * n[2]);
-                    let u = dx[l] * r[0] + dy[l] * r[1] + dz[l] * r[2];
-                    let v = dx[l] * q[0] + dy[l] * q[1] + dz[l] * q[2];
+            *p = [
+                -tri.n[0],
+                -tri.n[1],
+                -tri.n[2],
+                r[0],
+                r[1],
+                r[2],
+                q[0],
+                q[1],
+                q[2],
+                dot(tri.e2, q),
+            ];
+        }
+        let pre = &pre[..leaf.len()];
+        for c in 0..C {
+            let live = (rays >> (c * LANES)) & 0xFF;
+            if live == 0 {
+                continue;
+            }
+            let (dx, dy, dz) = (&self.dir[0][c], &self.dir[1][c], &self.dir[2][c]);
+            let (t_min, t_max) = (&self.t_min[c], &self.t_max[c]);
+            let mut hit = 0;
+            for p in pre {
+                hit |= lane_mask(|l| {
+                    let det = dx[l] * p[0] + dy[l] * p[1] + dz[l] * p[2];
+                    let u = dx[l] * p[3] + dy[l] * p[4] + dz[l] * p[5];
+                    let v = dx[l] * p[6] + dy[l] * p[7] + dz[l] * p[8];
                     // Make det positive by flipping signs with its sign bit.
                     let sign = det.to_bits() & 0x8000_0000;
                     let flip = |x: f32| f32::from_bits(x.to_bits() ^ sign);
-                    let (a, u, v, t) = (det.abs(), flip(u), flip(v), flip(t_det));
+                    let (a, u, v, t) = (det.abs(), flip(u), flip(v), flip(p[9]));
                     let tol = BARY_EPSILON * a;
                     a > 0.0
                         && u >= -tol
@@ -533,22 +626,32 @@ impl Packet {
                         && u + v <= a + tol
                         && t > t_min[l] * a
                         && t < t_max[l] * a
-                }) & live;
-                if hit != 0 {
-                    let bits = hit << (c * LANES);
-                    rays &= !bits;
-                    self.alive &= !bits;
-                }
+                });
             }
-            if self.alive == 0 {
-                return true;
-            }
-            if rays == 0 {
-                break;
-            }
+            self.alive &= !((hit & live) << (c * LANES));
         }
-        false
+        self.alive == 0
     }
+}
+
+/// The indices 0..4 ordered by ascending `key` (a sorting network: no
+/// branches, no call).
+#[inline(always)]
+fn sort4(key: [f32; 4]) -> [usize; 4] {
+    let mut idx = [0usize, 1, 2, 3];
+    let mut k = key;
+    let mut swap = |a: usize, b: usize| {
+        if k[b] < k[a] {
+            k.swap(a, b);
+            idx.swap(a, b);
+        }
+    };
+    swap(0, 1);
+    swap(2, 3);
+    swap(0, 2);
+    swap(1, 3);
+    swap(1, 2);
+    idx
 }
 
 #[cfg(test)]
