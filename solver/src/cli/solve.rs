@@ -34,11 +34,23 @@ use std::sync::Arc;
 pub fn run(args: SolveArgs) -> anyhow::Result<ExitCode> {
     let checkpoint_path = files::checkpoint_path(&args.out);
     check_checkpoint_state(&args, &checkpoint_path)?;
+    // Find out now, not after an hour of solving, that an output cannot be written.
+    for path in [
+        Some(&args.out),
+        args.stats_json.as_ref(),
+        args.preview.as_ref(),
+    ]
+    .into_iter()
+    .flatten()
+    {
+        files::check_writable(path)?;
+    }
 
     // The display file named on the command line, then the scene.
     let display_flag = match &args.display {
         Some(path) => {
             let display = crate::scene::load_display_file(path)
+                .map_err(plain)
                 .with_context(|| format!("reading display file {}", path.display()))?;
             print_warnings(&display.warnings);
             Some(display)
@@ -51,6 +63,7 @@ pub fn run(args: SolveArgs) -> anyhow::Result<ExitCode> {
         ..Default::default()
     };
     let loaded = crate::scene::load_scene(&args.scene, &options)
+        .map_err(plain)
         .with_context(|| format!("loading scene {}", args.scene.display()))?;
     let mut scene = loaded.scene;
     print_warnings(&scene.warnings);
@@ -74,7 +87,6 @@ pub fn run(args: SolveArgs) -> anyhow::Result<ExitCode> {
         .num_threads(threads)
         .build()
         .context("starting the worker threads")?;
-    files::ensure_parent(&args.out)?;
     let interrupted = install_ctrlc();
     let session = Session {
         out: &args.out,
@@ -158,6 +170,22 @@ fn resolve_settings(
     })
 }
 
+/// An error as one line: its message, then each source whose text the message
+/// does not already contain (library errors often quote their source, and anyhow
+/// would print it twice).
+fn plain<E: std::error::Error>(err: E) -> anyhow::Error {
+    let mut message = err.to_string();
+    let mut source = err.source();
+    while let Some(s) = source {
+        let text = s.to_string();
+        if !message.contains(&text) {
+            message = format!("{message}: {text}");
+        }
+        source = s.source();
+    }
+    anyhow::anyhow!(message)
+}
+
 /// Prints each import warning once (`file:line (item): message`).
 fn print_warnings(warnings: &[crate::scene::Warning]) {
     let mut seen = std::collections::HashSet::new();
@@ -201,6 +229,7 @@ fn solve(
         session.run(solver, meta.seconds)
     } else {
         let solver = Solver::new(scene, settings)
+            .map_err(plain)
             .with_context(|| format!("setting up the solve of {}", args.scene.display()))?;
         session.run(solver, 0.0)
     }

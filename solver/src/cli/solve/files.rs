@@ -44,15 +44,26 @@ pub fn checkpoint_path(out: &Path) -> PathBuf {
     PathBuf::from(name)
 }
 
-/// Creates the folder that will hold `path`, if it has one and it is missing.
-pub fn ensure_parent(path: &Path) -> anyhow::Result<()> {
+/// Creates the folder that will hold `path` when it is missing, and checks that a
+/// file can be created there (by creating and removing the temporary file that
+/// [`write_atomic`] would use).
+pub fn check_writable(path: &Path) -> anyhow::Result<()> {
+    if path.file_name().is_none() || path.is_dir() {
+        anyhow::bail!("output {} is not a file name", path.display());
+    }
     if let Some(parent) = path.parent() {
         if !parent.as_os_str().is_empty() && !parent.exists() {
             std::fs::create_dir_all(parent)
                 .with_context(|| format!("creating folder {}", parent.display()))?;
         }
     }
-    Ok(())
+    let probe = temp_path(path);
+    std::fs::OpenOptions::new()
+        .write(true)
+        .create_new(true)
+        .open(&probe)
+        .with_context(|| format!("cannot write {}", path.display()))?;
+    std::fs::remove_file(&probe).with_context(|| format!("removing {}", probe.display()))
 }
 
 #[cfg(test)]
@@ -76,6 +87,17 @@ mod tests {
         let path = dir.path().join("missing").join("a.json");
         let err = write_atomic(&path, b"x").unwrap_err();
         assert!(format!("{err:#}").contains("a.json"), "{err:#}");
+    }
+
+    #[test]
+    fn writability_is_checked_and_folders_created() {
+        let dir = tempfile::tempdir().unwrap();
+        let nested = dir.path().join("a").join("b.sol");
+        check_writable(&nested).unwrap();
+        assert!(dir.path().join("a").is_dir());
+        assert_eq!(std::fs::read_dir(dir.path().join("a")).unwrap().count(), 0);
+        let err = check_writable(dir.path()).unwrap_err();
+        assert!(format!("{err:#}").contains("not a file name"), "{err:#}");
     }
 
     #[test]
