@@ -186,6 +186,13 @@ impl Hasher for FxHasher {
 
 type VertexTable = HashMap<VertexKey, u32, BuildHasherDefault<FxHasher>>;
 
+/// For a child's corner slot that may hold a new vertex: (slot, the vertices
+/// whose average interpolates it, how many of them).
+type ParentSlot = (u32, [u32; 4], u8);
+
+/// A child to create: its parametric corners and its [`ParentSlot`]s.
+type ChildSpec = ([[u32; 2]; 4], Vec<ParentSlot>);
+
 /// Patches, elements and vertices of every surface.
 #[derive(Clone, Debug)]
 pub struct Mesh {
@@ -242,8 +249,8 @@ impl Mesh {
             let area = 0.5 * newell.length();
             if vertices.len() < 3
                 || !vertices.iter().all(|v| v.is_finite())
-                || !(area > 0.0)
                 || !area.is_finite()
+                || area <= 0.0
             {
                 mesh.skipped.push(index);
                 continue;
@@ -354,7 +361,7 @@ impl Mesh {
         depth: u8,
         uv: [[u32; 2]; 4],
         count: u8,
-        mut created: Option<(&mut Vec<NewVertex>, &[(u32, [u32; 4], u8)])>,
+        mut created: Option<(&mut Vec<NewVertex>, &[ParentSlot])>,
     ) -> Result<u32, MeshError> {
         let piece = self.pieces[piece_index as usize];
         let surface = &self.surfaces[piece.surface as usize];
@@ -454,31 +461,41 @@ impl Mesh {
         // first child that names it, and `parents` maps a child's corner slot to
         // the interpolation parents of the vertex in that slot.
         if e.corner_count == 4 {
-            let (m01, m12, m23, m30) = (mid(c[0], c[1]), mid(c[1], c[2]), mid(c[2], c[3]), mid(c[3], c[0]));
+            let (m01, m12, m23, m30) = (
+                mid(c[0], c[1]),
+                mid(c[1], c[2]),
+                mid(c[2], c[3]),
+                mid(c[3], c[0]),
+            );
             let centre = mid(c[0], c[2]);
             let all = [k[0], k[1], k[2], k[3]];
-            let children: [([[u32; 2]; 4], Vec<(u32, [u32; 4], u8)>); 4] = [
+            let children: [ChildSpec; 4] = [
                 (
                     [c[0], m01, centre, m30],
-                    vec![(1, [k[0], k[1], 0, 0], 2), (2, all, 4), (3, [k[3], k[0], 0, 0], 2)],
+                    vec![
+                        (1, [k[0], k[1], 0, 0], 2),
+                        (2, all, 4),
+                        (3, [k[3], k[0], 0, 0], 2),
+                    ],
                 ),
-                (
-                    [m01, c[1], m12, centre],
-                    vec![(2, [k[1], k[2], 0, 0], 2)],
-                ),
-                (
-                    [centre, m12, c[2], m23],
-                    vec![(3, [k[2], k[3], 0, 0], 2)],
-                ),
+                ([m01, c[1], m12, centre], vec![(2, [k[1], k[2], 0, 0], 2)]),
+                ([centre, m12, c[2], m23], vec![(3, [k[2], k[3], 0, 0], 2)]),
                 ([m30, centre, m23, c[3]], vec![]),
             ];
             for (uv, parents) in children {
-                self.push_element(piece_index, e.patch, depth, uv, 4, Some((created, &parents)))?;
+                self.push_element(
+                    piece_index,
+                    e.patch,
+                    depth,
+                    uv,
+                    4,
+                    Some((created, &parents)),
+                )?;
             }
         } else {
             let (m01, m12, m20) = (mid(c[0], c[1]), mid(c[1], c[2]), mid(c[2], c[0]));
             let z = [0u32; 2];
-            let children: [([[u32; 2]; 4], Vec<(u32, [u32; 4], u8)>); 4] = [
+            let children: [ChildSpec; 4] = [
                 (
                     [c[0], m01, m20, z],
                     vec![(1, [k[0], k[1], 0, 0], 2), (2, [k[2], k[0], 0, 0], 2)],
@@ -488,7 +505,14 @@ impl Mesh {
                 ([m01, m12, m20, z], vec![]),
             ];
             for (uv, parents) in children {
-                self.push_element(piece_index, e.patch, depth, uv, 3, Some((created, &parents)))?;
+                self.push_element(
+                    piece_index,
+                    e.patch,
+                    depth,
+                    uv,
+                    3,
+                    Some((created, &parents)),
+                )?;
             }
         }
         self.elements[element as usize].first_child = first;
@@ -551,7 +575,14 @@ impl Mesh {
     /// Vertices strictly inside the segment a–b, in order from a. A finer
     /// neighbour along the segment always has the segment's midpoint as a
     /// corner, so the search stops where a midpoint is missing.
-    fn hanging(&self, piece: &Piece, denominator: u32, a: [u32; 2], b: [u32; 2], out: &mut Vec<(u32, [i64; 2])>) {
+    fn hanging(
+        &self,
+        piece: &Piece,
+        denominator: u32,
+        a: [u32; 2],
+        b: [u32; 2],
+        out: &mut Vec<(u32, [i64; 2])>,
+    ) {
         let (s0, s1) = (a[0] + b[0], a[1] + b[1]);
         if s0 % 2 != 0 || s1 % 2 != 0 || a == b {
             return;
@@ -601,7 +632,10 @@ impl Mesh {
             points.extend(boundary.iter().map(|b| b.1));
             tris.clear();
             triangulate::triangulate_convex(&points, &mut work, &mut tris);
-            out.extend(tris.iter().map(|t| [boundary[t[0]].0, boundary[t[1]].0, boundary[t[2]].0]));
+            out.extend(
+                tris.iter()
+                    .map(|t| [boundary[t[0]].0, boundary[t[1]].0, boundary[t[2]].0]),
+            );
         }
     }
 

@@ -32,7 +32,10 @@ pub enum VertexKey {
     Quad { surface: u32, s: u32, t: u32 },
     /// Barycentric weights `w / D` over polygon vertices, sorted by vertex index,
     /// unused entries `(u32::MAX, 0)`.
-    Bary { surface: u32, weights: [(u32, u32); 3] },
+    Bary {
+        surface: u32,
+        weights: [(u32, u32); 3],
+    },
 }
 
 impl VertexKey {
@@ -97,11 +100,7 @@ impl Piece {
                 t: uv[1],
             },
             PieceKind::Triangle([a, b, c]) => {
-                let mut entries = [
-                    (a, denominator - uv[0] - uv[1]),
-                    (b, uv[0]),
-                    (c, uv[1]),
-                ];
+                let mut entries = [(a, denominator - uv[0] - uv[1]), (b, uv[0]), (c, uv[1])];
                 for e in entries.iter_mut() {
                     if e.1 == 0 {
                         *e = (u32::MAX, 0);
@@ -157,7 +156,10 @@ mod tests {
         assert_eq!(key(d, d).position(&quad, d), quad[2]);
         // Midpoint of the bottom edge and the bilinear centre.
         assert_eq!(key(d / 2, 0).position(&quad, d), DVec3::new(2.0, 0.0, 0.0));
-        assert_eq!(key(d / 2, d / 2).position(&quad, d), DVec3::new(2.0, 1.0, 0.0));
+        assert_eq!(
+            key(d / 2, d / 2).position(&quad, d),
+            DVec3::new(2.0, 1.0, 0.0)
+        );
         let tri = Piece {
             surface: 0,
             kind: PieceKind::Triangle([0, 1, 2]),

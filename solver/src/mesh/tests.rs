@@ -50,10 +50,17 @@ fn pentagon() -> Vec<DVec3> {
 
 /// An L-shaped (non-convex) hexagon, counter-clockwise about +z.
 fn ell() -> Vec<DVec3> {
-    [(0.0, 0.0), (3.0, 0.0), (3.0, 1.0), (1.0, 1.0), (1.0, 2.0), (0.0, 2.0)]
-        .iter()
-        .map(|&(x, y)| DVec3::new(x, y, 0.5))
-        .collect()
+    [
+        (0.0, 0.0),
+        (3.0, 0.0),
+        (3.0, 1.0),
+        (1.0, 1.0),
+        (1.0, 2.0),
+        (0.0, 2.0),
+    ]
+    .iter()
+    .map(|&(x, y)| DVec3::new(x, y, 0.5))
+    .collect()
 }
 
 #[test]
@@ -100,7 +107,10 @@ fn degenerate_polygons_are_skipped_and_bad_counts_refused() {
     assert_eq!(mesh.skipped, vec![0]);
     assert_eq!(mesh.surfaces.len(), 1);
     let err = Mesh::new(&scene_of(vec![square()], 5000), DVec3::ZERO, 1).unwrap_err();
-    assert!(matches!(err, MeshError::TooManyPatches { patches: 5000, .. }));
+    assert!(matches!(
+        err,
+        MeshError::TooManyPatches { patches: 5000, .. }
+    ));
 }
 
 /// Splits random leaves of every polygon, then checks the displayed
@@ -111,13 +121,20 @@ fn degenerate_polygons_are_skipped_and_bad_counts_refused() {
 /// edge used once in the interior would be a crack (a T-junction).
 #[test]
 fn random_refinement_leaves_no_cracks() {
-    let tri = vec![DVec3::new(0.0, 0.0, 1.0), DVec3::new(3.0, 0.0, 1.0), DVec3::new(0.0, 2.0, 2.0)];
+    let tri = vec![
+        DVec3::new(0.0, 0.0, 1.0),
+        DVec3::new(3.0, 0.0, 1.0),
+        DVec3::new(0.0, 2.0, 2.0),
+    ];
     for (case, poly) in [square(), pentagon(), ell(), tri].into_iter().enumerate() {
         let mut mesh = Mesh::new(&scene_of(vec![poly.clone()], 2), DVec3::ZERO, 2).unwrap();
         let mut rng = Rng::new(7, case as u64);
         let mut created = Vec::new();
         for _ in 0..150 {
-            let leaves: Vec<u32> = mesh.leaves().filter(|&e| mesh.elements[e as usize].depth < 5).collect();
+            let leaves: Vec<u32> = mesh
+                .leaves()
+                .filter(|&e| mesh.elements[e as usize].depth < 5)
+                .collect();
             let pick = leaves[(rng.next_u32() as usize) % leaves.len()];
             created.clear();
             mesh.split(pick, &mut created).unwrap();
@@ -144,7 +161,10 @@ fn random_refinement_leaves_no_cracks() {
             }
         }
         let exact = polygon::area(&poly);
-        assert!((area - exact).abs() <= 1e-12 * exact, "case {case}: {area} vs {exact}");
+        assert!(
+            (area - exact).abs() <= 1e-12 * exact,
+            "case {case}: {area} vs {exact}"
+        );
         let on_edge = |i: usize, v: u32| {
             let (a, b) = (poly[i], poly[(i + 1) % poly.len()]);
             let x = mesh.vertices[v as usize].position;
@@ -155,20 +175,29 @@ fn random_refinement_leaves_no_cracks() {
             match uses {
                 // Interior edges are shared by two triangles, traversed once in
                 // each direction.
-                2 => assert_eq!(orientation, 0, "case {case}: edge {a}-{b} not shared consistently"),
+                2 => assert_eq!(
+                    orientation, 0,
+                    "case {case}: edge {a}-{b} not shared consistently"
+                ),
                 1 => {
                     assert!(
                         (0..poly.len()).any(|i| on_edge(i, a) && on_edge(i, b)),
                         "case {case}: interior edge {a}-{b} used once (a crack)"
                     );
-                    boundary_length +=
-                        (mesh.vertices[a as usize].position - mesh.vertices[b as usize].position).length();
+                    boundary_length += (mesh.vertices[a as usize].position
+                        - mesh.vertices[b as usize].position)
+                        .length();
                 }
                 _ => panic!("case {case}: edge {a}-{b} used {uses} times"),
             }
         }
-        let perimeter: f64 = (0..poly.len()).map(|i| (poly[(i + 1) % poly.len()] - poly[i]).length()).sum();
-        assert!((boundary_length - perimeter).abs() < 1e-12 * perimeter, "case {case}");
+        let perimeter: f64 = (0..poly.len())
+            .map(|i| (poly[(i + 1) % poly.len()] - poly[i]).length())
+            .sum();
+        assert!(
+            (boundary_length - perimeter).abs() < 1e-12 * perimeter,
+            "case {case}"
+        );
     }
 }
 
@@ -197,7 +226,11 @@ fn new_vertices_interpolate_from_their_edge_or_element_corners() {
     mesh.split(0, &mut created).unwrap();
     assert_eq!(created.len(), 5, "four midpoints and the centre");
     for v in &created {
-        let mean = v.parents().iter().map(|&p| mesh.vertices[p as usize].position).sum::<DVec3>()
+        let mean = v
+            .parents()
+            .iter()
+            .map(|&p| mesh.vertices[p as usize].position)
+            .sum::<DVec3>()
             / v.parent_count as f64;
         assert_eq!(mesh.vertices[v.id as usize].position, mean);
     }
@@ -208,5 +241,9 @@ fn new_vertices_interpolate_from_their_edge_or_element_corners() {
     mesh.split(first, &mut created).unwrap();
     created.clear();
     mesh.split(first + 1, &mut created).unwrap();
-    assert_eq!(created.len(), 4, "the shared edge's midpoint already exists");
+    assert_eq!(
+        created.len(),
+        4,
+        "the shared edge's midpoint already exists"
+    );
 }

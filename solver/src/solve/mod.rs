@@ -1,1 +1,540 @@
-//! (module under construction)
+//! Diffuse progressive-refinement radiosity (000 §3.7, Fig. 3.6) with ray-cast
+//! vertex form factors (§3.6) and adaptive meshing (§3.3, step 5c).
+//!
+//! The [`Solver`] is the pure core: no files, terminals or flags. The command
+//! line drives it shot by shot (`step`), saves [`Checkpoint`]s and writes
+//! [`Solver::to_solution`].
+//!
+//! ## State and units
+//!
+//! * Per vertex: radiance L (RGB, W·sr⁻¹·m⁻²), including the emission of its
+//!   surface, and ΔL of the shot in progress.
+//! * Per patch: unshot radiance U_p. After each shot the ΔL of every vertex is
+//!   gathered into the patches it belongs to, each patch receiving the part of
+//!   the vertex's ΔL that its area there represents (design notes,
+//!   "Progressive refinement"). The weights are exact integrals of the displayed
+//!   (Gouraud) field: a vertex gets a third of the area of every display
+//!   triangle it is a corner of ([`Mesh::patch_triangles`]), so a patch's unshot
+//!   power π · U_p · A_p is the integral of the displayed ΔL over the patch, and
+//!   a vertex shared by four patches gives each its share instead of all to the
+//!   first. 000 (step 5a) gathers the same area-weighted average into the patch
+//!   and zeroes the vertices; doing it right after the shot means vertex unshot
+//!   never outlives its shot, so a split never has to interpolate unshot
+//!   radiance of earlier shots: that energy is already held by the patch,
+//!   exactly, and new vertices only receive the current shot's ΔL.
+//! * Power = π · U · A per channel for a diffuse emitter; totals sum the three
+//!   channels. The source each step is the patch with the most unshot power
+//!   (000 shoots patches, not elements: the source count stays fixed as
+//!   elements refine, and the user-set patch grid is what bounds the error of
+//!   treating a source as uniform).
+//!
+//! ## Determinism
+//!
+//! Receivers are shot in parallel with rayon. Each receiver's random samples
+//! come from its own stream (seed, shot index, vertex id) and its result goes to
+//! its own slot; sums over vertices (the gather into patches, the ray count) are
+//! done in a fixed order. A solve therefore gives bit-identical radiance for any
+//! thread count, and a resumed solve continues bit-identically.
+
+mod checkpoint;
+mod output;
+mod refine;
+pub mod shoot;
+
+pub use checkpoint::Checkpoint;
+
+use crate::format::SolveMode;
+use crate::geometry::visibility::Occluder;
+use crate::mesh::{Mesh, MeshError};
+use crate::scene::Scene;
+use crate::settings::{SettingsError, SolverSettings};
+use glam::DVec3;
+use rayon::prelude::*;
+use shoot::{Received, Scratch, Shot};
+use std::f64::consts::PI;
+use std::time::Instant;
+
+/// Why a solve cannot start or resume.
+#[derive(Debug, thiserror::Error)]
+pub enum SolveError {
+    #[error("the scene has no polygons with non-zero area: nothing to solve")]
+    EmptyScene,
+    #[error(
+        "the scene has a single polygon: a planar polygon cannot light itself, so there is \
+         nothing to solve (add the surfaces it should light)"
+    )]
+    SinglePolygon,
+    #[error(
+        "the scene has no emitter: no polygon of non-zero area uses a material with emission \
+         (MTL `Ke`, TOML `emission`, legacy `emit`) above zero"
+    )]
+    NoEmitter,
+    #[error("material `{name}`: {problem}")]
+    BadMaterial { name: String, problem: String },
+    #[error(transparent)]
+    Mesh(#[from] MeshError),
+    #[error(transparent)]
+    Settings(#[from] SettingsError),
+    #[error("mode `{0:?}` is not implemented by this solver yet; use `diffuse`")]
+    UnsupportedMode(SolveMode),
+    #[error("the checkpoint does not belong to this scene and these settings: {0}")]
+    CheckpointMismatch(String),
+}
+
+/// What one shot did.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ShotReport {
+    /// Shots done so far, this one included (1 for the first).
+    pub shot: u64,
+    /// The patch that shot.
+    pub source: u32,
+    /// Visibility rays traced by this shot (refinement included).
+    pub rays: u64,
+    /// Total unshot power / total emitted power after the shot.
+    pub unshot_fraction: f64,
+    /// Leaf elements after the shot.
+    pub elements: usize,
+    pub vertices: usize,
+    /// Elements split by this shot's adaptive subdivision.
+    pub splits: usize,
+}
+
+/// Where the solve stands.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Progress {
+    pub shots: u64,
+    pub rays: u64,
+    pub unshot_fraction: f64,
+    /// Leaf elements.
+    pub elements: usize,
+    pub vertices: usize,
+    /// Total emitted power, W, summed over the three channels.
+    pub emitted_power: f64,
+}
+
+/// The progressive-refinement solver. See the module documentation.
+pub struct Solver {
+    settings: SolverSettings,
+    mesh: Mesh,
+    occluder: Occluder,
+    /// Scene coordinates minus this are the solver's (re-centred) coordinates.
+    offset: DVec3,
+    /// From the scene, for the solution header.
+    scene_recentre: DVec3,
+    scene_camera: Option<crate::camera::Camera>,
+    scene_units_per_metre: f64,
+    up_axis: crate::camera::UpAxis,
+    /// Per surface.
+    kd: Vec<DVec3>,
+    emission: Vec<DVec3>,
+    /// Per surface, its patches (contiguous).
+    surface_patches: Vec<std::ops::Range<u32>>,
+    /// Per vertex.
+    radiance: Vec<DVec3>,
+    received: Vec<DVec3>,
+    visible: Vec<u32>,
+    /// Per patch: unshot radiance, and (vertex, area) weights of the gather.
+    patch_unshot: Vec<DVec3>,
+    patch_weights: Vec<Vec<(u32, f64)>>,
+    leaf_count: usize,
+    shots: u64,
+    rays: u64,
+    seconds: f64,
+    emitted_power: f64,
+    unshot_power: f64,
+}
+
+impl Solver {
+    /// Meshes the scene into patches and sets every emitter's patches to shoot.
+    ///
+    /// Errors: settings out of range, directional mode, an empty scene, a single
+    /// polygon, no emitter, a material with negative or non-finite values, too
+    /// many patches.
+    pub fn new(scene: &Scene, settings: &SolverSettings) -> Result<Solver, SolveError> {
+        settings.validate()?;
+        if settings.mode != SolveMode::Diffuse {
+            return Err(SolveError::UnsupportedMode(settings.mode));
+        }
+        for m in &scene.materials {
+            let ok = |v: DVec3| v.is_finite() && v.min_element() >= 0.0;
+            if !ok(m.kd) || !ok(m.emission) || m.kd.max_element() > 1.0 {
+                return Err(SolveError::BadMaterial {
+                    name: m.name.clone(),
+                    problem: format!(
+                        "Kd {:?} must be in [0, 1] and emission {:?} finite and >= 0",
+                        m.kd.to_array(),
+                        m.emission.to_array()
+                    ),
+                });
+            }
+        }
+        let offset = scene_centre(scene);
+        let mesh = Mesh::new(scene, offset, settings.patches)?;
+        match mesh.surfaces.len() {
+            0 => return Err(SolveError::EmptyScene),
+            1 => return Err(SolveError::SinglePolygon),
+            _ => {}
+        }
+        let kd: Vec<DVec3> = mesh
+            .surfaces
+            .iter()
+            .map(|s| scene.materials[s.material].kd)
+            .collect();
+        let emission: Vec<DVec3> = mesh
+            .surfaces
+            .iter()
+            .map(|s| scene.materials[s.material].emission)
+            .collect();
+        let occluder = Occluder::new(
+            &mesh
+                .surfaces
+                .iter()
+                .map(|s| s.vertices.as_slice())
+                .collect::<Vec<_>>(),
+        );
+        let mut surface_patches = vec![0..0; mesh.surfaces.len()];
+        for (p, patch) in mesh.patches.iter().enumerate() {
+            let r = &mut surface_patches[patch.surface as usize];
+            if r.start == r.end {
+                *r = p as u32..p as u32 + 1;
+            } else {
+                r.end = p as u32 + 1;
+            }
+        }
+        let radiance: Vec<DVec3> = mesh
+            .vertices
+            .iter()
+            .map(|v| emission[v.surface as usize])
+            .collect();
+        let patch_unshot: Vec<DVec3> = mesh
+            .patches
+            .iter()
+            .map(|p| emission[p.surface as usize])
+            .collect();
+        let emitted_power: f64 = mesh
+            .patches
+            .iter()
+            .zip(&patch_unshot)
+            .map(|(p, u)| PI * p.area * u.element_sum())
+            .sum();
+        if emitted_power.is_nan() || emitted_power <= 0.0 {
+            return Err(SolveError::NoEmitter);
+        }
+        let vertex_count = mesh.vertices.len();
+        let patch_count = mesh.patches.len();
+        let mut solver = Solver {
+            settings: settings.clone(),
+            leaf_count: mesh.leaf_count(),
+            mesh,
+            occluder,
+            offset,
+            scene_recentre: scene.recentre_offset,
+            scene_camera: scene.camera,
+            scene_units_per_metre: scene.units_per_metre,
+            up_axis: scene.up_axis,
+            kd,
+            emission,
+            surface_patches,
+            radiance,
+            received: vec![DVec3::ZERO; vertex_count],
+            visible: vec![0; vertex_count],
+            patch_unshot,
+            patch_weights: vec![Vec::new(); patch_count],
+            shots: 0,
+            rays: 0,
+            seconds: 0.0,
+            emitted_power,
+            unshot_power: 0.0,
+        };
+        let all: Vec<u32> = (0..solver.mesh.surfaces.len() as u32).collect();
+        solver.update_weights(&all);
+        solver.unshot_power = solver.total_unshot_power();
+        Ok(solver)
+    }
+
+    /// Whether the solve has converged (total unshot power below `threshold` ×
+    /// emitted power) or used its shot budget.
+    pub fn is_done(&self) -> bool {
+        self.shots >= self.settings.max_shots
+            || self.unshot_power < self.settings.threshold * self.emitted_power
+            || self.unshot_power.is_nan()
+            || self.unshot_power <= 0.0
+    }
+
+    /// One shot (000 Fig. 3.6 steps 5a–5c): the patch with the most unshot power
+    /// shoots to every vertex, the mesh is refined where the result varies too
+    /// much, and the shot's ΔL is gathered into the patches. `None` when done.
+    pub fn step(&mut self) -> Option<ShotReport> {
+        if self.is_done() {
+            return None;
+        }
+        let start = Instant::now();
+        let source = self.choose_source();
+        let unshot = std::mem::replace(&mut self.patch_unshot[source as usize], DVec3::ZERO);
+        let patch = &self.mesh.patches[source as usize];
+        let polygon = patch.polygon();
+        let centre = polygon.iter().copied().sum::<DVec3>() / polygon.len() as f64;
+        let diameter = polygon
+            .iter()
+            .flat_map(|a| polygon.iter().map(move |b| (*a - *b).length()))
+            .fold(0.0, f64::max);
+        let shot = Shot {
+            index: self.shots,
+            seed: self.settings.seed,
+            source_surface: patch.surface,
+            polygon: patch.corners,
+            corner_count: patch.corner_count as usize,
+            normal: self.mesh.surfaces[patch.surface as usize].normal,
+            centre,
+            area: patch.area,
+            diameter,
+            unshot,
+            samples: self.settings.samples,
+            method: self.settings.form_factors,
+            shadows: self.settings.shadows,
+            occluder: &self.occluder,
+            kd: &self.kd,
+        };
+        let mesh = &self.mesh;
+        let results: Vec<Received> = (0..mesh.vertices.len() as u32)
+            .into_par_iter()
+            .map_init(Scratch::default, |scratch, v| {
+                shot.receive(mesh, v, scratch)
+            })
+            .collect();
+        let mut rays = 0u64;
+        for (v, r) in results.iter().enumerate() {
+            self.radiance[v] += r.radiance;
+            self.received[v] = r.radiance;
+            self.visible[v] = r.visible;
+            rays += r.rays as u64;
+        }
+        let refined = if self.settings.adaptive {
+            refine::refine(
+                &mut self.mesh,
+                refine::VertexState {
+                    radiance: &mut self.radiance,
+                    received: &mut self.received,
+                    visible: &mut self.visible,
+                },
+                &refine::Criteria::from_settings(&self.settings),
+                &shot,
+            )
+        } else {
+            refine::Refined::default()
+        };
+        let splits = refined.splits;
+        rays += refined.rays;
+        self.leaf_count += 3 * splits;
+        self.update_weights(&refined.dirty_surfaces);
+        self.gather();
+        self.shots += 1;
+        self.rays += rays;
+        self.unshot_power = self.total_unshot_power();
+        self.seconds += start.elapsed().as_secs_f64();
+        Some(ShotReport {
+            shot: self.shots,
+            source,
+            rays,
+            unshot_fraction: self.unshot_fraction(),
+            elements: self.leaf_count,
+            vertices: self.mesh.vertices.len(),
+            splits,
+        })
+    }
+
+    /// Where the solve stands.
+    pub fn progress(&self) -> Progress {
+        Progress {
+            shots: self.shots,
+            rays: self.rays,
+            unshot_fraction: self.unshot_fraction(),
+            elements: self.leaf_count,
+            vertices: self.mesh.vertices.len(),
+            emitted_power: self.emitted_power,
+        }
+    }
+
+    /// Radiance per mesh vertex (RGB, W·sr⁻¹·m⁻²), emission included, without
+    /// the ambient term.
+    pub fn vertex_radiance(&self) -> &[DVec3] {
+        &self.radiance
+    }
+
+    /// The mesh, for inspection (element sizes, vertices, display triangles).
+    pub fn mesh(&self) -> &Mesh {
+        &self.mesh
+    }
+
+    /// Unshot radiance per patch (RGB).
+    pub fn patch_unshot(&self) -> &[DVec3] {
+        &self.patch_unshot
+    }
+
+    /// The gather weights of `patch`: (vertex, area of the patch the vertex
+    /// represents), summing to the patch's area.
+    pub fn patch_weights(&self, patch: u32) -> &[(u32, f64)] {
+        &self.patch_weights[patch as usize]
+    }
+
+    /// The offset subtracted from scene coordinates to get the solver's (and the
+    /// solution's) positions.
+    pub fn offset(&self) -> DVec3 {
+        self.offset
+    }
+
+    pub fn settings(&self) -> &SolverSettings {
+        &self.settings
+    }
+
+    /// Seconds spent in [`Solver::step`] (this session and, after a resume, the
+    /// sessions before).
+    pub fn seconds(&self) -> f64 {
+        self.seconds
+    }
+
+    /// F(v←s) for every vertex from patch `source` as the next shot would
+    /// compute it (same samples and visibility), for tests and measurements.
+    pub fn vertex_form_factors(&self, source: u32) -> Vec<f64> {
+        let patch = &self.mesh.patches[source as usize];
+        let polygon = patch.polygon();
+        let centre = polygon.iter().copied().sum::<DVec3>() / polygon.len() as f64;
+        let diameter = polygon
+            .iter()
+            .flat_map(|a| polygon.iter().map(move |b| (*a - *b).length()))
+            .fold(0.0, f64::max);
+        let shot = Shot {
+            index: self.shots,
+            seed: self.settings.seed,
+            source_surface: patch.surface,
+            polygon: patch.corners,
+            corner_count: patch.corner_count as usize,
+            normal: self.mesh.surfaces[patch.surface as usize].normal,
+            centre,
+            area: patch.area,
+            diameter,
+            unshot: DVec3::ONE,
+            samples: self.settings.samples,
+            method: self.settings.form_factors,
+            shadows: self.settings.shadows,
+            occluder: &self.occluder,
+            kd: &self.kd,
+        };
+        let mut scratch = Scratch::default();
+        (0..self.mesh.vertices.len() as u32)
+            .map(|v| {
+                if self.mesh.vertices[v as usize].surface == patch.surface {
+                    0.0
+                } else {
+                    shot.form_factor(&self.mesh, v, &mut scratch).0
+                }
+            })
+            .collect()
+    }
+
+    fn unshot_fraction(&self) -> f64 {
+        self.unshot_power / self.emitted_power
+    }
+
+    fn total_unshot_power(&self) -> f64 {
+        self.mesh
+            .patches
+            .iter()
+            .zip(&self.patch_unshot)
+            .map(|(p, u)| PI * p.area * u.element_sum())
+            .sum()
+    }
+
+    /// The patch with the most unshot power (000 step 5a); ties go to the
+    /// lowest index.
+    fn choose_source(&self) -> u32 {
+        let mut best = (0u32, f64::NEG_INFINITY);
+        for (i, (p, u)) in self.mesh.patches.iter().zip(&self.patch_unshot).enumerate() {
+            let power = p.area * u.element_sum();
+            if power > best.1 {
+                best = (i as u32, power);
+            }
+        }
+        best.0
+    }
+
+    /// Recomputes the gather weights of the patches of `surfaces` from their
+    /// display triangulation.
+    fn update_weights(&mut self, surfaces: &[u32]) {
+        let patches: Vec<u32> = surfaces
+            .iter()
+            .flat_map(|&s| self.surface_patches[s as usize].clone())
+            .collect();
+        let mesh = &self.mesh;
+        let weights: Vec<Vec<(u32, f64)>> = patches
+            .par_iter()
+            .map(|&p| {
+                let mut tris = Vec::new();
+                mesh.patch_triangles(p, &mut tris);
+                let mut entries: Vec<(u32, f64)> = Vec::with_capacity(tris.len() * 3);
+                for t in &tris {
+                    let [a, b, c] = t.map(|i| mesh.vertices[i as usize].position);
+                    let third = (b - a).cross(c - a).length() / 6.0;
+                    entries.extend(t.iter().map(|&v| (v, third)));
+                }
+                // Merge per vertex in a fixed order.
+                entries.sort_by_key(|e| e.0);
+                let mut merged: Vec<(u32, f64)> = Vec::with_capacity(entries.len() / 2);
+                for (v, w) in entries {
+                    match merged.last_mut() {
+                        Some(last) if last.0 == v => last.1 += w,
+                        _ => merged.push((v, w)),
+                    }
+                }
+                merged
+            })
+            .collect();
+        for (p, w) in patches.into_iter().zip(weights) {
+            self.patch_weights[p as usize] = w;
+        }
+    }
+
+    /// Adds each patch's share of the shot's ΔL to its unshot radiance and
+    /// clears the vertices' ΔL: U_p += Σ_v w_vp ΔL_v / A_p, so π U_p A_p grows
+    /// by exactly the received power the display shows on the patch.
+    fn gather(&mut self) {
+        let received = &self.received;
+        let mesh = &self.mesh;
+        self.patch_unshot
+            .par_iter_mut()
+            .zip(&self.patch_weights)
+            .enumerate()
+            .for_each(|(p, (unshot, weights))| {
+                let mut sum = DVec3::ZERO;
+                for &(v, w) in weights {
+                    sum += received[v as usize] * w;
+                }
+                *unshot += sum / mesh.patches[p].area;
+            });
+        self.received.fill(DVec3::ZERO);
+    }
+}
+
+/// The centre of the scene's bounding box: the solver works relative to it so a
+/// scene far from the origin loses no precision in the f32 occluder or the
+/// solution file (design notes, "Units and conventions").
+fn scene_centre(scene: &Scene) -> DVec3 {
+    let mut lo = DVec3::splat(f64::INFINITY);
+    let mut hi = DVec3::splat(f64::NEG_INFINITY);
+    for p in &scene.polygons {
+        for &v in &p.vertices {
+            if v.is_finite() {
+                lo = lo.min(v);
+                hi = hi.max(v);
+            }
+        }
+    }
+    if lo.x <= hi.x {
+        (lo + hi) * 0.5
+    } else {
+        DVec3::ZERO
+    }
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,142 @@
+//! The solution the solver hands to the file writer (000 Fig. 3.6 steps 5d and
+//! 6), and the ambient term for partial solutions.
+
+use super::Solver;
+use crate::camera::{Camera, UpAxis};
+use crate::format::{
+    Batch, Header, Representation, ScalarType, Solution, SolveMode, SolveStats, Vertex,
+};
+use glam::DVec3;
+use std::f64::consts::PI;
+
+impl Solver {
+    /// The ambient radiance of Cohen, Chen, Wallace and Greenberg (1988), the
+    /// term 000's display file switches on (appendix A, line 8): the light not
+    /// yet shot, spread uniformly and reflected by an average surface forever.
+    ///
+    /// With A_j the patch areas, U_j their unshot radiance and ρ_j their
+    /// reflectance, per channel:
+    ///
+    /// ρ_avg = Σ ρ_j A_j / Σ A_j,  R = 1 / (1 − ρ_avg) = 1 + ρ_avg + ρ_avg² + …,
+    /// ambient = R · Σ U_j A_j / Σ A_j   (= R · Σ unshot power / (π Σ A_j)),
+    ///
+    /// and a vertex of reflectance ρ_i is displayed as L_i + ρ_i · ambient. The
+    /// term goes to zero as the unshot power does. R is capped at 1e6 (ρ_avg
+    /// within 1e-6 of 1), where the true sum diverges.
+    pub fn ambient(&self) -> DVec3 {
+        let mut area = 0.0;
+        let mut reflect = DVec3::ZERO;
+        let mut unshot = DVec3::ZERO;
+        for (p, u) in self.mesh.patches.iter().zip(&self.patch_unshot) {
+            area += p.area;
+            reflect += self.kd[p.surface as usize] * p.area;
+            unshot += *u * p.area;
+        }
+        if area.is_nan() || area <= 0.0 {
+            return DVec3::ZERO;
+        }
+        let rho = reflect / area;
+        let r = (DVec3::ONE - rho).max(DVec3::splat(1e-6)).recip();
+        r * unshot / area
+    }
+
+    /// The solution: one batch of order-0 SH (the diffuse mode), one vertex per
+    /// mesh vertex, the display triangles with T-vertices resolved. c₀₀ = L ·
+    /// √(4π) per channel, since Y₀₀ = 1/(2√π) and L = c₀₀ · Y₀₀.
+    ///
+    /// `partial` marks a file written mid-solve; with `settings.ambient` it also
+    /// adds the ambient term ρ · ambient to the displayed radiance (never to the
+    /// solver's own radiance).
+    pub fn to_solution(&self, partial: bool) -> Solution {
+        let ambient = if partial && self.settings.ambient {
+            self.ambient()
+        } else {
+            DVec3::ZERO
+        };
+        let scale = (4.0 * PI).sqrt();
+        let mut vertices = Vec::with_capacity(self.mesh.vertices.len());
+        let mut coefficients = Vec::with_capacity(3 * self.mesh.vertices.len());
+        let mut lo = DVec3::splat(f64::INFINITY);
+        let mut hi = DVec3::splat(f64::NEG_INFINITY);
+        for (v, l) in self.mesh.vertices.iter().zip(&self.radiance) {
+            let s = &self.mesh.surfaces[v.surface as usize];
+            let shown = *l + self.kd[v.surface as usize] * ambient;
+            let f = |d: DVec3| d.as_vec3().to_array();
+            vertices.push(Vertex {
+                position: f(v.position),
+                normal: f(s.normal),
+                tangent: f(s.tangent),
+            });
+            coefficients.extend((shown * scale).as_vec3().to_array());
+            let stored = v.position.as_vec3().as_dvec3();
+            lo = lo.min(stored);
+            hi = hi.max(stored);
+        }
+        if lo.x > hi.x {
+            lo = DVec3::ZERO;
+            hi = DVec3::ZERO;
+        }
+        let indices: Vec<u32> = self.mesh.triangles().into_iter().flatten().collect();
+        let scene_offset = self.scene_recentre + self.offset;
+        let camera = self
+            .scene_camera
+            .unwrap_or_else(|| default_camera(lo + scene_offset, hi + scene_offset, self.up_axis));
+        let units_per_metre = if self.settings.units_per_metre != 1.0 {
+            self.settings.units_per_metre
+        } else {
+            self.scene_units_per_metre
+        };
+        Solution {
+            header: Header {
+                units_per_metre,
+                up_axis: self.up_axis,
+                recentre_offset: scene_offset.to_array(),
+                camera,
+                bounds_min: lo.as_vec3().to_array(),
+                bounds_max: hi.as_vec3().to_array(),
+                partial,
+                mode: SolveMode::Diffuse,
+                stats: SolveStats {
+                    shots: self.shots,
+                    rays: self.rays,
+                    seconds: self.seconds,
+                    unshot_fraction: self.unshot_fraction(),
+                    emitted_power: self.emitted_power,
+                    ambient: ambient.as_vec3().to_array(),
+                },
+                settings_json: serde_json::to_string(&self.settings).unwrap_or_default(),
+            },
+            batches: vec![Batch {
+                representation: Representation::Sh { order: 0 },
+                scalar: ScalarType::F32,
+                vertices,
+                coefficients,
+                indices,
+            }],
+        }
+    }
+}
+
+/// A camera that frames the scene's bounds (scene coordinates) when the scene
+/// names none: 45° vertical field of view, looking horizontally along the axis
+/// perpendicular to `up` that OpenGL would use (−z for a y-up scene, +y for a
+/// z-up one), from far enough that the bounding sphere fits.
+fn default_camera(lo: DVec3, hi: DVec3, up: UpAxis) -> Camera {
+    let centre = (lo + hi) * 0.5;
+    let radius = ((hi - lo).length() * 0.5).max(1e-9);
+    let fov_y_deg: f64 = 45.0;
+    let distance = radius / (0.5 * fov_y_deg.to_radians()).sin();
+    let up_vector = DVec3::from_array(up.vector());
+    let back = match up {
+        UpAxis::PosY | UpAxis::NegY => DVec3::Z,
+        UpAxis::PosZ | UpAxis::NegZ => -DVec3::Y,
+    };
+    Camera {
+        eye: (centre + back * distance).to_array(),
+        target: centre.to_array(),
+        up: up_vector.to_array(),
+        fov_y_deg,
+        width: 512,
+        height: 512,
+    }
+}

@@ -1,0 +1,183 @@
+//! One shot's transport from the source patch to receiving vertices (000 Fig. 3.6,
+//! `Shoot(SP)`, and §3.6 for the form factor).
+//!
+//! Everything that depends only on the source is prepared once per shot
+//! ([`Shot`]); the per-receiver work is one analytic form factor and one packet
+//! of `samples` visibility rays from a shared origin, with no allocation per ray
+//! (the sample buffer lives in per-worker [`Scratch`]).
+
+use crate::geometry::formfactor::{point_to_polygon, wallace};
+use crate::geometry::sampling::{stratified_points, stream_id, Rng};
+use crate::geometry::visibility::Occluder;
+use crate::mesh::Mesh;
+use crate::settings::FormFactorMethod;
+use glam::DVec3;
+
+/// Receiving points on element boundaries are evaluated this fraction of the
+/// way toward the centroid of an element they belong to (design notes, "Form
+/// factors"). A vertex on the edge the receiver shares with the source (a
+/// room's corner) then sits just off the source's plane instead of on its edge,
+/// where r → 0; the bias is O(fraction) relative, 1e-3 at worst for such
+/// vertices, and zero where the form factor is flat.
+pub const INWARD_STEP: f64 = 1e-3;
+
+/// What one receiving vertex gets from one shot.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Received {
+    /// ΔL, radiance added by this shot (W·sr⁻¹·m⁻², RGB).
+    pub radiance: DVec3,
+    /// How many of the visibility rays reached the source (all of them when
+    /// shadows are off and the source is in front); 0 when the source cannot
+    /// be seen at all. Edges whose ends differ here are shadow boundaries.
+    pub visible: u32,
+    /// Rays traced for this receiver.
+    pub rays: u32,
+}
+
+/// Per-worker buffers: the source samples and their visibility flags.
+#[derive(Default)]
+pub struct Scratch {
+    points: Vec<DVec3>,
+    targets: Vec<DVec3>,
+    flags: Vec<bool>,
+}
+
+/// The source patch of one shot, with everything the receivers share.
+pub struct Shot<'a> {
+    /// 0-based shot number: with the seed and the vertex id it names the RNG
+    /// stream, so a receiver's samples do not depend on the thread count.
+    pub index: u64,
+    pub seed: u64,
+    pub source_surface: u32,
+    pub polygon: [DVec3; 4],
+    pub corner_count: usize,
+    pub normal: DVec3,
+    pub centre: DVec3,
+    pub area: f64,
+    /// Size of the source, for the scale of plane tests.
+    pub diameter: f64,
+    /// U_s: unshot radiance of the source patch (RGB).
+    pub unshot: DVec3,
+    pub samples: u32,
+    pub method: FormFactorMethod,
+    pub shadows: bool,
+    pub occluder: &'a Occluder,
+    /// Diffuse reflectance per surface.
+    pub kd: &'a [DVec3],
+}
+
+impl Shot<'_> {
+    pub fn polygon(&self) -> &[DVec3] {
+        &self.polygon[..self.corner_count]
+    }
+
+    /// The receiving point of vertex `v` (a small step inside an element it
+    /// belongs to) and its surface normal.
+    pub fn receiving_point(&self, mesh: &Mesh, v: u32) -> (DVec3, DVec3) {
+        let vertex = &mesh.vertices[v as usize];
+        let to_inside = vertex.inward - vertex.position;
+        let distance = to_inside.length();
+        let q = if distance > 0.0 {
+            let step = (INWARD_STEP * distance)
+                .max(2.0 * self.occluder.scene_epsilon())
+                .min(0.5 * distance);
+            vertex.position + to_inside * (step / distance)
+        } else {
+            vertex.position
+        };
+        (q, mesh.surfaces[vertex.surface as usize].normal)
+    }
+
+    /// F(v←s): the form factor from vertex `v`'s receiving point to the source,
+    /// with visibility, and the number of rays that reached the source.
+    ///
+    /// * `Analytic` (default): the exact unoccluded point-to-polygon factor
+    ///   times the visible fraction of `samples` stratified, jittered rays
+    ///   (design notes, "Form factors").
+    /// * `Wallace`: 000 eq. 3.1 over the same samples.
+    ///
+    /// Rays run between points lifted `scene_epsilon` off both surfaces along
+    /// their normals: from the receiving point, and to each sample on the
+    /// source. Lifting only the origin is not enough: a ray from a receiver
+    /// next to the source's edge (a room's corner) runs at a grazing angle to
+    /// the source's plane, and the f32 occluder then finds the source itself
+    /// a little before the segment's end, blocking half of the rays.
+    pub fn form_factor(&self, mesh: &Mesh, v: u32, scratch: &mut Scratch) -> (f64, u32, u32) {
+        let (q, n) = self.receiving_point(mesh, v);
+        // Cheap culls before the contour integral: a receiver clearly behind the
+        // one-sided source, or one that faces away from every source corner,
+        // gets nothing. The margin leaves points near the source's plane to
+        // `point_to_polygon`, which returns the limit from the front there.
+        if self.normal.dot(q - self.centre) < -1e-6 * self.diameter {
+            return (0.0, 0, 0);
+        }
+        if self.polygon().iter().all(|&c| n.dot(c - q) <= 0.0) {
+            return (0.0, 0, 0);
+        }
+        let origin = q + n * self.occluder.scene_epsilon();
+        match self.method {
+            FormFactorMethod::Analytic => {
+                let unoccluded = point_to_polygon(q, n, self.polygon());
+                if unoccluded.is_nan() || unoccluded <= 0.0 {
+                    return (0.0, 0, 0);
+                }
+                if !self.shadows {
+                    return (unoccluded, self.samples, 0);
+                }
+                let mut rng = Rng::new(self.seed, stream_id(self.index, v as u64));
+                stratified_points(self.polygon(), self.samples, &mut rng, &mut scratch.points);
+                let lift = self.normal * self.occluder.scene_epsilon();
+                scratch.points.iter_mut().for_each(|p| *p += lift);
+                let visible = self.occluder.count_visible(origin, &scratch.points);
+                let fraction = visible as f64 / self.samples as f64;
+                (unoccluded * fraction, visible, self.samples)
+            }
+            FormFactorMethod::Wallace => {
+                let mut rng = Rng::new(self.seed, stream_id(self.index, v as u64));
+                stratified_points(self.polygon(), self.samples, &mut rng, &mut scratch.points);
+                let rays = if self.shadows {
+                    let lift = self.normal * self.occluder.scene_epsilon();
+                    scratch.targets.clear();
+                    scratch
+                        .targets
+                        .extend(scratch.points.iter().map(|&p| p + lift));
+                    self.occluder
+                        .visible_each(origin, &scratch.targets, &mut scratch.flags);
+                    self.samples
+                } else {
+                    scratch.flags.clear();
+                    scratch.flags.resize(scratch.points.len(), true);
+                    0
+                };
+                let factor = wallace(
+                    q,
+                    n,
+                    &scratch.points,
+                    self.normal,
+                    self.area,
+                    &scratch.flags,
+                );
+                let visible = scratch.flags.iter().filter(|&&f| f).count() as u32;
+                let visible = if factor > 0.0 { visible } else { 0 };
+                (factor, visible, rays)
+            }
+        }
+    }
+
+    /// ΔL_v = Kd · U_s · F(v←s) (000 Fig. 3.6: ΔRad = SP.unshotRad ·
+    /// V.reflectance · F, in radiance: L = B/π on both sides).
+    pub fn receive(&self, mesh: &Mesh, v: u32, scratch: &mut Scratch) -> Received {
+        let surface = mesh.vertices[v as usize].surface;
+        // A planar polygon cannot light itself; a black one reflects nothing.
+        let kd = self.kd[surface as usize];
+        if surface == self.source_surface || kd == DVec3::ZERO {
+            return Received::default();
+        }
+        let (factor, visible, rays) = self.form_factor(mesh, v, scratch);
+        Received {
+            radiance: kd * self.unshot * factor,
+            visible,
+            rays,
+        }
+    }
+}
