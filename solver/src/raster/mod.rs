@@ -38,7 +38,7 @@
 //!
 //! The stored radiance is drawn as it is: no ambient term (a partial solution's
 //! ambient estimate is the caller's to add), no exposure, no tone mapping; see
-//! [`tonemap`] for display and [`compare`] for GPU-versus-CPU checks.
+//! [`tonemap`] for display and [`compare`](mod@compare) for GPU-versus-CPU checks.
 //!
 //! **Precision and expected GPU differences.** Geometry and radiance are computed in
 //! f64 and stored as f32. A GPU transforms in f32 and evaluates SH in f32
