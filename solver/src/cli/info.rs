@@ -1,5 +1,7 @@
-//! `solver info FILE [--json]`.
+//! `solver info FILE [--json]`: validates a solution file (all checksums) and
+//! prints its header and batches.
 
+use crate::format::{describe_json, describe_text, MappedSolution};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -13,8 +15,22 @@ pub struct InfoArgs {
 }
 
 pub fn run(args: InfoArgs) -> anyhow::Result<ExitCode> {
-    anyhow::bail!(
-        "`solver info {}`: the solution reader is not built yet",
-        args.file.display()
-    )
+    // The error names the file and what is wrong with it.
+    let solution = MappedSolution::open(&args.file)?;
+    let (major, minor) = solution.version();
+    if args.json {
+        let mut value = describe_json(solution.header(), solution.batches());
+        if let Some(object) = value.as_object_mut() {
+            object.insert("file".into(), args.file.display().to_string().into());
+            object.insert("format_version".into(), format!("{major}.{minor}").into());
+            object.insert("file_bytes".into(), solution.file_len().into());
+        }
+        println!("{}", serde_json::to_string_pretty(&value)?);
+    } else {
+        println!("file: {}", args.file.display());
+        println!("format_version: {major}.{minor}");
+        println!("file_bytes: {}", solution.file_len());
+        print!("{}", describe_text(solution.header(), solution.batches()));
+    }
+    Ok(ExitCode::SUCCESS)
 }

@@ -10,6 +10,22 @@
 use crate::camera::{Camera, UpAxis};
 use serde::{Deserialize, Serialize};
 
+mod describe;
+mod error;
+pub mod layout;
+mod read;
+mod validate;
+mod write;
+
+#[cfg(test)]
+mod tests;
+
+pub use describe::{batch_json, describe_json, describe_text};
+pub use error::{FormatError, Problem};
+pub use read::{decode, read_solution, BatchInfo, MappedSolution};
+pub use validate::{F16_MAX, FRAME_TOLERANCE};
+pub use write::{check_solution, encode, f16_scale_for, write_solution};
+
 /// How a batch stores each vertex's outgoing radiance.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "lowercase")]

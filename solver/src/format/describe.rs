@@ -1,0 +1,166 @@
+//! Human- and machine-readable descriptions of a solution file (`solver info`).
+
+use super::layout;
+use super::read::BatchInfo;
+use super::{Header, Representation, ScalarType, SolveMode};
+use serde_json::{json, Value};
+
+fn triple<T: std::fmt::Display>(v: &[T; 3]) -> String {
+    format!("{} {} {}", v[0], v[1], v[2])
+}
+
+fn mode_name(mode: SolveMode) -> &'static str {
+    match mode {
+        SolveMode::Diffuse => "diffuse",
+        SolveMode::Directional => "directional",
+    }
+}
+
+fn representation_text(r: Representation) -> String {
+    match r {
+        Representation::Sh { order } => format!(
+            "sh L={order} ({} coefficients per channel)",
+            r.coefficients_per_channel()
+        ),
+        Representation::Cube { directions } => format!("cube D={directions} directions"),
+    }
+}
+
+fn scalar_text(s: ScalarType) -> String {
+    match s {
+        ScalarType::F32 => "f32".into(),
+        ScalarType::F16 { scale } => format!("f16 (scale {scale})"),
+    }
+}
+
+fn frame_name(code: u32) -> &'static str {
+    match code {
+        layout::FRAME_POLYGON_NTB => "polygon-ntb",
+        _ => "unknown",
+    }
+}
+
+fn basis_name(code: u32) -> &'static str {
+    match code {
+        layout::BASIS_SH_REAL_ORTHONORMAL => "sh-real-orthonormal-no-condon-shortley",
+        layout::BASIS_CUBE_CELL_CENTRES => "cube-cell-centres",
+        _ => "unknown",
+    }
+}
+
+/// The header and batches as text, one `name: value` per line; batches follow as
+/// indented blocks.
+pub fn describe_text(header: &Header, batches: &[BatchInfo]) -> String {
+    use std::fmt::Write;
+    let mut out = String::new();
+    let h = header;
+    let c = &h.camera;
+    let s = &h.stats;
+    // Writing into a String cannot fail.
+    let _ = (|| -> std::fmt::Result {
+        writeln!(out, "units_per_metre: {}", h.units_per_metre)?;
+        writeln!(out, "up_axis: {}", h.up_axis)?;
+        writeln!(out, "recentre_offset: {}", triple(&h.recentre_offset))?;
+        writeln!(out, "camera.eye: {}", triple(&c.eye))?;
+        writeln!(out, "camera.target: {}", triple(&c.target))?;
+        writeln!(out, "camera.up: {}", triple(&c.up))?;
+        writeln!(out, "camera.fov_y_deg: {}", c.fov_y_deg)?;
+        writeln!(out, "camera.image: {}x{}", c.width, c.height)?;
+        writeln!(out, "bounds_min: {}", triple(&h.bounds_min))?;
+        writeln!(out, "bounds_max: {}", triple(&h.bounds_max))?;
+        writeln!(out, "partial: {}", h.partial)?;
+        writeln!(out, "mode: {}", mode_name(h.mode))?;
+        writeln!(out, "stats.shots: {}", s.shots)?;
+        writeln!(out, "stats.rays: {}", s.rays)?;
+        writeln!(out, "stats.seconds: {}", s.seconds)?;
+        writeln!(out, "stats.unshot_fraction: {}", s.unshot_fraction)?;
+        writeln!(out, "stats.emitted_power_w: {}", s.emitted_power)?;
+        writeln!(out, "stats.ambient_radiance: {}", triple(&s.ambient))?;
+        writeln!(out, "settings: {}", h.settings_json.replace('\n', " "))?;
+        let vertices: u64 = batches.iter().map(|b| u64::from(b.vertex_count)).sum();
+        let triangles: u64 = batches.iter().map(|b| u64::from(b.triangle_count())).sum();
+        writeln!(out, "batches: {}", batches.len())?;
+        writeln!(out, "total_vertices: {vertices}")?;
+        writeln!(out, "total_triangles: {triangles}")?;
+        for (i, b) in batches.iter().enumerate() {
+            writeln!(out, "batch {i}:")?;
+            writeln!(
+                out,
+                "  representation: {}",
+                representation_text(b.representation)
+            )?;
+            writeln!(out, "  scalar: {}", scalar_text(b.scalar))?;
+            writeln!(out, "  vertices: {}", b.vertex_count)?;
+            writeln!(out, "  triangles: {}", b.triangle_count())?;
+            writeln!(out, "  vertex_bytes: {}", b.vertex_bytes())?;
+            writeln!(out, "  coefficient_bytes: {}", b.coefficient_bytes())?;
+            writeln!(out, "  index_bytes: {}", b.index_bytes())?;
+            writeln!(out, "  frame: {}", frame_name(b.frame_convention))?;
+            writeln!(out, "  basis: {}", basis_name(b.basis_convention))?;
+        }
+        Ok(())
+    })();
+    out
+}
+
+/// One batch as a JSON object.
+pub fn batch_json(b: &BatchInfo) -> Value {
+    let representation = match b.representation {
+        Representation::Sh { order } => json!({ "kind": "sh", "order": order }),
+        Representation::Cube { directions } => json!({ "kind": "cube", "directions": directions }),
+    };
+    let scalar = match b.scalar {
+        ScalarType::F32 => json!({ "kind": "f32" }),
+        ScalarType::F16 { scale } => json!({ "kind": "f16", "scale": scale }),
+    };
+    json!({
+        "representation": representation,
+        "coefficients_per_channel": b.coefficients_per_channel(),
+        "scalar": scalar,
+        "vertex_count": b.vertex_count,
+        "index_count": b.index_count,
+        "triangle_count": b.triangle_count(),
+        "vertex_bytes": b.vertex_bytes(),
+        "coefficient_bytes": b.coefficient_bytes(),
+        "index_bytes": b.index_bytes(),
+        "frame_convention": frame_name(b.frame_convention),
+        "basis_convention": basis_name(b.basis_convention),
+    })
+}
+
+/// The header and batches as one JSON object. The settings appear parsed under
+/// `settings` when they are JSON (as the solver writes them), else as a string.
+pub fn describe_json(header: &Header, batches: &[BatchInfo]) -> Value {
+    let h = header;
+    let c = &h.camera;
+    let s = &h.stats;
+    let settings = serde_json::from_str::<Value>(&h.settings_json)
+        .unwrap_or_else(|_| Value::String(h.settings_json.clone()));
+    json!({
+        "units_per_metre": h.units_per_metre,
+        "up_axis": h.up_axis.to_string(),
+        "recentre_offset": h.recentre_offset,
+        "camera": {
+            "eye": c.eye,
+            "target": c.target,
+            "up": c.up,
+            "fov_y_deg": c.fov_y_deg,
+            "width": c.width,
+            "height": c.height,
+        },
+        "bounds_min": h.bounds_min,
+        "bounds_max": h.bounds_max,
+        "partial": h.partial,
+        "mode": mode_name(h.mode),
+        "stats": {
+            "shots": s.shots,
+            "rays": s.rays,
+            "seconds": s.seconds,
+            "unshot_fraction": s.unshot_fraction,
+            "emitted_power_w": s.emitted_power,
+            "ambient_radiance": s.ambient,
+        },
+        "settings": settings,
+        "batches": batches.iter().map(batch_json).collect::<Vec<_>>(),
+    })
+}

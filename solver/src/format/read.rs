@@ -1,0 +1,920 @@
+//! The validating reader: [`decode`], [`read_solution`] and [`MappedSolution`].
+//!
+//! [`parse`] checks a whole file in this order, and nothing it allocates is sized
+//! by an unchecked number:
+//!
+//! 1. length ≥ the preamble, magic, major version, the declared file length
+//!    against the real one;
+//! 2. the metadata length against the file, then the metadata CRC (so every count
+//!    and offset read afterwards is what the writer wrote);
+//! 3. block lengths and counts against the metadata length (checked arithmetic:
+//!    `count × entry length ≤ metadata length ≤ file length`), header values,
+//!    codes, section references;
+//! 4. section alignment, bounds (in u128, so no sum can wrap), overlap, zero
+//!    padding; vertex, coefficient and index counts against section lengths;
+//! 5. section CRCs; then the content: UTF-8 settings, finite values, orthonormal
+//!    frames, indices below the vertex count.
+//!
+//! The only vectors it allocates hold one element per batch or per section (each
+//! ≤ the file length divided by that entry's on-disk size), and the settings text
+//! (≤ its section's length). Materializing a [`Solution`] then allocates per
+//! vertex, coefficient and index at most 2× the bytes those sections occupy (f16
+//! coefficients widen to f32). So no allocation exceeds a small multiple of the
+//! file's real length, whatever the header claims.
+
+use super::error::{FormatError, Problem};
+use super::layout::{self, Fields};
+use super::validate;
+use super::{Batch, Header, Representation, ScalarType, Solution, SolveStats, Vertex};
+use crate::camera::{Camera, UpAxis};
+use std::ops::Range;
+use std::path::{Path, PathBuf};
+
+/// What a batch holds, as the runtime needs it to size buffers and pick shaders.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BatchInfo {
+    pub representation: Representation,
+    /// For f16, the shader multiplies each stored half by `scale`.
+    pub scalar: ScalarType,
+    pub vertex_count: u32,
+    pub index_count: u32,
+    /// [`layout::FRAME_POLYGON_NTB`] in version 1.
+    pub frame_convention: u32,
+    /// [`layout::BASIS_SH_REAL_ORTHONORMAL`] or [`layout::BASIS_CUBE_CELL_CENTRES`].
+    pub basis_convention: u32,
+}
+
+impl BatchInfo {
+    pub fn coefficients_per_channel(&self) -> u64 {
+        self.representation.coefficients_per_channel()
+    }
+    /// Coefficients in the batch: vertices × per channel × 3.
+    pub fn coefficient_count(&self) -> u64 {
+        u64::from(self.vertex_count) * self.coefficients_per_channel() * 3
+    }
+    pub fn coefficient_bytes(&self) -> u64 {
+        self.coefficient_count() * layout::scalar_size(self.scalar)
+    }
+    pub fn vertex_bytes(&self) -> u64 {
+        u64::from(self.vertex_count) * layout::VERTEX_LEN as u64
+    }
+    pub fn index_bytes(&self) -> u64 {
+        u64::from(self.index_count) * 4
+    }
+    pub fn triangle_count(&self) -> u32 {
+        self.index_count / 3
+    }
+}
+
+/// A validated file: everything but the bulk data, plus where the bulk data is.
+#[derive(Clone, Debug)]
+pub(crate) struct Parsed {
+    pub version: (u16, u16),
+    pub file_len: u64,
+    pub header: Header,
+    pub batches: Vec<BatchInfo>,
+    /// Byte ranges of each batch's vertices, coefficients and indices.
+    pub ranges: Vec<[Range<usize>; 3]>,
+}
+
+#[derive(Clone, Copy, Debug)]
+struct SectionEntry {
+    kind: u32,
+    crc: u32,
+    offset: u64,
+    length: u64,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Role {
+    Unused,
+    Settings,
+    Vertices(usize),
+    Coefficients(usize),
+    Indices(usize),
+}
+
+fn role_name(role: Role) -> String {
+    match role {
+        Role::Unused => "unused".into(),
+        Role::Settings => "settings".into(),
+        Role::Vertices(b) => format!("vertices of batch {b}"),
+        Role::Coefficients(b) => format!("coefficients of batch {b}"),
+        Role::Indices(b) => format!("indices of batch {b}"),
+    }
+}
+
+struct Sections {
+    entries: Vec<SectionEntry>,
+    roles: Vec<Role>,
+}
+
+impl Sections {
+    /// "section 3 (coefficients of batch 1)".
+    fn name(&self, index: usize) -> String {
+        match (self.roles.get(index), self.entries.get(index)) {
+            (Some(Role::Unused) | None, Some(e)) => format!(
+                "section {index} (kind {} {}, unused)",
+                e.kind,
+                layout::section_kind_name(e.kind)
+            ),
+            (Some(role), _) => format!("section {index} ({})", role_name(*role)),
+            (None, None) => format!("section {index}"),
+        }
+    }
+
+    /// The byte range of a section whose bounds `parse` has checked.
+    fn range(&self, index: usize) -> Range<usize> {
+        self.entries.get(index).map_or(0..0, |e| {
+            // Bounds were checked against the in-memory file, so both fit usize.
+            e.offset as usize..(e.offset + e.length) as usize
+        })
+    }
+}
+
+/// Version-1.0 block sizes must match exactly; a newer minor version may make
+/// them longer (appending fields this reader skips) but keeps them multiples of 8.
+fn check_block_len(what: &str, value: u32, v1: usize, newer: bool) -> Result<usize, Problem> {
+    let value_usize = value as usize;
+    let ok = if newer {
+        value_usize >= v1 && value_usize.is_multiple_of(8)
+    } else {
+        value_usize == v1
+    };
+    if ok {
+        Ok(value_usize)
+    } else {
+        Err(Problem::BadLength {
+            what: what.to_string(),
+            value: value.into(),
+            reason: if newer {
+                format!("a newer minor version may only extend it from {v1} in steps of 8")
+            } else {
+                format!("it is {v1} in this format version")
+            },
+        })
+    }
+}
+
+fn reserved(field: &str, value: u64, newer: bool) -> Result<(), Problem> {
+    if value != 0 && !newer {
+        return Err(Problem::Reserved {
+            field: field.to_string(),
+            value,
+        });
+    }
+    Ok(())
+}
+
+/// Validates the bytes of a whole solution file (see the module documentation for
+/// the order of the checks).
+pub(crate) fn parse(bytes: &[u8]) -> Result<Parsed, Problem> {
+    use layout::{batch as bf, header as hf, preamble as pf, section as sf};
+    let len = bytes.len() as u64;
+
+    // 1. Preamble: is it ours, which version, is it whole?
+    let Some(pre) = bytes
+        .get(..layout::PREAMBLE_LEN)
+        .and_then(|b| Fields::new(b, layout::PREAMBLE_LEN))
+    else {
+        return Err(Problem::TooShort {
+            len,
+            min: layout::PREAMBLE_LEN as u64,
+        });
+    };
+    let mut magic = [0u8; 8];
+    magic.copy_from_slice(&bytes[pf::MAGIC..pf::MAGIC + 8]);
+    if magic != layout::MAGIC {
+        return Err(Problem::BadMagic {
+            found: magic,
+            expected: layout::MAGIC,
+        });
+    }
+    let major = pre.u16(pf::VERSION_MAJOR);
+    let minor = pre.u16(pf::VERSION_MINOR);
+    if major != layout::VERSION_MAJOR {
+        return Err(Problem::UnsupportedVersion {
+            major,
+            minor,
+            known_major: layout::VERSION_MAJOR,
+            known_minor: layout::VERSION_MINOR,
+        });
+    }
+    let newer = minor > layout::VERSION_MINOR;
+    let declared = pre.u64(pf::FILE_LENGTH);
+    if declared != len {
+        return Err(Problem::LengthMismatch {
+            declared,
+            actual: len,
+        });
+    }
+
+    // 2. Metadata region and its checksum.
+    let metadata_len = pre.u64(pf::METADATA_LENGTH);
+    if metadata_len < layout::PREAMBLE_LEN as u64 {
+        return Err(Problem::BadLength {
+            what: "the metadata length".into(),
+            value: metadata_len,
+            reason: format!("it includes the {}-byte preamble", layout::PREAMBLE_LEN),
+        });
+    }
+    if metadata_len > len {
+        return Err(Problem::OutOfBounds {
+            what: "the header and tables".into(),
+            end: metadata_len.into(),
+            len,
+        });
+    }
+    let metadata = &bytes[..metadata_len as usize];
+    let stored = pre.u32(pf::METADATA_CRC);
+    let computed = layout::metadata_crc(metadata);
+    if stored != computed {
+        return Err(Problem::Checksum {
+            what: format!("the header and tables (bytes 0..{metadata_len})"),
+            stored,
+            computed,
+        });
+    }
+
+    // 3. Block lengths and counts must tile the metadata exactly.
+    let header_len = check_block_len(
+        "the header length",
+        pre.u32(pf::HEADER_LENGTH),
+        layout::HEADER_LEN,
+        newer,
+    )?;
+    let batch_entry_len = check_block_len(
+        "the batch entry length",
+        pre.u32(pf::BATCH_ENTRY_LENGTH),
+        layout::BATCH_ENTRY_LEN,
+        newer,
+    )?;
+    let section_entry_len = check_block_len(
+        "the section entry length",
+        pre.u32(pf::SECTION_ENTRY_LENGTH),
+        layout::SECTION_ENTRY_LEN,
+        newer,
+    )?;
+    let batch_count = pre.u32(pf::BATCH_COUNT);
+    let section_count = pre.u32(pf::SECTION_COUNT);
+    let expected_metadata = layout::PREAMBLE_LEN as u128
+        + header_len as u128
+        + u128::from(batch_count) * batch_entry_len as u128
+        + u128::from(section_count) * section_entry_len as u128;
+    if expected_metadata != u128::from(metadata_len) {
+        return Err(Problem::BadLength {
+            what: "the metadata length".into(),
+            value: metadata_len,
+            reason: format!(
+                "a {header_len}-byte header, {batch_count} batch entries of {batch_entry_len} bytes and {section_count} section entries of {section_entry_len} bytes take {expected_metadata}"
+            ),
+        });
+    }
+    reserved(
+        "the preamble's reserved word at byte 52",
+        pre.u32(pf::RESERVED_0).into(),
+        newer,
+    )?;
+    reserved(
+        "the preamble's reserved word at byte 56",
+        pre.u64(pf::RESERVED_1),
+        newer,
+    )?;
+    // From here on every block lies inside `metadata` because the sum above matched.
+    let header_start = layout::PREAMBLE_LEN;
+    let batches_start = header_start + header_len;
+    let sections_start = batches_start + batch_count as usize * batch_entry_len;
+
+    let hb = Fields::new(&metadata[header_start..batches_start], layout::HEADER_LEN).ok_or_else(
+        || Problem::BadLength {
+            what: "the header length".into(),
+            value: header_len as u64,
+            reason: "shorter than version 1.0's header".into(),
+        },
+    )?;
+    let up_code = hb.u32(hf::UP_AXIS);
+    let up_axis = UpAxis::from_code(up_code).ok_or_else(|| Problem::UnknownCode {
+        field: "header: up axis".into(),
+        code: up_code,
+    })?;
+    let mode_code = hb.u32(hf::MODE);
+    let mode = layout::mode_from_code(mode_code).ok_or_else(|| Problem::UnknownCode {
+        field: "header: solve mode".into(),
+        code: mode_code,
+    })?;
+    let partial = match hb.u32(hf::PARTIAL) {
+        0 => false,
+        1 => true,
+        code => {
+            return Err(Problem::UnknownCode {
+                field: "header: partial flag (0 or 1)".into(),
+                code,
+            })
+        }
+    };
+    reserved("header: reserved word", hb.u32(hf::RESERVED).into(), newer)?;
+    let mut header = Header {
+        units_per_metre: hb.f64(hf::UNITS_PER_METRE),
+        up_axis,
+        recentre_offset: hb.f64x3(hf::RECENTRE_OFFSET),
+        camera: Camera {
+            eye: hb.f64x3(hf::CAMERA_EYE),
+            target: hb.f64x3(hf::CAMERA_TARGET),
+            up: hb.f64x3(hf::CAMERA_UP),
+            fov_y_deg: hb.f64(hf::CAMERA_FOV_Y_DEG),
+            width: hb.u32(hf::CAMERA_WIDTH),
+            height: hb.u32(hf::CAMERA_HEIGHT),
+        },
+        bounds_min: hb.f32x3(hf::BOUNDS_MIN),
+        bounds_max: hb.f32x3(hf::BOUNDS_MAX),
+        partial,
+        mode,
+        stats: SolveStats {
+            shots: hb.u64(hf::SHOTS),
+            rays: hb.u64(hf::RAYS),
+            seconds: hb.f64(hf::SECONDS),
+            unshot_fraction: hb.f64(hf::UNSHOT_FRACTION),
+            emitted_power: hb.f64(hf::EMITTED_POWER),
+            ambient: hb.f32x3(hf::AMBIENT),
+        },
+        settings_json: String::new(),
+    };
+    validate::check_header(&header)?;
+
+    // Section table (its length was checked above: section_count entries fit).
+    let mut entries = Vec::with_capacity(section_count as usize);
+    for (i, raw) in metadata[sections_start..]
+        .chunks_exact(section_entry_len)
+        .enumerate()
+    {
+        let f = Fields::new(raw, layout::SECTION_ENTRY_LEN).ok_or_else(|| Problem::BadLength {
+            what: "the section entry length".into(),
+            value: section_entry_len as u64,
+            reason: "shorter than version 1.0's entry".into(),
+        })?;
+        let kind = f.u32(sf::KIND);
+        if !(layout::SECTION_SETTINGS..=layout::SECTION_INDICES).contains(&kind) && !newer {
+            return Err(Problem::UnknownCode {
+                field: format!("section {i}: kind"),
+                code: kind,
+            });
+        }
+        reserved(
+            &format!("section {i}: reserved field"),
+            f.u64(sf::RESERVED),
+            newer,
+        )?;
+        entries.push(SectionEntry {
+            kind,
+            crc: f.u32(sf::CRC),
+            offset: f.u64(sf::OFFSET),
+            length: f.u64(sf::LENGTH),
+        });
+    }
+    let mut sections = Sections {
+        roles: vec![Role::Unused; entries.len()],
+        entries,
+    };
+
+    // Assigns a role to a section, checking the reference.
+    let claim = |sections: &mut Sections, index: u32, role: Role, kind: u32| {
+        let what = match role {
+            Role::Settings => "header: settings section".to_string(),
+            Role::Vertices(b) => format!("batch {b}: vertices section"),
+            Role::Coefficients(b) => format!("batch {b}: coefficients section"),
+            Role::Indices(b) => format!("batch {b}: indices section"),
+            Role::Unused => "a section reference".to_string(),
+        };
+        let i = index as usize;
+        let Some(entry) = sections.entries.get(i) else {
+            return Err(Problem::MissingSection {
+                what,
+                index,
+                count: section_count,
+            });
+        };
+        if entry.kind != kind {
+            return Err(Problem::WrongSectionKind {
+                what,
+                index,
+                kind: entry.kind,
+                expected: kind,
+                expected_name: layout::section_kind_name(kind),
+            });
+        }
+        if sections.roles[i] != Role::Unused {
+            return Err(Problem::SectionReused {
+                index,
+                first: role_name(sections.roles[i]),
+                second: role_name(role),
+            });
+        }
+        sections.roles[i] = role;
+        Ok(())
+    };
+    claim(
+        &mut sections,
+        hb.u32(hf::SETTINGS_SECTION),
+        Role::Settings,
+        layout::SECTION_SETTINGS,
+    )?;
+
+    // Batch table.
+    let mut batches = Vec::with_capacity(batch_count as usize);
+    let mut batch_sections = Vec::with_capacity(batch_count as usize);
+    for (b, raw) in metadata[batches_start..sections_start]
+        .chunks_exact(batch_entry_len)
+        .enumerate()
+    {
+        let f = Fields::new(raw, layout::BATCH_ENTRY_LEN).ok_or_else(|| Problem::BadLength {
+            what: "the batch entry length".into(),
+            value: batch_entry_len as u64,
+            reason: "shorter than version 1.0's entry".into(),
+        })?;
+        let parameter = f.u32(bf::REPRESENTATION_PARAMETER);
+        let representation = match f.u32(bf::REPRESENTATION) {
+            layout::REPRESENTATION_SH => Representation::Sh { order: parameter },
+            layout::REPRESENTATION_CUBE => Representation::Cube {
+                directions: parameter,
+            },
+            code => {
+                return Err(Problem::UnknownCode {
+                    field: format!("batch {b}: representation"),
+                    code,
+                })
+            }
+        };
+        validate::check_representation(b, representation)?;
+        let scale = f.f32(bf::SCALE);
+        let scalar = match f.u32(bf::SCALAR) {
+            layout::SCALAR_F32 => {
+                if scale != 1.0 {
+                    return Err(Problem::Invalid {
+                        what: format!("batch {b}: f32 batch with scale {scale}"),
+                        reason: "f32 batches store scale 1".into(),
+                    });
+                }
+                ScalarType::F32
+            }
+            layout::SCALAR_F16 => ScalarType::F16 { scale },
+            code => {
+                return Err(Problem::UnknownCode {
+                    field: format!("batch {b}: scalar type"),
+                    code,
+                })
+            }
+        };
+        validate::check_scalar(b, scalar)?;
+        let frame_convention = f.u32(bf::FRAME_CONVENTION);
+        if frame_convention != layout::FRAME_POLYGON_NTB {
+            return Err(Problem::UnknownCode {
+                field: format!("batch {b}: frame convention"),
+                code: frame_convention,
+            });
+        }
+        let basis_convention = f.u32(bf::BASIS_CONVENTION);
+        if basis_convention != layout::basis_convention(representation) {
+            return Err(Problem::UnknownCode {
+                field: format!(
+                    "batch {b}: basis convention for {}",
+                    match representation {
+                        Representation::Sh { .. } => "spherical harmonics",
+                        Representation::Cube { .. } => "a global cube",
+                    }
+                ),
+                code: basis_convention,
+            });
+        }
+        reserved(
+            &format!("batch {b}: reserved field"),
+            f.u32(bf::RESERVED).into(),
+            newer,
+        )?;
+        let vertex_count = f.u64(bf::VERTEX_COUNT);
+        let index_count = f.u64(bf::INDEX_COUNT);
+        for (what, count) in [("vertex count", vertex_count), ("index count", index_count)] {
+            if count > layout::MAX_COUNT {
+                return Err(Problem::TooLarge {
+                    what: format!("batch {b}: {what}"),
+                    value: count,
+                    limit: layout::MAX_COUNT,
+                    reason: "indices and draw counts are u32",
+                });
+            }
+        }
+        if !index_count.is_multiple_of(3) {
+            return Err(Problem::NotTriangles {
+                batch: b,
+                count: index_count,
+            });
+        }
+        let refs = [
+            (
+                bf::VERTICES_SECTION,
+                Role::Vertices(b),
+                layout::SECTION_VERTICES,
+            ),
+            (
+                bf::COEFFICIENTS_SECTION,
+                Role::Coefficients(b),
+                layout::SECTION_COEFFICIENTS,
+            ),
+            (
+                bf::INDICES_SECTION,
+                Role::Indices(b),
+                layout::SECTION_INDICES,
+            ),
+        ];
+        let mut indices = [0usize; 3];
+        for (k, (at, role, kind)) in refs.into_iter().enumerate() {
+            let index = f.u32(at);
+            claim(&mut sections, index, role, kind)?;
+            indices[k] = index as usize;
+        }
+        batches.push(BatchInfo {
+            representation,
+            scalar,
+            // Both fit: checked against MAX_COUNT = u32::MAX above.
+            vertex_count: vertex_count as u32,
+            index_count: index_count as u32,
+            frame_convention,
+            basis_convention,
+        });
+        batch_sections.push(indices);
+    }
+    if !newer {
+        if let Some(i) = sections.roles.iter().position(|r| *r == Role::Unused) {
+            return Err(Problem::UnusedSection {
+                index: i as u32,
+                kind_name: layout::section_kind_name(sections.entries[i].kind),
+            });
+        }
+    }
+
+    // 4. Section placement: aligned, inside the file, after the metadata, disjoint,
+    //    with zero padding between.
+    for (i, e) in sections.entries.iter().enumerate() {
+        if e.offset % layout::SECTION_ALIGN != 0 {
+            return Err(Problem::Misaligned {
+                what: sections.name(i),
+                offset: e.offset,
+                align: layout::SECTION_ALIGN,
+            });
+        }
+        let end = u128::from(e.offset) + u128::from(e.length);
+        if end > u128::from(len) {
+            return Err(Problem::OutOfBounds {
+                what: sections.name(i),
+                end,
+                len,
+            });
+        }
+        if e.offset < metadata_len {
+            return Err(Problem::Overlap {
+                first: format!("the header and tables (bytes 0..{metadata_len})"),
+                second: sections.name(i),
+            });
+        }
+    }
+    let mut order: Vec<usize> = (0..sections.entries.len()).collect();
+    order.sort_by_key(|&i| (sections.entries[i].offset, sections.entries[i].length));
+    let mut cursor = metadata_len;
+    let mut previous: Option<usize> = None;
+    for &i in &order {
+        let e = sections.entries[i];
+        if e.offset < cursor {
+            return Err(Problem::Overlap {
+                first: previous
+                    .map_or_else(|| "the header and tables".into(), |p| sections.name(p)),
+                second: sections.name(i),
+            });
+        }
+        check_zero(bytes, cursor, e.offset)?;
+        cursor = e.offset + e.length;
+        previous = Some(i);
+    }
+    check_zero(bytes, cursor, len)?;
+
+    // Counts against section lengths.
+    for (b, (info, refs)) in batches.iter().zip(&batch_sections).enumerate() {
+        let vertex_count = u64::from(info.vertex_count);
+        let per_channel = info.coefficients_per_channel();
+        let expectations = [
+            (
+                refs[0],
+                vertex_count,
+                "vertices",
+                layout::VERTEX_LEN as u128,
+            ),
+            (
+                refs[1],
+                vertex_count,
+                "vertices' coefficients",
+                u128::from(per_channel) * 3 * u128::from(layout::scalar_size(info.scalar)),
+            ),
+            (refs[2], u64::from(info.index_count), "indices", 4),
+        ];
+        for (section, count, unit, size) in expectations {
+            let expected = u128::from(count) * size;
+            let actual = sections.entries[section].length;
+            if expected != u128::from(actual) {
+                return Err(Problem::SizeMismatch {
+                    what: format!("batch {b}"),
+                    count,
+                    unit,
+                    expected,
+                    section: sections.name(section),
+                    actual,
+                });
+            }
+        }
+    }
+
+    // 5. Section checksums, then content.
+    for (i, e) in sections.entries.iter().enumerate() {
+        let computed = crc32fast::hash(&bytes[sections.range(i)]);
+        if computed != e.crc {
+            return Err(Problem::Checksum {
+                what: sections.name(i),
+                stored: e.crc,
+                computed,
+            });
+        }
+    }
+    let settings_index = hb.u32(hf::SETTINGS_SECTION) as usize;
+    header.settings_json = std::str::from_utf8(&bytes[sections.range(settings_index)])
+        .map_err(|e| Problem::Invalid {
+            what: sections.name(settings_index),
+            reason: format!("the settings are not UTF-8 text: {e}"),
+        })?
+        .to_string();
+
+    let mut ranges = Vec::with_capacity(batches.len());
+    for (b, (info, refs)) in batches.iter().zip(&batch_sections).enumerate() {
+        let range = [
+            sections.range(refs[0]),
+            sections.range(refs[1]),
+            sections.range(refs[2]),
+        ];
+        check_content(b, info, bytes, &range)?;
+        ranges.push(range);
+    }
+
+    Ok(Parsed {
+        version: (major, minor),
+        file_len: len,
+        header,
+        batches,
+        ranges,
+    })
+}
+
+fn check_zero(bytes: &[u8], from: u64, to: u64) -> Result<(), Problem> {
+    let Some(gap) = bytes.get(from as usize..to as usize) else {
+        return Ok(());
+    };
+    match gap.iter().position(|&x| x != 0) {
+        Some(k) => Err(Problem::NonZeroPadding {
+            at: from + k as u64,
+            value: gap[k],
+        }),
+        None => Ok(()),
+    }
+}
+
+fn vertex_at(chunk: &[u8]) -> Vertex {
+    // `chunk` is one of `chunks_exact(VERTEX_LEN)`.
+    match Fields::new(chunk, layout::VERTEX_LEN) {
+        Some(f) => Vertex {
+            position: f.f32x3(0),
+            normal: f.f32x3(12),
+            tangent: f.f32x3(24),
+        },
+        None => Vertex::default(),
+    }
+}
+
+fn check_content(
+    b: usize,
+    info: &BatchInfo,
+    bytes: &[u8],
+    ranges: &[Range<usize>; 3],
+) -> Result<(), Problem> {
+    let [vertices, coefficients, indices] = ranges;
+    for (v, chunk) in bytes[vertices.clone()]
+        .chunks_exact(layout::VERTEX_LEN)
+        .enumerate()
+    {
+        validate::check_vertex(b, v as u64, &vertex_at(chunk))?;
+    }
+    let coefficient_bytes = &bytes[coefficients.clone()];
+    let bad = match info.scalar {
+        ScalarType::F32 => coefficient_bytes
+            .chunks_exact(4)
+            .position(|c| !f32::from_le_bytes([c[0], c[1], c[2], c[3]]).is_finite())
+            .map(|k| (k, "f32")),
+        // A half is Inf or NaN when its exponent bits are all ones.
+        ScalarType::F16 { .. } => coefficient_bytes
+            .chunks_exact(2)
+            .position(|c| u16::from_le_bytes([c[0], c[1]]) & 0x7C00 == 0x7C00)
+            .map(|k| (k, "f16")),
+    };
+    if let Some((k, kind)) = bad {
+        return Err(Problem::NonFinite {
+            what: format!("batch {b}: coefficient {k} ({kind})"),
+            value: "Inf or NaN".into(),
+        });
+    }
+    let vertex_count = u64::from(info.vertex_count);
+    if let Some((position, index)) = bytes[indices.clone()]
+        .chunks_exact(4)
+        .map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+        .enumerate()
+        .find(|(_, i)| u64::from(*i) >= vertex_count)
+    {
+        return Err(Problem::IndexOutOfRange {
+            batch: b,
+            position: position as u64,
+            index,
+            vertex_count,
+        });
+    }
+    Ok(())
+}
+
+/// Builds the in-memory solution from validated bytes. Infallible: `parse` checked
+/// every range, and slicing uses `get` so that even bytes changed after validation
+/// (see [`MappedSolution`]) cannot make it panic.
+pub(crate) fn materialize(bytes: &[u8], parsed: &Parsed) -> Solution {
+    let section = |r: &Range<usize>| bytes.get(r.clone()).unwrap_or(&[]);
+    let batches = parsed
+        .batches
+        .iter()
+        .zip(&parsed.ranges)
+        .map(|(info, [v, c, i])| {
+            let vertices = section(v)
+                .chunks_exact(layout::VERTEX_LEN)
+                .map(vertex_at)
+                .collect();
+            let coefficients = match info.scalar {
+                ScalarType::F32 => section(c)
+                    .chunks_exact(4)
+                    .map(|x| f32::from_le_bytes([x[0], x[1], x[2], x[3]]))
+                    .collect(),
+                ScalarType::F16 { scale } => section(c)
+                    .chunks_exact(2)
+                    .map(|x| half::f16::from_le_bytes([x[0], x[1]]).to_f32() * scale)
+                    .collect(),
+            };
+            let indices = section(i)
+                .chunks_exact(4)
+                .map(|x| u32::from_le_bytes([x[0], x[1], x[2], x[3]]))
+                .collect();
+            Batch {
+                representation: info.representation,
+                scalar: info.scalar,
+                vertices,
+                coefficients,
+                indices,
+            }
+        })
+        .collect();
+    Solution {
+        header: parsed.header.clone(),
+        batches,
+    }
+}
+
+/// Decodes and validates the bytes of a solution file. f16 coefficients come back
+/// as `half × scale` in f32.
+pub fn decode(bytes: &[u8]) -> Result<Solution, FormatError> {
+    let parsed = parse(bytes)?;
+    Ok(materialize(bytes, &parsed))
+}
+
+/// Reads and validates a solution file into memory.
+pub fn read_solution(path: &Path) -> Result<Solution, FormatError> {
+    let bytes = std::fs::read(path).map_err(|e| FormatError::io("read", path, e))?;
+    let parsed = parse(&bytes).map_err(|p| FormatError::in_file(path, p))?;
+    Ok(materialize(&bytes, &parsed))
+}
+
+/// A validated solution file mapped into memory: the runtime uploads
+/// [`vertex_bytes`](Self::vertex_bytes), [`coefficient_bytes`](Self::coefficient_bytes)
+/// and [`index_bytes`](Self::index_bytes) to GPU buffers as they are (little-endian,
+/// each slice starting 64-byte aligned in memory).
+pub struct MappedSolution {
+    path: PathBuf,
+    map: memmap2::Mmap,
+    parsed: Parsed,
+}
+
+impl std::fmt::Debug for MappedSolution {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("MappedSolution")
+            .field("path", &self.path)
+            .field("file_len", &self.parsed.file_len)
+            .field("batches", &self.parsed.batches)
+            .finish_non_exhaustive()
+    }
+}
+
+impl MappedSolution {
+    /// Maps and validates a solution file (every check of [`decode`], including all
+    /// checksums) before returning; only per-batch and per-section tables (bounded
+    /// by the file's length) are allocated.
+    pub fn open(path: impl AsRef<Path>) -> Result<Self, FormatError> {
+        let path = path.as_ref();
+        let file = std::fs::File::open(path).map_err(|e| FormatError::io("open", path, e))?;
+        let len = file
+            .metadata()
+            .map_err(|e| FormatError::io("inspect", path, e))?
+            .len();
+        if len < layout::PREAMBLE_LEN as u64 {
+            // Also avoids mapping an empty file, which some platforms refuse.
+            return Err(FormatError::in_file(
+                path,
+                Problem::TooShort {
+                    len,
+                    min: layout::PREAMBLE_LEN as u64,
+                },
+            ));
+        }
+        // SAFETY: `Mmap` hands out `&[u8]` that Rust assumes immutable for the
+        // map's lifetime. That holds as long as no process modifies or truncates
+        // the file while it is mapped. The solver never writes a solution file in
+        // place: `write_solution` writes a new temporary file and renames it over
+        // the old name, which leaves the inode we mapped untouched (readers of the
+        // old file keep the old bytes). Another tool truncating the file in place
+        // would make later accesses fault (SIGBUS) and in-place edits would change
+        // bytes after validation; the reader never trusts validated values for
+        // memory safety (all later slicing is bounds-checked), so such edits can
+        // only yield wrong pixels, not out-of-bounds access.
+        let map = unsafe { memmap2::Mmap::map(&file) }
+            .map_err(|e| FormatError::io("memory-map", path, e))?;
+        let parsed = parse(&map).map_err(|p| FormatError::in_file(path, p))?;
+        Ok(MappedSolution {
+            path: path.to_path_buf(),
+            map,
+            parsed,
+        })
+    }
+
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// `(major, minor)` format version of the file.
+    pub fn version(&self) -> (u16, u16) {
+        self.parsed.version
+    }
+
+    pub fn file_len(&self) -> u64 {
+        self.parsed.file_len
+    }
+
+    pub fn header(&self) -> &Header {
+        &self.parsed.header
+    }
+
+    pub fn batches(&self) -> &[BatchInfo] {
+        &self.parsed.batches
+    }
+
+    fn section(&self, batch: usize, which: usize) -> &[u8] {
+        let range = &self.parsed.ranges[batch][which];
+        self.map.get(range.clone()).unwrap_or(&[])
+    }
+
+    /// Batch `batch`'s vertices: `vertex_count × 36` bytes, each vertex 9
+    /// little-endian f32 (position, normal, tangent), the layout of [`Vertex`].
+    ///
+    /// # Panics
+    /// If `batch >= self.batches().len()`.
+    pub fn vertex_bytes(&self, batch: usize) -> &[u8] {
+        self.section(batch, 0)
+    }
+
+    /// Batch `batch`'s coefficients, vertex-major, then coefficient, then RGB:
+    /// little-endian f32, or f16 (multiply by the batch's scale).
+    ///
+    /// # Panics
+    /// If `batch >= self.batches().len()`.
+    pub fn coefficient_bytes(&self, batch: usize) -> &[u8] {
+        self.section(batch, 1)
+    }
+
+    /// Batch `batch`'s triangle list: `index_count` little-endian u32.
+    ///
+    /// # Panics
+    /// If `batch >= self.batches().len()`.
+    pub fn index_bytes(&self, batch: usize) -> &[u8] {
+        self.section(batch, 2)
+    }
+
+    /// Copies the file into an in-memory [`Solution`] (f16 coefficients widened to
+    /// f32 and multiplied by their scale).
+    pub fn to_solution(&self) -> Solution {
+        materialize(&self.map, &self.parsed)
+    }
+}
