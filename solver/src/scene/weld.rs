@@ -13,7 +13,9 @@
 //! Not welded: different materials or patch settings, curved polygons (with
 //! vertex normals), unions that are not convex, or polygons that share more than
 //! one edge. Collinear vertices left on the union's boundary (where two strips
-//! met) are removed, as in cleaning.
+//! met) are removed, as in cleaning; a neighbour that still has such a vertex on
+//! its edge meets the welded polygon in a T-vertex, which the mesher must handle
+//! anyway (000 §3.4).
 
 use super::clean::COLLINEAR_TOLERANCE;
 use super::planar::{is_convex, newell};
