@@ -18,10 +18,11 @@ fn mode_name(mode: SolveMode) -> &'static str {
 
 fn representation_text(r: Representation) -> String {
     match r {
-        Representation::Sh { order } => format!(
-            "sh L={order} ({} coefficients per channel)",
-            r.coefficients_per_channel()
-        ),
+        Representation::Sh { order } => {
+            let n = r.coefficients_per_channel();
+            let plural = if n == 1 { "" } else { "s" };
+            format!("sh L={order} ({n} coefficient{plural} per channel)")
+        }
         Representation::Cube { directions } => format!("cube D={directions} directions"),
     }
 }
