@@ -231,6 +231,7 @@ fn solve(
         let solver = Solver::new(scene, settings)
             .map_err(plain)
             .with_context(|| format!("setting up the solve of {}", args.scene.display()))?;
+        solver.warnings().iter().for_each(|w| eprintln!("solver: warning: {w}"));
         session.run(solver, 0.0)
     }
 }

@@ -34,6 +34,9 @@ pub struct Checkpoint {
     pub radiance: Vec<[u64; 3]>,
     /// Per patch: unshot radiance as f64 bit patterns (RGB).
     pub patch_unshot: Vec<[u64; 3]>,
+    /// Directional mode's SH coefficients; absent for a diffuse solve.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub directional: Option<super::DirectionalCheckpoint>,
 }
 
 fn to_bits(v: DVec3) -> [u64; 3] {
@@ -60,6 +63,7 @@ impl Solver {
             split_log: self.mesh.split_log.clone(),
             radiance: self.radiance.iter().map(|&v| to_bits(v)).collect(),
             patch_unshot: self.patch_unshot.iter().map(|&v| to_bits(v)).collect(),
+            directional: self.directional_checkpoint(),
         }
     }
 
@@ -131,6 +135,9 @@ impl Solver {
         solver.shots = checkpoint.shots;
         solver.rays = checkpoint.rays;
         solver.seconds = checkpoint.seconds;
+        solver
+            .restore_directional(checkpoint.directional)
+            .map_err(SolveError::CheckpointMismatch)?;
         solver.unshot_power = solver.total_unshot_power();
         Ok(solver)
     }

@@ -37,11 +37,13 @@
 //! thread count, and a resumed solve continues bit-identically.
 
 mod checkpoint;
+pub mod directional;
 mod output;
 mod refine;
 pub mod shoot;
 
 pub use checkpoint::Checkpoint;
+pub use directional::{Directional, DirectionalCheckpoint, SourceChoice};
 
 use crate::format::SolveMode;
 use crate::geometry::visibility::Occluder;
@@ -142,6 +144,10 @@ pub struct Solver {
     seconds: f64,
     emitted_power: f64,
     unshot_power: f64,
+    /// Directional mode's SH state (`None` in diffuse mode); see [`directional`].
+    directional: Option<Box<Directional>>,
+    /// Set-up warnings for the caller to show (see [`Solver::warnings`]).
+    warnings: Vec<String>,
 }
 
 impl Solver {
@@ -152,9 +158,6 @@ impl Solver {
     /// many patches.
     pub fn new(scene: &Scene, settings: &SolverSettings) -> Result<Solver, SolveError> {
         settings.validate()?;
-        if settings.mode != SolveMode::Diffuse {
-            return Err(SolveError::UnsupportedMode(settings.mode));
-        }
         for m in &scene.materials {
             let ok = |v: DVec3| v.is_finite() && v.min_element() >= 0.0;
             if !ok(m.kd) || !ok(m.emission) || m.kd.max_element() > 1.0 {
@@ -245,7 +248,10 @@ impl Solver {
             seconds: 0.0,
             emitted_power,
             unshot_power: 0.0,
+            directional: None,
+            warnings: Vec::new(),
         };
+        solver.init_directional(scene)?;
         let all: Vec<u32> = (0..solver.mesh.surfaces.len() as u32).collect();
         solver.update_weights(&all);
         solver.unshot_power = solver.total_unshot_power();
@@ -267,6 +273,9 @@ impl Solver {
     pub fn step(&mut self) -> Option<ShotReport> {
         if self.is_done() {
             return None;
+        }
+        if self.directional.is_some() {
+            return self.step_directional();
         }
         let start = Instant::now();
         let source = self.choose_source();
@@ -536,5 +545,7 @@ fn scene_centre(scene: &Scene) -> DVec3 {
     }
 }
 
+#[cfg(test)]
+mod directional_tests;
 #[cfg(test)]
 mod tests;

@@ -86,7 +86,7 @@ impl Solver {
         } else {
             self.scene_units_per_metre
         };
-        Solution {
+        let mut solution = Solution {
             header: Header {
                 units_per_metre,
                 up_axis: self.up_axis,
@@ -113,7 +113,10 @@ impl Solver {
                 coefficients,
                 indices,
             }],
-        }
+        };
+        // Directional mode: one batch per SH order instead.
+        self.directional_batches(&mut solution, ambient);
+        solution
     }
 }
 

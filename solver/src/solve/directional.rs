@@ -1,0 +1,910 @@
+//! Directional (glossy) shooting: radiance and unshot radiance as spherical
+//! harmonics per vertex and per patch (000 ch. 4, Fig. 4.7; design notes,
+//! "Directional mode").
+//!
+//! ## State
+//!
+//! * Per surface, an SH order L: 0 for a diffuse material (Ks = 0), otherwise
+//!   the smallest order whose Legendre fit of the lobe meets
+//!   `sh_error_target`, capped at `max_sh_order` (with a warning stating the
+//!   error left). All vertices and patches of a surface share its order and its
+//!   frame (n, t), so a patch's coefficients are the area-weighted average of
+//!   its vertices' and evaluating them toward a receiver is meaningful (a
+//!   source never mixes frames: patches do not cross surfaces).
+//! * Per vertex: radiance coefficients (emission included) and the ΔL of the
+//!   shot in progress, `(L+1)² × 3` f64 each, in flat vectors with an offset
+//!   per vertex, laid out coefficient-major then RGB as in the solution file.
+//! * Per patch: unshot coefficients, gathered from the vertices after each
+//!   shot exactly as the diffuse solver gathers ΔL (see [`crate::solve`]).
+//!
+//! The diffuse fields of [`Solver`] stay meaningful: `radiance` holds each
+//! vertex's c₀₀·Y₀₀ (its mean radiance over the sphere) and `patch_unshot` the
+//! diffuse-equivalent unshot radiance, hemispherical unshot power / (π A), so
+//! the convergence test, the ambient term and the hemisphere source choice are
+//! the diffuse code's, unchanged.
+//!
+//! ## Transport (design notes, "Directional mode")
+//!
+//! For every visible source sample i with form-factor share F_i (analytic
+//! method: the exact unoccluded factor divided evenly over the samples, the
+//! visible ones kept; Wallace: 000 eq. 3.1's per-sample term), with ω_i the
+//! direction from the receiver to the sample:
+//!
+//! * ΔE_i = U_s(−ω_i) · π · F_i, U_s evaluated from the source's SH in the
+//!   source's frame (clamped at 0: ringing of a truncated lobe is not light);
+//! * diffuse: c₀₀ += Kd · ΔE_i / π · √(4π);
+//! * glossy: c_lm += ΔE_i · Ks · C_R(μ_i) · a_l · 4π/(2l+1) · Y_lm(r_i)
+//!   ([`GlossyLobe::add_lobe_sh`], built with Ks = 1 and scaled per channel,
+//!   since C_R is linear in Ks).
+
+use super::refine::Criteria;
+use super::shoot::Shot;
+use super::{ShotReport, SolveError, Solver};
+use crate::brdf::normalization::funk_hecke_d;
+use crate::brdf::GlossyLobe;
+use crate::format::{Batch, Representation, ScalarType, Solution, Vertex};
+use crate::geometry::formfactor::{point_to_polygon, wallace};
+use crate::geometry::sampling::{stratified_points, stream_id, Rng};
+use crate::mesh::Mesh;
+use crate::scene::Scene;
+use crate::settings::{FormFactorMethod, SolverSettings};
+use crate::sh::{self, coefficient_count, Y00};
+use glam::DVec3;
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+use std::f64::consts::PI;
+use std::sync::Arc;
+use std::time::Instant;
+
+/// How the next source patch is chosen.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum SourceChoice {
+    /// Most unshot power over the upper hemisphere, A · Σ_l c_l0 ∫ Y_l0 cosθ dω
+    /// (design notes, "Progressive refinement"): the default.
+    #[default]
+    Hemisphere,
+    /// 000's choice by the [0,0] term alone, A · c₀₀ (kept to measure against).
+    ZerothTerm,
+}
+
+/// The directional state of a [`Solver`] in `SolveMode::Directional`.
+#[derive(Clone, Debug)]
+pub struct Directional {
+    /// Per surface: SH order, glossy reflectance and lobe (None when Ks = 0).
+    surface_order: Vec<u32>,
+    ks: Vec<DVec3>,
+    lobes: Vec<Option<Arc<GlossyLobe>>>,
+    /// Per vertex: start of its coefficients in `radiance`/`received`.
+    vertex_offset: Vec<usize>,
+    radiance: Vec<f64>,
+    received: Vec<f64>,
+    /// Per patch: start of its coefficients in `patch_unshot`.
+    patch_offset: Vec<usize>,
+    patch_unshot: Vec<f64>,
+    /// `hemisphere[l] = ∫_{upper} Y_l0 cosθ dω = 2π √((2l+1)/4π) D_l`.
+    hemisphere: Vec<f64>,
+    choice: SourceChoice,
+}
+
+/// The directional part of a [`super::Checkpoint`]: coefficients as f64 bit
+/// patterns, and the orders they were computed with.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct DirectionalCheckpoint {
+    pub surface_order: Vec<u32>,
+    pub radiance: Vec<u64>,
+    pub patch_unshot: Vec<u64>,
+}
+
+/// The warning for a diffuse solve of a scene with glossy materials (design
+/// notes, "Directional mode": say which materials were treated as diffuse and
+/// how to opt in). `None` when no used material has Ks > 0.
+pub fn diffuse_mode_warning(scene: &Scene, mesh: &Mesh) -> Option<String> {
+    let mut used = vec![false; scene.materials.len()];
+    for s in &mesh.surfaces {
+        used[s.material] = true;
+    }
+    let names: Vec<&str> = scene
+        .materials
+        .iter()
+        .zip(&used)
+        .filter(|(m, &u)| u && m.is_glossy())
+        .map(|(m, _)| m.name.as_str())
+        .collect();
+    if names.is_empty() {
+        return None;
+    }
+    Some(format!(
+        "diffuse mode: material(s) {} have Ks > 0 and were treated as diffuse (Ks ignored); \
+         solve with `--mode directional` (or `mode = \"directional\"` in the scene config) to \
+         reflect their glossy lobes",
+        names
+            .iter()
+            .map(|n| format!("`{n}`"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    ))
+}
+
+impl Directional {
+    /// Chooses each material's order, builds its lobe, and sets vertex radiance
+    /// and patch unshot to the emission (c₀₀ = Le · √(4π)). Returns the state
+    /// and its warnings (orders capped at `max_sh_order`).
+    pub fn new(
+        scene: &Scene,
+        settings: &SolverSettings,
+        mesh: &Mesh,
+    ) -> Result<(Directional, Vec<String>), SolveError> {
+        let mut warnings = Vec::new();
+        let mut material_lobe: Vec<Option<Arc<GlossyLobe>>> = Vec::new();
+        for m in &scene.materials {
+            let ok = m.ks.is_finite() && m.ks.min_element() >= 0.0 && m.ks.max_element() <= 1.0;
+            if !ok {
+                return Err(SolveError::BadMaterial {
+                    name: m.name.clone(),
+                    problem: format!("Ks {:?} must be in [0, 1]", m.ks.to_array()),
+                });
+            }
+            if !m.is_glossy() {
+                material_lobe.push(None);
+                continue;
+            }
+            let lobe = GlossyLobe::with_default_window(
+                m.alpha,
+                1.0,
+                settings.sh_error_target,
+                settings.max_sh_order,
+            )
+            .map_err(|e| SolveError::BadMaterial {
+                name: m.name.clone(),
+                problem: e.to_string(),
+            })?;
+            if lobe.choice.capped {
+                warnings.push(format!(
+                    "material `{}`: α = {} needs more than max_sh_order = {} SH bands for the \
+                     error target {:e}; capped at L = {} with a {} window, leaving a relative \
+                     L2 lobe error of {:.3e} (unwindowed fit)",
+                    m.name,
+                    m.alpha,
+                    settings.max_sh_order,
+                    settings.sh_error_target,
+                    lobe.order(),
+                    lobe.window.name(),
+                    lobe.choice.error
+                ));
+            }
+            material_lobe.push(Some(Arc::new(lobe)));
+        }
+        let lobes: Vec<Option<Arc<GlossyLobe>>> = mesh
+            .surfaces
+            .iter()
+            .map(|s| material_lobe[s.material].clone())
+            .collect();
+        let surface_order: Vec<u32> = lobes
+            .iter()
+            .map(|l| l.as_ref().map_or(0, |l| l.order()))
+            .collect();
+        let ks = mesh
+            .surfaces
+            .iter()
+            .map(|s| scene.materials[s.material].ks)
+            .collect();
+        let max_order = surface_order.iter().copied().max().unwrap_or(0);
+        let hemisphere = (0..=max_order)
+            .map(|l| 2.0 * PI * ((2.0 * l as f64 + 1.0) / (4.0 * PI)).sqrt() * funk_hecke_d(l))
+            .collect();
+        let mut d = Directional {
+            surface_order,
+            ks,
+            lobes,
+            vertex_offset: Vec::new(),
+            radiance: Vec::new(),
+            received: Vec::new(),
+            patch_offset: Vec::new(),
+            patch_unshot: Vec::new(),
+            hemisphere,
+            choice: SourceChoice::default(),
+        };
+        d.extend_vertices(mesh);
+        let mut at = 0;
+        for p in &mesh.patches {
+            d.patch_offset.push(at);
+            at += 3 * coefficient_count(d.surface_order[p.surface as usize]);
+        }
+        d.patch_unshot = vec![0.0; at];
+        let scale = (4.0 * PI).sqrt();
+        for (v, mv) in mesh.vertices.iter().enumerate() {
+            let e = scene.materials[mesh.surfaces[mv.surface as usize].material].emission;
+            let o = d.vertex_offset[v];
+            d.radiance[o..o + 3].copy_from_slice(&(e * scale).to_array());
+        }
+        for (p, mp) in mesh.patches.iter().enumerate() {
+            let e = scene.materials[mesh.surfaces[mp.surface as usize].material].emission;
+            let o = d.patch_offset[p];
+            d.patch_unshot[o..o + 3].copy_from_slice(&(e * scale).to_array());
+        }
+        Ok((d, warnings))
+    }
+
+    /// Adds zeroed coefficient slots for mesh vertices created since the last
+    /// call.
+    fn extend_vertices(&mut self, mesh: &Mesh) {
+        let mut at = self.radiance.len();
+        for v in &mesh.vertices[self.vertex_offset.len()..] {
+            self.vertex_offset.push(at);
+            at += 3 * coefficient_count(self.surface_order[v.surface as usize]);
+        }
+        self.radiance.resize(at, 0.0);
+        self.received.resize(at, 0.0);
+    }
+
+    /// The SH order of each mesh surface.
+    pub fn surface_orders(&self) -> &[u32] {
+        &self.surface_order
+    }
+
+    fn vertex_range(&self, mesh: &Mesh, v: usize) -> std::ops::Range<usize> {
+        let o = self.vertex_offset[v];
+        o..o + 3 * coefficient_count(self.surface_order[mesh.vertices[v].surface as usize])
+    }
+
+    fn patch_range(&self, mesh: &Mesh, p: usize) -> std::ops::Range<usize> {
+        let o = self.patch_offset[p];
+        o..o + 3 * coefficient_count(self.surface_order[mesh.patches[p].surface as usize])
+    }
+
+    /// Unshot radiance equivalent to the upper-hemisphere power of
+    /// `coefficients` (order `order`), per channel:
+    /// Σ_l c_l0 ∫_{upper} Y_l0 cosθ dω / π (design notes, "Progressive
+    /// refinement"); for L = 0 this is c₀₀ · Y₀₀, the diffuse unshot radiance.
+    fn hemisphere_equivalent(&self, order: u32, coefficients: &[f64]) -> DVec3 {
+        let mut sum = DVec3::ZERO;
+        for l in 0..=order as usize {
+            let k = l * l + l; // index(l, 0)
+            let c = DVec3::from_slice(&coefficients[3 * k..3 * k + 3]);
+            sum += c * self.hemisphere[l];
+        }
+        sum / PI
+    }
+}
+
+/// What one receiving vertex gets from one directional shot.
+struct ReceivedSh {
+    coefficients: Vec<f64>,
+    visible: u32,
+    rays: u32,
+}
+
+/// Per-worker buffers.
+#[derive(Default)]
+struct DirScratch {
+    points: Vec<DVec3>,
+    targets: Vec<DVec3>,
+    flags: Vec<bool>,
+    samples: Vec<(DVec3, f64)>,
+    basis: Vec<f64>,
+    unit: Vec<f64>,
+    lobe_scratch: Vec<f64>,
+}
+
+/// One directional shot: the diffuse [`Shot`] (geometry, samples,
+/// visibility) and the source's unshot SH.
+struct DirShot<'a> {
+    shot: &'a Shot<'a>,
+    unshot: &'a [f64],
+    source_order: u32,
+    source_tangent: DVec3,
+    tables: &'a Tables,
+}
+
+/// Per-surface tables a shot reads (a copy, so the state can grow meanwhile).
+#[derive(Clone)]
+struct Tables {
+    surface_order: Vec<u32>,
+    ks: Vec<DVec3>,
+    lobes: Vec<Option<Arc<GlossyLobe>>>,
+}
+
+impl DirShot<'_> {
+    /// The visible source samples seen from vertex `v`'s receiving point, with
+    /// their form-factor shares; the same samples, culls and visibility as
+    /// [`Shot::form_factor`], so the shares sum to its F(v←s). Returns the
+    /// receiving point, (visible count, rays).
+    fn samples(&self, mesh: &Mesh, v: u32, scratch: &mut DirScratch) -> (DVec3, u32, u32) {
+        let s = self.shot;
+        scratch.samples.clear();
+        let (q, n) = s.receiving_point(mesh, v);
+        if s.normal.dot(q - s.centre) < -1e-6 * s.diameter {
+            return (q, 0, 0);
+        }
+        if s.polygon().iter().all(|&c| n.dot(c - q) <= 0.0) {
+            return (q, 0, 0);
+        }
+        let origin = q + n * s.occluder.scene_epsilon();
+        let lift = s.normal * s.occluder.scene_epsilon();
+        match s.method {
+            FormFactorMethod::Analytic => {
+                let unoccluded = point_to_polygon(q, n, s.polygon());
+                if unoccluded.is_nan() || unoccluded <= 0.0 {
+                    return (q, 0, 0);
+                }
+                if !s.shadows {
+                    // No samples are drawn: the whole factor comes from the
+                    // direction of the source's centre.
+                    scratch.samples.push((s.centre, unoccluded));
+                    return (q, s.samples, 0);
+                }
+                let mut rng = Rng::new(s.seed, stream_id(s.index, v as u64));
+                stratified_points(s.polygon(), s.samples, &mut rng, &mut scratch.points);
+                scratch.targets.clear();
+                scratch.targets.extend(scratch.points.iter().map(|&p| p + lift));
+                s.occluder
+                    .visible_each(origin, &scratch.targets, &mut scratch.flags);
+                let share = unoccluded / s.samples as f64;
+                let mut visible = 0;
+                for (p, &f) in scratch.points.iter().zip(&scratch.flags) {
+                    if f {
+                        visible += 1;
+                        scratch.samples.push((*p, share));
+                    }
+                }
+                (q, visible, s.samples)
+            }
+            FormFactorMethod::Wallace => {
+                let mut rng = Rng::new(s.seed, stream_id(s.index, v as u64));
+                stratified_points(s.polygon(), s.samples, &mut rng, &mut scratch.points);
+                let rays = if s.shadows {
+                    scratch.targets.clear();
+                    scratch.targets.extend(scratch.points.iter().map(|&p| p + lift));
+                    s.occluder
+                        .visible_each(origin, &scratch.targets, &mut scratch.flags);
+                    s.samples
+                } else {
+                    scratch.flags.clear();
+                    scratch.flags.resize(scratch.points.len(), true);
+                    0
+                };
+                // 000 eq. 3.1 term by term: each sample's disc is A/k.
+                let disc = s.area / scratch.points.len().max(1) as f64;
+                let mut visible = 0;
+                for (p, &f) in scratch.points.iter().zip(&scratch.flags) {
+                    let term = wallace(q, n, std::slice::from_ref(p), s.normal, disc, &[f]);
+                    if term > 0.0 {
+                        visible += 1;
+                        scratch.samples.push((*p, term));
+                    }
+                }
+                (q, visible, rays)
+            }
+        }
+    }
+
+    /// ΔL of vertex `v` as SH coefficients of its surface's order.
+    fn receive(&self, mesh: &Mesh, kd: &[DVec3], v: u32, scratch: &mut DirScratch) -> ReceivedSh {
+        let surface = mesh.vertices[v as usize].surface as usize;
+        let order = self.tables.surface_order[surface];
+        let count = coefficient_count(order);
+        let mut out = vec![0.0; 3 * count];
+        let kd = kd[surface];
+        let ks = self.tables.ks[surface];
+        let lobe = self.tables.lobes[surface].as_deref();
+        if surface as u32 == self.shot.source_surface || (kd == DVec3::ZERO && lobe.is_none()) {
+            return ReceivedSh {
+                coefficients: out,
+                visible: 0,
+                rays: 0,
+            };
+        }
+        let (q, visible, rays) = self.samples(mesh, v, scratch);
+        let s = &mesh.surfaces[surface];
+        let source_count = coefficient_count(self.source_order);
+        scratch.basis.resize(source_count, 0.0);
+        scratch.unit.resize(count, 0.0);
+        scratch.lobe_scratch.resize(count, 0.0);
+        let samples = std::mem::take(&mut scratch.samples);
+        let sqrt_4pi = (4.0 * PI).sqrt();
+        for &(p, share) in &samples {
+            let Some(toward_source) = (p - q).try_normalize() else {
+                continue;
+            };
+            // U_s toward the receiver, from the source's SH in its frame.
+            let unshot = if self.source_order == 0 {
+                DVec3::from_slice(&self.unshot[..3]) * Y00
+            } else {
+                let local = sh::to_local(-toward_source, self.shot.normal, self.source_tangent);
+                sh::eval_basis(self.source_order, local, &mut scratch.basis);
+                let mut u = DVec3::ZERO;
+                for (c, y) in self.unshot.chunks_exact(3).zip(&scratch.basis) {
+                    u += DVec3::from_slice(c) * *y;
+                }
+                u
+            };
+            // Ringing of a truncated lobe below zero is not light to shoot.
+            let irradiance = unshot.max(DVec3::ZERO) * PI * share;
+            // Diffuse part: radiance Kd·ΔE/π as c₀₀.
+            let diffuse = kd * irradiance / PI * sqrt_4pi;
+            out[0] += diffuse.x;
+            out[1] += diffuse.y;
+            out[2] += diffuse.z;
+            if let Some(lobe) = lobe {
+                let omega_i = sh::to_local(toward_source, s.normal, s.tangent);
+                scratch.unit.fill(0.0);
+                lobe.add_lobe_sh(omega_i, 1.0, &mut scratch.unit, &mut scratch.lobe_scratch);
+                let e = irradiance * ks;
+                for (o, u) in out.chunks_exact_mut(3).zip(&scratch.unit) {
+                    o[0] += u * e.x;
+                    o[1] += u * e.y;
+                    o[2] += u * e.z;
+                }
+            }
+        }
+        scratch.samples = samples;
+        ReceivedSh {
+            coefficients: out,
+            visible,
+            rays,
+        }
+    }
+}
+
+impl Solver {
+    /// The directional state, when the solve is in directional mode.
+    pub fn directional(&self) -> Option<&Directional> {
+        self.directional.as_deref()
+    }
+
+    /// Radiance coefficients of vertex `v` (`(L+1)² × 3`, coefficient-major
+    /// then RGB) and their order, in directional mode.
+    pub fn vertex_sh(&self, v: u32) -> Option<(u32, &[f64])> {
+        let d = self.directional.as_deref()?;
+        let surface = self.mesh.vertices.get(v as usize)?.surface as usize;
+        Some((
+            d.surface_order[surface],
+            &d.radiance[d.vertex_range(&self.mesh, v as usize)],
+        ))
+    }
+
+    /// Selects how directional sources are chosen (for measurements).
+    pub fn set_source_choice(&mut self, choice: SourceChoice) {
+        if let Some(d) = self.directional.as_deref_mut() {
+            d.choice = choice;
+        }
+    }
+
+    /// Warnings of the set-up: glossy materials treated as diffuse, SH orders
+    /// capped. The command line prints them.
+    pub fn warnings(&self) -> &[String] {
+        &self.warnings
+    }
+
+    /// Sets up directional mode (called by [`Solver::new`]) or, in diffuse mode,
+    /// records the warning for glossy materials treated as diffuse.
+    pub(super) fn init_directional(&mut self, scene: &Scene) -> Result<(), SolveError> {
+        if self.settings.mode != crate::format::SolveMode::Directional {
+            self.warnings
+                .extend(diffuse_mode_warning(scene, &self.mesh));
+            return Ok(());
+        }
+        let (d, warnings) = Directional::new(scene, &self.settings, &self.mesh)?;
+        self.warnings.extend(warnings);
+        self.directional = Some(Box::new(d));
+        Ok(())
+    }
+
+    /// One directional shot (000 Fig. 4.7): see the module documentation.
+    pub(super) fn step_directional(&mut self) -> Option<ShotReport> {
+        let mut d = self.directional.take()?;
+        let report = self.shoot_directional(&mut d);
+        self.directional = Some(d);
+        Some(report)
+    }
+
+    fn choose_directional_source(&self, d: &Directional) -> u32 {
+        match d.choice {
+            SourceChoice::Hemisphere => self.choose_source(),
+            SourceChoice::ZerothTerm => {
+                let mut best = (0u32, f64::NEG_INFINITY);
+                for (i, p) in self.mesh.patches.iter().enumerate() {
+                    let o = d.patch_offset[i];
+                    let power = p.area * d.patch_unshot[o..o + 3].iter().sum::<f64>();
+                    if power > best.1 {
+                        best = (i as u32, power);
+                    }
+                }
+                best.0
+            }
+        }
+    }
+
+    fn shoot_directional(&mut self, d: &mut Directional) -> ShotReport {
+        let start = Instant::now();
+        let source = self.choose_directional_source(d);
+        let range = d.patch_range(&self.mesh, source as usize);
+        let unshot: Vec<f64> = d.patch_unshot[range.clone()].to_vec();
+        d.patch_unshot[range].fill(0.0);
+        let equivalent = std::mem::replace(&mut self.patch_unshot[source as usize], DVec3::ZERO);
+        let patch = &self.mesh.patches[source as usize];
+        let polygon = patch.polygon();
+        let centre = polygon.iter().copied().sum::<DVec3>() / polygon.len() as f64;
+        let diameter = polygon
+            .iter()
+            .flat_map(|a| polygon.iter().map(move |b| (*a - *b).length()))
+            .fold(0.0, f64::max);
+        let source_surface = &self.mesh.surfaces[patch.surface as usize];
+        let shot = Shot {
+            index: self.shots,
+            seed: self.settings.seed,
+            source_surface: patch.surface,
+            polygon: patch.corners,
+            corner_count: patch.corner_count as usize,
+            normal: source_surface.normal,
+            centre,
+            area: patch.area,
+            diameter,
+            unshot: equivalent,
+            samples: self.settings.samples,
+            method: self.settings.form_factors,
+            shadows: self.settings.shadows,
+            occluder: &self.occluder,
+            kd: &self.kd,
+        };
+        let source_order = d.surface_order[patch.surface as usize];
+        let source_tangent = source_surface.tangent;
+        let tables = Tables {
+            surface_order: d.surface_order.clone(),
+            ks: d.ks.clone(),
+            lobes: d.lobes.clone(),
+        };
+        let mut rays = 0u64;
+        {
+            let dir_shot = DirShot {
+                shot: &shot,
+                unshot: &unshot,
+                source_order,
+                source_tangent,
+                tables: &tables,
+            };
+            let mesh = &self.mesh;
+            let kd = &self.kd;
+            let results: Vec<ReceivedSh> = (0..mesh.vertices.len() as u32)
+                .into_par_iter()
+                .map_init(DirScratch::default, |scratch, v| {
+                    dir_shot.receive(mesh, kd, v, scratch)
+                })
+                .collect();
+            for (v, r) in results.into_iter().enumerate() {
+                let o = d.vertex_offset[v];
+                for (k, c) in r.coefficients.iter().enumerate() {
+                    d.radiance[o + k] += c;
+                    d.received[o + k] = *c;
+                }
+                self.visible[v] = r.visible;
+                rays += r.rays as u64;
+            }
+        }
+        let mut splits = 0;
+        let mut dirty = Vec::new();
+        if self.settings.adaptive {
+            let refined = refine_directional(
+                RefineState {
+                    mesh: &mut self.mesh,
+                    radiance: &mut self.radiance,
+                    received: &mut self.received,
+                    visible: &mut self.visible,
+                    kd: &self.kd,
+                    criteria: Criteria::from_settings(&self.settings),
+                },
+                d,
+                &DirShot {
+                    shot: &shot,
+                    unshot: &unshot,
+                    source_order,
+                    source_tangent,
+                    tables: &tables,
+                },
+            );
+            splits = refined.0;
+            rays += refined.1;
+            dirty = refined.2;
+        }
+        self.leaf_count += 3 * splits;
+        self.update_weights(&dirty);
+        // Gather (see `Solver::gather`): U_p += Σ_v w_vp ΔL_v / A_p per coefficient.
+        for p in 0..self.mesh.patches.len() {
+            let range = d.patch_range(&self.mesh, p);
+            let area = self.mesh.patches[p].area;
+            let mut sum = vec![0.0; range.len()];
+            for &(v, w) in &self.patch_weights[p] {
+                let o = d.vertex_offset[v as usize];
+                for (s, r) in sum.iter_mut().zip(&d.received[o..o + range.len()]) {
+                    *s += r * w;
+                }
+            }
+            for (u, s) in d.patch_unshot[range.clone()].iter_mut().zip(&sum) {
+                *u += s / area;
+            }
+            let order = d.surface_order[self.mesh.patches[p].surface as usize];
+            self.patch_unshot[p] = d.hemisphere_equivalent(order, &d.patch_unshot[range]);
+        }
+        d.received.fill(0.0);
+        for v in 0..self.mesh.vertices.len() {
+            let o = d.vertex_offset[v];
+            self.radiance[v] = DVec3::from_slice(&d.radiance[o..o + 3]) * Y00;
+        }
+        self.shots += 1;
+        self.rays += rays;
+        self.unshot_power = self.total_unshot_power();
+        self.seconds += start.elapsed().as_secs_f64();
+        ShotReport {
+            shot: self.shots,
+            source,
+            rays,
+            unshot_fraction: self.unshot_fraction(),
+            elements: self.leaf_count,
+            vertices: self.mesh.vertices.len(),
+            splits,
+        }
+    }
+
+    /// The directional part of a checkpoint.
+    pub(super) fn directional_checkpoint(&self) -> Option<DirectionalCheckpoint> {
+        let d = self.directional.as_deref()?;
+        Some(DirectionalCheckpoint {
+            surface_order: d.surface_order.clone(),
+            radiance: d.radiance.iter().map(|x| x.to_bits()).collect(),
+            patch_unshot: d.patch_unshot.iter().map(|x| x.to_bits()).collect(),
+        })
+    }
+
+    /// Restores the directional state after the mesh was replayed; an error
+    /// string when the checkpoint does not fit.
+    pub(super) fn restore_directional(
+        &mut self,
+        state: Option<DirectionalCheckpoint>,
+    ) -> Result<(), String> {
+        let d = match (self.directional.as_deref_mut(), state) {
+            (None, None) => return Ok(()),
+            (Some(_), None) => {
+                return Err("it was written by a diffuse solve, this one is directional".into())
+            }
+            (None, Some(_)) => {
+                return Err("it was written by a directional solve, this one is diffuse".into())
+            }
+            (Some(d), Some(s)) => {
+                d.extend_vertices(&self.mesh);
+                if s.surface_order != d.surface_order {
+                    return Err(format!(
+                        "its SH orders per surface {:?} differ from this solve's {:?} (another \
+                         α, Ks, sh_error_target or max_sh_order)",
+                        s.surface_order, d.surface_order
+                    ));
+                }
+                if s.radiance.len() != d.radiance.len()
+                    || s.patch_unshot.len() != d.patch_unshot.len()
+                {
+                    return Err(format!(
+                        "it has {} radiance and {} unshot coefficients, this mesh needs {} and {}",
+                        s.radiance.len(),
+                        s.patch_unshot.len(),
+                        d.radiance.len(),
+                        d.patch_unshot.len()
+                    ));
+                }
+                d.radiance = s.radiance.into_iter().map(f64::from_bits).collect();
+                d.patch_unshot = s.patch_unshot.into_iter().map(f64::from_bits).collect();
+                if !d.radiance.iter().chain(&d.patch_unshot).all(|x| x.is_finite()) {
+                    return Err("it holds non-finite coefficients".into());
+                }
+                d
+            }
+        };
+        d.received.fill(0.0);
+        Ok(())
+    }
+
+    /// Replaces the order-0 batch of a diffuse-style solution with one batch
+    /// per SH order (vertices of L = 0 materials in the order-0 batch, glossy
+    /// ones in their order's), so the runtime draws per order. `ambient` is
+    /// added to c₀₀ as Kd · ambient, as in the diffuse output.
+    pub(super) fn directional_batches(&self, solution: &mut Solution, ambient: DVec3) {
+        let Some(d) = self.directional.as_deref() else {
+            return;
+        };
+        solution.header.mode = crate::format::SolveMode::Directional;
+        let scale = (4.0 * PI).sqrt();
+        // Per order: the batch and the map from mesh vertex to batch vertex.
+        let mut batches: BTreeMap<u32, Batch> = BTreeMap::new();
+        let mut local = vec![u32::MAX; self.mesh.vertices.len()];
+        for (v, mv) in self.mesh.vertices.iter().enumerate() {
+            let order = d.surface_order[mv.surface as usize];
+            let s = &self.mesh.surfaces[mv.surface as usize];
+            let batch = batches.entry(order).or_insert_with(|| Batch {
+                representation: Representation::Sh { order },
+                scalar: ScalarType::F32,
+                vertices: Vec::new(),
+                coefficients: Vec::new(),
+                indices: Vec::new(),
+            });
+            local[v] = batch.vertices.len() as u32;
+            let f = |x: DVec3| x.as_vec3().to_array();
+            batch.vertices.push(Vertex {
+                position: f(mv.position),
+                normal: f(s.normal),
+                tangent: f(s.tangent),
+            });
+            let start = batch.coefficients.len();
+            batch.coefficients.extend(
+                d.radiance[d.vertex_range(&self.mesh, v)]
+                    .iter()
+                    .map(|&c| c as f32),
+            );
+            let c00 = DVec3::from_slice(&d.radiance[d.vertex_offset[v]..d.vertex_offset[v] + 3])
+                + self.kd[mv.surface as usize] * ambient * scale;
+            batch.coefficients[start..start + 3].copy_from_slice(&c00.as_vec3().to_array());
+        }
+        for t in self.mesh.triangles() {
+            let order = d.surface_order[self.mesh.vertices[t[0] as usize].surface as usize];
+            if let Some(batch) = batches.get_mut(&order) {
+                batch
+                    .indices
+                    .extend(t.iter().map(|&v| local[v as usize]));
+            }
+        }
+        solution.batches = batches.into_values().collect();
+    }
+}
+
+/// The solver fields adaptive subdivision reads and extends.
+struct RefineState<'a> {
+    mesh: &'a mut Mesh,
+    radiance: &'a mut Vec<DVec3>,
+    received: &'a mut Vec<DVec3>,
+    visible: &'a mut Vec<u32>,
+    kd: &'a [DVec3],
+    criteria: Criteria,
+}
+
+/// Adaptive subdivision in directional mode (see [`super::refine`]): an edge
+/// fails when the L2 norm of its ends' coefficient difference (by Parseval,
+/// the L2 difference of their radiance over the sphere) exceeds the threshold
+/// times the larger end's norm, per channel. For L = 0 this is the diffuse
+/// test on c₀₀. Returns (splits, rays, dirty surfaces).
+fn refine_directional(
+    state: RefineState<'_>,
+    d: &mut Directional,
+    dir_shot: &DirShot<'_>,
+) -> (usize, u64, Vec<u32>) {
+    let RefineState {
+        mesh,
+        radiance,
+        received,
+        visible,
+        kd,
+        criteria,
+    } = state;
+    let mut dirty = vec![false; mesh.surfaces.len()];
+    let (mut splits, mut rays) = (0usize, 0u64);
+    let mut candidates: Vec<u32> = (0..mesh.elements.len() as u32)
+        .filter(|&e| {
+            let el = &mesh.elements[e as usize];
+            el.is_leaf()
+                && el.corners().iter().any(|&c| {
+                    d.received[d.vertex_range(mesh, c as usize)]
+                        .iter()
+                        .any(|&x| x != 0.0)
+                })
+        })
+        .collect();
+    let mut created = Vec::new();
+    loop {
+        let to_split: Vec<u32> = candidates
+            .iter()
+            .copied()
+            .filter(|&e| should_split_sh(mesh, d, visible, &criteria, e))
+            .collect();
+        if to_split.is_empty() {
+            break;
+        }
+        created.clear();
+        let mut children = Vec::with_capacity(4 * to_split.len());
+        for &e in &to_split {
+            // Only an impossible mesh size (2^32 vertices) can fail; stop
+            // refining then rather than abort the solve.
+            let Ok(first) = mesh.split(e, &mut created) else {
+                break;
+            };
+            splits += 1;
+            children.extend(first..first + 4);
+            let surface = mesh.patches[mesh.elements[e as usize].patch as usize].surface;
+            dirty[surface as usize] = true;
+        }
+        d.extend_vertices(mesh);
+        for nv in &created {
+            // Radiance of earlier shots interpolated from the parents.
+            let range = d.vertex_range(mesh, nv.id as usize);
+            let mut earlier = vec![0.0; range.len()];
+            for &p in nv.parents() {
+                let o = d.vertex_offset[p as usize];
+                for (k, e) in earlier.iter_mut().enumerate() {
+                    *e += d.radiance[o + k] - d.received[o + k];
+                }
+            }
+            for (k, e) in earlier.iter().enumerate() {
+                d.radiance[range.start + k] = e / nv.parent_count as f64;
+            }
+            radiance.push(DVec3::ZERO);
+            received.push(DVec3::ZERO);
+            visible.push(0);
+        }
+        let results: Vec<ReceivedSh> = {
+            let mesh = &*mesh;
+            created
+                .par_iter()
+                .map_init(DirScratch::default, |scratch, nv| {
+                    dir_shot.receive(mesh, kd, nv.id, scratch)
+                })
+                .collect()
+        };
+        for (nv, r) in created.iter().zip(results) {
+            let o = d.vertex_offset[nv.id as usize];
+            for (k, c) in r.coefficients.iter().enumerate() {
+                d.radiance[o + k] += c;
+                d.received[o + k] = *c;
+            }
+            visible[nv.id as usize] = r.visible;
+            rays += r.rays as u64;
+        }
+        candidates = children;
+    }
+    let dirty = (0..dirty.len() as u32)
+        .filter(|&s| dirty[s as usize])
+        .collect();
+    (splits, rays, dirty)
+}
+
+/// Whether leaf `e` must split (see [`refine_directional`]).
+fn should_split_sh(
+    mesh: &Mesh,
+    d: &Directional,
+    visible: &[u32],
+    criteria: &Criteria,
+    e: u32,
+) -> bool {
+    let el = &mesh.elements[e as usize];
+    if !el.is_leaf() || el.depth as u32 >= criteria.max_depth {
+        return false;
+    }
+    let surface = &mesh.surfaces[mesh.patches[el.patch as usize].surface as usize];
+    if el.area <= criteria.min_element_area * surface.area {
+        return false;
+    }
+    let corners = el.corners();
+    let n = corners.len();
+    // Per channel Σ_k c_k², the squared L2 norm over the sphere (Parseval).
+    let norms = |a: &[f64]| {
+        let mut s = DVec3::ZERO;
+        for c in a.chunks_exact(3) {
+            s += DVec3::from_slice(c) * DVec3::from_slice(c);
+        }
+        s
+    };
+    (0..n).any(|k| {
+        let (a, b) = (corners[k] as usize, corners[(k + 1) % n] as usize);
+        let threshold = if visible[a] != visible[b] {
+            criteria.shadow_threshold
+        } else {
+            criteria.edge_threshold
+        };
+        let (ca, cb) = (
+            &d.radiance[d.vertex_range(mesh, a)],
+            &d.radiance[d.vertex_range(mesh, b)],
+        );
+        let local = norms(ca).max(norms(cb)).max_element().sqrt();
+        let mut diff = DVec3::ZERO;
+        for (x, y) in ca.chunks_exact(3).zip(cb.chunks_exact(3)) {
+            let t = DVec3::from_slice(x) - DVec3::from_slice(y);
+            diff += t * t;
+        }
+        local > 0.0 && diff.max_element().sqrt() > threshold * local
+    })
+}

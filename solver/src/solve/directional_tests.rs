@@ -1,0 +1,391 @@
+//! Tests of directional (glossy) shooting: see [`super::directional`].
+
+use super::tests::{material, scene_of};
+use super::*;
+use crate::format::Representation;
+use crate::settings::Preset;
+use crate::sh::{coefficient_count, gauss_legendre_on};
+
+fn glossy_floor() -> (Scene, SolverSettings) {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../config/glossy_floor.toml");
+    let loaded = crate::scene::load_scene(&path, &Default::default()).unwrap();
+    let mut settings = SolverSettings::preset(Preset::Draft);
+    settings.apply(&loaded.settings);
+    settings.samples = 2;
+    settings.patches = 2;
+    let mut scene = loaded.scene;
+    scene.fill_default_patches(settings.patches);
+    (scene, settings)
+}
+
+fn run(scene: &Scene, settings: &SolverSettings) -> Solver {
+    let mut solver = Solver::new(scene, settings).unwrap();
+    while solver.step().is_some() {}
+    solver
+}
+
+/// ∫ over the upper hemisphere of the radiance the SH `coefficients` (order
+/// `order`, RGB interleaved) evaluate to, times cosθ: the exitance, per channel.
+/// In μ = cosθ the integrand is a polynomial of degree ≤ order + 1 on [0, 1]
+/// and in φ a trigonometric polynomial of degree ≤ order, so Gauss–Legendre
+/// with order/2 + 2 nodes and 2·order + 2 uniform azimuths are exact (to
+/// rounding): the quadrature adds no error of its own.
+fn exitance(order: u32, coefficients: &[f64]) -> DVec3 {
+    let (mu, w) = gauss_legendre_on(order as usize / 2 + 2, 0.0, 1.0);
+    let n_phi = 2 * order as usize + 2;
+    let mut basis = vec![0.0; coefficient_count(order)];
+    let mut sum = DVec3::ZERO;
+    for (&m, &wm) in mu.iter().zip(&w) {
+        let s = (1.0 - m * m).max(0.0).sqrt();
+        for j in 0..n_phi {
+            let phi = 2.0 * PI * j as f64 / n_phi as f64;
+            crate::sh::eval_basis(order, DVec3::new(s * phi.cos(), s * phi.sin(), m), &mut basis);
+            let mut l = DVec3::ZERO;
+            for (c, y) in coefficients.chunks_exact(3).zip(&basis) {
+                l += DVec3::from_slice(c) * *y;
+            }
+            sum += l * m * wm * (2.0 * PI / n_phi as f64);
+        }
+    }
+    sum
+}
+
+/// A square of side `side` centred at `centre`, facing `normal` (counter-
+/// clockwise seen from the front).
+fn square(centre: DVec3, normal: DVec3, side: f64) -> Vec<DVec3> {
+    let n = normal.normalize();
+    let e1 = n.any_orthonormal_vector();
+    let e2 = n.cross(e1);
+    let h = 0.5 * side;
+    let v = vec![
+        centre - e1 * h - e2 * h,
+        centre + e1 * h - e2 * h,
+        centre + e1 * h + e2 * h,
+        centre - e1 * h + e2 * h,
+    ];
+    assert!((v[1] - v[0]).cross(v[2] - v[0]).dot(n) > 0.0);
+    v
+}
+
+fn floor(half: f64) -> Vec<DVec3> {
+    [
+        [-half, 0.0, half],
+        [half, 0.0, half],
+        [half, 0.0, -half],
+        [-half, 0.0, -half],
+    ]
+    .map(DVec3::from_array)
+    .to_vec()
+}
+
+fn glossy(name: &str, kd: f64, ks: f64, alpha: f64) -> crate::scene::Material {
+    let mut m = material(name, kd, 0.0);
+    m.ks = DVec3::splat(ks);
+    m.alpha = alpha;
+    m
+}
+
+fn directional_settings() -> SolverSettings {
+    let mut s = SolverSettings::preset(Preset::Draft);
+    s.mode = SolveMode::Directional;
+    s.adaptive = false;
+    s.samples = 4;
+    s
+}
+
+/// The vertex of `solver` at scene position `p`.
+fn vertex_at(solver: &Solver, p: DVec3) -> u32 {
+    let local = p - solver.offset();
+    solver
+        .mesh()
+        .vertices
+        .iter()
+        .position(|v| (v.position - local).length() < 1e-9)
+        .unwrap() as u32
+}
+
+#[test]
+fn with_ks_zero_directional_mode_equals_the_diffuse_solver() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../config/cornell_box.obj");
+    let mut scene = crate::scene::load_scene(&path, &Default::default())
+        .unwrap()
+        .scene;
+    scene.fill_default_patches(2);
+    for m in &mut scene.materials {
+        m.ks = DVec3::ZERO;
+    }
+    for adaptive in [false, true] {
+        let mut diffuse = SolverSettings::preset(Preset::Draft);
+        diffuse.samples = 4;
+        diffuse.max_shots = 12;
+        diffuse.adaptive = adaptive;
+        let mut directional = diffuse.clone();
+        directional.mode = SolveMode::Directional;
+        let mut a = Solver::new(&scene, &diffuse).unwrap();
+        let mut b = Solver::new(&scene, &directional).unwrap();
+        while let Some(ra) = a.step() {
+            let rb = b.step().unwrap();
+            // The same source each shot (the hemisphere power of an L = 0
+            // source is π A c₀₀ Y₀₀, the diffuse power) and the same mesh.
+            assert_eq!(ra.source, rb.source);
+            assert_eq!(ra.splits, rb.splits);
+        }
+        assert!(b.step().is_none());
+        assert_eq!(a.mesh().split_log, b.mesh().split_log);
+        // 1e-6 relative: the two differ only in rounding (c₀₀ = L √(4π) and
+        // back, per-sample sums of F instead of visible/samples · F), ~1e-15.
+        let peak = a
+            .vertex_radiance()
+            .iter()
+            .map(|l| l.max_element())
+            .fold(0.0, f64::max);
+        for (v, (la, lb)) in a.vertex_radiance().iter().zip(b.vertex_radiance()).enumerate() {
+            let (order, sh) = b.vertex_sh(v as u32).unwrap();
+            assert_eq!(order, 0);
+            let from_sh = DVec3::from_slice(sh) * crate::sh::Y00;
+            assert!((*la - from_sh).abs().max_element() <= 1e-6 * peak, "{v}: {la} {from_sh}");
+            assert!((*la - *lb).abs().max_element() <= 1e-6 * peak);
+        }
+        let (sa, sb) = (a.to_solution(false), b.to_solution(false));
+        assert_eq!(sb.batches.len(), 1);
+        for (x, y) in sa.batches[0]
+            .coefficients
+            .iter()
+            .zip(&sb.batches[0].coefficients)
+        {
+            assert!((x - y).abs() <= 1e-6 * x.abs().max(1e-30), "{x} {y}");
+        }
+        assert_eq!(sa.batches[0].indices, sb.batches[0].indices);
+    }
+}
+
+/// One small emitter shines on a glossy floor's centre vertex from incidence
+/// μ_i; the exitance of the SH the solver stored there, integrated by exact
+/// quadrature, must be (Kd + Ks) · ΔE. The normalization C_R is built from
+/// the same truncated, windowed expansion (Funk–Hecke), so truncation and
+/// windowing change the lobe's shape, not its energy: what is left is the
+/// normalization table's interpolation (1e-6 relative) and rounding; the
+/// tolerance 1e-5 allows for both. The lobe's own fit error is printed.
+#[test]
+fn one_beam_reflects_kd_plus_ks_of_its_irradiance() {
+    let (kd, ks) = (0.3, 0.5);
+    for alpha in [0.3, 0.1, 0.03] {
+        for mu in [1.0, 0.5, 0.1, 0.01] {
+            let sin = (1.0f64 - mu * mu).sqrt();
+            let dir = DVec3::new(sin, mu, 0.0);
+            let distance = 0.5;
+            let emitter = square(dir * distance, -dir, 0.004);
+            let scene = scene_of(
+                vec![(floor(1.0), 0), (emitter, 1)],
+                vec![glossy("floor", kd, ks, alpha), material("light", 0.0, 1000.0)],
+                2,
+            );
+            let mut solver = Solver::new(&scene, &directional_settings()).unwrap();
+            let centre = vertex_at(&solver, DVec3::ZERO);
+            let light = (0..solver.mesh().patches.len() as u32)
+                .find(|&p| solver.mesh().patches[p as usize].surface == 1)
+                .unwrap();
+            let factor = solver.vertex_form_factors(light)[centre as usize];
+            assert!(factor > 0.0);
+            let report = solver.step().unwrap();
+            assert_eq!(report.source, light);
+            let irradiance = 1000.0 * PI * factor;
+            let (order, sh) = solver.vertex_sh(centre).unwrap();
+            let out = exitance(order, sh);
+            let expected = (kd + ks) * irradiance;
+            let error = (out.x - expected).abs() / expected;
+            let lobe = &solver.directional().unwrap().surface_orders();
+            println!(
+                "alpha {alpha} mu_i {mu}: L = {order} (orders {lobe:?}), fit error {:.2e}, \
+                 exitance {:.6e} expected {:.6e}, relative error {error:.2e}",
+                crate::brdf::fit_error(alpha, order),
+                out.x,
+                expected
+            );
+            assert!(error < 1e-5, "alpha {alpha} mu {mu}: {error:e}");
+            assert_eq!(out.x, out.y);
+        }
+    }
+}
+
+/// A glossy floor under a small bright emitter, seen from an eye that moves:
+/// the brightest floor vertex (its SH evaluated toward the eye) follows the
+/// emitter's mirror point for that eye. The floor's vertices are 0.125 m apart;
+/// the lobe (α = 0.1) and the per-incidence normalization shift the peak a
+/// little, so the brightest vertex must lie within one spacing of the mirror
+/// point, and move the way it does.
+#[test]
+fn highlight_tracks_the_mirror_point_as_the_eye_moves() {
+    let light_centre = DVec3::new(0.0, 1.0, 0.0);
+    let scene = scene_of(
+        vec![
+            (floor(1.0), 0),
+            (square(light_centre, -DVec3::Y, 0.05), 1),
+        ],
+        vec![glossy("floor", 0.05, 0.9, 0.1), material("light", 0.0, 100.0)],
+        16,
+    );
+    let mut settings = directional_settings();
+    settings.max_shots = 1;
+    let solver = run(&scene, &settings);
+    let floor_vertices: Vec<u32> = (0..solver.mesh().vertices.len() as u32)
+        .filter(|&v| solver.mesh().vertices[v as usize].surface == 0)
+        .collect();
+    let mut previous: Option<f64> = None;
+    for eye_x in [-0.8, -0.3, 0.2, 0.7] {
+        let eye = DVec3::new(eye_x, 1.0, 0.6);
+        // Mirror the light in the floor (y → −y) and intersect eye→image with y = 0.
+        let image = DVec3::new(light_centre.x, -light_centre.y, light_centre.z);
+        let t = eye.y / (eye.y - image.y);
+        let mirror_point = eye + (image - eye) * t;
+        let mut best = (0u32, f64::NEG_INFINITY);
+        for &v in &floor_vertices {
+            let p = solver.mesh().vertices[v as usize].position + solver.offset();
+            let s = &solver.mesh().surfaces[0];
+            let dir = crate::sh::to_local((eye - p).normalize(), s.normal, s.tangent);
+            let (order, sh) = solver.vertex_sh(v).unwrap();
+            let f32s: Vec<f32> = sh.iter().map(|&c| c as f32).collect();
+            let l = crate::sh::eval_rgb(order, &f32s, dir)[0];
+            if l > best.1 {
+                best = (v, l);
+            }
+        }
+        let p = solver.mesh().vertices[best.0 as usize].position + solver.offset();
+        let miss = (p - mirror_point).length();
+        println!("eye x {eye_x}: mirror point {mirror_point:?}, brightest vertex {p:?}, miss {miss:.3}");
+        assert!(miss <= 0.125, "eye x {eye_x}: {miss}");
+        if let Some(x) = previous {
+            assert!(p.x > x, "the highlight moves with the eye");
+        }
+        previous = Some(p.x);
+    }
+}
+
+#[test]
+fn glossy_floor_solves_to_batches_of_order_zero_and_above() {
+    let (scene, mut settings) = glossy_floor();
+    assert_eq!(settings.mode, SolveMode::Directional);
+    settings.max_shots = 3;
+    let solver = run(&scene, &settings);
+    assert!(solver.warnings().is_empty(), "{:?}", solver.warnings());
+    let solution = solver.to_solution(false);
+    assert_eq!(solution.header.mode, SolveMode::Directional);
+    let orders: Vec<u32> = solution
+        .batches
+        .iter()
+        .map(|b| match b.representation {
+            Representation::Sh { order } => order,
+            _ => panic!("not SH"),
+        })
+        .collect();
+    assert_eq!(orders[0], 0);
+    assert!(orders.len() >= 2 && orders[1] > 0, "{orders:?}");
+    let mut total = 0;
+    for (b, &order) in solution.batches.iter().zip(&orders) {
+        assert_eq!(
+            b.coefficients.len(),
+            b.vertices.len() * coefficient_count(order) * 3
+        );
+        assert!(!b.indices.is_empty());
+        assert!(b.indices.iter().all(|&i| (i as usize) < b.vertices.len()));
+        assert!(b.coefficients.iter().all(|c| c.is_finite()));
+        total += b.vertices.len();
+    }
+    assert_eq!(total, solver.mesh().vertices.len());
+}
+
+#[test]
+fn diffuse_solve_of_a_glossy_scene_warns_naming_the_materials_and_the_flag() {
+    let (scene, mut settings) = glossy_floor();
+    settings.mode = SolveMode::Diffuse;
+    let solver = Solver::new(&scene, &settings).unwrap();
+    assert_eq!(solver.warnings().len(), 1);
+    let w = &solver.warnings()[0];
+    assert!(w.contains("`glossy_floor`") && w.contains("--mode directional"), "{w}");
+    assert!(!w.contains("`white`"), "{w}");
+}
+
+#[test]
+fn capped_order_warns_with_the_error_left() {
+    let scene = scene_of(
+        vec![(floor(1.0), 0), (square(DVec3::Y, -DVec3::Y, 0.2), 1)],
+        vec![glossy("sharp", 0.1, 0.5, 0.05), material("light", 0.0, 1.0)],
+        1,
+    );
+    let mut settings = directional_settings();
+    settings.max_sh_order = 8;
+    let solver = Solver::new(&scene, &settings).unwrap();
+    assert_eq!(solver.directional().unwrap().surface_orders(), &[8, 0]);
+    let w = &solver.warnings()[0];
+    assert!(w.contains("`sharp`") && w.contains("L = 8"), "{w}");
+}
+
+fn sh_bits(solver: &Solver) -> Vec<u64> {
+    (0..solver.mesh().vertices.len() as u32)
+        .flat_map(|v| solver.vertex_sh(v).unwrap().1.to_vec())
+        .map(f64::to_bits)
+        .collect()
+}
+
+#[test]
+fn resumed_directional_solve_equals_an_uninterrupted_one() {
+    let (scene, mut settings) = glossy_floor();
+    settings.max_shots = 6;
+    settings.adaptive = true;
+    let whole = run(&scene, &settings);
+    assert!(whole.progress().elements > whole.mesh().patches.len(), "should refine");
+
+    let mut first = Solver::new(&scene, &settings).unwrap();
+    for _ in 0..3 {
+        first.step().unwrap();
+    }
+    let json = serde_json::to_string(&first.checkpoint()).unwrap();
+    drop(first);
+    let state: Checkpoint = serde_json::from_str(&json).unwrap();
+    assert!(state.directional.is_some());
+    let mut resumed = Solver::resume(&scene, &settings, state.clone()).unwrap();
+    while resumed.step().is_some() {}
+    assert_eq!(resumed.mesh().split_log, whole.mesh().split_log);
+    assert_eq!(sh_bits(&resumed), sh_bits(&whole));
+    assert_eq!(resumed.progress(), whole.progress());
+    let (mut a, mut b) = (resumed.to_solution(false), whole.to_solution(false));
+    a.header.stats.seconds = 0.0;
+    b.header.stats.seconds = 0.0;
+    assert_eq!(a, b);
+
+    // A directional checkpoint is refused by a diffuse solve, and vice versa.
+    let mut diffuse = settings.clone();
+    diffuse.mode = SolveMode::Diffuse;
+    let err = Solver::resume(&scene, &diffuse, state).err().unwrap();
+    assert!(err.to_string().contains("directional"), "{err}");
+}
+
+/// Source choice by hemispherical unshot power (design notes) against 000's
+/// [0,0] term alone: prints the shots each needs to reach the threshold, and
+/// checks both converge to the same floor radiance (within the threshold's
+/// share of the emitted power, as either stops with that much unshot).
+#[test]
+fn source_choice_hemisphere_against_zeroth_term() {
+    let (scene, mut settings) = glossy_floor();
+    settings.threshold = 0.05;
+    settings.max_shots = 400;
+    let mut shots = Vec::new();
+    let mut solvers = Vec::new();
+    for choice in [SourceChoice::Hemisphere, SourceChoice::ZerothTerm] {
+        let mut solver = Solver::new(&scene, &settings).unwrap();
+        solver.set_source_choice(choice);
+        while solver.step().is_some() {}
+        let p = solver.progress();
+        println!(
+            "{choice:?}: {} shots to unshot fraction {:.4} (threshold {})",
+            p.shots, p.unshot_fraction, settings.threshold
+        );
+        assert!(p.unshot_fraction < settings.threshold);
+        shots.push(p.shots);
+        solvers.push(solver);
+    }
+    // Mean radiance of the scene, area-weighted via c₀₀ (L = c₀₀ Y₀₀).
+    let mean = |s: &Solver| s.vertex_radiance().iter().map(|l| l.x).sum::<f64>();
+    let (a, b) = (mean(&solvers[0]), mean(&solvers[1]));
+    assert!((a - b).abs() <= 2.0 * settings.threshold * a.max(b), "{a} {b}");
+}
