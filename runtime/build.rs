@@ -17,6 +17,9 @@ const SHADERS: &[(&str, &str, &[&str])] = &[
     ("scene.frag", "scene.frag.spv", &[]),
     ("tonemap.vert", "tonemap.vert.spv", &[]),
     ("tonemap.frag", "tonemap.frag.spv", &[]),
+    ("inspect.vert", "inspect.vert.spv", &[]),
+    ("inspect.frag", "inspect.frag.spv", &[]),
+    ("composite.frag", "composite.frag.spv", &[]),
 ];
 
 fn main() {

@@ -13,3 +13,4 @@ pub mod cli;
 pub mod gpu;
 pub mod render;
 pub mod session;
+pub mod mirror;

@@ -7,6 +7,11 @@ fn main() {
     if let Err(e) = runtime::cli::run(cli) {
         // One line: the error and its causes.
         eprintln!("runtime: error: {e:#}");
+        // `runtime mirror` without a usable display has its own status, so
+        // scripts can fall back to screenshots.
+        if e.downcast_ref::<runtime::mirror::NoDisplay>().is_some() {
+            std::process::exit(runtime::mirror::NO_DISPLAY_EXIT_CODE);
+        }
         std::process::exit(1);
     }
 }

@@ -16,6 +16,11 @@ pub const SCENE_SH_F16_VERT: &[u8] = spirv!("scene_sh_f16.vert.spv");
 pub const SCENE_FRAG: &[u8] = spirv!("scene.frag.spv");
 pub const TONEMAP_VERT: &[u8] = spirv!("tonemap.vert.spv");
 pub const TONEMAP_FRAG: &[u8] = spirv!("tonemap.frag.spv");
+pub const INSPECT_VERT: &[u8] = spirv!("inspect.vert.spv");
+pub const INSPECT_FRAG: &[u8] = spirv!("inspect.frag.spv");
+/// The mirror window's composite pass (its vertex shader is `TONEMAP_VERT`,
+/// the full-screen triangle).
+pub const COMPOSITE_FRAG: &[u8] = spirv!("composite.frag.spv");
 
 /// A shader module (destroyed by its owner, see `render::pipelines`).
 pub fn create_module(gpu: &Gpu, spirv: &[u8]) -> Result<vk::ShaderModule, GpuError> {

@@ -15,12 +15,14 @@
 //! clip planes of `solver::camera::clip_planes_for`, exactly as the CPU
 //! reference rasterizer does.
 
+pub mod inspect;
 pub mod multiview;
 mod passes;
 pub mod scene;
 pub mod tonemap;
 pub mod truncation;
 
+pub use inspect::{Edges, Inspect};
 pub use multiview::MultiviewMode;
 pub use scene::{CoefficientStorage, GpuScene, SceneError};
 pub use tonemap::{ToneCurve, ToneSettings};
@@ -108,6 +110,9 @@ struct Target {
 /// The stereo renderer. Fields are declared newest-first; `Drop` waits for the
 /// device before they are destroyed.
 pub struct StereoRenderer {
+    /// Made on the first [`StereoRenderer::set_inspect`] that draws lines.
+    inspect_gpu: Option<inspect::InspectGpu>,
+    inspect: Inspect,
     targets: Vec<Target>,
     tonemap_set: vk::DescriptorSet,
     batch_sets: Vec<vk::DescriptorSet>,
@@ -269,6 +274,8 @@ impl StereoRenderer {
             unsafe { device.allocate_command_buffers(&alloc) }.ctx("vkAllocateCommandBuffers")?[0];
 
         let mut renderer = StereoRenderer {
+            inspect_gpu: None,
+            inspect: Inspect::default(),
             targets: Vec::new(),
             tonemap_set: vk::DescriptorSet::null(),
             batch_sets: Vec::new(),
@@ -450,6 +457,36 @@ impl StereoRenderer {
         &self.desc
     }
 
+    /// Mesh inspection for the next frames (000 appendix D `-w`, `-n`): element
+    /// edges and vertex normals as lines. `solution` must be the one this
+    /// renderer was made from (its triangles give the edges); the line
+    /// pipelines are made on the first call that needs them.
+    pub fn set_inspect(
+        &mut self,
+        gpu: &Gpu,
+        solution: &Solution,
+        mode: Inspect,
+    ) -> Result<(), RenderError> {
+        if mode.draws_lines() && self.inspect_gpu.is_none() {
+            let diagonal = (self.bounds.1 - self.bounds.0).length() as f32;
+            self.inspect_gpu = Some(inspect::InspectGpu::new(
+                gpu,
+                solution,
+                &self.scene.draws,
+                &self.layouts,
+                &self.pass_sets,
+                diagonal,
+            )?);
+        }
+        self.inspect = mode;
+        Ok(())
+    }
+
+    /// The inspection mode in use.
+    pub fn inspect(&self) -> Inspect {
+        self.inspect
+    }
+
     /// Changes exposure and curve for the next frames.
     pub fn set_tone(&mut self, tone: ToneSettings) {
         self.desc.tone = tone;
@@ -574,13 +611,19 @@ impl StereoRenderer {
                 .enumerate()
                 .find(|(_, s)| s.desc.view_mask == mask)
                 .ok_or_else(|| GpuError::Unsupported(format!("no pass for view mask {mask:#b}")))?;
-            self.record_pass(cmd, set, target.framebuffers[index]);
+            self.record_pass(cmd, index, set, target.framebuffers[index]);
         }
         // SAFETY: recording.
         unsafe { device.end_command_buffer(cmd) }.ctx("vkEndCommandBuffer")
     }
 
-    fn record_pass(&self, cmd: vk::CommandBuffer, set: &PassSet, framebuffer: vk::Framebuffer) {
+    fn record_pass(
+        &self,
+        cmd: vk::CommandBuffer,
+        set_index: usize,
+        set: &PassSet,
+        framebuffer: vk::Framebuffer,
+    ) {
         let device = &self.gpu_shared.device;
         let (w, h) = (self.desc.width, self.desc.height);
         let black = vk::ClearValue {
@@ -635,7 +678,13 @@ impl StereoRenderer {
             device.cmd_bind_vertex_buffers(cmd, 0, &[self.scene.vertices.raw], &[0]);
             device.cmd_bind_index_buffer(cmd, self.scene.indices.raw, 0, vk::IndexType::UINT32);
             let mut bound = None;
-            for (draw, &ds) in self.scene.draws.iter().zip(&self.batch_sets) {
+            // Wireframe alone (prorad's -w) leaves the shading out.
+            let shaded = if self.inspect.edges == Edges::Only {
+                0
+            } else {
+                self.scene.draws.len()
+            };
+            for (draw, &ds) in self.scene.draws.iter().zip(&self.batch_sets).take(shaded) {
                 let pipeline = if draw.order == 0 {
                     set.scene_l0
                 } else {
@@ -675,6 +724,20 @@ impl StereoRenderer {
                     draw.vertex_base as i32,
                     0,
                 );
+            }
+            if let (Some(lines), Some(&frame_set)) = (&self.inspect_gpu, self.batch_sets.first()) {
+                if self.inspect.draws_lines() {
+                    lines.record(
+                        device,
+                        cmd,
+                        set_index,
+                        frame_set,
+                        self.inspect,
+                        self.desc.tone,
+                        self.scene.radiance_scale,
+                        (&self.scene.vertices, self.scene.vertex_count),
+                    );
+                }
             }
             device.cmd_next_subpass(cmd, vk::SubpassContents::INLINE);
             device.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, set.tonemap);

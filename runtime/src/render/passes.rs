@@ -494,7 +494,7 @@ fn tonemap_pipeline(
 }
 
 #[allow(clippy::too_many_arguments)]
-fn graphics_pipeline(
+pub(super) fn graphics_pipeline(
     gpu: &Gpu,
     render_pass: vk::RenderPass,
     subpass: u32,

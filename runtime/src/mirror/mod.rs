@@ -1,0 +1,671 @@
+//! `runtime mirror`: a desktop window showing both eyes of a solution side by
+//! side (or one eye, or a red–cyan anaglyph), driven by radview's controls
+//! (000 appendix C) when no XR session runs.
+//!
+//! * [`controls`]: input events → camera and display state (pure, unit-tested).
+//! * [`present`]: the window's surface, swapchain and composite pass.
+//! * [`font`]: the 5×7 bitmap font of the help and frame-time overlay.
+//! * [`script`]: `--script`, synthetic input per frame for tests.
+//! * [`watch`]: `--watch`, reloading the file each time the solver rewrites it.
+//! * [`stats`]: frame-time figures.
+//!
+//! Each frame: acquire a window image (never waiting, unless `--vsync`), apply
+//! the frame's input, render both eyes with the stereo renderer into the
+//! mirror's own images, copy them into the window image with the overlay, and
+//! present. `--frames N` stops after N presented frames and prints the median
+//! and p99 frame time (the interval between successive presented frames).
+
+pub mod controls;
+pub mod font;
+pub mod present;
+pub mod script;
+pub mod stats;
+pub mod watch;
+
+use crate::cli::{
+    load_solution, parse_size, report_truncation, write_exr, write_png, RenderOptions,
+};
+use crate::gpu::{Gpu, GpuDesc};
+use crate::render::{Edges, Inspect, RendererDesc, StereoRenderer, ToneSettings};
+use anyhow::{Context, Result};
+use controls::{Command, Controls, Display, Input, Key, SceneFrame, Wireframe};
+use glam::DVec3;
+use present::{Layout, Overlay, Presenter};
+use solver::camera::{Camera, EyeView};
+use solver::format::Solution;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::time::Instant;
+use winit::application::ApplicationHandler;
+use winit::event::{ElementState, KeyEvent, MouseButton, WindowEvent};
+use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop};
+use winit::keyboard::{Key as WinitKey, NamedKey};
+use winit::window::{Window, WindowId};
+
+/// The exit status of `runtime mirror` when no window can be opened (no
+/// display, or a display without Vulkan presentation): `scripts/main-job.sh`
+/// then writes screenshots instead.
+pub const NO_DISPLAY_EXIT_CODE: i32 = 3;
+
+/// No window could be opened.
+#[derive(Debug, thiserror::Error)]
+#[error("cannot open a window: {0}")]
+pub struct NoDisplay(pub String);
+
+/// The time step of held walking keys under `--script` (a headset's 90 Hz), so
+/// scripted runs move the same on every machine.
+pub const SCRIPT_DT: f64 = 1.0 / 90.0;
+
+#[derive(clap::Args, Debug, Clone)]
+pub struct MirrorArgs {
+    /// The solution file.
+    pub solution: PathBuf,
+    /// Stop after N presented frames and print the median and p99 frame time.
+    #[arg(long, value_name = "N")]
+    pub frames: Option<u64>,
+    /// Reload the file each time it is rewritten (e.g. by a running `solver
+    /// solve`), keeping the view; a file that fails to load is reported and
+    /// the previous solution stays.
+    #[arg(long)]
+    pub watch: bool,
+    /// Initial eye position, scene coordinates (default: the header's camera).
+    #[arg(long, num_args = 3, value_names = ["X", "Y", "Z"], allow_negative_numbers = true)]
+    pub eye: Option<Vec<f64>>,
+    /// Initial reference point (looked at), scene coordinates.
+    #[arg(long, num_args = 3, value_names = ["X", "Y", "Z"], allow_negative_numbers = true)]
+    pub target: Option<Vec<f64>>,
+    /// Up direction of the camera (default: the header's camera).
+    #[arg(long, num_args = 3, value_names = ["X", "Y", "Z"], allow_negative_numbers = true)]
+    pub up: Option<Vec<f64>>,
+    /// Vertical field of view, degrees (default: the header's camera).
+    #[arg(long, value_name = "DEG")]
+    pub fov_y: Option<f64>,
+    /// Window size, WIDTHxHEIGHT (side by side, each eye gets half the width).
+    #[arg(long, value_name = "WxH", value_parser = parse_size, default_value = "1024x512")]
+    pub size: (u32, u32),
+    /// Interpupillary distance in metres (scaled by the header's units_per_metre).
+    #[arg(long, value_name = "METRES", default_value_t = 0.064)]
+    pub ipd: f64,
+    /// How the eyes are shown (keys 1-4 switch).
+    #[arg(long, value_enum, default_value_t = Display::SideBySide)]
+    pub display: Display,
+    /// Wait for the display's refresh (FIFO); without it the window presents
+    /// with MAILBOX or IMMEDIATE and never makes a frame wait.
+    #[arg(long)]
+    pub vsync: bool,
+    /// Start with the wireframe over the shading (key m cycles; 000 App. D -w).
+    #[arg(long)]
+    pub wireframe: bool,
+    /// Start with vertex normals drawn (key n; 000 App. D -n).
+    #[arg(long)]
+    pub normals: bool,
+    /// F12 writes PREFIX-NNN-left/-right .png and .exr.
+    #[arg(long, value_name = "PREFIX", default_value = "mirror")]
+    pub screenshot_prefix: PathBuf,
+    /// Synthetic input per frame (see `runtime/src/mirror/script.rs`).
+    #[arg(long, value_name = "FILE", hide = true)]
+    pub script: Option<PathBuf>,
+    /// Write the window's last image (as shown) to this PNG at exit.
+    #[arg(long, value_name = "PNG", hide = true)]
+    pub dump_last_frame: Option<PathBuf>,
+    /// With --watch: exit after this many reloads.
+    #[arg(long, value_name = "N", hide = true)]
+    pub quit_after_reloads: Option<u64>,
+    #[command(flatten)]
+    pub render: RenderOptions,
+}
+
+fn vec3(v: &Option<Vec<f64>>, default: [f64; 3]) -> [f64; 3] {
+    match v {
+        Some(v) if v.len() == 3 => [v[0], v[1], v[2]],
+        _ => default,
+    }
+}
+
+fn scene_frame(solution: &Solution) -> SceneFrame {
+    let h = &solution.header;
+    let lo = DVec3::from(h.bounds_min.map(f64::from));
+    let hi = DVec3::from(h.bounds_max.map(f64::from));
+    let diagonal = (hi - lo).length();
+    SceneFrame {
+        up_axis: h.up_axis,
+        units_per_metre: h.units_per_metre,
+        diagonal: if diagonal > 0.0 && diagonal.is_finite() {
+            diagonal
+        } else {
+            1.0
+        },
+    }
+}
+
+/// Runs `runtime mirror`.
+pub fn run(args: &MirrorArgs) -> Result<()> {
+    args.render.check()?;
+    if !(args.ipd.is_finite() && args.ipd >= 0.0) {
+        anyhow::bail!(
+            "--ipd {} must be a finite, non-negative distance in metres",
+            args.ipd
+        );
+    }
+    if args.frames == Some(0) {
+        anyhow::bail!("--frames must be at least 1");
+    }
+    let solution = load_solution(&args.solution)?;
+    report_truncation(&solution, args.render.max_order);
+    let header = &solution.header;
+    let camera = Camera {
+        eye: vec3(&args.eye, header.camera.eye),
+        target: vec3(&args.target, header.camera.target),
+        up: vec3(&args.up, header.camera.up),
+        fov_y_deg: args.fov_y.unwrap_or(header.camera.fov_y_deg),
+        width: args.size.0,
+        height: args.size.1,
+    };
+    camera.validate().context("invalid camera")?;
+    let script = match &args.script {
+        Some(path) => Some(script::Script::load(path)?),
+        None => None,
+    };
+    let mut controls = Controls::new(camera, scene_frame(&solution));
+    controls.view.display = args.display;
+    controls.view.wireframe = if args.wireframe {
+        Wireframe::Overlay
+    } else {
+        Wireframe::Off
+    };
+    controls.view.normals = args.normals;
+    controls.view.exposure_stops = args.render.exposure;
+
+    // winit reports a missing display when the event loop is made.
+    let event_loop = EventLoop::new().map_err(|e| NoDisplay(e.to_string()))?;
+    event_loop.set_control_flow(ControlFlow::Poll);
+    let mut app = App {
+        args: args.clone(),
+        solution,
+        controls,
+        script,
+        state: None,
+        error: None,
+        validation: None,
+    };
+    let ran = event_loop.run_app(&mut app);
+    // Tear the window and the GPU down before counting validation messages:
+    // destruction is where leaks are reported.
+    let state = app.state.take();
+    let summary = state.as_ref().map(|s| s.summary(&app.controls));
+    drop(state);
+    if let Some(e) = app.error.take() {
+        return Err(e);
+    }
+    ran.context("the window's event loop failed")?;
+    if let Some(summary) = summary {
+        print!("{summary}");
+    }
+    if let Some(log) = &app.validation {
+        anyhow::ensure!(
+            log.count() == 0,
+            "{} Vulkan validation messages (printed above)",
+            log.count()
+        );
+    }
+    Ok(())
+}
+
+struct App {
+    args: MirrorArgs,
+    solution: Solution,
+    controls: Controls,
+    script: Option<script::Script>,
+    state: Option<Running>,
+    error: Option<anyhow::Error>,
+    validation: Option<Arc<crate::gpu::ValidationLog>>,
+}
+
+/// The window and everything drawn into it. Fields drop in order: the
+/// renderer and presenter (which free command buffers of the GPU's pool)
+/// before the GPU, and the window last.
+struct Running {
+    renderer: Option<StereoRenderer>,
+    presenter: Presenter,
+    gpu: Gpu,
+    window: Arc<Window>,
+    watch: Option<watch::Watch>,
+    /// Window events since the last frame.
+    pending: Vec<Input>,
+    cursor: Option<(f64, f64)>,
+    /// Frames drawn (the script's frame counter) and presented.
+    frame: u64,
+    presented: u64,
+    times: stats::FrameTimes,
+    last_present: Option<Instant>,
+    last_update: Instant,
+    hud: String,
+    title_at: Instant,
+    screenshots: u32,
+    reloads: u64,
+    exiting: bool,
+    renderer_inspect: Inspect,
+}
+
+impl Running {
+    fn summary(&self, controls: &Controls) -> String {
+        let (n, median, p99) = self.times.summary();
+        let c = controls.camera(1, 1);
+        let size = self.presenter.extent().unwrap_or((0, 0));
+        format!(
+            "frames: {} presented, median {:.3} ms, p99 {:.3} ms per frame ({} intervals; {}x{} window, \
+             {:?} present mode, {})\ncamera: eye {:?} {:?} {:?} target {:?} {:?} {:?}\n",
+            self.presented,
+            median,
+            p99,
+            n,
+            size.0,
+            size.1,
+            self.presenter.present_mode(),
+            self.gpu.info.describe(),
+            c.eye[0],
+            c.eye[1],
+            c.eye[2],
+            c.target[0],
+            c.target[1],
+            c.target[2],
+        )
+    }
+}
+
+fn translate_key(event: &KeyEvent) -> Option<Key> {
+    match &event.logical_key {
+        WinitKey::Named(named) => Some(match named {
+            NamedKey::ArrowLeft => Key::Left,
+            NamedKey::ArrowRight => Key::Right,
+            NamedKey::ArrowUp => Key::Up,
+            NamedKey::ArrowDown => Key::Down,
+            NamedKey::Tab => Key::Tab,
+            NamedKey::Shift => Key::Shift,
+            NamedKey::F1 => Key::F1,
+            NamedKey::F2 => Key::F2,
+            NamedKey::F3 => Key::F3,
+            NamedKey::F12 => Key::F12,
+            NamedKey::Escape => Key::Escape,
+            _ => return None,
+        }),
+        WinitKey::Character(text) => {
+            let mut chars = text.chars();
+            match (chars.next(), chars.next()) {
+                (Some(c), None) if c.is_ascii_graphic() => Some(Key::Char(c.to_ascii_lowercase())),
+                _ => None,
+            }
+        }
+        _ => None,
+    }
+}
+
+impl ApplicationHandler for App {
+    fn resumed(&mut self, event_loop: &ActiveEventLoop) {
+        if self.state.is_some() || self.error.is_some() {
+            return;
+        }
+        match self.start(event_loop) {
+            Ok(state) => self.state = Some(state),
+            Err(e) => {
+                self.error = Some(e);
+                event_loop.exit();
+            }
+        }
+    }
+
+    fn window_event(&mut self, _: &ActiveEventLoop, _id: WindowId, event: WindowEvent) {
+        let scripted = self.script.is_some();
+        let Some(state) = self.state.as_mut() else {
+            return;
+        };
+        match event {
+            // The next frame is the last (and is dumped if asked).
+            WindowEvent::CloseRequested => state.exiting = true,
+            WindowEvent::Resized(_) => state.presenter.resized(),
+            // A scripted run ignores the real keyboard and mouse, so a stray
+            // event cannot change what a test sees.
+            _ if scripted => {}
+            WindowEvent::KeyboardInput { event, .. } => {
+                if let Some(key) = translate_key(&event) {
+                    state.pending.push(match event.state {
+                        ElementState::Pressed => Input::KeyDown {
+                            key,
+                            repeat: event.repeat,
+                        },
+                        ElementState::Released => Input::KeyUp(key),
+                    });
+                }
+            }
+            WindowEvent::MouseInput {
+                state: pressed,
+                button: MouseButton::Left,
+                ..
+            } => state.pending.push(match pressed {
+                ElementState::Pressed => Input::ButtonDown,
+                ElementState::Released => Input::ButtonUp,
+            }),
+            WindowEvent::CursorMoved { position, .. } => {
+                if let Some((x, y)) = state.cursor {
+                    state.pending.push(Input::PointerMoved {
+                        dx: position.x - x,
+                        dy: position.y - y,
+                    });
+                }
+                state.cursor = Some((position.x, position.y));
+            }
+            WindowEvent::CursorLeft { .. } => state.cursor = None,
+            WindowEvent::Focused(false) => state.pending.push(Input::FocusLost),
+            _ => {}
+        }
+    }
+
+    fn about_to_wait(&mut self, event_loop: &ActiveEventLoop) {
+        if self.state.is_none() || self.error.is_some() {
+            return;
+        }
+        match self.frame() {
+            Ok(true) => {}
+            Ok(false) => event_loop.exit(),
+            Err(e) => {
+                self.error = Some(e);
+                event_loop.exit();
+            }
+        }
+    }
+}
+
+impl App {
+    fn start(&mut self, event_loop: &ActiveEventLoop) -> Result<Running> {
+        let (w, h) = self.args.size;
+        let title = format!("runtime mirror: {}", self.args.solution.display());
+        let attributes = Window::default_attributes()
+            .with_title(title)
+            .with_inner_size(winit::dpi::PhysicalSize::new(w, h));
+        let window = Arc::new(
+            event_loop
+                .create_window(attributes)
+                .map_err(|e| NoDisplay(e.to_string()))?,
+        );
+        let extensions =
+            present::required_extensions(&window).map_err(|e| NoDisplay(format!("{e:#}")))?;
+        let gpu = Gpu::with_extensions(
+            &GpuDesc {
+                validation: self.args.render.validation,
+            },
+            &extensions,
+        )
+        .context("cannot start Vulkan for the window")?;
+        self.validation = Some(gpu.validation_log_handle());
+        let presenter = Presenter::new(&gpu, window.clone(), self.args.vsync)
+            .map_err(|e| NoDisplay(format!("{e:#}")))?;
+        let now = Instant::now();
+        Ok(Running {
+            renderer: None,
+            presenter,
+            gpu,
+            window,
+            watch: self
+                .args
+                .watch
+                .then(|| watch::Watch::new(&self.args.solution)),
+            pending: Vec::new(),
+            cursor: None,
+            frame: 0,
+            presented: 0,
+            times: stats::FrameTimes::default(),
+            last_present: None,
+            last_update: now,
+            hud: String::new(),
+            title_at: now,
+            screenshots: 0,
+            reloads: 0,
+            exiting: false,
+            renderer_inspect: Inspect::default(),
+        })
+    }
+
+    /// One frame; false when the window should close.
+    fn frame(&mut self) -> Result<bool> {
+        let Some(state) = self.state.as_mut() else {
+            return Ok(false);
+        };
+        let dumping = self.args.dump_last_frame.is_some();
+        // --watch: a new version of the file replaces the renderer.
+        let mut quit_after_this = false;
+        if let Some(watch) = state.watch.as_mut() {
+            let now = Instant::now();
+            if let Some(stamp) = watch.poll(now) {
+                match load_solution(&self.args.solution) {
+                    Ok(solution) => {
+                        watch.loaded(stamp);
+                        state.renderer = None;
+                        self.controls.set_scene(scene_frame(&solution));
+                        self.solution = solution;
+                        state.reloads += 1;
+                        let h = &self.solution.header;
+                        let (v, t) = self.solution.batches.iter().fold((0, 0), |(v, t), b| {
+                            (v + b.vertices.len(), t + b.indices.len() / 3)
+                        });
+                        eprintln!(
+                            "reloaded: shots={} partial={} vertices={v} triangles={t}",
+                            h.stats.shots, h.partial
+                        );
+                        if self
+                            .args
+                            .quit_after_reloads
+                            .is_some_and(|n| state.reloads >= n)
+                        {
+                            quit_after_this = true;
+                        }
+                    }
+                    Err(e) => {
+                        if watch.failed(stamp, now) {
+                            eprintln!(
+                                "reload of {} failed, keeping the previous solution: {e:#}",
+                                watch.path().display()
+                            );
+                        }
+                    }
+                }
+            }
+        }
+
+        let Some(frame) = state.presenter.begin_frame()? else {
+            // No window image free right now (or no window area): try again,
+            // unless the window is closing.
+            return Ok(!state.exiting);
+        };
+
+        // Input of this frame: the script's, or the window's.
+        let inputs = match self.script.as_mut() {
+            Some(script) => script.take(state.frame),
+            None => std::mem::take(&mut state.pending),
+        };
+        let mut screenshot = false;
+        for input in inputs {
+            match self.controls.apply(input) {
+                Some(Command::Exit) => state.exiting = true,
+                Some(Command::Screenshot) => screenshot = true,
+                None => {}
+            }
+        }
+        let now = Instant::now();
+        let dt = if self.script.is_some() {
+            SCRIPT_DT
+        } else {
+            now.duration_since(state.last_update).as_secs_f64().min(0.1)
+        };
+        state.last_update = now;
+        self.controls.update(dt);
+        // Exiting (Esc, closing the window) presents this frame first, so the
+        // swapchain image acquired above is given back and can be dumped.
+        let last = state.exiting
+            || quit_after_this
+            || self.args.frames.is_some_and(|n| state.presented + 1 >= n);
+
+        // Eye images and renderer at the window's per-eye size.
+        let (win_w, win_h) = state.presenter.extent().context("no swapchain")?;
+        let view = self.controls.view;
+        let (eye_w, eye_h) = match view.display {
+            Display::SideBySide => ((win_w / 2).max(1), win_h),
+            _ => (win_w, win_h),
+        };
+        if state.presenter.ensure_eye_size(&state.gpu, eye_w, eye_h)? {
+            state.renderer = None;
+        }
+        let tone = ToneSettings {
+            exposure_stops: view.exposure_stops,
+            curve: self.args.render.tonemap,
+        };
+        if state.renderer.is_none() {
+            let desc = RendererDesc {
+                width: eye_w,
+                height: eye_h,
+                max_samples: self.args.render.samples,
+                multiview: self.args.render.multiview,
+                storage: self.args.render.coefficients,
+                max_order: self.args.render.max_order,
+                tone,
+            };
+            state.renderer = Some(StereoRenderer::new(
+                &state.gpu,
+                &self.solution,
+                desc,
+                &state.presenter.eye_targets(),
+            )?);
+            state.renderer_inspect = Inspect::default();
+        }
+        let renderer = state.renderer.as_mut().context("no renderer")?;
+        renderer.set_tone(tone);
+        let inspect = Inspect {
+            edges: match view.wireframe {
+                Wireframe::Off => Edges::Off,
+                Wireframe::Overlay => Edges::Overlay,
+                Wireframe::Only => Edges::Only,
+            },
+            normals: view.normals,
+        };
+        if inspect != state.renderer_inspect {
+            renderer.set_inspect(&state.gpu, &self.solution, inspect)?;
+            state.renderer_inspect = inspect;
+        }
+
+        // The eyes: both for a screenshot (always a pair) and for the stereo
+        // layouts; one otherwise.
+        let header = &self.solution.header;
+        let camera = self.controls.camera(eye_w, eye_h);
+        camera.validate().context("the view has become invalid")?;
+        let offset = DVec3::from(header.recentre_offset);
+        let stereo = camera.stereo_views(self.args.ipd * header.units_per_metre, offset);
+        let (views, layout): (Vec<EyeView>, Layout) = match view.display {
+            Display::SideBySide => (stereo.to_vec(), Layout::SideBySide),
+            Display::Anaglyph => (stereo.to_vec(), Layout::Anaglyph),
+            Display::Left if !screenshot => (vec![stereo[0]], Layout::Single { layer: 0 }),
+            Display::Right if !screenshot => (vec![stereo[1]], Layout::Single { layer: 0 }),
+            Display::Left => (stereo.to_vec(), Layout::Single { layer: 0 }),
+            Display::Right => (stereo.to_vec(), Layout::Single { layer: 1 }),
+        };
+        renderer.render(&views, frame.slot)?;
+        if screenshot {
+            state.screenshots += 1;
+            let eyes = renderer.read_back(&state.gpu, frame.slot, 2)?;
+            let base = format!(
+                "{}-{:03}",
+                self.args.screenshot_prefix.display(),
+                state.screenshots
+            );
+            for (eye, side) in eyes.iter().zip(["left", "right"]) {
+                let png = PathBuf::from(format!("{base}-{side}.png"));
+                let exr = PathBuf::from(format!("{base}-{side}.exr"));
+                write_png(&png, eye.width, eye.height, &eye.srgb)?;
+                write_exr(&exr, eye.width, eye.height, &eye.radiance)?;
+                println!("wrote {} and {}", png.display(), exr.display());
+            }
+            let c = &camera;
+            println!(
+                "screenshot camera: eye {:?} {:?} {:?} target {:?} {:?} {:?}",
+                c.eye[0], c.eye[1], c.eye[2], c.target[0], c.target[1], c.target[2]
+            );
+        }
+
+        // The overlay: the frame time, then the help.
+        let mut lines = Vec::new();
+        if view.hud {
+            lines.push(state.hud.clone());
+        }
+        if view.help {
+            if view.hud {
+                lines.push(String::new());
+            }
+            lines.extend(Controls::help_lines().iter().map(|s| s.to_string()));
+        }
+        let scale = if win_w >= 800 && win_h >= 400 { 2 } else { 1 };
+        let margin = 4 * scale as i32;
+        let max_cols = (win_w.saturating_sub(2 * margin as u32) / (font::CELL_W * scale))
+            .min(present::MAX_TEXT_COLS);
+        let max_rows = (win_h.saturating_sub(2 * margin as u32) / (font::CELL_H * scale))
+            .min(present::MAX_TEXT_ROWS);
+        let overlay = Overlay {
+            grid: font::TextGrid::new(&lines, max_cols, max_rows),
+            origin: (margin, margin),
+            scale,
+        };
+        let dump = last && dumping;
+        let image = state
+            .presenter
+            .finish_frame(&state.gpu, frame, layout, &overlay, dump)?;
+        if let (Some(image), Some(path)) = (image, &self.args.dump_last_frame) {
+            write_png(path, image.width, image.height, &image.rgba)?;
+            println!("wrote {}", path.display());
+        }
+        state.frame += 1;
+        state.presented += 1;
+        let now = Instant::now();
+        if let Some(prev) = state.last_present {
+            state
+                .times
+                .push(now.duration_since(prev).as_secs_f64() * 1e3);
+        }
+        state.last_present = Some(now);
+        if now.duration_since(state.title_at) >= stats::FrameTimes::WINDOW || state.hud.is_empty() {
+            state.title_at = now;
+            state.hud = hud_line(&state.times, &self.controls, eye_w, eye_h, header);
+            state.window.set_title(&format!(
+                "runtime mirror: {} - {}",
+                file_name(&self.args.solution),
+                state.hud
+            ));
+        }
+        Ok(!last)
+    }
+}
+
+fn file_name(path: &Path) -> String {
+    path.file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| path.display().to_string())
+}
+
+fn hud_line(
+    times: &stats::FrameTimes,
+    controls: &Controls,
+    eye_w: u32,
+    eye_h: u32,
+    header: &solver::format::Header,
+) -> String {
+    let time = match times.recent_mean_ms() {
+        Some(ms) => format!("{ms:.1} ms {:.0} fps", 1e3 / ms.max(1e-3)),
+        None => "-- ms".into(),
+    };
+    let mode = match controls.mode {
+        controls::Mode::Orbit => "orbit",
+        controls::Mode::Walk => "walk",
+    };
+    let partial = if header.partial {
+        format!("  partial, {} shots", header.stats.shots)
+    } else {
+        String::new()
+    };
+    format!("{time}  {eye_w}x{eye_h}/eye  {mode}{partial}  F1 help")
+}
