@@ -14,3 +14,4 @@ pub mod gpu;
 pub mod render;
 pub mod session;
 pub mod mirror;
+pub mod xr;

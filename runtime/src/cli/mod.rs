@@ -30,6 +30,9 @@ pub enum Command {
     Screenshot(ScreenshotArgs),
     /// Renders offscreen stereo frames along a scripted walk and prints timings.
     Bench(BenchArgs),
+    /// Walks through the solution in a headset (OpenXR); without a runtime it
+    /// says so and suggests `runtime mirror`.
+    Xr(crate::xr::cli::XrArgs),
     /// Shows the solution in a desktop window, both eyes side by side (or one
     /// eye, or anaglyph), with radview's keys (F1 lists them).
     Mirror(crate::mirror::MirrorArgs),
@@ -40,6 +43,7 @@ pub fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Screenshot(args) => screenshot::run(&args),
         Command::Bench(args) => bench::run(&args).map(|_| ()),
+        Command::Xr(args) => crate::xr::cli::run(args),
         Command::Mirror(args) => crate::mirror::run(&args),
     }
 }
