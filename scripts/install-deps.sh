@@ -13,6 +13,7 @@ want=(
   glslang-tools         # glslangValidator: compiles shaders/*.glsl to SPIR-V at build time
   libopenxr-loader1     # OpenXR loader (runtime xr); absent runtimes are reported, not fatal
   pkg-config
+  libxkbcommon-x11-0 libx11-xcb1 libxcursor1 libxrandr2 libxi6  # loaded at run time by winit's X11 backend (runtime mirror)
 )
 if [ "${1:-run}" = "test" ]; then
   want+=(

@@ -468,7 +468,7 @@ impl Controls {
     /// Moves the eye (and the reference point with it) for `dt` seconds of the
     /// held walking keys.
     pub fn update(&mut self, dt: f64) {
-        if self.mode != Mode::Walk || !(dt > 0.0) {
+        if self.mode != Mode::Walk || dt.is_nan() || dt <= 0.0 {
             return;
         }
         let h = self.held;

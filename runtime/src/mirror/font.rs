@@ -177,7 +177,7 @@ impl TextGrid {
             return false;
         }
         let (gx, gy) = (px % CELL_W, py % CELL_H);
-        if gx >= GLYPH_W || gy < 1 || gy > GLYPH_H {
+        if gx >= GLYPH_W || !(1..=GLYPH_H).contains(&gy) {
             return false;
         }
         let code = self.codes[(row * self.cols + col) as usize];
@@ -216,12 +216,12 @@ mod tests {
         }
         // Every printable character has its own bitmap (a typo in the table
         // that duplicated a glyph would show here), and only space is blank.
-        for a in 0..FONT.len() {
-            assert_eq!(FONT[a].iter().all(|&r| r == 0), a == 0, "glyph {a}");
-            for b in a + 1..FONT.len() {
+        for (a, glyph_a) in FONT.iter().enumerate() {
+            assert_eq!(glyph_a.iter().all(|&r| r == 0), a == 0, "glyph {a}");
+            for (b, glyph_b) in FONT.iter().enumerate().skip(a + 1) {
                 assert_ne!(
-                    FONT[a],
-                    FONT[b],
+                    glyph_a,
+                    glyph_b,
                     "{:?} and {:?}",
                     (a as u8 + 32) as char,
                     (b as u8 + 32) as char
@@ -255,7 +255,7 @@ mod tests {
             assert!(px[(2 * w + x) as usize] && px[(3 * w + x) as usize]);
         }
         assert!(!px[(2 * w + 10) as usize], "the spacing column is dark");
-        assert!(!px[(0 * w + 4) as usize], "the top margin row is dark");
+        assert!(!px[4], "the top margin row is dark");
         let lit = px.iter().filter(|&&p| p).count() as u32;
         let bits = |c: char| glyph(c).iter().map(|r| r.count_ones()).sum::<u32>();
         assert_eq!(lit, 4 * (bits('T') + bits('a') + bits('b')));

@@ -150,6 +150,9 @@ pub fn run(args: &MirrorArgs) -> Result<()> {
     if args.frames == Some(0) {
         anyhow::bail!("--frames must be at least 1");
     }
+    // The file's version is noted before it is read, so a rewrite while it is
+    // being read is seen as a new version by --watch.
+    let watch = args.watch.then(|| watch::Watch::new(&args.solution));
     let solution = load_solution(&args.solution)?;
     report_truncation(&solution, args.render.max_order);
     let header = &solution.header;
@@ -176,14 +179,18 @@ pub fn run(args: &MirrorArgs) -> Result<()> {
     controls.view.normals = args.normals;
     controls.view.exposure_stops = args.render.exposure;
 
-    // winit reports a missing display when the event loop is made.
-    let event_loop = EventLoop::new().map_err(|e| NoDisplay(e.to_string()))?;
+    // winit reports a missing display when the event loop is made (and may
+    // panic when a windowing library it loads at run time is missing).
+    let event_loop = std::panic::catch_unwind(EventLoop::new)
+        .map_err(|_| NoDisplay("the windowing system failed to start (see above)".into()))?
+        .map_err(|e| NoDisplay(e.to_string()))?;
     event_loop.set_control_flow(ControlFlow::Poll);
     let mut app = App {
         args: args.clone(),
         solution,
         controls,
         script,
+        watch,
         state: None,
         error: None,
         validation: None,
@@ -216,6 +223,7 @@ struct App {
     solution: Solution,
     controls: Controls,
     script: Option<script::Script>,
+    watch: Option<watch::Watch>,
     state: Option<Running>,
     error: Option<anyhow::Error>,
     validation: Option<Arc<crate::gpu::ValidationLog>>,
@@ -405,10 +413,7 @@ impl App {
             presenter,
             gpu,
             window,
-            watch: self
-                .args
-                .watch
-                .then(|| watch::Watch::new(&self.args.solution)),
+            watch: self.watch.take(),
             pending: Vec::new(),
             cursor: None,
             frame: 0,
@@ -618,6 +623,13 @@ impl App {
         if let (Some(image), Some(path)) = (image, &self.args.dump_last_frame) {
             write_png(path, image.width, image.height, &image.rgba)?;
             println!("wrote {}", path.display());
+        }
+        if state.presented == 0 {
+            eprintln!(
+                "mirror: first frame presented ({win_w}x{win_h} window, {:?}, {:?} present mode)",
+                view.display,
+                state.presenter.present_mode()
+            );
         }
         state.frame += 1;
         state.presented += 1;
