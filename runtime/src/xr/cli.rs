@@ -123,7 +123,8 @@ pub fn run(args: XrArgs) -> Result<()> {
         system.runtime, system.api_version, system.width, system.height
     );
     let gpu = create_gpu(&system, args.render.validation)?;
-    let session = XrSession::new(&system, &gpu, &solution.header, config)?;
+    let mut session = XrSession::new(&system, &gpu, &solution.header, config)?;
+    session.prepare_overlay(&gpu);
     let renderer = new_renderer(&args, &gpu, &solution, &session)?;
     let mut app = XrApp {
         session,
@@ -139,6 +140,7 @@ pub fn run(args: XrArgs) -> Result<()> {
         if app.session.swapchain_generation() != generation {
             // A lost session was recreated with a new swapchain.
             app.renderer = new_renderer(&args, &app.gpu, &solution, &app.session)?;
+            app.session.prepare_overlay(&app.gpu);
             generation = app.session.swapchain_generation();
         }
         let start = Instant::now();

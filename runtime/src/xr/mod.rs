@@ -16,6 +16,7 @@
 //!   predicted display time, acquire, release, end).
 //! * [`input`]: the action set (walk, snap turn, recentre, help) and its
 //!   suggested bindings for common controllers.
+//! * [`overlay`]: the help panel the menu button toggles (a quad layer).
 //! * [`locomotion`]: the tracking space's place in the scene (units, up axis,
 //!   walking, snap turns, recentring, IPD override), pure and unit-tested.
 //! * [`config`]: comfort settings from `config/xr.toml`.
@@ -31,6 +32,7 @@ pub mod config;
 pub mod input;
 pub mod lifecycle;
 pub mod locomotion;
+pub mod overlay;
 pub mod session;
 pub mod system;
 pub mod vulkan;

@@ -16,6 +16,7 @@ use super::config::{ReferenceSpace, XrConfig};
 use super::input::{XrInput, HELP};
 use super::lifecycle::{Action, Event, ExitReason, Lifecycle, XrState};
 use super::locomotion::{apply_deadzone, scene_yaw_deg, with_ipd, Locomotion, Placement};
+use super::overlay::{panel_pose, HelpOverlay};
 use super::system::{choose_swapchain_format, XrSystem, BLEND_MODE, VIEW_TYPE};
 use super::{XrContext, XrError, XrResult};
 use crate::gpu::{DeviceShared, Gpu};
@@ -110,6 +111,7 @@ pub fn fov_to_xr(fov: &Fov) -> xr::Fovf {
 /// The handles one session owns. Fields are dropped in declaration order:
 /// the swapchain and spaces before the frame stream, waiter and session.
 struct SessionObjects {
+    overlay: Option<HelpOverlay>,
     swapchain: xr::Swapchain<xr::Vulkan>,
     images: Vec<vk::Image>,
     format: vk::Format,
@@ -202,6 +204,7 @@ impl SessionRecipe {
             .collect();
         Ok((
             SessionObjects {
+                overlay: None,
                 swapchain,
                 images,
                 format,
@@ -347,6 +350,22 @@ impl XrSession {
     /// Whether the help overlay is toggled on.
     pub fn help_visible(&self) -> bool {
         self.help_visible
+    }
+
+    /// Creates the help overlay's swapchain and writes the help text into it
+    /// (after the session is created, and again after it is recreated). Without
+    /// it the help goes to standard output only.
+    pub fn prepare_overlay(&mut self, gpu: &Gpu) {
+        let Some(o) = self.objects.as_mut() else {
+            return;
+        };
+        if o.overlay.is_some() {
+            return;
+        }
+        match HelpOverlay::new(&o.session, gpu, o.format) {
+            Ok(overlay) => o.overlay = Some(overlay),
+            Err(e) => eprintln!("runtime xr: no help overlay in the headset: {e}"),
+        }
     }
 
     /// Asks the runtime to end the session; frames go on (without layers)
@@ -521,6 +540,9 @@ impl XrSession {
                     self.help_visible = !self.help_visible;
                     if self.help_visible {
                         println!("{HELP}");
+                    }
+                    if let Some(overlay) = self.objects.as_mut().and_then(|o| o.overlay.as_mut()) {
+                        overlay.pose = self.help_visible.then(|| panel_pose(&head));
                     }
                 }
             }
@@ -702,6 +724,7 @@ impl Session for XrSession {
             swapchain,
             space,
             stream,
+            overlay,
             ..
         } = o;
         let time = state.predicted_display_time;
@@ -732,7 +755,12 @@ impl Session for XrSession {
             let projection = xr::CompositionLayerProjection::new()
                 .space(space)
                 .views(&projection_views);
-            stream.end(time, BLEND_MODE, &[&projection])
+            let quad = overlay.as_ref().and_then(|h| h.layer(space));
+            let mut layers: Vec<&xr::CompositionLayerBase<xr::Vulkan>> = vec![&projection];
+            if let Some(quad) = &quad {
+                layers.push(quad);
+            }
+            stream.end(time, BLEND_MODE, &layers)
         } else {
             stream.end(time, BLEND_MODE, &[])
         };
