@@ -47,7 +47,9 @@ impl Reporter {
     pub fn new(threshold: f64, max_shots: u64, seconds_before: f64, start: Snapshot) -> Self {
         let output = if std::io::stderr().is_terminal() {
             let bar = ProgressBar::with_draw_target(Some(BAR_TICKS), ProgressDrawTarget::stderr());
-            let style = ProgressStyle::with_template("{spinner} [{elapsed}] {wide_bar} {msg}")
+            let style = ProgressStyle::with_template(
+                "{spinner} [{elapsed}] {wide_bar} {percent:>3}% of the way to the threshold\n  {wide_msg}",
+            )
                 .unwrap_or_else(|_| ProgressStyle::default_bar());
             bar.set_style(style);
             bar.enable_steady_tick(Duration::from_millis(200));
@@ -94,7 +96,7 @@ impl Reporter {
             .seconds_left()
             .map_or_else(|| "?".to_string(), format_duration);
         let message = format!(
-            "shot {} | unshot {:.3}% (stop at {}%) | {} rays/s | {} elements | ETA {}",
+            "shot {} | unshot {:.2}% (stop {}%) | {} rays/s | {} elements | ETA {}",
             now.shots,
             100.0 * now.unshot_fraction,
             100.0 * self.threshold,
