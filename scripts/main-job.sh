@@ -41,17 +41,14 @@ fi
 has_command() { grep -qE "^[[:space:]]+$1([[:space:]]|$)" <<<"$help"; }
 
 if [ -n "${DISPLAY:-}${WAYLAND_DISPLAY:-}" ] && has_command mirror; then
-  echo "main-job: showing $sol in the stereo mirror window (F1: keys; Esc or close it to finish)"
+  echo "main-job: showing $sol in the stereo mirror window (F1 lists the keys; close it to finish)"
   status=0
   "$runtime" mirror "$sol" || status=$?
-  # Status 3: the display is set but no window could be opened on it (no X
-  # server behind DISPLAY, no Vulkan presentation); fall back to screenshots.
-  # Any other failure is a real one.
+  # Exit status 3 means the display could not be used: fall back to screenshots.
   if [ "$status" -ne 3 ]; then
     exit "$status"
   fi
-  echo "main-job: the mirror window could not open on display ${DISPLAY:-${WAYLAND_DISPLAY:-}};" \
-       "writing screenshots instead"
+  echo "main-job: the display ${DISPLAY:-$WAYLAND_DISPLAY} cannot be used; falling back to a screenshot"
 fi
 
 if ! has_command screenshot; then
