@@ -270,6 +270,35 @@ fn keys_move_the_camera_as_specified_and_the_window_matches_the_offscreen_render
 }
 
 #[test]
+fn resizing_and_switching_layouts_keep_the_image_right() {
+    let x = Xvfb::start();
+    let dir = tempfile::tempdir().unwrap();
+    let file = write_solution(dir.path(), "room.sol", &common::diffuse_room(4));
+    // Window resizes (new swapchain) and layout switches (new eye-image size,
+    // the renderer resized in place), ending side by side at 100x60.
+    let script = "0 key F3\n2 resize 150 90\n5 key 2\n7 key 4\n9 key 3\n\
+                  11 resize 100 60\n13 key 1\n";
+    std::fs::write(dir.path().join("s.txt"), script).unwrap();
+    let dump = dir.path().join("window.png");
+    let mut cmd = x.mirror(&file);
+    cmd.args(["--size", "128x64", "--frames", "24", "--script"])
+        .arg(dir.path().join("s.txt"))
+        .arg("--dump-last-frame")
+        .arg(&dump);
+    let (stdout, _) = run_clean(cmd);
+    assert!(stdout.contains("frames: 24 presented"), "{stdout}");
+    let window = rgb(&dump);
+    assert_eq!(window.dimensions(), (100, 60), "the window did not resize");
+    let (left, right) = screenshot(dir.path(), &file, "50x60");
+    let (worst_l, _) = max_difference(&window, 0, &[&left, &left, &left]);
+    let (worst_r, _) = max_difference(&window, 50, &[&right, &right, &right]);
+    assert!(
+        worst_l <= 1 && worst_r <= 1,
+        "after resizing, the window differs from the screenshot by {worst_l} / {worst_r}"
+    );
+}
+
+#[test]
 fn anaglyph_takes_red_from_the_left_eye_and_cyan_from_the_right() {
     let x = Xvfb::start();
     let dir = tempfile::tempdir().unwrap();
@@ -431,7 +460,15 @@ fn watch_reloads_each_rewrite_and_keeps_the_old_solution_when_a_file_is_bad() {
     let file = write_solution(dir.path(), "room.sol", &version(1, 2));
     let mut child = x
         .mirror(&file)
-        .args(["--size", "64x32", "--watch", "--quit-after-reloads", "3"])
+        // Wireframe on: a reload rebuilds the edge lists too.
+        .args([
+            "--size",
+            "64x32",
+            "--watch",
+            "--wireframe",
+            "--quit-after-reloads",
+            "3",
+        ])
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()

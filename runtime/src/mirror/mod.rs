@@ -441,10 +441,17 @@ impl App {
         if let Some(watch) = state.watch.as_mut() {
             let now = Instant::now();
             if let Some(stamp) = watch.poll(now) {
-                match load_solution(&self.args.solution) {
+                // The renderer takes the new scene (keeping its pipelines); a
+                // file it cannot draw is refused like one that fails to read.
+                let loaded = load_solution(&self.args.solution).and_then(|solution| {
+                    if let Some(renderer) = state.renderer.as_mut() {
+                        renderer.set_solution(&state.gpu, &solution)?;
+                    }
+                    Ok(solution)
+                });
+                match loaded {
                     Ok(solution) => {
                         watch.loaded(stamp);
-                        state.renderer = None;
                         self.controls.set_scene(scene_frame(&solution));
                         self.solution = solution;
                         state.reloads += 1;
@@ -483,12 +490,25 @@ impl App {
         };
 
         // Input of this frame: the script's, or the window's.
-        let inputs = match self.script.as_mut() {
+        let events = match self.script.as_mut() {
             Some(script) => script.take(state.frame),
-            None => std::mem::take(&mut state.pending),
+            None => std::mem::take(&mut state.pending)
+                .into_iter()
+                .map(script::Event::Input)
+                .collect(),
         };
         let mut screenshot = false;
-        for input in inputs {
+        for event in events {
+            let input = match event {
+                script::Event::Input(input) => input,
+                script::Event::Resize(w, h) => {
+                    // Takes effect when the window system says so (Resized).
+                    let _ = state
+                        .window
+                        .request_inner_size(winit::dpi::PhysicalSize::new(w, h));
+                    continue;
+                }
+            };
             match self.controls.apply(input) {
                 Some(Command::Exit) => state.exiting = true,
                 Some(Command::Screenshot) => screenshot = true,
@@ -516,8 +536,11 @@ impl App {
             Display::SideBySide => ((win_w / 2).max(1), win_h),
             _ => (win_w, win_h),
         };
-        if state.presenter.ensure_eye_size(&state.gpu, eye_w, eye_h)? {
-            state.renderer = None;
+        if let Some(retired) = state.presenter.ensure_eye_size(&state.gpu, eye_w, eye_h)? {
+            if let Some(renderer) = state.renderer.as_mut() {
+                renderer.resize(&state.gpu, &state.presenter.eye_targets())?;
+            }
+            drop(retired);
         }
         let tone = ToneSettings {
             exposure_stops: view.exposure_stops,

@@ -277,16 +277,23 @@ impl Presenter {
         }
     }
 
-    /// Makes the eye images `width × height` if they are not; true when they
-    /// were remade (a renderer drawing into them must be remade too).
-    pub fn ensure_eye_size(&mut self, gpu: &Gpu, width: u32, height: u32) -> Result<bool> {
+    /// Makes the eye images `width × height` if they are not. When they were
+    /// remade, the old ones are returned: a renderer drawing into them must be
+    /// pointed at the new ones ([`Presenter::eye_targets`]) before they are
+    /// dropped.
+    pub fn ensure_eye_size(
+        &mut self,
+        gpu: &Gpu,
+        width: u32,
+        height: u32,
+    ) -> Result<Option<Vec<Image>>> {
         if self.eye_size == (width, height) && !self.eyes.is_empty() {
-            return Ok(false);
+            return Ok(None);
         }
         self.wait_idle();
-        self.eyes.clear();
+        let mut eyes = Vec::new();
         for _ in 0..SLOTS {
-            self.eyes.push(Image::new(
+            eyes.push(Image::new(
                 gpu,
                 ImageDesc {
                     width,
@@ -301,6 +308,7 @@ impl Presenter {
                 },
             )?);
         }
+        let retired = std::mem::replace(&mut self.eyes, eyes);
         self.eye_size = (width, height);
         for (slot, eye) in self.slots.iter().zip(&self.eyes) {
             let image_info = [vk::DescriptorImageInfo::default()
@@ -326,7 +334,7 @@ impl Presenter {
             // handle is live.
             unsafe { self.shared.device.update_descriptor_sets(&writes, &[]) };
         }
-        Ok(true)
+        Ok(Some(retired))
     }
 
     fn wait_idle(&self) {

@@ -10,6 +10,7 @@
 //! 2  press w        # hold ...
 //! 9  release w      # ... and let go
 //! 3  drag 20 -5     # left-button drag by (dx, dy) pixels, y down
+//! 4  resize 300 200 # ask the window system for a new window size
 //! ```
 
 use super::controls::{Input, Key};
@@ -30,11 +31,20 @@ pub enum ScriptError {
     },
 }
 
-/// A parsed script: `(frame, input)` pairs sorted by frame (file order within
+/// One scripted event.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Event {
+    /// Input for the controls.
+    Input(Input),
+    /// A window size request (width, height in pixels).
+    Resize(u32, u32),
+}
+
+/// A parsed script: `(frame, event)` pairs sorted by frame (file order within
 /// a frame).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Script {
-    events: Vec<(u64, Input)>,
+    events: Vec<(u64, Event)>,
     next: usize,
 }
 
@@ -74,6 +84,19 @@ impl Script {
                     .filter(|v| v.is_finite())
                     .ok_or_else(|| err(format!("{w:?} is not a finite number of pixels")))
             };
+            let pixels = |i: usize| -> Result<u32, ScriptError> {
+                let w = words.get(i).copied().unwrap_or("");
+                w.parse::<u32>()
+                    .ok()
+                    .filter(|v| (1..=solver::camera::MAX_IMAGE_SIDE).contains(v))
+                    .ok_or_else(|| {
+                        err(format!(
+                            "{w:?} is not a window size in 1..={} pixels",
+                            solver::camera::MAX_IMAGE_SIDE
+                        ))
+                    })
+            };
+            let mut push = |event: Event| events.push((frame, event));
             let want = |n: usize| -> Result<(), ScriptError> {
                 if words.len() == n {
                     Ok(())
@@ -90,39 +113,37 @@ impl Script {
                 Some("key") => {
                     want(3)?;
                     let k = key(2)?;
-                    events.push((
-                        frame,
-                        Input::KeyDown {
-                            key: k,
-                            repeat: false,
-                        },
-                    ));
-                    events.push((frame, Input::KeyUp(k)));
+                    push(Event::Input(Input::KeyDown {
+                        key: k,
+                        repeat: false,
+                    }));
+                    push(Event::Input(Input::KeyUp(k)));
                 }
                 Some("press") => {
                     want(3)?;
-                    events.push((
-                        frame,
-                        Input::KeyDown {
-                            key: key(2)?,
-                            repeat: false,
-                        },
-                    ));
+                    push(Event::Input(Input::KeyDown {
+                        key: key(2)?,
+                        repeat: false,
+                    }));
                 }
                 Some("release") => {
                     want(3)?;
-                    events.push((frame, Input::KeyUp(key(2)?)));
+                    push(Event::Input(Input::KeyUp(key(2)?)));
                 }
                 Some("drag") => {
                     want(4)?;
                     let (dx, dy) = (number(2)?, number(3)?);
-                    events.push((frame, Input::ButtonDown));
-                    events.push((frame, Input::PointerMoved { dx, dy }));
-                    events.push((frame, Input::ButtonUp));
+                    push(Event::Input(Input::ButtonDown));
+                    push(Event::Input(Input::PointerMoved { dx, dy }));
+                    push(Event::Input(Input::ButtonUp));
+                }
+                Some("resize") => {
+                    want(4)?;
+                    push(Event::Resize(pixels(2)?, pixels(3)?));
                 }
                 other => {
                     return Err(err(format!(
-                        "unknown event {:?} (key, press, release or drag)",
+                        "unknown event {:?} (key, press, release, drag or resize)",
                         other.unwrap_or("")
                     )))
                 }
@@ -134,7 +155,7 @@ impl Script {
     }
 
     /// The events of `frame` (and of any earlier frame not yet taken).
-    pub fn take(&mut self, frame: u64) -> Vec<Input> {
+    pub fn take(&mut self, frame: u64) -> Vec<Event> {
         let mut out = Vec::new();
         while let Some(&(f, input)) = self.events.get(self.next) {
             if f > frame {
@@ -158,29 +179,32 @@ mod tests {
 
     #[test]
     fn parses_events_in_frame_order() {
-        let text = "# test\n2 drag 5 -1.5\n0 key Right\n0 key z # zoom\n1 press w\n3 release w\n";
+        let text = "# test\n2 drag 5 -1.5\n0 key Right\n0 key z # zoom\n1 press w\n3 release w\n\
+                    3 resize 320 200\n";
         let mut s = Script::parse(text, "s.txt").unwrap();
         assert_eq!(s.last_frame(), Some(3));
-        let down = |key| Input::KeyDown { key, repeat: false };
+        let down = |key| Event::Input(Input::KeyDown { key, repeat: false });
+        let up = |key| Event::Input(Input::KeyUp(key));
         assert_eq!(
             s.take(0),
             vec![
                 down(Key::Right),
-                Input::KeyUp(Key::Right),
+                up(Key::Right),
                 down(Key::Char('z')),
-                Input::KeyUp(Key::Char('z'))
+                up(Key::Char('z'))
             ]
         );
         assert_eq!(s.take(1), vec![down(Key::Char('w'))]);
         assert_eq!(
             s.take(2),
-            vec![
+            [
                 Input::ButtonDown,
                 Input::PointerMoved { dx: 5.0, dy: -1.5 },
                 Input::ButtonUp
             ]
+            .map(Event::Input)
         );
-        assert_eq!(s.take(9), vec![Input::KeyUp(Key::Char('w'))]);
+        assert_eq!(s.take(9), vec![up(Key::Char('w')), Event::Resize(320, 200)]);
         assert!(s.take(10).is_empty());
     }
 
@@ -193,6 +217,7 @@ mod tests {
             ("0 drag 1\n", "s:1: `drag` takes 2 argument(s), found 1"),
             ("0 drag 1 nan\n", "s:1: \"nan\" is not a finite"),
             ("0 key\n", "s:1: `key` takes 1 argument(s), found 0"),
+            ("0 resize 0 10\n", "s:1: \"0\" is not a window size"),
         ] {
             let msg = Script::parse(text, "s").unwrap_err().to_string();
             assert!(msg.starts_with(want), "{msg}");

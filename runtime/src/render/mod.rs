@@ -217,44 +217,8 @@ impl StereoRenderer {
                 },
             )?);
         }
-        let image = |format, samples, usage, aspect| {
-            Image::new(
-                gpu,
-                ImageDesc {
-                    width: desc.width,
-                    height: desc.height,
-                    layers: 2,
-                    format,
-                    samples,
-                    usage,
-                    aspect,
-                },
-            )
-        };
-        let depth = image(
-            depth_format,
-            samples,
-            vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT,
-            vk::ImageAspectFlags::DEPTH,
-        )?;
-        let linear = image(
-            passes::LINEAR_FORMAT,
-            vk::SampleCountFlags::TYPE_1,
-            vk::ImageUsageFlags::COLOR_ATTACHMENT
-                | vk::ImageUsageFlags::INPUT_ATTACHMENT
-                | vk::ImageUsageFlags::TRANSFER_SRC,
-            vk::ImageAspectFlags::COLOR,
-        )?;
-        let msaa = if samples == vk::SampleCountFlags::TYPE_1 {
-            None
-        } else {
-            Some(image(
-                passes::LINEAR_FORMAT,
-                samples,
-                vk::ImageUsageFlags::COLOR_ATTACHMENT,
-                vk::ImageAspectFlags::COLOR,
-            )?)
-        };
+        let (depth, linear, msaa) =
+            frame_images(gpu, desc.width, desc.height, samples, depth_format)?;
         let uniforms = Buffer::new(
             gpu,
             BufferDesc {
@@ -306,6 +270,105 @@ impl StereoRenderer {
             renderer.add_target(gpu, raw)?;
         }
         Ok(renderer)
+    }
+
+    /// Draws into `swapchain`'s images from now on, at their size (a resized
+    /// window): the size-dependent images and framebuffers are remade, the
+    /// scene and pipelines kept (viewport and scissor are dynamic).
+    pub fn resize(&mut self, gpu: &Gpu, swapchain: &SwapchainDesc) -> Result<(), RenderError> {
+        if swapchain.layers < 2 || swapchain.images.is_empty() {
+            return Err(RenderError::Usage(
+                "the swapchain needs at least one image with two layers".into(),
+            ));
+        }
+        if swapchain.format != self.swapchain.format {
+            return Err(RenderError::Usage(format!(
+                "resize cannot change the output format ({:?} to {:?})",
+                self.swapchain.format, swapchain.format
+            )));
+        }
+        let depth_format = self
+            .pass_sets
+            .first()
+            .map(|s| s.desc.depth_format)
+            .ok_or_else(|| RenderError::Usage("renderer without passes".into()))?;
+        let (depth, linear, msaa) = frame_images(
+            gpu,
+            swapchain.width,
+            swapchain.height,
+            self.samples,
+            depth_format,
+        )?;
+        self.wait_idle();
+        for target in std::mem::take(&mut self.targets) {
+            self.destroy_target(target);
+        }
+        self.depth = depth;
+        self.linear = linear;
+        self.msaa = msaa;
+        self.desc.width = swapchain.width;
+        self.desc.height = swapchain.height;
+        self.swapchain = swapchain.clone();
+        let image_info = [vk::DescriptorImageInfo::default()
+            .image_view(self.linear.view)
+            .image_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)];
+        let write = [vk::WriteDescriptorSet::default()
+            .dst_set(self.tonemap_set)
+            .dst_binding(0)
+            .descriptor_type(vk::DescriptorType::INPUT_ATTACHMENT)
+            .image_info(&image_info)];
+        // SAFETY: the device is idle, so the set is not in use; the view is live.
+        unsafe { self.gpu_shared.device.update_descriptor_sets(&write, &[]) };
+        for &raw in &swapchain.images {
+            self.add_target(gpu, raw)?;
+        }
+        Ok(())
+    }
+
+    /// Replaces the drawn solution (a reloaded file), keeping the pipelines and
+    /// images. On error the previous solution stays.
+    pub fn set_solution(&mut self, gpu: &Gpu, solution: &Solution) -> Result<(), RenderError> {
+        let scene = GpuScene::new(gpu, solution, self.desc.storage, self.desc.max_order)?;
+        let bounds = (
+            DVec3::from(solution.header.bounds_min.map(f64::from)),
+            DVec3::from(solution.header.bounds_max.map(f64::from)),
+        );
+        let inspect_gpu = if self.inspect.draws_lines() {
+            let diagonal = (bounds.1 - bounds.0).length() as f32;
+            Some(inspect::InspectGpu::new(
+                gpu,
+                solution,
+                &scene.draws,
+                &self.layouts,
+                &self.pass_sets,
+                diagonal,
+            )?)
+        } else {
+            None
+        };
+        self.wait_idle();
+        // SAFETY: the device is idle; the pool's sets are used by no pending
+        // command buffer, and new ones are made right after.
+        unsafe {
+            self.gpu_shared
+                .device
+                .destroy_descriptor_pool(self.descriptor_pool, None)
+        };
+        self.descriptor_pool = vk::DescriptorPool::null();
+        self.batch_sets.clear();
+        self.scene = scene;
+        self.bounds = bounds;
+        self.inspect_gpu = inspect_gpu;
+        self.create_descriptors()?;
+        Ok(())
+    }
+
+    fn wait_idle(&self) {
+        // SAFETY: waiting has no preconditions.
+        unsafe {
+            let _ = self.fence.wait();
+            let _ = self.gpu_shared.device.queue_wait_idle(self.queue);
+        }
     }
 
     fn create_descriptors(&mut self) -> Result<(), GpuError> {
@@ -894,6 +957,56 @@ impl StereoRenderer {
         }
         Ok(eyes)
     }
+}
+
+/// Depth, resolved linear radiance and (with MSAA) the multisampled colour
+/// target, two layers each.
+fn frame_images(
+    gpu: &Gpu,
+    width: u32,
+    height: u32,
+    samples: vk::SampleCountFlags,
+    depth_format: vk::Format,
+) -> Result<(Image, Image, Option<Image>), GpuError> {
+    let image = |format, samples, usage, aspect| {
+        Image::new(
+            gpu,
+            ImageDesc {
+                width,
+                height,
+                layers: 2,
+                format,
+                samples,
+                usage,
+                aspect,
+            },
+        )
+    };
+    let depth = image(
+        depth_format,
+        samples,
+        vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT,
+        vk::ImageAspectFlags::DEPTH,
+    )?;
+    let linear = image(
+        passes::LINEAR_FORMAT,
+        vk::SampleCountFlags::TYPE_1,
+        vk::ImageUsageFlags::COLOR_ATTACHMENT
+            | vk::ImageUsageFlags::INPUT_ATTACHMENT
+            | vk::ImageUsageFlags::TRANSFER_SRC,
+        vk::ImageAspectFlags::COLOR,
+    )?;
+    let msaa = if samples == vk::SampleCountFlags::TYPE_1 {
+        None
+    } else {
+        Some(image(
+            passes::LINEAR_FORMAT,
+            samples,
+            vk::ImageUsageFlags::COLOR_ATTACHMENT,
+            vk::ImageAspectFlags::COLOR,
+        )?)
+    };
+    Ok((depth, linear, msaa))
 }
 
 fn layout_barrier(image: &Image, layout: vk::ImageLayout) -> vk::ImageMemoryBarrier<'static> {
