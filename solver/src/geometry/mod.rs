@@ -5,6 +5,8 @@
 //! * [`formfactor`]: the exact unoccluded point-to-polygon form factor (Lambert's
 //!   contour formula, Baum et al. 1989) and 000's sampled disc formula (eq. 3.1),
 //!   kept to measure against (design notes, "Form factors").
+//! * [`hemicube`]: hemicube form factors (002, 001): exact delta form factors
+//!   and a rasterised item buffer with depth, for gathering and shooting.
 //! * [`sampling`]: a small deterministic PRNG whose streams do not depend on the
 //!   thread count, and stratified, jittered points on a convex polygon (000 §6.2).
 //! * [`polygon`]: clipping against a plane, triangulation, ray/triangle tests.
@@ -17,6 +19,7 @@
 
 mod bvh;
 pub mod formfactor;
+pub mod hemicube;
 pub mod polygon;
 pub mod sampling;
 pub mod visibility;
