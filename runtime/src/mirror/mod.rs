@@ -373,8 +373,13 @@ impl ApplicationHandler for App {
             return;
         }
         match self.frame() {
-            Ok(true) => {}
-            Ok(false) => event_loop.exit(),
+            Ok(Step::Presented) => event_loop.set_control_flow(ControlFlow::Poll),
+            // Nothing to present into (minimised, or every window image is
+            // with the display): look again shortly instead of spinning.
+            Ok(Step::Skipped) => event_loop.set_control_flow(ControlFlow::wait_duration(
+                std::time::Duration::from_millis(2),
+            )),
+            Ok(Step::Done) => event_loop.exit(),
             Err(e) => {
                 self.error = Some(e);
                 event_loop.exit();
@@ -430,10 +435,10 @@ impl App {
         })
     }
 
-    /// One frame; false when the window should close.
-    fn frame(&mut self) -> Result<bool> {
+    /// One frame.
+    fn frame(&mut self) -> Result<Step> {
         let Some(state) = self.state.as_mut() else {
-            return Ok(false);
+            return Ok(Step::Done);
         };
         let dumping = self.args.dump_last_frame.is_some();
         // --watch: a new version of the file replaces the renderer.
@@ -486,7 +491,11 @@ impl App {
         let Some(frame) = state.presenter.begin_frame()? else {
             // No window image free right now (or no window area): try again,
             // unless the window is closing.
-            return Ok(!state.exiting);
+            return Ok(if state.exiting {
+                Step::Done
+            } else {
+                Step::Skipped
+            });
         };
 
         // Input of this frame: the script's, or the window's.
@@ -672,8 +681,16 @@ impl App {
                 state.hud
             ));
         }
-        Ok(!last)
+        Ok(if last { Step::Done } else { Step::Presented })
     }
+}
+
+/// What a pass of the frame loop did.
+enum Step {
+    Presented,
+    Skipped,
+    /// The window should close.
+    Done,
 }
 
 fn file_name(path: &Path) -> String {
