@@ -89,6 +89,91 @@ pub struct GpuExtensions {
     pub device: Vec<&'static CStr>,
 }
 
+/// Creates the Vulkan instance and device for [`Gpu::with_factory`]. The
+/// direct way is `vkCreateInstance`, the ranked device choice and
+/// `vkCreateDevice`; OpenXR's `XR_KHR_vulkan_enable2` instead creates both
+/// itself (adding the extensions its compositor needs) and names the one
+/// physical device it can share images with (`runtime::xr::vulkan`).
+pub trait VulkanFactory {
+    /// Creates the instance from the renderer's create info.
+    ///
+    /// # Safety
+    ///
+    /// `info` and everything it points to are valid for the call.
+    unsafe fn create_instance(
+        &mut self,
+        entry: &ash::Entry,
+        info: &vk::InstanceCreateInfo<'_>,
+    ) -> Result<vk::Instance, GpuError>;
+
+    /// The physical device that must be used, or `None` to let the GPU
+    /// context choose (see [`Gpu::new`]).
+    ///
+    /// # Safety
+    ///
+    /// `instance` was made by [`VulkanFactory::create_instance`] and is alive.
+    unsafe fn physical_device(
+        &mut self,
+        instance: &ash::Instance,
+    ) -> Result<Option<vk::PhysicalDevice>, GpuError>;
+
+    /// Creates the device on `physical` from the renderer's create info.
+    ///
+    /// # Safety
+    ///
+    /// `physical` belongs to `instance`; `info` and everything it points to
+    /// are valid for the call.
+    unsafe fn create_device(
+        &mut self,
+        instance: &ash::Instance,
+        physical: vk::PhysicalDevice,
+        info: &vk::DeviceCreateInfo<'_>,
+    ) -> Result<vk::Device, GpuError>;
+}
+
+/// `vkCreateInstance` and `vkCreateDevice` through the loader.
+struct DirectFactory;
+
+impl VulkanFactory for DirectFactory {
+    unsafe fn create_instance(
+        &mut self,
+        entry: &ash::Entry,
+        info: &vk::InstanceCreateInfo<'_>,
+    ) -> Result<vk::Instance, GpuError> {
+        // SAFETY: the caller guarantees the create info.
+        let instance = unsafe { entry.create_instance(info, None) }.map_err(|e| {
+            if e == vk::Result::ERROR_INCOMPATIBLE_DRIVER {
+                GpuError::NoDevice("no installable client driver accepted the instance".into())
+            } else {
+                GpuError::Vulkan {
+                    call: "vkCreateInstance",
+                    result: e,
+                }
+            }
+        })?;
+        Ok(instance.handle())
+    }
+
+    unsafe fn physical_device(
+        &mut self,
+        _instance: &ash::Instance,
+    ) -> Result<Option<vk::PhysicalDevice>, GpuError> {
+        Ok(None)
+    }
+
+    unsafe fn create_device(
+        &mut self,
+        instance: &ash::Instance,
+        physical: vk::PhysicalDevice,
+        info: &vk::DeviceCreateInfo<'_>,
+    ) -> Result<vk::Device, GpuError> {
+        // SAFETY: the caller guarantees `physical` and the create info.
+        let device =
+            unsafe { instance.create_device(physical, info, None) }.ctx("vkCreateDevice")?;
+        Ok(device.handle())
+    }
+}
+
 /// Validation messages received so far (warnings and errors; info and verbose
 /// messages are not counted).
 #[derive(Debug, Default)]
@@ -252,6 +337,17 @@ impl Gpu {
     /// As [`Gpu::new`], also enabling `extensions` (a device that lacks one of the
     /// device extensions is passed over, and named in the error if none is left).
     pub fn with_extensions(desc: &GpuDesc, wanted: &GpuExtensions) -> Result<Gpu, GpuError> {
+        Gpu::with_factory(desc, wanted, &mut DirectFactory)
+    }
+
+    /// As [`Gpu::with_extensions`], with the instance and device made by
+    /// `factory` (and on the physical device it names, if it names one, which
+    /// must meet the same requirements as a chosen one).
+    pub fn with_factory(
+        desc: &GpuDesc,
+        wanted: &GpuExtensions,
+        factory: &mut dyn VulkanFactory,
+    ) -> Result<Gpu, GpuError> {
         let validation = desc.validation || validation_from_env();
         // SAFETY: loading the Vulkan loader runs its initialisers; ash requires the
         // library to be a conforming Vulkan loader, which libvulkan.so.1 is.
@@ -311,17 +407,13 @@ impl Gpu {
             // Also catches messages from vkCreateInstance / vkDestroyInstance.
             instance_info = instance_info.push_next(&mut messenger_info);
         }
-        // SAFETY: every pointer in the create info refers to locals alive here.
-        let instance = unsafe { entry.create_instance(&instance_info, None) }.map_err(|e| {
-            if e == vk::Result::ERROR_INCOMPATIBLE_DRIVER {
-                GpuError::NoDevice("no installable client driver accepted the instance".into())
-            } else {
-                GpuError::Vulkan {
-                    call: "vkCreateInstance",
-                    result: e,
-                }
-            }
-        })?;
+        // SAFETY: every pointer in the create info refers to locals alive here;
+        // the handle is a live instance of this loader, whose functions `load`
+        // fetches through the entry's vkGetInstanceProcAddr.
+        let instance = unsafe {
+            let raw = factory.create_instance(&entry, &instance_info)?;
+            ash::Instance::load(entry.static_fn(), raw)
+        };
         // From here on, an early return must destroy the instance: wrap it.
         let guard = InstanceGuard {
             instance: Some(instance),
@@ -337,7 +429,18 @@ impl Gpu {
             guard.debug = Some((loader, messenger));
         }
 
-        let (physical, queue_family, info) = pick_device(guard.instance(), &wanted.device)?;
+        // SAFETY: the instance came from the factory and is alive.
+        let named = unsafe { factory.physical_device(guard.instance()) }?;
+        let (physical, queue_family, info) = match named {
+            None => pick_device(guard.instance(), &wanted.device)?,
+            Some(physical) => {
+                let (_, family, info) = examine_device(guard.instance(), physical, &wanted.device)
+                    .map_err(|why| {
+                        GpuError::NoDevice(format!("the device named for this session: {why}"))
+                    })?;
+                (physical, family, info)
+            }
+        };
         let device_extensions: Vec<*const std::ffi::c_char> =
             wanted.device.iter().map(|e| e.as_ptr()).collect();
 
@@ -351,9 +454,12 @@ impl Gpu {
             .enabled_extension_names(&device_extensions)
             .push_next(&mut multiview);
         // SAFETY: `physical` came from this instance; the create info points to
-        // locals alive for the call.
-        let device = unsafe { guard.instance().create_device(physical, &device_info, None) }
-            .ctx("vkCreateDevice")?;
+        // locals alive for the call; the handle is a live device of this
+        // instance, whose functions `load` fetches through vkGetDeviceProcAddr.
+        let device = unsafe {
+            let raw = factory.create_device(guard.instance(), physical, &device_info)?;
+            ash::Device::load(guard.instance().fp_v1_0(), raw)
+        };
         // SAFETY: the queue family and index were requested at device creation.
         let queue = unsafe { device.get_device_queue(queue_family, 0) };
         let pool_info = vk::CommandPoolCreateInfo::default()
@@ -511,76 +617,13 @@ fn pick_device(
     let mut best: Option<(u32, vk::PhysicalDevice, u32, DeviceInfo)> = None;
     let mut rejected = Vec::new();
     for physical in devices {
-        // SAFETY: `physical` was enumerated from this instance.
-        let props = unsafe { instance.get_physical_device_properties(physical) };
-        let name = c_name(&props.device_name);
-        if props.api_version < vk::API_VERSION_1_1 {
-            rejected.push(format!("{name}: Vulkan 1.0 only"));
-            continue;
-        }
-        // SAFETY: as above.
-        let families = unsafe { instance.get_physical_device_queue_family_properties(physical) };
-        let Some(family) = families
-            .iter()
-            .position(|f| f.queue_flags.contains(vk::QueueFlags::GRAPHICS))
-        else {
-            rejected.push(format!("{name}: no graphics queue"));
-            continue;
-        };
-        // SAFETY: as above; the features struct is a local.
-        let mut multiview = vk::PhysicalDeviceMultiviewFeatures::default();
-        let mut features = vk::PhysicalDeviceFeatures2::default().push_next(&mut multiview);
-        unsafe { instance.get_physical_device_features2(physical, &mut features) };
-        if multiview.multiview == vk::FALSE {
-            rejected.push(format!("{name}: no multiview"));
-            continue;
-        }
-        if !device_extensions.is_empty() {
-            // SAFETY: plain query on a physical device of this instance.
-            let available = unsafe { instance.enumerate_device_extension_properties(physical) }
-                .unwrap_or_default();
-            let missing: Vec<String> = device_extensions
-                .iter()
-                .filter(|want| {
-                    !available
-                        .iter()
-                        .any(|e| e.extension_name_as_c_str() == Ok(**want))
-                })
-                .map(|want| want.to_string_lossy().into_owned())
-                .collect();
-            if !missing.is_empty() {
-                rejected.push(format!("{name}: no {}", missing.join(", ")));
-                continue;
+        match examine_device(instance, physical, device_extensions) {
+            Err(why) => rejected.push(why),
+            Ok((rank, family, info)) => {
+                if best.as_ref().is_none_or(|b| rank < b.0) {
+                    best = Some((rank, physical, family, info));
+                }
             }
-        }
-        let driver_id = if props.api_version >= vk::API_VERSION_1_2 {
-            let mut driver = vk::PhysicalDeviceDriverProperties::default();
-            let mut props2 = vk::PhysicalDeviceProperties2::default().push_next(&mut driver);
-            // SAFETY: a 1.2 device supports the driver-properties query; locals only.
-            unsafe { instance.get_physical_device_properties2(physical, &mut props2) };
-            Some(driver.driver_id)
-        } else {
-            None
-        };
-        // SAFETY: plain query.
-        let memory = unsafe { instance.get_physical_device_memory_properties(physical) };
-        let rank = match props.device_type {
-            vk::PhysicalDeviceType::DISCRETE_GPU => 0,
-            vk::PhysicalDeviceType::INTEGRATED_GPU => 1,
-            vk::PhysicalDeviceType::VIRTUAL_GPU => 2,
-            vk::PhysicalDeviceType::CPU => 3,
-            _ => 4,
-        };
-        let info = DeviceInfo {
-            name,
-            driver_id,
-            api_version: props.api_version,
-            device_type: props.device_type,
-            limits: props.limits,
-            memory,
-        };
-        if best.as_ref().is_none_or(|b| rank < b.0) {
-            best = Some((rank, physical, family as u32, info));
         }
     }
     match best {
@@ -588,6 +631,81 @@ fn pick_device(
         None if rejected.is_empty() => Err(GpuError::NoDevice("the loader lists no device".into())),
         None => Err(GpuError::NoDevice(rejected.join("; "))),
     }
+}
+
+/// Checks one device (Vulkan 1.1, a graphics queue, multiview, the wanted
+/// extensions): its rank (lower is preferred), graphics queue family and
+/// description, or why it cannot be used.
+fn examine_device(
+    instance: &ash::Instance,
+    physical: vk::PhysicalDevice,
+    device_extensions: &[&CStr],
+) -> Result<(u32, u32, DeviceInfo), String> {
+    // SAFETY: `physical` belongs to this instance.
+    let props = unsafe { instance.get_physical_device_properties(physical) };
+    let name = c_name(&props.device_name);
+    if props.api_version < vk::API_VERSION_1_1 {
+        return Err(format!("{name}: Vulkan 1.0 only"));
+    }
+    // SAFETY: as above.
+    let families = unsafe { instance.get_physical_device_queue_family_properties(physical) };
+    let Some(family) = families
+        .iter()
+        .position(|f| f.queue_flags.contains(vk::QueueFlags::GRAPHICS))
+    else {
+        return Err(format!("{name}: no graphics queue"));
+    };
+    // SAFETY: as above; the features struct is a local.
+    let mut multiview = vk::PhysicalDeviceMultiviewFeatures::default();
+    let mut features = vk::PhysicalDeviceFeatures2::default().push_next(&mut multiview);
+    unsafe { instance.get_physical_device_features2(physical, &mut features) };
+    if multiview.multiview == vk::FALSE {
+        return Err(format!("{name}: no multiview"));
+    }
+    if !device_extensions.is_empty() {
+        // SAFETY: plain query on a physical device of this instance.
+        let available =
+            unsafe { instance.enumerate_device_extension_properties(physical) }.unwrap_or_default();
+        let missing: Vec<String> = device_extensions
+            .iter()
+            .filter(|want| {
+                !available
+                    .iter()
+                    .any(|e| e.extension_name_as_c_str() == Ok(**want))
+            })
+            .map(|want| want.to_string_lossy().into_owned())
+            .collect();
+        if !missing.is_empty() {
+            return Err(format!("{name}: no {}", missing.join(", ")));
+        }
+    }
+    let driver_id = if props.api_version >= vk::API_VERSION_1_2 {
+        let mut driver = vk::PhysicalDeviceDriverProperties::default();
+        let mut props2 = vk::PhysicalDeviceProperties2::default().push_next(&mut driver);
+        // SAFETY: a 1.2 device supports the driver-properties query; locals only.
+        unsafe { instance.get_physical_device_properties2(physical, &mut props2) };
+        Some(driver.driver_id)
+    } else {
+        None
+    };
+    // SAFETY: plain query.
+    let memory = unsafe { instance.get_physical_device_memory_properties(physical) };
+    let rank = match props.device_type {
+        vk::PhysicalDeviceType::DISCRETE_GPU => 0,
+        vk::PhysicalDeviceType::INTEGRATED_GPU => 1,
+        vk::PhysicalDeviceType::VIRTUAL_GPU => 2,
+        vk::PhysicalDeviceType::CPU => 3,
+        _ => 4,
+    };
+    let info = DeviceInfo {
+        name,
+        driver_id,
+        api_version: props.api_version,
+        device_type: props.device_type,
+        limits: props.limits,
+        memory,
+    };
+    Ok((rank, family as u32, info))
 }
 
 /// A fence wrapper.

@@ -13,13 +13,11 @@
 //! 3. [`XrVulkanFactory::create_device`]: `xrCreateVulkanDeviceKHR` on it with
 //!    the renderer's `VkDeviceCreateInfo` (one graphics queue, multiview on).
 //!
-//! The GPU context ([`crate::gpu::Gpu`]) owns the results. It creates its
-//! instance and device itself today (`Gpu::new`); [`create_gpu`] needs a way to
-//! hand it these three steps instead, which the GPU module does not offer yet
-//! (see its notes).
+//! The GPU context ([`crate::gpu::Gpu`]) owns the results: [`create_gpu`]
+//! hands it these three steps through its `VulkanFactory` hook.
 
 use super::{system::XrSystem, XrError, XrResult};
-use crate::gpu::Gpu;
+use crate::gpu::{Gpu, GpuDesc, GpuError, GpuExtensions, VulkanFactory};
 use ash::vk::{self, Handle};
 use openxr as xr;
 
@@ -155,20 +153,68 @@ impl XrVulkanFactory {
     }
 }
 
-/// The GPU context for a headset session: Vulkan created through the runtime.
-///
-/// Not available yet: [`Gpu`] creates its instance and device itself
-/// (`vkCreateInstance`, its own device choice, `vkCreateDevice`), and has no
-/// way to let [`XrVulkanFactory`] do those three steps. A GPU context made by
-/// `Gpu::new` would lack the runtime's required extensions and may sit on
-/// another device, which conformant runtimes refuse, so this reports the gap
-/// instead of pretending.
+/// [`XrVulkanFactory`] as the GPU context's [`VulkanFactory`]: OpenXR failures
+/// become [`GpuError::Unsupported`] carrying the OpenXR message.
+struct GpuHook {
+    factory: XrVulkanFactory,
+    /// The Vulkan loader the instance was made with (its
+    /// `vkGetInstanceProcAddr` is handed to OpenXR again for the device).
+    entry: Option<ash::Entry>,
+}
+
+fn hook_error(e: XrError) -> GpuError {
+    GpuError::Unsupported(e.to_string())
+}
+
+impl VulkanFactory for GpuHook {
+    unsafe fn create_instance(
+        &mut self,
+        entry: &ash::Entry,
+        info: &vk::InstanceCreateInfo<'_>,
+    ) -> Result<vk::Instance, GpuError> {
+        self.entry = Some(entry.clone());
+        // SAFETY: the GPU context passes a valid create info (the trait's
+        // contract), and XrSystem::new called xrGetVulkanGraphicsRequirements2KHR.
+        unsafe { self.factory.create_instance(entry, info) }.map_err(hook_error)
+    }
+
+    unsafe fn physical_device(
+        &mut self,
+        instance: &ash::Instance,
+    ) -> Result<Option<vk::PhysicalDevice>, GpuError> {
+        // SAFETY: the instance came from `create_instance` above.
+        unsafe { self.factory.physical_device(instance.handle()) }
+            .map(Some)
+            .map_err(hook_error)
+    }
+
+    unsafe fn create_device(
+        &mut self,
+        _instance: &ash::Instance,
+        physical: vk::PhysicalDevice,
+        info: &vk::DeviceCreateInfo<'_>,
+    ) -> Result<vk::Device, GpuError> {
+        let entry = self
+            .entry
+            .as_ref()
+            .ok_or_else(|| GpuError::Unsupported("device requested before the instance".into()))?;
+        // SAFETY: `physical` is the device `physical_device` named (the GPU
+        // context passes it back), and the create info is valid (the trait's
+        // contract).
+        unsafe { self.factory.create_device(entry, physical, info) }.map_err(hook_error)
+    }
+}
+
+/// The GPU context for a headset session: Vulkan 1.1 instance and device
+/// created through the runtime, on the physical device it names.
 pub fn create_gpu(system: &XrSystem, validation: bool) -> Result<Gpu, XrError> {
-    let _ = (XrVulkanFactory::new(system), validation);
-    Err(XrError::Unsupported {
-        runtime: system.runtime.clone(),
-        reason: "this build cannot yet create its Vulkan device through OpenXR \
-                 (xrCreateVulkanInstanceKHR/xrCreateVulkanDeviceKHR need a hook in gpu::Gpu)"
-            .into(),
-    })
+    let mut hook = GpuHook {
+        factory: XrVulkanFactory::new(system),
+        entry: None,
+    };
+    Ok(Gpu::with_factory(
+        &GpuDesc { validation },
+        &GpuExtensions::default(),
+        &mut hook,
+    )?)
 }
