@@ -44,6 +44,7 @@ use crate::brdf::normalization::funk_hecke_d;
 use crate::brdf::GlossyLobe;
 use crate::format::{Batch, Representation, ScalarType, Solution, Vertex};
 use crate::geometry::formfactor::{point_to_polygon, wallace};
+use crate::geometry::polygon::clip_to_halfspace;
 use crate::geometry::sampling::{stratified_points, stream_id, Rng};
 use crate::mesh::Mesh;
 use crate::scene::Scene;
@@ -279,6 +280,7 @@ struct ReceivedSh {
 #[derive(Default)]
 struct DirScratch {
     points: Vec<DVec3>,
+    clipped: Vec<DVec3>,
     targets: Vec<DVec3>,
     flags: Vec<bool>,
     samples: Vec<(DVec3, f64)>,
@@ -334,10 +336,20 @@ impl DirShot<'_> {
                     scratch.samples.push((s.centre, unoccluded));
                     return (q, s.samples, 0);
                 }
+                // The samples of `Shot::draw_visible_part_samples`: over the
+                // part of the source in front of the receiver's horizon.
+                clip_to_halfspace(s.polygon(), origin, n, &mut scratch.clipped);
+                let part: &[DVec3] = if scratch.clipped.len() >= 3 {
+                    &scratch.clipped
+                } else {
+                    s.polygon()
+                };
                 let mut rng = Rng::new(s.seed, stream_id(s.index, v as u64));
-                stratified_points(s.polygon(), s.samples, &mut rng, &mut scratch.points);
+                stratified_points(part, s.samples, &mut rng, &mut scratch.points);
                 scratch.targets.clear();
-                scratch.targets.extend(scratch.points.iter().map(|&p| p + lift));
+                scratch
+                    .targets
+                    .extend(scratch.points.iter().map(|&p| p + lift));
                 s.occluder
                     .visible_each(origin, &scratch.targets, &mut scratch.flags);
                 let share = unoccluded / s.samples as f64;
@@ -355,7 +367,9 @@ impl DirShot<'_> {
                 stratified_points(s.polygon(), s.samples, &mut rng, &mut scratch.points);
                 let rays = if s.shadows {
                     scratch.targets.clear();
-                    scratch.targets.extend(scratch.points.iter().map(|&p| p + lift));
+                    scratch
+                        .targets
+                        .extend(scratch.points.iter().map(|&p| p + lift));
                     s.occluder
                         .visible_each(origin, &scratch.targets, &mut scratch.flags);
                     s.samples
@@ -519,6 +533,9 @@ impl Solver {
     fn shoot_directional(&mut self, d: &mut Directional) -> ShotReport {
         let start = Instant::now();
         let source = self.choose_directional_source(d);
+        // The light not yet shot, this shot's included, for the meshing's
+        // local radiance level (as in `Solver::step`).
+        let ambient = self.ambient();
         let range = d.patch_range(&self.mesh, source as usize);
         let unshot: Vec<f64> = d.patch_unshot[range.clone()].to_vec();
         d.patch_unshot[range].fill(0.0);
@@ -580,6 +597,10 @@ impl Solver {
                 }
                 self.visible[v] = r.visible;
                 rays += r.rays as u64;
+                // The diffuse proxies (mean radiance c₀₀ Y₀₀) the L = 0
+                // refinement test reads.
+                self.radiance[v] = DVec3::from_slice(&d.radiance[o..o + 3]) * Y00;
+                self.received[v] = DVec3::from_slice(&r.coefficients[..3]) * Y00;
             }
         }
         let mut splits = 0;
@@ -592,7 +613,12 @@ impl Solver {
                     received: &mut self.received,
                     visible: &mut self.visible,
                     kd: &self.kd,
-                    criteria: Criteria::from_settings(&self.settings),
+                    // The diffuse step's criteria (see `Solver::step`).
+                    criteria: Criteria {
+                        dark_floor: super::refine::DARK_FLOOR * self.radiance_level,
+                        ambient,
+                        ..Criteria::from_settings(&self.settings)
+                    },
                 },
                 d,
                 &DirShot {
@@ -627,6 +653,7 @@ impl Solver {
             self.patch_unshot[p] = d.hemisphere_equivalent(order, &d.patch_unshot[range]);
         }
         d.received.fill(0.0);
+        self.received.fill(DVec3::ZERO);
         for v in 0..self.mesh.vertices.len() {
             let o = d.vertex_offset[v];
             self.radiance[v] = DVec3::from_slice(&d.radiance[o..o + 3]) * Y00;
@@ -692,7 +719,12 @@ impl Solver {
                 }
                 d.radiance = s.radiance.into_iter().map(f64::from_bits).collect();
                 d.patch_unshot = s.patch_unshot.into_iter().map(f64::from_bits).collect();
-                if !d.radiance.iter().chain(&d.patch_unshot).all(|x| x.is_finite()) {
+                if !d
+                    .radiance
+                    .iter()
+                    .chain(&d.patch_unshot)
+                    .all(|x| x.is_finite())
+                {
                     return Err("it holds non-finite coefficients".into());
                 }
                 d
@@ -745,9 +777,7 @@ impl Solver {
         for t in self.mesh.triangles() {
             let order = d.surface_order[self.mesh.vertices[t[0] as usize].surface as usize];
             if let Some(batch) = batches.get_mut(&order) {
-                batch
-                    .indices
-                    .extend(t.iter().map(|&v| local[v as usize]));
+                batch.indices.extend(t.iter().map(|&v| local[v as usize]));
             }
         }
         solution.batches = batches.into_values().collect();
@@ -767,8 +797,11 @@ struct RefineState<'a> {
 /// Adaptive subdivision in directional mode (see [`super::refine`]): an edge
 /// fails when the L2 norm of its ends' coefficient difference (by Parseval,
 /// the L2 difference of their radiance over the sphere) exceeds the threshold
-/// times the larger end's norm, per channel. For L = 0 this is the diffuse
-/// test on c₀₀. Returns (splits, rays, dirty surfaces).
+/// times the larger end's norm, per channel, after the diffuse test's allowance
+/// for sampling noise. Surfaces of order 0 use the diffuse test itself
+/// ([`Criteria::should_split_at`]) on the mean-radiance proxies, so a scene with
+/// Ks = 0 meshes exactly as in diffuse mode. Element size is not yet tied to α
+/// (the glossy test only sees what the vertices' SH resolve). Returns (splits, rays, dirty surfaces).
 fn refine_directional(
     state: RefineState<'_>,
     d: &mut Directional,
@@ -800,7 +833,15 @@ fn refine_directional(
         let to_split: Vec<u32> = candidates
             .iter()
             .copied()
-            .filter(|&e| should_split_sh(mesh, d, visible, &criteria, e))
+            .filter(|&e| {
+                let surface = mesh.patches[mesh.elements[e as usize].patch as usize].surface;
+                if d.surface_order[surface as usize] == 0 {
+                    // Diffuse surfaces: exactly the diffuse solver's test.
+                    criteria.should_split_at(mesh, Some(kd), radiance, received, visible, e)
+                } else {
+                    should_split_sh(mesh, d, visible, &criteria, e)
+                }
+            })
             .collect();
         if to_split.is_empty() {
             break;
@@ -832,7 +873,7 @@ fn refine_directional(
             for (k, e) in earlier.iter().enumerate() {
                 d.radiance[range.start + k] = e / nv.parent_count as f64;
             }
-            radiance.push(DVec3::ZERO);
+            radiance.push(DVec3::from_slice(&d.radiance[range.start..range.start + 3]) * Y00);
             received.push(DVec3::ZERO);
             visible.push(0);
         }
@@ -851,6 +892,8 @@ fn refine_directional(
                 d.radiance[o + k] += c;
                 d.received[o + k] = *c;
             }
+            radiance[nv.id as usize] = DVec3::from_slice(&d.radiance[o..o + 3]) * Y00;
+            received[nv.id as usize] = DVec3::from_slice(&r.coefficients[..3]) * Y00;
             visible[nv.id as usize] = r.visible;
             rays += r.rays as u64;
         }
@@ -888,6 +931,18 @@ fn should_split_sh(
         }
         s
     };
+    // The diffuse test's allowance for sampling noise (see
+    // `Criteria::should_split`), on this shot's ΔL norm: σ_v = |ΔL_v| ·
+    // √((n − k)/(k n)) for k of n visible rays.
+    let samples = criteria.samples.max(1) as f64;
+    let sigma2 = |v: usize| {
+        let k = visible[v] as f64;
+        if k > 0.0 && k < samples {
+            norms(&d.received[d.vertex_range(mesh, v)]) * ((samples - k) / (k * samples))
+        } else {
+            DVec3::ZERO
+        }
+    };
     (0..n).any(|k| {
         let (a, b) = (corners[k] as usize, corners[(k + 1) % n] as usize);
         let threshold = if visible[a] != visible[b] {
@@ -895,16 +950,23 @@ fn should_split_sh(
         } else {
             criteria.edge_threshold
         };
+        let noise = (sigma2(a) + sigma2(b)).max_element().sqrt();
         let (ca, cb) = (
             &d.radiance[d.vertex_range(mesh, a)],
             &d.radiance[d.vertex_range(mesh, b)],
         );
-        let local = norms(ca).max(norms(cb)).max_element().sqrt();
+        // The dark floor and the ambient level are radiances; an isotropic
+        // radiance L has norm L √(4π).
+        let local = norms(ca)
+            .max(norms(cb))
+            .max_element()
+            .sqrt()
+            .max((criteria.dark_floor + criteria.ambient.max_element()) * (4.0 * PI).sqrt());
         let mut diff = DVec3::ZERO;
         for (x, y) in ca.chunks_exact(3).zip(cb.chunks_exact(3)) {
             let t = DVec3::from_slice(x) - DVec3::from_slice(y);
             diff += t * t;
         }
-        local > 0.0 && diff.max_element().sqrt() > threshold * local
+        local > 0.0 && diff.max_element().sqrt() - 2.0 * noise > threshold * local
     })
 }
