@@ -78,15 +78,23 @@ fn main() {
             && std::arch::is_x86_feature_detected!("avx2")
             && std::arch::is_x86_feature_detected!("fma")
     );
-    let quick = std::env::args().any(|a| a == "--quick");
+    let args: Vec<String> = std::env::args().collect();
+    let quick = args.iter().any(|a| a == "--quick");
+    // `--only WORD`: run only the methods, scenes and workloads whose names
+    // contain WORD (repeatable; all must match), e.g. for profiling.
+    let only: Vec<String> = args
+        .windows(2)
+        .filter(|w| w[0] == "--only")
+        .map(|w| w[1].clone())
+        .collect();
     let cornell = load_cornell_box();
     let big = generated_scene(&cornell);
     for scene in [&cornell, &big] {
-        run_scene(scene, quick);
+        run_scene(scene, quick, &only);
     }
 }
 
-fn run_scene(scene: &Scene, quick: bool) {
+fn run_scene(scene: &Scene, quick: bool, only: &[String]) {
     let start = Instant::now();
     let occ = Occluder::new(&scene.polygons);
     let build = start.elapsed();
@@ -110,6 +118,13 @@ fn run_scene(scene: &Scene, quick: bool) {
     #[cfg(feature = "compare-embree")]
     let embree = embree_cmp::Embree::new(&embree_device, &scene.polygons);
     for w in &workloads {
+        let report =
+            |w: &Workload, budget: Duration, name: &str, count: &dyn Fn(DVec3, &[DVec3]) -> u32| {
+                let label = format!("{} {} {}", scene.name, w.name, name);
+                if only.iter().all(|o| label.contains(o.as_str())) {
+                    report(w, budget, name, count);
+                }
+            };
         println!(
             "-- {} ({} receivers × {SAMPLES} = {} segments)",
             w.name,
@@ -126,16 +141,16 @@ fn run_scene(scene: &Scene, quick: bool) {
             w,
             budget,
             "own BVH4, packets of 64 (count_visible)",
-            |o, t| occ.count_visible(o, t),
+            &|o, t| occ.count_visible(o, t),
         );
-        report(w, budget, "own BVH4, single rays (visible)", |o, t| {
+        report(w, budget, "own BVH4, single rays (visible)", &|o, t| {
             t.iter().filter(|&&x| occ.visible(o, x)).count() as u32
         });
         #[cfg(feature = "compare-obvhs")]
         {
             println!("   (obvhs build {:.1} ms)", obvhs.build_ms);
             let eps = occ.scene_epsilon();
-            report(w, budget, "obvhs 0.4 CWBVH, single rays", |o, t| {
+            report(w, budget, "obvhs 0.4 CWBVH, single rays", &|o, t| {
                 obvhs.count_visible(o, t, eps)
             });
         }
@@ -143,14 +158,14 @@ fn run_scene(scene: &Scene, quick: bool) {
         {
             println!("   (embree build {:.1} ms)", embree.build_ms);
             let eps = occ.scene_epsilon();
-            report(w, budget, "Embree 3 rtcOccluded1, single rays", |o, t| {
+            report(w, budget, "Embree 3 rtcOccluded1, single rays", &|o, t| {
                 embree.count_visible_1(o, t, eps)
             });
             report(
                 w,
                 budget,
                 "Embree 3 rtcOccluded16, packets of 16",
-                |o, t| embree.count_visible_16(o, t, eps),
+                &|o, t| embree.count_visible_16(o, t, eps),
             );
         }
     }
@@ -158,7 +173,7 @@ fn run_scene(scene: &Scene, quick: bool) {
 
 /// Runs `count` over the workload repeatedly for about `budget` and prints the
 /// best pass's rate and the number of visible segments.
-fn report(w: &Workload, budget: Duration, name: &str, count: impl Fn(DVec3, &[DVec3]) -> u32) {
+fn report(w: &Workload, budget: Duration, name: &str, count: &dyn Fn(DVec3, &[DVec3]) -> u32) {
     let pass = || {
         let mut visible = 0u64;
         for (i, &o) in w.origins.iter().enumerate() {
