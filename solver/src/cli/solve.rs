@@ -197,13 +197,24 @@ fn print_warnings(warnings: &[crate::scene::Warning]) {
     }
 }
 
-/// Sets a flag on Ctrl-C; the loop checks it between shots. If the handler cannot
-/// be installed, Ctrl-C kills the process as usual and only the last periodic
-/// checkpoint survives, which is said once.
+/// Sets a flag on Ctrl-C; the loop checks it between shots. A second Ctrl-C
+/// quits at once (a long shot need not be waited for), keeping the last periodic
+/// checkpoint; every file is written atomically, so none is left half-written. If
+/// the handler cannot be installed, Ctrl-C kills the process as usual, which is
+/// said once.
 fn install_ctrlc() -> Arc<AtomicBool> {
     let flag = Arc::new(AtomicBool::new(false));
     let handler_flag = Arc::clone(&flag);
-    if let Err(err) = ctrlc::set_handler(move || handler_flag.store(true, Ordering::SeqCst)) {
+    let installed = ctrlc::set_handler(move || {
+        if handler_flag.swap(true, Ordering::SeqCst) {
+            eprintln!("\nsolver: second Ctrl-C: quitting now; --resume continues from the last checkpoint");
+            std::process::exit(EXIT_INTERRUPTED.into());
+        }
+        eprintln!(
+            "\nsolver: Ctrl-C: stopping after the current shot (press again to quit at once)"
+        );
+    });
+    if let Err(err) = installed {
         eprintln!("solver: note: Ctrl-C will stop without a final checkpoint ({err})");
     }
     flag
@@ -231,7 +242,10 @@ fn solve(
         let solver = Solver::new(scene, settings)
             .map_err(plain)
             .with_context(|| format!("setting up the solve of {}", args.scene.display()))?;
-        solver.warnings().iter().for_each(|w| eprintln!("solver: warning: {w}"));
+        solver
+            .warnings()
+            .iter()
+            .for_each(|w| eprintln!("solver: warning: {w}"));
         session.run(solver, 0.0)
     }
 }
