@@ -45,6 +45,13 @@ pub enum FormFactorMethod {
     Wallace,
 }
 
+/// Default cells per side of a hemicube's top face (`hemicube_resolution`).
+pub const DEFAULT_HEMICUBE_RESOLUTION: u32 = 128;
+
+fn default_hemicube_resolution() -> u32 {
+    DEFAULT_HEMICUBE_RESOLUTION
+}
+
 /// Every knob of a solve, fully resolved.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct SolverSettings {
@@ -53,6 +60,10 @@ pub struct SolverSettings {
     pub form_factors: FormFactorMethod,
     /// Visibility rays per (receiving vertex, source patch).
     pub samples: u32,
+    /// Cells per side of a hemicube's top face (002; even, 2 to 2048): the
+    /// Gauss–Seidel gather's form factors and the hemicube shooter's item buffer.
+    #[serde(default = "default_hemicube_resolution")]
+    pub hemicube_resolution: u32,
     /// Trace visibility rays at all (000 appendix D `-t` turns them off).
     pub shadows: bool,
     /// Stop when total unshot power < threshold × total emitted power.
@@ -95,6 +106,7 @@ pub struct SettingsPatch {
     pub mode: Option<SolveMode>,
     pub form_factors: Option<FormFactorMethod>,
     pub samples: Option<u32>,
+    pub hemicube_resolution: Option<u32>,
     pub shadows: Option<bool>,
     pub threshold: Option<f64>,
     pub max_shots: Option<u64>,
@@ -131,6 +143,7 @@ impl SolverSettings {
             mode: SolveMode::Diffuse,
             form_factors: FormFactorMethod::Analytic,
             samples: 16,
+            hemicube_resolution: DEFAULT_HEMICUBE_RESOLUTION,
             shadows: true,
             threshold: 0.005,
             max_shots: 20_000,
@@ -179,6 +192,7 @@ impl SolverSettings {
             mode,
             form_factors,
             samples,
+            hemicube_resolution,
             shadows,
             threshold,
             max_shots,
@@ -238,6 +252,13 @@ impl SolverSettings {
             "samples",
             self.samples,
             "1 to 4096",
+        )?;
+        check(
+            (2..=2048).contains(&self.hemicube_resolution)
+                && self.hemicube_resolution.is_multiple_of(2),
+            "hemicube_resolution",
+            self.hemicube_resolution,
+            "an even number from 2 to 2048",
         )?;
         check(
             self.threshold.is_finite() && self.threshold > 0.0 && self.threshold < 1.0,

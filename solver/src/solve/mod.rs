@@ -38,6 +38,7 @@
 
 mod checkpoint;
 pub mod directional;
+pub mod gauss_seidel;
 mod output;
 mod refine;
 pub mod shoot;
