@@ -7,7 +7,7 @@
 //!
 //! **Reference.** The meshing of preset `REFERENCE_PRESET` (default `final`) with
 //! `REFERENCE_SAMPLES` visibility rays (default 256) and a threshold of
-//! `REFERENCE_THRESHOLD` (default 1e-4),
+//! `REFERENCE_THRESHOLD` (default 1e-4) and another seed than the presets',
 //! cached in `target/bench-cache/` because it is by far the slowest part (delete
 //! the file to recompute it).
 //!
@@ -42,16 +42,38 @@ struct Run {
     shots: u64,
     rays: u64,
     seconds: f64,
+    /// User + system CPU seconds of the process during the solve (all threads).
+    cpu_seconds: f64,
     unshot_fraction: f64,
+}
+
+/// CPU seconds (user + system, all threads) of this process so far, from
+/// /proc/self/stat in clock ticks of 1/100 s (Linux's USER_HZ); NaN elsewhere. On a
+/// shared machine this, unlike wall time, does not grow with other people's load.
+fn cpu_seconds() -> f64 {
+    std::fs::read_to_string("/proc/self/stat")
+        .ok()
+        .and_then(|s| {
+            // Fields after the parenthesised command name; utime and stime are
+            // fields 14 and 15 of the whole line.
+            let rest = &s[s.rfind(')')? + 2..];
+            let fields: Vec<&str> = rest.split_whitespace().collect();
+            let ticks =
+                fields.get(11)?.parse::<f64>().ok()? + fields.get(12)?.parse::<f64>().ok()?;
+            Some(ticks / 100.0)
+        })
+        .unwrap_or(f64::NAN)
 }
 
 fn solve(scene: &Scene, settings: &SolverSettings) -> Run {
     let mut scene = scene.clone();
     scene.fill_default_patches(settings.patches);
     let start = Instant::now();
+    let cpu_start = cpu_seconds();
     let mut solver = Solver::new(&scene, settings).expect("the Cornell box solves");
     while solver.step().is_some() {}
     let seconds = start.elapsed().as_secs_f64();
+    let cpu_seconds = cpu_seconds() - cpu_start;
     let p = solver.progress();
     Run {
         solution: solver.to_solution(false),
@@ -60,6 +82,7 @@ fn solve(scene: &Scene, settings: &SolverSettings) -> Run {
         shots: p.shots,
         rays: p.rays,
         seconds,
+        cpu_seconds,
         unshot_fraction: p.unshot_fraction,
     }
 }
@@ -148,9 +171,12 @@ fn main() {
     reference_settings.samples = ref_samples;
     reference_settings.threshold = ref_threshold;
     reference_settings.max_shots = u64::MAX / 2;
+    // Other jitter than the presets', so that the reference's noise is independent
+    // of theirs (with the same seed a preset would share the reference's samples).
+    reference_settings.seed = reference_settings.seed.wrapping_add(1000);
     let cache_dir = root.join("target/bench-cache");
     let cache: PathBuf = cache_dir.join(format!(
-        "cornell-reference-{}-s{ref_samples}-t{ref_threshold:e}.sol",
+        "cornell-reference-{}-s{ref_samples}-t{ref_threshold:e}-seed+1000.sol",
         ref_preset.name()
     ));
     let reference = match solver::format::read_solution(&cache) {
@@ -185,10 +211,10 @@ fn main() {
     );
     println!();
     println!(
-        "| preset | samples | threshold | elements | vertices | shots | rays | wall s | \
-         rays/s per core | unshot | error vs reference |"
+        "| preset | samples | threshold | elements | vertices | shots | rays | wall s | CPU s | \
+         rays/s per core (wall) | rays per CPU s | unshot | error vs reference |"
     );
-    println!("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |");
+    println!("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |");
     for preset in [Preset::Draft, Preset::Medium, Preset::Final] {
         if !wanted.split(',').any(|w| w.trim() == preset.name()) {
             continue;
@@ -197,7 +223,7 @@ fn main() {
         let run = solve(&scene, &settings);
         let error = relative_rms(&images(&run.solution, &views), &reference_images);
         println!(
-            "| {} | {} | {} | {} | {} | {} | {:.3e} | {:.2} | {:.3e} | {:.2e} | {:.4} |",
+            "| {} | {} | {} | {} | {} | {} | {:.3e} | {:.2} | {:.2} | {:.3e} | {:.3e} | {:.2e} | {:.4} |",
             preset.name(),
             settings.samples,
             settings.threshold,
@@ -206,7 +232,9 @@ fn main() {
             run.shots,
             run.rays as f64,
             run.seconds,
+            run.cpu_seconds,
             run.rays as f64 / run.seconds / threads as f64,
+            run.rays as f64 / run.cpu_seconds,
             run.unshot_fraction,
             error
         );
