@@ -245,6 +245,10 @@ struct Running {
     frame: u64,
     presented: u64,
     times: stats::FrameTimes,
+    /// Per presented frame: the stereo render (submit and wait), and the
+    /// window's own work (slot wait, acquire, composite submit, present).
+    render_ms: stats::FrameTimes,
+    window_ms: stats::FrameTimes,
     last_present: Option<Instant>,
     last_update: Instant,
     hud: String,
@@ -258,11 +262,16 @@ struct Running {
 impl Running {
     fn summary(&self, controls: &Controls) -> String {
         let (n, median, p99) = self.times.summary();
+        let (_, render, _) = self.render_ms.summary();
+        let (_, window, _) = self.window_ms.summary();
         let c = controls.camera(1, 1);
         let size = self.presenter.extent().unwrap_or((0, 0));
         format!(
             "frames: {} presented, median {:.3} ms, p99 {:.3} ms per frame ({} intervals; {}x{} window, \
-             {:?} present mode, {})\ncamera: eye {:?} {:?} {:?} target {:?} {:?} {:?}\n",
+             {:?} present mode, {})\nframe parts (medians): stereo render {:.3} ms (submit to \
+             fence; the queue runs the previous frame's composite first), window CPU side (slot \
+             wait, acquire, composite submit, present) {:.3} ms\n\
+             camera: eye {:?} {:?} {:?} target {:?} {:?} {:?}\n",
             self.presented,
             median,
             p99,
@@ -271,6 +280,8 @@ impl Running {
             size.1,
             self.presenter.present_mode(),
             self.gpu.info.describe(),
+            render,
+            window,
             c.eye[0],
             c.eye[1],
             c.eye[2],
@@ -424,6 +435,8 @@ impl App {
             frame: 0,
             presented: 0,
             times: stats::FrameTimes::default(),
+            render_ms: stats::FrameTimes::default(),
+            window_ms: stats::FrameTimes::default(),
             last_present: None,
             last_update: now,
             hud: String::new(),
@@ -488,7 +501,10 @@ impl App {
             }
         }
 
-        let Some(frame) = state.presenter.begin_frame()? else {
+        let window_start = Instant::now();
+        let begun = state.presenter.begin_frame()?;
+        let begin_ms = window_start.elapsed().as_secs_f64() * 1e3;
+        let Some(frame) = begun else {
             // No window image free right now (or no window area): try again,
             // unless the window is closing.
             return Ok(if state.exiting {
@@ -603,7 +619,11 @@ impl App {
             Display::Left => (stereo.to_vec(), Layout::Single { layer: 0 }),
             Display::Right => (stereo.to_vec(), Layout::Single { layer: 1 }),
         };
+        let render_start = Instant::now();
         renderer.render(&views, frame.slot)?;
+        state
+            .render_ms
+            .push(render_start.elapsed().as_secs_f64() * 1e3);
         if screenshot {
             state.screenshots += 1;
             let eyes = renderer.read_back(&state.gpu, frame.slot, 2)?;
@@ -649,9 +669,15 @@ impl App {
             scale,
         };
         let dump = last && dumping;
+        let finish_start = Instant::now();
         let image = state
             .presenter
             .finish_frame(&state.gpu, frame, layout, &overlay, dump)?;
+        // A dump waits for the GPU and copies: not a normal frame's work.
+        if !dump {
+            let finish_ms = finish_start.elapsed().as_secs_f64() * 1e3;
+            state.window_ms.push(begin_ms + finish_ms);
+        }
         if let (Some(image), Some(path)) = (image, &self.args.dump_last_frame) {
             write_png(path, image.width, image.height, &image.rgba)?;
             println!("wrote {}", path.display());
