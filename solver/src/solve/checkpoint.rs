@@ -1,7 +1,8 @@
 //! The solver's state between shots, for checkpoint files.
 //!
 //! Between shots the state is: the mesh (rebuilt exactly by replaying its split
-//! log on a fresh mesh of the same scene), each vertex's radiance, each patch's
+//! log on a fresh mesh of the same scene), each vertex's radiance and the part
+//! of it from recorded (emitter) shots, the list of those shots, each patch's
 //! unshot radiance, and the counters. Vertex ΔL is always zero between shots
 //! (it is gathered into the patches), and random samples are drawn from
 //! stateless streams (seed, shot, vertex), so nothing else is needed for a
@@ -34,6 +35,13 @@ pub struct Checkpoint {
     pub radiance: Vec<[u64; 3]>,
     /// Per patch: unshot radiance as f64 bit patterns (RGB).
     pub patch_unshot: Vec<[u64; 3]>,
+    /// Per vertex: the part of the radiance from recorded shots (bits); empty
+    /// when the mode does not keep it (directional).
+    #[serde(default)]
+    pub direct: Vec<[u64; 3]>,
+    /// The recorded (emitter) shots, in order.
+    #[serde(default)]
+    pub recorded: Vec<super::shoot::RecordedShot>,
     /// Directional mode's SH coefficients; absent for a diffuse solve.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub directional: Option<super::DirectionalCheckpoint>,
@@ -63,6 +71,12 @@ impl Solver {
             split_log: self.mesh.split_log.clone(),
             radiance: self.radiance.iter().map(|&v| to_bits(v)).collect(),
             patch_unshot: self.patch_unshot.iter().map(|&v| to_bits(v)).collect(),
+            direct: if self.direct.len() == self.radiance.len() {
+                self.direct.iter().map(|&v| to_bits(v)).collect()
+            } else {
+                Vec::new()
+            },
+            recorded: self.recorded.clone(),
             directional: self.directional_checkpoint(),
         }
     }
@@ -106,6 +120,8 @@ impl Solver {
             .replay(&checkpoint.split_log)
             .map_err(|e| SolveError::CheckpointMismatch(e.to_string()))?;
         if checkpoint.radiance.len() != solver.mesh.vertices.len()
+            || !(checkpoint.direct.is_empty()
+                || checkpoint.direct.len() == solver.mesh.vertices.len())
             || checkpoint.patch_unshot.len() != solver.mesh.patches.len()
         {
             return mismatch(format!(
@@ -118,10 +134,25 @@ impl Solver {
         }
         solver.radiance = checkpoint.radiance.into_iter().map(from_bits).collect();
         solver.patch_unshot = checkpoint.patch_unshot.into_iter().map(from_bits).collect();
+        solver.direct = if checkpoint.direct.is_empty() {
+            vec![DVec3::ZERO; solver.mesh.vertices.len()]
+        } else {
+            checkpoint.direct.into_iter().map(from_bits).collect()
+        };
+        let patches = solver.mesh.patches.len() as u32;
+        if let Some(bad) = checkpoint
+            .recorded
+            .iter()
+            .find(|r| r.patch >= patches || r.index >= checkpoint.shots)
+        {
+            return mismatch(format!("its recorded shot {bad:?} does not fit the solve"));
+        }
+        solver.recorded = checkpoint.recorded;
         if !solver
             .radiance
             .iter()
             .chain(&solver.patch_unshot)
+            .chain(&solver.direct)
             .all(|v| v.is_finite())
         {
             return mismatch("it holds non-finite radiance".into());

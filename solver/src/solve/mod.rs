@@ -53,7 +53,7 @@ use crate::scene::Scene;
 use crate::settings::{SettingsError, SolverSettings};
 use glam::DVec3;
 use rayon::prelude::*;
-use shoot::{Received, Scratch, Shot};
+use shoot::{Received, RecordedShot, Scratch, Shot};
 use std::f64::consts::PI;
 use std::time::Instant;
 
@@ -136,6 +136,10 @@ pub struct Solver {
     radiance: Vec<DVec3>,
     received: Vec<DVec3>,
     visible: Vec<u32>,
+    /// The part of `radiance` that came from recorded (emitter) shots.
+    direct: Vec<DVec3>,
+    /// Every shot from an emitter's patch, in order.
+    recorded: Vec<RecordedShot>,
     /// Per patch: unshot radiance, and (vertex, area) weights of the gather.
     patch_unshot: Vec<DVec3>,
     patch_weights: Vec<Vec<(u32, f64)>>,
@@ -145,6 +149,9 @@ pub struct Solver {
     seconds: f64,
     emitted_power: f64,
     unshot_power: f64,
+    /// The scene's radiance level (brightest channel of the ambient term
+    /// before any shot), for the meshing's dark floor.
+    radiance_level: f64,
     /// Directional mode's SH state (`None` in diffuse mode); see [`directional`].
     directional: Option<Box<Directional>>,
     /// Set-up warnings for the caller to show (see [`Solver::warnings`]).
@@ -242,6 +249,8 @@ impl Solver {
             radiance,
             received: vec![DVec3::ZERO; vertex_count],
             visible: vec![0; vertex_count],
+            direct: vec![DVec3::ZERO; vertex_count],
+            recorded: Vec::new(),
             patch_unshot,
             patch_weights: vec![Vec::new(); patch_count],
             shots: 0,
@@ -249,6 +258,7 @@ impl Solver {
             seconds: 0.0,
             emitted_power,
             unshot_power: 0.0,
+            radiance_level: 0.0,
             directional: None,
             warnings: Vec::new(),
         };
@@ -256,6 +266,7 @@ impl Solver {
         let all: Vec<u32> = (0..solver.mesh.surfaces.len() as u32).collect();
         solver.update_weights(&all);
         solver.unshot_power = solver.total_unshot_power();
+        solver.radiance_level = solver.ambient().max_element();
         Ok(solver)
     }
 
@@ -280,31 +291,29 @@ impl Solver {
         }
         let start = Instant::now();
         let source = self.choose_source();
+        // The light not yet shot, this shot's included, for the meshing's
+        // local radiance level.
+        let ambient = self.ambient();
         let unshot = std::mem::replace(&mut self.patch_unshot[source as usize], DVec3::ZERO);
-        let patch = &self.mesh.patches[source as usize];
-        let polygon = patch.polygon();
-        let centre = polygon.iter().copied().sum::<DVec3>() / polygon.len() as f64;
-        let diameter = polygon
-            .iter()
-            .flat_map(|a| polygon.iter().map(move |b| (*a - *b).length()))
-            .fold(0.0, f64::max);
-        let shot = Shot {
-            index: self.shots,
-            seed: self.settings.seed,
-            source_surface: patch.surface,
-            polygon: patch.corners,
-            corner_count: patch.corner_count as usize,
-            normal: self.mesh.surfaces[patch.surface as usize].normal,
-            centre,
-            area: patch.area,
-            diameter,
+        let shot = Shot::for_patch(
+            &self.mesh,
+            source,
+            self.shots,
             unshot,
-            samples: self.settings.samples,
-            method: self.settings.form_factors,
-            shadows: self.settings.shadows,
-            occluder: &self.occluder,
-            kd: &self.kd,
-        };
+            &self.settings,
+            &self.occluder,
+            &self.kd,
+        );
+        // Shots from emitters are remembered: vertices that later splits create
+        // receive them exactly (see `refine`).
+        let recorded = self.emission[shot.source_surface as usize] != DVec3::ZERO;
+        if recorded {
+            self.recorded.push(RecordedShot {
+                index: self.shots,
+                patch: source,
+                unshot: unshot.to_array().map(f64::to_bits),
+            });
+        }
         let mesh = &self.mesh;
         let results: Vec<Received> = (0..mesh.vertices.len() as u32)
             .into_par_iter()
@@ -317,17 +326,44 @@ impl Solver {
             self.radiance[v] += r.radiance;
             self.received[v] = r.radiance;
             self.visible[v] = r.visible;
+            if recorded {
+                self.direct[v] += r.radiance;
+            }
             rays += r.rays as u64;
         }
         let refined = if self.settings.adaptive {
+            let replay: Vec<Shot> = self
+                .recorded
+                .iter()
+                .map(|r| {
+                    Shot::for_patch(
+                        &self.mesh,
+                        r.patch,
+                        r.index,
+                        r.unshot(),
+                        &self.settings,
+                        &self.occluder,
+                        &self.kd,
+                    )
+                })
+                .collect();
             refine::refine(
                 &mut self.mesh,
                 refine::VertexState {
                     radiance: &mut self.radiance,
                     received: &mut self.received,
                     visible: &mut self.visible,
+                    direct: &mut self.direct,
                 },
-                &refine::Criteria::from_settings(&self.settings),
+                &refine::Replay {
+                    recorded: &replay,
+                    current_recorded: recorded,
+                },
+                &refine::Criteria {
+                    dark_floor: refine::DARK_FLOOR * self.radiance_level,
+                    ambient,
+                    ..refine::Criteria::from_settings(&self.settings)
+                },
                 &shot,
             )
         } else {
@@ -406,34 +442,19 @@ impl Solver {
     /// F(v←s) for every vertex from patch `source` as the next shot would
     /// compute it (same samples and visibility), for tests and measurements.
     pub fn vertex_form_factors(&self, source: u32) -> Vec<f64> {
-        let patch = &self.mesh.patches[source as usize];
-        let polygon = patch.polygon();
-        let centre = polygon.iter().copied().sum::<DVec3>() / polygon.len() as f64;
-        let diameter = polygon
-            .iter()
-            .flat_map(|a| polygon.iter().map(move |b| (*a - *b).length()))
-            .fold(0.0, f64::max);
-        let shot = Shot {
-            index: self.shots,
-            seed: self.settings.seed,
-            source_surface: patch.surface,
-            polygon: patch.corners,
-            corner_count: patch.corner_count as usize,
-            normal: self.mesh.surfaces[patch.surface as usize].normal,
-            centre,
-            area: patch.area,
-            diameter,
-            unshot: DVec3::ONE,
-            samples: self.settings.samples,
-            method: self.settings.form_factors,
-            shadows: self.settings.shadows,
-            occluder: &self.occluder,
-            kd: &self.kd,
-        };
+        let shot = Shot::for_patch(
+            &self.mesh,
+            source,
+            self.shots,
+            DVec3::ONE,
+            &self.settings,
+            &self.occluder,
+            &self.kd,
+        );
         let mut scratch = Scratch::default();
         (0..self.mesh.vertices.len() as u32)
             .map(|v| {
-                if self.mesh.vertices[v as usize].surface == patch.surface {
+                if self.mesh.vertices[v as usize].surface == shot.source_surface {
                     0.0
                 } else {
                     shot.form_factor(&self.mesh, v, &mut scratch).0
@@ -548,5 +569,7 @@ fn scene_centre(scene: &Scene) -> DVec3 {
 
 #[cfg(test)]
 mod directional_tests;
+#[cfg(test)]
+mod physics_tests;
 #[cfg(test)]
 mod tests;

@@ -2,22 +2,42 @@
 //!
 //! An element edge whose end vertices differ in visibility of the source is on
 //! a shadow boundary. A leaf splits when the radiance difference across one of
-//! its edges exceeds `threshold × local radiance` (`shadow_threshold` on shadow
-//! boundaries, `edge_threshold` elsewhere), its area is above
-//! `min_element_area × polygon area` and its depth is below `max_depth`. The
-//! local radiance is the brighter end's brightest channel, so the test is
-//! relative (design notes, "Automatic meshing"): the same mesh results whatever
-//! the units or the emitters' strength.
+//! its edges, less twice its sampling noise, exceeds `threshold × local
+//! radiance` (`shadow_threshold` on shadow boundaries, `edge_threshold`
+//! elsewhere), its area is above `min_element_area × polygon area` and its
+//! depth is below `max_depth` ([`Criteria::should_split_at`]). The local
+//! radiance is the level the vertices are heading for (L + Kd · ambient), never
+//! less than [`DARK_FLOOR`] of the scene's level, so the test is relative
+//! (design notes, "Automatic meshing"): the same mesh results whatever the
+//! units or the emitters' strength.
 //!
 //! New vertices get the radiance of earlier shots interpolated from the corners
 //! that define them (edge midpoint: the two ends; quad centre: the four
 //! corners), 000's "accumulated radiosity interpolated from the vertices on
 //! either side", and are then shot to by the current source; their children are
 //! tested again, recursively, until every edge passes or can split no more.
+//!
+//! 000 argues the interpolation is accurate because an edge with a large
+//! difference would have been split when its light was shot. That holds only if
+//! every shot's structure is resolved as it is shot, which a test on partial
+//! sums does badly (the first of 16 light patches makes every surface look
+//! like a shadow boundary; a ceiling lit by one wall patch looks like one big
+//! gradient). So the solver records every shot from an emitter's patch
+//! ([`super::shoot::RecordedShot`]) and keeps, per vertex, the part of its
+//! radiance that came from them: a new vertex interpolates only the rest (the
+//! emission and the indirect light, which is smooth) and receives every
+//! recorded shot exactly. A shadow boundary can thus be refined whenever the
+//! test finds it, with the direct light at new vertices computed, not guessed.
+//! Emitter patches shoot few times, so this costs a few recorded shots' rays
+//! per new vertex.
+//!
 //! Unshot radiance of earlier shots is not interpolated: it was gathered into
 //! the patches after each shot (see the module documentation of
 //! [`crate::solve`]), so a split neither creates nor loses unshot energy; the
-//! current shot's unshot at a new vertex is its own, computed ΔL.
+//! current shot's unshot at a new vertex is its own, computed ΔL. (A new vertex
+//! does receive the recorded shots' light, so its radiance is better than the
+//! interpolation the patches' unshot was gathered from; the difference is
+//! below the split threshold by construction and is not re-gathered.)
 //!
 //! 000 refines only after emitters shoot; here every shot may refine, since
 //! indirect light casts shadows too, and an edge that already passed is only
@@ -37,7 +57,28 @@ pub struct Criteria {
     pub max_depth: u32,
     /// Fraction of the polygon's area.
     pub min_element_area: f64,
+    /// Visibility rays per receiver (the n of the noise allowance).
+    pub samples: u32,
+    /// The least "local radiance" a difference is measured against (absolute,
+    /// W·sr⁻¹·m⁻²); see [`DARK_FLOOR`]. 0 compares with the local radiance only.
+    pub dark_floor: f64,
+    /// The ambient radiance (Cohen et al. 1988) of the light not yet shot: a
+    /// vertex's local radiance is taken as L + Kd · ambient, the level it is
+    /// heading for, not the partial sum of the shots so far.
+    pub ambient: DVec3,
 }
+
+/// Differences are judged relative to the local radiance, but never relative
+/// to less than this fraction of the scene's radiance level (Cohen et al.'s
+/// ambient term of the unsolved scene: emitted power over π · total area,
+/// times 1 / (1 − average reflectance), i.e. the mean radiance the solution
+/// will have). Weber's law, which the relative test models, fails in the dark
+/// part of the range a display shows: in the dark side of a wide penumbra
+/// radiance rises from zero, so relative differences between neighbours stay
+/// large down to any element size and a purely relative test refines the whole
+/// penumbra to the maximum depth. The floor is relative to the scene's own
+/// level, so the mesh still does not depend on units or emitter strength.
+pub const DARK_FLOOR: f64 = 0.1;
 
 impl Criteria {
     pub fn from_settings(s: &SolverSettings) -> Self {
@@ -46,12 +87,45 @@ impl Criteria {
             shadow_threshold: s.shadow_threshold,
             max_depth: s.max_depth,
             min_element_area: s.min_element_area,
+            samples: if s.shadows { s.samples } else { 0 },
+            dark_floor: 0.0,
+            ambient: DVec3::ZERO,
         }
     }
 
-    /// Whether leaf `e` must split given the vertices' radiance and their
-    /// visibility of the current source.
-    pub fn should_split(&self, mesh: &Mesh, radiance: &[DVec3], visible: &[u32], e: u32) -> bool {
+    /// Whether leaf `e` must split given the vertices' radiance, this shot's
+    /// ΔL and their visibility of the current source (rays that reached it).
+    ///
+    /// An edge a–b fails when, in some channel,
+    ///
+    /// |L_a − L_b| − 2 √(σ_a² + σ_b²) > threshold · max(L̂_a, L̂_b, dark floor)
+    ///
+    /// (the brightest channel of the brighter end), with L̂ = L + Kd · ambient
+    /// the radiance the vertex is heading for. Measuring against the partial
+    /// sum L alone refines every surface lit only indirectly (a ceiling) early
+    /// in the solve, when a few shots make up all of its light and each
+    /// varies across it by tens of percent; 000 avoided this by refining only
+    /// after emitters shot (step 5c).
+    ///
+    ///
+    /// where σ_v is the standard error of this shot's ΔL_v from its k of n
+    /// visible rays, taken as binomial: ΔL = K · F · k/n, so σ_v = ΔL_v ·
+    /// √((n − k)/(k n)) (0 when every ray or none got through). Without the
+    /// noise term a relative test refines every penumbra to the maximum depth:
+    /// neighbouring vertices that see 1 and 2 of 16 rays differ by 100%
+    /// whatever their distance, so the differences never shrink with the
+    /// elements. Stratified sampling is less noisy than binomial, so the
+    /// allowance errs toward splitting less in deep penumbrae, never on a
+    /// sharp boundary (k = n against k = 0 has no noise).
+    pub fn should_split_at(
+        &self,
+        mesh: &Mesh,
+        kd: Option<&[DVec3]>,
+        radiance: &[DVec3],
+        received: &[DVec3],
+        visible: &[u32],
+        e: u32,
+    ) -> bool {
         let el = &mesh.elements[e as usize];
         if !el.is_leaf() || el.depth as u32 >= self.max_depth {
             return false;
@@ -60,18 +134,36 @@ impl Criteria {
         if el.area <= self.min_element_area * surface.area {
             return false;
         }
+        let n = self.samples.max(1) as f64;
+        let sigma = |v: usize| {
+            let k = visible[v] as f64;
+            if k > 0.0 && k < n {
+                received[v].abs() * ((n - k) / (k * n)).sqrt()
+            } else {
+                DVec3::ZERO
+            }
+        };
         let corners = el.corners();
-        let n = corners.len();
-        (0..n).any(|k| {
-            let (a, b) = (corners[k] as usize, corners[(k + 1) % n] as usize);
+        let count = corners.len();
+        (0..count).any(|k| {
+            let (a, b) = (corners[k] as usize, corners[(k + 1) % count] as usize);
             let threshold = if visible[a] != visible[b] {
                 self.shadow_threshold
             } else {
                 self.edge_threshold
             };
             let (la, lb) = (radiance[a], radiance[b]);
-            let local = la.max(lb).max_element();
-            local > 0.0 && (la - lb).abs().max_element() > threshold * local
+            let expected = |v: usize, l: DVec3| {
+                let reflectance = kd.map_or(DVec3::ONE, |kd| kd[mesh.vertices[v].surface as usize]);
+                l + reflectance * self.ambient
+            };
+            let local = expected(a, la)
+                .max(expected(b, lb))
+                .max_element()
+                .max(self.dark_floor);
+            let (sa, sb) = (sigma(a), sigma(b));
+            let noise = (sa * sa + sb * sb).powf(0.5) * 2.0;
+            local > 0.0 && ((la - lb).abs() - noise).max_element() > threshold * local
         })
     }
 }
@@ -81,6 +173,16 @@ pub struct VertexState<'a> {
     pub radiance: &'a mut Vec<DVec3>,
     pub received: &'a mut Vec<DVec3>,
     pub visible: &'a mut Vec<u32>,
+    /// The part of `radiance` from recorded (emitter) shots.
+    pub direct: &'a mut Vec<DVec3>,
+}
+
+/// The recorded shots, re-evaluated exactly at new vertices.
+pub struct Replay<'a, 'b> {
+    /// Every emitter shot so far, in order, the current one last if it is one.
+    pub recorded: &'b [Shot<'a>],
+    /// Whether the current shot is the last of `recorded`.
+    pub current_recorded: bool,
 }
 
 /// What a refinement pass did.
@@ -98,6 +200,7 @@ pub struct Refined {
 pub fn refine(
     mesh: &mut Mesh,
     state: VertexState<'_>,
+    replay: &Replay<'_, '_>,
     criteria: &Criteria,
     shot: &Shot,
 ) -> Refined {
@@ -105,6 +208,7 @@ pub fn refine(
         radiance,
         received,
         visible,
+        direct,
     } = state;
     let mut dirty = vec![false; mesh.surfaces.len()];
     let mut out = Refined::default();
@@ -125,11 +229,14 @@ pub fn refine(
     let mut created = Vec::new();
     loop {
         let to_split: Vec<u32> = {
-            let (mesh, radiance, visible) = (&*mesh, &*radiance, &*visible);
+            let (mesh, radiance, received, visible) = (&*mesh, &*radiance, &*received, &*visible);
+            let kd = shot.kd;
             candidates
                 .par_iter()
                 .copied()
-                .filter(|&e| criteria.should_split(mesh, radiance, visible, e))
+                .filter(|&e| {
+                    criteria.should_split_at(mesh, Some(kd), radiance, received, visible, e)
+                })
                 .collect()
         };
         if to_split.is_empty() {
@@ -150,33 +257,58 @@ pub fn refine(
         }
         for nv in &created {
             debug_assert_eq!(nv.id as usize, radiance.len());
-            // Radiance of the earlier shots: each parent's radiance less this
-            // shot's ΔL, averaged.
+            // The smooth part of each parent's radiance, averaged: less the
+            // recorded shots and this shot's ΔL, which are recomputed exactly.
+            let smooth = |p: usize| {
+                let current = if replay.current_recorded {
+                    DVec3::ZERO
+                } else {
+                    received[p]
+                };
+                radiance[p] - direct[p] - current
+            };
             let earlier = nv
                 .parents()
                 .iter()
-                .map(|&p| radiance[p as usize] - received[p as usize])
+                .map(|&p| smooth(p as usize))
                 .sum::<DVec3>()
                 / nv.parent_count as f64;
             radiance.push(earlier);
             received.push(DVec3::ZERO);
             visible.push(0);
+            direct.push(DVec3::ZERO);
         }
-        let results: Vec<Received> = {
+        let results: Vec<(DVec3, Received, u64)> = {
             let mesh = &*mesh;
             created
                 .par_iter()
                 .map_init(Scratch::default, |scratch, nv| {
-                    shot.receive(mesh, nv.id, scratch)
+                    let mut exact = DVec3::ZERO;
+                    let mut rays = 0u64;
+                    let mut current = Received::default();
+                    for r in replay.recorded {
+                        current = r.receive(mesh, nv.id, scratch);
+                        exact += current.radiance;
+                        rays += current.rays as u64;
+                    }
+                    if !replay.current_recorded {
+                        current = shot.receive(mesh, nv.id, scratch);
+                        rays += current.rays as u64;
+                    }
+                    (exact, current, rays)
                 })
                 .collect()
         };
-        for (nv, r) in created.iter().zip(&results) {
+        for (nv, (exact, current, rays)) in created.iter().zip(&results) {
             let v = nv.id as usize;
-            radiance[v] += r.radiance;
-            received[v] = r.radiance;
-            visible[v] = r.visible;
-            out.rays += r.rays as u64;
+            radiance[v] += *exact;
+            if !replay.current_recorded {
+                radiance[v] += current.radiance;
+            }
+            direct[v] = *exact;
+            received[v] = current.radiance;
+            visible[v] = current.visible;
+            out.rays += rays;
         }
         candidates = children;
     }

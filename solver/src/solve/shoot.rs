@@ -7,6 +7,7 @@
 //! (the sample buffer lives in per-worker [`Scratch`]).
 
 use crate::geometry::formfactor::{point_to_polygon, wallace};
+use crate::geometry::polygon::clip_to_halfspace;
 use crate::geometry::sampling::{stratified_points, stream_id, Rng};
 use crate::geometry::visibility::Occluder;
 use crate::mesh::Mesh;
@@ -38,6 +39,7 @@ pub struct Received {
 #[derive(Default)]
 pub struct Scratch {
     points: Vec<DVec3>,
+    clipped: Vec<DVec3>,
     targets: Vec<DVec3>,
     flags: Vec<bool>,
 }
@@ -66,6 +68,62 @@ pub struct Shot<'a> {
     pub kd: &'a [DVec3],
 }
 
+/// A shot the solver remembers: every shot from an emitter's patch, so that a
+/// vertex created by a later split can receive it exactly instead of by
+/// interpolation (see [`crate::solve::refine`]).
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct RecordedShot {
+    /// The shot's 0-based index (its RNG streams).
+    pub index: u64,
+    pub patch: u32,
+    /// U_s as f64 bit patterns (RGB), exact through any serde format.
+    pub unshot: [u64; 3],
+}
+
+impl RecordedShot {
+    pub fn unshot(&self) -> DVec3 {
+        DVec3::from_array(self.unshot.map(f64::from_bits))
+    }
+}
+
+impl<'a> Shot<'a> {
+    /// The shot of `patch` with unshot radiance `unshot` as shot number `index`.
+    pub fn for_patch(
+        mesh: &Mesh,
+        patch: u32,
+        index: u64,
+        unshot: DVec3,
+        settings: &crate::settings::SolverSettings,
+        occluder: &'a Occluder,
+        kd: &'a [DVec3],
+    ) -> Shot<'a> {
+        let patch = &mesh.patches[patch as usize];
+        let polygon = patch.polygon();
+        let centre = polygon.iter().copied().sum::<DVec3>() / polygon.len() as f64;
+        let diameter = polygon
+            .iter()
+            .flat_map(|a| polygon.iter().map(move |b| (*a - *b).length()))
+            .fold(0.0, f64::max);
+        Shot {
+            index,
+            seed: settings.seed,
+            source_surface: patch.surface,
+            polygon: patch.corners,
+            corner_count: patch.corner_count as usize,
+            normal: mesh.surfaces[patch.surface as usize].normal,
+            centre,
+            area: patch.area,
+            diameter,
+            unshot,
+            samples: settings.samples,
+            method: settings.form_factors,
+            shadows: settings.shadows,
+            occluder,
+            kd,
+        }
+    }
+}
+
 impl Shot<'_> {
     pub fn polygon(&self) -> &[DVec3] {
         &self.polygon[..self.corner_count]
@@ -92,8 +150,9 @@ impl Shot<'_> {
     /// with visibility, and the number of rays that reached the source.
     ///
     /// * `Analytic` (default): the exact unoccluded point-to-polygon factor
-    ///   times the visible fraction of `samples` stratified, jittered rays
-    ///   (design notes, "Form factors").
+    ///   times the visible fraction of `samples` stratified, jittered rays to
+    ///   the part of the source above the receiver's horizon (design notes,
+    ///   "Form factors"; see [`Shot::draw_visible_part_samples`]).
     /// * `Wallace`: 000 eq. 3.1 over the same samples.
     ///
     /// Rays run between points lifted `scene_epsilon` off both surfaces along
@@ -124,8 +183,7 @@ impl Shot<'_> {
                 if !self.shadows {
                     return (unoccluded, self.samples, 0);
                 }
-                let mut rng = Rng::new(self.seed, stream_id(self.index, v as u64));
-                stratified_points(self.polygon(), self.samples, &mut rng, &mut scratch.points);
+                self.draw_visible_part_samples(q, n, v, scratch);
                 let lift = self.normal * self.occluder.scene_epsilon();
                 scratch.points.iter_mut().for_each(|p| *p += lift);
                 let visible = self.occluder.count_visible(origin, &scratch.points);
@@ -162,6 +220,32 @@ impl Shot<'_> {
                 (factor, visible, rays)
             }
         }
+    }
+
+    /// Draws `samples` stratified, jittered points (RNG stream (seed, shot,
+    /// vertex)) into `scratch.points` over the part of the source in front of
+    /// the receiver: the source clipped to the half-space n · (x − o) ≥ 0 with o
+    /// the ray origin, ε above the receiving point.
+    ///
+    /// The analytic factor already leaves out the part of the source behind the
+    /// receiver's tangent plane, so the visible fraction must be estimated over
+    /// the rest only: sampling the whole source would multiply the factor by
+    /// the fraction of the source above the horizon a second time (and blocked
+    /// rays through the receiver's own surface would make it noisy). Clipping
+    /// at the origin's height rather than the point's keeps every ray above
+    /// the receiving plane, at the cost of an ε-thin band of the source.
+    pub fn draw_visible_part_samples(&self, q: DVec3, n: DVec3, v: u32, scratch: &mut Scratch) {
+        let origin = q + n * self.occluder.scene_epsilon();
+        clip_to_halfspace(self.polygon(), origin, n, &mut scratch.clipped);
+        let part: &[DVec3] = if scratch.clipped.len() >= 3 {
+            &scratch.clipped
+        } else {
+            // Only a sliver (numerically nothing) is in front: its factor is
+            // negligible; sample the whole source rather than nothing.
+            self.polygon()
+        };
+        let mut rng = Rng::new(self.seed, stream_id(self.index, v as u64));
+        stratified_points(part, self.samples, &mut rng, &mut scratch.points);
     }
 
     /// ΔL_v = Kd · U_s · F(v←s) (000 Fig. 3.6: ΔRad = SP.unshotRad ·
