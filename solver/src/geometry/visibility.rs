@@ -1114,6 +1114,13 @@ mod tests {
     }
 
     #[test]
+    fn occluder_is_send_and_sync() {
+        // Built once, shared by every solver thread.
+        fn assert_send_sync<T: Send + Sync>() {}
+        assert_send_sync::<Occluder>();
+    }
+
+    #[test]
     fn empty_and_degenerate_scenes_block_nothing() {
         let empty: Vec<Vec<DVec3>> = Vec::new();
         let occ = Occluder::new(&empty);
