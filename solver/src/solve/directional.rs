@@ -612,6 +612,7 @@ impl Solver {
                     radiance: &mut self.radiance,
                     received: &mut self.received,
                     visible: &mut self.visible,
+                    direct: &mut self.direct,
                     kd: &self.kd,
                     // The diffuse step's criteria (see `Solver::step`).
                     criteria: Criteria {
@@ -790,6 +791,9 @@ struct RefineState<'a> {
     radiance: &'a mut Vec<DVec3>,
     received: &'a mut Vec<DVec3>,
     visible: &'a mut Vec<u32>,
+    /// The diffuse step's per-vertex emitter-shot radiance: kept sized (zero)
+    /// in directional mode.
+    direct: &'a mut Vec<DVec3>,
     kd: &'a [DVec3],
     criteria: Criteria,
 }
@@ -812,6 +816,7 @@ fn refine_directional(
         radiance,
         received,
         visible,
+        direct,
         kd,
         criteria,
     } = state;
@@ -876,6 +881,7 @@ fn refine_directional(
             radiance.push(DVec3::from_slice(&d.radiance[range.start..range.start + 3]) * Y00);
             received.push(DVec3::ZERO);
             visible.push(0);
+            direct.push(DVec3::ZERO);
         }
         let results: Vec<ReceivedSh> = {
             let mesh = &*mesh;
