@@ -67,9 +67,9 @@ pub fn run(args: SolveArgs) -> anyhow::Result<ExitCode> {
         .with_context(|| format!("loading scene {}", args.scene.display()))?;
     let mut scene = loaded.scene;
     print_warnings(&scene.warnings);
+    adopt_display_camera(&mut scene, display_flag.as_ref(), loaded.display.as_ref());
     // `--display` stands in for a display file that a TOML config names.
     let display = display_flag.or(loaded.display);
-    adopt_display_camera(&mut scene, display.as_ref(), args.display.is_some());
 
     let display_patch = display
         .as_ref()
@@ -129,12 +129,21 @@ fn check_checkpoint_state(args: &SolveArgs, checkpoint_path: &Path) -> anyhow::R
     Ok(())
 }
 
-/// The display file's camera becomes the scene's when the scene names none, or
-/// when the scene's camera came from a config-named display file that `--display`
-/// replaces.
-fn adopt_display_camera(scene: &mut Scene, display: Option<&DisplayParams>, from_flag: bool) {
-    let Some(display) = display else { return };
-    if scene.camera.is_none() || from_flag {
+/// The display file's camera becomes the scene's when the scene names none. A
+/// `--display` file also replaces the camera of a display file that the TOML
+/// config names, but not the config's own `[camera]` (the config ranks above any
+/// display file).
+fn adopt_display_camera(
+    scene: &mut Scene,
+    flag: Option<&DisplayParams>,
+    named_by_config: Option<&DisplayParams>,
+) {
+    let camera_from_named = named_by_config.is_some_and(|d| scene.camera == Some(d.camera));
+    if let Some(display) = flag {
+        if scene.camera.is_none() || camera_from_named {
+            scene.camera = Some(display.camera);
+        }
+    } else if let (None, Some(display)) = (scene.camera, named_by_config) {
         scene.camera = Some(display.camera);
     }
 }
@@ -330,4 +339,68 @@ fn finish(
         );
     }
     Ok(ExitCode::SUCCESS)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn display(width: u32) -> DisplayParams {
+        DisplayParams {
+            camera: Camera {
+                width,
+                ..Camera::default()
+            },
+            fov_x_deg: 45.0,
+            near: 0.1,
+            far: 10.0,
+            diameter: 1.0,
+            settings: SettingsPatch::default(),
+            file: "d.display".into(),
+            warnings: vec![],
+        }
+    }
+
+    fn scene(camera: Option<Camera>) -> Scene {
+        Scene {
+            polygons: vec![],
+            materials: vec![],
+            units_per_metre: 1.0,
+            up_axis: Default::default(),
+            camera,
+            recentre_offset: glam::DVec3::ZERO,
+            warnings: vec![],
+        }
+    }
+
+    /// Precedence (design notes): the config's camera over any display file's;
+    /// a `--display` file over one that the config names.
+    #[test]
+    fn display_cameras_follow_the_precedence() {
+        let config_camera = Camera {
+            width: 7,
+            ..Camera::default()
+        };
+        let (flag, named) = (display(64), display(32));
+
+        let mut s = scene(None);
+        adopt_display_camera(&mut s, Some(&flag), None);
+        assert_eq!(s.camera.unwrap().width, 64, "fills a missing camera");
+
+        let mut s = scene(Some(config_camera));
+        adopt_display_camera(&mut s, Some(&flag), None);
+        assert_eq!(s.camera.unwrap().width, 7, "config [camera] wins");
+
+        let mut s = scene(Some(named.camera));
+        adopt_display_camera(&mut s, Some(&flag), Some(&named));
+        assert_eq!(
+            s.camera.unwrap().width,
+            64,
+            "--display replaces the named file"
+        );
+
+        let mut s = scene(None);
+        adopt_display_camera(&mut s, None, Some(&named));
+        assert_eq!(s.camera.unwrap().width, 32);
+    }
 }
