@@ -20,6 +20,7 @@ const SHADERS: &[(&str, &str, &[&str])] = &[
     ("inspect.vert", "inspect.vert.spv", &[]),
     ("inspect.frag", "inspect.frag.spv", &[]),
     ("composite.frag", "composite.frag.spv", &[]),
+    ("overlay.frag", "overlay.frag.spv", &[]),
 ];
 
 fn main() {

@@ -185,7 +185,7 @@ fn keys_move_the_camera_as_specified_and_the_window_matches_the_offscreen_render
     script += "3 key z\n3 key z\n";
     script += &"4 key a\n".repeat(3);
     script += "5 key F12\n6 key r\n6 key Tab\n7 press w\n16 release w\n17 key F12\n";
-    script += "18 key Tab\n18 key r\n";
+    script += "18 key Tab\n18 key r\n19 key F12\n";
     std::fs::write(dir.path().join("keys.txt"), script).unwrap();
     let dump = dir.path().join("window.png");
     let mut cmd = x.mirror(&file);
@@ -224,7 +224,8 @@ fn keys_move_the_camera_as_specified_and_the_window_matches_the_offscreen_render
         .filter(|l| l.starts_with("screenshot camera:"))
         .map(parse_camera)
         .collect();
-    assert_eq!(shots.len(), 2, "{stdout}");
+    assert_eq!(shots.len(), 3, "{stdout}");
+    assert_eq!(shots[2], (e0, t0), "F12 after r: the initial camera");
     // f64 trigonometry on values of order 5: 1e-9 is far above rounding.
     for (got, want, what) in [(shots[0], want_a, "keys"), (shots[1], want_b, "walk")] {
         assert!(
@@ -235,7 +236,7 @@ fn keys_move_the_camera_as_specified_and_the_window_matches_the_offscreen_render
     // r restores the initial camera exactly.
     let last = stdout.lines().find(|l| l.starts_with("camera:")).unwrap();
     assert_eq!(parse_camera(last), (e0, t0), "{stdout}");
-    for n in ["001", "002"] {
+    for n in ["001", "002", "003"] {
         for side in ["left", "right"] {
             let png = dir.path().join(format!("shot-{n}-{side}.png"));
             assert_eq!(rgb(&png).dimensions(), (96, 96));
@@ -264,6 +265,16 @@ fn keys_move_the_camera_as_specified_and_the_window_matches_the_offscreen_render
         worst_l <= 1 && worst_r <= 1,
         "window differs from the screenshot by {worst_l} (left) / {worst_r} (right)"
     );
+    // F12 of the initial view writes what `runtime screenshot` writes (the
+    // same renderer, views and size; the window's eye images may be BGRA).
+    for (side, reference) in [("left", &left), ("right", &right)] {
+        let shot = rgb(&dir.path().join(format!("shot-003-{side}.png")));
+        let (worst, _) = max_difference(&shot, 0, &[reference, reference, reference]);
+        assert!(
+            worst <= 1,
+            "F12 {side} differs from the screenshot by {worst}"
+        );
+    }
     // And the two eyes differ (a stereo pair, not one image twice).
     let (_, differing) = max_difference(&window, 0, &[&right, &right, &right]);
     assert!(differing > 100, "left and right eyes look the same");
@@ -320,21 +331,31 @@ fn anaglyph_takes_red_from_the_left_eye_and_cyan_from_the_right() {
 
 #[test]
 fn help_overlay_draws_the_key_list_with_the_bitmap_font() {
-    use runtime::mirror::controls::Controls;
-    use runtime::mirror::font::{TextGrid, CELL_H, CELL_W};
     let x = Xvfb::start();
     let dir = tempfile::tempdir().unwrap();
     let file = write_solution(dir.path(), "room.sol", &common::diffuse_room(2));
     std::fs::write(dir.path().join("s.txt"), "0 key F3\n0 key F1\n").unwrap();
-    let dump = dir.path().join("window.png");
-    let (w, h) = (320u32, 200u32);
-    let mut cmd = x.mirror(&file);
-    cmd.args(["--size", &format!("{w}x{h}"), "--frames", "2", "--script"])
-        .arg(dir.path().join("s.txt"))
-        .arg("--dump-last-frame")
-        .arg(&dump);
-    run_clean(cmd);
-    let window = rgb(&dump);
+    // Both ways of drawing it: blended over copied eye images (the default on
+    // an sRGB window) and inside the full-screen composite.
+    for composite in [false, true] {
+        let dump = dir.path().join(format!("window-{composite}.png"));
+        let (w, h) = (320u32, 200u32);
+        let mut cmd = x.mirror(&file);
+        cmd.args(["--size", &format!("{w}x{h}"), "--frames", "2", "--script"])
+            .arg(dir.path().join("s.txt"))
+            .arg("--dump-last-frame")
+            .arg(&dump);
+        if composite {
+            cmd.env("RUNTIME_MIRROR_COMPOSITE", "1");
+        }
+        run_clean(cmd);
+        check_help_text(&rgb(&dump), w, h);
+    }
+}
+
+fn check_help_text(window: &image::RgbImage, w: u32, h: u32) {
+    use runtime::mirror::controls::Controls;
+    use runtime::mirror::font::{TextGrid, CELL_H, CELL_W};
     // The layout the window uses below 800 px: scale 1, a 4 px margin, the
     // grid cut to what fits.
     let lines: Vec<String> = Controls::help_lines()

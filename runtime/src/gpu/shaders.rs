@@ -21,6 +21,8 @@ pub const INSPECT_FRAG: &[u8] = spirv!("inspect.frag.spv");
 /// The mirror window's composite pass (its vertex shader is `TONEMAP_VERT`,
 /// the full-screen triangle).
 pub const COMPOSITE_FRAG: &[u8] = spirv!("composite.frag.spv");
+/// The mirror's text overlay over copied eye images.
+pub const OVERLAY_FRAG: &[u8] = spirv!("overlay.frag.spv");
 
 /// A shader module (destroyed by its owner, see `render::pipelines`).
 pub fn create_module(gpu: &Gpu, spirv: &[u8]) -> Result<vk::ShaderModule, GpuError> {

@@ -269,8 +269,8 @@ impl Running {
         format!(
             "frames: {} presented, median {:.3} ms, p99 {:.3} ms per frame ({} intervals; {}x{} window, \
              {:?} present mode, {})\nframe parts (medians): stereo render {:.3} ms (submit to \
-             fence; the queue runs the previous frame's composite first), window CPU side (slot \
-             wait, acquire, composite submit, present) {:.3} ms\n\
+             fence; the queue runs the previous frame's copy or composite first), window CPU side \
+             (slot wait, acquire, copy or composite submit, present) {:.3} ms\n\
              camera: eye {:?} {:?} {:?} target {:?} {:?} {:?}\n",
             self.presented,
             median,
@@ -684,9 +684,16 @@ impl App {
         }
         if state.presented == 0 {
             eprintln!(
-                "mirror: first frame presented ({win_w}x{win_h} window, {:?}, {:?} present mode)",
+                "mirror: first frame presented ({win_w}x{win_h} window, {:?}, {:?} present mode, \
+                 {:?}, {})",
                 view.display,
-                state.presenter.present_mode()
+                state.presenter.present_mode(),
+                state.presenter.surface_format(),
+                if state.presenter.copies_eyes() {
+                    "eye images copied"
+                } else {
+                    "composite shader"
+                }
             );
         }
         state.frame += 1;

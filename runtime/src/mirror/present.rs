@@ -25,8 +25,9 @@ use super::font::{self, TextGrid};
 
 /// Frames in flight (eye images, command buffers, fences).
 pub const SLOTS: usize = 2;
-/// The eye images' format (the renderer's output: sRGB, sampled as linear).
-pub const EYE_FORMAT: vk::Format = vk::Format::R8G8B8A8_SRGB;
+/// The eye images' format when the window's cannot be used (the renderer's
+/// output: sRGB, sampled as linear by the composite shader).
+pub const DEFAULT_EYE_FORMAT: vk::Format = vk::Format::R8G8B8A8_SRGB;
 /// The most text the overlay holds.
 pub const MAX_TEXT_COLS: u32 = 100;
 pub const MAX_TEXT_ROWS: u32 = 40;
@@ -98,9 +99,15 @@ pub struct Presenter {
     pipeline_layout: vk::PipelineLayout,
     set_layout: vk::DescriptorSetLayout,
     render_pass: vk::RenderPass,
+    overlay_pipeline: vk::Pipeline,
+    overlay_pass: vk::RenderPass,
     sampler: vk::Sampler,
     format: vk::SurfaceFormatKHR,
     encode_srgb: bool,
+    /// The eye images' format: the window's when it is 8-bit sRGB (then they
+    /// are copied into it), else R8G8B8A8_SRGB through the composite shader.
+    eye_format: vk::Format,
+    copy_path: bool,
     present_mode: vk::PresentModeKHR,
     can_dump: bool,
     next_slot: usize,
@@ -198,9 +205,13 @@ impl Presenter {
             pipeline_layout: vk::PipelineLayout::null(),
             set_layout: vk::DescriptorSetLayout::null(),
             render_pass: vk::RenderPass::null(),
+            overlay_pipeline: vk::Pipeline::null(),
+            overlay_pass: vk::RenderPass::null(),
             sampler: vk::Sampler::null(),
             format: vk::SurfaceFormatKHR::default(),
             encode_srgb: false,
+            eye_format: DEFAULT_EYE_FORMAT,
+            copy_path: false,
             present_mode: vk::PresentModeKHR::FIFO,
             can_dump: false,
             next_slot: 0,
@@ -241,6 +252,27 @@ impl Presenter {
         }
         presenter.format = choose_format(&formats).context("the surface offers no format")?;
         presenter.encode_srgb = !srgb_format(presenter.format.format);
+        // SAFETY: plain query.
+        let caps = unsafe {
+            presenter
+                .surface_loader
+                .get_physical_device_surface_capabilities(gpu.physical, surface)
+        }
+        .ctx("vkGetPhysicalDeviceSurfaceCapabilitiesKHR")?;
+        let copyable = matches!(
+            presenter.format.format,
+            vk::Format::B8G8R8A8_SRGB | vk::Format::R8G8B8A8_SRGB
+        ) && caps
+            .supported_usage_flags
+            .contains(vk::ImageUsageFlags::TRANSFER_DST);
+        // RUNTIME_MIRROR_COMPOSITE=1 forces the composite shader (to measure
+        // or test it against the copies).
+        presenter.copy_path = copyable && std::env::var_os("RUNTIME_MIRROR_COMPOSITE").is_none();
+        presenter.eye_format = if presenter.copy_path {
+            presenter.format.format
+        } else {
+            DEFAULT_EYE_FORMAT
+        };
         presenter.present_mode = choose_present_mode(&modes, vsync);
         presenter.create_pipeline(gpu)?;
         presenter.create_slots(gpu)?;
@@ -253,6 +285,12 @@ impl Presenter {
 
     pub fn surface_format(&self) -> vk::Format {
         self.format.format
+    }
+
+    /// Whether side-by-side and single-eye frames are copied into the window
+    /// (else drawn by the composite shader).
+    pub fn copies_eyes(&self) -> bool {
+        self.copy_path
     }
 
     /// The window's drawable size now (the swapchain follows it).
@@ -270,7 +308,7 @@ impl Presenter {
     pub fn eye_targets(&self) -> SwapchainDesc {
         SwapchainDesc {
             images: self.eyes.iter().map(|i| i.raw).collect(),
-            format: EYE_FORMAT,
+            format: self.eye_format,
             width: self.eye_size.0,
             height: self.eye_size.1,
             layers: 2,
@@ -299,7 +337,7 @@ impl Presenter {
                     width,
                     height,
                     layers: 2,
-                    format: EYE_FORMAT,
+                    format: self.eye_format,
                     samples: vk::SampleCountFlags::TYPE_1,
                     usage: vk::ImageUsageFlags::COLOR_ATTACHMENT
                         | vk::ImageUsageFlags::SAMPLED
@@ -342,14 +380,29 @@ impl Presenter {
         let _ = unsafe { self.shared.device.device_wait_idle() };
     }
 
-    fn create_pipeline(&mut self, gpu: &Gpu) -> Result<(), GpuError> {
-        let device = gpu.device();
+    /// A render pass on the swapchain image: the full composite (its contents
+    /// discarded first) or the overlay over copied eye images (loaded from the
+    /// copy's TRANSFER_DST layout). The two are compatible (one attachment of
+    /// one format), so the framebuffers serve both.
+    fn create_render_pass(
+        &self,
+        device: &ash::Device,
+        overlay: bool,
+    ) -> Result<vk::RenderPass, GpuError> {
         let attachment = [vk::AttachmentDescription::default()
             .format(self.format.format)
             .samples(vk::SampleCountFlags::TYPE_1)
-            .load_op(vk::AttachmentLoadOp::DONT_CARE)
+            .load_op(if overlay {
+                vk::AttachmentLoadOp::LOAD
+            } else {
+                vk::AttachmentLoadOp::DONT_CARE
+            })
             .store_op(vk::AttachmentStoreOp::STORE)
-            .initial_layout(vk::ImageLayout::UNDEFINED)
+            .initial_layout(if overlay {
+                vk::ImageLayout::TRANSFER_DST_OPTIMAL
+            } else {
+                vk::ImageLayout::UNDEFINED
+            })
             .final_layout(vk::ImageLayout::PRESENT_SRC_KHR)];
         let color = [vk::AttachmentReference::default()
             .attachment(0)
@@ -357,15 +410,23 @@ impl Presenter {
         let subpass = [vk::SubpassDescription::default()
             .pipeline_bind_point(vk::PipelineBindPoint::GRAPHICS)
             .color_attachments(&color)];
-        // The acquire semaphore is waited for at COLOR_ATTACHMENT_OUTPUT: the
-        // layout transition must come after it.
+        // Before: the acquire semaphore (waited for at COLOR_ATTACHMENT_OUTPUT
+        // and TRANSFER) and, for the overlay, the copies into the image. After:
+        // the dump's copy, if any.
         let dependencies = [
             vk::SubpassDependency::default()
                 .src_subpass(vk::SUBPASS_EXTERNAL)
                 .dst_subpass(0)
-                .src_stage_mask(vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT)
+                .src_stage_mask(
+                    vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT
+                        | vk::PipelineStageFlags::TRANSFER,
+                )
                 .dst_stage_mask(vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT)
-                .dst_access_mask(vk::AccessFlags::COLOR_ATTACHMENT_WRITE),
+                .src_access_mask(vk::AccessFlags::TRANSFER_WRITE)
+                .dst_access_mask(
+                    vk::AccessFlags::COLOR_ATTACHMENT_READ
+                        | vk::AccessFlags::COLOR_ATTACHMENT_WRITE,
+                ),
             vk::SubpassDependency::default()
                 .src_subpass(0)
                 .dst_subpass(vk::SUBPASS_EXTERNAL)
@@ -374,6 +435,21 @@ impl Presenter {
                 .src_access_mask(vk::AccessFlags::COLOR_ATTACHMENT_WRITE)
                 .dst_access_mask(vk::AccessFlags::TRANSFER_READ),
         ];
+        // SAFETY: the create info points to locals.
+        unsafe {
+            device.create_render_pass(
+                &vk::RenderPassCreateInfo::default()
+                    .attachments(&attachment)
+                    .subpasses(&subpass)
+                    .dependencies(&dependencies),
+                None,
+            )
+        }
+        .ctx("vkCreateRenderPass")
+    }
+
+    fn create_pipeline(&mut self, gpu: &Gpu) -> Result<(), GpuError> {
+        let device = gpu.device();
         let bindings = [
             vk::DescriptorSetLayoutBinding::default()
                 .binding(0)
@@ -389,18 +465,11 @@ impl Presenter {
         let push = [vk::PushConstantRange::default()
             .stage_flags(vk::ShaderStageFlags::FRAGMENT)
             .size(PUSH_SIZE)];
+        self.render_pass = self.create_render_pass(device, false)?;
+        self.overlay_pass = self.create_render_pass(device, true)?;
         // SAFETY: create infos point to locals; every handle is stored in self
         // at once, so Drop destroys it if a later step fails.
         unsafe {
-            self.render_pass = device
-                .create_render_pass(
-                    &vk::RenderPassCreateInfo::default()
-                        .attachments(&attachment)
-                        .subpasses(&subpass)
-                        .dependencies(&dependencies),
-                    None,
-                )
-                .ctx("vkCreateRenderPass")?;
             self.set_layout = device
                 .create_descriptor_set_layout(
                     &vk::DescriptorSetLayoutCreateInfo::default().bindings(&bindings),
@@ -428,25 +497,31 @@ impl Presenter {
                 )
                 .ctx("vkCreateSampler")?;
         }
-        let vert = crate::gpu::shaders::create_module(gpu, crate::gpu::shaders::TONEMAP_VERT)?;
-        let frag =
-            match crate::gpu::shaders::create_module(gpu, crate::gpu::shaders::COMPOSITE_FRAG) {
-                Ok(f) => f,
-                Err(e) => {
-                    // SAFETY: unused module.
-                    unsafe { device.destroy_shader_module(vert, None) };
-                    return Err(e);
-                }
-            };
-        let stages = [
+        use crate::gpu::shaders::{create_module, COMPOSITE_FRAG, OVERLAY_FRAG, TONEMAP_VERT};
+        let mut modules = Vec::new();
+        let made = [TONEMAP_VERT, COMPOSITE_FRAG, OVERLAY_FRAG]
+            .into_iter()
+            .try_for_each(|spirv| create_module(gpu, spirv).map(|m| modules.push(m)));
+        if let Err(e) = made {
+            for m in modules {
+                // SAFETY: unused modules.
+                unsafe { device.destroy_shader_module(m, None) };
+            }
+            return Err(e);
+        }
+        let stage = |kind, module| {
             vk::PipelineShaderStageCreateInfo::default()
-                .stage(vk::ShaderStageFlags::VERTEX)
-                .module(vert)
-                .name(c"main"),
-            vk::PipelineShaderStageCreateInfo::default()
-                .stage(vk::ShaderStageFlags::FRAGMENT)
-                .module(frag)
-                .name(c"main"),
+                .stage(kind)
+                .module(module)
+                .name(c"main")
+        };
+        let composite_stages = [
+            stage(vk::ShaderStageFlags::VERTEX, modules[0]),
+            stage(vk::ShaderStageFlags::FRAGMENT, modules[1]),
+        ];
+        let overlay_stages = [
+            stage(vk::ShaderStageFlags::VERTEX, modules[0]),
+            stage(vk::ShaderStageFlags::FRAGMENT, modules[2]),
         ];
         let vertex_input = vk::PipelineVertexInputStateCreateInfo::default();
         let assembly = vk::PipelineInputAssemblyStateCreateInfo::default()
@@ -460,38 +535,57 @@ impl Presenter {
             .line_width(1.0);
         let multisample = vk::PipelineMultisampleStateCreateInfo::default()
             .rasterization_samples(vk::SampleCountFlags::TYPE_1);
-        let blend_attachments = [vk::PipelineColorBlendAttachmentState::default()
+        let opaque = [vk::PipelineColorBlendAttachmentState::default()
             .color_write_mask(vk::ColorComponentFlags::RGBA)];
-        let blend =
-            vk::PipelineColorBlendStateCreateInfo::default().attachments(&blend_attachments);
+        // The overlay over copied eye images: text opaque, the block's
+        // background darkening what is below (alpha = 1 - TEXT_BACKGROUND);
+        // blending on an sRGB attachment happens on linear values.
+        let over = [vk::PipelineColorBlendAttachmentState::default()
+            .blend_enable(true)
+            .src_color_blend_factor(vk::BlendFactor::SRC_ALPHA)
+            .dst_color_blend_factor(vk::BlendFactor::ONE_MINUS_SRC_ALPHA)
+            .color_blend_op(vk::BlendOp::ADD)
+            .src_alpha_blend_factor(vk::BlendFactor::ONE)
+            .dst_alpha_blend_factor(vk::BlendFactor::ZERO)
+            .alpha_blend_op(vk::BlendOp::ADD)
+            .color_write_mask(vk::ColorComponentFlags::RGBA)];
+        let blend_opaque = vk::PipelineColorBlendStateCreateInfo::default().attachments(&opaque);
+        let blend_over = vk::PipelineColorBlendStateCreateInfo::default().attachments(&over);
         let dynamic_states = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
         let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic_states);
         let depth = vk::PipelineDepthStencilStateCreateInfo::default();
-        let info = [vk::GraphicsPipelineCreateInfo::default()
-            .stages(&stages)
-            .vertex_input_state(&vertex_input)
-            .input_assembly_state(&assembly)
-            .viewport_state(&viewport)
-            .rasterization_state(&raster)
-            .multisample_state(&multisample)
-            .depth_stencil_state(&depth)
-            .color_blend_state(&blend)
-            .dynamic_state(&dynamic)
-            .layout(self.pipeline_layout)
-            .render_pass(self.render_pass)
-            .subpass(0)];
-        // SAFETY: the create info points to locals and live handles.
+        let info = [
+            (self.render_pass, &blend_opaque, &composite_stages),
+            (self.overlay_pass, &blend_over, &overlay_stages),
+        ]
+        .map(|(pass, blend, stages)| {
+            vk::GraphicsPipelineCreateInfo::default()
+                .stages(stages)
+                .vertex_input_state(&vertex_input)
+                .input_assembly_state(&assembly)
+                .viewport_state(&viewport)
+                .rasterization_state(&raster)
+                .multisample_state(&multisample)
+                .depth_stencil_state(&depth)
+                .color_blend_state(blend)
+                .dynamic_state(&dynamic)
+                .layout(self.pipeline_layout)
+                .render_pass(pass)
+                .subpass(0)
+        });
+        // SAFETY: the create infos point to locals and live handles.
         let result =
             unsafe { device.create_graphics_pipelines(vk::PipelineCache::null(), &info, None) };
-        // SAFETY: modules may go once the pipeline exists (or failed).
-        unsafe {
-            device.destroy_shader_module(vert, None);
-            device.destroy_shader_module(frag, None);
+        for m in modules {
+            // SAFETY: modules may go once the pipelines exist (or failed).
+            unsafe { device.destroy_shader_module(m, None) };
         }
-        self.pipeline = result.map_err(|(_, result)| GpuError::Vulkan {
+        let pipelines = result.map_err(|(_, result)| GpuError::Vulkan {
             call: "vkCreateGraphicsPipelines",
             result,
-        })?[0];
+        })?;
+        self.pipeline = pipelines[0];
+        self.overlay_pipeline = pipelines[1];
         Ok(())
     }
 
@@ -639,6 +733,9 @@ impl Presenter {
             .supported_usage_flags
             .contains(vk::ImageUsageFlags::TRANSFER_SRC);
         let mut usage = vk::ImageUsageFlags::COLOR_ATTACHMENT;
+        if self.copy_path {
+            usage |= vk::ImageUsageFlags::TRANSFER_DST;
+        }
         if self.can_dump {
             usage |= vk::ImageUsageFlags::TRANSFER_SRC;
         }
@@ -840,12 +937,25 @@ impl Presenter {
         let cmd = slot.command_buffer;
         let eye = &self.eyes[frame.slot];
         let image = chain.images[frame.image as usize];
+        // Copy path: the eye images are already in the window's format, so
+        // side by side and single eyes are plain image copies (a memcpy on a CPU
+        // device), with the overlay blended over its own rectangle. Anaglyph
+        // (and windows of other formats) take the full-screen composite.
+        let copies = copy_regions(layout, self.eye_size, (extent.width, extent.height));
+        let copy = self.copy_path && copies.is_some();
         let (mode, layer) = match layout {
             Layout::SideBySide => (0u32, 0u32),
             Layout::Single { layer } => (1, layer),
             Layout::Anaglyph => (2, 0),
         };
-        let push = push_bytes(self.eye_size, mode, layer, self.encode_srgb, overlay);
+        let push = push_bytes(
+            self.eye_size,
+            if copy { 3 } else { mode },
+            layer,
+            self.encode_srgb,
+            overlay,
+        );
+        let overlay_area = overlay_rect(overlay, extent);
         // SAFETY: the slot's fence was waited for, so its command buffer is not
         // pending; every handle is live; the eye image was last written by the
         // renderer's pass (layout COLOR_ATTACHMENT_OPTIMAL), an earlier
@@ -862,67 +972,171 @@ impl Presenter {
                         .flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT),
                 )
                 .ctx("vkBeginCommandBuffer")?;
-            let to_sampled = [vk::ImageMemoryBarrier::default()
-                .src_access_mask(vk::AccessFlags::COLOR_ATTACHMENT_WRITE)
-                .dst_access_mask(vk::AccessFlags::SHADER_READ)
-                .old_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
-                .new_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)
-                .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-                .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-                .image(eye.raw)
-                .subresource_range(eye.range())];
-            device.cmd_pipeline_barrier(
-                cmd,
-                vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT,
-                vk::PipelineStageFlags::FRAGMENT_SHADER,
-                vk::DependencyFlags::empty(),
-                &[],
-                &[],
-                &to_sampled,
-            );
-            let area = vk::Rect2D {
+            let barrier = |image: vk::Image, range, from, to, src, dst| {
+                vk::ImageMemoryBarrier::default()
+                    .src_access_mask(src)
+                    .dst_access_mask(dst)
+                    .old_layout(from)
+                    .new_layout(to)
+                    .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+                    .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+                    .image(image)
+                    .subresource_range(range)
+            };
+            let full = vk::Rect2D {
                 offset: vk::Offset2D { x: 0, y: 0 },
                 extent,
             };
-            device.cmd_begin_render_pass(
-                cmd,
-                &vk::RenderPassBeginInfo::default()
-                    .render_pass(self.render_pass)
-                    .framebuffer(chain.framebuffers[frame.image as usize])
-                    .render_area(area),
-                vk::SubpassContents::INLINE,
-            );
-            device.cmd_set_viewport(
-                cmd,
-                0,
-                &[vk::Viewport {
-                    x: 0.0,
-                    y: 0.0,
-                    width: extent.width as f32,
-                    height: extent.height as f32,
-                    min_depth: 0.0,
-                    max_depth: 1.0,
-                }],
-            );
-            device.cmd_set_scissor(cmd, 0, &[area]);
-            device.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, self.pipeline);
-            device.cmd_bind_descriptor_sets(
-                cmd,
-                vk::PipelineBindPoint::GRAPHICS,
-                self.pipeline_layout,
-                0,
-                &[slot.descriptor_set],
-                &[],
-            );
-            device.cmd_push_constants(
-                cmd,
-                self.pipeline_layout,
-                vk::ShaderStageFlags::FRAGMENT,
-                0,
-                &push,
-            );
-            device.cmd_draw(cmd, 3, 1, 0, 0);
-            device.cmd_end_render_pass(cmd);
+            let (pass, pipeline, area) = if let (true, Some((regions, covers))) = (copy, &copies) {
+                let to_copy = [
+                    barrier(
+                        eye.raw,
+                        eye.range(),
+                        vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
+                        vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                        vk::AccessFlags::COLOR_ATTACHMENT_WRITE,
+                        vk::AccessFlags::TRANSFER_READ,
+                    ),
+                    barrier(
+                        image,
+                        COLOR_RANGE,
+                        vk::ImageLayout::UNDEFINED,
+                        vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                        vk::AccessFlags::empty(),
+                        vk::AccessFlags::TRANSFER_WRITE,
+                    ),
+                ];
+                device.cmd_pipeline_barrier(
+                    cmd,
+                    vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT
+                        | vk::PipelineStageFlags::TRANSFER,
+                    vk::PipelineStageFlags::TRANSFER,
+                    vk::DependencyFlags::empty(),
+                    &[],
+                    &[],
+                    &to_copy,
+                );
+                if !covers {
+                    // An odd window width leaves a column no eye covers.
+                    device.cmd_clear_color_image(
+                        cmd,
+                        image,
+                        vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                        &vk::ClearColorValue {
+                            float32: [0.0, 0.0, 0.0, 1.0],
+                        },
+                        &[COLOR_RANGE],
+                    );
+                    let after_clear = [barrier(
+                        image,
+                        COLOR_RANGE,
+                        vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                        vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                        vk::AccessFlags::TRANSFER_WRITE,
+                        vk::AccessFlags::TRANSFER_WRITE,
+                    )];
+                    device.cmd_pipeline_barrier(
+                        cmd,
+                        vk::PipelineStageFlags::TRANSFER,
+                        vk::PipelineStageFlags::TRANSFER,
+                        vk::DependencyFlags::empty(),
+                        &[],
+                        &[],
+                        &after_clear,
+                    );
+                }
+                device.cmd_copy_image(
+                    cmd,
+                    eye.raw,
+                    vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                    image,
+                    vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                    regions,
+                );
+                match overlay_area {
+                    Some(area) => (self.overlay_pass, self.overlay_pipeline, Some(area)),
+                    None => {
+                        let to_present = [barrier(
+                            image,
+                            COLOR_RANGE,
+                            vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                            vk::ImageLayout::PRESENT_SRC_KHR,
+                            vk::AccessFlags::TRANSFER_WRITE,
+                            vk::AccessFlags::empty(),
+                        )];
+                        device.cmd_pipeline_barrier(
+                            cmd,
+                            vk::PipelineStageFlags::TRANSFER,
+                            vk::PipelineStageFlags::BOTTOM_OF_PIPE,
+                            vk::DependencyFlags::empty(),
+                            &[],
+                            &[],
+                            &to_present,
+                        );
+                        (self.overlay_pass, self.overlay_pipeline, None)
+                    }
+                }
+            } else {
+                let to_sampled = [barrier(
+                    eye.raw,
+                    eye.range(),
+                    vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
+                    vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+                    vk::AccessFlags::COLOR_ATTACHMENT_WRITE,
+                    vk::AccessFlags::SHADER_READ,
+                )];
+                device.cmd_pipeline_barrier(
+                    cmd,
+                    vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT,
+                    vk::PipelineStageFlags::FRAGMENT_SHADER,
+                    vk::DependencyFlags::empty(),
+                    &[],
+                    &[],
+                    &to_sampled,
+                );
+                (self.render_pass, self.pipeline, Some(full))
+            };
+            if let Some(area) = area {
+                device.cmd_begin_render_pass(
+                    cmd,
+                    &vk::RenderPassBeginInfo::default()
+                        .render_pass(pass)
+                        .framebuffer(chain.framebuffers[frame.image as usize])
+                        .render_area(area),
+                    vk::SubpassContents::INLINE,
+                );
+                device.cmd_set_viewport(
+                    cmd,
+                    0,
+                    &[vk::Viewport {
+                        x: 0.0,
+                        y: 0.0,
+                        width: extent.width as f32,
+                        height: extent.height as f32,
+                        min_depth: 0.0,
+                        max_depth: 1.0,
+                    }],
+                );
+                device.cmd_set_scissor(cmd, 0, &[area]);
+                device.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, pipeline);
+                device.cmd_bind_descriptor_sets(
+                    cmd,
+                    vk::PipelineBindPoint::GRAPHICS,
+                    self.pipeline_layout,
+                    0,
+                    &[slot.descriptor_set],
+                    &[],
+                );
+                device.cmd_push_constants(
+                    cmd,
+                    self.pipeline_layout,
+                    vk::ShaderStageFlags::FRAGMENT,
+                    0,
+                    &push,
+                );
+                device.cmd_draw(cmd, 3, 1, 0, 0);
+                device.cmd_end_render_pass(cmd);
+            }
             if let Some(buffer) = &dump_buffer {
                 let swap = |from, to, src, dst| {
                     [vk::ImageMemoryBarrier::default()
@@ -985,7 +1199,9 @@ impl Presenter {
             }
             device.end_command_buffer(cmd).ctx("vkEndCommandBuffer")?;
             let waits = [slot.acquired];
-            let stages = [vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT];
+            let stages =
+                [vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT
+                    | vk::PipelineStageFlags::TRANSFER];
             let signals = [chain.rendered[frame.image as usize]];
             let cmds = [cmd];
             let submit = [vk::SubmitInfo::default()
@@ -1047,6 +1263,69 @@ const COLOR_RANGE: vk::ImageSubresourceRange = vk::ImageSubresourceRange {
     layer_count: 1,
 };
 
+/// The copies that place the eye layers in the window for `layout` (None:
+/// the layout needs the composite shader), and whether they cover the whole
+/// window.
+fn copy_regions(
+    layout: Layout,
+    eye: (u32, u32),
+    window: (u32, u32),
+) -> Option<(Vec<vk::ImageCopy>, bool)> {
+    let region = |layer: u32, x: u32| {
+        let sub = |layer| vk::ImageSubresourceLayers {
+            aspect_mask: vk::ImageAspectFlags::COLOR,
+            mip_level: 0,
+            base_array_layer: layer,
+            layer_count: 1,
+        };
+        vk::ImageCopy::default()
+            .src_subresource(sub(layer))
+            .dst_subresource(sub(0))
+            .dst_offset(vk::Offset3D {
+                x: x as i32,
+                y: 0,
+                z: 0,
+            })
+            .extent(vk::Extent3D {
+                width: eye.0.min(window.0.saturating_sub(x)),
+                height: eye.1.min(window.1),
+                depth: 1,
+            })
+    };
+    let (regions, covered) = match layout {
+        Layout::SideBySide => (vec![region(0, 0), region(1, eye.0)], (2 * eye.0, eye.1)),
+        Layout::Single { layer } => (vec![region(layer, 0)], eye),
+        Layout::Anaglyph => return None,
+    };
+    if regions
+        .iter()
+        .any(|r| r.extent.width == 0 || r.extent.height == 0)
+    {
+        return None;
+    }
+    let covers = covered.0 >= window.0 && covered.1 >= window.1;
+    Some((regions, covers))
+}
+
+/// The overlay's text block clipped to the window (None when empty).
+fn overlay_rect(overlay: &Overlay, extent: vk::Extent2D) -> Option<vk::Rect2D> {
+    let (w, h) = overlay.grid.size(overlay.scale.max(1));
+    let x0 = overlay.origin.0.max(0) as u32;
+    let y0 = overlay.origin.1.max(0) as u32;
+    let x1 = (x0 + w).min(extent.width);
+    let y1 = (y0 + h).min(extent.height);
+    (x1 > x0 && y1 > y0).then(|| vk::Rect2D {
+        offset: vk::Offset2D {
+            x: x0 as i32,
+            y: y0 as i32,
+        },
+        extent: vk::Extent2D {
+            width: x1 - x0,
+            height: y1 - y0,
+        },
+    })
+}
+
 /// Push constants of `composite.frag`, 40 bytes.
 const PUSH_SIZE: u32 = 40;
 
@@ -1097,6 +1376,8 @@ impl Drop for Presenter {
             device.destroy_pipeline_layout(self.pipeline_layout, None);
             device.destroy_descriptor_set_layout(self.set_layout, None);
             device.destroy_render_pass(self.render_pass, None);
+            device.destroy_pipeline(self.overlay_pipeline, None);
+            device.destroy_render_pass(self.overlay_pass, None);
             device.destroy_sampler(self.sampler, None);
             self.surface_loader.destroy_surface(self.surface, None);
         }

@@ -936,10 +936,20 @@ impl StereoRenderer {
         })?;
         let data = buffer.read();
         let unscale = 1.0 / self.scene.radiance_scale;
+        let bgra = matches!(
+            self.swapchain.format,
+            vk::Format::B8G8R8A8_SRGB | vk::Format::B8G8R8A8_UNORM
+        );
         let mut eyes = Vec::new();
         for layer in 0..views as u64 {
             let base = (layer * per_layer) as usize;
-            let srgb = data[base..base + srgb_bytes as usize].to_vec();
+            let mut srgb = data[base..base + srgb_bytes as usize].to_vec();
+            // BGRA outputs (window and XR swapchains often are) read back as RGBA.
+            if bgra {
+                for px in srgb.chunks_exact_mut(4) {
+                    px.swap(0, 2);
+                }
+            }
             let lin = &data[base + srgb_bytes as usize..base + per_layer as usize];
             let mut radiance = Vec::with_capacity(pixels as usize * 3);
             for px in lin.chunks_exact(8) {
