@@ -11,7 +11,7 @@
 
 pub mod cli;
 pub mod gpu;
+pub mod mirror;
 pub mod render;
 pub mod session;
-pub mod mirror;
 pub mod xr;

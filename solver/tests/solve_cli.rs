@@ -346,7 +346,7 @@ fn ctrl_c_saves_a_resumable_checkpoint() {
     // the first checkpoint and the signal, so the solve is still running when the
     // signal arrives.
     let long = ["--threshold", "1e-7"];
-    let mut child = draft(&scene, &out)
+    let child = draft(&scene, &out)
         .args(long)
         .args(["--max-shots", "1000000", "--checkpoint-every", "1"])
         .stderr(std::process::Stdio::piped())

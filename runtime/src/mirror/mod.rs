@@ -454,8 +454,7 @@ impl App {
             return Ok(Step::Done);
         };
         let dumping = self.args.dump_last_frame.is_some();
-        // --watch: a new version of the file replaces the renderer.
-        let mut quit_after_this = false;
+        // --watch: a new version of the file replaces the renderer's scene.
         if let Some(watch) = state.watch.as_mut() {
             let now = Instant::now();
             if let Some(stamp) = watch.poll(now) {
@@ -486,7 +485,8 @@ impl App {
                             .quit_after_reloads
                             .is_some_and(|n| state.reloads >= n)
                         {
-                            quit_after_this = true;
+                            // The next presented frame is the last.
+                            state.exiting = true;
                         }
                     }
                     Err(e) => {
@@ -550,9 +550,7 @@ impl App {
         self.controls.update(dt);
         // Exiting (Esc, closing the window) presents this frame first, so the
         // swapchain image acquired above is given back and can be dumped.
-        let last = state.exiting
-            || quit_after_this
-            || self.args.frames.is_some_and(|n| state.presented + 1 >= n);
+        let last = state.exiting || self.args.frames.is_some_and(|n| state.presented + 1 >= n);
 
         // Eye images and renderer at the window's per-eye size.
         let (win_w, win_h) = state.presenter.extent().context("no swapchain")?;
