@@ -87,7 +87,7 @@ fn meshing_refines_along_shadow_boundaries_and_leaves_smooth_light_coarse() {
     let mut open = 0;
     for (el, c) in leaves(back) {
         let p = c + original;
-        if (150.0..400.0).contains(&p.x) && (340.0..480.0).contains(&p.y) {
+        if (150.0..400.0).contains(&p.x) && (330.0..430.0).contains(&p.y) {
             open += 1;
             assert!(
                 el.depth <= 2 && el.area >= patch_area(back) / 16.0 * 0.999,
