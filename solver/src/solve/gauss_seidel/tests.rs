@@ -247,8 +247,8 @@ fn gauss_seidel_and_progressive_refinement_agree_on_the_cornell_box() {
     // (≤ ρ/(1 − ρ) × 0.2% ≈ 0.5% of the radiance for the box's ρ ≤ 0.7) and the
     // Gauss–Seidel tolerance (1e-6, negligible). Checked on the five room
     // surfaces (floor, ceiling, back, left and right walls) and the mean over
-    // every surface. Measured: the differences use 16% to 87% of the bound,
-    // and are 2% to 8% of the radiance (the walls' top rows, lit at grazing
+    // every surface. Measured: the differences use 1% to 77% of the bound,
+    // and are 0.1% to 8.3% of the radiance (the walls' top rows, lit at grazing
     // incidence by a light 0.1 mm below the ceiling, are where the two
     // discretisations part most).
     let (g3, p3) = cornell_surface_means(3);
