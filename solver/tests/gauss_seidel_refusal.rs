@@ -145,6 +145,7 @@ fn a_huge_scene_is_refused_before_meshing_with_almost_no_allocation() {
         }
         other => panic!("expected a refusal, got {other:?}"),
     }
+    println!("refusal before meshing: {total} bytes allocated in all, largest {largest}");
     assert!(
         total < 64 << 10,
         "allocated {total} bytes in all (largest {largest})"
