@@ -43,6 +43,9 @@ pub enum FormFactorMethod {
     Analytic,
     /// 000 eq. 3.1 (disc approximation per sample), kept to measure against.
     Wallace,
+    /// The exact unoccluded factor × visibility read from a hemicube item
+    /// buffer on the shooting patch (002; `hemicube_resolution`).
+    Hemicube,
 }
 
 /// Default cells per side of a hemicube's top face (`hemicube_resolution`).

@@ -75,6 +75,11 @@ use glam::{DVec2, DVec3};
 /// 150 MB of item buffer and delta table.
 pub const MAX_RESOLUTION: u32 = 2048;
 
+/// The golden angle, radians: callers that build many hemicubes rotate the
+/// k-th about its normal by k times this, which spreads the rotations evenly
+/// (see "Accuracy against R").
+pub const GOLDEN_ANGLE: f64 = 2.399_963_229_728_653;
+
 /// A cell that holds no polygon.
 pub const NO_ITEM: u32 = u32::MAX;
 
@@ -389,6 +394,9 @@ pub struct ItemBuffer {
     clip_a: Vec<DVec3>,
     clip_b: Vec<DVec3>,
     screen: Vec<DVec2>,
+    /// Per target: its plane in the frame's coordinates, n · x = offset (zero
+    /// for targets that were skipped).
+    planes: Vec<(DVec3, f64)>,
 }
 
 impl ItemBuffer {
@@ -407,6 +415,7 @@ impl ItemBuffer {
             clip_a: Vec::new(),
             clip_b: Vec::new(),
             screen: Vec::new(),
+            planes: Vec::new(),
         }
     }
 
@@ -436,13 +445,24 @@ impl ItemBuffer {
         self.frame.as_ref()
     }
 
+    /// Empties the buffer and forgets its frame: every lookup fails.
+    pub fn clear(&mut self) {
+        self.frame = None;
+        self.items.fill(NO_ITEM);
+        self.inverse_depth.fill(0.0);
+        self.planes.clear();
+    }
+
     /// Clears the buffer and draws `targets` (item k is `targets[k]`; at most
     /// 2³¹ − 1 targets, the rest are ignored) as seen from `frame`.
     pub fn render<P: AsRef<[DVec3]>>(&mut self, frame: &Frame, targets: &[P]) {
         self.frame = Some(*frame);
         self.items.fill(NO_ITEM);
         self.inverse_depth.fill(0.0);
-        for (k, target) in targets.iter().enumerate().take(BACK_FACE as usize - 1) {
+        let count = targets.len().min(BACK_FACE as usize - 1);
+        self.planes.clear();
+        self.planes.resize(count, (DVec3::ZERO, 0.0));
+        for (k, target) in targets.iter().enumerate().take(count) {
             self.draw(frame, target.as_ref(), k as u32);
         }
     }
@@ -473,6 +493,7 @@ impl ItemBuffer {
         if offset.abs() <= PLANE_TOLERANCE * normal_length * reach {
             return;
         }
+        self.planes[index as usize] = (normal, offset);
         let item = if offset < 0.0 {
             index
         } else {
@@ -632,30 +653,51 @@ impl ItemBuffer {
     /// How many cells of the (2·radius + 1)² block around the cell through which
     /// the centre sees `point` (clipped to that face) let `point` see the
     /// centre, and how many cells were tested: percentage-closer filtering of
-    /// the item buffer used as a visibility map. A cell lets the point through
-    /// when its item is `own` (the point's own polygon, front or back) or when
-    /// its item lies no nearer than the point, within `relative_bias` of the
-    /// point's depth. `(0, 0)` when the point cannot be looked up.
-    pub fn visible_cells(
-        &self,
-        point: DVec3,
-        own: u32,
-        radius: usize,
-        relative_bias: f64,
-    ) -> (u32, u32) {
+    /// the item buffer used as a visibility map. `(0, 0)` when the point cannot
+    /// be looked up.
+    ///
+    /// A cell lets the point through when it is empty, holds `own` (the
+    /// point's own polygon, either side), or holds a polygon whose *plane* the
+    /// segment from the centre to the point does not cross before the point.
+    /// The plane is tested along the exact segment, not along the cell's
+    /// central ray: a cell's stored depth belongs to a ray up to a cell away,
+    /// and near a surface seen at a grazing angle that depth differs from the
+    /// point's by far more than any fixed bias. The plane test has no such
+    /// error: a wall meeting the point's surface at a corner of a room, which
+    /// fills the cells next to a point near the corner, never crosses the
+    /// segment (the centre and the point are on the same side of it), so it
+    /// does not shadow the point; a genuine occluder between them does. The
+    /// only approximation left is the cell's: that the polygon seen through it
+    /// also covers the segment.
+    pub fn visible_cells(&self, point: DVec3, own: u32, radius: usize) -> (u32, u32) {
         let Some(hit) = self.lookup(point) else {
             return (0, 0);
         };
+        let Some(frame) = self.frame.as_ref() else {
+            return (0, 0);
+        };
+        let p = frame.local(point);
         let r = self.resolution as usize;
         let (rows, first) = face_layout(r, hit.face);
-        let threshold = hit.depth * (1.0 - relative_bias);
         let (mut visible, mut tested) = (0u32, 0u32);
         for row in hit.row.saturating_sub(radius)..=(hit.row + radius).min(rows - 1) {
             for col in hit.col.saturating_sub(radius)..=(hit.col + radius).min(r - 1) {
-                let cell = first + row * r + col;
                 tested += 1;
-                let item = self.items[cell];
-                if item != NO_ITEM && item & !BACK_FACE == own || self.depth(cell) >= threshold {
+                let item = self.items[first + row * r + col];
+                let index = (item & !BACK_FACE) as usize;
+                let blocks = item != NO_ITEM
+                    && index != own as usize
+                    && self.planes.get(index).is_some_and(|&(normal, offset)| {
+                        // The segment t·p, t ∈ [0, 1], meets the plane at
+                        // t = offset / (normal · p); it blocks when that is
+                        // before the point (by more than rounding).
+                        let along = normal.dot(p);
+                        along != 0.0 && {
+                            let t = offset / along;
+                            t > 0.0 && t < 1.0 - PLANE_TOLERANCE
+                        }
+                    });
+                if !blocks {
                     visible += 1;
                 }
             }

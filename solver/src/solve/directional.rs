@@ -325,7 +325,10 @@ impl DirShot<'_> {
         let origin = q + n * s.occluder.scene_epsilon();
         let lift = s.normal * s.occluder.scene_epsilon();
         match s.method {
-            FormFactorMethod::Analytic => {
+            // Directional shots need a visibility answer per sample direction,
+            // which ray casting gives and a hemicube item buffer does not: the
+            // hemicube method is the analytic one here.
+            FormFactorMethod::Analytic | FormFactorMethod::Hemicube => {
                 let unoccluded = point_to_polygon(q, n, s.polygon());
                 if unoccluded.is_nan() || unoccluded <= 0.0 {
                     return (q, 0, 0);
@@ -561,6 +564,7 @@ impl Solver {
             unshot: equivalent,
             samples: self.settings.samples,
             method: self.settings.form_factors,
+            hemicube_resolution: self.settings.hemicube_resolution,
             shadows: self.settings.shadows,
             occluder: &self.occluder,
             kd: &self.kd,

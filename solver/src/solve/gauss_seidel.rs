@@ -48,7 +48,7 @@
 
 use super::{SolveError, Solver};
 use crate::format::{Solution, SolveMode};
-use crate::geometry::hemicube::{Frame, Hemicube, HemicubeError, ItemBuffer};
+use crate::geometry::hemicube::{Frame, Hemicube, HemicubeError, ItemBuffer, GOLDEN_ANGLE};
 use crate::scene::Scene;
 use crate::settings::SolverSettings;
 use glam::DVec3;
@@ -60,10 +60,6 @@ pub const BYTES_PER_FACTOR: u64 = 4;
 
 /// Default bound on the form-factor matrix: 2 GiB.
 pub const DEFAULT_MAX_MATRIX_BYTES: u64 = 2 << 30;
-
-/// The golden angle, radians: successive hemicubes are rotated about their
-/// normals by multiples of it, which spreads the rotations evenly.
-const GOLDEN_ANGLE: f64 = 2.399_963_229_728_653;
 
 /// Bounds on a Gauss–Seidel solve.
 #[derive(Clone, Debug, PartialEq)]

@@ -7,6 +7,7 @@
 //! (the sample buffer lives in per-worker [`Scratch`]).
 
 use crate::geometry::formfactor::{point_to_polygon, wallace};
+use crate::geometry::hemicube::{self, ItemBuffer};
 use crate::geometry::polygon::clip_to_halfspace;
 use crate::geometry::sampling::{stratified_points, stream_id, Rng};
 use crate::geometry::visibility::Occluder;
@@ -42,7 +43,18 @@ pub struct Scratch {
     clipped: Vec<DVec3>,
     targets: Vec<DVec3>,
     flags: Vec<bool>,
+    /// The `Hemicube` method's item buffer of the current shot, rendered once
+    /// per worker and shot, with the key of the shot it belongs to.
+    hemicube: Option<([u64; 8], ItemBuffer)>,
 }
+
+/// The `Hemicube` method filters visibility over this many cells each side of
+/// the receiver's cell: a 3 × 3 block (percentage-closer filtering).
+const HEMICUBE_FILTER_RADIUS: usize = 1;
+
+/// Cells in a full filter block; visible counts are scaled to it so that a
+/// block clipped at a face border does not look like a shadow boundary.
+const HEMICUBE_FILTER_CELLS: u32 = 9;
 
 /// The source patch of one shot, with everything the receivers share.
 pub struct Shot<'a> {
@@ -62,6 +74,8 @@ pub struct Shot<'a> {
     pub unshot: DVec3,
     pub samples: u32,
     pub method: FormFactorMethod,
+    /// Cells per side of the `Hemicube` method's top face.
+    pub hemicube_resolution: u32,
     pub shadows: bool,
     pub occluder: &'a Occluder,
     /// Diffuse reflectance per surface.
@@ -117,6 +131,7 @@ impl<'a> Shot<'a> {
             unshot,
             samples: settings.samples,
             method: settings.form_factors,
+            hemicube_resolution: settings.hemicube_resolution,
             shadows: settings.shadows,
             occluder,
             kd,
@@ -154,6 +169,10 @@ impl Shot<'_> {
     ///   the part of the source above the receiver's horizon (design notes,
     ///   "Form factors"; see [`Shot::draw_visible_part_samples`]).
     /// * `Wallace`: 000 eq. 3.1 over the same samples.
+    /// * `Hemicube`: the exact unoccluded factor times the visible fraction
+    ///   read from a hemicube item buffer on the source patch's centre (002,
+    ///   "on the shooting patch when shooting"; see [`Shot::hemicube_visibility`]).
+    ///   No rays are traced.
     ///
     /// Rays run between points lifted `scene_epsilon` off both surfaces along
     /// their normals: from the receiving point, and to each sample on the
@@ -219,6 +238,82 @@ impl Shot<'_> {
                 let visible = if factor > 0.0 { visible } else { 0 };
                 (factor, visible, rays)
             }
+            FormFactorMethod::Hemicube => {
+                let unoccluded = point_to_polygon(q, n, self.polygon());
+                if unoccluded.is_nan() || unoccluded <= 0.0 {
+                    return (0.0, 0, 0);
+                }
+                if !self.shadows {
+                    return (unoccluded, HEMICUBE_FILTER_CELLS, 0);
+                }
+                let surface = mesh.vertices[v as usize].surface;
+                let (visible, tested) = self.hemicube_visibility(mesh, q, surface, scratch);
+                if tested == 0 {
+                    return (0.0, 0, 0);
+                }
+                let fraction = visible as f64 / tested as f64;
+                let scaled = (fraction * HEMICUBE_FILTER_CELLS as f64).round() as u32;
+                (unoccluded * fraction, scaled, 0)
+            }
+        }
+    }
+
+    /// The visibility of the source from receiving point `q` on `surface` by
+    /// the hemicube method: (cells that let `q` see the source's centre, cells
+    /// tested) in the 3 × 3 block around the cell through which the centre sees
+    /// `q` ([`ItemBuffer::visible_cells`]).
+    ///
+    /// The item buffer is a hemicube of `hemicube_resolution` on the source
+    /// patch's centre over every input surface (item k = surface k), rotated
+    /// about the normal by the golden angle times the shot index so the cell
+    /// grid's aliasing does not line up from shot to shot. It is a one-point
+    /// view of the source, like 000's single sample: shadows are as seen from
+    /// the source's centre, with edges softened over the 3 × 3 block. A cell
+    /// lets `q` through when it holds `q`'s own surface or a surface whose
+    /// plane the segment from the centre to `q` does not cross, so walls
+    /// meeting `q`'s surface at a room's corner never shadow it.
+    pub fn hemicube_visibility(
+        &self,
+        mesh: &Mesh,
+        q: DVec3,
+        surface: u32,
+        scratch: &mut Scratch,
+    ) -> (u32, u32) {
+        let key = [
+            self.index,
+            self.hemicube_resolution as u64,
+            self.centre.x.to_bits(),
+            self.centre.y.to_bits(),
+            self.centre.z.to_bits(),
+            self.normal.x.to_bits(),
+            self.normal.y.to_bits(),
+            self.normal.z.to_bits(),
+        ];
+        let stale = scratch.hemicube.as_ref().is_none_or(|(k, _)| *k != key);
+        if stale {
+            let mut buffer = match scratch.hemicube.take() {
+                Some((_, b)) if b.resolution() == self.hemicube_resolution => b,
+                _ => ItemBuffer::with_resolution(self.hemicube_resolution),
+            };
+            let source = &mesh.surfaces[self.source_surface as usize];
+            let angle = hemicube::GOLDEN_ANGLE * self.index as f64;
+            let hint = source.tangent * angle.cos() + source.bitangent * angle.sin();
+            if let Some(frame) = hemicube::Frame::new(self.centre, self.normal, hint) {
+                let targets: Vec<&[DVec3]> = mesh
+                    .surfaces
+                    .iter()
+                    .map(|s| s.vertices.as_slice())
+                    .collect();
+                buffer.render(&frame, &targets);
+            } else {
+                // A degenerate normal: nothing can be looked up, nothing is seen.
+                buffer.clear();
+            }
+            scratch.hemicube = Some((key, buffer));
+        }
+        match &scratch.hemicube {
+            Some((_, buffer)) => buffer.visible_cells(q, surface, HEMICUBE_FILTER_RADIUS),
+            None => (0, 0),
         }
     }
 

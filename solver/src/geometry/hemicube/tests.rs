@@ -309,20 +309,20 @@ fn the_buffer_answers_visibility_lookups() {
         .unwrap() as u32;
     let blocker_item = targets.len() as u32 - 1;
     assert_eq!(
-        buffer.visible_cells(DVec3::new(0.0, 0.0, -2.0), floor, 1, 0.01),
+        buffer.visible_cells(DVec3::new(0.0, 0.0, -2.0), floor, 1),
         (0, 9)
     );
     assert_eq!(
-        buffer.visible_cells(DVec3::new(1.6, 1.2, -2.0), floor, 1, 0.01),
+        buffer.visible_cells(DVec3::new(1.6, 1.2, -2.0), floor, 1),
         (9, 9)
     );
     assert_eq!(
-        buffer.visible_cells(DVec3::new(0.1, 0.2, -1.0), blocker_item, 1, 0.01),
+        buffer.visible_cells(DVec3::new(0.1, 0.2, -1.0), blocker_item, 1),
         (9, 9)
     );
     // Behind the base plane: no answer.
     assert_eq!(
-        buffer.visible_cells(DVec3::new(0.0, 0.0, 1.0), floor, 1, 0.01),
+        buffer.visible_cells(DVec3::new(0.0, 0.0, 1.0), floor, 1),
         (0, 0)
     );
 }

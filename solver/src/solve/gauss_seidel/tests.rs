@@ -272,3 +272,126 @@ fn gauss_seidel_and_progressive_refinement_agree_on_the_cornell_box() {
         }
     }
 }
+
+// The progressive solver with hemicube form factors (the hemicube on the
+// shooting patch, `FormFactorMethod::Hemicube`): tests beside the gathering
+// ones, since both are 002's hemicube methods.
+
+use crate::settings::FormFactorMethod;
+
+fn emitter_patch(solver: &Solver, scene: &Scene) -> u32 {
+    let mesh = solver.mesh();
+    (0..mesh.patches.len() as u32)
+        .find(|&p| {
+            let surface = &mesh.surfaces[mesh.patches[p as usize].surface as usize];
+            scene.materials[surface.material].emission.max_element() > 0.0
+        })
+        .unwrap()
+}
+
+#[test]
+fn hemicube_shooting_sees_every_vertex_of_a_convex_room() {
+    // In a closed cube nothing is occluded, so the hemicube's visibility must
+    // be 1 for every receiving vertex, corners and edges included (where a
+    // neighbouring wall fills the receiver's cell and only the depth test
+    // lets it through): the factors equal the exact unoccluded ones bit for
+    // bit.
+    let scene = scene_of(cube(), vec![material("furnace", 0.5, 1.0)], 3);
+    let mut hemicube = settings(3, 64);
+    hemicube.form_factors = FormFactorMethod::Hemicube;
+    let mut unoccluded = settings(3, 64);
+    unoccluded.shadows = false;
+    let (a, b) = (
+        Solver::new(&scene, &hemicube).unwrap(),
+        Solver::new(&scene, &unoccluded).unwrap(),
+    );
+    for source in [0u32, 4, 13, 22, 40, 53] {
+        let (fa, fb) = (a.vertex_form_factors(source), b.vertex_form_factors(source));
+        let lit = fb.iter().filter(|&&f| f > 0.0).count();
+        assert!(lit > 20, "source {source}: only {lit} receivers");
+        assert_eq!(fa, fb, "source {source}");
+    }
+}
+
+#[test]
+fn hemicube_shooting_casts_the_shadow_seen_from_the_source_centre() {
+    // A 1 × 1 emitter at height 3 facing down, a 1 × 1 blocker at height 2
+    // (both sides drawn: it faces up, toward the source) and a 6 × 6 floor.
+    // The hemicube sees the blocker from the source's centre c; a floor point
+    // p is behind it exactly when the ray c → p crosses the blocker's square,
+    // i.e. when its crossing of the blocker's plane, c + (p − c)·(1/3) here, is
+    // inside the square. The blocker is parallel to the top face, so in that
+    // plane a cell is h·D wide (D = 1 the plane's distance, h = 2/R): the 3 × 3
+    // filter sees across the edge only within 1.5·√2·h·D of it. Outside a band
+    // of 2.5·h·D around the edge, the visible fraction must be exactly 0
+    // (inside) or 1 (outside).
+    let (r, d) = (64u32, 1.0);
+    let floor = vec![
+        DVec3::new(-3.0, -3.0, 0.0),
+        DVec3::new(3.0, -3.0, 0.0),
+        DVec3::new(3.0, 3.0, 0.0),
+        DVec3::new(-3.0, 3.0, 0.0),
+    ];
+    let square = |z: f64, half: f64| {
+        vec![
+            DVec3::new(-half, -half, z),
+            DVec3::new(-half, half, z),
+            DVec3::new(half, half, z),
+            DVec3::new(half, -half, z),
+        ]
+    };
+    let mut blocker_up = square(2.0, 0.5);
+    blocker_up.reverse();
+    let scene = {
+        let mut s = scene_of(
+            vec![
+                (floor, 0),
+                (square(3.0, 0.5), 1),
+                (square(2.0, 0.5), 0),
+                (blocker_up, 0),
+            ],
+            vec![material("grey", 0.5, 0.0), material("lamp", 0.5, 1.0)],
+            1,
+        );
+        s.polygons[0].patches = 16;
+        s
+    };
+    let mut hemicube = settings(1, r);
+    hemicube.form_factors = FormFactorMethod::Hemicube;
+    let mut unoccluded = settings(1, r);
+    unoccluded.shadows = false;
+    let (a, b) = (
+        Solver::new(&scene, &hemicube).unwrap(),
+        Solver::new(&scene, &unoccluded).unwrap(),
+    );
+    let source = emitter_patch(&a, &scene);
+    let (fa, fb) = (a.vertex_form_factors(source), b.vertex_form_factors(source));
+    let mesh = a.mesh();
+    let centre = DVec3::new(0.0, 0.0, 3.0) - a.offset();
+    let margin = 2.5 * (2.0 / r as f64) * d;
+    let (mut inside, mut outside) = (0, 0);
+    for (v, vertex) in mesh.vertices.iter().enumerate() {
+        if mesh.surfaces[vertex.surface as usize].polygon != 0 || fb[v] <= 0.0 {
+            continue;
+        }
+        let p = vertex.position;
+        let crossing =
+            centre + (p - centre) * ((centre.z - (2.0 - a.offset().z)) / (centre.z - p.z));
+        let reach = (crossing - (DVec3::new(0.0, 0.0, 2.0) - a.offset()))
+            .abs()
+            .max_element();
+        let fraction = fa[v] / fb[v];
+        if reach < 0.5 - margin {
+            assert_eq!(fraction, 0.0, "vertex {v} at {p} should be in the shadow");
+            inside += 1;
+        } else if reach > 0.5 + margin {
+            assert!(
+                (fraction - 1.0).abs() < 1e-12,
+                "vertex {v} at {p}: {fraction}"
+            );
+            outside += 1;
+        }
+    }
+    println!("{inside} vertices in the shadow, {outside} lit, checked");
+    assert!(inside >= 9 && outside >= 100, "{inside} {outside}");
+}
