@@ -16,7 +16,7 @@ mod progress;
 mod session;
 mod stats;
 
-pub use args::{SolveArgs, EXIT_INTERRUPTED};
+pub use args::{SolveArgs, SolverKind, EXIT_INTERRUPTED};
 pub use stats::RunStats;
 
 use crate::camera::Camera;
@@ -104,7 +104,12 @@ pub fn run(args: SolveArgs) -> anyhow::Result<ExitCode> {
         threads,
         interrupted: &interrupted,
     };
-    let outcome = pool.install(|| solve(&args, &scene, &settings, &session))?;
+    let outcome = match args.solver {
+        SolverKind::Progressive => pool.install(|| solve(&args, &scene, &settings, &session))?,
+        SolverKind::GaussSeidel => {
+            pool.install(|| gauss_seidel(&args, &scene, &settings, threads))?
+        }
+    };
     finish(&args, &settings, &checkpoint_path, outcome, scene.camera)
 }
 
@@ -257,6 +262,56 @@ fn solve(
             .for_each(|w| eprintln!("solver: warning: {w}"));
         session.run(solver, 0.0)
     }
+}
+
+/// `--solver gauss-seidel`: one call, no checkpoints (nothing to resume).
+fn gauss_seidel(
+    args: &SolveArgs,
+    scene: &Scene,
+    settings: &SolverSettings,
+    threads: usize,
+) -> anyhow::Result<Outcome> {
+    use crate::solve::gauss_seidel::{solve_gauss_seidel, GaussSeidelLimits};
+    if args.resume {
+        bail!("--resume: the Gauss-Seidel solver keeps no checkpoints; run without --resume");
+    }
+    let result = solve_gauss_seidel(scene, settings, &GaussSeidelLimits::default())
+        .map_err(plain)
+        .with_context(|| format!("solving {} by Gauss-Seidel", args.scene.display()))?;
+    eprintln!(
+        "solver: gauss-seidel: {} patches, {:.1} MiB matrix, form factors {:.2} s, {} sweeps \
+         {:.2} s, last change {:.1e}{}",
+        result.patch_radiance.len(),
+        result.matrix_bytes as f64 / (1u64 << 20) as f64,
+        result.form_factor_seconds,
+        result.sweeps,
+        result.solve_seconds,
+        result.change,
+        if result.converged {
+            ""
+        } else {
+            " (not converged: sweep budget)"
+        }
+    );
+    let batch = result.solution.batches.first();
+    let stats = RunStats {
+        elements: result.patch_radiance.len() as u64,
+        vertices: batch.map_or(0, |b| b.vertices.len() as u64),
+        shots: result.sweeps as u64,
+        rays: 0,
+        seconds: result.form_factor_seconds + result.solve_seconds,
+        rays_per_second: 0.0,
+        threads,
+        unshot_fraction: result.solution.header.stats.unshot_fraction,
+    };
+    // There is no checkpoint to keep or resume: an unconverged result is said
+    // above and marked partial in the file, so the session's resume hint is off.
+    Ok(Outcome {
+        converged: true,
+        solution: result.solution,
+        stats,
+        interrupted: false,
+    })
 }
 
 impl session::Shooter for Solver {

@@ -4,6 +4,16 @@ use crate::format::SolveMode;
 use crate::settings::{FormFactorMethod, Preset, SettingsPatch};
 use std::path::PathBuf;
 
+/// Which solver `--solver` runs.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum SolverKind {
+    /// Progressive refinement (000 §3.7).
+    #[default]
+    Progressive,
+    /// The full matrix solved by Gauss-Seidel (002, 001).
+    GaussSeidel,
+}
+
 /// Exit code of a solve stopped by Ctrl-C after saving its checkpoint (128 + SIGINT,
 /// as shells report an interrupted program).
 pub const EXIT_INTERRUPTED: u8 = 130;
@@ -108,7 +118,7 @@ pub struct SolveArgs {
     )]
     pub no_shadows: bool,
 
-    /// Point-to-source form factor: analytic (default) or wallace.
+    /// Point-to-source form factor: analytic (default), wallace or hemicube.
     #[arg(
         long,
         value_enum,
@@ -117,9 +127,38 @@ pub struct SolveArgs {
             (default): the exact point-to-polygon factor times the visible fraction of \
             the rays; correct near the source and in corners. wallace: 000 eq. 3.1's \
             disc approximation per sample, slightly cheaper, dark near shared edges \
-            (kept to measure against)."
+            (kept to measure against). hemicube: the exact factor times the visibility \
+            read from a hemicube on the shooting patch's centre (002), no rays; hard \
+            shadows as seen from the source's centre (directional mode uses analytic)."
     )]
     pub form_factors: Option<FormFactorMethod>,
+
+    /// Hemicube cells per side of the top face (even, 2 to 2048).
+    #[arg(
+        long,
+        value_name = "R",
+        long_help = "Cells per side of a hemicube's top face (even, 2 to 2048; default \
+            128): 3R² cells in all. Used by --form-factors hemicube and --solver \
+            gauss-seidel. The error of a hemicube factor falls like 1/R where polygon \
+            edges line up with the cells and faster otherwise; time grows like R²."
+    )]
+    pub hemicube_resolution: Option<u32>,
+
+    /// progressive (default) or gauss-seidel.
+    #[arg(
+        long,
+        value_enum,
+        value_name = "SOLVER",
+        default_value_t = SolverKind::Progressive,
+        long_help = "progressive (default): progressive refinement, shooting the \
+            brightest patch each step, with adaptive meshing, checkpoints and --resume. \
+            gauss-seidel: 002's full matrix B = E + ρFB with form factors from a \
+            hemicube on each receiving patch, solved by Gauss-Seidel sweeps; no \
+            adaptive meshing, checkpoints or --resume; refused when the n × n f32 \
+            matrix would exceed 2 GiB (about 23 000 patches). A baseline to measure \
+            the progressive solver against."
+    )]
+    pub solver: SolverKind,
 
     /// diffuse (default) or directional (glossy, spherical harmonics).
     #[arg(
@@ -228,6 +267,7 @@ impl SolveArgs {
             mode: self.mode,
             form_factors: self.form_factors,
             samples: self.samples,
+            hemicube_resolution: self.hemicube_resolution,
             shadows: self.no_shadows.then_some(false),
             threshold: self.threshold,
             max_shots: self.max_shots,
