@@ -117,6 +117,8 @@ pub struct NewVertex {
     pub id: u32,
     pub parents: [u32; 4],
     pub parent_count: u8,
+    /// Its parametric position in the piece of the element that created it.
+    pub uv: [u32; 2],
 }
 
 impl NewVertex {
@@ -206,6 +208,8 @@ pub struct Mesh {
     pub skipped: Vec<usize>,
     /// Every split, in order: replaying it on a fresh mesh rebuilds this one.
     pub split_log: Vec<u32>,
+    /// Per piece, its patches (contiguous).
+    pub piece_patches: Vec<std::ops::Range<u32>>,
     table: VertexTable,
 }
 
@@ -222,6 +226,7 @@ impl Mesh {
             vertices: Vec::new(),
             skipped: Vec::new(),
             split_log: Vec::new(),
+            piece_patches: Vec::new(),
             table: VertexTable::default(),
         };
         let mut fan = Vec::new();
@@ -331,6 +336,8 @@ impl Mesh {
                 }
             }
         }
+        let first = self.patches.len() as u32;
+        self.piece_patches.push(first..first + cells.len() as u32);
         for (uv, count) in cells {
             let patch = self.patches.len() as u32;
             let element = self.push_element(piece_index, patch, 0, uv, count, None)?;
@@ -409,6 +416,7 @@ impl Mesh {
                         id,
                         parents: p,
                         parent_count: pc,
+                        uv: uv[k],
                     });
                 }
             }
@@ -646,6 +654,71 @@ impl Mesh {
             self.patch_triangles(p as u32, &mut out);
         }
         out
+    }
+
+    /// The patches whose closed region holds the piece-local point `uv` of piece
+    /// `piece`, appended to `out`: the patches whose display triangulation a
+    /// vertex there can change. A point on the piece's boundary of a surface
+    /// made of several pieces may lie on a diagonal shared with another piece,
+    /// so then every patch of the surface is reported.
+    pub fn patches_at(&self, piece: u32, uv: [u32; 2], out: &mut Vec<u32>) {
+        let p = self.pieces[piece as usize];
+        let surface = &self.surfaces[p.surface as usize];
+        let (d, n) = (surface.denominator, surface.patches_per_side);
+        let on_piece_edge = match p.kind {
+            PieceKind::Quad => uv[0] == 0 || uv[1] == 0 || uv[0] == d || uv[1] == d,
+            PieceKind::Triangle(_) => uv[0] == 0 || uv[1] == 0 || uv[0] + uv[1] == d,
+        };
+        if on_piece_edge
+            && self
+                .pieces
+                .iter()
+                .filter(|q| q.surface == p.surface)
+                .count()
+                > 1
+        {
+            for (q, range) in self.pieces.iter().zip(&self.piece_patches) {
+                if q.surface == p.surface {
+                    out.extend(range.clone());
+                }
+            }
+            return;
+        }
+        let start = self.piece_patches[piece as usize].start;
+        let base = out.len();
+        let step = 1u32 << SUBDIVISION_BITS;
+        let (ci, cj) = ((uv[0] / step).min(n - 1), (uv[1] / step).min(n - 1));
+        let contains = |patch: u32| {
+            let e = &self.elements[self.patches[patch as usize].root as usize];
+            let c = e.corner_count as usize;
+            let q = [uv[0] as i64, uv[1] as i64];
+            (0..c).all(|k| {
+                let (a, b) = (e.uv[k], e.uv[(k + 1) % c]);
+                let (ax, ay, bx, by) = (a[0] as i64, a[1] as i64, b[0] as i64, b[1] as i64);
+                (bx - ax) * (q[1] - ay) - (by - ay) * (q[0] - ax) >= 0
+            })
+        };
+        for j in cj.saturating_sub(1)..=cj {
+            for i in ci.saturating_sub(1)..=ci {
+                let candidates: [Option<u32>; 2] = match p.kind {
+                    PieceKind::Quad => [Some(j * n + i), None],
+                    PieceKind::Triangle(_) => {
+                        if i + j >= n {
+                            [None, None]
+                        } else {
+                            let row = 2 * n * j - j * j;
+                            let down = (i + j + 1 < n).then_some(row + 2 * i + 1);
+                            [Some(row + 2 * i), down]
+                        }
+                    }
+                };
+                for local in candidates.into_iter().flatten() {
+                    if contains(start + local) && !out[base..].contains(&(start + local)) {
+                        out.push(start + local);
+                    }
+                }
+            }
+        }
     }
 
     /// Number of leaf elements.

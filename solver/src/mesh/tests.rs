@@ -247,3 +247,46 @@ fn new_vertices_interpolate_from_their_edge_or_element_corners() {
         "the shared edge's midpoint already exists"
     );
 }
+
+#[test]
+fn patches_at_finds_every_patch_a_point_touches() {
+    let step = 1u32 << SUBDIVISION_BITS;
+    let mesh = Mesh::new(&scene_of(vec![square()], 4), DVec3::ZERO, 4).unwrap();
+    let at = |uv: [u32; 2]| {
+        let mut out = Vec::new();
+        mesh.patches_at(0, uv, &mut out);
+        out.sort();
+        out
+    };
+    assert_eq!(
+        at([step + step / 2, step / 2]),
+        vec![1],
+        "inside patch (1, 0)"
+    );
+    assert_eq!(at([step, step / 2]), vec![0, 1], "on the edge between two");
+    assert_eq!(at([step, step]), vec![0, 1, 4, 5], "at a grid corner");
+    assert_eq!(at([0, 0]), vec![0], "a polygon corner");
+
+    let tri = vec![DVec3::ZERO, DVec3::X, DVec3::Y];
+    let mesh = Mesh::new(&scene_of(vec![tri], 3), DVec3::ZERO, 3).unwrap();
+    let mut out = Vec::new();
+    mesh.patches_at(0, [step, step], &mut out);
+    assert_eq!(
+        out.len(),
+        6,
+        "an inner grid point of a triangle touches six patches"
+    );
+    for &p in &out {
+        let corners = mesh.elements[mesh.patches[p as usize].root as usize].uv;
+        assert!(
+            corners.iter().any(|c| *c == [step, step]),
+            "patch {p} does not touch it"
+        );
+    }
+    // A point on the shared diagonal of a fanned pentagon may touch patches of
+    // the other piece: every patch of the surface is reported.
+    let mesh = Mesh::new(&scene_of(vec![pentagon()], 2), DVec3::ZERO, 2).unwrap();
+    out.clear();
+    mesh.patches_at(0, [0, step / 2], &mut out);
+    assert_eq!(out.len(), mesh.patches.len());
+}

@@ -102,6 +102,18 @@ pub struct ShotReport {
     pub splits: usize,
 }
 
+/// Wall seconds spent in the parts of [`Solver::step`] since the solver was
+/// built or resumed, for benchmarks: shooting (source choice, form factors and
+/// visibility to every vertex), refinement (split tests, splits, shooting new
+/// vertices) and bookkeeping (display triangulation of the changed patches,
+/// gather into patches).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Timings {
+    pub shoot: f64,
+    pub refine: f64,
+    pub gather: f64,
+}
+
 /// Where the solve stands.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Progress {
@@ -149,6 +161,8 @@ pub struct Solver {
     seconds: f64,
     emitted_power: f64,
     unshot_power: f64,
+    /// Where step time went (this session).
+    timings: Timings,
     /// The scene's radiance level (brightest channel of the ambient term
     /// before any shot), for the meshing's dark floor.
     radiance_level: f64,
@@ -259,6 +273,7 @@ impl Solver {
             emitted_power,
             unshot_power: 0.0,
             radiance_level: 0.0,
+            timings: Timings::default(),
             directional: None,
             warnings: Vec::new(),
         };
@@ -331,6 +346,7 @@ impl Solver {
             }
             rays += r.rays as u64;
         }
+        let shot_done = Instant::now();
         let refined = if self.settings.adaptive {
             let replay: Vec<Shot> = self
                 .recorded
@@ -372,8 +388,12 @@ impl Solver {
         let splits = refined.splits;
         rays += refined.rays;
         self.leaf_count += 3 * splits;
-        self.update_weights(&refined.dirty_surfaces);
+        let refine_done = Instant::now();
+        self.update_patch_weights(&refined.dirty_patches);
         self.gather();
+        self.timings.shoot += (shot_done - start).as_secs_f64();
+        self.timings.refine += (refine_done - shot_done).as_secs_f64();
+        self.timings.gather += refine_done.elapsed().as_secs_f64();
         self.shots += 1;
         self.rays += rays;
         self.unshot_power = self.total_unshot_power();
@@ -387,6 +407,11 @@ impl Solver {
             vertices: self.mesh.vertices.len(),
             splits,
         })
+    }
+
+    /// Where step time went since the solver was built or resumed.
+    pub fn timings(&self) -> Timings {
+        self.timings
     }
 
     /// Where the solve stands.
@@ -496,6 +521,12 @@ impl Solver {
             .iter()
             .flat_map(|&s| self.surface_patches[s as usize].clone())
             .collect();
+        self.update_patch_weights(&patches);
+    }
+
+    /// Recomputes the gather weights of `patches` from their display
+    /// triangulation.
+    fn update_patch_weights(&mut self, patches: &[u32]) {
         let mesh = &self.mesh;
         let weights: Vec<Vec<(u32, f64)>> = patches
             .par_iter()
@@ -520,7 +551,7 @@ impl Solver {
                 merged
             })
             .collect();
-        for (p, w) in patches.into_iter().zip(weights) {
+        for (&p, w) in patches.iter().zip(weights) {
             self.patch_weights[p as usize] = w;
         }
     }

@@ -193,6 +193,9 @@ pub struct Refined {
     /// Surfaces whose mesh changed (their display triangulation and gather
     /// weights must be rebuilt).
     pub dirty_surfaces: Vec<u32>,
+    /// The patches whose display triangulation changed, sorted: those of the
+    /// split elements and those a new vertex lies on the edge of.
+    pub dirty_patches: Vec<u32>,
 }
 
 /// Refines after `shot`: tests the leaves the shot changed, splits, shoots the
@@ -247,6 +250,7 @@ pub fn refine(
         for &e in &to_split {
             // Only an impossible mesh size (2^32 vertices) can fail; stop
             // refining then rather than abort the solve.
+            let before = created.len();
             let Ok(first) = mesh.split(e, &mut created) else {
                 break;
             };
@@ -254,6 +258,12 @@ pub fn refine(
             children.extend(first..first + 4);
             let surface = mesh.patches[mesh.elements[e as usize].patch as usize].surface;
             dirty[surface as usize] = true;
+            let patch = mesh.elements[e as usize].patch;
+            out.dirty_patches.push(patch);
+            let piece = mesh.patches[patch as usize].piece;
+            for nv in &created[before..] {
+                mesh.patches_at(piece, nv.uv, &mut out.dirty_patches);
+            }
         }
         for nv in &created {
             debug_assert_eq!(nv.id as usize, radiance.len());
@@ -312,6 +322,8 @@ pub fn refine(
         }
         candidates = children;
     }
+    out.dirty_patches.sort_unstable();
+    out.dirty_patches.dedup();
     out.dirty_surfaces = (0..dirty.len() as u32)
         .filter(|&s| dirty[s as usize])
         .collect();
