@@ -279,7 +279,7 @@ fn patches_at_finds_every_patch_a_point_touches() {
     for &p in &out {
         let corners = mesh.elements[mesh.patches[p as usize].root as usize].uv;
         assert!(
-            corners.iter().any(|c| *c == [step, step]),
+            corners.contains(&[step, step]),
             "patch {p} does not touch it"
         );
     }
