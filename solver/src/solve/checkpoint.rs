@@ -148,6 +148,22 @@ impl Solver {
             return mismatch(format!("its recorded shot {bad:?} does not fit the solve"));
         }
         solver.recorded = checkpoint.recorded;
+        solver.recorded_pools = solver
+            .recorded
+            .iter()
+            .map(|r| {
+                let shot = super::shoot::Shot::for_patch(
+                    &solver.mesh,
+                    r.patch,
+                    r.index,
+                    r.unshot(),
+                    &solver.settings,
+                    &solver.occluder,
+                    &solver.kd,
+                );
+                super::shoot::SamplePool::with_sets(&shot, super::shoot::REPLAY_POOL_SETS)
+            })
+            .collect();
         if !solver
             .radiance
             .iter()

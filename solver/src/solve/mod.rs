@@ -53,7 +53,7 @@ use crate::scene::Scene;
 use crate::settings::{SettingsError, SolverSettings};
 use glam::DVec3;
 use rayon::prelude::*;
-use shoot::{Received, RecordedShot, Scratch, Shot};
+use shoot::{Received, RecordedShot, SamplePool, Scratch, Shot};
 use std::f64::consts::PI;
 use std::time::Instant;
 
@@ -152,6 +152,8 @@ pub struct Solver {
     direct: Vec<DVec3>,
     /// Every shot from an emitter's patch, in order.
     recorded: Vec<RecordedShot>,
+    /// Their sample pools (rebuilt on resume, not checkpointed).
+    recorded_pools: Vec<SamplePool>,
     /// Per patch: unshot radiance, and (vertex, area) weights of the gather.
     patch_unshot: Vec<DVec3>,
     patch_weights: Vec<Vec<(u32, f64)>>,
@@ -265,6 +267,7 @@ impl Solver {
             visible: vec![0; vertex_count],
             direct: vec![DVec3::ZERO; vertex_count],
             recorded: Vec::new(),
+            recorded_pools: Vec::new(),
             patch_unshot,
             patch_weights: vec![Vec::new(); patch_count],
             shots: 0,
@@ -329,11 +332,16 @@ impl Solver {
                 unshot: unshot.to_array().map(f64::to_bits),
             });
         }
+        if recorded {
+            self.recorded_pools
+                .push(SamplePool::with_sets(&shot, shoot::REPLAY_POOL_SETS));
+        }
+        let pool = SamplePool::new(&shot);
         let mesh = &self.mesh;
         let results: Vec<Received> = (0..mesh.vertices.len() as u32)
             .into_par_iter()
             .map_init(Scratch::default, |scratch, v| {
-                shot.receive(mesh, v, scratch)
+                shot.receive(mesh, v, &pool, scratch)
             })
             .collect();
         let mut rays = 0u64;
@@ -373,6 +381,7 @@ impl Solver {
                 },
                 &refine::Replay {
                     recorded: &replay,
+                    pools: &self.recorded_pools,
                     current_recorded: recorded,
                 },
                 &refine::Criteria {
@@ -381,6 +390,7 @@ impl Solver {
                     ..refine::Criteria::from_settings(&self.settings)
                 },
                 &shot,
+                &pool,
             )
         } else {
             refine::Refined::default()
@@ -477,12 +487,13 @@ impl Solver {
             &self.kd,
         );
         let mut scratch = Scratch::default();
+        let pool = SamplePool::new(&shot);
         (0..self.mesh.vertices.len() as u32)
             .map(|v| {
                 if self.mesh.vertices[v as usize].surface == shot.source_surface {
                     0.0
                 } else {
-                    shot.form_factor(&self.mesh, v, &mut scratch).0
+                    shot.form_factor(&self.mesh, v, &pool, &mut scratch).0
                 }
             })
             .collect()

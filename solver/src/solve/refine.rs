@@ -43,7 +43,7 @@
 //! indirect light casts shadows too, and an edge that already passed is only
 //! tested again when the shot changed one of its ends.
 
-use super::shoot::{Received, Scratch, Shot};
+use super::shoot::{Received, SamplePool, Scratch, Shot};
 use crate::mesh::Mesh;
 use crate::settings::SolverSettings;
 use glam::DVec3;
@@ -181,6 +181,8 @@ pub struct VertexState<'a> {
 pub struct Replay<'a, 'b> {
     /// Every emitter shot so far, in order, the current one last if it is one.
     pub recorded: &'b [Shot<'a>],
+    /// Their sample pools.
+    pub pools: &'b [SamplePool],
     /// Whether the current shot is the last of `recorded`.
     pub current_recorded: bool,
 }
@@ -206,6 +208,7 @@ pub fn refine(
     replay: &Replay<'_, '_>,
     criteria: &Criteria,
     shot: &Shot,
+    pool: &SamplePool,
 ) -> Refined {
     let VertexState {
         radiance,
@@ -296,13 +299,13 @@ pub fn refine(
                     let mut exact = DVec3::ZERO;
                     let mut rays = 0u64;
                     let mut current = Received::default();
-                    for r in replay.recorded {
-                        current = r.receive(mesh, nv.id, scratch);
+                    for (r, p) in replay.recorded.iter().zip(replay.pools) {
+                        current = r.receive(mesh, nv.id, p, scratch);
                         exact += current.radiance;
                         rays += current.rays as u64;
                     }
                     if !replay.current_recorded {
-                        current = shot.receive(mesh, nv.id, scratch);
+                        current = shot.receive(mesh, nv.id, pool, scratch);
                         rays += current.rays as u64;
                     }
                     (exact, current, rays)

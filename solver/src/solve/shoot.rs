@@ -41,11 +41,92 @@ pub struct Received {
 pub struct Scratch {
     points: Vec<DVec3>,
     clipped: Vec<DVec3>,
-    targets: Vec<DVec3>,
     flags: Vec<bool>,
     /// The `Hemicube` method's item buffer of the current shot, rendered once
     /// per worker and shot, with the key of the shot it belongs to.
     hemicube: Option<([u64; 8], ItemBuffer)>,
+}
+
+/// How many jittered sample sets a shot draws on its source ([`SamplePool`]).
+pub const POOL_SETS: u32 = 256;
+
+/// Sets kept for each recorded (emitter) shot, re-evaluated at vertices that
+/// later splits create: smaller, since such a pool lives for the whole solve.
+pub const REPLAY_POOL_SETS: u32 = 32;
+
+/// Stream ids of the pool's sets, apart from the vertex ids (< 2^32) that name
+/// the receivers' streams.
+const POOL_STREAM: u64 = 1 << 62;
+
+/// Stratified, jittered sample sets over one shot's source, drawn once per
+/// shot: [`POOL_SETS`] sets of `samples` points, set k from the RNG stream
+/// (seed, shot, 2^62 + k). A receiver whose view of the source is not clipped
+/// by its horizon uses the set named by the first draw of its own stream
+/// (seed, shot, vertex id), so results still depend only on the seed, the
+/// shot and the vertex, never on threads or order.
+///
+/// Drawing a fresh set per receiver cost as much as tracing its rays (stratified
+/// sampling maps every point through the source's fan with a square root and
+/// two 53-bit draws): a pool moves that out of the inner loop. Each receiver's
+/// estimate is as unbiased as before (a random, independently jittered set);
+/// receivers that draw the same set (1 in 256 pairs) have correlated noise,
+/// which at 256 sets is far below what a viewer or the refinement test could
+/// see.
+pub struct SamplePool {
+    samples: usize,
+    sets: u32,
+    /// On the source's surface (the points 000 eq. 3.1 evaluates).
+    on_source: Vec<DVec3>,
+    /// The same lifted `scene_epsilon` off the source: the rays' targets.
+    lifted: Vec<DVec3>,
+}
+
+impl SamplePool {
+    /// The pool of `shot`; empty when its method and settings trace no rays
+    /// and need no samples.
+    pub fn new(shot: &Shot) -> SamplePool {
+        Self::with_sets(shot, POOL_SETS)
+    }
+
+    /// A pool of `sets` sets (the first `sets` of the full pool's).
+    pub fn with_sets(shot: &Shot, sets: u32) -> SamplePool {
+        let needed = match shot.method {
+            FormFactorMethod::Analytic => shot.shadows,
+            FormFactorMethod::Wallace => true,
+            FormFactorMethod::Hemicube => false,
+        };
+        let samples = shot.samples as usize;
+        let sets = sets.max(1);
+        let mut pool = SamplePool {
+            samples,
+            sets,
+            on_source: Vec::new(),
+            lifted: Vec::new(),
+        };
+        if !needed || samples == 0 {
+            return pool;
+        }
+        pool.on_source.reserve(sets as usize * samples);
+        let mut set = Vec::with_capacity(samples);
+        for k in 0..sets {
+            let mut rng = Rng::new(shot.seed, stream_id(shot.index, POOL_STREAM + k as u64));
+            stratified_points(shot.polygon(), shot.samples, &mut rng, &mut set);
+            pool.on_source.extend_from_slice(&set);
+        }
+        let lift = shot.normal * shot.occluder.scene_epsilon();
+        pool.lifted = pool.on_source.iter().map(|&p| p + lift).collect();
+        pool
+    }
+
+    /// The set receiver `v` of `shot` uses: (points on the source, lifted).
+    pub fn set_for(&self, shot: &Shot, v: u32) -> (&[DVec3], &[DVec3]) {
+        if self.on_source.is_empty() {
+            return (&[], &[]);
+        }
+        let k = Rng::new(shot.seed, stream_id(shot.index, v as u64)).next_u32() % self.sets;
+        let range = k as usize * self.samples..(k as usize + 1) * self.samples;
+        (&self.on_source[range.clone()], &self.lifted[range])
+    }
 }
 
 /// The `Hemicube` method filters visibility over this many cells each side of
@@ -167,8 +248,10 @@ impl Shot<'_> {
     /// * `Analytic` (default): the exact unoccluded point-to-polygon factor
     ///   times the visible fraction of `samples` stratified, jittered rays to
     ///   the part of the source above the receiver's horizon (design notes,
-    ///   "Form factors"; see [`Shot::draw_visible_part_samples`]).
-    /// * `Wallace`: 000 eq. 3.1 over the same samples.
+    ///   "Form factors"): a pooled set ([`SamplePool`]) when the whole source is
+    ///   above it, else a set drawn on the clipped part
+    ///   ([`Shot::draw_visible_part_samples`]).
+    /// * `Wallace`: 000 eq. 3.1 over a pooled set on the whole source.
     /// * `Hemicube`: the exact unoccluded factor times the visible fraction
     ///   read from a hemicube item buffer on the source patch's centre (002,
     ///   "on the shooting patch when shooting"; see [`Shot::hemicube_visibility`]).
@@ -180,7 +263,13 @@ impl Shot<'_> {
     /// next to the source's edge (a room's corner) runs at a grazing angle to
     /// the source's plane, and the f32 occluder then finds the source itself
     /// a little before the segment's end, blocking half of the rays.
-    pub fn form_factor(&self, mesh: &Mesh, v: u32, scratch: &mut Scratch) -> (f64, u32, u32) {
+    pub fn form_factor(
+        &self,
+        mesh: &Mesh,
+        v: u32,
+        pool: &SamplePool,
+        scratch: &mut Scratch,
+    ) -> (f64, u32, u32) {
         let (q, n) = self.receiving_point(mesh, v);
         // Cheap culls before the contour integral: a receiver clearly behind the
         // one-sided source, or one that faces away from every source corner,
@@ -202,38 +291,37 @@ impl Shot<'_> {
                 if !self.shadows {
                     return (unoccluded, self.samples, 0);
                 }
-                self.draw_visible_part_samples(q, n, v, scratch);
-                let lift = self.normal * self.occluder.scene_epsilon();
-                scratch.points.iter_mut().for_each(|p| *p += lift);
-                let visible = self.occluder.count_visible(origin, &scratch.points);
+                // A source entirely in the receiver's closed upper half-space
+                // (corners on the tangent plane allowed, as where a wall meets
+                // the floor) uses a pooled set: a ray from the lifted origin to
+                // a target at height ≥ 0 reaches the receiving plane at most at
+                // its end, which the occluder excludes. The tolerance, 1e-6 ε,
+                // absorbs rounding of corners on the plane and moves such a
+                // crossing no further than 1e-6 of the segment from its end.
+                let floor = -1e-6 * self.occluder.scene_epsilon();
+                let visible = if self.polygon().iter().all(|&c| n.dot(c - q) >= floor) {
+                    self.occluder.count_visible(origin, pool.set_for(self, v).1)
+                } else {
+                    self.draw_visible_part_samples(q, n, v, scratch);
+                    let lift = self.normal * self.occluder.scene_epsilon();
+                    scratch.points.iter_mut().for_each(|p| *p += lift);
+                    self.occluder.count_visible(origin, &scratch.points)
+                };
                 let fraction = visible as f64 / self.samples as f64;
                 (unoccluded * fraction, visible, self.samples)
             }
             FormFactorMethod::Wallace => {
-                let mut rng = Rng::new(self.seed, stream_id(self.index, v as u64));
-                stratified_points(self.polygon(), self.samples, &mut rng, &mut scratch.points);
+                let (points, targets) = pool.set_for(self, v);
                 let rays = if self.shadows {
-                    let lift = self.normal * self.occluder.scene_epsilon();
-                    scratch.targets.clear();
-                    scratch
-                        .targets
-                        .extend(scratch.points.iter().map(|&p| p + lift));
                     self.occluder
-                        .visible_each(origin, &scratch.targets, &mut scratch.flags);
+                        .visible_each(origin, targets, &mut scratch.flags);
                     self.samples
                 } else {
                     scratch.flags.clear();
-                    scratch.flags.resize(scratch.points.len(), true);
+                    scratch.flags.resize(points.len(), true);
                     0
                 };
-                let factor = wallace(
-                    q,
-                    n,
-                    &scratch.points,
-                    self.normal,
-                    self.area,
-                    &scratch.flags,
-                );
+                let factor = wallace(q, n, points, self.normal, self.area, &scratch.flags);
                 let visible = scratch.flags.iter().filter(|&&f| f).count() as u32;
                 let visible = if factor > 0.0 { visible } else { 0 };
                 (factor, visible, rays)
@@ -345,14 +433,20 @@ impl Shot<'_> {
 
     /// ΔL_v = Kd · U_s · F(v←s) (000 Fig. 3.6: ΔRad = SP.unshotRad ·
     /// V.reflectance · F, in radiance: L = B/π on both sides).
-    pub fn receive(&self, mesh: &Mesh, v: u32, scratch: &mut Scratch) -> Received {
+    pub fn receive(
+        &self,
+        mesh: &Mesh,
+        v: u32,
+        pool: &SamplePool,
+        scratch: &mut Scratch,
+    ) -> Received {
         let surface = mesh.vertices[v as usize].surface;
         // A planar polygon cannot light itself; a black one reflects nothing.
         let kd = self.kd[surface as usize];
         if surface == self.source_surface || kd == DVec3::ZERO {
             return Received::default();
         }
-        let (factor, visible, rays) = self.form_factor(mesh, v, scratch);
+        let (factor, visible, rays) = self.form_factor(mesh, v, pool, scratch);
         Received {
             radiance: kd * self.unshot * factor,
             visible,
