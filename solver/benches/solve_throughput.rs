@@ -36,9 +36,11 @@ fn main() {
         .expect("one worker thread");
     println!(
         "| preset | samples | shots | elements | vertices | rays | wall s | M rays/s (1 thread) | \
-         setup s | shoot s | refine s | gather s |"
+         setup s | shoot s | shoot M rays/s | refine s | refine M rays/s | gather s |"
     );
-    println!("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |");
+    println!(
+        "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"
+    );
     for preset in presets {
         let mut scene = load_scene(&path, &ImportOptions::default())
             .expect("config/cornell_box.obj imports")
@@ -57,7 +59,7 @@ fn main() {
         let t = solver.timings();
         let setup = wall - t.shoot - t.refine - t.gather;
         println!(
-            "| {} | {} | {} | {} | {} | {:.3e} | {:.2} | {:.1} | {:.3} | {:.2} | {:.2} | {:.2} |",
+            "| {} | {} | {} | {} | {} | {:.3e} | {:.2} | {:.1} | {:.3} | {:.2} | {:.1} | {:.2} | {:.1} | {:.2} |",
             preset.name(),
             settings.samples,
             p.shots,
@@ -68,7 +70,9 @@ fn main() {
             p.rays as f64 / wall / 1e6,
             setup,
             t.shoot,
+            t.shoot_rays as f64 / t.shoot / 1e6,
             t.refine,
+            (p.rays - t.shoot_rays) as f64 / t.refine / 1e6,
             t.gather
         );
     }

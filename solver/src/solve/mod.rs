@@ -112,6 +112,8 @@ pub struct Timings {
     pub shoot: f64,
     pub refine: f64,
     pub gather: f64,
+    /// Rays traced by the shooting part (the rest were traced by refinement).
+    pub shoot_rays: u64,
 }
 
 /// Where the solve stands.
@@ -402,6 +404,7 @@ impl Solver {
         self.update_patch_weights(&refined.dirty_patches);
         self.gather();
         self.timings.shoot += (shot_done - start).as_secs_f64();
+        self.timings.shoot_rays += rays - refined.rays;
         self.timings.refine += (refine_done - shot_done).as_secs_f64();
         self.timings.gather += refine_done.elapsed().as_secs_f64();
         self.shots += 1;
