@@ -68,7 +68,7 @@
 //! polygon's projection.
 
 use super::formfactor::point_to_polygon;
-use super::polygon::{clip_to_halfspace, is_convex, newell_normal, triangulate};
+use super::polygon::{clip_to_halfspace, is_convex, newell_normal, ray_triangle, triangulate};
 use glam::{DVec2, DVec3};
 
 /// The largest resolution accepted: 3 · 2048² cells, 12.6 million, about
@@ -395,8 +395,10 @@ pub struct ItemBuffer {
     clip_b: Vec<DVec3>,
     screen: Vec<DVec2>,
     /// Per target: its plane in the frame's coordinates, n · x = offset (zero
-    /// for targets that were skipped).
+    /// for targets that were skipped), and its triangles in `triangles`.
     planes: Vec<(DVec3, f64)>,
+    spans: Vec<(usize, usize)>,
+    triangles: Vec<[DVec3; 3]>,
 }
 
 impl ItemBuffer {
@@ -416,6 +418,8 @@ impl ItemBuffer {
             clip_b: Vec::new(),
             screen: Vec::new(),
             planes: Vec::new(),
+            spans: Vec::new(),
+            triangles: Vec::new(),
         }
     }
 
@@ -451,6 +455,8 @@ impl ItemBuffer {
         self.items.fill(NO_ITEM);
         self.inverse_depth.fill(0.0);
         self.planes.clear();
+        self.spans.clear();
+        self.triangles.clear();
     }
 
     /// Clears the buffer and draws `targets` (item k is `targets[k]`; at most
@@ -462,6 +468,9 @@ impl ItemBuffer {
         let count = targets.len().min(BACK_FACE as usize - 1);
         self.planes.clear();
         self.planes.resize(count, (DVec3::ZERO, 0.0));
+        self.spans.clear();
+        self.spans.resize(count, (0, 0));
+        self.triangles.clear();
         for (k, target) in targets.iter().enumerate().take(count) {
             self.draw(frame, target.as_ref(), k as u32);
         }
@@ -494,6 +503,14 @@ impl ItemBuffer {
             return;
         }
         self.planes[index as usize] = (normal, offset);
+        self.pieces.clear();
+        triangulate(&self.local, &mut self.pieces);
+        let first = self.triangles.len();
+        for &[i, j, k] in &self.pieces {
+            self.triangles
+                .push([self.local[i], self.local[j], self.local[k]]);
+        }
+        self.spans[index as usize] = (first, self.pieces.len());
         let item = if offset < 0.0 {
             index
         } else {
@@ -650,59 +667,75 @@ impl ItemBuffer {
         })
     }
 
-    /// How many cells of the (2·radius + 1)² block around the cell through which
-    /// the centre sees `point` (clipped to that face) let `point` see the
-    /// centre, and how many cells were tested: percentage-closer filtering of
-    /// the item buffer used as a visibility map. `(0, 0)` when the point cannot
-    /// be looked up.
+    /// Whether the segment from the centre to `point` is unobstructed, judged
+    /// against the candidates the buffer shows around it: the polygons held
+    /// by the (2·radius + 1)² block of cells around the cell through which the
+    /// centre sees `point` (clipped to that face), each tested exactly against
+    /// the segment (against its triangles, ignoring crossings within `end_gap`
+    /// scene units of either end, like the ray caster's end epsilon). `own`
+    /// (the point's own polygon) is never an obstacle. `None` when the point cannot be looked up (below the
+    /// base plane, at the centre, or nothing rendered).
     ///
-    /// A cell lets the point through when it is empty, holds `own` (the
-    /// point's own polygon, either side), or holds a polygon whose *plane* the
-    /// segment from the centre to the point does not cross before the point.
-    /// The plane is tested along the exact segment, not along the cell's
-    /// central ray: a cell's stored depth belongs to a ray up to a cell away,
-    /// and near a surface seen at a grazing angle that depth differs from the
-    /// point's by far more than any fixed bias. The plane test has no such
-    /// error: a wall meeting the point's surface at a corner of a room, which
-    /// fills the cells next to a point near the corner, never crosses the
-    /// segment (the centre and the point are on the same side of it), so it
-    /// does not shadow the point; a genuine occluder between them does. The
-    /// only approximation left is the cell's: that the polygon seen through it
-    /// also covers the segment.
-    pub fn visible_cells(&self, point: DVec3, own: u32, radius: usize) -> (u32, u32) {
-        let Some(hit) = self.lookup(point) else {
-            return (0, 0);
-        };
-        let Some(frame) = self.frame.as_ref() else {
-            return (0, 0);
-        };
+    /// This is the item buffer used as Haines and Greenberg's light buffer: a
+    /// cell's stored depth belongs to its central ray, up to a cell away from
+    /// the segment, and near a surface seen at a grazing angle it differs
+    /// from the point's depth by more than any fixed bias; the exact test has
+    /// no such error. A wall meeting the point's surface at a room's corner, or
+    /// the side of a box whose top the point lies on, fills cells next to the
+    /// point but is not crossed by the segment, so it casts no false shadow;
+    /// a polygon that does cross the segment is an occluder. What the buffer
+    /// can still miss is an occluder that covers the segment's direction but
+    /// no cell centre of the block, or that is hidden in each of those cells
+    /// behind a nearer polygon that does not cross the segment: occluders
+    /// thinner than about a cell.
+    pub fn segment_visible(
+        &self,
+        point: DVec3,
+        own: u32,
+        radius: usize,
+        end_gap: f64,
+    ) -> Option<bool> {
+        let hit = self.lookup(point)?;
+        let frame = self.frame.as_ref()?;
         let p = frame.local(point);
         let r = self.resolution as usize;
         let (rows, first) = face_layout(r, hit.face);
-        let (mut visible, mut tested) = (0u32, 0u32);
+        let mut last = NO_ITEM;
         for row in hit.row.saturating_sub(radius)..=(hit.row + radius).min(rows - 1) {
             for col in hit.col.saturating_sub(radius)..=(hit.col + radius).min(r - 1) {
-                tested += 1;
                 let item = self.items[first + row * r + col];
-                let index = (item & !BACK_FACE) as usize;
-                let blocks = item != NO_ITEM
-                    && index != own as usize
-                    && self.planes.get(index).is_some_and(|&(normal, offset)| {
-                        // The segment t·p, t ∈ [0, 1], meets the plane at
-                        // t = offset / (normal · p); it blocks when that is
-                        // before the point (by more than rounding).
-                        let along = normal.dot(p);
-                        along != 0.0 && {
-                            let t = offset / along;
-                            t > 0.0 && t < 1.0 - PLANE_TOLERANCE
-                        }
-                    });
-                if !blocks {
-                    visible += 1;
+                if item == NO_ITEM || item == last {
+                    continue;
+                }
+                last = item;
+                let index = item & !BACK_FACE;
+                if index != own && self.crosses(index as usize, p, end_gap) {
+                    return Some(false);
                 }
             }
         }
-        (visible, tested)
+        Some(true)
+    }
+
+    /// Whether target `index` crosses the segment from the centre to `p`
+    /// (frame coordinates), more than `end_gap` (scene units) from its ends.
+    /// Tested against the target's triangles, which pass through its actual
+    /// vertices: a slightly non-planar input polygon (the Cornell box's red
+    /// wall is off by a millimetre) would otherwise be tested against its mean
+    /// plane, which the neighbouring floor's edge does not lie on.
+    fn crosses(&self, index: usize, p: DVec3, end_gap: f64) -> bool {
+        let Some(&(start, count)) = self.spans.get(index) else {
+            return false;
+        };
+        let length = p.length();
+        if length == 0.0 {
+            return false;
+        }
+        let margin = (end_gap / length).max(PLANE_TOLERANCE);
+        self.triangles[start..start + count].iter().any(|t| {
+            ray_triangle(DVec3::ZERO, p, t[0], t[1], t[2])
+                .is_some_and(|s| s > margin && s < 1.0 - margin)
+        })
     }
 }
 

@@ -565,6 +565,7 @@ impl Solver {
             samples: self.settings.samples,
             method: self.settings.form_factors,
             hemicube_resolution: self.settings.hemicube_resolution,
+            hemicube: Default::default(),
             shadows: self.settings.shadows,
             occluder: &self.occluder,
             kd: &self.kd,

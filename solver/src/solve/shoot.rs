@@ -14,6 +14,7 @@ use crate::geometry::visibility::Occluder;
 use crate::mesh::Mesh;
 use crate::settings::FormFactorMethod;
 use glam::DVec3;
+use std::sync::OnceLock;
 
 /// Receiving points on element boundaries are evaluated this fraction of the
 /// way toward the centroid of an element they belong to (design notes, "Form
@@ -42,13 +43,14 @@ pub struct Scratch {
     points: Vec<DVec3>,
     clipped: Vec<DVec3>,
     flags: Vec<bool>,
-    /// The `Hemicube` method's item buffer of the current shot, rendered once
-    /// per worker and shot, with the key of the shot it belongs to.
-    hemicube: Option<([u64; 8], ItemBuffer)>,
 }
 
 /// How many jittered sample sets a shot draws on its source ([`SamplePool`]).
 pub const POOL_SETS: u32 = 256;
+
+/// The most points a pool holds (3 MB): with thousands of samples per
+/// receiver a pool has fewer sets rather than grow without bound.
+pub const POOL_POINTS: u32 = 1 << 16;
 
 /// Sets kept for each recorded (emitter) shot, re-evaluated at vertices that
 /// later splits create: smaller, since such a pool lives for the whole solve.
@@ -88,8 +90,10 @@ impl SamplePool {
         Self::with_sets(shot, POOL_SETS)
     }
 
-    /// A pool of `sets` sets (the first `sets` of the full pool's).
+    /// A pool of `sets` sets (the first `sets` of the full pool's), fewer when
+    /// that would exceed [`POOL_POINTS`] points (at least 8 sets).
     pub fn with_sets(shot: &Shot, sets: u32) -> SamplePool {
+        let sets = sets.min((POOL_POINTS / shot.samples.max(1)).max(8));
         let needed = match shot.method {
             FormFactorMethod::Analytic => shot.shadows,
             FormFactorMethod::Wallace => true,
@@ -129,13 +133,10 @@ impl SamplePool {
     }
 }
 
-/// The `Hemicube` method filters visibility over this many cells each side of
-/// the receiver's cell: a 3 × 3 block (percentage-closer filtering).
-const HEMICUBE_FILTER_RADIUS: usize = 1;
-
-/// Cells in a full filter block; visible counts are scaled to it so that a
-/// block clipped at a face border does not look like a shadow boundary.
-const HEMICUBE_FILTER_CELLS: u32 = 9;
+/// The `Hemicube` method gathers candidate occluders from this many cells each
+/// side of the receiver's cell: a 3 × 3 block, so that an occluder covering
+/// the receiver's direction but not its cell's centre is still found.
+const HEMICUBE_SEARCH_RADIUS: usize = 1;
 
 /// The source patch of one shot, with everything the receivers share.
 pub struct Shot<'a> {
@@ -157,6 +158,9 @@ pub struct Shot<'a> {
     pub method: FormFactorMethod,
     /// Cells per side of the `Hemicube` method's top face.
     pub hemicube_resolution: u32,
+    /// The `Hemicube` method's item buffer on the source's centre, rendered on
+    /// first use ([`Shot::hemicube_visible`]).
+    pub hemicube: OnceLock<ItemBuffer>,
     pub shadows: bool,
     pub occluder: &'a Occluder,
     /// Diffuse reflectance per surface.
@@ -213,6 +217,7 @@ impl<'a> Shot<'a> {
             samples: settings.samples,
             method: settings.form_factors,
             hemicube_resolution: settings.hemicube_resolution,
+            hemicube: OnceLock::new(),
             shadows: settings.shadows,
             occluder,
             kd,
@@ -252,10 +257,10 @@ impl Shot<'_> {
     ///   above it, else a set drawn on the clipped part
     ///   ([`Shot::draw_visible_part_samples`]).
     /// * `Wallace`: 000 eq. 3.1 over a pooled set on the whole source.
-    /// * `Hemicube`: the exact unoccluded factor times the visible fraction
-    ///   read from a hemicube item buffer on the source patch's centre (002,
-    ///   "on the shooting patch when shooting"; see [`Shot::hemicube_visibility`]).
-    ///   No rays are traced.
+    /// * `Hemicube`: the exact unoccluded factor when the source's centre is
+    ///   visible by a hemicube item buffer on it (002, "on the shooting patch
+    ///   when shooting"; see [`Shot::hemicube_visible`]), else 0. No rays are
+    ///   traced.
     ///
     /// Rays run between points lifted `scene_epsilon` off both surfaces along
     /// their normals: from the receiving point, and to each sample on the
@@ -332,60 +337,40 @@ impl Shot<'_> {
                     return (0.0, 0, 0);
                 }
                 if !self.shadows {
-                    return (unoccluded, HEMICUBE_FILTER_CELLS, 0);
+                    return (unoccluded, 1, 0);
                 }
                 let surface = mesh.vertices[v as usize].surface;
-                let (visible, tested) = self.hemicube_visibility(mesh, q, surface, scratch);
-                if tested == 0 {
-                    return (0.0, 0, 0);
+                if self.hemicube_visible(mesh, q, surface) {
+                    (unoccluded, 1, 0)
+                } else {
+                    (0.0, 0, 0)
                 }
-                let fraction = visible as f64 / tested as f64;
-                let scaled = (fraction * HEMICUBE_FILTER_CELLS as f64).round() as u32;
-                (unoccluded * fraction, scaled, 0)
             }
         }
     }
 
-    /// The visibility of the source from receiving point `q` on `surface` by
-    /// the hemicube method: (cells that let `q` see the source's centre, cells
-    /// tested) in the 3 × 3 block around the cell through which the centre sees
-    /// `q` ([`ItemBuffer::visible_cells`]).
+    /// Whether receiving point `q` on `surface` sees the source's centre, by
+    /// the hemicube method ([`ItemBuffer::segment_visible`] over the 3 × 3
+    /// block of cells around `q`'s direction).
     ///
     /// The item buffer is a hemicube of `hemicube_resolution` on the source
     /// patch's centre over every input surface (item k = surface k), rotated
-    /// about the normal by the golden angle times the shot index so the cell
-    /// grid's aliasing does not line up from shot to shot. It is a one-point
-    /// view of the source, like 000's single sample: shadows are as seen from
-    /// the source's centre, with edges softened over the 3 × 3 block. A cell
-    /// lets `q` through when it holds `q`'s own surface or a surface whose
-    /// plane the segment from the centre to `q` does not cross, so walls
-    /// meeting `q`'s surface at a room's corner never shadow it.
-    pub fn hemicube_visibility(
-        &self,
-        mesh: &Mesh,
-        q: DVec3,
-        surface: u32,
-        scratch: &mut Scratch,
-    ) -> (u32, u32) {
-        let key = [
-            self.index,
-            self.hemicube_resolution as u64,
-            self.centre.x.to_bits(),
-            self.centre.y.to_bits(),
-            self.centre.z.to_bits(),
-            self.normal.x.to_bits(),
-            self.normal.y.to_bits(),
-            self.normal.z.to_bits(),
-        ];
-        let stale = scratch.hemicube.as_ref().is_none_or(|(k, _)| *k != key);
-        if stale {
-            let mut buffer = match scratch.hemicube.take() {
-                Some((_, b)) if b.resolution() == self.hemicube_resolution => b,
-                _ => ItemBuffer::with_resolution(self.hemicube_resolution),
-            };
+    /// about the normal by the golden angle times the shot index so that the
+    /// cell grid's aliasing does not line up from shot to shot. It is rendered
+    /// once per shot, on the first query (a shot that never asks, such as a
+    /// replayed shot no new vertex needs, renders nothing). It is a one-point
+    /// view of the source, like 000's single sample: hard shadows as seen from
+    /// the source's centre. The buffer finds the candidate occluders and each
+    /// is tested exactly against the segment, so walls meeting at a room's
+    /// corner or a box's edges cast no false shadows.
+    pub fn hemicube_visible(&self, mesh: &Mesh, q: DVec3, surface: u32) -> bool {
+        let buffer = self.hemicube.get_or_init(|| {
+            let mut buffer = ItemBuffer::with_resolution(self.hemicube_resolution);
             let source = &mesh.surfaces[self.source_surface as usize];
             let angle = hemicube::GOLDEN_ANGLE * self.index as f64;
             let hint = source.tangent * angle.cos() + source.bitangent * angle.sin();
+            // A degenerate normal leaves the buffer unrendered: nothing can be
+            // looked up, so nothing is seen.
             if let Some(frame) = hemicube::Frame::new(self.centre, self.normal, hint) {
                 let targets: Vec<&[DVec3]> = mesh
                     .surfaces
@@ -393,16 +378,17 @@ impl Shot<'_> {
                     .map(|s| s.vertices.as_slice())
                     .collect();
                 buffer.render(&frame, &targets);
-            } else {
-                // A degenerate normal: nothing can be looked up, nothing is seen.
-                buffer.clear();
             }
-            scratch.hemicube = Some((key, buffer));
-        }
-        match &scratch.hemicube {
-            Some((_, buffer)) => buffer.visible_cells(q, surface, HEMICUBE_FILTER_RADIUS),
-            None => (0, 0),
-        }
+            buffer
+        });
+        buffer
+            .segment_visible(
+                q,
+                surface,
+                HEMICUBE_SEARCH_RADIUS,
+                self.occluder.scene_epsilon(),
+            )
+            .unwrap_or(false)
     }
 
     /// Draws `samples` stratified, jittered points (RNG stream (seed, shot,

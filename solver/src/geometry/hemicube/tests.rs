@@ -286,43 +286,72 @@ fn non_convex_targets_and_degenerate_input_are_handled() {
     assert_eq!(f, vec![0.0]);
 }
 
+/// The five outward faces (no bottom) of the block [lo, hi] standing on a floor.
+fn block_faces(lo: DVec3, hi: DVec3) -> Vec<Vec<DVec3>> {
+    let centre = (lo + hi) * 0.5;
+    box_faces(lo, hi)
+        .into_iter()
+        .filter(|f| !f.iter().all(|v| v.z == lo.z))
+        .map(|mut f| {
+            // box_faces winds toward the inside; a block's faces face out.
+            f.reverse();
+            debug_assert!(newell_normal(&f).dot(f[0] - centre) > 0.0);
+            f
+        })
+        .collect()
+}
+
 #[test]
-fn the_buffer_answers_visibility_lookups() {
-    // A blocker between the centre and part of the floor of a box: points
-    // behind it see no cell through, points beside it see every cell, and a
-    // point on the blocker itself is seen (its own item).
-    let faces = box_faces(DVec3::new(-2.0, -2.0, -2.0), DVec3::new(2.0, 2.0, 2.0));
-    let blocker = rect_facing_down(-0.5, -0.5, 0.5, 0.5, -1.0);
-    let mut targets = faces.clone();
-    targets.push({
-        let mut b = blocker.clone();
-        // Facing +z, toward the centre above it.
-        b.reverse();
-        b
-    });
-    let frame = Frame::new(DVec3::ZERO, -DVec3::Z, DVec3::X).unwrap();
-    let mut buffer = ItemBuffer::with_resolution(64);
-    buffer.render(&frame, &targets);
-    let floor = faces
-        .iter()
-        .position(|f| f.iter().all(|v| v.z == -2.0))
-        .unwrap() as u32;
-    let blocker_item = targets.len() as u32 - 1;
-    assert_eq!(
-        buffer.visible_cells(DVec3::new(0.0, 0.0, -2.0), floor, 1),
-        (0, 9)
-    );
-    assert_eq!(
-        buffer.visible_cells(DVec3::new(1.6, 1.2, -2.0), floor, 1),
-        (9, 9)
-    );
-    assert_eq!(
-        buffer.visible_cells(DVec3::new(0.1, 0.2, -1.0), blocker_item, 1),
-        (9, 9)
-    );
-    // Behind the base plane: no answer.
-    assert_eq!(
-        buffer.visible_cells(DVec3::new(0.0, 0.0, 1.0), floor, 1),
-        (0, 0)
-    );
+fn the_buffer_answers_segment_visibility_exactly_for_the_candidates_it_shows() {
+    // A room [−2, 2]³ with a block on its floor, seen from the room's centre
+    // looking down. Points behind the block (their segment to the centre
+    // crosses its top) are hidden; points beside it, on its top next to an
+    // edge (its side fills the neighbouring cells but is not crossed), and in
+    // the room's corners (the other wall fills the neighbouring cells) are
+    // seen.
+    let room = box_faces(DVec3::splat(-2.0), DVec3::splat(2.0));
+    let block = block_faces(DVec3::new(0.5, -0.5, -2.0), DVec3::new(1.0, 0.5, -1.5));
+    let mut targets = room.clone();
+    targets.extend(block.iter().cloned());
+    let item = |f: &dyn Fn(&Vec<DVec3>) -> bool| targets.iter().position(f).unwrap() as u32;
+    let floor = item(&|f| f.iter().all(|v| v.z == -2.0));
+    let wall = item(&|f| f.iter().all(|v| v.x == 2.0));
+    let top = item(&|f| f.iter().all(|v| v.z == -1.5));
+    let frame = Frame::new(DVec3::ZERO, -DVec3::Z, DVec3::new(0.3, 1.0, 0.0)).unwrap();
+    for r in [16u32, 64, 256] {
+        let mut buffer = ItemBuffer::with_resolution(r);
+        buffer.render(&frame, &targets);
+        let seen = |p: DVec3, own: u32| buffer.segment_visible(p, own, 1, 0.0);
+        // Behind the block: the segment crosses its top at x = 0.8.
+        assert_eq!(
+            seen(DVec3::new(0.8 * 2.0 / 1.5, 0.0, -2.0), floor),
+            Some(false),
+            "R = {r}"
+        );
+        // Beside it, toward the centre, right at its foot.
+        assert_eq!(
+            seen(DVec3::new(0.49, 0.0, -2.0), floor),
+            Some(true),
+            "R = {r}"
+        );
+        assert_eq!(
+            seen(DVec3::new(0.3, 0.2, -2.0), floor),
+            Some(true),
+            "R = {r}"
+        );
+        // On its top, 1e-6 from the far edge.
+        assert_eq!(
+            seen(DVec3::new(1.0 - 1e-6, 0.1, -1.5), top),
+            Some(true),
+            "R = {r}"
+        );
+        // In the room's corner, on the wall x = 2 next to the floor and y = 2.
+        assert_eq!(
+            seen(DVec3::new(2.0, 2.0 - 1e-6, -2.0 + 1e-6), wall),
+            Some(true),
+            "R = {r}"
+        );
+        // Behind the base plane: no answer.
+        assert_eq!(seen(DVec3::new(0.0, 0.0, 1.0), floor), None, "R = {r}");
+    }
 }
