@@ -554,7 +554,7 @@ impl Solver {
                     entries.extend(t.iter().map(|&v| (v, third)));
                 }
                 // Merge per vertex in a fixed order.
-                entries.sort_by_key(|e| e.0);
+                entries.sort_unstable_by_key(|e| e.0);
                 let mut merged: Vec<(u32, f64)> = Vec::with_capacity(entries.len() / 2);
                 for (v, w) in entries {
                     match merged.last_mut() {

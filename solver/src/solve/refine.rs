@@ -134,6 +134,28 @@ impl Criteria {
         if el.area <= self.min_element_area * surface.area {
             return false;
         }
+        let corners = el.corners();
+        let count = corners.len();
+        // All corners of an element share its surface, hence its reflectance.
+        let reflectance = kd.map_or(DVec3::ONE, |kd| {
+            kd[mesh.patches[el.patch as usize].surface as usize]
+        });
+        let level = |v: usize| (radiance[v] + reflectance * self.ambient).max_element();
+        // Early out: no edge can differ by more than the spread of the corners,
+        // and no edge's local level is below the lowest corner's (or the dark
+        // floor), whatever the noise allowance (which only lowers differences).
+        let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
+        let mut lowest = f64::INFINITY;
+        for &c in corners {
+            let l = radiance[c as usize];
+            lo = lo.min(l);
+            hi = hi.max(l);
+            lowest = lowest.min(level(c as usize));
+        }
+        let least = self.edge_threshold.min(self.shadow_threshold) * lowest.max(self.dark_floor);
+        if (hi - lo).max_element() <= least {
+            return false;
+        }
         let n = self.samples.max(1) as f64;
         let sigma = |v: usize| {
             let k = visible[v] as f64;
@@ -143,8 +165,6 @@ impl Criteria {
                 DVec3::ZERO
             }
         };
-        let corners = el.corners();
-        let count = corners.len();
         (0..count).any(|k| {
             let (a, b) = (corners[k] as usize, corners[(k + 1) % count] as usize);
             let threshold = if visible[a] != visible[b] {
@@ -153,14 +173,7 @@ impl Criteria {
                 self.edge_threshold
             };
             let (la, lb) = (radiance[a], radiance[b]);
-            let expected = |v: usize, l: DVec3| {
-                let reflectance = kd.map_or(DVec3::ONE, |kd| kd[mesh.vertices[v].surface as usize]);
-                l + reflectance * self.ambient
-            };
-            let local = expected(a, la)
-                .max(expected(b, lb))
-                .max_element()
-                .max(self.dark_floor);
+            let local = level(a).max(level(b)).max(self.dark_floor);
             let (sa, sb) = (sigma(a), sigma(b));
             let noise = (sa * sa + sb * sb).powf(0.5) * 2.0;
             local > 0.0 && ((la - lb).abs() - noise).max_element() > threshold * local
