@@ -345,3 +345,109 @@ pub fn refine(
         .collect();
     out
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::camera::UpAxis;
+    use crate::scene::{Material, Polygon, Scene, SourceRef};
+
+    /// One unit square, one patch: element 0 with corners 0..4.
+    fn square_mesh() -> Mesh {
+        let scene = Scene {
+            polygons: vec![Polygon {
+                vertices: vec![DVec3::ZERO, DVec3::X, DVec3::new(1.0, 1.0, 0.0), DVec3::Y],
+                vertex_normals: None,
+                material: 0,
+                patches: 1,
+                source: SourceRef::default(),
+            }],
+            materials: vec![Material {
+                name: "grey".into(),
+                kd: DVec3::splat(0.5),
+                ks: DVec3::ZERO,
+                alpha: 1.0,
+                emission: DVec3::ZERO,
+            }],
+            units_per_metre: 1.0,
+            up_axis: UpAxis::PosY,
+            camera: None,
+            recentre_offset: DVec3::ZERO,
+            warnings: Vec::new(),
+        };
+        Mesh::new(&scene, DVec3::ZERO, 1).unwrap()
+    }
+
+    fn criteria() -> Criteria {
+        Criteria {
+            edge_threshold: 0.3,
+            shadow_threshold: 0.1,
+            max_depth: 4,
+            min_element_area: 1e-3,
+            samples: 16,
+            dark_floor: 0.0,
+            ambient: DVec3::ZERO,
+        }
+    }
+
+    /// Radiance 1 at corners 0 and 3, `right` at corners 1 and 2, all of it
+    /// from this shot, with `seen` of 16 rays at the right-hand corners.
+    fn split(c: &Criteria, right: f64, seen_left: u32, seen_right: u32) -> bool {
+        let mesh = square_mesh();
+        let l = [1.0, right, right, 1.0].map(DVec3::splat);
+        let visible = [seen_left, seen_right, seen_right, seen_left];
+        c.should_split_at(&mesh, None, &l, &l, &visible, 0)
+    }
+
+    #[test]
+    fn split_test_follows_thresholds_noise_floor_and_limits() {
+        let c = criteria();
+        // An ordinary edge (same visibility) splits above 30% of the brighter end.
+        assert!(!split(&c, 0.75, 16, 16));
+        assert!(split(&c, 0.65, 16, 16));
+        // A sharp shadow boundary (16 of 16 rays against 0) has no sampling
+        // noise and splits above 10%.
+        assert!(split(&c, 0.0, 16, 0));
+        // Deep penumbra: 2 and 1 of 16 rays (radiance 1 and 0.5) differ by 50%
+        // of the brighter end, but the binomial allowance 2 √(σ₁² + σ₂²) with
+        // σ = L √((n − k)/(k n)) is 2 √(0.66² + 0.48²) ≈ 1.6: no split.
+        assert!(!split(&c, 0.5, 2, 1));
+        // Half-lit against fully lit: difference 0.5, allowance 2 · 0.5 · √(1/16)
+        // = 0.25, so 0.25 > 0.1 · 1: split.
+        assert!(split(&c, 0.5, 16, 8));
+        // The dark floor: the same 35% difference at radiance 1e-3 does not count
+        // against a floor of 0.01 (0.35e-3 < 0.3 · 0.01).
+        let dim = |c: &Criteria| {
+            let mesh = square_mesh();
+            let l = [1e-3, 0.65e-3, 0.65e-3, 1e-3].map(DVec3::splat);
+            c.should_split_at(&mesh, None, &l, &l, &[16; 4], 0)
+        };
+        assert!(dim(&c));
+        assert!(!dim(&Criteria {
+            dark_floor: 0.01,
+            ..c
+        }));
+        // Light still to come raises the level: with ambient 1 (Kd = 1 here) the
+        // level is ~2 and a 0.35 difference is below 0.3 · 2.
+        assert!(!split(
+            &Criteria {
+                ambient: DVec3::ONE,
+                ..c
+            },
+            0.65,
+            16,
+            16
+        ));
+        // Depth and area limits.
+        assert!(!split(&Criteria { max_depth: 0, ..c }, 0.0, 16, 0));
+        assert!(!split(
+            &Criteria {
+                min_element_area: 1.0,
+                ..c
+            },
+            0.0,
+            16,
+            0
+        ));
+    }
+}
