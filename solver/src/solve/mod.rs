@@ -22,6 +22,9 @@
 //!   never outlives its shot, so a split never has to interpolate unshot
 //!   radiance of earlier shots: that energy is already held by the patch,
 //!   exactly, and new vertices only receive the current shot's ΔL.
+//! * Per vertex also the part of L that came from emitter shots, and the list
+//!   of those shots: a vertex created by a later split receives them again,
+//!   exactly, and interpolates only the rest (see `refine.rs`).
 //! * Power = π · U · A per channel for a diffuse emitter; totals sum the three
 //!   channels. The source each step is the patch with the most unshot power
 //!   (000 shoots patches, not elements: the source count stays fixed as
@@ -30,11 +33,22 @@
 //!
 //! ## Determinism
 //!
-//! Receivers are shot in parallel with rayon. Each receiver's random samples
-//! come from its own stream (seed, shot index, vertex id) and its result goes to
-//! its own slot; sums over vertices (the gather into patches, the ray count) are
-//! done in a fixed order. A solve therefore gives bit-identical radiance for any
-//! thread count, and a resumed solve continues bit-identically.
+//! Receivers are shot in parallel with rayon, on the caller's pool (the command
+//! line builds one of `settings.threads`; tests use `ThreadPool::install`).
+//! Each receiver's random choices come from its own stream (seed, shot index,
+//! vertex id): which of the shot's pooled sample sets it uses
+//! ([`shoot::SamplePool`]), or its own set where the source is clipped by its
+//! horizon. Its result goes to its own slot; sums over vertices (the gather
+//! into patches, the ray count) are done in a fixed order. A solve therefore
+//! gives bit-identical radiance for any thread count, and a resumed solve
+//! continues bit-identically.
+//!
+//! ## Limits
+//!
+//! Form factors and frames use the facet normal of each polygon; per-vertex
+//! normals of curved input are not used by the diffuse solve. Radiance a new
+//! vertex receives from recorded shots (better than the interpolation the
+//! patches' unshot was gathered from) is not re-gathered.
 
 mod checkpoint;
 pub mod directional;

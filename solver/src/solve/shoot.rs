@@ -169,7 +169,7 @@ pub struct Shot<'a> {
 
 /// A shot the solver remembers: every shot from an emitter's patch, so that a
 /// vertex created by a later split can receive it exactly instead of by
-/// interpolation (see [`crate::solve::refine`]).
+/// interpolation (see `solve/refine.rs`).
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct RecordedShot {
     /// The shot's 0-based index (its RNG streams).
