@@ -139,7 +139,8 @@ pub struct Progress {
     /// Leaf elements.
     pub elements: usize,
     pub vertices: usize,
-    /// Total emitted power, W, summed over the three channels.
+    /// Total emitted power, W (areas converted to m² by the units per
+    /// metre), summed over the three channels.
     pub emitted_power: f64,
 }
 
@@ -177,6 +178,8 @@ pub struct Solver {
     shots: u64,
     rays: u64,
     seconds: f64,
+    /// Total emitted power in scene units (radiance × scene area), summed over
+    /// the channels; [`Solver::progress`] reports it in watts.
     emitted_power: f64,
     unshot_power: f64,
     /// Where step time went (this session).
@@ -449,7 +452,7 @@ impl Solver {
             unshot_fraction: self.unshot_fraction(),
             elements: self.leaf_count,
             vertices: self.mesh.vertices.len(),
-            emitted_power: self.emitted_power,
+            emitted_power: self.emitted_watts(),
         }
     }
 
@@ -514,6 +517,21 @@ impl Solver {
                 }
             })
             .collect()
+    }
+
+    /// Scene units per metre: the settings' when set (a flag or the scene
+    /// config), else the scene's.
+    fn units_per_metre(&self) -> f64 {
+        if self.settings.units_per_metre != 1.0 {
+            self.settings.units_per_metre
+        } else {
+            self.scene_units_per_metre
+        }
+    }
+
+    /// The emitted power in watts: areas in scene units² over units_per_metre².
+    fn emitted_watts(&self) -> f64 {
+        self.emitted_power / (self.units_per_metre() * self.units_per_metre())
     }
 
     fn unshot_fraction(&self) -> f64 {

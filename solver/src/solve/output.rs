@@ -81,11 +81,7 @@ impl Solver {
         let camera = self
             .scene_camera
             .unwrap_or_else(|| default_camera(lo + scene_offset, hi + scene_offset, self.up_axis));
-        let units_per_metre = if self.settings.units_per_metre != 1.0 {
-            self.settings.units_per_metre
-        } else {
-            self.scene_units_per_metre
-        };
+        let units_per_metre = self.units_per_metre();
         let mut solution = Solution {
             header: Header {
                 units_per_metre,
@@ -101,7 +97,7 @@ impl Solver {
                     rays: self.rays,
                     seconds: self.seconds,
                     unshot_fraction: self.unshot_fraction(),
-                    emitted_power: self.emitted_power,
+                    emitted_power: self.emitted_watts(),
                     ambient: ambient.as_vec3().to_array(),
                 },
                 settings_json: serde_json::to_string(&self.settings).unwrap_or_default(),
