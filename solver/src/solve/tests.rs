@@ -244,6 +244,14 @@ fn one_shot_delivers_kd_times_the_exactly_intercepted_power() {
         (emitted - PI * 1.0 * 6.0).abs() < 1e-12 * emitted,
         "π · A · ΣLe = 6π"
     );
+    // In millimetres the same numbers are 1e-6 of the watts.
+    let mut millimetres = scene.clone();
+    millimetres.units_per_metre = 1000.0;
+    let watts = Solver::new(&millimetres, &solver_settings)
+        .unwrap()
+        .progress()
+        .emitted_power;
+    assert!((watts - 6.0 * PI * 1e-6).abs() < 1e-12 * watts, "{watts}");
     for _ in 0..16 {
         let report = solver.step().unwrap();
         assert!(solver.mesh().patches[report.source as usize].surface == 0);
