@@ -48,6 +48,12 @@
 //! polygon itself) and targets whose plane passes through the centre (seen
 //! edge-on) are skipped.
 //!
+//! The same buffer answers visibility for shooting (the solver's
+//! `--form-factors hemicube`): [`ItemBuffer::segment_visible`] takes the
+//! polygons the cells around a point's direction hold as candidate occluders
+//! and tests each exactly against the segment to the point, as Haines and
+//! Greenberg's light buffer does (1986).
+//!
 //! ## Accuracy against R
 //!
 //! A cell is counted whole for the polygon seen through its centre, so the

@@ -25,6 +25,34 @@ fn bad_resolutions_are_refused() {
 }
 
 #[test]
+fn the_setting_accepts_exactly_the_resolutions_the_hemicube_does() {
+    // settings.rs states the range by hand (it cannot name this module without
+    // the `solve` feature's geometry); the two must not drift apart.
+    let mut settings = crate::settings::SolverSettings::preset(crate::settings::Preset::Draft);
+    for r in [
+        0u32,
+        1,
+        2,
+        3,
+        64,
+        127,
+        128,
+        2046,
+        2047,
+        MAX_RESOLUTION,
+        MAX_RESOLUTION + 2,
+        4096,
+    ] {
+        settings.hemicube_resolution = r;
+        assert_eq!(
+            settings.validate().is_ok(),
+            check_resolution(r).is_ok(),
+            "R = {r}"
+        );
+    }
+}
+
+#[test]
 fn delta_form_factors_sum_to_one_and_match_002_midpoint_formulas() {
     // The exact cell factors tile the hemisphere: their sum is 1 up to f64
     // rounding of 3R² contour integrals (each ~1e-16 relative of its O(1)
