@@ -38,7 +38,7 @@
 //!   since C_R is linear in Ks).
 
 use super::refine::Criteria;
-use super::shoot::Shot;
+use super::shoot::{SamplePool, Shot};
 use super::{ShotReport, SolveError, Solver};
 use crate::brdf::normalization::funk_hecke_d;
 use crate::brdf::GlossyLobe;
@@ -293,6 +293,8 @@ struct DirScratch {
 /// visibility) and the source's unshot SH.
 struct DirShot<'a> {
     shot: &'a Shot<'a>,
+    /// The shot's jittered sample sets, shared with the diffuse path.
+    pool: &'a SamplePool,
     unshot: &'a [f64],
     source_order: u32,
     source_tangent: DVec3,
@@ -339,16 +341,24 @@ impl DirShot<'_> {
                     scratch.samples.push((s.centre, unoccluded));
                     return (q, s.samples, 0);
                 }
-                // The samples of `Shot::draw_visible_part_samples`: over the
-                // part of the source in front of the receiver's horizon.
-                clip_to_halfspace(s.polygon(), origin, n, &mut scratch.clipped);
-                let part: &[DVec3] = if scratch.clipped.len() >= 3 {
-                    &scratch.clipped
+                // The samples of `Shot::form_factor`: the shot's pooled set when
+                // the whole source is above the receiver's horizon (same test and
+                // tolerance), else a set over the part in front of it.
+                let floor = -1e-6 * s.occluder.scene_epsilon();
+                if s.polygon().iter().all(|&c| n.dot(c - q) >= floor) {
+                    let (points, _) = self.pool.set_for(s, v);
+                    scratch.points.clear();
+                    scratch.points.extend_from_slice(points);
                 } else {
-                    s.polygon()
-                };
-                let mut rng = Rng::new(s.seed, stream_id(s.index, v as u64));
-                stratified_points(part, s.samples, &mut rng, &mut scratch.points);
+                    clip_to_halfspace(s.polygon(), origin, n, &mut scratch.clipped);
+                    let part: &[DVec3] = if scratch.clipped.len() >= 3 {
+                        &scratch.clipped
+                    } else {
+                        s.polygon()
+                    };
+                    let mut rng = Rng::new(s.seed, stream_id(s.index, v as u64));
+                    stratified_points(part, s.samples, &mut rng, &mut scratch.points);
+                }
                 scratch.targets.clear();
                 scratch
                     .targets
@@ -366,8 +376,10 @@ impl DirShot<'_> {
                 (q, visible, s.samples)
             }
             FormFactorMethod::Wallace => {
-                let mut rng = Rng::new(s.seed, stream_id(s.index, v as u64));
-                stratified_points(s.polygon(), s.samples, &mut rng, &mut scratch.points);
+                // The pooled set, as `Shot::form_factor` uses for Wallace.
+                let (points, _) = self.pool.set_for(s, v);
+                scratch.points.clear();
+                scratch.points.extend_from_slice(points);
                 let rays = if s.shadows {
                     scratch.targets.clear();
                     scratch
@@ -570,6 +582,7 @@ impl Solver {
             occluder: &self.occluder,
             kd: &self.kd,
         };
+        let pool = SamplePool::new(&shot);
         let source_order = d.surface_order[patch.surface as usize];
         let source_tangent = source_surface.tangent;
         let tables = Tables {
@@ -581,6 +594,7 @@ impl Solver {
         {
             let dir_shot = DirShot {
                 shot: &shot,
+                pool: &pool,
                 unshot: &unshot,
                 source_order,
                 source_tangent,
@@ -629,6 +643,7 @@ impl Solver {
                 d,
                 &DirShot {
                     shot: &shot,
+                    pool: &pool,
                     unshot: &unshot,
                     source_order,
                     source_tangent,
