@@ -5,7 +5,7 @@
 //! The library is split by a feature so that the runtime links only what it needs:
 //!
 //! * always built: [`format`] (the solution file), [`sh`] (spherical-harmonic
-//!   evaluation), [`camera`] and [`raster`] (a small CPU rasterizer used by
+//!   evaluation), [`cube`] (001's global-cube lookup), [`camera`] and [`raster`] (a small CPU rasterizer used by
 //!   `--preview` and by the runtime's reference renderer);
 //! * feature `solve` (default): [`scene`] (importers), [`geometry`] (form factors and
 //!   visibility), [`mesh`], [`brdf`], [`solve`] and the command line in [`cli`].
@@ -13,6 +13,7 @@
 //! **Architecture Invariant:** this crate never depends on `ash`, `openxr` or `winit`.
 
 pub mod camera;
+pub mod cube;
 pub mod format;
 pub mod raster;
 pub mod sh;
