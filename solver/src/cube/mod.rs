@@ -93,100 +93,75 @@ pub fn cell_solid_angle(k: u32, index: u32) -> f64 {
     f(u1, v1) - f(u0, v1) - f(u1, v0) + f(u0, v0)
 }
 
-/// The face of `dir` and its projected in-face coordinates (u, v) in [−1, 1].
-/// A zero or non-finite direction looks along the local normal (+z), as SH
-/// evaluation does.
-fn project(dir: DVec3) -> (u32, f64, f64) {
-    let a = dir.abs();
-    let dir = if a.max_element() > 0.0 && dir.is_finite() {
-        dir
-    } else {
-        DVec3::Z
+/// Defines a bilinear lookup for one float width. The f64 version is the reference;
+/// the f32 one is written the way `shaders/scene_cube.vert` computes it, so that tests
+/// can bound the GPU's rounding against it. One body serves both so they cannot
+/// drift apart.
+macro_rules! define_bilinear {
+    ($(#[$doc:meta])* $name:ident, $float:ty, $vec:ty) => {
+        $(#[$doc])*
+        ///
+        /// # Panics
+        /// If `k` is 0.
+        pub fn $name(k: u32, dir: $vec) -> [(u32, $float); 4] {
+            assert!(k >= 1);
+            // A zero or non-finite direction looks along the local normal (+z), as
+            // SH evaluation does.
+            let dir = if dir.abs().max_element() > 0.0 && dir.is_finite() {
+                dir
+            } else {
+                <$vec>::Z
+            };
+            // The face: the axis of largest |component|, ties to x, then y, then z.
+            let a = dir.abs();
+            let axis = if a.x >= a.y && a.x >= a.z {
+                0
+            } else if a.y >= a.z {
+                1
+            } else {
+                2
+            };
+            let d = dir.to_array();
+            let major = d[axis];
+            let face = axis as u32 * 2 + u32::from(major < 0.0);
+            let (ua, va) = in_face_axes(axis);
+            let inv = 1.0 / major.abs();
+            // One axis: the lower cell, the upper cell and the weight of the upper
+            // one, the continuous coordinate clamped to the border cells.
+            let kf = k as $float;
+            let cells = |u: $float| {
+                let x = ((u + 1.0) * 0.5 * kf - 0.5).clamp(0.0, kf - 1.0);
+                let lower = (x.floor() as u32).min(k.saturating_sub(2));
+                let upper = (lower + 1).min(k - 1);
+                (lower, upper, x - lower as $float)
+            };
+            let (j0, j1, fu) = cells(d[ua] * inv);
+            let (i0, i1, fv) = cells(d[va] * inv);
+            let index = |i: u32, j: u32| (face * k + i) * k + j;
+            [
+                (index(i0, j0), (1.0 - fu) * (1.0 - fv)),
+                (index(i0, j1), fu * (1.0 - fv)),
+                (index(i1, j0), (1.0 - fu) * fv),
+                (index(i1, j1), fu * fv),
+            ]
+        }
     };
-    let a = dir.abs();
-    let axis = if a.x >= a.y && a.x >= a.z {
-        0
-    } else if a.y >= a.z {
-        1
-    } else {
-        2
-    };
-    let d = dir.to_array();
-    let major = d[axis];
-    let face = axis as u32 * 2 + u32::from(major < 0.0);
-    let (ua, va) = in_face_axes(axis);
-    let inv = 1.0 / major.abs();
-    (face, d[ua] * inv, d[va] * inv)
 }
 
-/// One axis of the bilinear lookup: the lower cell, the upper cell and the weight
-/// of the upper one, with the continuous coordinate clamped to the border cells.
-fn axis_cells(k: u32, u: f64) -> (u32, u32, f64) {
-    let x = ((u + 1.0) * 0.5 * f64::from(k) - 0.5).clamp(0.0, f64::from(k - 1));
-    let lower = (x.floor() as u32).min(k.saturating_sub(2));
-    let upper = (lower + 1).min(k - 1);
-    (lower, upper, x - f64::from(lower))
-}
+define_bilinear!(
+    /// The four cells nearest `dir` (local frame) and their bilinear weights, which
+    /// sum to 1. At a cell centre the weight of that cell is 1.
+    bilinear,
+    f64,
+    DVec3
+);
 
-/// The four cells nearest `dir` (local frame) and their bilinear weights, which sum
-/// to 1. At a cell centre the weight of that cell is 1.
-///
-/// # Panics
-/// If `k` is 0.
-pub fn bilinear(k: u32, dir: DVec3) -> [(u32, f64); 4] {
-    assert!(k >= 1);
-    let (face, u, v) = project(dir);
-    let (j0, j1, fu) = axis_cells(k, u);
-    let (i0, i1, fv) = axis_cells(k, v);
-    let index = |i: u32, j: u32| (face * k + i) * k + j;
-    [
-        (index(i0, j0), (1.0 - fu) * (1.0 - fv)),
-        (index(i0, j1), fu * (1.0 - fv)),
-        (index(i1, j0), (1.0 - fu) * fv),
-        (index(i1, j1), fu * fv),
-    ]
-}
-
-/// The f32 twin of [`bilinear`], written the way `shaders/scene_cube.vert` computes
-/// it, so that tests can bound the GPU's rounding against the f64 reference.
-pub fn bilinear_f32(k: u32, dir: Vec3) -> [(u32, f32); 4] {
-    assert!(k >= 1);
-    let a = dir.abs();
-    let dir = if a.max_element() > 0.0 && dir.is_finite() {
-        dir
-    } else {
-        Vec3::Z
-    };
-    let a = dir.abs();
-    let axis = if a.x >= a.y && a.x >= a.z {
-        0
-    } else if a.y >= a.z {
-        1
-    } else {
-        2
-    };
-    let d = dir.to_array();
-    let major = d[axis];
-    let face = axis as u32 * 2 + u32::from(major < 0.0);
-    let (ua, va) = in_face_axes(axis);
-    let inv = 1.0 / major.abs();
-    let kf = k as f32;
-    let cells = |u: f32| {
-        let x = ((u + 1.0) * 0.5 * kf - 0.5).clamp(0.0, kf - 1.0);
-        let lower = (x.floor() as u32).min(k.saturating_sub(2));
-        let upper = (lower + 1).min(k - 1);
-        (lower, upper, x - lower as f32)
-    };
-    let (j0, j1, fu) = cells(d[ua] * inv);
-    let (i0, i1, fv) = cells(d[va] * inv);
-    let index = |i: u32, j: u32| (face * k + i) * k + j;
-    [
-        (index(i0, j0), (1.0 - fu) * (1.0 - fv)),
-        (index(i0, j1), fu * (1.0 - fv)),
-        (index(i1, j0), (1.0 - fu) * fv),
-        (index(i1, j1), fu * fv),
-    ]
-}
+define_bilinear!(
+    /// The f32 twin of [`bilinear`], the shader's arithmetic.
+    bilinear_f32,
+    f32,
+    Vec3
+);
 
 /// RGB radiance toward `dir` (local frame) from one vertex's cube values, laid out
 /// `values[d * 3 + c]` as in a solution batch. Cells beyond the slice count as zero
