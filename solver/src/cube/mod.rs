@@ -35,17 +35,20 @@ pub fn direction_count(k: u32) -> u64 {
 
 /// The `k` with 6k² = `directions`, if there is one in 1..=[`MAX_RESOLUTION`].
 pub fn resolution_from_directions(directions: u32) -> Option<u32> {
-    if directions == 0 || directions % 6 != 0 {
+    if directions == 0 || !directions.is_multiple_of(6) {
         return None;
     }
     let squared = directions / 6;
     let k = (f64::from(squared)).sqrt().round() as u32;
-    (k >= 1 && k <= MAX_RESOLUTION && k * k == squared).then_some(k)
+    ((1..=MAX_RESOLUTION).contains(&k) && k * k == squared).then_some(k)
 }
 
 /// Axis index (0 = x, 1 = y, 2 = z) and sign of face `face` (0..6).
 fn face_axis(face: u32) -> (usize, f64) {
-    ((face / 2) as usize, if face % 2 == 0 { 1.0 } else { -1.0 })
+    (
+        (face / 2) as usize,
+        if face.is_multiple_of(2) { 1.0 } else { -1.0 },
+    )
 }
 
 /// The in-face axes (u, v) of the face with normal axis `axis`.
