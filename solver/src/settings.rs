@@ -48,6 +48,38 @@ pub enum FormFactorMethod {
     Hemicube,
 }
 
+/// How a glossy lobe is normalized (design notes, "Directional mode"; see
+/// `crate::brdf::Normalization` for the measured difference).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+#[cfg_attr(feature = "solve", derive(clap::ValueEnum))]
+pub enum BrdfNormalization {
+    /// 000's per-incidence C_R(μ_i): reflects exactly Ks of every beam, not reciprocal.
+    #[default]
+    Thesis,
+    /// One constant per material: reciprocal, albedo Ks at normal incidence, ≤ Ks elsewhere.
+    Reciprocal,
+}
+
+/// How directional mode stores a glossy vertex's outgoing radiance (`--directional`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+#[cfg_attr(feature = "solve", derive(clap::ValueEnum))]
+pub enum DirectionalRepresentation {
+    /// Spherical harmonics of an order chosen per material (000 ch. 4), shot progressively.
+    #[default]
+    Sh,
+    /// 001's global cube of 6k² directions (`cube_resolution`), gathered by Gauss–Seidel.
+    Cube,
+}
+
+/// Default cells per cube face edge of the global-cube representation (`cube_resolution`).
+pub const DEFAULT_CUBE_RESOLUTION: u32 = 8;
+
+fn default_cube_resolution() -> u32 {
+    DEFAULT_CUBE_RESOLUTION
+}
+
 /// Default cells per side of a hemicube's top face (`hemicube_resolution`).
 pub const DEFAULT_HEMICUBE_RESOLUTION: u32 = 128;
 
@@ -96,6 +128,15 @@ pub struct SolverSettings {
     pub sh_error_target: f64,
     /// Highest SH order a material may get; a lobe that needs more is capped with a warning.
     pub max_sh_order: u32,
+    /// Normalization of glossy lobes: the thesis's per-incidence one or a reciprocal one.
+    #[serde(default)]
+    pub brdf_normalization: BrdfNormalization,
+    /// Directional mode's representation: SH (default) or 001's global cube.
+    #[serde(default)]
+    pub directional: DirectionalRepresentation,
+    /// Cells per face edge k of the global cube (D = 6k² directions per vertex).
+    #[serde(default = "default_cube_resolution")]
+    pub cube_resolution: u32,
     /// Scene units per metre (scene config or flag).
     pub units_per_metre: f64,
     /// Turn import warnings (Kd + Ks > 1, …) into errors.
@@ -125,6 +166,9 @@ pub struct SettingsPatch {
     pub ambient: Option<bool>,
     pub sh_error_target: Option<f64>,
     pub max_sh_order: Option<u32>,
+    pub brdf_normalization: Option<BrdfNormalization>,
+    pub directional: Option<DirectionalRepresentation>,
+    pub cube_resolution: Option<u32>,
     pub units_per_metre: Option<f64>,
     pub strict: Option<bool>,
 }
@@ -162,6 +206,9 @@ impl SolverSettings {
             ambient: true,
             sh_error_target: 1e-3,
             max_sh_order: 64,
+            brdf_normalization: BrdfNormalization::Thesis,
+            directional: DirectionalRepresentation::Sh,
+            cube_resolution: DEFAULT_CUBE_RESOLUTION,
             units_per_metre: 1.0,
             strict: false,
         }
@@ -210,6 +257,9 @@ impl SolverSettings {
             ambient,
             sh_error_target,
             max_sh_order,
+            brdf_normalization,
+            directional,
+            cube_resolution,
             units_per_metre,
             strict
         );
@@ -315,6 +365,12 @@ impl SolverSettings {
             "max_sh_order",
             self.max_sh_order,
             "0 to 100",
+        )?;
+        check(
+            (2..=256).contains(&self.cube_resolution),
+            "cube_resolution",
+            self.cube_resolution,
+            "2 to 256 cells per cube face edge",
         )?;
         check(
             self.units_per_metre.is_finite() && self.units_per_metre > 0.0,

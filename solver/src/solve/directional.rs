@@ -150,11 +150,12 @@ impl Directional {
                 material_lobe.push(None);
                 continue;
             }
-            let lobe = GlossyLobe::with_default_window(
+            let lobe = GlossyLobe::with_default_window_and(
                 m.alpha,
                 1.0,
                 settings.sh_error_target,
                 settings.max_sh_order,
+                settings.brdf_normalization,
             )
             .map_err(|e| SolveError::BadMaterial {
                 name: m.name.clone(),

@@ -1,7 +1,9 @@
 //! The flags of `solver solve` and the settings patch they make.
 
 use crate::format::SolveMode;
-use crate::settings::{FormFactorMethod, Preset, SettingsPatch};
+use crate::settings::{
+    BrdfNormalization, DirectionalRepresentation, FormFactorMethod, Preset, SettingsPatch,
+};
 use std::path::PathBuf;
 
 /// Which solver `--solver` runs.
@@ -173,6 +175,49 @@ pub struct SolveArgs {
     )]
     pub mode: Option<SolveMode>,
 
+    /// Glossy-lobe normalization: thesis (default) or reciprocal.
+    #[arg(
+        long,
+        value_enum,
+        value_name = "NORM",
+        long_help = "How glossy lobes are normalized (directional mode). thesis \
+            (default): 000's C_R(μ_i), which reflects exactly Ks of every incident beam \
+            but is not reciprocal (f(ω_i, ω_o) ≠ f(ω_o, ω_i); a glossy furnace is not \
+            uniform). reciprocal: one constant per material, reciprocal, reflecting Ks \
+            at normal incidence and less toward grazing (docs/sh-bands.md)."
+    )]
+    pub brdf_normalization: Option<BrdfNormalization>,
+
+    /// Directional representation: sh (default) or cube (001's global cube).
+    #[arg(
+        long,
+        value_enum,
+        value_name = "REPR",
+        long_help = "How --mode directional stores glossy radiance. sh (default): \
+            spherical harmonics of an order chosen per material, shot progressively with \
+            adaptive meshing. cube: 001's global cube, radiance on D = 6k² directions \
+            per glossy vertex (k = --cube-resolution), gathered by Gauss-Seidel sweeps in \
+            light-propagation order on the fixed patch mesh (no adaptive meshing, \
+            checkpoints or --resume); the BRDF is evaluated exactly at each direction, \
+            with no Legendre truncation or ringing. Only meaningful with --mode \
+            directional."
+    )]
+    pub directional: Option<DirectionalRepresentation>,
+
+    /// Global-cube cells per face edge k (2 to 256): D = 6k² directions.
+    #[arg(
+        long,
+        value_name = "K",
+        long_help = "Cells per cube face edge for --directional cube (2 to 256; default \
+            8): D = 6k² directions per glossy vertex. Memory and time grow like k² \
+            (values) to k⁴ (each glossy material's direction-to-direction BRDF matrix \
+            and the reflection per sweep); in return highlights are sharper and placed \
+            more accurately: a lobe narrower than a cell (about 90°/k) is aliased \
+            between cell centres. The solve refuses, before allocating, a k whose \
+            memory estimate exceeds its stated bound."
+    )]
+    pub cube_resolution: Option<u32>,
+
     /// Scene units per metre (e.g. 1000 for millimetres).
     #[arg(
         long,
@@ -265,6 +310,9 @@ impl SolveArgs {
     pub fn patch(&self) -> SettingsPatch {
         SettingsPatch {
             mode: self.mode,
+            brdf_normalization: self.brdf_normalization,
+            directional: self.directional,
+            cube_resolution: self.cube_resolution,
             form_factors: self.form_factors,
             samples: self.samples,
             hemicube_resolution: self.hemicube_resolution,
@@ -329,6 +377,8 @@ mod tests {
             "directional",
             "--threads",
             "3",
+            "--brdf-normalization",
+            "reciprocal",
         ]);
         let p = args.patch();
         assert_eq!(p.samples, Some(9));
@@ -339,6 +389,7 @@ mod tests {
         assert_eq!(p.form_factors, Some(FormFactorMethod::Wallace));
         assert_eq!(p.mode, Some(SolveMode::Directional));
         assert_eq!(p.threads, Some(3));
+        assert_eq!(p.brdf_normalization, Some(BrdfNormalization::Reciprocal));
     }
 
     #[test]
