@@ -12,7 +12,11 @@
 //!    [`RenderOptions::max_order`] (the first `(L'+1)²` coefficients of each
 //!    channel). Negative radiance (ringing of a truncated expansion) is clamped to
 //!    0 per vertex, before interpolation, unless [`RenderOptions::clamp_negative`]
-//!    is off. Positions go to clip space by [`EyeView::view_projection`].
+//!    is off. Discrete-direction (001's global cube) batches are looked up toward
+//!    the same local direction by [`crate::cube::eval_rgb`] (bilinear between the
+//!    four nearest cell centres of the face the direction leaves through; the
+//!    order cap does not apply to them), and clamped the same way.
+//!    Positions go to clip space by [`EyeView::view_projection`].
 //! 2. **Clipping** in homogeneous coordinates against the near plane (`z ≥ 0`),
 //!    the far plane (`z ≤ w`) and a guard band `|x|, |y| ≤ 4w` outside the image
 //!    (which changes no pixel; it bounds the fixed-point arithmetic). Radiance is
@@ -158,13 +162,15 @@ impl Default for RenderOptions {
 /// Why [`render`] (or an image comparison) refused.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum RenderError {
-    /// 001's discrete-direction ("global cube") batches need the bilinear lookup of
-    /// the directions toward the eye (001 §5), which the renderers do not have yet.
+    /// A global-cube batch whose direction count is not D = 6k² for a whole k in
+    /// 1..=[`crate::cube::MAX_RESOLUTION`] (the format reader refuses such files;
+    /// an in-memory solution can still hold one).
     #[error(
-        "batch {batch}: the discrete-direction representation ({directions} directions, \
-         001's global cube) cannot be rendered yet; only spherical-harmonic batches can"
+        "batch {batch}: a global cube of {directions} directions is not 6·k² for a whole k \
+         in 1..={max}",
+        max = crate::cube::MAX_RESOLUTION
     )]
-    UnsupportedRepresentation { batch: usize, directions: u32 },
+    CubeDirections { batch: usize, directions: u32 },
     #[error("batch {batch}: {found} coefficients for {vertices} vertices, expected {expected}")]
     CoefficientCount {
         batch: usize,
@@ -308,10 +314,12 @@ fn check_batch(index: usize, batch: &Batch) -> Result<(), RenderError> {
 
 fn check_coefficients(index: usize, batch: &Batch) -> Result<(), RenderError> {
     if let Representation::Cube { directions } = batch.representation {
-        return Err(RenderError::UnsupportedRepresentation {
-            batch: index,
-            directions,
-        });
+        if crate::cube::resolution_from_directions(directions).is_none() {
+            return Err(RenderError::CubeDirections {
+                batch: index,
+                directions,
+            });
+        }
     }
     let vertices = batch.vertices.len();
     let expected = (vertices as u64)
@@ -332,9 +340,10 @@ fn check_coefficients(index: usize, batch: &Batch) -> Result<(), RenderError> {
 const PARALLEL_SHADING_WORK: usize = 1 << 16;
 
 /// The vertex stage: each vertex's radiance toward `eye`, in f64, stored as f32
-/// (what the vertex shader hands to the rasterizer). `order` may be below the
-/// batch's (a cap; above it, the batch's own order is used). Refuses a
-/// discrete-direction batch or a coefficient array of the wrong length.
+/// (what the vertex shader hands to the rasterizer). For SH batches `order` may
+/// be below the batch's (a cap; above it, the batch's own order is used); cube
+/// batches ignore it (a lookup reads four cells whatever D is). Refuses a cube
+/// whose D is not 6k² or a coefficient array of the wrong length.
 pub fn shade_vertices(
     batch: &Batch,
     order: u32,
@@ -343,39 +352,53 @@ pub fn shade_vertices(
 ) -> Result<Vec<[f32; 3]>, RenderError> {
     // Batch index 0: callers that know the index report it themselves.
     check_coefficients(0, batch)?;
-    let order = match batch.representation {
-        Representation::Sh { order: stored } => order.min(stored),
-        Representation::Cube { .. } => 0,
-    };
     let stored = batch.representation.coefficients_per_channel() as usize;
-    let used = sh::coefficient_count(order).min(stored);
+    let lookup = match batch.representation {
+        Representation::Sh {
+            order: stored_order,
+        } => Lookup::Sh {
+            order: order.min(stored_order),
+        },
+        Representation::Cube { directions } => Lookup::Cube {
+            // Checked by `check_coefficients`.
+            resolution: crate::cube::resolution_from_directions(directions).ok_or(
+                RenderError::CubeDirections {
+                    batch: 0,
+                    directions,
+                },
+            )?,
+        },
+    };
+    // Scalars read per vertex and channel (sets when shading is worth threads).
+    let used = match lookup {
+        Lookup::Sh { order } => sh::coefficient_count(order).min(stored),
+        Lookup::Cube { .. } => 4,
+    };
     let n = batch.vertices.len();
     let mut out = vec![[0.0f32; 3]; n];
     let shade_range = |start: usize, out: &mut [[f32; 3]]| {
-        let mut scratch = vec![0.0; sh::coefficient_count(order)];
+        let mut scratch = match lookup {
+            Lookup::Sh { order } => vec![0.0; sh::coefficient_count(order)],
+            Lookup::Cube { .. } => Vec::new(),
+        };
         for (k, radiance) in out.iter_mut().enumerate() {
             let v = start + k;
             let vertex = &batch.vertices[v];
-            // Coefficients of vertex v: `coefficients[(v * n + k) * 3 + c]`, of
-            // which the first `used` per channel form the capped expansion.
-            let coefficients = &batch.coefficients[v * stored * 3..(v * stored + used) * 3];
-            let rgb = if order == 0 {
+            // Values of vertex v: `coefficients[(v * n + k) * 3 + c]`.
+            let values = &batch.coefficients[v * stored * 3..(v + 1) * stored * 3];
+            let rgb = match lookup {
                 // Y_00 is constant: no direction needed.
-                [0, 1, 2].map(|c| f64::from(coefficients[c]) * sh::Y00)
-            } else {
-                let position = DVec3::from(vertex.position.map(f64::from));
-                let toward_eye = eye - position;
-                let local = match sh::orthonormal_frame(
-                    DVec3::from(vertex.normal.map(f64::from)),
-                    DVec3::from(vertex.tangent.map(f64::from)),
-                ) {
-                    // A zero direction (eye on the vertex) normalises to the
-                    // normal inside `eval_basis`.
-                    Some((normal, tangent)) => sh::to_local(toward_eye, normal, tangent),
-                    // A zero normal (corrupt frame): look along the local normal.
-                    None => DVec3::Z,
-                };
-                sh::eval_rgb_with(order, coefficients, local, &mut scratch)
+                Lookup::Sh { order: 0 } => [0, 1, 2].map(|c| f64::from(values[c]) * sh::Y00),
+                // The first `used` coefficients per channel form the capped expansion.
+                Lookup::Sh { order } => sh::eval_rgb_with(
+                    order,
+                    &values[..used * 3],
+                    local_eye(vertex, eye),
+                    &mut scratch,
+                ),
+                Lookup::Cube { resolution } => {
+                    crate::cube::eval_rgb(resolution, values, local_eye(vertex, eye))
+                }
             };
             *radiance = rgb.map(|c| {
                 let c = c as f32;
@@ -400,4 +423,28 @@ pub fn shade_vertices(
         });
     }
     Ok(out)
+}
+
+/// How a batch's vertices are shaded.
+#[derive(Clone, Copy)]
+enum Lookup {
+    /// Spherical harmonics up to this (possibly capped) order.
+    Sh { order: u32 },
+    /// 001's global cube with `resolution` cells along a face edge.
+    Cube { resolution: u32 },
+}
+
+/// The direction from `vertex` toward `eye` in the vertex's local frame
+/// (x = t, y = b, z = n), not normalised: both lookups normalise it themselves,
+/// and both take a zero direction (eye on the vertex) as the local normal.
+fn local_eye(vertex: &crate::format::Vertex, eye: DVec3) -> DVec3 {
+    let position = DVec3::from(vertex.position.map(f64::from));
+    match sh::orthonormal_frame(
+        DVec3::from(vertex.normal.map(f64::from)),
+        DVec3::from(vertex.tangent.map(f64::from)),
+    ) {
+        Some((normal, tangent)) => sh::to_local(eye - position, normal, tangent),
+        // A zero normal (corrupt frame): look along the local normal.
+        None => DVec3::Z,
+    }
 }

@@ -676,15 +676,26 @@ fn unsupported_and_malformed_batches_are_refused() {
     let quad = screen_quad(&view, (10.0, 10.0, 50.0, 40.0), 4.0, [1.0; 3]);
     let good = batch(&quad);
     let options = RenderOptions::default();
+    // A cube whose D is not 6k² (12 = 6·2 is not 6 times a square).
     let mut cube = good.clone();
-    cube.representation = Representation::Cube { directions: 24 };
-    cube.coefficients = vec![0.0; cube.vertices.len() * 24 * 3];
+    cube.representation = Representation::Cube { directions: 12 };
+    cube.coefficients = vec![0.0; cube.vertices.len() * 12 * 3];
     assert!(matches!(
-        render(&solution(vec![good.clone(), cube]), &view, &options),
-        Err(RenderError::UnsupportedRepresentation {
+        render(&solution(vec![good.clone(), cube.clone()]), &view, &options),
+        Err(RenderError::CubeDirections {
             batch: 1,
-            directions: 24
+            directions: 12
         })
+    ));
+    assert!(matches!(
+        shade_vertices(&cube, 0, DVec3::Z, true),
+        Err(RenderError::CubeDirections { .. })
+    ));
+    // A valid cube with a short value array.
+    cube.representation = Representation::Cube { directions: 24 };
+    assert!(matches!(
+        render(&solution(vec![cube]), &view, &options),
+        Err(RenderError::CoefficientCount { batch: 0, .. })
     ));
     let mut short = good.clone();
     short.coefficients.pop();
@@ -746,4 +757,215 @@ fn unsupported_and_malformed_batches_are_refused() {
         render(&solution(vec![]), &view, &clip),
         Err(RenderError::ClipPlanes { .. })
     ));
+}
+
+/// Cube values that are affine in each face's coordinates: on the face of axis a
+/// and sign s (index `face`), cell (i, j) holds `(A_f + B_f·u_j + C_f·v_i)·(1 +
+/// ch/4)` for channel ch. Bilinear interpolation between evenly spaced cell
+/// centres reproduces an affine function exactly, and clamping the continuous
+/// cell coordinate to the border cells is clamping (u, v) to [u_0, u_{k−1}], so
+/// the lookup toward any direction has the closed form of [`affine_cube_value`].
+fn affine_coefficients(face: u32) -> [f64; 3] {
+    let f = f64::from(face);
+    [2.0 + 0.5 * f, 0.3 + 0.1 * f, -0.2 + 0.07 * f]
+}
+
+/// The values of one vertex (`values[d * 3 + c]`), laid out as
+/// docs/solution-format.md ("Cube") defines: index (face·k + i)·k + j.
+fn affine_cube_values(k: u32) -> Vec<f32> {
+    let centre = |c: u32| -1.0 + (2.0 * f64::from(c) + 1.0) / f64::from(k);
+    let mut values = Vec::new();
+    for face in 0..6 {
+        let [a, b, c] = affine_coefficients(face);
+        for i in 0..k {
+            for j in 0..k {
+                let value = a + b * centre(j) + c * centre(i);
+                for ch in 0..3 {
+                    values.push((value * (1.0 + 0.25 * ch as f64)) as f32);
+                }
+            }
+        }
+    }
+    values
+}
+
+/// The closed form of the lookup of [`affine_cube_values`] toward `dir` (local
+/// frame, no ties between the largest components), from the format's
+/// definition alone: the face is the axis of largest |component|, (u, v) the
+/// projection onto it, clamped to the outermost cell centres.
+fn affine_cube_value(k: u32, dir: DVec3) -> [f64; 3] {
+    let d = dir.to_array();
+    let a = dir.abs().to_array();
+    let axis = if a[0] > a[1] && a[0] > a[2] {
+        0
+    } else if a[1] > a[2] {
+        1
+    } else {
+        2
+    };
+    let face = axis as u32 * 2 + u32::from(d[axis] < 0.0);
+    let (ua, va) = [(1, 2), (2, 0), (0, 1)][axis];
+    let limit = 1.0 - 1.0 / f64::from(k);
+    let u = (d[ua] / a[axis]).clamp(-limit, limit);
+    let v = (d[va] / a[axis]).clamp(-limit, limit);
+    let [fa, fb, fc] = affine_coefficients(face);
+    let value = fa + fb * u + fc * v;
+    [0, 1, 2].map(|ch| value * (1.0 + 0.25 * ch as f64))
+}
+
+/// A one-vertex cube batch at the origin with normal +z and tangent +x, so
+/// that world directions are local ones.
+fn cube_vertex(k: u32, values: Vec<f32>) -> Batch {
+    Batch {
+        representation: Representation::Cube {
+            directions: 6 * k * k,
+        },
+        scalar: ScalarType::F32,
+        vertices: vec![Vertex {
+            position: [0.0; 3],
+            normal: [0.0, 0.0, 1.0],
+            tangent: [1.0, 0.0, 0.0],
+        }],
+        coefficients: values,
+        indices: vec![],
+    }
+}
+
+#[test]
+fn cube_vertex_stage_is_the_bilinear_lookup_on_every_face() {
+    // Eyes toward every face, inside faces and within half a cell of their
+    // edges (clamped), at several distances (the lookup is scale-free).
+    let eyes = [
+        DVec3::new(0.1, -0.2, 3.0),
+        DVec3::new(0.97, 0.4, 1.0),
+        DVec3::new(2.0, 0.3, -0.5),
+        DVec3::new(-5.0, 1.2, 0.7),
+        DVec3::new(0.2, 4.0, -3.1),
+        DVec3::new(0.3, -1.0, 0.2),
+        DVec3::new(-0.9, 0.95, -2.0),
+        DVec3::new(0.05, 0.02, -0.5),
+    ];
+    for k in [1, 2, 5] {
+        let batch = cube_vertex(k, affine_cube_values(k));
+        let mut faces_seen = std::collections::BTreeSet::new();
+        for eye in eyes {
+            let got = shade_vertices(&batch, 0, eye, false).unwrap()[0];
+            let want = affine_cube_value(k, eye);
+            let a = eye.abs();
+            faces_seen.insert(if a.x > a.y && a.x > a.z {
+                0
+            } else if a.y > a.z {
+                1
+            } else {
+                2
+            });
+            for c in 0..3 {
+                // The stored values are f32 (relative 6e-8 each); four of them
+                // are blended with weights summing to 1 in f64, and the result
+                // is stored as f32: 1e-6 of the value bounds both roundings.
+                assert!(
+                    (f64::from(got[c]) - want[c]).abs() <= 1e-6 * want[c].abs(),
+                    "k = {k}, eye {eye}: {got:?} vs {want:?}"
+                );
+            }
+        }
+        assert_eq!(
+            faces_seen.len(),
+            3,
+            "eyes should reach the x, y and z faces"
+        );
+    }
+    // The order cap does not apply to cubes.
+    let batch = cube_vertex(3, affine_cube_values(3));
+    let eye = DVec3::new(0.4, 0.1, 1.0);
+    assert_eq!(
+        shade_vertices(&batch, 0, eye, true).unwrap(),
+        shade_vertices(&batch, u32::MAX, eye, true).unwrap()
+    );
+}
+
+#[test]
+fn cube_radiance_is_clamped_at_zero_unless_asked() {
+    let k = 2;
+    let values: Vec<f32> = affine_cube_values(k).iter().map(|v| -v).collect();
+    let batch = cube_vertex(k, values);
+    let eye = DVec3::new(0.2, 0.1, 2.0);
+    let want = affine_cube_value(k, eye);
+    assert_eq!(shade_vertices(&batch, 0, eye, true).unwrap()[0], [0.0; 3]);
+    let raw = shade_vertices(&batch, 0, eye, false).unwrap()[0];
+    for c in 0..3 {
+        assert!((f64::from(raw[c]) + want[c]).abs() <= 1e-6 * want[c]);
+    }
+}
+
+#[test]
+fn cube_pixels_show_the_lookup_toward_each_eye() {
+    // As in `glossy_vertex_radiance_follows_sh_toward_each_eye`: a vertex P on
+    // z = 0 (normal +z, tangent +x) lands exactly on a pixel centre as the
+    // top-left corner of its triangle, so that pixel shows P's own radiance,
+    // which must be the closed-form lookup toward that eye: on the +z face
+    // (eye above), and on the +x and −x faces (grazing eyes).
+    let k = 4;
+    let values = affine_cube_values(k);
+    let p = DVec3::new(0.3, -0.2, 0.0);
+    let eyes = [
+        (DVec3::new(0.0, 0.0, 5.0), (20, 14)),
+        (DVec3::new(3.0, -2.0, 2.0), (31, 20)),
+        (DVec3::new(-4.0, 1.5, 1.0), (12, 30)),
+    ];
+    let mut seen = Vec::new();
+    for (eye, pixel) in eyes {
+        let cam = Camera {
+            eye: eye.into(),
+            target: p.into(),
+            up: [0.0, 0.0, 1.0],
+            fov_y_deg: 60.0,
+            width: W,
+            height: H,
+        };
+        let mut v = cam.mono_view(DVec3::ZERO);
+        let centre = DVec2::new(pixel.0 as f64 + 0.5, pixel.1 as f64 + 0.5);
+        let d = (p - v.position).dot(v.forward);
+        v.position -= v.pixel_ray(centre) * d - (p - v.position);
+        let at_plane = |px: DVec2| {
+            let dir = v.pixel_ray(px);
+            v.position + dir * (-v.position.z / dir.z)
+        };
+        let positions = [
+            p,
+            at_plane(centre + DVec2::new(12.0, 0.0)),
+            at_plane(centre + DVec2::new(0.0, 9.0)),
+        ];
+        let mut batch = cube_vertex(k, [values.clone(), values.clone(), values.clone()].concat());
+        batch.vertices = positions
+            .iter()
+            .map(|q| Vertex {
+                position: q.as_vec3().into(),
+                normal: [0.0, 0.0, 1.0],
+                tangent: [1.0, 0.0, 0.0],
+            })
+            .collect();
+        batch.indices = if (positions[1] - p).cross(positions[2] - p).z < 0.0 {
+            vec![0, 2, 1]
+        } else {
+            vec![0, 1, 2]
+        };
+        let p32 = DVec3::from(batch.vertices[0].position.map(f64::from));
+        let image = render(&solution(vec![batch]), &v, &RenderOptions::default()).unwrap();
+        let want = affine_cube_value(k, v.position - p32);
+        let got = image.pixel(pixel.0, pixel.1);
+        for c in 0..3 {
+            // f32 values, f64 blend, f32 store, one f64 rounding in the
+            // perspective divide (see the SH test): 1e-6 relative.
+            assert!(
+                (f64::from(got[c]) - want[c]).abs() <= 1e-6 * want[c].abs(),
+                "eye {eye}: {got:?} vs {want:?}"
+            );
+        }
+        seen.push(got);
+    }
+    assert!(
+        (seen[0][0] - seen[1][0]).abs() > 0.3 && (seen[1][0] - seen[2][0]).abs() > 0.3,
+        "{seen:?}"
+    );
 }
