@@ -121,47 +121,67 @@ pub fn triangulate(polygon: &[DVec3], out: &mut Vec<[usize; 3]>) {
         }
     };
     let points: Vec<DVec2> = polygon.iter().map(|&v| project(v)).collect();
-    let mut remaining: Vec<usize> = (0..count).collect();
-    let cross = |a: DVec2, b: DVec2, c: DVec2| (b - a).perp_dot(c - a);
-    let mut guard = 0;
-    while remaining.len() > 3 && guard < 2 * count * count {
-        guard += 1;
+    out.extend(ear_clip(&points));
+}
+
+/// Ear clipping of a simple 2-D polygon, counter-clockwise or not: index triples
+/// in the input's orientation, O(n²) (fine for input polygons). A polygon on which
+/// no ear can be found (not simple, or numerically degenerate) is finished as a
+/// fan rather than looping forever. Shared by [`triangulate`] and the importers'
+/// cleaning of non-convex polygons.
+pub fn ear_clip(p: &[DVec2]) -> Vec<[usize; 3]> {
+    let n = p.len();
+    if n < 3 {
+        return Vec::new();
+    }
+    let signed_area: f64 = (0..n).map(|i| p[i].perp_dot(p[(i + 1) % n])).sum();
+    let ccw = signed_area >= 0.0;
+    let turn = |a: usize, b: usize, c: usize| {
+        let o = (p[b] - p[a]).perp_dot(p[c] - p[a]);
+        if ccw {
+            o
+        } else {
+            -o
+        }
+    };
+    let mut remaining: Vec<usize> = (0..n).collect();
+    let mut triangles = Vec::with_capacity(n - 2);
+    while remaining.len() > 3 {
         let m = remaining.len();
-        let mut clipped = false;
-        for k in 0..m {
-            let (ia, ib, ic) = (
+        let corner = |k: usize| {
+            (
                 remaining[(k + m - 1) % m],
                 remaining[k],
                 remaining[(k + 1) % m],
-            );
-            let (a, b, c) = (points[ia], points[ib], points[ic]);
-            if cross(a, b, c) <= 0.0 {
-                continue; // reflex or collinear corner: not an ear
+            )
+        };
+        let ear = (0..m).find(|&k| {
+            let (a, b, c) = corner(k);
+            // A reflex or collinear corner is not an ear.
+            if turn(a, b, c) <= 0.0 {
+                return false;
             }
-            let contains_other = remaining.iter().any(|&j| {
-                if j == ia || j == ib || j == ic {
-                    return false;
-                }
-                let p = points[j];
-                cross(a, b, p) >= 0.0 && cross(b, c, p) >= 0.0 && cross(c, a, p) >= 0.0
-            });
-            if contains_other {
-                continue;
+            // No other remaining vertex may lie inside or on the ear.
+            remaining.iter().all(|&q| {
+                q == a
+                    || q == b
+                    || q == c
+                    || !(turn(a, b, q) >= 0.0 && turn(b, c, q) >= 0.0 && turn(c, a, q) >= 0.0)
+            })
+        });
+        let Some(k) = ear else {
+            // Not simple (or numerically degenerate): a fan over what is left.
+            for i in 1..m - 1 {
+                triangles.push([remaining[0], remaining[i], remaining[i + 1]]);
             }
-            out.push([ia, ib, ic]);
-            remaining.remove(k);
-            clipped = true;
-            break;
-        }
-        if !clipped {
-            // Not simple (or numerically degenerate): fall back to a fan over
-            // what is left rather than loop forever.
-            break;
-        }
+            return triangles;
+        };
+        let (a, b, c) = corner(k);
+        triangles.push([a, b, c]);
+        remaining.remove(k);
     }
-    for i in 1..remaining.len().saturating_sub(1) {
-        out.push([remaining[0], remaining[i], remaining[i + 1]]);
-    }
+    triangles.push([remaining[0], remaining[1], remaining[2]]);
+    triangles
 }
 
 /// Ray/triangle intersection (Möller–Trumbore) in f64: the parameter `t` of
@@ -234,6 +254,28 @@ mod tests {
             total += 0.5 * n.length();
         }
         assert!((total - 3.0).abs() < 1e-12, "area {total}");
+    }
+
+    #[test]
+    fn ear_clipping_a_clockwise_l_keeps_its_orientation_and_area() {
+        // The L above projected to 2-D and reversed: clockwise, area 3.
+        let l: Vec<DVec2> = [
+            (0.0, 2.0),
+            (1.0, 2.0),
+            (1.0, 1.0),
+            (2.0, 1.0),
+            (2.0, 0.0),
+            (0.0, 0.0),
+        ]
+        .iter()
+        .map(|&(x, y)| DVec2::new(x, y))
+        .collect();
+        let tris = ear_clip(&l);
+        assert_eq!(tris.len(), 4);
+        let signed = |t: &[usize; 3]| 0.5 * (l[t[1]] - l[t[0]]).perp_dot(l[t[2]] - l[t[0]]);
+        assert!(tris.iter().all(|t| signed(t) < 0.0), "{tris:?}");
+        let total: f64 = tris.iter().map(signed).sum();
+        assert!((total + 3.0).abs() < 1e-12, "area {total}");
     }
 
     #[test]

@@ -19,13 +19,14 @@
 //! | `Kd + Ks > 1` | both scaled down to sum 1 in that channel |
 //! | `material ... defined in no mtllib` | default material used |
 
-use super::planar::{bbox_diagonal, is_simple, max_plane_deviation, newell, project, triangulate};
+use super::planar::{bbox_diagonal, is_simple, max_plane_deviation, project};
 use super::raw::{RawMaterial, RawPolygon, RawScene};
 use super::recentre::recentre;
 use super::text::{rgb, short};
 use super::weld::weld;
 use super::{Material, Polygon, Scene, SceneError, SourceRef, Warning};
 use crate::camera::{Camera, UpAxis};
+use crate::geometry::polygon::{ear_clip, newell_normal};
 use glam::DVec3;
 
 /// A polygon is planar enough to keep as one when no vertex lies farther from its
@@ -249,7 +250,7 @@ fn clean_polygon(
             format!("collinear vertices: removed {collinear} vertex(es) lying on a straight edge; {} vertices remain", vertices.len()),
         );
     }
-    let n = newell(&vertices);
+    let n = newell_normal(&vertices);
     let area = 0.5 * n.length();
     let size = bbox_diagonal(&vertices);
     if area <= ZERO_AREA_TOLERANCE * size * size {
@@ -287,7 +288,7 @@ fn clean_polygon(
         });
         return;
     }
-    let triangles = triangulate(&projected);
+    let triangles = ear_clip(&projected);
     warn(
         warnings,
         &source,
@@ -300,7 +301,7 @@ fn clean_polygon(
     );
     for t in triangles {
         let tv: Vec<DVec3> = t.iter().map(|&i| vertices[i]).collect();
-        let tn = newell(&tv);
+        let tn = newell_normal(&tv);
         let t_size = bbox_diagonal(&tv);
         if 0.5 * tn.length() <= ZERO_AREA_TOLERANCE * t_size * t_size {
             continue;

@@ -1,18 +1,8 @@
-//! Planar-polygon helpers used while cleaning and welding: Newell's plane, a 2-D
-//! projection, simplicity and convexity tests, and ear-clipping triangulation.
-//! All in f64 on re-centred positions.
+//! Planar-polygon checks used while cleaning and welding: size, flatness, a 2-D
+//! projection, simplicity and strict convexity. All in f64 on re-centred
+//! positions. Newell's normal and ear clipping are [`crate::geometry::polygon`]'s.
 
 use glam::{DVec2, DVec3};
-
-/// Newell's normal, not normalised: its length is twice the polygon's area.
-pub(crate) fn newell(vertices: &[DVec3]) -> DVec3 {
-    let mut n = DVec3::ZERO;
-    for (i, a) in vertices.iter().enumerate() {
-        let b = vertices[(i + 1) % vertices.len()];
-        n += a.cross(b);
-    }
-    n
-}
 
 /// Length of the diagonal of the vertices' bounding box: the polygon's size.
 pub(crate) fn bbox_diagonal(vertices: &[DVec3]) -> f64 {
@@ -115,61 +105,10 @@ pub(crate) fn is_convex(vertices: &[DVec3], n: DVec3) -> bool {
     (turning - std::f64::consts::TAU).abs() < 1e-6
 }
 
-/// Triangulates a simple polygon (given projected, counter-clockwise or not) by
-/// ear clipping; returns index triples in the input's orientation. A polygon on
-/// which no ear can be found (numerically degenerate) falls back to a fan.
-pub(crate) fn triangulate(p: &[DVec2]) -> Vec<[usize; 3]> {
-    let n = p.len();
-    if n < 3 {
-        return Vec::new();
-    }
-    let signed_area: f64 = (0..n).map(|i| p[i].perp_dot(p[(i + 1) % n])).sum();
-    let ccw = signed_area >= 0.0;
-    let turn = |a: usize, b: usize, c: usize| {
-        let o = orient(p[a], p[b], p[c]);
-        if ccw {
-            o
-        } else {
-            -o
-        }
-    };
-    let mut remaining: Vec<usize> = (0..n).collect();
-    let mut triangles = Vec::with_capacity(n - 2);
-    while remaining.len() > 3 {
-        let m = remaining.len();
-        let ear = (0..m).find(|&k| {
-            let (a, b, c) = (
-                remaining[(k + m - 1) % m],
-                remaining[k],
-                remaining[(k + 1) % m],
-            );
-            if turn(a, b, c) <= 0.0 {
-                return false;
-            }
-            // No other remaining vertex may lie inside or on the ear.
-            remaining.iter().all(|&q| {
-                q == a
-                    || q == b
-                    || q == c
-                    || !(turn(a, b, q) >= 0.0 && turn(b, c, q) >= 0.0 && turn(c, a, q) >= 0.0)
-            })
-        });
-        let k = ear.unwrap_or(0);
-        let m = remaining.len();
-        triangles.push([
-            remaining[(k + m - 1) % m],
-            remaining[k],
-            remaining[(k + 1) % m],
-        ]);
-        remaining.remove(k);
-    }
-    triangles.push([remaining[0], remaining[1], remaining[2]]);
-    triangles
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::geometry::polygon::newell_normal;
 
     #[test]
     fn newell_area_and_deviation() {
@@ -179,12 +118,12 @@ mod tests {
             DVec3::new(2.0, 2.0, 0.0),
             DVec3::new(0.0, 2.0, 0.0),
         ];
-        assert_eq!(newell(&square), DVec3::new(0.0, 0.0, 8.0));
+        assert_eq!(newell_normal(&square), DVec3::new(0.0, 0.0, 8.0));
         assert_eq!(max_plane_deviation(&square, DVec3::Z), 0.0);
         let mut bent = square;
         bent[2].z = 0.4;
         // Newell's normal of a quad bent at one corner: deviations ±0.1 alternate.
-        let n = newell(&bent).normalize();
+        let n = newell_normal(&bent).normalize();
         assert!((max_plane_deviation(&bent, n) - 0.1 * n.z).abs() < 1e-12);
     }
 
@@ -216,28 +155,5 @@ mod tests {
             })
             .collect();
         assert!(!is_convex(&star, DVec3::Z));
-    }
-
-    #[test]
-    fn ear_clipping_covers_a_non_convex_polygon() {
-        let l_shape = [
-            DVec2::new(0.0, 0.0),
-            DVec2::new(2.0, 0.0),
-            DVec2::new(2.0, 1.0),
-            DVec2::new(1.0, 1.0),
-            DVec2::new(1.0, 2.0),
-            DVec2::new(0.0, 2.0),
-        ];
-        let tris = triangulate(&l_shape);
-        assert_eq!(tris.len(), 4);
-        // The triangles' areas (all positive: same orientation) sum to the L's 3.
-        let total: f64 = tris
-            .iter()
-            .map(|t| 0.5 * orient(l_shape[t[0]], l_shape[t[1]], l_shape[t[2]]))
-            .sum();
-        assert!(tris
-            .iter()
-            .all(|t| orient(l_shape[t[0]], l_shape[t[1]], l_shape[t[2]]) > 0.0));
-        assert!((total - 3.0).abs() < 1e-12);
     }
 }

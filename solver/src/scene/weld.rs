@@ -18,8 +18,9 @@
 //! anyway (000 §3.4).
 
 use super::clean::COLLINEAR_TOLERANCE;
-use super::planar::{is_convex, newell};
+use super::planar::is_convex;
 use super::Polygon;
+use crate::geometry::polygon::newell_normal;
 use glam::DVec3;
 use std::collections::HashMap;
 use std::hash::{BuildHasherDefault, Hasher};
@@ -184,7 +185,7 @@ fn compatible(p: &Polygon, q: &Polygon) -> bool {
         && p.patches == q.patches
         && p.vertex_normals.is_none()
         && q.vertex_normals.is_none()
-        && newell(&p.vertices).dot(newell(&q.vertices)) > 0.0
+        && newell_normal(&p.vertices).dot(newell_normal(&q.vertices)) > 0.0
 }
 
 /// The union of P and Q across P's edge `k` (a → b), which Q has as b → a;
@@ -217,7 +218,7 @@ fn merge(
     if (1..ids.len()).any(|i| ids[..i].contains(&ids[i])) {
         return None;
     }
-    let normal = newell(&vertices).normalize_or_zero();
+    let normal = newell_normal(&vertices).normalize_or_zero();
     if normal == DVec3::ZERO {
         return None;
     }
