@@ -6,7 +6,9 @@
 //! This is the issue's figure of merit for the solver core: it is the packet
 //! speed of the occluder (`--bench visibility`) less everything the solver does
 //! around the rays. Run: `cargo bench -p solver --bench solve_throughput`
-//! (env `PRESETS=draft,medium`, `SHOTS=N` caps the shots, default 200).
+//! (env `PRESETS=draft,medium`, `SHOTS=N` caps the shots, default 200). The CPU-time
+//! column divides by the solve's CPU time instead: on a shared machine it is the
+//! steadier figure (wall time includes waiting for a core).
 
 use solver::scene::{load_scene, ImportOptions};
 use solver::settings::{Preset, SolverSettings};
@@ -36,10 +38,10 @@ fn main() {
         .expect("one worker thread");
     println!(
         "| preset | samples | shots | elements | vertices | rays | wall s | M rays/s (1 thread) | \
-         setup s | shoot s | shoot M rays/s | refine s | refine M rays/s | gather s |"
+         cpu s | M rays/s by CPU | setup s | shoot s | shoot M rays/s | refine s | refine M rays/s | gather s |"
     );
     println!(
-        "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"
+        "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"
     );
     for preset in presets {
         let mut scene = load_scene(&path, &ImportOptions::default())
@@ -48,6 +50,7 @@ fn main() {
         let mut settings = SolverSettings::preset(preset);
         settings.max_shots = shots;
         scene.fill_default_patches(settings.patches);
+        let cpu_start = process_cpu_seconds();
         let start = Instant::now();
         let solver = pool.install(|| {
             let mut solver = Solver::new(&scene, &settings).expect("the Cornell box solves");
@@ -55,11 +58,15 @@ fn main() {
             solver
         });
         let wall = start.elapsed().as_secs_f64();
+        let cpu = match (cpu_start, process_cpu_seconds()) {
+            (Some(a), Some(b)) => b - a,
+            _ => f64::NAN,
+        };
         let p = solver.progress();
         let t = solver.timings();
         let setup = wall - t.shoot - t.refine - t.gather;
         println!(
-            "| {} | {} | {} | {} | {} | {:.3e} | {:.2} | {:.1} | {:.3} | {:.2} | {:.1} | {:.2} | {:.1} | {:.2} |",
+            "| {} | {} | {} | {} | {} | {:.3e} | {:.2} | {:.1} | {:.2} | {:.1} | {:.3} | {:.2} | {:.1} | {:.2} | {:.1} | {:.2} |",
             preset.name(),
             settings.samples,
             p.shots,
@@ -68,6 +75,8 @@ fn main() {
             p.rays as f64,
             wall,
             p.rays as f64 / wall / 1e6,
+            cpu,
+            p.rays as f64 / cpu / 1e6,
             setup,
             t.shoot,
             t.shoot_rays as f64 / t.shoot / 1e6,
@@ -76,4 +85,22 @@ fn main() {
             t.gather
         );
     }
+}
+
+/// CPU time of every thread of this process so far, from Linux's
+/// /proc/self/task/*/schedstat (nanoseconds). The solve runs on one rayon
+/// worker while the main thread sleeps, so this is the solve's own CPU time:
+/// unlike the wall time it leaves out time spent waiting for a core on a
+/// shared machine. `None` where /proc is not available.
+fn process_cpu_seconds() -> Option<f64> {
+    let mut total = 0.0;
+    for task in std::fs::read_dir("/proc/self/task").ok()? {
+        let path = task.ok()?.path().join("schedstat");
+        // A thread may exit between the listing and the read: skip it.
+        if let Ok(text) = std::fs::read_to_string(path) {
+            let ns: f64 = text.split_whitespace().next()?.parse().ok()?;
+            total += ns;
+        }
+    }
+    Some(total * 1e-9)
 }

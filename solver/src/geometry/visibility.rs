@@ -287,10 +287,41 @@ impl Occluder {
     /// unobstructed; the same answers as calling [`Occluder::visible`] for each,
     /// but traced together as packets (the fast path).
     pub fn count_visible(&self, origin: DVec3, targets: &[DVec3]) -> u32 {
+        // A packet this small would be traced ray by ray from its root anyway
+        // (SINGLE_RAY_THRESHOLD): skip building it (the draft preset's 4
+        // samples per receiver).
+        if targets.len() <= SINGLE_RAY_THRESHOLD as usize {
+            return self.count_visible_single(origin, targets);
+        }
         targets
             .chunks(MAX_PACKET)
             .map(|chunk| self.trace(origin, chunk).count_ones())
             .sum()
+    }
+
+    /// [`Occluder::count_visible`] for a few segments: each traced alone, with
+    /// the AVX2 path chosen once for all of them.
+    fn count_visible_single(&self, origin: DVec3, targets: &[DVec3]) -> u32 {
+        #[cfg(target_arch = "x86_64")]
+        if self.avx2 {
+            // SAFETY: `avx2` is true only when the running CPU reported AVX2
+            // and FMA support (has_avx2), which is all that the target-feature
+            // function requires.
+            return unsafe { self.count_visible_single_avx2(origin, targets) };
+        }
+        targets
+            .iter()
+            .filter(|&&t| self.visible_one(origin, t))
+            .count() as u32
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    fn count_visible_single_avx2(&self, origin: DVec3, targets: &[DVec3]) -> u32 {
+        targets
+            .iter()
+            .filter(|&&t| self.visible_one(origin, t))
+            .count() as u32
     }
 
     /// Per-target visibility from a shared origin into `out` (cleared first),
