@@ -33,14 +33,15 @@ pub fn direction_count(k: u32) -> u64 {
     6 * u64::from(k) * u64::from(k)
 }
 
-/// The `k` with 6k² = `directions`, if there is one in 1..=[`MAX_RESOLUTION`].
+/// The `k ≥ 1` with 6k² = `directions`, if there is one. Not capped: the format
+/// reader compares it with [`MAX_RESOLUTION`] itself, to name the right problem.
 pub fn resolution_from_directions(directions: u32) -> Option<u32> {
     if directions == 0 || !directions.is_multiple_of(6) {
         return None;
     }
     let squared = directions / 6;
     let k = (f64::from(squared)).sqrt().round() as u32;
-    ((1..=MAX_RESOLUTION).contains(&k) && k * k == squared).then_some(k)
+    (k.checked_mul(k) == Some(squared)).then_some(k)
 }
 
 /// Axis index (0 = x, 1 = y, 2 = z) and sign of face `face` (0..6).

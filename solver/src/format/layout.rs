@@ -162,7 +162,7 @@ pub const MAX_SH_ORDER: u32 = 1024;
 
 /// The largest cube resolution k (D = 6k² ≤ 6,291,456 directions), for the same
 /// reason as [`MAX_SH_ORDER`].
-pub const MAX_CUBE_RESOLUTION: u32 = 1024;
+pub const MAX_CUBE_RESOLUTION: u32 = crate::cube::MAX_RESOLUTION;
 
 /// Vertex and index counts are u64 on disk (so no hostile value can wrap) but
 /// at most this in version 1: indices are u32 and a Vulkan draw counts in u32.

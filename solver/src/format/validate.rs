@@ -114,9 +114,11 @@ pub fn check_representation(batch: usize, r: Representation) -> Result<(), Probl
             }
         }
         Representation::Cube { directions } => {
-            let k = cube_resolution(directions).ok_or_else(|| Problem::Invalid {
-                what: format!("batch {batch}: cube with {directions} directions"),
-                reason: "a global cube has 6·k² directions for a whole k ≥ 1".into(),
+            let k = crate::cube::resolution_from_directions(directions).ok_or_else(|| {
+                Problem::Invalid {
+                    what: format!("batch {batch}: cube with {directions} directions"),
+                    reason: "a global cube has 6·k² directions for a whole k ≥ 1".into(),
+                }
             })?;
             if k > MAX_CUBE_RESOLUTION {
                 return Err(Problem::TooLarge {
@@ -129,16 +131,6 @@ pub fn check_representation(batch: usize, r: Representation) -> Result<(), Probl
         }
     }
     Ok(())
-}
-
-/// k with `directions == 6·k²`, k ≥ 1.
-pub fn cube_resolution(directions: u32) -> Option<u32> {
-    if directions == 0 || !directions.is_multiple_of(6) {
-        return None;
-    }
-    let cells = directions / 6;
-    let k = (f64::from(cells)).sqrt().round() as u32;
-    (k.checked_mul(k) == Some(cells)).then_some(k)
 }
 
 /// Checks an f16 scale: finite, positive and normal (a subnormal scale would lose
@@ -196,14 +188,15 @@ mod tests {
     use super::*;
 
     #[test]
-    fn cube_resolution_accepts_only_six_squares() {
-        assert_eq!(cube_resolution(6), Some(1));
-        assert_eq!(cube_resolution(24), Some(2));
-        assert_eq!(cube_resolution(6 * 1024 * 1024), Some(1024));
-        assert_eq!(cube_resolution(0), None);
-        assert_eq!(cube_resolution(12), None);
-        assert_eq!(cube_resolution(7), None);
-        assert_eq!(cube_resolution(u32::MAX), None);
+    fn cubes_must_have_six_squares_of_directions_within_the_cap() {
+        let check = |directions| check_representation(0, Representation::Cube { directions });
+        assert!(check(6).is_ok());
+        assert!(check(6 * 1024 * 1024).is_ok());
+        assert!(matches!(check(12), Err(Problem::Invalid { .. })));
+        assert!(matches!(
+            check(6 * 1025 * 1025),
+            Err(Problem::TooLarge { .. })
+        ));
     }
 
     #[test]
