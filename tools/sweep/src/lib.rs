@@ -1,0 +1,11 @@
+//! The speed/accuracy sweep of issue 7, as a library so that its pieces are unit
+//! tested: child-process measurement ([`child`]), error metrics and the Pareto
+//! front ([`metrics`]), the per-vertex reference lookup ([`lookup`]), EXR input
+//! ([`image`]) and the SVG plot ([`svg`]). The binary (`src/main.rs`) holds the
+//! sweep's points and writes `docs/tradeoffs.md`.
+
+pub mod child;
+pub mod image;
+pub mod lookup;
+pub mod metrics;
+pub mod svg;

@@ -1,0 +1,421 @@
+//! `sweep`: the speed/accuracy sweep of issue 7.
+//!
+//! For each scene (the Cornell box and the bundled glossy room) it solves one
+//! converged reference, then one solve per sweep point, each through the real
+//! `solver solve` binary, and measures what the point cost (CPU and wall
+//! seconds, rays, peak resident memory, file size) and what it bought (error
+//! per vertex and in images rendered by `runtime screenshot` from fixed
+//! cameras, both against the reference). It writes `docs/tradeoffs.md` and one
+//! SVG plot per scene. Run it from the repository root after
+//! `cargo build --release -p solver -p runtime`:
+//!
+//! ```text
+//! cargo run --release -p sweep -- --quick      # a few points, under 3 minutes
+//! cargo run --release -p sweep                 # the full sweep
+//! ```
+//!
+//! Results are cached per point in the work folder (keyed by the exact scene
+//! config and flags), so a second run only re-renders the report; `--fresh`
+//! re-measures everything.
+
+mod points;
+mod report;
+
+use anyhow::{bail, Context};
+use clap::Parser;
+use glam::DVec3;
+use points::{Camera, Point, SceneSpec};
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use sweep::child::run_measured;
+use sweep::image::{read_exr, RgbImage};
+use sweep::lookup::ReferenceLookup;
+use sweep::metrics::relative_error;
+
+#[derive(Parser, Debug)]
+#[command(about = "Speed/accuracy sweep of the solver; writes docs/tradeoffs.md")]
+struct Args {
+    /// A few points per scene (under 3 minutes); the report goes to the work folder
+    /// unless --docs is given.
+    #[arg(long)]
+    quick: bool,
+    /// Work folder: references, per-point solutions, images and cached results.
+    #[arg(long, default_value = "target/sweep")]
+    work: PathBuf,
+    /// The solver binary.
+    #[arg(long, default_value = "target/release/solver")]
+    solver: PathBuf,
+    /// The runtime binary (offscreen screenshots).
+    #[arg(long, default_value = "target/release/runtime")]
+    runtime: PathBuf,
+    /// Where tradeoffs.md and the SVG plots go (default: docs/, or the work
+    /// folder with --quick).
+    #[arg(long)]
+    docs: Option<PathBuf>,
+    /// Only these scenes (cornell, glossy).
+    #[arg(long, value_delimiter = ',')]
+    scenes: Option<Vec<String>>,
+    /// Only these axes (see the report's tables), e.g. samples,presets.
+    #[arg(long, value_delimiter = ',')]
+    axes: Option<Vec<String>>,
+    /// Re-measure points whose results are cached.
+    #[arg(long)]
+    fresh: bool,
+    /// Notes (markdown) inserted into the report after the generated summary.
+    #[arg(long, default_value = "tools/sweep/notes.md")]
+    notes: PathBuf,
+}
+
+/// Everything measured for one point.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct PointResult {
+    pub scene: String,
+    pub axis: String,
+    pub label: String,
+    /// The settings that differ from the scene config, as `key=value` text.
+    pub settings: String,
+    pub cpu_seconds: f64,
+    pub wall_seconds: f64,
+    pub peak_rss_bytes: u64,
+    pub file_bytes: u64,
+    pub elements: u64,
+    pub vertices: u64,
+    pub shots: u64,
+    pub rays: u64,
+    pub unshot_fraction: f64,
+    /// Relative L1 error of the vertices' radiance toward the scene's fixed eye.
+    pub vertex_error: Option<f64>,
+    /// Fraction of vertices that could not be located on the reference mesh.
+    pub vertex_unmatched: Option<f64>,
+    /// Relative L1 and RMSE errors over every camera's pixels.
+    pub image_error: Option<f64>,
+    pub image_rmse: Option<f64>,
+    /// What went wrong in a stage that did not stop the point.
+    pub note: Option<String>,
+}
+
+#[derive(Serialize, Deserialize)]
+struct StatsJson {
+    elements: u64,
+    vertices: u64,
+    shots: u64,
+    rays: u64,
+    #[allow(dead_code)]
+    seconds: f64,
+    unshot_fraction: f64,
+}
+
+/// The per-scene state the points are measured against.
+struct Reference {
+    lookup: ReferenceLookup,
+    /// The vertex-error eye in file (re-centred) coordinates.
+    eye_file: DVec3,
+    images: Vec<RgbImage>,
+    result: PointResult,
+}
+
+fn main() -> anyhow::Result<()> {
+    let args = Args::parse();
+    if !args.solver.is_file() || !args.runtime.is_file() {
+        bail!(
+            "{} or {} is missing: run `cargo build --release -p solver -p runtime` first \
+             (from the repository root)",
+            args.solver.display(),
+            args.runtime.display()
+        );
+    }
+    if std::env::var_os("VK_ICD_FILENAMES").is_none() {
+        // lavapipe, as scripts/test.sh picks it, unless the caller chose a device.
+        if let Some(icd) = lavapipe_icd() {
+            std::env::set_var("VK_ICD_FILENAMES", icd);
+        }
+    }
+    let help = Command::new(&args.solver)
+        .args(["solve", "--help"])
+        .output()
+        .context("running solver solve --help")?;
+    let help = String::from_utf8_lossy(&help.stdout).into_owned();
+    let has_cube = help.contains("--directional");
+    if !has_cube {
+        println!(
+            "note: `solver solve --help` lists no --directional flag: the global-cube (D) points are skipped"
+        );
+    }
+    let load_before = load_average();
+    let started = std::time::Instant::now();
+    let mut all: Vec<(SceneSpec, Vec<PointResult>, PointResult)> = Vec::new();
+    for scene in points::scenes() {
+        if let Some(only) = &args.scenes {
+            if !only.iter().any(|s| s == scene.key) {
+                continue;
+            }
+        }
+        let dir = args.work.join(scene.key);
+        std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
+        println!("== {}: reference", scene.title);
+        let reference = reference(&args, &scene, &dir)?;
+        let mut results = Vec::new();
+        for point in points::points(&scene, args.quick, has_cube, &help) {
+            if let Some(only) = &args.axes {
+                if !only.contains(&point.axis) {
+                    continue;
+                }
+            }
+            let result = measure(&args, &scene, &dir, &point, Some(&reference))?;
+            println!(
+                "   {:<14} {:<34} cpu {:>7.2} s  wall {:>7.2} s  vertex err {}  image err {}{}",
+                result.axis,
+                result.label,
+                result.cpu_seconds,
+                result.wall_seconds,
+                report::fmt_err(result.vertex_error),
+                report::fmt_err(result.image_error),
+                result
+                    .note
+                    .as_deref()
+                    .map(|n| format!("  ({n})"))
+                    .unwrap_or_default()
+            );
+            results.push(result);
+        }
+        all.push((scene, results, reference.result));
+    }
+    let load_after = load_average();
+    let docs = args.docs.clone().unwrap_or_else(|| {
+        if args.quick {
+            args.work.clone()
+        } else {
+            PathBuf::from("docs")
+        }
+    });
+    let notes = std::fs::read_to_string(&args.notes).unwrap_or_default();
+    let machine = report::Machine {
+        cpu: cpu_model(),
+        cores: std::thread::available_parallelism().map_or(1, |n| n.get()),
+        load_before,
+        load_after,
+        sweep_seconds: started.elapsed().as_secs_f64(),
+        quick: args.quick,
+    };
+    report::write(&docs, &all, &machine, &notes)?;
+    println!("report written to {}", docs.join("tradeoffs.md").display());
+    Ok(())
+}
+
+/// Solves (or loads) the scene's reference and renders its images.
+fn reference(args: &Args, scene: &SceneSpec, dir: &Path) -> anyhow::Result<Reference> {
+    let point = points::reference_point(scene);
+    let result = measure(args, scene, dir, &point, None)?;
+    let point_dir = dir.join(point.id());
+    let solution = solver::format::read_solution(&point_dir.join("solution.sol"))
+        .with_context(|| format!("reading the {} reference", scene.key))?;
+    let offset = DVec3::from(solution.header.recentre_offset);
+    let eye_file = DVec3::from(scene.vertex_eye) - offset;
+    let lookup = ReferenceLookup::new(&solution, eye_file)?;
+    let mut images = Vec::new();
+    for camera in &scene.cameras {
+        images.push(read_exr(&point_dir.join(format!("{}.exr", camera.name)))?);
+    }
+    println!(
+        "   reference: {} elements, cpu {:.1} s, wall {:.1} s",
+        result.elements, result.cpu_seconds, result.wall_seconds
+    );
+    Ok(Reference {
+        lookup,
+        eye_file,
+        images,
+        result,
+    })
+}
+
+/// Measures one point (cached by its key), comparing with `reference` when given.
+fn measure(
+    args: &Args,
+    scene: &SceneSpec,
+    dir: &Path,
+    point: &Point,
+    reference: Option<&Reference>,
+) -> anyhow::Result<PointResult> {
+    let point_dir = dir.join(point.id());
+    std::fs::create_dir_all(&point_dir)?;
+    let config = points::scene_config(scene, point)?;
+    let key = format!(
+        "{config}\n# flags: {:?}\n# cameras: {:?}\n",
+        point.flags, scene.cameras
+    );
+    let key_path = point_dir.join("key.txt");
+    let result_path = point_dir.join("result.json");
+    if !args.fresh && std::fs::read_to_string(&key_path).ok().as_deref() == Some(key.as_str()) {
+        if let Ok(text) = std::fs::read_to_string(&result_path) {
+            if let Ok(result) = serde_json::from_str::<PointResult>(&text) {
+                return Ok(result);
+            }
+        }
+    }
+    // The config's relative paths are made absolute, so it may live anywhere.
+    let config_path = point_dir.join("scene.toml");
+    std::fs::write(&config_path, &config)?;
+    let solution_path = point_dir.join("solution.sol");
+    let stats_path = point_dir.join("stats.json");
+    let mut command = Command::new(&args.solver);
+    command
+        .arg("solve")
+        .arg(&config_path)
+        .arg("-o")
+        .arg(&solution_path)
+        .arg("--stats-json")
+        .arg(&stats_path)
+        .args(&point.flags);
+    let measured = run_measured(&mut command, &point_dir.join("solve.log"))?;
+    let stats: StatsJson = serde_json::from_str(
+        &std::fs::read_to_string(&stats_path)
+            .with_context(|| format!("reading {}", stats_path.display()))?,
+    )
+    .with_context(|| format!("parsing {}", stats_path.display()))?;
+    let file_bytes = std::fs::metadata(&solution_path)?.len();
+    let mut result = PointResult {
+        scene: scene.key.to_string(),
+        axis: point.axis.clone(),
+        label: point.label.clone(),
+        settings: point.settings_text(),
+        cpu_seconds: measured.cpu_seconds,
+        wall_seconds: measured.wall_seconds,
+        peak_rss_bytes: measured.peak_rss_bytes,
+        file_bytes,
+        elements: stats.elements,
+        vertices: stats.vertices,
+        shots: stats.shots,
+        rays: stats.rays,
+        unshot_fraction: stats.unshot_fraction,
+        vertex_error: None,
+        vertex_unmatched: None,
+        image_error: None,
+        image_rmse: None,
+        note: None,
+    };
+    let mut notes = Vec::new();
+    // Images from the fixed cameras.
+    let mut images = Vec::new();
+    for camera in &scene.cameras {
+        match screenshot(args, &solution_path, &point_dir, camera) {
+            Ok(image) => images.push(image),
+            Err(e) => {
+                notes.push(format!("no image: {}", first_line(&e)));
+                break;
+            }
+        }
+    }
+    if let Some(reference) = reference {
+        if images.len() == reference.images.len() {
+            let (r, t): (Vec<f64>, Vec<f64>) = (
+                reference
+                    .images
+                    .iter()
+                    .flat_map(|i| i.values.iter().copied())
+                    .collect(),
+                images
+                    .iter()
+                    .flat_map(|i| i.values.iter().copied())
+                    .collect(),
+            );
+            match relative_error(&r, &t) {
+                Ok(e) => {
+                    result.image_error = Some(e.rel_l1);
+                    result.image_rmse = Some(e.rel_rmse);
+                }
+                Err(e) => notes.push(format!("image comparison: {e}")),
+            }
+        }
+        let vertex = solver::format::read_solution(&solution_path)
+            .map_err(anyhow::Error::from)
+            .and_then(|s| reference.lookup.vertex_error(&s, reference.eye_file));
+        match vertex {
+            Ok(v) => {
+                result.vertex_error = Some(v.stats.rel_l1);
+                result.vertex_unmatched = Some(v.unmatched as f64 / v.vertices.max(1) as f64);
+            }
+            Err(e) => notes.push(format!("no vertex error: {}", first_line(&e))),
+        }
+    }
+    if !notes.is_empty() {
+        result.note = Some(notes.join("; "));
+    }
+    // The solution itself is only needed again for the reference.
+    if reference.is_some() {
+        std::fs::remove_file(&solution_path).ok();
+    }
+    std::fs::write(&result_path, serde_json::to_string_pretty(&result)?)?;
+    std::fs::write(&key_path, key)?;
+    Ok(result)
+}
+
+fn first_line(e: &anyhow::Error) -> String {
+    format!("{e:#}")
+        .lines()
+        .next()
+        .unwrap_or_default()
+        .to_string()
+}
+
+/// Renders `solution` from `camera` with the runtime; returns the linear image.
+fn screenshot(
+    args: &Args,
+    solution: &Path,
+    dir: &Path,
+    camera: &Camera,
+) -> anyhow::Result<RgbImage> {
+    let prefix = dir.join(camera.name);
+    let v = |a: [f64; 3]| a.map(|x| x.to_string());
+    let mut command = Command::new(&args.runtime);
+    command
+        .arg("screenshot")
+        .arg(solution)
+        .arg("--mono")
+        .arg("--out")
+        .arg(&prefix)
+        .arg("--eye")
+        .args(v(camera.eye))
+        .arg("--target")
+        .args(v(camera.target))
+        .arg("--up")
+        .args(v(camera.up))
+        .arg("--fov-y")
+        .arg(camera.fov_y_deg.to_string())
+        .arg("--size")
+        .arg(format!("{}x{}", camera.width, camera.height));
+    run_measured(&mut command, &dir.join(format!("{}.log", camera.name)))?;
+    read_exr(&prefix.with_extension("exr"))
+}
+
+fn lavapipe_icd() -> Option<PathBuf> {
+    let mut found: Vec<PathBuf> = std::fs::read_dir("/usr/share/vulkan/icd.d")
+        .ok()?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| {
+            p.file_name()
+                .and_then(|n| n.to_str())
+                .is_some_and(|n| n.starts_with("lvp_icd") && n.ends_with(".json"))
+        })
+        .collect();
+    found.sort();
+    found.into_iter().next()
+}
+
+fn load_average() -> String {
+    std::fs::read_to_string("/proc/loadavg")
+        .map(|s| s.split_whitespace().take(3).collect::<Vec<_>>().join(" "))
+        .unwrap_or_else(|_| "unknown".into())
+}
+
+fn cpu_model() -> String {
+    std::fs::read_to_string("/proc/cpuinfo")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("model name"))
+                .and_then(|l| l.split(':').nth(1))
+                .map(|m| m.trim().to_string())
+        })
+        .unwrap_or_else(|| "unknown CPU".into())
+}

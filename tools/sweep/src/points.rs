@@ -1,0 +1,488 @@
+//! The sweep's scenes, fixed cameras, reference settings and points.
+//!
+//! Every point states its solver settings in full (written into the scene
+//! config's `[solver]` table) rather than as changes to a preset, so that the
+//! sweep measures the same thing after `config/presets.toml` is re-chosen from
+//! it. The `presets` axis alone runs `--preset NAME` as shipped.
+
+use anyhow::Context;
+use std::path::Path;
+use toml::Value;
+
+/// A fixed camera for the image error (scene coordinates, as the runtime's
+/// `screenshot --eye/--target/--up` take them).
+#[derive(Clone, Debug)]
+pub struct Camera {
+    pub name: &'static str,
+    pub eye: [f64; 3],
+    pub target: [f64; 3],
+    pub up: [f64; 3],
+    pub fov_y_deg: f64,
+    pub width: u32,
+    pub height: u32,
+}
+
+pub struct SceneSpec {
+    pub key: &'static str,
+    pub title: &'static str,
+    /// The scene config, relative to the repository root.
+    pub config: &'static str,
+    /// Settings every point starts from.
+    pub base: Vec<(&'static str, Value)>,
+    /// The converged reference's settings (over `base`).
+    pub reference: Vec<(&'static str, Value)>,
+    pub cameras: Vec<Camera>,
+    /// The eye toward which per-vertex radiance is compared (scene coordinates).
+    pub vertex_eye: [f64; 3],
+}
+
+/// One solve of the sweep.
+#[derive(Clone, Debug)]
+pub struct Point {
+    pub axis: String,
+    pub label: String,
+    /// `[solver]` settings, applied in order (later wins).
+    pub overrides: Vec<(String, Value)>,
+    /// Extra command-line flags.
+    pub flags: Vec<String>,
+}
+
+impl Point {
+    /// A file-name-safe identifier, unique within a scene.
+    pub fn id(&self) -> String {
+        let raw = format!("{}-{}", self.axis, self.label);
+        raw.chars()
+            .map(|c| {
+                if c.is_ascii_alphanumeric() || c == '.' || c == '-' {
+                    c
+                } else {
+                    '_'
+                }
+            })
+            .collect()
+    }
+
+    /// The point's own settings (not the base's) as `key=value` text.
+    pub fn settings_text(&self) -> String {
+        let mut parts: Vec<String> = self
+            .overrides
+            .iter()
+            .filter(|(k, _)| !k.starts_with("__"))
+            .map(|(k, v)| format!("{k}={v}"))
+            .collect();
+        parts.extend(self.flags.iter().cloned());
+        parts.join(" ")
+    }
+}
+
+fn f(x: f64) -> Value {
+    Value::Float(x)
+}
+fn i(x: i64) -> Value {
+    Value::Integer(x)
+}
+fn s(x: &str) -> Value {
+    Value::String(x.to_string())
+}
+
+/// The diffuse knobs as one tuple, for the ladder of combined settings:
+/// (samples, edge, shadow, min area, max depth, patches, threshold).
+type Ladder = (i64, f64, f64, f64, i64, i64, f64);
+
+fn ladder_overrides(l: Ladder) -> Vec<(String, Value)> {
+    vec![
+        ("samples".into(), i(l.0)),
+        ("edge_threshold".into(), f(l.1)),
+        ("shadow_threshold".into(), f(l.2)),
+        ("min_element_area".into(), f(l.3)),
+        ("max_depth".into(), i(l.4)),
+        ("patches".into(), i(l.5)),
+        ("threshold".into(), f(l.6)),
+    ]
+}
+
+pub fn scenes() -> Vec<SceneSpec> {
+    vec![
+        SceneSpec {
+            key: "cornell",
+            title: "Cornell box (diffuse)",
+            config: "config/cornell_box.toml",
+            // A draft-like starting point: each axis moves one knob from here.
+            base: vec![
+                ("samples", i(8)),
+                ("threshold", f(0.01)),
+                ("max_shots", i(100_000)),
+                ("patches", i(4)),
+                ("adaptive", Value::Boolean(true)),
+                ("edge_threshold", f(0.5)),
+                ("shadow_threshold", f(0.2)),
+                ("min_element_area", f(2e-4)),
+                ("max_depth", i(5)),
+                ("checkpoint_every", i(1_000_000)),
+                ("seed", i(1)),
+            ],
+            // Converged: 64 rays per vertex and source, unshot power 0.1%, a mesh
+            // refined to 1e-5 of a polygon where the radiance changes by 15%
+            // (5% across shadow edges). Another seed than the points', so the
+            // points' noise is not correlated with the reference's.
+            reference: vec![
+                ("samples", i(64)),
+                ("threshold", f(0.001)),
+                ("patches", i(6)),
+                ("edge_threshold", f(0.15)),
+                ("shadow_threshold", f(0.05)),
+                ("min_element_area", f(1e-5)),
+                ("max_depth", i(8)),
+                ("seed", i(7)),
+            ],
+            cameras: vec![
+                Camera {
+                    name: "front",
+                    eye: [278.0, 273.0, -800.0],
+                    target: [278.0, 273.0, 0.0],
+                    up: [0.0, 1.0, 0.0],
+                    fov_y_deg: 39.3077,
+                    width: 256,
+                    height: 256,
+                },
+                // Inside the box, high in a front corner, looking down at the
+                // blocks' shadows and the colour bleeding onto them.
+                Camera {
+                    name: "corner",
+                    eye: [500.0, 480.0, 60.0],
+                    target: [220.0, 60.0, 330.0],
+                    up: [0.0, 1.0, 0.0],
+                    fov_y_deg: 60.0,
+                    width: 256,
+                    height: 256,
+                },
+            ],
+            vertex_eye: [278.0, 273.0, -800.0],
+        },
+        SceneSpec {
+            key: "glossy",
+            title: "Glossy room (directional, spherical harmonics)",
+            config: "config/glossy_floor.toml",
+            base: vec![
+                ("samples", i(4)),
+                ("threshold", f(0.02)),
+                ("max_shots", i(100_000)),
+                ("patches", i(2)),
+                ("adaptive", Value::Boolean(true)),
+                ("edge_threshold", f(0.5)),
+                ("shadow_threshold", f(0.2)),
+                ("min_element_area", f(2e-4)),
+                ("max_depth", i(4)),
+                ("checkpoint_every", i(1_000_000)),
+                ("sh_error_target", f(1e-2)),
+                ("max_sh_order", i(64)),
+                ("seed", i(1)),
+            ],
+            reference: vec![
+                ("samples", i(16)),
+                ("threshold", f(0.005)),
+                ("patches", i(4)),
+                ("edge_threshold", f(0.3)),
+                ("shadow_threshold", f(0.1)),
+                ("min_element_area", f(5e-5)),
+                ("max_depth", i(6)),
+                ("sh_error_target", f(1e-3)),
+                ("seed", i(7)),
+            ],
+            cameras: vec![
+                // The scene's own camera: the floor's highlight in view.
+                Camera {
+                    name: "front",
+                    eye: [0.0, 0.6, 1.8],
+                    target: [0.0, 0.0, 0.0],
+                    up: [0.0, 1.0, 0.0],
+                    fov_y_deg: 60.0,
+                    width: 320,
+                    height: 240,
+                },
+                // From a side, lower: the highlight moves with the eye.
+                Camera {
+                    name: "side",
+                    eye: [1.2, 0.4, 0.2],
+                    target: [-0.6, 0.0, -1.2],
+                    up: [0.0, 1.0, 0.0],
+                    fov_y_deg: 60.0,
+                    width: 320,
+                    height: 240,
+                },
+            ],
+            vertex_eye: [0.0, 0.6, 1.8],
+        },
+    ]
+}
+
+pub fn reference_point(scene: &SceneSpec) -> Point {
+    Point {
+        axis: "reference".into(),
+        label: "converged".into(),
+        overrides: scene
+            .reference
+            .iter()
+            .map(|(k, v)| (k.to_string(), v.clone()))
+            .collect(),
+        flags: Vec::new(),
+    }
+}
+
+fn point(axis: &str, label: impl Into<String>, overrides: Vec<(&str, Value)>) -> Point {
+    Point {
+        axis: axis.into(),
+        label: label.into(),
+        overrides: overrides
+            .into_iter()
+            .map(|(k, v)| (k.to_string(), v))
+            .collect(),
+        flags: Vec::new(),
+    }
+}
+
+fn with_flags(mut p: Point, flags: &[&str]) -> Point {
+    p.flags = flags.iter().map(|f| f.to_string()).collect();
+    p
+}
+
+/// The flag that sets the global cube's D (helper C1's `--directional cube`),
+/// when the solver has one.
+fn cube_flag(help: &str) -> Option<&'static str> {
+    [
+        "--cube-directions",
+        "--directions",
+        "--cube-resolution",
+        "--cube-size",
+    ]
+    .into_iter()
+    .find(|flag| help.contains(flag))
+}
+
+/// The sweep's points for `scene`: one knob at a time from the base, plus
+/// combined settings (the ladder) and the shipped presets.
+pub fn points(scene: &SceneSpec, quick: bool, has_cube: bool, help: &str) -> Vec<Point> {
+    let mut out = Vec::new();
+    match scene.key {
+        "cornell" => {
+            let samples: &[i64] = if quick {
+                &[2, 8, 32]
+            } else {
+                &[1, 2, 4, 8, 16, 32, 64]
+            };
+            for &n in samples {
+                out.push(point(
+                    "samples",
+                    format!("samples={n}"),
+                    vec![("samples", i(n))],
+                ));
+            }
+            if quick {
+                return out;
+            }
+            for (edge, shadow) in [(1.0, 0.5), (0.5, 0.2), (0.3, 0.1), (0.15, 0.05)] {
+                out.push(point(
+                    "mesh",
+                    format!("edge={edge} shadow={shadow}"),
+                    vec![
+                        ("edge_threshold", f(edge)),
+                        ("shadow_threshold", f(shadow)),
+                        ("max_depth", i(8)),
+                    ],
+                ));
+            }
+            // The smallest element, with the depth cap lifted so that it binds
+            // and the meshing thresholds tight enough to want small elements.
+            for a in [2e-3, 5e-4, 1e-4, 2e-5] {
+                out.push(point(
+                    "min_area",
+                    format!("min_area={a:e}"),
+                    vec![
+                        ("min_element_area", f(a)),
+                        ("max_depth", i(10)),
+                        ("edge_threshold", f(0.3)),
+                        ("shadow_threshold", f(0.1)),
+                    ],
+                ));
+            }
+            for n in [2, 4, 8] {
+                out.push(point(
+                    "patches",
+                    format!("patches={n}"),
+                    vec![("patches", i(n))],
+                ));
+            }
+            for t in [0.05, 0.01, 0.002] {
+                out.push(point(
+                    "threshold",
+                    format!("threshold={t}"),
+                    vec![("threshold", f(t))],
+                ));
+            }
+            for m in ["analytic", "wallace", "hemicube"] {
+                out.push(point("form_factors", m, vec![("form_factors", s(m))]));
+            }
+            for r in [16, 32, 64, 128, 256] {
+                out.push(point(
+                    "hemicube",
+                    format!("hemicube R={r}"),
+                    vec![
+                        ("form_factors", s("hemicube")),
+                        ("hemicube_resolution", i(r)),
+                    ],
+                ));
+            }
+            // 002's full-matrix gather: no adaptive meshing, so the patches are
+            // the mesh.
+            for (n, r) in [(4, 64), (8, 128), (12, 128)] {
+                out.push(with_flags(
+                    point(
+                        "gauss_seidel",
+                        format!("GS patches={n} R={r}"),
+                        vec![("patches", i(n)), ("hemicube_resolution", i(r))],
+                    ),
+                    &["--solver", "gauss-seidel"],
+                ));
+            }
+            let ladder: [(&str, Ladder); 6] = [
+                ("L0", (2, 1.0, 0.5, 1e-3, 3, 2, 0.05)),
+                ("L1", (4, 0.5, 0.2, 2e-4, 4, 2, 0.02)),
+                ("L2", (8, 0.4, 0.15, 1e-4, 5, 3, 0.01)),
+                ("L3", (16, 0.3, 0.1, 5e-5, 6, 4, 0.005)),
+                ("L4", (16, 0.2, 0.07, 2e-5, 7, 4, 0.003)),
+                ("L5", (32, 0.2, 0.07, 2e-5, 7, 4, 0.002)),
+            ];
+            for (name, l) in ladder {
+                out.push(Point {
+                    axis: "ladder".into(),
+                    label: format!(
+                        "{name}: n={} e={} s={} a={:e} d={} p={} t={}",
+                        l.0, l.1, l.2, l.3, l.4, l.5, l.6
+                    ),
+                    overrides: ladder_overrides(l),
+                    flags: Vec::new(),
+                });
+            }
+        }
+        "glossy" => {
+            let targets: &[f64] = if quick {
+                &[1e-1, 1e-2]
+            } else {
+                &[1e-1, 3e-2, 1e-2, 3e-3]
+            };
+            for &t in targets {
+                out.push(point(
+                    "sh_target",
+                    format!("sh_error_target={t:e}"),
+                    vec![("sh_error_target", f(t))],
+                ));
+            }
+            if quick {
+                return out;
+            }
+            // The order cap at a target that would ask for more (α = 0.1 needs
+            // L ≈ 25 at 1e-3).
+            for l in [2, 4, 8, 16] {
+                out.push(point(
+                    "sh_order",
+                    format!("max_sh_order={l}"),
+                    vec![("sh_error_target", f(1e-3)), ("max_sh_order", i(l))],
+                ));
+            }
+            for n in [1, 4, 16] {
+                out.push(point(
+                    "samples",
+                    format!("samples={n}"),
+                    vec![("samples", i(n))],
+                ));
+            }
+            for (edge, shadow) in [(1.0, 0.5), (0.3, 0.1)] {
+                out.push(point(
+                    "mesh",
+                    format!("edge={edge} shadow={shadow}"),
+                    vec![
+                        ("edge_threshold", f(edge)),
+                        ("shadow_threshold", f(shadow)),
+                        ("max_depth", i(6)),
+                    ],
+                ));
+            }
+            if has_cube {
+                match cube_flag(help) {
+                    Some(flag) => {
+                        for d in cube_values(flag) {
+                            out.push(with_flags(
+                                point("cube", format!("cube {flag} {d}"), vec![]),
+                                &["--directional", "cube", flag, &d.to_string()],
+                            ));
+                        }
+                    }
+                    None => println!(
+                        "note: --directional is listed but no flag for D was recognised; cube points skipped"
+                    ),
+                }
+            }
+        }
+        _ => {}
+    }
+    for preset in ["draft", "medium", "final"] {
+        if scene.key == "glossy" && preset != "draft" {
+            // medium/final ask for L ≈ 25 and 60+ on the glossy floor: minutes
+            // each on this machine, past the sweep's budget.
+            continue;
+        }
+        let mut p = point("presets", format!("--preset {preset}"), vec![]);
+        p.flags = vec!["--preset".into(), preset.into()];
+        p.overrides
+            .push(("__preset_only".into(), Value::Boolean(true)));
+        out.push(p);
+    }
+    out
+}
+
+/// D values for the cube flag: per-face resolutions for a resolution-like
+/// flag, direction counts otherwise.
+fn cube_values(flag: &str) -> Vec<u32> {
+    if flag.contains("resolution") || flag.contains("size") {
+        vec![2, 4, 8, 16]
+    } else {
+        vec![24, 96, 384, 1536]
+    }
+}
+
+/// The scene config for `point`: the scene's own config with absolute
+/// geometry paths and a `[solver]` table of the base settings, then the
+/// reference's or the point's. A `presets` point keeps the scene's own
+/// `[solver]` table so that the preset decides.
+pub fn scene_config(scene: &SceneSpec, point: &Point) -> anyhow::Result<String> {
+    let path = Path::new(scene.config);
+    let text =
+        std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+    let mut table: toml::Table =
+        toml::from_str(&text).with_context(|| format!("parsing {}", path.display()))?;
+    let dir = std::fs::canonicalize(path.parent().unwrap_or(Path::new(".")))
+        .with_context(|| format!("resolving {}", path.display()))?;
+    let absolute = |v: &Value| match v {
+        Value::String(p) => Value::String(dir.join(p).to_string_lossy().into_owned()),
+        other => other.clone(),
+    };
+    if let Some(Value::Array(files)) = table.get("geometry") {
+        let files: Vec<Value> = files.iter().map(absolute).collect();
+        table.insert("geometry".into(), Value::Array(files));
+    }
+    if let Some(display) = table.get("display").map(absolute) {
+        table.insert("display".into(), display);
+    }
+    let preset_only = point.overrides.iter().any(|(k, _)| k == "__preset_only");
+    if !preset_only {
+        let mut solver = toml::Table::new();
+        for (k, v) in &scene.base {
+            solver.insert(k.to_string(), v.clone());
+        }
+        for (k, v) in &point.overrides {
+            solver.insert(k.clone(), v.clone());
+        }
+        table.insert("solver".into(), Value::Table(solver));
+    }
+    toml::to_string(&table).context("writing the scene config")
+}
