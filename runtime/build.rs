@@ -14,6 +14,12 @@ const SHADERS: &[(&str, &str, &[&str])] = &[
     ("scene_l0.vert", "scene_l0_f16.vert.spv", &["-DCOEFF_F16"]),
     ("scene_sh.vert", "scene_sh_f32.vert.spv", &[]),
     ("scene_sh.vert", "scene_sh_f16.vert.spv", &["-DCOEFF_F16"]),
+    ("scene_cube.vert", "scene_cube_f32.vert.spv", &[]),
+    (
+        "scene_cube.vert",
+        "scene_cube_f16.vert.spv",
+        &["-DCOEFF_F16"],
+    ),
     ("scene.frag", "scene.frag.spv", &[]),
     ("tonemap.vert", "tonemap.vert.spv", &[]),
     ("tonemap.frag", "tonemap.frag.spv", &[]),

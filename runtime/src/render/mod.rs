@@ -8,7 +8,9 @@
 //! or, where the driver has the multiview clipping bug (`multiview`), one pass
 //! per view (masks 0b01 then 0b10) with the same shaders. Batches are drawn by
 //! increasing SH order: order 0 with the trivial `scene_l0.vert`, the rest with
-//! `scene_sh.vert` whose loop bound is the batch's order (push constant).
+//! `scene_sh.vert` whose loop bound is the batch's order (push constant); then
+//! 001's global-cube batches with `scene_cube.vert` (four cells per channel,
+//! the resolution k in the same push constant).
 //!
 //! Conventions: positions are in file (re-centred) coordinates; views are
 //! `solver::camera::EyeView`s, projected with `EyeView::view_projection` and the
@@ -24,7 +26,7 @@ pub mod truncation;
 
 pub use inspect::{Edges, Inspect};
 pub use multiview::MultiviewMode;
-pub use scene::{CoefficientStorage, GpuScene, SceneError};
+pub use scene::{CoefficientStorage, DrawKind, GpuScene, SceneError};
 pub use tonemap::{ToneCurve, ToneSettings};
 
 use crate::gpu::{
@@ -748,10 +750,10 @@ impl StereoRenderer {
                 self.scene.draws.len()
             };
             for (draw, &ds) in self.scene.draws.iter().zip(&self.batch_sets).take(shaded) {
-                let pipeline = if draw.order == 0 {
-                    set.scene_l0
-                } else {
-                    set.scene_sh
+                let pipeline = match draw.kind {
+                    DrawKind::Sh if draw.order == 0 => set.scene_l0,
+                    DrawKind::Sh => set.scene_sh,
+                    DrawKind::Cube { .. } => set.scene_cube,
                 };
                 if bound != Some(pipeline) {
                     device.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, pipeline);
@@ -766,7 +768,7 @@ impl StereoRenderer {
                     &[],
                 );
                 let constants = BatchConstants {
-                    order: draw.order,
+                    order: draw.loop_parameter(),
                     vertex_base: draw.vertex_base,
                     coeff_base: 0,
                     stride: draw.stride,

@@ -27,10 +27,18 @@ pub const DEPTH_LAYOUT: vk::ImageLayout = vk::ImageLayout::DEPTH_STENCIL_ATTACHM
 pub const LINEAR_LAYOUT: vk::ImageLayout = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
 pub const OUTPUT_LAYOUT: vk::ImageLayout = vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL;
 
+/// SPIR-V of `shaders/scene_cube.vert` (compiled by `runtime/build.rs` like the
+/// other scene shaders, with f32 and packed-f16 coefficients).
+const SCENE_CUBE_F32_VERT: &[u8] =
+    include_bytes!(concat!(env!("OUT_DIR"), "/scene_cube_f32.vert.spv"));
+const SCENE_CUBE_F16_VERT: &[u8] =
+    include_bytes!(concat!(env!("OUT_DIR"), "/scene_cube_f16.vert.spv"));
+
 /// Push constants of the scene pipelines (`scene_common.glsl`, `Batch`).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default)]
 pub struct BatchConstants {
+    /// The SH order, or a cube batch's resolution k (`DrawBatch::loop_parameter`).
     pub order: u32,
     pub vertex_base: u32,
     pub coeff_base: u32,
@@ -157,9 +165,10 @@ pub struct PassDesc {
     pub storage: CoefficientStorage,
 }
 
-/// A render pass for one view mask with its three pipelines.
+/// A render pass for one view mask with its four pipelines.
 pub struct PassSet {
     // Newest first.
+    pub scene_cube: vk::Pipeline,
     pub tonemap: vk::Pipeline,
     pub scene_sh: vk::Pipeline,
     pub scene_l0: vk::Pipeline,
@@ -174,6 +183,7 @@ impl Drop for PassSet {
         // ignored.
         unsafe {
             let d = &self.device.device;
+            d.destroy_pipeline(self.scene_cube, None);
             d.destroy_pipeline(self.tonemap, None);
             d.destroy_pipeline(self.scene_sh, None);
             d.destroy_pipeline(self.scene_l0, None);
@@ -208,6 +218,7 @@ impl Drop for Modules<'_> {
 impl PassSet {
     pub fn new(gpu: &Gpu, layouts: &Layouts, desc: PassDesc) -> Result<PassSet, GpuError> {
         let mut set = PassSet {
+            scene_cube: vk::Pipeline::null(),
             tonemap: vk::Pipeline::null(),
             scene_sh: vk::Pipeline::null(),
             scene_l0: vk::Pipeline::null(),
@@ -220,18 +231,28 @@ impl PassSet {
             device: gpu.device(),
             handles: Vec::new(),
         };
-        let (l0_spv, sh_spv) = match desc.storage {
-            CoefficientStorage::F32 => (shaders::SCENE_L0_F32_VERT, shaders::SCENE_SH_F32_VERT),
-            CoefficientStorage::F16 => (shaders::SCENE_L0_F16_VERT, shaders::SCENE_SH_F16_VERT),
+        let (l0_spv, sh_spv, cube_spv) = match desc.storage {
+            CoefficientStorage::F32 => (
+                shaders::SCENE_L0_F32_VERT,
+                shaders::SCENE_SH_F32_VERT,
+                SCENE_CUBE_F32_VERT,
+            ),
+            CoefficientStorage::F16 => (
+                shaders::SCENE_L0_F16_VERT,
+                shaders::SCENE_SH_F16_VERT,
+                SCENE_CUBE_F16_VERT,
+            ),
         };
         let l0 = modules.load(gpu, l0_spv)?;
         let sh = modules.load(gpu, sh_spv)?;
+        let cube = modules.load(gpu, cube_spv)?;
         let frag = modules.load(gpu, shaders::SCENE_FRAG)?;
         let tm_vert = modules.load(gpu, shaders::TONEMAP_VERT)?;
         let tm_frag = modules.load(gpu, shaders::TONEMAP_FRAG)?;
         set.scene_l0 = scene_pipeline(gpu, layouts, &set, l0, frag)?;
         set.scene_sh = scene_pipeline(gpu, layouts, &set, sh, frag)?;
         set.tonemap = tonemap_pipeline(gpu, layouts, &set, tm_vert, tm_frag)?;
+        set.scene_cube = scene_pipeline(gpu, layouts, &set, cube, frag)?;
         Ok(set)
     }
 }

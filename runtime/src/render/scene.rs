@@ -1,5 +1,6 @@
 //! The solution's vertex, index and coefficient data on the GPU, and the draw list
-//! (batches sorted by SH order, so diffuse batches share one trivial pipeline).
+//! (SH batches sorted by order, so diffuse batches share one trivial pipeline,
+//! then 001's global-cube batches by resolution, drawn by `scene_cube.vert`).
 
 use crate::gpu::{Buffer, Gpu, GpuError};
 use ash::vk;
@@ -24,7 +25,8 @@ pub enum CoefficientStorage {
 pub enum SceneError {
     #[error(
         "batch {batch}: representation {representation:?} is not drawn by this renderer \
-         (only spherical harmonics are)"
+         (spherical harmonics and global cubes of 6·k² directions, 1 ≤ k ≤ {max}, are)",
+        max = solver::cube::MAX_RESOLUTION
     )]
     Representation {
         batch: usize,
@@ -45,14 +47,26 @@ pub enum SceneError {
     Gpu(#[from] GpuError),
 }
 
+/// Which vertex shader draws a batch.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum DrawKind {
+    /// Spherical harmonics: `scene_l0.vert` at order 0, else `scene_sh.vert`.
+    Sh,
+    /// 001's global cube with `resolution` (k) cells along a face edge:
+    /// `scene_cube.vert`, the bilinear lookup of `solver::cube::bilinear_f32`.
+    Cube { resolution: u32 },
+}
+
 /// One batch as drawn.
 #[derive(Clone, Debug)]
 pub struct DrawBatch {
     /// Index of the batch in the solution file.
     pub source: usize,
-    /// The file's SH order.
+    pub kind: DrawKind,
+    /// The file's SH order (0 for cube batches).
     pub file_order: u32,
-    /// The order evaluated: `min(file_order, max_order)`.
+    /// The order evaluated: `min(file_order, max_order)` (0 for cube batches,
+    /// which a cap leaves alone: a lookup reads four cells whatever D is).
     pub order: u32,
     pub first_index: u32,
     pub index_count: u32,
@@ -62,10 +76,21 @@ pub struct DrawBatch {
     /// Byte offset and size of the batch's coefficients in the storage buffer.
     pub coeff_offset: u64,
     pub coeff_bytes: u64,
-    /// Scalars per vertex, `(file_order + 1)² · 3`.
+    /// Scalars per vertex, `(file_order + 1)² · 3`, or `D · 3` for a cube.
     pub stride: u32,
     /// Multiplies stored values to get radiance (the f16 scale; 1 for f32).
     pub storage_scale: f32,
+}
+
+impl DrawBatch {
+    /// The push constant `order` of the batch's shader: the evaluated SH order,
+    /// or for a cube its resolution k (`scene_cube.vert`).
+    pub fn loop_parameter(&self) -> u32 {
+        match self.kind {
+            DrawKind::Sh => self.order,
+            DrawKind::Cube { resolution } => resolution,
+        }
+    }
 }
 
 /// The GPU copy of a solution.
@@ -74,7 +99,8 @@ pub struct GpuScene {
     pub coefficients: Buffer,
     pub indices: Buffer,
     pub vertices: Buffer,
-    /// Diffuse batches first, then glossy by increasing order.
+    /// Diffuse batches first, then glossy SH by increasing order, then cubes by
+    /// increasing resolution.
     pub draws: Vec<DrawBatch>,
     /// Multiplies radiance before it is written to the half-float colour target,
     /// so that the brightest radiance any vertex can produce is at most 1 (see
@@ -86,9 +112,17 @@ pub struct GpuScene {
 }
 
 /// An upper bound of the radiance a batch's vertices can produce in any
-/// direction: `max_v Σ_k |c_vk| · envelope(l_k)`, with `|Y_lm| ≤ envelope(l) =
-/// √((2l+1)/(4π))` (Unsöld). Only the evaluated orders count.
+/// direction: for SH `max_v Σ_k |c_vk| · envelope(l_k)`, with `|Y_lm| ≤
+/// envelope(l) = √((2l+1)/(4π))` (Unsöld), only the evaluated orders counting;
+/// for a cube the largest |value|, since the bilinear weights are non-negative
+/// and sum to 1 (`solver::cube::bilinear`).
 pub fn radiance_bound(batch: &Batch, order: u32) -> f64 {
+    if let Representation::Cube { .. } = batch.representation {
+        return batch
+            .coefficients
+            .iter()
+            .fold(0.0f64, |m, &c| m.max(f64::from(c).abs()));
+    }
     let n = batch.representation.coefficients_per_channel() as usize;
     let count = (order as usize + 1).pow(2).min(n);
     let envelope: Vec<f64> = (0..count)
@@ -127,7 +161,7 @@ fn align(value: u64, alignment: u64) -> u64 {
 
 impl GpuScene {
     /// Uploads `solution`. `max_order` caps the evaluated SH order (bands above it
-    /// are not read; see `crate::render::truncation`).
+    /// are not read; see `crate::render::truncation`); cube batches ignore it.
     pub fn new(
         gpu: &Gpu,
         solution: &Solution,
@@ -137,21 +171,32 @@ impl GpuScene {
         let limits = &gpu.info.limits;
         let mut order_of = Vec::new();
         for (i, batch) in solution.batches.iter().enumerate() {
-            let Representation::Sh { order } = batch.representation else {
-                return Err(SceneError::Representation {
-                    batch: i,
-                    representation: batch.representation,
-                });
+            let (kind, order) = match batch.representation {
+                Representation::Sh { order } => (DrawKind::Sh, order),
+                Representation::Cube { directions } => {
+                    match solver::cube::resolution_from_directions(directions) {
+                        Some(resolution) => (DrawKind::Cube { resolution }, 0),
+                        None => {
+                            return Err(SceneError::Representation {
+                                batch: i,
+                                representation: batch.representation,
+                            })
+                        }
+                    }
+                }
             };
             let n = batch.representation.coefficients_per_channel();
-            let expected = batch.vertices.len() as u64 * n * 3;
+            let expected = (batch.vertices.len() as u64)
+                .saturating_mul(n)
+                .saturating_mul(3);
             if batch.coefficients.len() as u64 != expected {
                 return Err(SceneError::Inconsistent {
                     batch: i,
                     what: format!(
-                        "{} coefficients for {} vertices of order {order} (expected {expected})",
+                        "{} coefficients for {} vertices of {:?} (expected {expected})",
                         batch.coefficients.len(),
-                        batch.vertices.len()
+                        batch.vertices.len(),
+                        batch.representation
                     ),
                 });
             }
@@ -177,10 +222,10 @@ impl GpuScene {
                     ),
                 });
             }
-            order_of.push((order, i));
+            order_of.push((kind, order, i));
         }
-        // Diffuse first, then by order: one pipeline switch, and draws of one
-        // loop bound together.
+        // Diffuse first, then SH by order, then cubes by resolution: one switch
+        // per pipeline, and draws of one loop bound together.
         order_of.sort();
 
         let mut vertex_data = Vec::new();
@@ -190,7 +235,7 @@ impl GpuScene {
         let mut bound = 0.0f64;
         let mut vertex_base = 0u64;
         let mut first_index = 0u64;
-        for &(file_order, i) in &order_of {
+        for &(kind, file_order, i) in &order_of {
             let batch = &solution.batches[i];
             let order = max_order.map_or(file_order, |m| m.min(file_order));
             bound = bound.max(radiance_bound(batch, order));
@@ -248,6 +293,7 @@ impl GpuScene {
             if !batch.indices.is_empty() {
                 draws.push(DrawBatch {
                     source: i,
+                    kind,
                     file_order,
                     order,
                     first_index: u32::try_from(first_index).map_err(|_| too_big("index count"))?,

@@ -19,7 +19,9 @@ pub struct Truncation {
     pub relative_l2: f64,
 }
 
-/// The relative L2 error of evaluating `batch` only up to `cap`.
+/// The relative L2 error of evaluating `batch` only up to `cap`. `None` for a
+/// global-cube batch: the cap does not apply to it (its lookup reads four cells
+/// whatever D is, and the renderer draws it in full).
 pub fn truncation_error(index: usize, batch: &Batch, cap: u32) -> Option<Truncation> {
     let Representation::Sh { order } = batch.representation else {
         return None;
@@ -96,6 +98,19 @@ mod tests {
         assert_eq!(truncation_error(0, &b, 7).unwrap().kept_order, 1);
         assert_eq!(truncation_report(std::slice::from_ref(&b), 0).len(), 1);
         assert!(truncation_report(&[b], 1).is_empty());
+    }
+
+    #[test]
+    fn cube_batches_are_left_alone_by_the_cap() {
+        let cube = Batch {
+            representation: Representation::Cube { directions: 24 },
+            scalar: ScalarType::F32,
+            vertices: vec![Vertex::default()],
+            coefficients: vec![1.0; 24 * 3],
+            indices: vec![],
+        };
+        assert_eq!(truncation_error(0, &cube, 0), None);
+        assert!(truncation_report(&[cube], 0).is_empty());
     }
 
     #[test]

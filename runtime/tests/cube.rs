@@ -1,0 +1,249 @@
+//! 001's global-cube batches on the GPU (`shaders/scene_cube.vert`) against the
+//! CPU reference rasterizer (`solver::raster`, which looks cubes up with
+//! `solver::cube::eval_rgb`), and the view dependence of a glossy cube floor.
+
+mod common;
+
+use glam::{DVec2, DVec3};
+use runtime::gpu::Gpu;
+use runtime::render::{
+    CoefficientStorage, DrawKind, EyeImage, MultiviewMode, RendererDesc, StereoRenderer,
+};
+use runtime::session::OffscreenSwapchain;
+use solver::camera::EyeView;
+use solver::format::{Batch, Representation, ScalarType, Solution, SolveMode};
+use solver::raster;
+
+/// Cells along a cube face edge: D = 6·12² = 864 directions per vertex. A cell
+/// spans about 9° at the face centre, half the lobe's 19° half-width at half
+/// maximum (cos^12), so the highlight is resolved by a few cells.
+const RESOLUTION: u32 = 12;
+/// The floor's subdivisions: (24 + 1)² = 625 vertices.
+const FLOOR_SUBDIVISIONS: usize = 24;
+
+/// The test room of `common` with its floor as a global-cube batch: each vertex
+/// holds, in every cell direction ω (local frame), 0.3 × the room's diffuse
+/// radiance plus a lobe 2·max(0, ω·r)^12 about the mirror direction r of
+/// `common::LIGHT` — the same floor as `common::glossy_room`, but sampled on the
+/// cube's directions instead of expanded in SH. The walls stay one L = 0 batch.
+fn cube_room(n: usize, resolution: u32) -> Solution {
+    let quads = common::room_quads(n);
+    let (vertices, indices) = quads[0].vertices_and_indices();
+    let directions = 6 * resolution * resolution;
+    let cells: Vec<DVec3> = (0..directions)
+        .map(|d| solver::cube::cell_direction(resolution, d))
+        .collect();
+    let mut coefficients = Vec::with_capacity(vertices.len() * cells.len() * 3);
+    for v in &vertices {
+        let pos = DVec3::from(v.position.map(f64::from));
+        let to_light = (common::LIGHT - pos).normalize();
+        // The floor's frame: n = +y, t = +x (common::Quad), so b = n × t = −z.
+        let (nrm, tan) = (DVec3::Y, DVec3::X);
+        let r = 2.0 * to_light.dot(nrm) * nrm - to_light;
+        let local_r = solver::sh::to_local(r, nrm, tan);
+        let base = common::diffuse_radiance(pos);
+        for cell in &cells {
+            let lobe = 2.0 * cell.dot(local_r).max(0.0).powi(12);
+            for b in base {
+                coefficients.push((0.3 * b + lobe) as f32);
+            }
+        }
+    }
+    let floor = Batch {
+        representation: Representation::Cube { directions },
+        scalar: ScalarType::F32,
+        vertices,
+        coefficients,
+        indices,
+    };
+    // The walls: the diffuse room without its floor (the first quad).
+    let mut walls = common::diffuse_room(n);
+    let floor_vertices = (n + 1) * (n + 1);
+    let w = &mut walls.batches[0];
+    w.vertices.drain(..floor_vertices);
+    w.coefficients.drain(..floor_vertices * 3);
+    w.indices.drain(..6 * n * n);
+    for i in &mut w.indices {
+        *i -= floor_vertices as u32;
+    }
+    let mut solution = walls;
+    solution.header.mode = SolveMode::Directional;
+    // The cube batch first in the file: the renderer reorders draws (L = 0
+    // pipeline, then cubes), which must not change the picture.
+    solution.batches.insert(0, floor);
+    solution
+}
+
+fn render(
+    gpu: &Gpu,
+    solution: &Solution,
+    views: &[EyeView],
+    storage: CoefficientStorage,
+    max_order: Option<u32>,
+) -> Vec<EyeImage> {
+    let (w, h) = (views[0].width, views[0].height);
+    let swapchain = OffscreenSwapchain::new(gpu, w, h, 1).unwrap();
+    let desc = RendererDesc {
+        width: w,
+        height: h,
+        max_samples: 1,
+        multiview: MultiviewMode::Auto,
+        storage,
+        max_order,
+        ..RendererDesc::default()
+    };
+    let mut renderer = StereoRenderer::new(gpu, solution, desc, &swapchain.desc()).unwrap();
+    let draws = &renderer.scene().draws;
+    assert_eq!(draws.len(), 2);
+    assert_eq!(
+        draws[0].kind,
+        DrawKind::Sh,
+        "the L = 0 walls are drawn first"
+    );
+    assert_eq!(
+        draws[1].kind,
+        DrawKind::Cube {
+            resolution: RESOLUTION
+        }
+    );
+    renderer.render(views, 0).unwrap();
+    renderer.read_back(gpu, 0, views.len()).unwrap()
+}
+
+fn as_raster(eye: &EyeImage) -> raster::Image {
+    let mut image = raster::Image::new(eye.width, eye.height);
+    for (px, rgb) in image.pixels.iter_mut().zip(eye.radiance.chunks_exact(3)) {
+        *px = [rgb[0], rgb[1], rgb[2]];
+    }
+    image
+}
+
+// Tolerances: those of the SH reference test (runtime/tests/reference.rs),
+// relative to the reference image's mean radiance as `raster::compare` reports
+// them: mean 2e-3, p99 5e-3, at most 1% of pixels above
+// raster::DEFAULT_DIFF_THRESHOLD. What sets them here:
+// * the half-float colour target: 2⁻¹¹ ≈ 4.9e-4 of the radiance bound (the
+//   largest cube value, 2.2 here, against a mean near 0.5: ≈ 2e-3 of the mean
+//   at the very brightest pixels, far less elsewhere);
+// * the lookup in f32: the cell coordinate is rounded by a few ulps of k, and
+//   the weights move by as much, so the radiance by ~1e-6 relative; the face is
+//   chosen alike in f32 and f64 except within rounding of a face edge;
+// * f16 coefficients: each value rounded to 2⁻¹¹ relative, blended with
+//   convex weights, so at most 4.9e-4 of the local radiance;
+// * coverage at the silhouette above the walls, as in the SH test.
+const MEAN_TOL: f64 = 2e-3;
+const P99_TOL: f64 = 5e-3;
+const FRACTION_TOL: f64 = 0.01;
+
+#[test]
+fn cube_room_matches_cpu_reference_in_both_eyes_with_f32_and_f16_values() {
+    let solution = cube_room(FLOOR_SUBDIVISIONS, RESOLUTION);
+    let gpu = common::gpu();
+    let camera = common::room_camera(96, 80);
+    let views = camera.stereo_views(0.3, DVec3::ZERO);
+    for storage in [CoefficientStorage::F32, CoefficientStorage::F16] {
+        let eyes = render(&gpu, &solution, &views, storage, None);
+        for (eye, (view, label)) in eyes.iter().zip(views.iter().zip(["left", "right"])) {
+            let expected =
+                raster::render(&solution, view, &raster::RenderOptions::default()).unwrap();
+            let actual = as_raster(eye);
+            let diff = raster::compare(&expected, &actual).unwrap();
+            if !(diff.mean_abs <= MEAN_TOL
+                && diff.p99_abs <= P99_TOL
+                && diff.differing_fraction <= FRACTION_TOL)
+            {
+                let flat = |img: &raster::Image| {
+                    img.pixels.iter().flatten().copied().collect::<Vec<f32>>()
+                };
+                let dir = common::write_failure_images(
+                    &format!("cube-{storage:?}-{label}"),
+                    eye.width,
+                    eye.height,
+                    &flat(&actual),
+                    &flat(&expected),
+                );
+                panic!(
+                    "cube {storage:?} {label} eye differs from the CPU reference: {diff:?} \
+                     (tolerances: mean {MEAN_TOL}, p99 {P99_TOL}, differing fraction \
+                     {FRACTION_TOL}); images in {}",
+                    dir.display()
+                );
+            }
+            eprintln!("cube {storage:?} {label}: {diff:?}");
+        }
+    }
+    common::assert_validation_clean(&gpu);
+}
+
+#[test]
+fn an_order_cap_leaves_cube_batches_alone() {
+    // `--max-order 0` drops SH bands; a cube lookup has no bands and must draw
+    // the same image, pixel for pixel (same shaders, same inputs).
+    let solution = cube_room(8, RESOLUTION);
+    let gpu = common::gpu();
+    let views = common::room_camera(48, 40).stereo_views(0.3, DVec3::ZERO);
+    let plain = render(&gpu, &solution, &views, CoefficientStorage::F32, None);
+    let capped = render(&gpu, &solution, &views, CoefficientStorage::F32, Some(0));
+    for (a, b) in plain.iter().zip(&capped) {
+        assert_eq!(a.radiance, b.radiance);
+    }
+    common::assert_validation_clean(&gpu);
+}
+
+/// Centroid (framebuffer coordinates) of pixels whose red channel exceeds
+/// `threshold`.
+fn centroid(eye: &EyeImage, threshold: f32) -> DVec2 {
+    let mut sum = DVec2::ZERO;
+    let mut count = 0.0;
+    for j in 0..eye.height {
+        for i in 0..eye.width {
+            let r = eye.radiance[((j * eye.width + i) * 3) as usize];
+            if r > threshold {
+                sum += DVec2::new(i as f64 + 0.5, j as f64 + 0.5);
+                count += 1.0;
+            }
+        }
+    }
+    assert!(count > 0.0, "no pixel above {threshold}");
+    sum / count
+}
+
+#[test]
+fn cube_highlight_moves_on_the_floor_between_the_eyes() {
+    // As for the SH floor (reference.rs): the highlight is the mirror image of
+    // common::LIGHT, so moving an eye at height h_e sideways by Δ moves the
+    // mirror point on the floor by Δ·h_l/(h_e + h_l). A view-independent floor
+    // would not move it at all.
+    let solution = cube_room(FLOOR_SUBDIVISIONS, RESOLUTION);
+    let camera = common::room_camera(128, 128);
+    let ipd = 0.6;
+    let views = camera.stereo_views(ipd, DVec3::ZERO);
+    let gpu = common::gpu();
+    let eyes = render(&gpu, &solution, &views, CoefficientStorage::F32, None);
+    let mut floor_points = Vec::new();
+    for (eye, view) in eyes.iter().zip(&views) {
+        let max = eye
+            .radiance
+            .chunks_exact(3)
+            .map(|p| p[0])
+            .fold(0.0f32, f32::max);
+        let c = centroid(eye, 0.7 * max);
+        let ray = view.pixel_ray(c);
+        let t = -view.position.y / ray.y;
+        assert!(t > 0.0, "highlight is not on the floor");
+        floor_points.push(view.position + ray * t);
+    }
+    let right_dir = views[1].position - views[0].position;
+    let shift = (floor_points[1] - floor_points[0]).dot(right_dir.normalize());
+    let (h_e, h_l) = (camera.eye[1], common::LIGHT.y);
+    let expected = ipd * h_l / (h_e + h_l);
+    // 25%, as for SH: the highlight is a thresholded blob of a Gouraud-shaded
+    // lobe on a 1/3-unit mesh, looked up between cells about 9° apart, on a
+    // diffuse gradient; its centroid follows the mirror point only
+    // approximately. A view-independent floor gives 0.
+    assert!(
+        (shift - expected).abs() < 0.25 * expected,
+        "highlight moved {shift:.3} along the eye baseline, expected ≈ {expected:.3}"
+    );
+    common::assert_validation_clean(&gpu);
+}
