@@ -172,12 +172,23 @@ impl ReferenceLookup {
     /// Compares every vertex of `test` (radiance toward `eye`, file
     /// coordinates, the same eye as the lookup's) with the reference there.
     pub fn vertex_error(&self, test: &Solution, eye: DVec3) -> anyhow::Result<VertexError> {
+        self.vertex_error_capped(test, eye, u32::MAX)
+    }
+
+    /// [`Self::vertex_error`] with the test's SH expansion cut at `max_order`
+    /// (plain truncation, as `runtime screenshot --max-order` draws it).
+    pub fn vertex_error_capped(
+        &self,
+        test: &Solution,
+        eye: DVec3,
+        max_order: u32,
+    ) -> anyhow::Result<VertexError> {
         let mut reference = Vec::new();
         let mut values = Vec::new();
         let mut unmatched = 0;
         let mut vertices = 0;
         for (index, batch) in test.batches.iter().enumerate() {
-            let radiance = shade_vertices(batch, u32::MAX, eye, true)
+            let radiance = shade_vertices(batch, max_order, eye, true)
                 .map_err(|e| anyhow::anyhow!("test batch {index}: {e}"))?;
             for (vertex, rgb) in batch.vertices.iter().zip(&radiance) {
                 vertices += 1;

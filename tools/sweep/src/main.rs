@@ -217,6 +217,13 @@ fn reference(args: &Args, scene: &SceneSpec, dir: &Path) -> anyhow::Result<Refer
     for camera in &scene.cameras {
         images.push(read_exr(&point_dir.join(format!("{}.exr", camera.name)))?);
     }
+    if images.len() != scene.cameras.len() {
+        bail!(
+            "the {} reference has no images: {:?}",
+            scene.key,
+            result.note
+        );
+    }
     println!(
         "   reference: {} elements, cpu {:.1} s, wall {:.1} s",
         result.elements, result.cpu_seconds, result.wall_seconds
@@ -239,6 +246,9 @@ fn measure(
 ) -> anyhow::Result<PointResult> {
     let point_dir = dir.join(point.id());
     std::fs::create_dir_all(&point_dir)?;
+    if let (Some(order), Some(reference)) = (point.render_max_order, reference) {
+        return truncated(args, scene, dir, &point_dir, point, order, reference);
+    }
     let config = points::scene_config(scene, point)?;
     let key = format!(
         "{config}\n# flags: {:?}\n# cameras: {:?}\n",
@@ -298,7 +308,7 @@ fn measure(
     // Images from the fixed cameras.
     let mut images = Vec::new();
     for camera in &scene.cameras {
-        match screenshot(args, &solution_path, &point_dir, camera) {
+        match screenshot(args, &solution_path, &point_dir, camera, None) {
             Ok(image) => images.push(image),
             Err(e) => {
                 notes.push(format!("no image: {}", first_line(&e)));
@@ -350,6 +360,59 @@ fn measure(
     Ok(result)
 }
 
+/// A `truncation` point: the reference's solution drawn with its SH expansion
+/// cut at `order`. Its cost columns are the reference's (it solves nothing);
+/// its errors are what the cut alone loses.
+fn truncated(
+    args: &Args,
+    scene: &SceneSpec,
+    dir: &Path,
+    point_dir: &Path,
+    point: &Point,
+    order: u32,
+    reference: &Reference,
+) -> anyhow::Result<PointResult> {
+    let solution_path = dir
+        .join(points::reference_point(scene).id())
+        .join("solution.sol");
+    let mut result = reference.result.clone();
+    result.axis = point.axis.clone();
+    result.label = point.label.clone();
+    result.settings = format!("runtime screenshot --max-order {order}");
+    let mut images = Vec::new();
+    for camera in &scene.cameras {
+        images.push(screenshot(
+            args,
+            &solution_path,
+            point_dir,
+            camera,
+            Some(order),
+        )?);
+    }
+    let (r, t): (Vec<f64>, Vec<f64>) = (
+        reference
+            .images
+            .iter()
+            .flat_map(|i| i.values.iter().copied())
+            .collect(),
+        images
+            .iter()
+            .flat_map(|i| i.values.iter().copied())
+            .collect(),
+    );
+    let e = relative_error(&r, &t)?;
+    result.image_error = Some(e.rel_l1);
+    result.image_rmse = Some(e.rel_rmse);
+    let solution = solver::format::read_solution(&solution_path)?;
+    let v = reference
+        .lookup
+        .vertex_error_capped(&solution, reference.eye_file, order)?;
+    result.vertex_error = Some(v.stats.rel_l1);
+    result.vertex_unmatched = Some(v.unmatched as f64 / v.vertices.max(1) as f64);
+    result.note = None;
+    Ok(result)
+}
+
 fn first_line(e: &anyhow::Error) -> String {
     format!("{e:#}")
         .lines()
@@ -364,6 +427,7 @@ fn screenshot(
     solution: &Path,
     dir: &Path,
     camera: &Camera,
+    max_order: Option<u32>,
 ) -> anyhow::Result<RgbImage> {
     let prefix = dir.join(camera.name);
     let v = |a: [f64; 3]| a.map(|x| x.to_string());
@@ -384,6 +448,9 @@ fn screenshot(
         .arg(camera.fov_y_deg.to_string())
         .arg("--size")
         .arg(format!("{}x{}", camera.width, camera.height));
+    if let Some(order) = max_order {
+        command.arg("--max-order").arg(order.to_string());
+    }
     run_measured(&mut command, &dir.join(format!("{}.log", camera.name)))?;
     read_exr(&prefix.with_extension("exr"))
 }

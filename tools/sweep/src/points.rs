@@ -45,6 +45,10 @@ pub struct Point {
     pub overrides: Vec<(String, Value)>,
     /// Extra command-line flags.
     pub flags: Vec<String>,
+    /// Render the reference's own solution with the SH order capped here
+    /// (`runtime screenshot --max-order`): plain truncation at display time, no
+    /// solve of its own.
+    pub render_max_order: Option<u32>,
 }
 
 impl Point {
@@ -178,14 +182,18 @@ pub fn scenes() -> Vec<SceneSpec> {
                 ("max_sh_order", i(64)),
                 ("seed", i(1)),
             ],
+            // Converged enough to rank the points: 16 rays, unshot power 0.5%,
+            // L ≈ 25 on the floor (SH target 1e-3). A finer mesh or a tighter
+            // target costs minutes per solve here (the cost grows with L² per
+            // glossy vertex and shot).
             reference: vec![
                 ("samples", i(16)),
                 ("threshold", f(0.005)),
                 ("patches", i(4)),
-                ("edge_threshold", f(0.3)),
-                ("shadow_threshold", f(0.1)),
-                ("min_element_area", f(5e-5)),
-                ("max_depth", i(6)),
+                ("edge_threshold", f(0.4)),
+                ("shadow_threshold", f(0.15)),
+                ("min_element_area", f(1e-4)),
+                ("max_depth", i(5)),
                 ("sh_error_target", f(1e-3)),
                 ("seed", i(7)),
             ],
@@ -226,6 +234,7 @@ pub fn reference_point(scene: &SceneSpec) -> Point {
             .map(|(k, v)| (k.to_string(), v.clone()))
             .collect(),
         flags: Vec::new(),
+        render_max_order: None,
     }
 }
 
@@ -238,6 +247,7 @@ fn point(axis: &str, label: impl Into<String>, overrides: Vec<(&str, Value)>) ->
             .map(|(k, v)| (k.to_string(), v))
             .collect(),
         flags: Vec::new(),
+        render_max_order: None,
     }
 }
 
@@ -246,8 +256,8 @@ fn with_flags(mut p: Point, flags: &[&str]) -> Point {
     p
 }
 
-/// The flag that sets the global cube's D (helper C1's `--directional cube`),
-/// when the solver has one.
+/// The flag that sets the global cube's D (`--directional cube
+/// --cube-resolution k`, D = 6k²), when the solver has one.
 fn cube_flag(help: &str) -> Option<&'static str> {
     [
         "--cube-directions",
@@ -352,15 +362,33 @@ pub fn points(scene: &SceneSpec, quick: bool, has_cube: bool, help: &str) -> Vec
                 ("L4", (16, 0.2, 0.07, 2e-5, 7, 4, 0.003)),
                 ("L5", (32, 0.2, 0.07, 2e-5, 7, 4, 0.002)),
             ];
-            for (name, l) in ladder {
+            // Combinations suggested by the one-knob axes: tight meshing
+            // thresholds with a *coarse* smallest element (min_area 2e-3 was
+            // the cheapest way down in image error), finer patches, and few
+            // rays (more rays lower the vertex error but hardly the image's).
+            let combos: [(&str, Ladder); 7] = [
+                ("C1", (2, 0.5, 0.2, 2e-3, 10, 4, 0.02)),
+                ("C2", (4, 0.3, 0.1, 2e-3, 10, 4, 0.01)),
+                ("C3", (4, 0.5, 0.2, 2e-3, 10, 8, 0.01)),
+                ("C4", (8, 0.3, 0.1, 2e-3, 10, 8, 0.005)),
+                ("C5", (8, 0.15, 0.05, 5e-4, 10, 8, 0.005)),
+                ("C6", (16, 0.15, 0.05, 1e-4, 10, 8, 0.002)),
+                ("C7", (16, 0.1, 0.03, 1e-4, 10, 12, 0.002)),
+            ];
+            let named = ladder
+                .iter()
+                .map(|&(n, l)| ("ladder", n, l))
+                .chain(combos.iter().map(|&(n, l)| ("combo", n, l)));
+            for (axis, name, l) in named {
                 out.push(Point {
-                    axis: "ladder".into(),
+                    axis: axis.into(),
                     label: format!(
                         "{name}: n={} e={} s={} a={:e} d={} p={} t={}",
                         l.0, l.1, l.2, l.3, l.4, l.5, l.6
                     ),
                     overrides: ladder_overrides(l),
                     flags: Vec::new(),
+                    render_max_order: None,
                 });
             }
         }
@@ -389,6 +417,18 @@ pub fn points(scene: &SceneSpec, quick: bool, has_cube: bool, help: &str) -> Vec
                     vec![("sh_error_target", f(1e-3)), ("max_sh_order", i(l))],
                 ));
             }
+            // The same orders as plain truncation of the reference (windowed at
+            // its own L ≈ 25) when it is displayed: what `runtime --max-order`
+            // costs, against the solver's cap above (lobe windowed at L).
+            for l in [2, 4, 8, 16] {
+                let mut p = point(
+                    "truncation",
+                    format!("reference at --max-order {l}"),
+                    vec![],
+                );
+                p.render_max_order = Some(l);
+                out.push(p);
+            }
             for n in [1, 4, 16] {
                 out.push(point(
                     "samples",
@@ -411,8 +451,14 @@ pub fn points(scene: &SceneSpec, quick: bool, has_cube: bool, help: &str) -> Vec
                 match cube_flag(help) {
                     Some(flag) => {
                         for d in cube_values(flag) {
+                            let label = if flag == "--cube-resolution" {
+                                // 001's global cube: D = 6k² directions.
+                                format!("cube k={d} (D={})", 6 * d * d)
+                            } else {
+                                format!("cube {flag} {d}")
+                            };
                             out.push(with_flags(
-                                point("cube", format!("cube {flag} {d}"), vec![]),
+                                point("cube", label, vec![]),
                                 &["--directional", "cube", flag, &d.to_string()],
                             ));
                         }
@@ -425,8 +471,18 @@ pub fn points(scene: &SceneSpec, quick: bool, has_cube: bool, help: &str) -> Vec
         }
         _ => {}
     }
+    if !quick {
+        // The reference's settings with the points' seed: how far two
+        // converged solutions differ by noise alone, the floor under every
+        // error in the tables.
+        let mut floor = reference_point(scene);
+        floor.axis = "floor".into();
+        floor.label = "reference settings, seed 1".into();
+        floor.overrides.push(("seed".into(), i(1)));
+        out.push(floor);
+    }
     for preset in ["draft", "medium", "final"] {
-        if scene.key == "glossy" && preset != "draft" {
+        if (quick || scene.key == "glossy") && preset != "draft" {
             // medium/final ask for L ≈ 25 and 60+ on the glossy floor: minutes
             // each on this machine, past the sweep's budget.
             continue;
