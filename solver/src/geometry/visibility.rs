@@ -256,8 +256,8 @@ impl Occluder {
                 for k in 0..4 {
                     let ta = (node.lo[a][k] - o[a]) * inv[a];
                     let tb = (node.hi[a][k] - o[a]) * inv[a];
-                    t0[k] = t0[k].max(ta.min(tb));
-                    t1[k] = t1[k].min(ta.max(tb));
+                    t0[k] = fmax(t0[k], fmin(ta, tb));
+                    t1[k] = fmin(t1[k], fmax(ta, tb));
                 }
             }
             for k in 0..4 {
@@ -443,10 +443,15 @@ impl Occluder {
             // Visit the children nearest the origin first: a blocker there ends
             // the rays soonest. Leaves are tested near-to-far now; inner
             // children are pushed far-to-near so the nearest is popped next.
-            let order = sort4(near);
+            // One surviving child (common near the leaves) needs no sorting.
+            let (order, visits) = if hit_mask.count_ones() == 1 {
+                ([hit_mask.trailing_zeros() as usize, 0, 0, 0], 1)
+            } else {
+                (sort4(near), 4)
+            };
             let mut inner = [(0u32, 0u64); 4];
             let mut inner_count = 0;
-            for &k in &order {
+            for &k in &order[..visits] {
                 if hit_mask & (1 << k) == 0 {
                     continue;
                 }
@@ -507,6 +512,29 @@ fn cross(a: [f32; 3], b: [f32; 3]) -> [f32; 3] {
     ]
 }
 
+/// min(a, b) for operands that are never NaN: a single `minps` (the standard
+/// `f32::min` adds NaN handling that costs two more instructions per use in
+/// the slab tests). Every use here compares finite values or ±∞ (inverse
+/// directions are finite, see `Packet::new`), where both give the same result.
+#[inline(always)]
+fn fmin(a: f32, b: f32) -> f32 {
+    if a < b {
+        a
+    } else {
+        b
+    }
+}
+
+/// max(a, b) for operands that are never NaN (see [`fmin`]).
+#[inline(always)]
+fn fmax(a: f32, b: f32) -> f32 {
+    if a > b {
+        a
+    } else {
+        b
+    }
+}
+
 /// Eight f32 lanes; plain arrays whose element-wise loops the compiler turns
 /// into vector instructions.
 type F8 = [f32; LANES];
@@ -514,11 +542,15 @@ type F8 = [f32; LANES];
 /// The bits of lanes where `cond` holds.
 #[inline(always)]
 fn lane_mask(cond: impl Fn(usize) -> bool) -> u64 {
-    let mut m = 0u64;
+    // One byte (0 or 1) per lane, gathered into the low 8 bits by one
+    // multiplication: byte i (bit 8i) times 2^(56 − 7i) lands on bit 56 + i,
+    // and every other product falls on a distinct bit outside 56..64, so
+    // nothing carries into the result.
+    let mut bytes = [0u8; LANES];
     for i in 0..LANES {
-        m |= (cond(i) as u64) << i;
+        bytes[i] = cond(i) as u8;
     }
-    m
+    u64::from_le_bytes(bytes).wrapping_mul(0x0102_0408_1020_4080) >> 56
 }
 
 /// Up to 8·C segments sharing an origin, structure-of-arrays in f32 relative
@@ -587,9 +619,11 @@ impl<const C: usize> Packet<C> {
             t_lo: 1.0,
             t_hi: 0.0,
         };
-        // Everything else lane by lane, so that it vectorises.
-        let mut neg = [[false; LANES]; 3];
-        let mut pos = [[false; LANES]; 3];
+        // Everything else lane by lane, so that it vectorises: per-lane flags
+        // are f32-wide selects, and the packet's sign summary comes from the
+        // inverse directions' range (an inverse is never zero: |d| ≥ 1e-30
+        // below, and infinite segments are not traced), so no per-lane
+        // boolean accumulators are needed.
         let mut inv_lo = [[f32::INFINITY; LANES]; 3];
         let mut inv_hi = [[f32::NEG_INFINITY; LANES]; 3];
         let mut box_lo = [[f32::INFINITY; LANES]; 3];
@@ -602,22 +636,25 @@ impl<const C: usize> Packet<C> {
             for l in 0..LANES {
                 len[l] = (dx[l] * dx[l] + dy[l] * dy[l] + dz[l] * dz[l]).sqrt();
             }
-            let in_packet = (valid >> (c * LANES)) & 0xFF;
+            // Lanes past the targets (padding) have length 0 and stay out.
+            let in_chunk = targets.len().saturating_sub(c * LANES).min(LANES);
             // Too short to be blocked (or not a finite segment): visible, and
-            // never traced. Padding lanes have length 0 and stay out too.
-            let traced = lane_mask(|l| len[l] > 2.0 * eps && len[l] < f32::INFINITY) & in_packet;
+            // never traced.
+            let mut on = [false; LANES];
+            for l in 0..LANES {
+                on[l] = l < in_chunk && len[l] > 2.0 * eps && len[l] < f32::INFINITY;
+            }
+            let traced = lane_mask(|l| on[l]);
             p.alive |= traced << (c * LANES);
             for l in 0..LANES {
-                let on = traced >> l & 1 == 1;
                 let t_eps = eps / len[l];
-                p.t_min[c][l] = if on { t_eps } else { 1.0 };
-                p.t_max[c][l] = if on { 1.0 - t_eps } else { 0.0 };
-                t_lo[l] = t_lo[l].min(p.t_min[c][l]);
-                t_hi[l] = t_hi[l].max(p.t_max[c][l]);
+                p.t_min[c][l] = if on[l] { t_eps } else { 1.0 };
+                p.t_max[c][l] = if on[l] { 1.0 - t_eps } else { 0.0 };
+                t_lo[l] = fmin(t_lo[l], p.t_min[c][l]);
+                t_hi[l] = fmax(t_hi[l], p.t_max[c][l]);
             }
             for a in 0..3 {
                 for l in 0..LANES {
-                    let on = traced >> l & 1 == 1;
                     let d = p.dir[a][c][l];
                     // A zero component would give 0 · ∞ = NaN in the slab
                     // test; a huge finite inverse of the same sign answers
@@ -629,30 +666,30 @@ impl<const C: usize> Packet<C> {
                     };
                     let inv = 1.0 / safe;
                     p.inv[a][c][l] = inv;
-                    neg[a][l] |= on && inv < 0.0;
-                    pos[a][l] |= on && inv >= 0.0;
-                    inv_lo[a][l] = inv_lo[a][l].min(if on { inv } else { f32::INFINITY });
-                    inv_hi[a][l] = inv_hi[a][l].max(if on { inv } else { f32::NEG_INFINITY });
+                    inv_lo[a][l] = fmin(inv_lo[a][l], if on[l] { inv } else { f32::INFINITY });
+                    inv_hi[a][l] = fmax(inv_hi[a][l], if on[l] { inv } else { f32::NEG_INFINITY });
                     let end = o[a] + d;
-                    box_lo[a][l] = box_lo[a][l].min(if on { end } else { f32::INFINITY });
-                    box_hi[a][l] = box_hi[a][l].max(if on { end } else { f32::NEG_INFINITY });
+                    box_lo[a][l] = fmin(box_lo[a][l], if on[l] { end } else { f32::INFINITY });
+                    box_hi[a][l] = fmax(box_hi[a][l], if on[l] { end } else { f32::NEG_INFINITY });
                 }
             }
         }
         for l in 0..LANES {
-            p.t_lo = p.t_lo.min(t_lo[l]);
-            p.t_hi = p.t_hi.max(t_hi[l]);
+            p.t_lo = fmin(p.t_lo, t_lo[l]);
+            p.t_hi = fmax(p.t_hi, t_hi[l]);
         }
         for a in 0..3 {
-            let (mut any_neg, mut any_pos) = (false, false);
             for l in 0..LANES {
-                any_neg |= neg[a][l];
-                any_pos |= pos[a][l];
-                p.inv_lo[a] = p.inv_lo[a].min(inv_lo[a][l]);
-                p.inv_hi[a] = p.inv_hi[a].max(inv_hi[a][l]);
-                p.box_lo[a] = p.box_lo[a].min(box_lo[a][l]);
-                p.box_hi[a] = p.box_hi[a].max(box_hi[a][l]);
+                p.inv_lo[a] = fmin(p.inv_lo[a], inv_lo[a][l]);
+                p.inv_hi[a] = fmax(p.inv_hi[a], inv_hi[a][l]);
+                p.box_lo[a] = fmin(p.box_lo[a], box_lo[a][l]);
+                p.box_hi[a] = fmax(p.box_hi[a], box_hi[a][l]);
             }
+            // Traced rays with a negative / non-negative inverse on this axis
+            // exist exactly when the range reaches below / above zero (with
+            // none traced: neither, so the axis counts as positive).
+            let any_neg = p.inv_lo[a] < 0.0;
+            let any_pos = p.inv_hi[a] >= 0.0;
             p.same_sign[a] = !(any_neg && any_pos);
             p.positive[a] = !any_neg;
         }
@@ -689,8 +726,8 @@ impl<const C: usize> Packet<C> {
                 // Positive directions enter through lo and leave through hi;
                 // negative ones the other way round.
                 let (entry, exit) = if self.positive[a] { (lo, hi) } else { (hi, lo) };
-                near[k] = near[k].max((entry * il).min(entry * ih));
-                far[k] = far[k].min((exit * il).max(exit * ih));
+                near[k] = fmax(near[k], fmin(entry * il, entry * ih));
+                far[k] = fmin(far[k], fmax(exit * il, exit * ih));
             }
         }
         let mut mask = 0;
@@ -729,8 +766,8 @@ impl<const C: usize> Packet<C> {
                 for l in 0..LANES {
                     let ta = lo[a] * inv[l];
                     let tb = hi[a] * inv[l];
-                    t0[l] = t0[l].max(ta.min(tb));
-                    t1[l] = t1[l].min(ta.max(tb));
+                    t0[l] = fmax(t0[l], fmin(ta, tb));
+                    t1[l] = fmin(t1[l], fmax(ta, tb));
                 }
             }
             rays |= (lane_mask(|l| t0[l] <= t1[l]) & live) << (c * LANES);
