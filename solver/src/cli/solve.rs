@@ -104,7 +104,10 @@ pub fn run(args: SolveArgs) -> anyhow::Result<ExitCode> {
         threads,
         interrupted: &interrupted,
     };
+    let cube = settings.mode == crate::format::SolveMode::Directional
+        && settings.directional == crate::settings::DirectionalRepresentation::Cube;
     let outcome = match args.solver {
+        _ if cube => pool.install(|| cube_solve(&args, &scene, &settings, threads))?,
         SolverKind::Progressive => pool.install(|| solve(&args, &scene, &settings, &session))?,
         SolverKind::GaussSeidel => {
             pool.install(|| gauss_seidel(&args, &scene, &settings, threads))?
@@ -306,6 +309,63 @@ fn gauss_seidel(
     };
     // There is no checkpoint to keep or resume: an unconverged result is said
     // above and marked partial in the file, so the session's resume hint is off.
+    Ok(Outcome {
+        converged: true,
+        solution: result.solution,
+        stats,
+        interrupted: false,
+    })
+}
+
+/// `--mode directional --directional cube`: 001's global cubes gathered by
+/// Gauss-Seidel; one call, no checkpoints (nothing to resume).
+fn cube_solve(
+    args: &SolveArgs,
+    scene: &Scene,
+    settings: &SolverSettings,
+    threads: usize,
+) -> anyhow::Result<Outcome> {
+    use crate::solve::cube::{solve_cube, CubeLimits};
+    if args.resume {
+        bail!("--resume: the global-cube solve keeps no checkpoints; run without --resume");
+    }
+    let result = solve_cube(scene, settings, &CubeLimits::default())
+        .map_err(plain)
+        .with_context(|| format!("solving {} on global cubes", args.scene.display()))?;
+    eprintln!(
+        "solver: global cube k = {} (D = {}): {:.1} MiB, transport {:.2} s, {} sweeps {:.2} s, \
+         last change {:.1e}, error bound {:.1e} (power {:.1e}){}",
+        result.k,
+        crate::cube::direction_count(result.k),
+        result.memory_bytes as f64 / (1u64 << 20) as f64,
+        result.form_factor_seconds,
+        result.sweeps,
+        result.solve_seconds,
+        result.change,
+        result.error_bound,
+        result.power_bound,
+        if result.converged {
+            ""
+        } else {
+            " (not converged: sweep budget)"
+        }
+    );
+    let stats = RunStats {
+        elements: result.patches as u64,
+        vertices: result.vertex_count() as u64,
+        shots: result.sweeps as u64,
+        rays: result.rays,
+        seconds: result.form_factor_seconds + result.solve_seconds,
+        rays_per_second: if result.form_factor_seconds > 0.0 {
+            result.rays as f64 / result.form_factor_seconds
+        } else {
+            0.0
+        },
+        threads,
+        unshot_fraction: result.solution.header.stats.unshot_fraction,
+    };
+    // As for Gauss-Seidel: an unconverged result is said above and marked
+    // partial in the file; there is no checkpoint to keep.
     Ok(Outcome {
         converged: true,
         solution: result.solution,

@@ -51,6 +51,7 @@
 //! patches' unshot was gathered from) is not re-gathered.
 
 mod checkpoint;
+pub mod cube;
 pub mod directional;
 pub mod gauss_seidel;
 mod output;

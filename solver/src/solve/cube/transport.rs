@@ -1,0 +1,244 @@
+//! Light transport into one receiving vertex from every source patch: the
+//! form factors and the incoming directions the gather needs, computed once
+//! (the mesh is fixed) before the Gauss–Seidel sweeps.
+//!
+//! For receiver v and source patch s the factor is the progressive solver's
+//! (design notes, "Form factors"; [`Shot::form_factor`]): the exact unoccluded
+//! point-to-polygon factor at v's receiving point times the visible fraction of
+//! `samples` stratified, jittered rays, from the same pooled or clipped sample
+//! sets (shot index = the source's patch index, so the streams depend only on
+//! the seed, the source and the receiver). The `wallace` method uses 000 eq.
+//! 3.1's per-sample terms and `hemicube` is treated as analytic, as the SH
+//! directional mode does: a direction per visible sample is needed.
+//!
+//! A glossy receiver also needs where the light comes from: each visible
+//! sample's share of the factor is splatted onto the receiver's
+//! upper-hemisphere cube cells with the bilinear weights of its direction
+//! (the adjoint of the lookup, renormalized over cells above the horizon), so
+//! the reflection sees the source's extent, not only its centre.
+
+use super::UpperCells;
+use crate::geometry::formfactor::{point_to_polygon, wallace};
+use crate::geometry::polygon::clip_to_halfspace;
+use crate::geometry::sampling::{stratified_points, stream_id, Rng};
+use crate::mesh::Mesh;
+use crate::settings::FormFactorMethod;
+use crate::sh;
+use crate::solve::shoot::{SamplePool, Shot};
+use glam::DVec3;
+
+/// Transport from one source patch into one receiver.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Pair {
+    pub source: u32,
+    /// F(v←s) with visibility.
+    pub factor: f64,
+    /// End of this pair's incoming-cell entries in [`Receiver::entries`]
+    /// (they start where the previous pair's end).
+    pub entries_end: u32,
+    /// Where a glossy source is looked up: the upper cells of the source's
+    /// cube nearest the direction from its centre toward the receiver, with
+    /// bilinear weights summing to 1 (unused for diffuse sources).
+    pub taps: [(u32, f32); 4],
+}
+
+/// Everything one receiving vertex gathers from.
+#[derive(Clone, Debug, Default)]
+pub(super) struct Receiver {
+    pub pairs: Vec<Pair>,
+    /// (upper-cell slot, share of the factor) per pair, glossy receivers only.
+    pub entries: Vec<(u32, f64)>,
+    /// Rays traced for this receiver.
+    pub rays: u64,
+}
+
+/// Per-worker buffers.
+#[derive(Default)]
+pub(super) struct Scratch {
+    points: Vec<DVec3>,
+    clipped: Vec<DVec3>,
+    targets: Vec<DVec3>,
+    flags: Vec<bool>,
+    /// Visible samples: (point on the source, share of the factor).
+    samples: Vec<(DVec3, f64)>,
+    cells: Vec<(u32, f64)>,
+}
+
+/// What receiver v gets from the shot's source: the pair (when the factor is
+/// positive), its incoming entries appended to `entries`, and the rays traced.
+pub(super) struct PairInput<'a> {
+    pub mesh: &'a Mesh,
+    pub shot: &'a Shot<'a>,
+    pub pool: &'a SamplePool,
+    /// The receiver's cube cells (None: a diffuse receiver).
+    pub receiver_cells: Option<&'a UpperCells>,
+    /// The source's cube cells (None: a diffuse source).
+    pub source_cells: Option<&'a UpperCells>,
+}
+
+impl PairInput<'_> {
+    pub fn pair(
+        &self,
+        v: u32,
+        source: u32,
+        scratch: &mut Scratch,
+    ) -> Option<(Pair, Vec<(u32, f64)>, u32)> {
+        let mesh = self.mesh;
+        let shot = self.shot;
+        let surface = mesh.vertices[v as usize].surface;
+        if surface == shot.source_surface {
+            return None;
+        }
+        let (q, rays) = visible_samples(shot, mesh, v, self.pool, scratch);
+        let factor: f64 = scratch.samples.iter().map(|s| s.1).sum();
+        if !(factor > 0.0 && factor.is_finite()) {
+            return None;
+        }
+        let receiving = &mesh.surfaces[surface as usize];
+        let mut entries = Vec::new();
+        if let Some(cells) = self.receiver_cells {
+            scratch.cells.clear();
+            for &(p, share) in &scratch.samples {
+                let Some(dir) = (p - q).try_normalize() else {
+                    continue;
+                };
+                let local = sh::to_local(dir, receiving.normal, receiving.tangent);
+                if let Some(taps) = cells.taps(local) {
+                    for (slot, w) in taps {
+                        if w > 0.0 {
+                            scratch.cells.push((slot, share * w));
+                        }
+                    }
+                }
+            }
+            // Merge per cell in a fixed order.
+            scratch.cells.sort_unstable_by_key(|c| c.0);
+            for &(slot, w) in &scratch.cells {
+                match entries.last_mut() {
+                    Some((last, sum)) if *last == slot => *sum += w,
+                    _ => entries.push((slot, w)),
+                }
+            }
+            if entries.is_empty() {
+                return None;
+            }
+        }
+        let mut taps = [(0u32, 0f32); 4];
+        if let Some(cells) = self.source_cells {
+            let source_surface = &mesh.surfaces[shot.source_surface as usize];
+            let toward = (q - shot.centre).try_normalize().unwrap_or(shot.normal);
+            let local = sh::to_local(toward, source_surface.normal, source_surface.tangent);
+            match cells.taps(local) {
+                Some(t) => {
+                    for (slot, (cell, w)) in taps.iter_mut().zip(t) {
+                        *slot = (cell, w as f32);
+                    }
+                }
+                // The receiver is on the source's horizon: it sees none of it.
+                None => return None,
+            }
+        }
+        Some((
+            Pair {
+                source,
+                factor,
+                entries_end: 0,
+                taps,
+            },
+            entries,
+            rays,
+        ))
+    }
+}
+
+/// The visible samples of `shot`'s source seen from vertex `v`'s receiving
+/// point, with their shares of F(v←s), into `scratch.samples`: the samples,
+/// culls and visibility of [`Shot::form_factor`], so the shares sum to its
+/// factor (test `pair_factors_equal_the_shooters`). Returns the receiving
+/// point and the rays traced.
+fn visible_samples(
+    s: &Shot,
+    mesh: &Mesh,
+    v: u32,
+    pool: &SamplePool,
+    scratch: &mut Scratch,
+) -> (DVec3, u32) {
+    scratch.samples.clear();
+    let (q, n) = s.receiving_point(mesh, v);
+    if s.normal.dot(q - s.centre) < -1e-6 * s.diameter {
+        return (q, 0);
+    }
+    if s.polygon().iter().all(|&c| n.dot(c - q) <= 0.0) {
+        return (q, 0);
+    }
+    let origin = q + n * s.occluder.scene_epsilon();
+    let lift = s.normal * s.occluder.scene_epsilon();
+    match s.method {
+        FormFactorMethod::Analytic | FormFactorMethod::Hemicube => {
+            let unoccluded = point_to_polygon(q, n, s.polygon());
+            if unoccluded.is_nan() || unoccluded <= 0.0 {
+                return (q, 0);
+            }
+            if !s.shadows {
+                // No rays: the whole factor comes from the source's centre.
+                scratch.samples.push((s.centre, unoccluded));
+                return (q, 0);
+            }
+            let floor = -1e-6 * s.occluder.scene_epsilon();
+            if s.polygon().iter().all(|&c| n.dot(c - q) >= floor) {
+                let (points, _) = pool.set_for(s, v);
+                scratch.points.clear();
+                scratch.points.extend_from_slice(points);
+            } else {
+                clip_to_halfspace(s.polygon(), origin, n, &mut scratch.clipped);
+                let part: &[DVec3] = if scratch.clipped.len() >= 3 {
+                    &scratch.clipped
+                } else {
+                    s.polygon()
+                };
+                let mut rng = Rng::new(s.seed, stream_id(s.index, v as u64));
+                stratified_points(part, s.samples, &mut rng, &mut scratch.points);
+            }
+            scratch.targets.clear();
+            scratch
+                .targets
+                .extend(scratch.points.iter().map(|&p| p + lift));
+            s.occluder
+                .visible_each(origin, &scratch.targets, &mut scratch.flags);
+            let share = unoccluded / s.samples as f64;
+            for (p, &f) in scratch.points.iter().zip(&scratch.flags) {
+                if f {
+                    scratch.samples.push((*p, share));
+                }
+            }
+            (q, s.samples)
+        }
+        FormFactorMethod::Wallace => {
+            let (points, _) = pool.set_for(s, v);
+            scratch.points.clear();
+            scratch.points.extend_from_slice(points);
+            let rays = if s.shadows {
+                scratch.targets.clear();
+                scratch
+                    .targets
+                    .extend(scratch.points.iter().map(|&p| p + lift));
+                s.occluder
+                    .visible_each(origin, &scratch.targets, &mut scratch.flags);
+                s.samples
+            } else {
+                scratch.flags.clear();
+                scratch.flags.resize(scratch.points.len(), true);
+                0
+            };
+            // 000 eq. 3.1 term by term: each sample's disc is A/n.
+            let disc = s.area / scratch.points.len().max(1) as f64;
+            for (p, &f) in scratch.points.iter().zip(&scratch.flags) {
+                let term = wallace(q, n, std::slice::from_ref(p), s.normal, disc, &[f]);
+                if term > 0.0 {
+                    scratch.samples.push((*p, term));
+                }
+            }
+            (q, rays)
+        }
+    }
+}
