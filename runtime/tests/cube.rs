@@ -237,6 +237,7 @@ fn cube_highlight_moves_on_the_floor_between_the_eyes() {
     let shift = (floor_points[1] - floor_points[0]).dot(right_dir.normalize());
     let (h_e, h_l) = (camera.eye[1], common::LIGHT.y);
     let expected = ipd * h_l / (h_e + h_l);
+    eprintln!("cube highlight shift {shift:.4}, mirror-point shift {expected:.4}");
     // 25%, as for SH: the highlight is a thresholded blob of a Gouraud-shaded
     // lobe on a 1/3-unit mesh, looked up between cells about 9° apart, on a
     // diffuse gradient; its centroid follows the mirror point only
