@@ -66,15 +66,65 @@ pub fn point_to_polygon(p: DVec3, n: DVec3, polygon: &[DVec3]) -> f64 {
     if polygon.len() < 3 || !n.is_finite() || n.length_squared() == 0.0 {
         return 0.0;
     }
+    match polygon_terms(polygon) {
+        Some((ns, centre)) => factor_with_terms(p, n, polygon, ns, centre),
+        None => 0.0,
+    }
+}
+
+/// A source polygon prepared for many receivers: [`SourcePolygon::form_factor`]
+/// is [`point_to_polygon`] (the same arithmetic, the same bits) without
+/// recomputing the polygon's unit normal and vertex average per receiver.
+#[derive(Clone, Debug)]
+pub struct SourcePolygon {
+    vertices: Vec<DVec3>,
+    /// Unit normal and vertex average; `None` for a degenerate polygon.
+    terms: Option<(DVec3, DVec3)>,
+}
+
+impl SourcePolygon {
+    pub fn new(polygon: &[DVec3]) -> SourcePolygon {
+        SourcePolygon {
+            vertices: polygon.to_vec(),
+            terms: if polygon.len() < 3 {
+                None
+            } else {
+                polygon_terms(polygon)
+            },
+        }
+    }
+
+    /// F from a differential area at `p` with unit normal `n` to this polygon:
+    /// exactly `point_to_polygon(p, n, polygon)`.
+    pub fn form_factor(&self, p: DVec3, n: DVec3) -> f64 {
+        if !n.is_finite() || n.length_squared() == 0.0 {
+            return 0.0;
+        }
+        match self.terms {
+            Some((ns, centre)) => factor_with_terms(p, n, &self.vertices, ns, centre),
+            None => 0.0,
+        }
+    }
+}
+
+/// The source's unit (Newell) normal and vertex average; `None` when its area
+/// is zero or not finite.
+fn polygon_terms(polygon: &[DVec3]) -> Option<(DVec3, DVec3)> {
     let source_normal = newell_normal(polygon);
     let twice_area = source_normal.length();
     if twice_area == 0.0 || !twice_area.is_finite() {
-        return 0.0;
+        return None;
     }
     let ns = source_normal / twice_area;
     // Distances measured from the vertex average, which keeps the plane test
     // robust for slightly non-planar input.
     let centre = polygon.iter().copied().sum::<DVec3>() / polygon.len() as f64;
+    Some((ns, centre))
+}
+
+/// [`point_to_polygon`] once the polygon (≥ 3 vertices, non-degenerate) has
+/// its unit normal `ns` and vertex average `centre`, and `n` is valid.
+fn factor_with_terms(p: DVec3, n: DVec3, polygon: &[DVec3], ns: DVec3, centre: DVec3) -> f64 {
     let height = ns.dot(p - centre);
     let reach = polygon
         .iter()
@@ -775,6 +825,44 @@ mod tests {
         }
         assert!(tested > 5_000, "only {tested} configurations in front");
         assert!(worst <= 1e-14, "worst difference {worst:e}");
+    }
+
+    #[test]
+    fn prepared_source_gives_the_same_bits_as_point_to_polygon() {
+        // Same arithmetic in the same order, so equality is exact: random
+        // quads and receivers, including points behind, on (within the plane
+        // tolerance) and in front of the source's plane, and degenerate input.
+        let mut rng = Rng::new(9, 2);
+        let unit = |rng: &mut Rng| {
+            DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64()) * 2.0 - DVec3::ONE
+        };
+        for i in 0..5_000 {
+            let poly: Vec<DVec3> = (0..3 + i % 4).map(|_| unit(&mut rng) * 3.0).collect();
+            let mut p = unit(&mut rng);
+            if i % 5 == 0 {
+                // On the plane of the first three vertices.
+                let (a, b, c) = (poly[0], poly[1], poly[2]);
+                p = a + (b - a) * rng.next_f64() + (c - a) * rng.next_f64();
+            }
+            let n = unit(&mut rng).normalize();
+            let source = SourcePolygon::new(&poly);
+            let (a, b) = (source.form_factor(p, n), point_to_polygon(p, n, &poly));
+            assert_eq!(a.to_bits(), b.to_bits(), "case {i}: {a} vs {b}");
+        }
+        let line = [DVec3::ZERO, DVec3::X, DVec3::X * 2.0];
+        assert_eq!(
+            SourcePolygon::new(&line).form_factor(DVec3::Z, -DVec3::Z),
+            0.0
+        );
+        let quad = rect_z(0.0, 0.0, 1.0, 1.0, 0.0, 1.0);
+        assert_eq!(
+            SourcePolygon::new(&quad).form_factor(DVec3::Z, DVec3::ZERO),
+            0.0
+        );
+        assert_eq!(
+            SourcePolygon::new(&[]).form_factor(DVec3::Z, -DVec3::Z),
+            0.0
+        );
     }
 
     #[test]

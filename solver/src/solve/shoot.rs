@@ -6,7 +6,7 @@
 //! of `samples` visibility rays from a shared origin, with no allocation per ray
 //! (the sample buffer lives in per-worker [`Scratch`]).
 
-use crate::geometry::formfactor::{point_to_polygon, wallace};
+use crate::geometry::formfactor::{wallace, SourcePolygon};
 use crate::geometry::hemicube::{self, ItemBuffer};
 use crate::geometry::polygon::clip_to_halfspace;
 use crate::geometry::sampling::{stratified_points, stream_id, Rng};
@@ -147,6 +147,9 @@ pub struct Shot<'a> {
     pub source_surface: u32,
     pub polygon: [DVec3; 4],
     pub corner_count: usize,
+    /// The source polygon prepared for the exact form factor (its unit normal
+    /// and vertex average computed once per shot, not per receiver).
+    pub source: SourcePolygon,
     pub normal: DVec3,
     pub centre: DVec3,
     pub area: f64,
@@ -209,6 +212,7 @@ impl<'a> Shot<'a> {
             source_surface: patch.surface,
             polygon: patch.corners,
             corner_count: patch.corner_count as usize,
+            source: SourcePolygon::new(polygon),
             normal: mesh.surfaces[patch.surface as usize].normal,
             centre,
             area: patch.area,
@@ -279,7 +283,7 @@ impl Shot<'_> {
         // Cheap culls before the contour integral: a receiver clearly behind the
         // one-sided source, or one that faces away from every source corner,
         // gets nothing. The margin leaves points near the source's plane to
-        // `point_to_polygon`, which returns the limit from the front there.
+        // the exact factor, which returns the limit from the front there.
         if self.normal.dot(q - self.centre) < -1e-6 * self.diameter {
             return (0.0, 0, 0);
         }
@@ -289,7 +293,7 @@ impl Shot<'_> {
         let origin = q + n * self.occluder.scene_epsilon();
         match self.method {
             FormFactorMethod::Analytic => {
-                let unoccluded = point_to_polygon(q, n, self.polygon());
+                let unoccluded = self.source.form_factor(q, n);
                 if unoccluded.is_nan() || unoccluded <= 0.0 {
                     return (0.0, 0, 0);
                 }
@@ -332,7 +336,7 @@ impl Shot<'_> {
                 (factor, visible, rays)
             }
             FormFactorMethod::Hemicube => {
-                let unoccluded = point_to_polygon(q, n, self.polygon());
+                let unoccluded = self.source.form_factor(q, n);
                 if unoccluded.is_nan() || unoccluded <= 0.0 {
                     return (0.0, 0, 0);
                 }
