@@ -37,7 +37,8 @@
 //!   ([`GlossyLobe::add_lobe_sh`], built with Ks = 1 and scaled per channel,
 //!   since C_R is linear in Ks).
 
-use super::refine::Criteria;
+use super::refine::{Criteria, Field};
+use super::shoot::RecordedShot;
 use super::shoot::{SamplePool, Shot};
 use super::{ShotReport, SolveError, Solver};
 use crate::brdf::normalization::funk_hecke_d;
@@ -46,7 +47,7 @@ use crate::format::{Batch, Representation, ScalarType, Solution, Vertex};
 use crate::geometry::formfactor::{point_to_polygon, wallace};
 use crate::geometry::polygon::clip_to_halfspace;
 use crate::geometry::sampling::{stratified_points, stream_id, Rng};
-use crate::mesh::Mesh;
+use crate::mesh::{Mesh, NewVertex};
 use crate::scene::Scene;
 use crate::settings::{FormFactorMethod, SolverSettings};
 use crate::sh::{self, coefficient_count, Y00};
@@ -86,6 +87,36 @@ pub struct Directional {
     /// `hemisphere[l] = ∫_{upper} Y_l0 cosθ dω = 2π √((2l+1)/4π) D_l`.
     hemisphere: Vec<f64>,
     choice: SourceChoice,
+    /// Per vertex, per coefficient: the part of `radiance` from recorded
+    /// (emitter) shots, which a new vertex receives exactly instead of by
+    /// interpolation (as the diffuse solver's `direct`; see `refine.rs`).
+    direct: Vec<f64>,
+    /// The unshot SH of each of the solver's recorded shots, in order.
+    recorded_unshot: Vec<Vec<f64>>,
+    /// Per surface: the smallest element edge glossy refinement may create
+    /// (see [`min_glossy_edge`]); 0 for L = 0 surfaces.
+    min_edge: Vec<f64>,
+}
+
+/// The smallest element edge refinement may create on a glossy surface of
+/// glossiness α in a scene whose viewing distance scale is `view_distance`
+/// (half the diagonal of the scene's bounds: a walkthrough's eye is inside
+/// the scene, so that is the distance its surfaces are typically seen from).
+///
+/// Rule: `h_min = α · D / 2`. Why: the runtime evaluates each vertex's SH
+/// toward the eye and interpolates between vertices, so what the mesh must
+/// resolve is the radiance toward one eye as it varies across the surface.
+/// Seen from distance D, a step Δx on the surface turns the direction to the
+/// eye by about Δx / D, and the lobe g = exp(−tan²(θ0/2)/α²) falls to 1/e at
+/// θ0 ≈ 2α, so a highlight's 1/e half-width on the surface is at least
+/// w ≈ 2αD (more where the source is far too, since the mirror direction
+/// also turns). Vertices every w/4 = αD/2 interpolate that Gaussian
+/// profile to within h²/8 · max|g''| = (w/4)²/8 · 2/w² = 1/64 ≈ 1.6% of its
+/// peak; finer elements cannot show the eye more (the lobe itself blurs
+/// anything smaller), only cost coefficients, (L+1)² per vertex. The floor
+/// scales with α: a narrow lobe (more bands) may be meshed finer.
+pub fn min_glossy_edge(alpha: f64, view_distance: f64) -> f64 {
+    0.5 * alpha * view_distance
 }
 
 /// The directional part of a [`super::Checkpoint`]: coefficients as f64 bit
@@ -95,6 +126,12 @@ pub struct DirectionalCheckpoint {
     pub surface_order: Vec<u32>,
     pub radiance: Vec<u64>,
     pub patch_unshot: Vec<u64>,
+    /// Per coefficient: the part of `radiance` from recorded shots.
+    #[serde(default)]
+    pub direct: Vec<u64>,
+    /// The unshot SH of each recorded shot.
+    #[serde(default)]
+    pub recorded_unshot: Vec<Vec<u64>>,
 }
 
 /// The warning for a diffuse solve of a scene with glossy materials (design
@@ -206,7 +243,28 @@ impl Directional {
             patch_unshot: Vec::new(),
             hemisphere,
             choice: SourceChoice::default(),
+            direct: Vec::new(),
+            recorded_unshot: Vec::new(),
+            min_edge: Vec::new(),
         };
+        let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
+        for v in &mesh.vertices {
+            lo = lo.min(v.position);
+            hi = hi.max(v.position);
+        }
+        let view_distance = if lo.x <= hi.x {
+            0.5 * (hi - lo).length()
+        } else {
+            0.0
+        };
+        d.min_edge = d
+            .lobes
+            .iter()
+            .map(|l| {
+                l.as_ref()
+                    .map_or(0.0, |l| min_glossy_edge(l.alpha, view_distance))
+            })
+            .collect();
         d.extend_vertices(mesh);
         let mut at = 0;
         for p in &mesh.patches {
@@ -238,6 +296,7 @@ impl Directional {
         }
         self.radiance.resize(at, 0.0);
         self.received.resize(at, 0.0);
+        self.direct.resize(at, 0.0);
     }
 
     /// The SH order of each mesh surface.
@@ -308,6 +367,8 @@ struct Tables {
     surface_order: Vec<u32>,
     ks: Vec<DVec3>,
     lobes: Vec<Option<Arc<GlossyLobe>>>,
+    /// Per surface: the tangent of its SH frame.
+    tangent: Vec<DVec3>,
 }
 
 impl DirShot<'_> {
@@ -556,51 +617,47 @@ impl Solver {
         let unshot: Vec<f64> = d.patch_unshot[range.clone()].to_vec();
         d.patch_unshot[range].fill(0.0);
         let equivalent = std::mem::replace(&mut self.patch_unshot[source as usize], DVec3::ZERO);
-        let patch = &self.mesh.patches[source as usize];
-        let polygon = patch.polygon();
-        let centre = polygon.iter().copied().sum::<DVec3>() / polygon.len() as f64;
-        let diameter = polygon
-            .iter()
-            .flat_map(|a| polygon.iter().map(move |b| (*a - *b).length()))
-            .fold(0.0, f64::max);
-        let source_surface = &self.mesh.surfaces[patch.surface as usize];
-        let shot = Shot {
-            index: self.shots,
-            seed: self.settings.seed,
-            source_surface: patch.surface,
-            polygon: patch.corners,
-            corner_count: patch.corner_count as usize,
-            normal: source_surface.normal,
-            centre,
-            area: patch.area,
-            diameter,
-            unshot: equivalent,
-            samples: self.settings.samples,
-            method: self.settings.form_factors,
-            hemicube_resolution: self.settings.hemicube_resolution,
-            hemicube: Default::default(),
-            shadows: self.settings.shadows,
-            occluder: &self.occluder,
-            kd: &self.kd,
-        };
+        let shot = Shot::for_patch(
+            &self.mesh,
+            source,
+            self.shots,
+            equivalent,
+            &self.settings,
+            &self.occluder,
+            &self.kd,
+        );
+        let source_surface = shot.source_surface as usize;
+        // Shots from emitters are remembered, as in `Solver::step`: vertices
+        // that later splits create receive them exactly (see `refine.rs`).
+        let recorded = self.emission[source_surface] != DVec3::ZERO;
+        if recorded {
+            self.recorded.push(RecordedShot {
+                index: self.shots,
+                patch: source,
+                unshot: equivalent.to_array().map(f64::to_bits),
+            });
+            self.recorded_pools
+                .push(SamplePool::with_sets(&shot, super::shoot::REPLAY_POOL_SETS));
+            d.recorded_unshot.push(unshot.clone());
+        }
         let pool = SamplePool::new(&shot);
-        let source_order = d.surface_order[patch.surface as usize];
-        let source_tangent = source_surface.tangent;
+        let source_order = d.surface_order[source_surface];
         let tables = Tables {
             surface_order: d.surface_order.clone(),
             ks: d.ks.clone(),
             lobes: d.lobes.clone(),
+            tangent: self.mesh.surfaces.iter().map(|s| s.tangent).collect(),
         };
         let mut rays = 0u64;
+        let dir_shot = DirShot {
+            shot: &shot,
+            pool: &pool,
+            unshot: &unshot,
+            source_order,
+            source_tangent: tables.tangent[source_surface],
+            tables: &tables,
+        };
         {
-            let dir_shot = DirShot {
-                shot: &shot,
-                pool: &pool,
-                unshot: &unshot,
-                source_order,
-                source_tangent,
-                tables: &tables,
-            };
             let mesh = &self.mesh;
             let kd = &self.kd;
             let results: Vec<ReceivedSh> = (0..mesh.vertices.len() as u32)
@@ -614,6 +671,9 @@ impl Solver {
                 for (k, c) in r.coefficients.iter().enumerate() {
                     d.radiance[o + k] += c;
                     d.received[o + k] = *c;
+                    if recorded {
+                        d.direct[o + k] += c;
+                    }
                 }
                 self.visible[v] = r.visible;
                 rays += r.rays as u64;
@@ -623,40 +683,68 @@ impl Solver {
                 self.received[v] = DVec3::from_slice(&r.coefficients[..3]) * Y00;
             }
         }
-        let mut splits = 0;
-        let mut dirty = Vec::new();
+        let mut refined = super::refine::Refined::default();
         if self.settings.adaptive {
-            let refined = refine_directional(
-                RefineState {
-                    mesh: &mut self.mesh,
+            // The recorded shots, rebuilt (their unshot SH kept in `d`).
+            let replay_shots: Vec<Shot> = self
+                .recorded
+                .iter()
+                .map(|r| {
+                    Shot::for_patch(
+                        &self.mesh,
+                        r.patch,
+                        r.index,
+                        r.unshot(),
+                        &self.settings,
+                        &self.occluder,
+                        &self.kd,
+                    )
+                })
+                .collect();
+            let recorded_unshot = std::mem::take(&mut d.recorded_unshot);
+            let replay: Vec<DirShot> = replay_shots
+                .iter()
+                .zip(&self.recorded_pools)
+                .zip(&recorded_unshot)
+                .map(|((shot, pool), unshot)| {
+                    let surface = shot.source_surface as usize;
+                    DirShot {
+                        shot,
+                        pool,
+                        unshot,
+                        source_order: tables.surface_order[surface],
+                        source_tangent: tables.tangent[surface],
+                        tables: &tables,
+                    }
+                })
+                .collect();
+            refined = super::refine::refine_field(
+                &mut self.mesh,
+                &mut DirField {
+                    d: &mut *d,
                     radiance: &mut self.radiance,
                     received: &mut self.received,
                     visible: &mut self.visible,
                     direct: &mut self.direct,
                     kd: &self.kd,
-                    // The diffuse step's criteria (see `Solver::step`).
-                    criteria: Criteria {
-                        dark_floor: super::refine::DARK_FLOOR * self.radiance_level,
-                        ambient,
-                        ..Criteria::from_settings(&self.settings)
-                    },
+                    shot: &dir_shot,
+                    replay: &replay,
+                    current_recorded: recorded,
                 },
-                d,
-                &DirShot {
-                    shot: &shot,
-                    pool: &pool,
-                    unshot: &unshot,
-                    source_order,
-                    source_tangent,
-                    tables: &tables,
+                // The diffuse step's criteria (see `Solver::step`).
+                &Criteria {
+                    dark_floor: super::refine::DARK_FLOOR * self.radiance_level,
+                    ambient,
+                    ..Criteria::from_settings(&self.settings)
                 },
             );
-            splits = refined.0;
-            rays += refined.1;
-            dirty = refined.2;
+            drop(replay);
+            d.recorded_unshot = recorded_unshot;
+            rays += refined.rays;
         }
+        let splits = refined.splits;
         self.leaf_count += 3 * splits;
-        self.update_weights(&dirty);
+        self.update_patch_weights(&refined.dirty_patches);
         // Gather (see `Solver::gather`): U_p += Σ_v w_vp ΔL_v / A_p per coefficient.
         for p in 0..self.mesh.patches.len() {
             let range = d.patch_range(&self.mesh, p);
@@ -702,6 +790,12 @@ impl Solver {
             surface_order: d.surface_order.clone(),
             radiance: d.radiance.iter().map(|x| x.to_bits()).collect(),
             patch_unshot: d.patch_unshot.iter().map(|x| x.to_bits()).collect(),
+            direct: d.direct.iter().map(|x| x.to_bits()).collect(),
+            recorded_unshot: d
+                .recorded_unshot
+                .iter()
+                .map(|u| u.iter().map(|x| x.to_bits()).collect())
+                .collect(),
         })
     }
 
@@ -739,12 +833,44 @@ impl Solver {
                         d.patch_unshot.len()
                     ));
                 }
+                if !(s.direct.is_empty() || s.direct.len() == d.radiance.len()) {
+                    return Err(format!(
+                        "it has {} recorded-shot coefficients, this mesh needs {}",
+                        s.direct.len(),
+                        d.radiance.len()
+                    ));
+                }
+                // One unshot SH per recorded shot, of its source surface's order.
+                let recorded_fits = s.recorded_unshot.len() == self.recorded.len()
+                    && s.recorded_unshot.iter().zip(&self.recorded).all(|(u, r)| {
+                        let surface = self.mesh.patches[r.patch as usize].surface as usize;
+                        u.len() == 3 * coefficient_count(d.surface_order[surface])
+                    });
+                if !recorded_fits {
+                    return Err(format!(
+                        "its {} recorded directional shots do not match its {} recorded shots",
+                        s.recorded_unshot.len(),
+                        self.recorded.len()
+                    ));
+                }
                 d.radiance = s.radiance.into_iter().map(f64::from_bits).collect();
                 d.patch_unshot = s.patch_unshot.into_iter().map(f64::from_bits).collect();
+                d.direct = if s.direct.is_empty() {
+                    vec![0.0; d.radiance.len()]
+                } else {
+                    s.direct.into_iter().map(f64::from_bits).collect()
+                };
+                d.recorded_unshot = s
+                    .recorded_unshot
+                    .into_iter()
+                    .map(|u| u.into_iter().map(f64::from_bits).collect())
+                    .collect();
                 if !d
                     .radiance
                     .iter()
                     .chain(&d.patch_unshot)
+                    .chain(&d.direct)
+                    .chain(d.recorded_unshot.iter().flatten())
                     .all(|x| x.is_finite())
                 {
                     return Err("it holds non-finite coefficients".into());
@@ -806,133 +932,155 @@ impl Solver {
     }
 }
 
-/// The solver fields adaptive subdivision reads and extends.
-struct RefineState<'a> {
-    mesh: &'a mut Mesh,
-    radiance: &'a mut Vec<DVec3>,
-    received: &'a mut Vec<DVec3>,
-    visible: &'a mut Vec<u32>,
-    /// The diffuse step's per-vertex emitter-shot radiance: kept sized (zero)
-    /// in directional mode.
-    direct: &'a mut Vec<DVec3>,
-    kd: &'a [DVec3],
-    criteria: Criteria,
+/// Directional mode's [`Field`] for adaptive subdivision: the same driver,
+/// candidates, splits and replay of recorded (emitter) shots as the diffuse
+/// solver (`refine.rs`), on SH coefficients. The diffuse proxies (c₀₀ Y₀₀,
+/// ΔL, visibility) are kept in step, so L = 0 surfaces use the diffuse test
+/// itself ([`Criteria::should_split_at`]) and a scene with Ks = 0 meshes, and
+/// solves, as in diffuse mode. Glossy surfaces use [`should_split_sh`].
+struct DirField<'s, 'a> {
+    d: &'s mut Directional,
+    radiance: &'s mut Vec<DVec3>,
+    received: &'s mut Vec<DVec3>,
+    visible: &'s mut Vec<u32>,
+    /// The diffuse solver's recorded-shot radiance: kept sized (zero) here,
+    /// the directional part is `Directional::direct`.
+    direct: &'s mut Vec<DVec3>,
+    kd: &'s [DVec3],
+    shot: &'s DirShot<'a>,
+    replay: &'s [DirShot<'a>],
+    /// Whether the current shot is the last of `replay`.
+    current_recorded: bool,
 }
 
-/// Adaptive subdivision in directional mode (see [`super::refine`]): an edge
-/// fails when the L2 norm of its ends' coefficient difference (by Parseval,
-/// the L2 difference of their radiance over the sphere) exceeds the threshold
-/// times the larger end's norm, per channel, after the diffuse test's allowance
-/// for sampling noise. Surfaces of order 0 use the diffuse test itself
-/// ([`Criteria::should_split_at`]) on the mean-radiance proxies, so a scene with
-/// Ks = 0 meshes exactly as in diffuse mode. Element size is not yet tied to α
-/// (the glossy test only sees what the vertices' SH resolve). Returns (splits, rays, dirty surfaces).
-fn refine_directional(
-    state: RefineState<'_>,
-    d: &mut Directional,
-    dir_shot: &DirShot<'_>,
-) -> (usize, u64, Vec<u32>) {
-    let RefineState {
-        mesh,
-        radiance,
-        received,
-        visible,
-        direct,
-        kd,
-        criteria,
-    } = state;
-    let mut dirty = vec![false; mesh.surfaces.len()];
-    let (mut splits, mut rays) = (0usize, 0u64);
-    let mut candidates: Vec<u32> = (0..mesh.elements.len() as u32)
-        .filter(|&e| {
-            let el = &mesh.elements[e as usize];
-            el.is_leaf()
-                && el.corners().iter().any(|&c| {
-                    d.received[d.vertex_range(mesh, c as usize)]
-                        .iter()
-                        .any(|&x| x != 0.0)
-                })
-        })
-        .collect();
-    let mut created = Vec::new();
-    loop {
-        let to_split: Vec<u32> = candidates
-            .iter()
+impl Field for DirField<'_, '_> {
+    fn changed(&self, v: u32) -> bool {
+        let o = self.d.vertex_offset[v as usize];
+        let end = self
+            .d
+            .vertex_offset
+            .get(v as usize + 1)
             .copied()
-            .filter(|&e| {
-                let surface = mesh.patches[mesh.elements[e as usize].patch as usize].surface;
-                if d.surface_order[surface as usize] == 0 {
-                    // Diffuse surfaces: exactly the diffuse solver's test.
-                    criteria.should_split_at(mesh, Some(kd), radiance, received, visible, e)
-                } else {
-                    should_split_sh(mesh, d, visible, &criteria, e)
-                }
-            })
-            .collect();
-        if to_split.is_empty() {
-            break;
+            .unwrap_or(self.d.received.len());
+        self.d.received[o..end].iter().any(|&x| x != 0.0)
+    }
+
+    fn should_split(&self, mesh: &Mesh, criteria: &Criteria, e: u32) -> bool {
+        let surface = mesh.patches[mesh.elements[e as usize].patch as usize].surface;
+        if self.d.surface_order[surface as usize] == 0 {
+            // Diffuse surfaces: exactly the diffuse solver's test.
+            criteria.should_split_at(
+                mesh,
+                Some(self.kd),
+                self.radiance,
+                self.received,
+                self.visible,
+                e,
+            )
+        } else {
+            should_split_sh(mesh, self.d, self.visible, criteria, e)
         }
-        created.clear();
-        let mut children = Vec::with_capacity(4 * to_split.len());
-        for &e in &to_split {
-            // Only an impossible mesh size (2^32 vertices) can fail; stop
-            // refining then rather than abort the solve.
-            let Ok(first) = mesh.split(e, &mut created) else {
-                break;
-            };
-            splits += 1;
-            children.extend(first..first + 4);
-            let surface = mesh.patches[mesh.elements[e as usize].patch as usize].surface;
-            dirty[surface as usize] = true;
-        }
+    }
+
+    fn interpolate(&mut self, mesh: &Mesh, created: &[NewVertex]) {
+        let d = &mut *self.d;
         d.extend_vertices(mesh);
-        for nv in &created {
-            // Radiance of earlier shots interpolated from the parents.
+        for nv in created {
+            // As the diffuse field: the parents' radiance less the recorded
+            // shots and this shot's ΔL (both recomputed exactly), averaged.
             let range = d.vertex_range(mesh, nv.id as usize);
             let mut earlier = vec![0.0; range.len()];
             for &p in nv.parents() {
                 let o = d.vertex_offset[p as usize];
                 for (k, e) in earlier.iter_mut().enumerate() {
-                    *e += d.radiance[o + k] - d.received[o + k];
+                    let current = if self.current_recorded {
+                        0.0
+                    } else {
+                        d.received[o + k]
+                    };
+                    *e += d.radiance[o + k] - d.direct[o + k] - current;
                 }
             }
             for (k, e) in earlier.iter().enumerate() {
                 d.radiance[range.start + k] = e / nv.parent_count as f64;
             }
-            radiance.push(DVec3::from_slice(&d.radiance[range.start..range.start + 3]) * Y00);
-            received.push(DVec3::ZERO);
-            visible.push(0);
-            direct.push(DVec3::ZERO);
+            self.radiance
+                .push(DVec3::from_slice(&d.radiance[range.start..range.start + 3]) * Y00);
+            self.received.push(DVec3::ZERO);
+            self.visible.push(0);
+            self.direct.push(DVec3::ZERO);
         }
-        let results: Vec<ReceivedSh> = {
-            let mesh = &*mesh;
-            created
-                .par_iter()
-                .map_init(DirScratch::default, |scratch, nv| {
-                    dir_shot.receive(mesh, kd, nv.id, scratch)
-                })
-                .collect()
-        };
-        for (nv, r) in created.iter().zip(results) {
-            let o = d.vertex_offset[nv.id as usize];
-            for (k, c) in r.coefficients.iter().enumerate() {
-                d.radiance[o + k] += c;
+    }
+
+    fn receive(&mut self, mesh: &Mesh, created: &[NewVertex]) -> u64 {
+        let (kd, shot, replay) = (self.kd, self.shot, self.replay);
+        let current_recorded = self.current_recorded;
+        // Per new vertex: (recorded shots' coefficients, this shot's, its
+        // visibility, rays).
+        let results: Vec<(Vec<f64>, ReceivedSh, u64)> = created
+            .par_iter()
+            .map_init(DirScratch::default, |scratch, nv| {
+                let mut exact: Vec<f64> = Vec::new();
+                let mut rays = 0u64;
+                let mut current = None;
+                for r in replay {
+                    let got = r.receive(mesh, kd, nv.id, scratch);
+                    if exact.is_empty() {
+                        exact = vec![0.0; got.coefficients.len()];
+                    }
+                    for (e, c) in exact.iter_mut().zip(&got.coefficients) {
+                        *e += c;
+                    }
+                    rays += got.rays as u64;
+                    current = Some(got);
+                }
+                if !current_recorded {
+                    let got = shot.receive(mesh, kd, nv.id, scratch);
+                    rays += got.rays as u64;
+                    current = Some(got);
+                }
+                let current = current.unwrap_or(ReceivedSh {
+                    coefficients: Vec::new(),
+                    visible: 0,
+                    rays: 0,
+                });
+                (exact, current, rays)
+            })
+            .collect();
+        let d = &mut *self.d;
+        let mut total = 0;
+        for (nv, (exact, current, rays)) in created.iter().zip(results) {
+            let v = nv.id as usize;
+            let o = d.vertex_offset[v];
+            for (k, e) in exact.iter().enumerate() {
+                d.radiance[o + k] += e;
+                d.direct[o + k] = *e;
+            }
+            for (k, c) in current.coefficients.iter().enumerate() {
+                if !current_recorded {
+                    d.radiance[o + k] += c;
+                }
                 d.received[o + k] = *c;
             }
-            radiance[nv.id as usize] = DVec3::from_slice(&d.radiance[o..o + 3]) * Y00;
-            received[nv.id as usize] = DVec3::from_slice(&r.coefficients[..3]) * Y00;
-            visible[nv.id as usize] = r.visible;
-            rays += r.rays as u64;
+            self.radiance[v] = DVec3::from_slice(&d.radiance[o..o + 3]) * Y00;
+            self.received[v] = if current.coefficients.is_empty() {
+                DVec3::ZERO
+            } else {
+                DVec3::from_slice(&current.coefficients[..3]) * Y00
+            };
+            self.visible[v] = current.visible;
+            total += rays;
         }
-        candidates = children;
+        total
     }
-    let dirty = (0..dirty.len() as u32)
-        .filter(|&s| dirty[s as usize])
-        .collect();
-    (splits, rays, dirty)
 }
 
-/// Whether leaf `e` must split (see [`refine_directional`]).
+/// Whether leaf `e` of a glossy surface must split: an edge fails when the
+/// L2 norm of its ends' coefficient difference (by Parseval, the L2
+/// difference of their radiance over the sphere) exceeds the threshold times
+/// the larger end's norm, per channel, after the diffuse test's allowance for
+/// sampling noise; elements whose children would have an edge shorter than
+/// the surface's [`min_glossy_edge`] do not split.
 fn should_split_sh(
     mesh: &Mesh,
     d: &Directional,
@@ -944,11 +1092,22 @@ fn should_split_sh(
     if !el.is_leaf() || el.depth as u32 >= criteria.max_depth {
         return false;
     }
-    let surface = &mesh.surfaces[mesh.patches[el.patch as usize].surface as usize];
+    let surface_index = mesh.patches[el.patch as usize].surface as usize;
+    let surface = &mesh.surfaces[surface_index];
     if el.area <= criteria.min_element_area * surface.area {
         return false;
     }
     let corners = el.corners();
+    // The α floor: a split halves every edge.
+    let shortest = (0..corners.len())
+        .map(|k| {
+            let (a, b) = (corners[k], corners[(k + 1) % corners.len()]);
+            (mesh.vertices[a as usize].position - mesh.vertices[b as usize].position).length()
+        })
+        .fold(f64::INFINITY, f64::min);
+    if 0.5 * shortest < d.min_edge[surface_index] {
+        return false;
+    }
     let n = corners.len();
     // Per channel Σ_k c_k², the squared L2 norm over the sphere (Parseval).
     let norms = |a: &[f64]| {

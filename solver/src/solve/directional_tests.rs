@@ -108,6 +108,11 @@ fn vertex_at(solver: &Solver, p: DVec3) -> u32 {
         .unwrap() as u32
 }
 
+/// With Ks = 0 everywhere, directional mode gives the diffuse solver's
+/// result, on a fixed mesh and with adaptive meshing on: the refinement is
+/// the same code (`refine::refine_field`, the diffuse split test on L = 0
+/// surfaces, the same replay of emitter shots to new vertices), so the same
+/// elements split in the same order and the vertices agree to rounding.
 #[test]
 fn with_ks_zero_directional_mode_equals_the_diffuse_solver() {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../config/cornell_box.obj");
@@ -118,7 +123,7 @@ fn with_ks_zero_directional_mode_equals_the_diffuse_solver() {
     for m in &mut scene.materials {
         m.ks = DVec3::ZERO;
     }
-    for adaptive in [false] {
+    for adaptive in [false, true] {
         let mut diffuse = SolverSettings::preset(Preset::Draft);
         diffuse.samples = 4;
         diffuse.max_shots = 12;
@@ -136,6 +141,9 @@ fn with_ks_zero_directional_mode_equals_the_diffuse_solver() {
         }
         assert!(b.step().is_none());
         assert_eq!(a.mesh().split_log, b.mesh().split_log);
+        // With adaptive meshing on, the mesh did refine (so the shared
+        // refinement and the replay of emitter shots are exercised).
+        assert_eq!(a.mesh().split_log.is_empty(), !adaptive);
         // 1e-6 relative: the two differ only in rounding (c₀₀ = L √(4π) and
         // back, per-sample sums of F instead of visible/samples · F), ~1e-15.
         let peak = a
@@ -409,8 +417,19 @@ fn source_choice_hemisphere_against_zeroth_term() {
         shots.push(p.shots);
         solvers.push(solver);
     }
-    // Mean radiance of the scene, area-weighted via c₀₀ (L = c₀₀ Y₀₀).
-    let mean = |s: &Solver| s.vertex_radiance().iter().map(|l| l.x).sum::<f64>();
+    // Mean radiance of the scene (L = c₀₀ Y₀₀), area-weighted by the gather
+    // weights (each vertex's share of each patch's area), so that the two
+    // solves' different adaptive meshes compare.
+    let mean = |s: &Solver| {
+        let (mut sum, mut area) = (0.0, 0.0);
+        for p in 0..s.mesh().patches.len() as u32 {
+            for &(v, w) in s.patch_weights(p) {
+                sum += s.vertex_radiance()[v as usize].x * w;
+                area += w;
+            }
+        }
+        sum / area
+    };
     let (a, b) = (mean(&solvers[0]), mean(&solvers[1]));
     assert!(
         (a - b).abs() <= 2.0 * settings.threshold * a.max(b),
@@ -532,4 +551,57 @@ fn glossy_furnace_uniformity_by_normalization() {
         }
         highs.push(hi);
     }
+}
+
+/// Glossy refinement stops at the α floor: on the glossy floor (α = 0.1),
+/// with the area and depth limits below it, the floor refines (the
+/// highlight) but no floor leaf has an edge shorter than `min_glossy_edge`
+/// (α · D / 2, D half the diagonal of the scene's bounds).
+#[test]
+fn glossy_elements_stop_at_the_alpha_floor() {
+    let (scene, mut settings) = glossy_floor();
+    settings.max_shots = 4;
+    settings.adaptive = true;
+    // Depth 5 would allow floor edges of 1.5 m / 2⁵ = 0.047 m, a third of the
+    // floor's h_min (0.14 m), so the α floor is what stops the floor.
+    settings.max_depth = 5;
+    settings.min_element_area = 1e-6;
+    settings.edge_threshold = 0.05;
+    let solver = run(&scene, &settings);
+    let mesh = solver.mesh();
+    let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
+    for v in &mesh.vertices {
+        lo = lo.min(v.position);
+        hi = hi.max(v.position);
+    }
+    let h_min = super::directional::min_glossy_edge(0.1, 0.5 * (hi - lo).length());
+    let orders = solver.directional().unwrap().surface_orders();
+    let mut glossy_splits = 0;
+    let mut shortest_glossy = f64::INFINITY;
+    for el in &mesh.elements {
+        let surface = mesh.patches[el.patch as usize].surface as usize;
+        if orders[surface] == 0 {
+            continue;
+        }
+        if !el.is_leaf() {
+            glossy_splits += 1;
+            continue;
+        }
+        let c = el.corners();
+        for k in 0..c.len() {
+            let (a, b) = (c[k] as usize, c[(k + 1) % c.len()] as usize);
+            let edge = (mesh.vertices[a].position - mesh.vertices[b].position).length();
+            shortest_glossy = shortest_glossy.min(edge);
+        }
+    }
+    println!(
+        "α floor {h_min:.3}: {glossy_splits} glossy splits, shortest glossy edge \
+         {shortest_glossy:.3}"
+    );
+    assert!(glossy_splits > 0);
+    // 1e-9: the edge lengths are differences of f64 positions.
+    assert!(
+        shortest_glossy >= h_min * (1.0 - 1e-9),
+        "{shortest_glossy} < {h_min}"
+    );
 }

@@ -44,7 +44,7 @@
 //! tested again when the shot changed one of its ends.
 
 use super::shoot::{Received, SamplePool, Scratch, Shot};
-use crate::mesh::Mesh;
+use crate::mesh::{Mesh, NewVertex};
 use crate::settings::SolverSettings;
 use glam::DVec3;
 use rayon::prelude::*;
@@ -213,49 +213,50 @@ pub struct Refined {
     pub dirty_patches: Vec<u32>,
 }
 
-/// Refines after `shot`: tests the leaves the shot changed, splits, shoots the
-/// new vertices, and repeats on the children.
-pub fn refine(
-    mesh: &mut Mesh,
-    state: VertexState<'_>,
-    replay: &Replay<'_, '_>,
-    criteria: &Criteria,
-    shot: &Shot,
-    pool: &SamplePool,
-) -> Refined {
-    let VertexState {
-        radiance,
-        received,
-        visible,
-        direct,
-    } = state;
+/// A solve mode's per-vertex state as adaptive subdivision sees it: the
+/// diffuse radiance ([`DiffuseField`]) or directional mode's SH coefficients
+/// (`super::directional`). [`refine_field`] drives either with the same loop,
+/// the same candidates, the same splitting and the same replay of recorded
+/// shots, so the two modes mesh alike wherever their vertices agree.
+pub trait Field: Sync {
+    /// Whether the current shot changed vertex `v` (its leaves are tested).
+    fn changed(&self, v: u32) -> bool;
+    /// Whether leaf `e` must split.
+    fn should_split(&self, mesh: &Mesh, criteria: &Criteria, e: u32) -> bool;
+    /// Appends the state of the vertices `created` (ids following the last
+    /// vertex): the smooth part of their radiance (emission and indirect
+    /// light, less the recorded shots and this shot) averaged from their
+    /// parents, and nothing received yet.
+    fn interpolate(&mut self, mesh: &Mesh, created: &[NewVertex]);
+    /// Shoots every recorded shot and the current one (once, if it is not
+    /// recorded) to the vertices `created` and adds the light; returns the
+    /// rays traced.
+    fn receive(&mut self, mesh: &Mesh, created: &[NewVertex]) -> u64;
+}
+
+/// Refines after a shot: tests the leaves the shot changed, splits, has the
+/// field interpolate and shoot the new vertices, and repeats on the children.
+pub fn refine_field<F: Field>(mesh: &mut Mesh, field: &mut F, criteria: &Criteria) -> Refined {
     let mut dirty = vec![false; mesh.surfaces.len()];
     let mut out = Refined::default();
     let mut candidates: Vec<u32> = {
-        let (mesh, received) = (&*mesh, &*received);
+        let (mesh, field) = (&*mesh, &*field);
         (0..mesh.elements.len() as u32)
             .into_par_iter()
             .filter(|&e| {
                 let el = &mesh.elements[e as usize];
-                el.is_leaf()
-                    && el
-                        .corners()
-                        .iter()
-                        .any(|&c| received[c as usize] != DVec3::ZERO)
+                el.is_leaf() && el.corners().iter().any(|&c| field.changed(c))
             })
             .collect()
     };
     let mut created = Vec::new();
     loop {
         let to_split: Vec<u32> = {
-            let (mesh, radiance, received, visible) = (&*mesh, &*radiance, &*received, &*visible);
-            let kd = shot.kd;
+            let (mesh, field) = (&*mesh, &*field);
             candidates
                 .par_iter()
                 .copied()
-                .filter(|&e| {
-                    criteria.should_split_at(mesh, Some(kd), radiance, received, visible, e)
-                })
+                .filter(|&e| field.should_split(mesh, criteria, e))
                 .collect()
         };
         if to_split.is_empty() {
@@ -281,12 +282,57 @@ pub fn refine(
                 mesh.patches_at(piece, nv.uv, &mut out.dirty_patches);
             }
         }
-        for nv in &created {
+        field.interpolate(mesh, &created);
+        out.rays += field.receive(mesh, &created);
+        candidates = children;
+    }
+    out.dirty_patches.sort_unstable();
+    out.dirty_patches.dedup();
+    out.dirty_surfaces = (0..dirty.len() as u32)
+        .filter(|&s| dirty[s as usize])
+        .collect();
+    out
+}
+
+/// The diffuse solver's [`Field`]: one radiance per vertex.
+pub struct DiffuseField<'s, 'a, 'b> {
+    pub state: VertexState<'s>,
+    pub replay: &'s Replay<'a, 'b>,
+    pub shot: &'s Shot<'s>,
+    pub pool: &'s SamplePool,
+}
+
+impl Field for DiffuseField<'_, '_, '_> {
+    fn changed(&self, v: u32) -> bool {
+        self.state.received[v as usize] != DVec3::ZERO
+    }
+
+    fn should_split(&self, mesh: &Mesh, criteria: &Criteria, e: u32) -> bool {
+        let s = &self.state;
+        criteria.should_split_at(
+            mesh,
+            Some(self.shot.kd),
+            s.radiance,
+            s.received,
+            s.visible,
+            e,
+        )
+    }
+
+    fn interpolate(&mut self, _mesh: &Mesh, created: &[NewVertex]) {
+        let current_recorded = self.replay.current_recorded;
+        let VertexState {
+            radiance,
+            received,
+            visible,
+            direct,
+        } = &mut self.state;
+        for nv in created {
             debug_assert_eq!(nv.id as usize, radiance.len());
             // The smooth part of each parent's radiance, averaged: less the
             // recorded shots and this shot's ΔL, which are recomputed exactly.
             let smooth = |p: usize| {
-                let current = if replay.current_recorded {
+                let current = if current_recorded {
                     DVec3::ZERO
                 } else {
                     received[p]
@@ -304,46 +350,65 @@ pub fn refine(
             visible.push(0);
             direct.push(DVec3::ZERO);
         }
-        let results: Vec<(DVec3, Received, u64)> = {
-            let mesh = &*mesh;
-            created
-                .par_iter()
-                .map_init(Scratch::default, |scratch, nv| {
-                    let mut exact = DVec3::ZERO;
-                    let mut rays = 0u64;
-                    let mut current = Received::default();
-                    for (r, p) in replay.recorded.iter().zip(replay.pools) {
-                        current = r.receive(mesh, nv.id, p, scratch);
-                        exact += current.radiance;
-                        rays += current.rays as u64;
-                    }
-                    if !replay.current_recorded {
-                        current = shot.receive(mesh, nv.id, pool, scratch);
-                        rays += current.rays as u64;
-                    }
-                    (exact, current, rays)
-                })
-                .collect()
-        };
+    }
+
+    fn receive(&mut self, mesh: &Mesh, created: &[NewVertex]) -> u64 {
+        let (replay, shot, pool) = (self.replay, self.shot, self.pool);
+        let results: Vec<(DVec3, Received, u64)> = created
+            .par_iter()
+            .map_init(Scratch::default, |scratch, nv| {
+                let mut exact = DVec3::ZERO;
+                let mut rays = 0u64;
+                let mut current = Received::default();
+                for (r, p) in replay.recorded.iter().zip(replay.pools) {
+                    current = r.receive(mesh, nv.id, p, scratch);
+                    exact += current.radiance;
+                    rays += current.rays as u64;
+                }
+                if !replay.current_recorded {
+                    current = shot.receive(mesh, nv.id, pool, scratch);
+                    rays += current.rays as u64;
+                }
+                (exact, current, rays)
+            })
+            .collect();
+        let s = &mut self.state;
+        let mut total = 0;
         for (nv, (exact, current, rays)) in created.iter().zip(&results) {
             let v = nv.id as usize;
-            radiance[v] += *exact;
+            s.radiance[v] += *exact;
             if !replay.current_recorded {
-                radiance[v] += current.radiance;
+                s.radiance[v] += current.radiance;
             }
-            direct[v] = *exact;
-            received[v] = current.radiance;
-            visible[v] = current.visible;
-            out.rays += rays;
+            s.direct[v] = *exact;
+            s.received[v] = current.radiance;
+            s.visible[v] = current.visible;
+            total += rays;
         }
-        candidates = children;
+        total
     }
-    out.dirty_patches.sort_unstable();
-    out.dirty_patches.dedup();
-    out.dirty_surfaces = (0..dirty.len() as u32)
-        .filter(|&s| dirty[s as usize])
-        .collect();
-    out
+}
+
+/// Refines after `shot` in diffuse mode ([`refine_field`] with a
+/// [`DiffuseField`]).
+pub fn refine(
+    mesh: &mut Mesh,
+    state: VertexState<'_>,
+    replay: &Replay<'_, '_>,
+    criteria: &Criteria,
+    shot: &Shot,
+    pool: &SamplePool,
+) -> Refined {
+    refine_field(
+        mesh,
+        &mut DiffuseField {
+            state,
+            replay,
+            shot,
+            pool,
+        },
+        criteria,
+    )
 }
 
 #[cfg(test)]
