@@ -331,3 +331,46 @@ impl GpuScene {
         })
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use solver::format::ScalarType;
+
+    #[test]
+    fn cube_radiance_bound_is_the_largest_value_and_bounds_every_lookup() {
+        // k = 3, two vertices with values of both signs.
+        let directions = 54u32;
+        let coefficients: Vec<f32> = (0..2 * directions as usize * 3)
+            .map(|i| ((i * 29 % 17) as f32 - 8.0) * 0.25)
+            .collect();
+        let largest = coefficients.iter().fold(0.0f32, |m, c| m.max(c.abs()));
+        let batch = Batch {
+            representation: Representation::Cube { directions },
+            scalar: ScalarType::F32,
+            vertices: vec![Vertex::default(); 2],
+            coefficients,
+            indices: vec![],
+        };
+        let bound = radiance_bound(&batch, 0);
+        assert_eq!(bound, f64::from(largest));
+        // The bilinear weights are convex, so no lookup exceeds it (checked on a
+        // grid of directions over the sphere, every face and edge).
+        let n = batch.representation.coefficients_per_channel() as usize * 3;
+        for values in batch.coefficients.chunks_exact(n) {
+            for a in 0..24 {
+                for b in 0..12 {
+                    let (phi, theta) = (a as f64 * 0.2618, b as f64 * 0.2618 + 0.1);
+                    let dir = glam::DVec3::new(
+                        theta.sin() * phi.cos(),
+                        theta.sin() * phi.sin(),
+                        theta.cos(),
+                    );
+                    for c in solver::cube::eval_rgb(3, values, dir) {
+                        assert!(c.abs() <= bound * (1.0 + 1e-12), "{c} > {bound}");
+                    }
+                }
+            }
+        }
+    }
+}

@@ -49,7 +49,10 @@
 //! (`sh::f32_basis_tolerance`), so its interior pixels differ by that tolerance; a
 //! pixel whose centre lies within about 1/256 pixel of an edge may be covered by the
 //! other triangle (or the background) on the GPU, because f32 transforms move the
-//! snapped vertex by one step. Comparisons should therefore bound the *fraction* of
+//! snapped vertex by one step. A cube lookup in f32 (`cube::bilinear_f32`, what
+//! the shader does) moves the cell coordinate by a few ulps of k, so the radiance
+//! by ~1e-6 relative, except for a direction within rounding of a face edge,
+//! where the two precisions may pick different faces. Comparisons should therefore bound the *fraction* of
 //! differing pixels by the edge pixels, not demand zero.
 
 pub mod compare;
