@@ -7,9 +7,10 @@
 //! barycentrically there, which is exactly what the renderers draw between
 //! vertices (Gouraud). Radiance toward the fixed eye makes the error
 //! view-dependent for glossy (SH) vertices; for diffuse vertices it is just the
-//! vertex radiance.
+//! vertex radiance. Each vertex is weighted by the area it stands for
+//! ([`vertex_areas`]), so the figure is a surface average.
 
-use crate::metrics::{relative_error, ErrorStats, MetricError};
+use crate::metrics::{relative_error_weighted, ErrorStats, MetricError};
 use glam::DVec3;
 use solver::format::Solution;
 use solver::raster::shade_vertices;
@@ -185,12 +186,14 @@ impl ReferenceLookup {
     ) -> anyhow::Result<VertexError> {
         let mut reference = Vec::new();
         let mut values = Vec::new();
+        let mut weights = Vec::new();
         let mut unmatched = 0;
         let mut vertices = 0;
         for (index, batch) in test.batches.iter().enumerate() {
             let radiance = shade_vertices(batch, max_order, eye, true)
                 .map_err(|e| anyhow::anyhow!("test batch {index}: {e}"))?;
-            for (vertex, rgb) in batch.vertices.iter().zip(&radiance) {
+            let area = vertex_areas(batch);
+            for ((vertex, rgb), &a) in batch.vertices.iter().zip(&radiance).zip(&area) {
                 vertices += 1;
                 let p = DVec3::from(vertex.position.map(f64::from));
                 let n = DVec3::from(vertex.normal.map(f64::from));
@@ -198,20 +201,45 @@ impl ReferenceLookup {
                     Some(r) => {
                         reference.extend(r);
                         values.extend(rgb.map(f64::from));
+                        weights.extend([a; 3]);
                     }
                     None => unmatched += 1,
                 }
             }
         }
-        let stats = relative_error(&reference, &values).map_err(|e: MetricError| {
-            anyhow::anyhow!("per-vertex comparison ({vertices} vertices): {e}")
-        })?;
+        let stats = relative_error_weighted(&reference, &values, Some(&weights)).map_err(
+            |e: MetricError| anyhow::anyhow!("per-vertex comparison ({vertices} vertices): {e}"),
+        )?;
         Ok(VertexError {
             stats,
             unmatched,
             vertices,
         })
     }
+}
+
+/// The surface area each vertex stands for: a third of each triangle it is a
+/// corner of. Weighing the per-vertex error by it makes the figure a surface
+/// average, not an average over wherever the adaptive mesher put vertices
+/// (which is densest exactly where the radiance is hardest: penumbrae and
+/// highlights).
+fn vertex_areas(batch: &solver::format::Batch) -> Vec<f64> {
+    let mut area = vec![0.0; batch.vertices.len()];
+    let p = |i: u32| {
+        batch
+            .vertices
+            .get(i as usize)
+            .map(|v| DVec3::from(v.position.map(f64::from)))
+    };
+    for t in batch.indices.chunks_exact(3) {
+        if let (Some(a), Some(b), Some(c)) = (p(t[0]), p(t[1]), p(t[2])) {
+            let third = (b - a).cross(c - a).length() / 6.0;
+            for &i in t {
+                area[i as usize] += third;
+            }
+        }
+    }
+    area
 }
 
 #[cfg(test)]

@@ -93,6 +93,24 @@ pub struct PointResult {
     pub image_rmse: Option<f64>,
     /// What went wrong in a stage that did not stop the point.
     pub note: Option<String>,
+    /// The solution's batches, e.g. `SH 0, 18` or `SH 0, cube 384`.
+    #[serde(default)]
+    pub representation: Option<String>,
+}
+
+/// The distinct representations of a solution's batches, in file order.
+fn representation_text(solution: &solver::format::Solution) -> String {
+    let mut parts: Vec<String> = Vec::new();
+    for batch in &solution.batches {
+        let text = match batch.representation {
+            solver::format::Representation::Sh { order } => format!("L={order}"),
+            solver::format::Representation::Cube { directions } => format!("D={directions}"),
+        };
+        if !parts.contains(&text) {
+            parts.push(text);
+        }
+    }
+    parts.join(", ")
 }
 
 #[derive(Serialize, Deserialize)]
@@ -213,6 +231,8 @@ fn reference(args: &Args, scene: &SceneSpec, dir: &Path) -> anyhow::Result<Refer
     let offset = DVec3::from(solution.header.recentre_offset);
     let eye_file = DVec3::from(scene.vertex_eye) - offset;
     let lookup = ReferenceLookup::new(&solution, eye_file)?;
+    let mut result = result;
+    result.representation = Some(representation_text(&solution));
     let mut images = Vec::new();
     for camera in &scene.cameras {
         images.push(read_exr(&point_dir.join(format!("{}.exr", camera.name)))?);
@@ -303,6 +323,7 @@ fn measure(
         image_error: None,
         image_rmse: None,
         note: None,
+        representation: None,
     };
     let mut notes = Vec::new();
     // Images from the fixed cameras.
@@ -339,7 +360,10 @@ fn measure(
         }
         let vertex = solver::format::read_solution(&solution_path)
             .map_err(anyhow::Error::from)
-            .and_then(|s| reference.lookup.vertex_error(&s, reference.eye_file));
+            .and_then(|s| {
+                result.representation = Some(representation_text(&s));
+                reference.lookup.vertex_error(&s, reference.eye_file)
+            });
         match vertex {
             Ok(v) => {
                 result.vertex_error = Some(v.stats.rel_l1);
@@ -404,6 +428,10 @@ fn truncated(
     result.image_error = Some(e.rel_l1);
     result.image_rmse = Some(e.rel_rmse);
     let solution = solver::format::read_solution(&solution_path)?;
+    result.representation = Some(format!(
+        "{} (drawn to L={order})",
+        representation_text(&solution)
+    ));
     let v = reference
         .lookup
         .vertex_error_capped(&solution, reference.eye_file, order)?;

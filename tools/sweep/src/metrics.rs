@@ -50,6 +50,25 @@ impl std::error::Error for MetricError {}
 /// vertices × channels), in f64. A non-finite test value makes both errors
 /// infinite rather than hiding it.
 pub fn relative_error(reference: &[f64], test: &[f64]) -> Result<ErrorStats, MetricError> {
+    relative_error_weighted(reference, test, None)
+}
+
+/// [`relative_error`] with a weight per value (e.g. the surface area a vertex
+/// stands for): `Σ w|t − r| / Σ w|r|` and `sqrt(Σ w(t − r)² / Σ w) / (Σ w|r| / Σ w)`.
+/// `None` weighs every value 1. Negative or non-finite weights count as 0.
+pub fn relative_error_weighted(
+    reference: &[f64],
+    test: &[f64],
+    weights: Option<&[f64]>,
+) -> Result<ErrorStats, MetricError> {
+    if let Some(w) = weights {
+        if w.len() != reference.len() {
+            return Err(MetricError::Length {
+                reference: reference.len(),
+                test: w.len(),
+            });
+        }
+    }
     if reference.len() != test.len() {
         return Err(MetricError::Length {
             reference: reference.len(),
@@ -59,15 +78,20 @@ pub fn relative_error(reference: &[f64], test: &[f64]) -> Result<ErrorStats, Met
     if reference.is_empty() {
         return Err(MetricError::Empty);
     }
-    let n = reference.len() as f64;
+    let mut n = 0.0;
     let mut sum_ref = 0.0;
     let mut sum_abs = 0.0;
     let mut sum_sq = 0.0;
-    for (&r, &t) in reference.iter().zip(test) {
-        sum_ref += r.abs();
+    for (k, (&r, &t)) in reference.iter().zip(test).enumerate() {
+        let w = weights.map_or(1.0, |w| w[k]);
+        let w = if w.is_finite() && w > 0.0 { w } else { 0.0 };
+        n += w;
+        sum_ref += w * r.abs();
         let d = t - r;
-        sum_abs += d.abs();
-        sum_sq += d * d;
+        if w > 0.0 {
+            sum_abs += w * d.abs();
+            sum_sq += w * d * d;
+        }
     }
     if !(sum_ref > 0.0 && sum_ref.is_finite()) {
         return Err(MetricError::NoScale);
@@ -152,6 +176,21 @@ mod tests {
         let e = relative_error(&r, &t).unwrap();
         assert!((e.rel_l1 - 0.25).abs() < 1e-12);
         assert!((e.rel_rmse - 0.5).abs() < 1e-12);
+    }
+
+    #[test]
+    fn weights_scale_each_value() {
+        // r = 1; t = (1, 3): unweighted rel_l1 = 2/2 = 1; weights (3, 1) give
+        // (3·0 + 1·2) / (3 + 1) = 0.5, and rel_rmse = sqrt(4/4) / 1 = 1. Zero
+        // weight drops a value entirely.
+        let r = [1.0, 1.0];
+        let t = [1.0, 3.0];
+        let e = relative_error_weighted(&r, &t, Some(&[3.0, 1.0])).unwrap();
+        assert!((e.rel_l1 - 0.5).abs() < 1e-12, "{e:?}");
+        assert!((e.rel_rmse - 1.0).abs() < 1e-12, "{e:?}");
+        let e = relative_error_weighted(&r, &t, Some(&[1.0, 0.0])).unwrap();
+        assert_eq!(e.rel_l1, 0.0);
+        assert!(relative_error_weighted(&r, &t, Some(&[1.0])).is_err());
     }
 
     #[test]

@@ -436,6 +436,13 @@ pub fn points(scene: &SceneSpec, quick: bool, has_cube: bool, help: &str) -> Vec
                     vec![("samples", i(n))],
                 ));
             }
+            for n in [1, 2, 4] {
+                out.push(point(
+                    "patches",
+                    format!("patches={n}"),
+                    vec![("patches", i(n))],
+                ));
+            }
             for (edge, shadow) in [(1.0, 0.5), (0.3, 0.1)] {
                 out.push(point(
                     "mesh",

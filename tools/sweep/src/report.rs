@@ -88,10 +88,12 @@ pub fn write(
         md,
         "Columns: **CPU s** and **wall s** of the `solver solve` process; **Mrays** \
          visibility rays traced; **peak MB** its peak resident set (`wait4` ru_maxrss, \
-         this child only); **file KB** the solution file; **vertex err** the relative L1 \
-         error (Σ|L − L_ref| / Σ|L_ref| over vertices and RGB) of each vertex's radiance \
-         toward the scene's fixed eye, the reference interpolated barycentrically at the \
-         vertex on the reference mesh; **image err** / **image RMSE** the relative L1 and \
+         this child only); **file KB** the solution file; **stored as** the solution's \
+         batches (SH order L per batch, or the global cube's D); **vertex err** the \
+         area-weighted relative L1 error (Σ A|L − L_ref| / Σ A|L_ref| over vertices and \
+         RGB, A = a third of the area of the triangles around the vertex) of each vertex's \
+         radiance toward the scene's fixed eye, the reference interpolated \
+         barycentrically at the vertex on the reference mesh; **image err** / **image RMSE** the relative L1 and \
          relative RMSE over every pixel of the fixed cameras' linear EXR screenshots \
          (`runtime screenshot`, lavapipe) against the reference's. **front** marks the \
          Pareto front of (CPU s, image err) over all of the scene's points.\n"
@@ -170,13 +172,13 @@ pub fn write(
             let _ = writeln!(md, "### {} — {axis}\n", scene.key);
             let _ = writeln!(
                 md,
-                "| point | CPU s | wall s | Mrays | elements | peak MB | file KB | vertex err | image err | image RMSE | front |"
+                "| point | CPU s | wall s | Mrays | elements | peak MB | file KB | stored as | vertex err | image err | image RMSE | front |"
             );
-            let _ = writeln!(md, "|---|--:|--:|--:|--:|--:|--:|--:|--:|--:|:-:|");
+            let _ = writeln!(md, "|---|--:|--:|--:|--:|--:|--:|---|--:|--:|--:|:-:|");
             for (k, r) in results.iter().enumerate().filter(|(_, r)| r.axis == axis) {
                 let _ = writeln!(
                     md,
-                    "| {}{} | {:.2} | {:.2} | {} | {} | {} | {} | {} | {} | {} | {} |",
+                    "| {}{} | {:.2} | {:.2} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
                     r.label,
                     r.note
                         .as_deref()
@@ -188,6 +190,7 @@ pub fn write(
                     r.elements,
                     mb(r.peak_rss_bytes),
                     kb(r.file_bytes),
+                    r.representation.as_deref().unwrap_or(""),
                     fmt_err(r.vertex_error),
                     fmt_err(r.image_error),
                     fmt_err(r.image_rmse),
