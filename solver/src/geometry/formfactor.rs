@@ -254,8 +254,9 @@ fn edge_term(a: DVec3, b: DVec3, n: DVec3) -> f64 {
 /// the contour sum's own rounding (~1e-12 absolute, see [`point_to_polygon`]).
 #[inline]
 fn atan2_upper(y: f64, x: f64) -> f64 {
-    /// π in two parts (fdlibm `pi`, `pi_lo`).
-    const PI_HI: f64 = 3.141_592_653_589_793_116e0;
+    /// π in two parts: the nearest double (fdlibm `pi`) and the rest.
+    const PI_HI: f64 = PI;
+    #[allow(clippy::excessive_precision)] // fdlibm's constant as published
     const PI_LO: f64 = 1.224_646_799_147_353_177_2e-16;
     let z = atan_nonneg(y / x.abs());
     if x < 0.0 {
@@ -266,14 +267,16 @@ fn atan2_upper(y: f64, x: f64) -> f64 {
 }
 
 /// atan(x) for x ≥ 0 (or +∞), fdlibm's `s_atan.c`: < 1 ulp.
+// The constants are fdlibm's as published (decimal forms of its hex words).
+#[allow(clippy::excessive_precision)]
 #[inline]
 fn atan_nonneg(x: f64) -> f64 {
     /// atan(0.5), atan(1), atan(1.5), atan(∞) in high and low parts.
     const ATAN_HI: [f64; 4] = [
         4.636_476_090_008_060_935_15e-1,
-        7.853_981_633_974_482_789_99e-1,
+        std::f64::consts::FRAC_PI_4,
         9.827_937_232_473_290_540_82e-1,
-        1.570_796_326_794_896_558_00e0,
+        std::f64::consts::FRAC_PI_2,
     ];
     const ATAN_LO: [f64; 4] = [
         2.269_877_745_296_168_709_24e-17,
