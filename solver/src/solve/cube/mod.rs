@@ -280,6 +280,9 @@ pub struct CubeResult {
     pub receiving_points: Vec<DVec3>,
     /// The offset subtracted from scene coordinates.
     pub offset: DVec3,
+    /// Per mesh vertex: the area it represents (a third of each display
+    /// triangle it is a corner of), for power sums.
+    pub vertex_areas: Vec<f64>,
     pub sweeps: u32,
     pub change: f64,
     pub gamma: f64,
@@ -651,6 +654,7 @@ pub fn solve_cube(
         cells,
         receiving_points,
         offset: solver.offset(),
+        vertex_areas: area,
         sweeps,
         change,
         gamma,
