@@ -25,14 +25,15 @@ float coefficient(uint i) { return coeffs.values[i]; }
 
 // Per-batch data (20 bytes).
 layout(push_constant) uniform Batch {
-    // SH order evaluated for this batch (the file's order, capped by --max-order).
+    // SH batches: the order evaluated (the file's order, capped by --max-order).
+    // Cube batches (scene_cube.vert): the cube resolution k, D = 6k^2.
     uint order;
     // Index of the batch's first vertex in the shared vertex buffer.
     uint vertex_base;
     // Index of the batch's first scalar in the coefficient buffer.
     uint coeff_base;
-    // Scalars per vertex: (file order + 1)^2 * 3 (the stride does not change with
-    // the cap: dropped bands are simply not read).
+    // Scalars per vertex: SH (file order + 1)^2 * 3 (the stride does not change
+    // with the cap: dropped bands are simply not read); cube 3D.
     uint stride;
     // Multiplies every coefficient: the f16 storage scale times the renderer's
     // radiance scale (which keeps half-float colour targets in range).

@@ -1,7 +1,7 @@
 //! `runtime bench`: offscreen stereo frames through the mock session.
 
 use super::{load_solution, open_gpu, parse_size, report_truncation, RenderOptions};
-use crate::render::{RendererDesc, StereoRenderer, ToneSettings};
+use crate::render::{DrawKind, RendererDesc, StereoRenderer, ToneSettings};
 use crate::session::{run_frame, HeadPath, MockDesc, MockSession, Session};
 use anyhow::Result;
 use glam::DVec3;
@@ -51,7 +51,8 @@ pub struct BenchReport {
     /// Vertex SH evaluations (one per vertex per eye, any order) per second at
     /// the median frame time.
     pub sh_evals_per_second: f64,
-    /// Basis-function terms `(L+1)²` summed over vertices and eyes, per second.
+    /// Basis-function terms summed over vertices and eyes, per second: `(L+1)²`
+    /// for an SH vertex, the 4 bilinear taps for a global-cube vertex.
     pub sh_terms_per_second: f64,
     pub device: String,
     pub multiview: String,
@@ -144,7 +145,13 @@ pub fn run(args: &BenchArgs) -> Result<BenchReport> {
     let terms: u64 = scene
         .draws
         .iter()
-        .map(|d| u64::from(d.vertex_count) * 2 * (u64::from(d.order) + 1).pow(2))
+        .map(|d| {
+            let per_vertex = match d.kind {
+                DrawKind::Sh => (u64::from(d.order) + 1).pow(2),
+                DrawKind::Cube { .. } => 4,
+            };
+            u64::from(d.vertex_count) * 2 * per_vertex
+        })
         .sum();
     let per_second = |count: u64| {
         if median_ms > 0.0 {
