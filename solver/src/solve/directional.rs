@@ -35,7 +35,20 @@
 //! * diffuse: c₀₀ += Kd · ΔE_i / π · √(4π);
 //! * glossy: c_lm += ΔE_i · Ks · C_R(μ_i) · a_l · 4π/(2l+1) · Y_lm(r_i)
 //!   ([`GlossyLobe::add_lobe_sh`], built with Ks = 1 and scaled per channel,
-//!   since C_R is linear in Ks).
+//!   since C_R is linear in Ks); C_R is the thesis's or, with the setting
+//!   `brdf_normalization = "reciprocal"`, the reciprocal variant's constant
+//!   ([`crate::brdf::reciprocal_constant`]).
+//!
+//! ## Refinement
+//!
+//! Adaptive subdivision is the diffuse solver's (`refine::refine_field` with
+//! this module's `DirField`): the same candidates, splits, interpolation
+//! of the smooth part and exact replay of every recorded emitter shot to new
+//! vertices, per SH coefficient (the recorded shots' unshot SH are kept, and
+//! checkpointed, beside the diffuse solver's list). L = 0 surfaces use the
+//! diffuse split test on the c₀₀ proxies, so with Ks = 0 the two modes mesh
+//! and solve alike; glossy surfaces split on the Parseval L2 norm of the
+//! coefficient difference across an edge, down to [`min_glossy_edge`].
 
 use super::refine::{Criteria, Field};
 use super::shoot::RecordedShot;
@@ -132,6 +145,9 @@ pub struct DirectionalCheckpoint {
     /// The unshot SH of each recorded shot.
     #[serde(default)]
     pub recorded_unshot: Vec<Vec<u64>>,
+    /// The lobe normalization the coefficients were computed with.
+    #[serde(default)]
+    pub brdf_normalization: crate::settings::BrdfNormalization,
 }
 
 /// The warning for a diffuse solve of a scene with glossy materials (design
@@ -796,6 +812,7 @@ impl Solver {
                 .iter()
                 .map(|u| u.iter().map(|x| x.to_bits()).collect())
                 .collect(),
+            brdf_normalization: self.settings.brdf_normalization,
         })
     }
 
@@ -831,6 +848,12 @@ impl Solver {
                         s.patch_unshot.len(),
                         d.radiance.len(),
                         d.patch_unshot.len()
+                    ));
+                }
+                if s.brdf_normalization != self.settings.brdf_normalization {
+                    return Err(format!(
+                        "it was solved with brdf_normalization {:?}, this solve uses {:?}",
+                        s.brdf_normalization, self.settings.brdf_normalization
                     ));
                 }
                 if !(s.direct.is_empty() || s.direct.len() == d.radiance.len()) {

@@ -389,8 +389,15 @@ fn resumed_directional_solve_equals_an_uninterrupted_one() {
     // A directional checkpoint is refused by a diffuse solve, and vice versa.
     let mut diffuse = settings.clone();
     diffuse.mode = SolveMode::Diffuse;
-    let err = Solver::resume(&scene, &diffuse, state).err().unwrap();
+    let err = Solver::resume(&scene, &diffuse, state.clone())
+        .err()
+        .unwrap();
     assert!(err.to_string().contains("directional"), "{err}");
+    // And one solved with the other lobe normalization.
+    let mut reciprocal = settings.clone();
+    reciprocal.brdf_normalization = BrdfNormalization::Reciprocal;
+    let err = Solver::resume(&scene, &reciprocal, state).err().unwrap();
+    assert!(err.to_string().contains("brdf_normalization"), "{err}");
 }
 
 /// Source choice by hemispherical unshot power (design notes) against 000's
