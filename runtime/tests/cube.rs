@@ -11,7 +11,7 @@ use runtime::render::{
 };
 use runtime::session::OffscreenSwapchain;
 use solver::camera::EyeView;
-use solver::format::{Batch, Representation, ScalarType, Solution, SolveMode};
+use solver::format::Solution;
 use solver::raster;
 
 /// Cells along a cube face edge: D = 6·12² = 864 directions per vertex. A cell
@@ -20,59 +20,6 @@ use solver::raster;
 const RESOLUTION: u32 = 12;
 /// The floor's subdivisions: (24 + 1)² = 625 vertices.
 const FLOOR_SUBDIVISIONS: usize = 24;
-
-/// The test room of `common` with its floor as a global-cube batch: each vertex
-/// holds, in every cell direction ω (local frame), 0.3 × the room's diffuse
-/// radiance plus a lobe 2·max(0, ω·r)^12 about the mirror direction r of
-/// `common::LIGHT` — the same floor as `common::glossy_room`, but sampled on the
-/// cube's directions instead of expanded in SH. The walls stay one L = 0 batch.
-fn cube_room(n: usize, resolution: u32) -> Solution {
-    let quads = common::room_quads(n);
-    let (vertices, indices) = quads[0].vertices_and_indices();
-    let directions = 6 * resolution * resolution;
-    let cells: Vec<DVec3> = (0..directions)
-        .map(|d| solver::cube::cell_direction(resolution, d))
-        .collect();
-    let mut coefficients = Vec::with_capacity(vertices.len() * cells.len() * 3);
-    for v in &vertices {
-        let pos = DVec3::from(v.position.map(f64::from));
-        let to_light = (common::LIGHT - pos).normalize();
-        // The floor's frame: n = +y, t = +x (common::Quad), so b = n × t = −z.
-        let (nrm, tan) = (DVec3::Y, DVec3::X);
-        let r = 2.0 * to_light.dot(nrm) * nrm - to_light;
-        let local_r = solver::sh::to_local(r, nrm, tan);
-        let base = common::diffuse_radiance(pos);
-        for cell in &cells {
-            let lobe = 2.0 * cell.dot(local_r).max(0.0).powi(12);
-            for b in base {
-                coefficients.push((0.3 * b + lobe) as f32);
-            }
-        }
-    }
-    let floor = Batch {
-        representation: Representation::Cube { directions },
-        scalar: ScalarType::F32,
-        vertices,
-        coefficients,
-        indices,
-    };
-    // The walls: the diffuse room without its floor (the first quad).
-    let mut walls = common::diffuse_room(n);
-    let floor_vertices = (n + 1) * (n + 1);
-    let w = &mut walls.batches[0];
-    w.vertices.drain(..floor_vertices);
-    w.coefficients.drain(..floor_vertices * 3);
-    w.indices.drain(..6 * n * n);
-    for i in &mut w.indices {
-        *i -= floor_vertices as u32;
-    }
-    let mut solution = walls;
-    solution.header.mode = SolveMode::Directional;
-    // The cube batch first in the file: the renderer reorders draws (L = 0
-    // pipeline, then cubes), which must not change the picture.
-    solution.batches.insert(0, floor);
-    solution
-}
 
 fn render(
     gpu: &Gpu,
@@ -137,7 +84,7 @@ const FRACTION_TOL: f64 = 0.01;
 
 #[test]
 fn cube_room_matches_cpu_reference_in_both_eyes_with_f32_and_f16_values() {
-    let solution = cube_room(FLOOR_SUBDIVISIONS, RESOLUTION);
+    let solution = common::cube_room(FLOOR_SUBDIVISIONS, RESOLUTION);
     let gpu = common::gpu();
     let camera = common::room_camera(96, 80);
     let views = camera.stereo_views(0.3, DVec3::ZERO);
@@ -179,7 +126,7 @@ fn cube_room_matches_cpu_reference_in_both_eyes_with_f32_and_f16_values() {
 fn an_order_cap_leaves_cube_batches_alone() {
     // `--max-order 0` drops SH bands; a cube lookup has no bands and must draw
     // the same image, pixel for pixel (same shaders, same inputs).
-    let solution = cube_room(8, RESOLUTION);
+    let solution = common::cube_room(8, RESOLUTION);
     let gpu = common::gpu();
     let views = common::room_camera(48, 40).stereo_views(0.3, DVec3::ZERO);
     let plain = render(&gpu, &solution, &views, CoefficientStorage::F32, None);
@@ -214,7 +161,7 @@ fn cube_highlight_moves_on_the_floor_between_the_eyes() {
     // common::LIGHT, so moving an eye at height h_e sideways by Δ moves the
     // mirror point on the floor by Δ·h_l/(h_e + h_l). A view-independent floor
     // would not move it at all.
-    let solution = cube_room(FLOOR_SUBDIVISIONS, RESOLUTION);
+    let solution = common::cube_room(FLOOR_SUBDIVISIONS, RESOLUTION);
     let camera = common::room_camera(128, 128);
     let ipd = 0.6;
     let views = camera.stereo_views(ipd, DVec3::ZERO);

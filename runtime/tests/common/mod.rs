@@ -276,6 +276,59 @@ pub fn glossy_room(n: usize, order: u32) -> Solution {
 
 /// Writes actual/expected/difference images into a temp folder and returns its
 /// path (for failure messages).
+/// The test room of `common` with its floor as a global-cube batch: each vertex
+/// holds, in every cell direction ω (local frame), 0.3 × the room's diffuse
+/// radiance plus a lobe 2·max(0, ω·r)^12 about the mirror direction r of
+/// `LIGHT` — the same floor as `glossy_room`, but sampled on the
+/// cube's directions instead of expanded in SH. The walls stay one L = 0 batch.
+pub fn cube_room(n: usize, resolution: u32) -> Solution {
+    let quads = room_quads(n);
+    let (vertices, indices) = quads[0].vertices_and_indices();
+    let directions = 6 * resolution * resolution;
+    let cells: Vec<DVec3> = (0..directions)
+        .map(|d| solver::cube::cell_direction(resolution, d))
+        .collect();
+    let mut coefficients = Vec::with_capacity(vertices.len() * cells.len() * 3);
+    for v in &vertices {
+        let pos = DVec3::from(v.position.map(f64::from));
+        let to_light = (LIGHT - pos).normalize();
+        // The floor's frame: n = +y, t = +x (Quad), so b = n × t = −z.
+        let (nrm, tan) = (DVec3::Y, DVec3::X);
+        let r = 2.0 * to_light.dot(nrm) * nrm - to_light;
+        let local_r = solver::sh::to_local(r, nrm, tan);
+        let base = diffuse_radiance(pos);
+        for cell in &cells {
+            let lobe = 2.0 * cell.dot(local_r).max(0.0).powi(12);
+            for b in base {
+                coefficients.push((0.3 * b + lobe) as f32);
+            }
+        }
+    }
+    let floor = Batch {
+        representation: Representation::Cube { directions },
+        scalar: ScalarType::F32,
+        vertices,
+        coefficients,
+        indices,
+    };
+    // The walls: the diffuse room without its floor (the first quad).
+    let mut walls = diffuse_room(n);
+    let floor_vertices = (n + 1) * (n + 1);
+    let w = &mut walls.batches[0];
+    w.vertices.drain(..floor_vertices);
+    w.coefficients.drain(..floor_vertices * 3);
+    w.indices.drain(..6 * n * n);
+    for i in &mut w.indices {
+        *i -= floor_vertices as u32;
+    }
+    let mut solution = walls;
+    solution.header.mode = SolveMode::Directional;
+    // The cube batch first in the file: the renderer reorders draws (L = 0
+    // pipeline, then cubes), which must not change the picture.
+    solution.batches.insert(0, floor);
+    solution
+}
+
 pub fn write_failure_images(
     name: &str,
     width: u32,
