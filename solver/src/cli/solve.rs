@@ -334,7 +334,7 @@ fn cube_solve(
         .with_context(|| format!("solving {} on global cubes", args.scene.display()))?;
     eprintln!(
         "solver: global cube k = {} (D = {}): {:.1} MiB, transport {:.2} s, {} sweeps {:.2} s, \
-         last change {:.1e}, error bound {:.1e} (power {:.1e}){}",
+         last change {:.1e}, γ = {:.3}, error bound {:.1e} (power {:.1e}){}",
         result.k,
         crate::cube::direction_count(result.k),
         result.memory_bytes as f64 / (1u64 << 20) as f64,
@@ -342,6 +342,7 @@ fn cube_solve(
         result.sweeps,
         result.solve_seconds,
         result.change,
+        result.gamma,
         result.error_bound,
         result.power_bound,
         if result.converged {

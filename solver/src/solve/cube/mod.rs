@@ -318,6 +318,11 @@ impl CubeResult {
         sum
     }
 
+    /// Whether mesh vertex `v` is stored as a cube (its surface is glossy).
+    pub fn is_glossy(&self, v: u32) -> bool {
+        self.values[v as usize].len() != 3
+    }
+
     /// Vertices in mesh order.
     pub fn vertex_count(&self) -> usize {
         self.values.len()

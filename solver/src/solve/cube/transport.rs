@@ -80,12 +80,7 @@ pub(super) struct PairInput<'a> {
 }
 
 impl PairInput<'_> {
-    pub fn pair(
-        &self,
-        v: u32,
-        source: u32,
-        scratch: &mut Scratch,
-    ) -> Option<PairResult> {
+    pub fn pair(&self, v: u32, source: u32, scratch: &mut Scratch) -> Option<PairResult> {
         let mesh = self.mesh;
         let shot = self.shot;
         let surface = mesh.vertices[v as usize].surface;
