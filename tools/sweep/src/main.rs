@@ -143,6 +143,24 @@ fn main() -> anyhow::Result<()> {
             args.runtime.display()
         );
     }
+    // Other people rebuild target/release while a sweep runs; every point must
+    // use the same programs, so the sweep runs private copies.
+    let mut args = args;
+    let bin = args.work.join("bin");
+    std::fs::create_dir_all(&bin).with_context(|| format!("creating {}", bin.display()))?;
+    let mut built = Vec::new();
+    for (name, path) in [("solver", &mut args.solver), ("runtime", &mut args.runtime)] {
+        let copy = bin.join(name);
+        std::fs::copy(&*path, &copy)
+            .with_context(|| format!("copying {} to {}", path.display(), copy.display()))?;
+        let modified = std::fs::metadata(&*path)
+            .and_then(|m| m.modified())
+            .ok()
+            .and_then(|t| t.duration_since(std::time::UNIX_EPOCH).ok())
+            .map_or(0, |d| d.as_secs());
+        built.push(format!("{name} built at Unix time {modified}"));
+        *path = copy;
+    }
     if std::env::var_os("VK_ICD_FILENAMES").is_none() {
         // lavapipe, as scripts/test.sh picks it, unless the caller chose a device.
         if let Some(icd) = lavapipe_icd() {
@@ -214,6 +232,7 @@ fn main() -> anyhow::Result<()> {
         load_before,
         load_after,
         sweep_seconds: started.elapsed().as_secs_f64(),
+        binaries: format!("{} (git HEAD {})", built.join(", "), git_head()),
         quick: args.quick,
     };
     report::write(&docs, &all, &machine, &notes)?;
@@ -297,7 +316,36 @@ fn measure(
         .arg("--stats-json")
         .arg(&stats_path)
         .args(&point.flags);
-    let measured = run_measured(&mut command, &point_dir.join("solve.log"))?;
+    let measured = match run_measured(&mut command, &point_dir.join("solve.log")) {
+        Ok(m) => m,
+        // A refused point (e.g. a memory bound) is a row that says so, not the
+        // end of the sweep; the reference must solve.
+        Err(e) if reference.is_some() => {
+            let failed = PointResult {
+                scene: scene.key.to_string(),
+                axis: point.axis.clone(),
+                label: point.label.clone(),
+                settings: point.settings_text(),
+                cpu_seconds: f64::NAN,
+                wall_seconds: f64::NAN,
+                peak_rss_bytes: 0,
+                file_bytes: 0,
+                elements: 0,
+                vertices: 0,
+                shots: 0,
+                rays: 0,
+                unshot_fraction: f64::NAN,
+                vertex_error: None,
+                vertex_unmatched: None,
+                image_error: None,
+                image_rmse: None,
+                note: Some(format!("solve failed: {}", last_line(&e))),
+                representation: None,
+            };
+            return Ok(failed);
+        }
+        Err(e) => return Err(e),
+    };
     let stats: StatsJson = serde_json::from_str(
         &std::fs::read_to_string(&stats_path)
             .with_context(|| format!("reading {}", stats_path.display()))?,
@@ -441,6 +489,14 @@ fn truncated(
     Ok(result)
 }
 
+fn last_line(e: &anyhow::Error) -> String {
+    format!("{e:#}")
+        .lines()
+        .last()
+        .unwrap_or_default()
+        .to_string()
+}
+
 fn first_line(e: &anyhow::Error) -> String {
     format!("{e:#}")
         .lines()
@@ -495,6 +551,16 @@ fn lavapipe_icd() -> Option<PathBuf> {
         .collect();
     found.sort();
     found.into_iter().next()
+}
+
+fn git_head() -> String {
+    Command::new("git")
+        .args(["rev-parse", "--short", "HEAD"])
+        .output()
+        .ok()
+        .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
+        .filter(|s| !s.is_empty())
+        .unwrap_or_else(|| "unknown".into())
 }
 
 fn load_average() -> String {
