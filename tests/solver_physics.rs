@@ -41,6 +41,14 @@ fn meshing_refines_along_shadow_boundaries_and_leaves_smooth_light_coarse() {
     let mut settings = SolverSettings::preset(Preset::Medium);
     settings.samples = 16;
     settings.max_shots = 30;
+    // The meshing this test's thresholds were derived from (the medium preset
+    // before docs/tradeoffs.md re-chose it): 4×4 patches per wall, refinement
+    // down to 5e-5 of a polygon in at most 6 levels.
+    settings.patches = 4;
+    settings.edge_threshold = 0.3;
+    settings.shadow_threshold = 0.1;
+    settings.min_element_area = 5e-5;
+    settings.max_depth = 6;
     scene.fill_default_patches(settings.patches);
     let mut solver = Solver::new(&scene, &settings).unwrap();
     while solver.step().is_some() {}

@@ -457,18 +457,36 @@ pub fn points(scene: &SceneSpec, quick: bool, has_cube: bool, help: &str) -> Vec
             if has_cube {
                 match cube_flag(help) {
                     Some(flag) => {
+                        // The cube is gathered on the fixed patch mesh (no
+                        // adaptive meshing), so it gets a finer one: 16×16
+                        // patches per polygon. The SH row beside it solves the
+                        // same fixed mesh (adaptive off, L ≈ 25) for a
+                        // like-for-like comparison of the representations.
+                        let fixed = || {
+                            vec![
+                                ("patches", i(CUBE_PATCHES)),
+                                ("adaptive", Value::Boolean(false)),
+                            ]
+                        };
                         for d in cube_values(flag) {
                             let label = if flag == "--cube-resolution" {
                                 // 001's global cube: D = 6k² directions.
-                                format!("cube k={d} (D={})", 6 * d * d)
+                                format!("cube k={d} (D={}) patches={CUBE_PATCHES}", 6 * d * d)
                             } else {
-                                format!("cube {flag} {d}")
+                                format!("cube {flag} {d} patches={CUBE_PATCHES}")
                             };
                             out.push(with_flags(
-                                point("cube", label, vec![]),
+                                point("cube", label, fixed()),
                                 &["--directional", "cube", flag, &d.to_string()],
                             ));
                         }
+                        let mut sh = fixed();
+                        sh.push(("sh_error_target", f(1e-3)));
+                        out.push(point(
+                            "cube",
+                            format!("SH target 1e-3, fixed mesh patches={CUBE_PATCHES}"),
+                            sh,
+                        ));
                     }
                     None => println!(
                         "note: --directional is listed but no flag for D was recognised; cube points skipped"
@@ -502,6 +520,9 @@ pub fn points(scene: &SceneSpec, quick: bool, has_cube: bool, help: &str) -> Vec
     }
     out
 }
+
+/// Patches per polygon of the fixed-mesh (global cube) comparison.
+const CUBE_PATCHES: i64 = 16;
 
 /// D values for the cube flag: per-face resolutions for a resolution-like
 /// flag, direction counts otherwise.
