@@ -48,12 +48,19 @@ fn mrays(rays: u64) -> String {
     format!("{:.1}", rays as f64 / 1e6)
 }
 
-/// Index of the (cost, error) front of `results` by image error (vertex error
-/// where a point has no image).
+/// The axis whose rows re-draw the reference instead of solving; they are in
+/// the tables but not on the plots or fronts (the reference's cost is not
+/// theirs).
+const TRUNCATION_AXIS: &str = "truncation";
+
+/// Index of the (cost, error) front of `results` by image (or vertex) error.
 fn front(results: &[PointResult], vertex: bool) -> Vec<usize> {
     let points: Vec<(f64, f64)> = results
         .iter()
         .map(|r| {
+            if r.axis == TRUNCATION_AXIS {
+                return (f64::NAN, f64::NAN);
+            }
             let e = if vertex {
                 r.vertex_error
             } else {
@@ -165,7 +172,13 @@ pub fn write(
             let points: Vec<PlotPoint> = results
                 .iter()
                 .map(|r| PlotPoint {
-                    x: r.cpu_seconds,
+                    // NaN leaves a truncation row off the plot, keeping the
+                    // indices of `front_idx` valid.
+                    x: if r.axis == TRUNCATION_AXIS {
+                        f64::NAN
+                    } else {
+                        r.cpu_seconds
+                    },
                     y: if vertex {
                         r.vertex_error
                     } else {
