@@ -20,12 +20,18 @@ use std::time::Duration;
 struct Xvfb {
     child: Child,
     display: String,
+    /// Xvfb's standard output, kept open: the server writes its display number
+    /// again at every server reset, and a closed pipe would kill it by SIGPIPE.
+    _displayfd: BufReader<std::process::ChildStdout>,
 }
 
 impl Xvfb {
     fn start() -> Xvfb {
         // -displayfd 1: the server picks a free display number itself and
         // writes it to its standard output once it accepts connections.
+        // -noreset: several `runtime mirror` runs share one server; without it the
+        // server resets when the last client leaves and a quick next run can find
+        // it gone.
         let mut child = match Command::new("Xvfb")
             .args([
                 "-displayfd",
@@ -35,6 +41,7 @@ impl Xvfb {
                 "1280x720x24",
                 "-nolisten",
                 "tcp",
+                "-noreset",
             ])
             .stdout(Stdio::piped())
             .stderr(Stdio::null())
@@ -48,7 +55,8 @@ impl Xvfb {
         };
         let mut line = String::new();
         let stdout = child.stdout.take().expect("piped stdout");
-        BufReader::new(stdout)
+        let mut displayfd = BufReader::new(stdout);
+        displayfd
             .read_line(&mut line)
             .expect("Xvfb's display number");
         let number: u32 = line
@@ -58,6 +66,7 @@ impl Xvfb {
         Xvfb {
             child,
             display: format!(":{number}"),
+            _displayfd: displayfd,
         }
     }
 
