@@ -57,9 +57,7 @@ use super::{ShotReport, SolveError, Solver};
 use crate::brdf::normalization::funk_hecke_d;
 use crate::brdf::GlossyLobe;
 use crate::format::{Batch, Representation, ScalarType, Solution, Vertex};
-use crate::geometry::formfactor::{point_to_polygon, wallace};
-use crate::geometry::polygon::clip_to_halfspace;
-use crate::geometry::sampling::{stratified_points, stream_id, Rng};
+use crate::geometry::formfactor::wallace;
 use crate::mesh::{Mesh, NewVertex};
 use crate::scene::Scene;
 use crate::settings::{FormFactorMethod, SolverSettings};
@@ -409,7 +407,7 @@ impl DirShot<'_> {
             // which ray casting gives and a hemicube item buffer does not: the
             // hemicube method is the analytic one here.
             FormFactorMethod::Analytic | FormFactorMethod::Hemicube => {
-                let unoccluded = point_to_polygon(q, n, s.polygon());
+                let unoccluded = s.source.form_factor(q, n);
                 if unoccluded.is_nan() || unoccluded <= 0.0 {
                     return (q, 0, 0);
                 }
@@ -422,21 +420,14 @@ impl DirShot<'_> {
                 // The samples of `Shot::form_factor`: the shot's pooled set when
                 // the whole source is above the receiver's horizon (same test and
                 // tolerance), else a set over the part in front of it.
-                let floor = -1e-6 * s.occluder.scene_epsilon();
-                if s.polygon().iter().all(|&c| n.dot(c - q) >= floor) {
-                    let (points, _) = self.pool.set_for(s, v);
-                    scratch.points.clear();
-                    scratch.points.extend_from_slice(points);
-                } else {
-                    clip_to_halfspace(s.polygon(), origin, n, &mut scratch.clipped);
-                    let part: &[DVec3] = if scratch.clipped.len() >= 3 {
-                        &scratch.clipped
-                    } else {
-                        s.polygon()
-                    };
-                    let mut rng = Rng::new(s.seed, stream_id(s.index, v as u64));
-                    stratified_points(part, s.samples, &mut rng, &mut scratch.points);
-                }
+                s.receiver_samples(
+                    self.pool,
+                    q,
+                    n,
+                    v,
+                    &mut scratch.clipped,
+                    &mut scratch.points,
+                );
                 scratch.targets.clear();
                 scratch
                     .targets

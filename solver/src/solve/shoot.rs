@@ -307,8 +307,7 @@ impl Shot<'_> {
                 // its end, which the occluder excludes. The tolerance, 1e-6 ε,
                 // absorbs rounding of corners on the plane and moves such a
                 // crossing no further than 1e-6 of the segment from its end.
-                let floor = -1e-6 * self.occluder.scene_epsilon();
-                let visible = if self.polygon().iter().all(|&c| n.dot(c - q) >= floor) {
+                let visible = if self.source_above_horizon(q, n) {
                     self.occluder.count_visible(origin, pool.set_for(self, v).1)
                 } else {
                     self.draw_visible_part_samples(q, n, v, scratch);
@@ -395,6 +394,38 @@ impl Shot<'_> {
             .unwrap_or(false)
     }
 
+    /// Whether the whole source lies in the receiver's closed upper half-space
+    /// (corners on its tangent plane allowed, within 1e-6 ε), so that the
+    /// shot's pooled sample sets serve it (see [`Shot::form_factor`]).
+    #[inline]
+    pub fn source_above_horizon(&self, q: DVec3, n: DVec3) -> bool {
+        let floor = -1e-6 * self.occluder.scene_epsilon();
+        self.polygon().iter().all(|&c| n.dot(c - q) >= floor)
+    }
+
+    /// The (unlifted) sample points on the source that receiver `v` at `q`, with
+    /// normal `n`, traces to, written into `points`: the shot's pooled set when
+    /// the source is above the receiver's horizon, else a set over the part in
+    /// front of it ([`Shot::draw_visible_part_samples`]). The directional
+    /// transports (SH and global cube) draw their samples here, so they are
+    /// exactly the diffuse path's.
+    pub fn receiver_samples(
+        &self,
+        pool: &SamplePool,
+        q: DVec3,
+        n: DVec3,
+        v: u32,
+        clipped: &mut Vec<DVec3>,
+        points: &mut Vec<DVec3>,
+    ) {
+        if self.source_above_horizon(q, n) {
+            points.clear();
+            points.extend_from_slice(pool.set_for(self, v).0);
+        } else {
+            self.draw_part_samples(q, n, v, clipped, points);
+        }
+    }
+
     /// Draws `samples` stratified, jittered points (RNG stream (seed, shot,
     /// vertex)) into `scratch.points` over the part of the source in front of
     /// the receiver: the source clipped to the half-space n · (x − o) ≥ 0 with o
@@ -408,17 +439,28 @@ impl Shot<'_> {
     /// at the origin's height rather than the point's keeps every ray above
     /// the receiving plane, at the cost of an ε-thin band of the source.
     pub fn draw_visible_part_samples(&self, q: DVec3, n: DVec3, v: u32, scratch: &mut Scratch) {
+        self.draw_part_samples(q, n, v, &mut scratch.clipped, &mut scratch.points);
+    }
+
+    fn draw_part_samples(
+        &self,
+        q: DVec3,
+        n: DVec3,
+        v: u32,
+        clipped: &mut Vec<DVec3>,
+        points: &mut Vec<DVec3>,
+    ) {
         let origin = q + n * self.occluder.scene_epsilon();
-        clip_to_halfspace(self.polygon(), origin, n, &mut scratch.clipped);
-        let part: &[DVec3] = if scratch.clipped.len() >= 3 {
-            &scratch.clipped
+        clip_to_halfspace(self.polygon(), origin, n, clipped);
+        let part: &[DVec3] = if clipped.len() >= 3 {
+            clipped
         } else {
             // Only a sliver (numerically nothing) is in front: its factor is
             // negligible; sample the whole source rather than nothing.
             self.polygon()
         };
         let mut rng = Rng::new(self.seed, stream_id(self.index, v as u64));
-        stratified_points(part, self.samples, &mut rng, &mut scratch.points);
+        stratified_points(part, self.samples, &mut rng, points);
     }
 
     /// ΔL_v = Kd · U_s · F(v←s) (000 Fig. 3.6: ΔRad = SP.unshotRad ·

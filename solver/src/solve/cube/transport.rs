@@ -18,9 +18,7 @@
 //! the reflection sees the source's extent, not only its centre.
 
 use super::UpperCells;
-use crate::geometry::formfactor::{point_to_polygon, wallace};
-use crate::geometry::polygon::clip_to_halfspace;
-use crate::geometry::sampling::{stratified_points, stream_id, Rng};
+use crate::geometry::formfactor::wallace;
 use crate::mesh::Mesh;
 use crate::settings::FormFactorMethod;
 use crate::sh;
@@ -173,7 +171,7 @@ pub(super) fn visible_samples(
     let lift = s.normal * s.occluder.scene_epsilon();
     match s.method {
         FormFactorMethod::Analytic | FormFactorMethod::Hemicube => {
-            let unoccluded = point_to_polygon(q, n, s.polygon());
+            let unoccluded = s.source.form_factor(q, n);
             if unoccluded.is_nan() || unoccluded <= 0.0 {
                 return (q, 0);
             }
@@ -182,21 +180,7 @@ pub(super) fn visible_samples(
                 scratch.samples.push((s.centre, unoccluded));
                 return (q, 0);
             }
-            let floor = -1e-6 * s.occluder.scene_epsilon();
-            if s.polygon().iter().all(|&c| n.dot(c - q) >= floor) {
-                let (points, _) = pool.set_for(s, v);
-                scratch.points.clear();
-                scratch.points.extend_from_slice(points);
-            } else {
-                clip_to_halfspace(s.polygon(), origin, n, &mut scratch.clipped);
-                let part: &[DVec3] = if scratch.clipped.len() >= 3 {
-                    &scratch.clipped
-                } else {
-                    s.polygon()
-                };
-                let mut rng = Rng::new(s.seed, stream_id(s.index, v as u64));
-                stratified_points(part, s.samples, &mut rng, &mut scratch.points);
-            }
+            s.receiver_samples(pool, q, n, v, &mut scratch.clipped, &mut scratch.points);
             scratch.targets.clear();
             scratch
                 .targets
