@@ -46,7 +46,7 @@
 //! lower bound on n counted from the scene's polygons before meshing, then from
 //! the mesh's exact count.
 
-use super::{SolveError, Solver};
+use super::{human_bytes, SolveError, Solver};
 use crate::format::{Solution, SolveMode};
 use crate::geometry::hemicube::{Frame, Hemicube, HemicubeError, ItemBuffer, GOLDEN_ANGLE};
 use crate::scene::Scene;
@@ -108,18 +108,6 @@ pub enum GaussSeidelError {
     OutOfMemory { patches: u64, bytes: u128 },
     #[error("tolerance {0} is out of range: 0 < tolerance < 1")]
     BadTolerance(f64),
-}
-
-/// `bytes` as GiB/MiB/KiB with one decimal.
-fn human_bytes(bytes: u128) -> String {
-    let b = bytes as f64;
-    if b >= (1u64 << 30) as f64 {
-        format!("{:.1} GiB", b / (1u64 << 30) as f64)
-    } else if b >= (1u64 << 20) as f64 {
-        format!("{:.1} MiB", b / (1u64 << 20) as f64)
-    } else {
-        format!("{:.1} KiB", b / 1024.0)
-    }
 }
 
 /// Bytes of the form-factor matrix of `patches` patches (u128, saturating).

@@ -645,6 +645,19 @@ fn scene_centre(scene: &Scene) -> DVec3 {
     }
 }
 
+/// `bytes` as GiB/MiB/KiB with one decimal, for the memory-bound refusals of
+/// the Gauss–Seidel and global-cube solves.
+pub(crate) fn human_bytes(bytes: u128) -> String {
+    let b = bytes as f64;
+    if b >= (1u64 << 30) as f64 {
+        format!("{:.1} GiB", b / (1u64 << 30) as f64)
+    } else if b >= (1u64 << 20) as f64 {
+        format!("{:.1} MiB", b / (1u64 << 20) as f64)
+    } else {
+        format!("{:.1} KiB", b / 1024.0)
+    }
+}
+
 #[cfg(test)]
 mod directional_tests;
 #[cfg(test)]

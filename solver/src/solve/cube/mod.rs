@@ -79,7 +79,7 @@ mod transport;
 
 pub use lobe::{CellBrdf, ExactLobe};
 
-use super::{SolveError, Solver};
+use super::{human_bytes, SolveError, Solver};
 use crate::cube;
 use crate::format::{Batch, Representation, ScalarType, Solution, SolveMode, Vertex};
 use crate::geometry::visibility::Occluder;
@@ -150,17 +150,6 @@ pub enum CubeError {
     OutOfMemory { bytes: u128 },
     #[error("tolerance {0} is out of range: 0 < tolerance < 1")]
     BadTolerance(f64),
-}
-
-fn human_bytes(bytes: u128) -> String {
-    let b = bytes as f64;
-    if b >= (1u64 << 30) as f64 {
-        format!("{:.1} GiB", b / (1u64 << 30) as f64)
-    } else if b >= (1u64 << 20) as f64 {
-        format!("{:.1} MiB", b / (1u64 << 20) as f64)
-    } else {
-        format!("{:.1} KiB", b / 1024.0)
-    }
 }
 
 /// The cells of a cube of resolution k above a surface (local z > 0), with
