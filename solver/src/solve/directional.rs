@@ -693,21 +693,13 @@ impl Solver {
         let mut refined = super::refine::Refined::default();
         if self.settings.adaptive {
             // The recorded shots, rebuilt (their unshot SH kept in `d`).
-            let replay_shots: Vec<Shot> = self
-                .recorded
-                .iter()
-                .map(|r| {
-                    Shot::for_patch(
-                        &self.mesh,
-                        r.patch,
-                        r.index,
-                        r.unshot(),
-                        &self.settings,
-                        &self.occluder,
-                        &self.kd,
-                    )
-                })
-                .collect();
+            let replay_shots = RecordedShot::rebuild_all(
+                &self.recorded,
+                &self.mesh,
+                &self.settings,
+                &self.occluder,
+                &self.kd,
+            );
             let recorded_unshot = std::mem::take(&mut d.recorded_unshot);
             let replay: Vec<DirShot> = replay_shots
                 .iter()

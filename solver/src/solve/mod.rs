@@ -376,21 +376,13 @@ impl Solver {
         }
         let shot_done = Instant::now();
         let refined = if self.settings.adaptive {
-            let replay: Vec<Shot> = self
-                .recorded
-                .iter()
-                .map(|r| {
-                    Shot::for_patch(
-                        &self.mesh,
-                        r.patch,
-                        r.index,
-                        r.unshot(),
-                        &self.settings,
-                        &self.occluder,
-                        &self.kd,
-                    )
-                })
-                .collect();
+            let replay = RecordedShot::rebuild_all(
+                &self.recorded,
+                &self.mesh,
+                &self.settings,
+                &self.occluder,
+                &self.kd,
+            );
             refine::refine(
                 &mut self.mesh,
                 refine::VertexState {

@@ -186,6 +186,23 @@ impl RecordedShot {
     pub fn unshot(&self) -> DVec3 {
         DVec3::from_array(self.unshot.map(f64::from_bits))
     }
+
+    /// The recorded shots rebuilt against the current mesh, for the replay to
+    /// new vertices after a split (000 §3.3, step 5c); the diffuse and the SH
+    /// refinements replay exactly these. The shots borrow the occluder and the
+    /// reflectances, not the mesh, so the mesh can be split while they live.
+    pub fn rebuild_all<'a>(
+        recorded: &[RecordedShot],
+        mesh: &Mesh,
+        settings: &crate::settings::SolverSettings,
+        occluder: &'a Occluder,
+        kd: &'a [DVec3],
+    ) -> Vec<Shot<'a>> {
+        recorded
+            .iter()
+            .map(|r| Shot::for_patch(mesh, r.patch, r.index, r.unshot(), settings, occluder, kd))
+            .collect()
+    }
 }
 
 impl<'a> Shot<'a> {
