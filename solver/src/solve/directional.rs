@@ -52,15 +52,14 @@
 
 use super::refine::{Criteria, Field};
 use super::shoot::RecordedShot;
-use super::shoot::{SamplePool, Shot};
+use super::shoot::{visible_samples, SamplePool, SampleScratch, Shot};
 use super::{ShotReport, SolveError, Solver};
 use crate::brdf::normalization::funk_hecke_d;
 use crate::brdf::GlossyLobe;
 use crate::format::{Batch, Representation, ScalarType, Solution, Vertex};
-use crate::geometry::formfactor::wallace;
 use crate::mesh::{Mesh, NewVertex};
 use crate::scene::Scene;
-use crate::settings::{FormFactorMethod, SolverSettings};
+use crate::settings::SolverSettings;
 use crate::sh::{self, coefficient_count, Y00};
 use glam::DVec3;
 use rayon::prelude::*;
@@ -353,11 +352,8 @@ struct ReceivedSh {
 /// Per-worker buffers.
 #[derive(Default)]
 struct DirScratch {
-    points: Vec<DVec3>,
-    clipped: Vec<DVec3>,
-    targets: Vec<DVec3>,
-    flags: Vec<bool>,
-    samples: Vec<(DVec3, f64)>,
+    /// The visible source samples and the buffers that find them.
+    sampling: SampleScratch,
     basis: Vec<f64>,
     unit: Vec<f64>,
     lobe_scratch: Vec<f64>,
@@ -386,97 +382,6 @@ struct Tables {
 }
 
 impl DirShot<'_> {
-    /// The visible source samples seen from vertex `v`'s receiving point, with
-    /// their form-factor shares; the same samples, culls and visibility as
-    /// [`Shot::form_factor`], so the shares sum to its F(v←s). Returns the
-    /// receiving point, (visible count, rays).
-    fn samples(&self, mesh: &Mesh, v: u32, scratch: &mut DirScratch) -> (DVec3, u32, u32) {
-        let s = self.shot;
-        scratch.samples.clear();
-        let (q, n) = s.receiving_point(mesh, v);
-        if s.normal.dot(q - s.centre) < -1e-6 * s.diameter {
-            return (q, 0, 0);
-        }
-        if s.polygon().iter().all(|&c| n.dot(c - q) <= 0.0) {
-            return (q, 0, 0);
-        }
-        let origin = q + n * s.occluder.scene_epsilon();
-        let lift = s.normal * s.occluder.scene_epsilon();
-        match s.method {
-            // Directional shots need a visibility answer per sample direction,
-            // which ray casting gives and a hemicube item buffer does not: the
-            // hemicube method is the analytic one here.
-            FormFactorMethod::Analytic | FormFactorMethod::Hemicube => {
-                let unoccluded = s.source.form_factor(q, n);
-                if unoccluded.is_nan() || unoccluded <= 0.0 {
-                    return (q, 0, 0);
-                }
-                if !s.shadows {
-                    // No samples are drawn: the whole factor comes from the
-                    // direction of the source's centre.
-                    scratch.samples.push((s.centre, unoccluded));
-                    return (q, s.samples, 0);
-                }
-                // The samples of `Shot::form_factor`: the shot's pooled set when
-                // the whole source is above the receiver's horizon (same test and
-                // tolerance), else a set over the part in front of it.
-                s.receiver_samples(
-                    self.pool,
-                    q,
-                    n,
-                    v,
-                    &mut scratch.clipped,
-                    &mut scratch.points,
-                );
-                scratch.targets.clear();
-                scratch
-                    .targets
-                    .extend(scratch.points.iter().map(|&p| p + lift));
-                s.occluder
-                    .visible_each(origin, &scratch.targets, &mut scratch.flags);
-                let share = unoccluded / s.samples as f64;
-                let mut visible = 0;
-                for (p, &f) in scratch.points.iter().zip(&scratch.flags) {
-                    if f {
-                        visible += 1;
-                        scratch.samples.push((*p, share));
-                    }
-                }
-                (q, visible, s.samples)
-            }
-            FormFactorMethod::Wallace => {
-                // The pooled set, as `Shot::form_factor` uses for Wallace.
-                let (points, _) = self.pool.set_for(s, v);
-                scratch.points.clear();
-                scratch.points.extend_from_slice(points);
-                let rays = if s.shadows {
-                    scratch.targets.clear();
-                    scratch
-                        .targets
-                        .extend(scratch.points.iter().map(|&p| p + lift));
-                    s.occluder
-                        .visible_each(origin, &scratch.targets, &mut scratch.flags);
-                    s.samples
-                } else {
-                    scratch.flags.clear();
-                    scratch.flags.resize(scratch.points.len(), true);
-                    0
-                };
-                // 000 eq. 3.1 term by term: each sample's disc is A/k.
-                let disc = s.area / scratch.points.len().max(1) as f64;
-                let mut visible = 0;
-                for (p, &f) in scratch.points.iter().zip(&scratch.flags) {
-                    let term = wallace(q, n, std::slice::from_ref(p), s.normal, disc, &[f]);
-                    if term > 0.0 {
-                        visible += 1;
-                        scratch.samples.push((*p, term));
-                    }
-                }
-                (q, visible, rays)
-            }
-        }
-    }
-
     /// ΔL of vertex `v` as SH coefficients of its surface's order.
     fn receive(&self, mesh: &Mesh, kd: &[DVec3], v: u32, scratch: &mut DirScratch) -> ReceivedSh {
         let surface = mesh.vertices[v as usize].surface as usize;
@@ -493,13 +398,14 @@ impl DirShot<'_> {
                 rays: 0,
             };
         }
-        let (q, visible, rays) = self.samples(mesh, v, scratch);
+        let (q, visible, rays) =
+            visible_samples(self.shot, mesh, v, self.pool, &mut scratch.sampling);
         let s = &mesh.surfaces[surface];
         let source_count = coefficient_count(self.source_order);
         scratch.basis.resize(source_count, 0.0);
         scratch.unit.resize(count, 0.0);
         scratch.lobe_scratch.resize(count, 0.0);
-        let samples = std::mem::take(&mut scratch.samples);
+        let samples = std::mem::take(&mut scratch.sampling.samples);
         let sqrt_4pi = (4.0 * PI).sqrt();
         for &(p, share) in &samples {
             let Some(toward_source) = (p - q).try_normalize() else {
@@ -536,7 +442,7 @@ impl DirShot<'_> {
                 }
             }
         }
-        scratch.samples = samples;
+        scratch.sampling.samples = samples;
         ReceivedSh {
             coefficients: out,
             visible,

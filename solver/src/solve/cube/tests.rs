@@ -258,7 +258,7 @@ fn pair_factors_equal_the_shooters() {
             .collect::<Vec<_>>(),
     );
     let kd = vec![DVec3::splat(0.5); mesh.surfaces.len()];
-    let mut scratch = transport::Scratch::default();
+    let mut scratch = crate::solve::shoot::SampleScratch::default();
     let mut shooter_scratch = crate::solve::shoot::Scratch::default();
     let (mut compared, mut shadowed) = (0, 0);
     for source in 0..mesh.patches.len() as u32 {
@@ -276,7 +276,7 @@ fn pair_factors_equal_the_shooters() {
             if mesh.vertices[v as usize].surface == shot.source_surface {
                 continue;
             }
-            transport::visible_samples(&shot, mesh, v, &pool, &mut scratch);
+            crate::solve::shoot::visible_samples(&shot, mesh, v, &pool, &mut scratch);
             let ours: f64 = scratch_factor(&scratch);
             let (theirs, visible, _) = shot.form_factor(mesh, v, &pool, &mut shooter_scratch);
             assert!(
@@ -293,7 +293,7 @@ fn pair_factors_equal_the_shooters() {
     );
 }
 
-fn scratch_factor(scratch: &transport::Scratch) -> f64 {
+fn scratch_factor(scratch: &crate::solve::shoot::SampleScratch) -> f64 {
     scratch.samples.iter().map(|s| s.1).sum()
 }
 

@@ -18,12 +18,9 @@
 //! the reflection sees the source's extent, not only its centre.
 
 use super::UpperCells;
-use crate::geometry::formfactor::wallace;
 use crate::mesh::Mesh;
-use crate::settings::FormFactorMethod;
 use crate::sh;
-use crate::solve::shoot::{SamplePool, Shot};
-use glam::DVec3;
+use crate::solve::shoot::{visible_samples, SamplePool, SampleScratch, Shot};
 
 /// Transport from one source patch into one receiver.
 #[derive(Clone, Copy, Debug)]
@@ -53,12 +50,8 @@ pub(super) struct Receiver {
 /// Per-worker buffers.
 #[derive(Default)]
 pub(super) struct Scratch {
-    points: Vec<DVec3>,
-    clipped: Vec<DVec3>,
-    targets: Vec<DVec3>,
-    flags: Vec<bool>,
-    /// Visible samples: (point on the source, share of the factor).
-    pub(super) samples: Vec<(DVec3, f64)>,
+    /// The visible samples and the buffers that find them.
+    pub(super) sampling: SampleScratch,
     cells: Vec<(u32, f64)>,
 }
 
@@ -85,8 +78,8 @@ impl PairInput<'_> {
         if surface == shot.source_surface {
             return None;
         }
-        let (q, rays) = visible_samples(shot, mesh, v, self.pool, scratch);
-        let factor: f64 = scratch.samples.iter().map(|s| s.1).sum();
+        let (q, _, rays) = visible_samples(shot, mesh, v, self.pool, &mut scratch.sampling);
+        let factor: f64 = scratch.sampling.samples.iter().map(|s| s.1).sum();
         if !(factor > 0.0 && factor.is_finite()) {
             return None;
         }
@@ -94,7 +87,7 @@ impl PairInput<'_> {
         let mut entries = Vec::new();
         if let Some(cells) = self.receiver_cells {
             scratch.cells.clear();
-            for &(p, share) in &scratch.samples {
+            for &(p, share) in &scratch.sampling.samples {
                 let Some(dir) = (p - q).try_normalize() else {
                     continue;
                 };
@@ -144,90 +137,5 @@ impl PairInput<'_> {
             entries,
             rays,
         ))
-    }
-}
-
-/// The visible samples of `shot`'s source seen from vertex `v`'s receiving
-/// point, with their shares of F(v←s), into `scratch.samples`: the samples,
-/// culls and visibility of [`Shot::form_factor`], so the shares sum to its
-/// factor (test `pair_factors_equal_the_shooters`). Returns the receiving
-/// point and the rays traced.
-pub(super) fn visible_samples(
-    s: &Shot,
-    mesh: &Mesh,
-    v: u32,
-    pool: &SamplePool,
-    scratch: &mut Scratch,
-) -> (DVec3, u32) {
-    scratch.samples.clear();
-    let (q, n) = s.receiving_point(mesh, v);
-    if s.normal.dot(q - s.centre) < -1e-6 * s.diameter {
-        return (q, 0);
-    }
-    if s.polygon().iter().all(|&c| n.dot(c - q) <= 0.0) {
-        return (q, 0);
-    }
-    let origin = q + n * s.occluder.scene_epsilon();
-    let lift = s.normal * s.occluder.scene_epsilon();
-    match s.method {
-        FormFactorMethod::Analytic | FormFactorMethod::Hemicube => {
-            let unoccluded = s.source.form_factor(q, n);
-            if unoccluded.is_nan() || unoccluded <= 0.0 {
-                return (q, 0);
-            }
-            if !s.shadows {
-                // No rays: the whole factor comes from the source's centre.
-                scratch.samples.push((s.centre, unoccluded));
-                return (q, 0);
-            }
-            s.receiver_samples(pool, q, n, v, &mut scratch.clipped, &mut scratch.points);
-            scratch.targets.clear();
-            scratch
-                .targets
-                .extend(scratch.points.iter().map(|&p| p + lift));
-            s.occluder
-                .visible_each(origin, &scratch.targets, &mut scratch.flags);
-            // Equal shares, as the SH shooter divides the factor: the samples
-            // are uniform in area, so the incoming directions of a source much
-            // larger than its distance are spread by area rather than by
-            // differential factor (weighting by 000 eq. 3.1's term was tried:
-            // with 16 samples it concentrates a corner's light on a few cells
-            // and raised the largest row sum γ of a glossy furnace from 0.87
-            // to 0.999).
-            let share = unoccluded / s.samples as f64;
-            for (p, &f) in scratch.points.iter().zip(&scratch.flags) {
-                if f {
-                    scratch.samples.push((*p, share));
-                }
-            }
-            (q, s.samples)
-        }
-        FormFactorMethod::Wallace => {
-            let (points, _) = pool.set_for(s, v);
-            scratch.points.clear();
-            scratch.points.extend_from_slice(points);
-            let rays = if s.shadows {
-                scratch.targets.clear();
-                scratch
-                    .targets
-                    .extend(scratch.points.iter().map(|&p| p + lift));
-                s.occluder
-                    .visible_each(origin, &scratch.targets, &mut scratch.flags);
-                s.samples
-            } else {
-                scratch.flags.clear();
-                scratch.flags.resize(scratch.points.len(), true);
-                0
-            };
-            // 000 eq. 3.1 term by term: each sample's disc is A/n.
-            let disc = s.area / scratch.points.len().max(1) as f64;
-            for (p, &f) in scratch.points.iter().zip(&scratch.flags) {
-                let term = wallace(q, n, std::slice::from_ref(p), s.normal, disc, &[f]);
-                if term > 0.0 {
-                    scratch.samples.push((*p, term));
-                }
-            }
-            (q, rays)
-        }
     }
 }
