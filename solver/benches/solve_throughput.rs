@@ -6,7 +6,9 @@
 //! This is the figure of merit for the solver core: it is the packet
 //! speed of the occluder (`--bench visibility`) less everything the solver does
 //! around the rays. Run: `cargo bench -p solver --bench solve_throughput`
-//! (env `PRESETS=draft,medium`, `SHOTS=N` caps the shots, default 200). The CPU-time
+//! (env `PRESETS=draft,medium`, `SHOTS=N` caps the shots, default 200; `SAMPLES=N`
+//! overrides every preset's rays per receiver, e.g. 64 for the reference
+//! workload now that the presets use fewer). The CPU-time
 //! column divides by the solve's CPU time instead: on a shared machine it is the
 //! steadier figure (wall time includes waiting for a core).
 
@@ -31,6 +33,7 @@ fn main() {
         .ok()
         .and_then(|s| s.parse().ok())
         .unwrap_or(200);
+    let samples: Option<u32> = std::env::var("SAMPLES").ok().and_then(|s| s.parse().ok());
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../config/cornell_box.obj");
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(1)
@@ -49,6 +52,9 @@ fn main() {
             .scene;
         let mut settings = SolverSettings::preset(preset);
         settings.max_shots = shots;
+        if let Some(samples) = samples {
+            settings.samples = samples;
+        }
         scene.fill_default_patches(settings.patches);
         let cpu_start = process_cpu_seconds();
         let start = Instant::now();
