@@ -4,7 +4,7 @@
 
 mod common;
 
-use glam::{DVec2, DVec3};
+use glam::DVec3;
 use runtime::gpu::Gpu;
 use runtime::render::{
     CoefficientStorage, DrawKind, EyeImage, MultiviewMode, RendererDesc, StereoRenderer,
@@ -12,7 +12,6 @@ use runtime::render::{
 use runtime::session::OffscreenSwapchain;
 use solver::camera::EyeView;
 use solver::format::Solution;
-use solver::raster;
 
 /// Cells along a cube face edge: D = 6·12² = 864 directions per vertex. A cell
 /// spans about 9° at the face centre, half the lobe's 19° half-width at half
@@ -57,14 +56,6 @@ fn render(
     renderer.read_back(gpu, 0, views.len()).unwrap()
 }
 
-fn as_raster(eye: &EyeImage) -> raster::Image {
-    let mut image = raster::Image::new(eye.width, eye.height);
-    for (px, rgb) in image.pixels.iter_mut().zip(eye.radiance.chunks_exact(3)) {
-        *px = [rgb[0], rgb[1], rgb[2]];
-    }
-    image
-}
-
 // Tolerances: those of the SH reference test (runtime/tests/reference.rs),
 // relative to the reference image's mean radiance as `raster::compare` reports
 // them: mean 2e-3, p99 5e-3, at most 1% of pixels above
@@ -91,32 +82,17 @@ fn cube_room_matches_cpu_reference_in_both_eyes_with_f32_and_f16_values() {
     for storage in [CoefficientStorage::F32, CoefficientStorage::F16] {
         let eyes = render(&gpu, &solution, &views, storage, None);
         for (eye, (view, label)) in eyes.iter().zip(views.iter().zip(["left", "right"])) {
-            let expected =
-                raster::render(&solution, view, &raster::RenderOptions::default()).unwrap();
-            let actual = as_raster(eye);
-            let diff = raster::compare(&expected, &actual).unwrap();
-            if !(diff.mean_abs <= MEAN_TOL
-                && diff.p99_abs <= P99_TOL
-                && diff.differing_fraction <= FRACTION_TOL)
-            {
-                let flat = |img: &raster::Image| {
-                    img.pixels.iter().flatten().copied().collect::<Vec<f32>>()
-                };
-                let dir = common::write_failure_images(
-                    &format!("cube-{storage:?}-{label}"),
-                    eye.width,
-                    eye.height,
-                    &flat(&actual),
-                    &flat(&expected),
-                );
-                panic!(
-                    "cube {storage:?} {label} eye differs from the CPU reference: {diff:?} \
-                     (tolerances: mean {MEAN_TOL}, p99 {P99_TOL}, differing fraction \
-                     {FRACTION_TOL}); images in {}",
-                    dir.display()
-                );
-            }
-            eprintln!("cube {storage:?} {label}: {diff:?}");
+            common::assert_matches_cpu_reference(
+                &format!("cube-{storage:?}-{label}"),
+                &solution,
+                view,
+                eye,
+                common::Tolerances {
+                    mean: MEAN_TOL,
+                    p99: P99_TOL,
+                    fraction: FRACTION_TOL,
+                },
+            );
         }
     }
     common::assert_validation_clean(&gpu);
@@ -135,24 +111,6 @@ fn an_order_cap_leaves_cube_batches_alone() {
         assert_eq!(a.radiance, b.radiance);
     }
     common::assert_validation_clean(&gpu);
-}
-
-/// Centroid (framebuffer coordinates) of pixels whose red channel exceeds
-/// `threshold`.
-fn centroid(eye: &EyeImage, threshold: f32) -> DVec2 {
-    let mut sum = DVec2::ZERO;
-    let mut count = 0.0;
-    for j in 0..eye.height {
-        for i in 0..eye.width {
-            let r = eye.radiance[((j * eye.width + i) * 3) as usize];
-            if r > threshold {
-                sum += DVec2::new(i as f64 + 0.5, j as f64 + 0.5);
-                count += 1.0;
-            }
-        }
-    }
-    assert!(count > 0.0, "no pixel above {threshold}");
-    sum / count
 }
 
 #[test]
@@ -174,7 +132,7 @@ fn cube_highlight_moves_on_the_floor_between_the_eyes() {
             .chunks_exact(3)
             .map(|p| p[0])
             .fold(0.0f32, f32::max);
-        let c = centroid(eye, 0.7 * max);
+        let c = common::centroid(eye, 0.7 * max);
         let ray = view.pixel_ray(c);
         let t = -view.position.y / ray.y;
         assert!(t > 0.0, "highlight is not on the floor");

@@ -3,13 +3,12 @@
 
 mod common;
 
-use glam::{DVec2, DVec3};
+use glam::DVec3;
 use runtime::gpu::Gpu;
 use runtime::render::{CoefficientStorage, EyeImage, MultiviewMode, RendererDesc, StereoRenderer};
 use runtime::session::OffscreenSwapchain;
 use solver::camera::{Camera, EyeView};
 use solver::format::Solution;
-use solver::raster;
 
 fn render(gpu: &Gpu, solution: &Solution, views: &[EyeView], samples: u32) -> Vec<EyeImage> {
     render_with(gpu, solution, views, samples, CoefficientStorage::F32)
@@ -37,14 +36,6 @@ fn render_with(
     renderer.read_back(gpu, 0, views.len()).unwrap()
 }
 
-fn as_raster(eye: &EyeImage) -> raster::Image {
-    let mut image = raster::Image::new(eye.width, eye.height);
-    for (px, rgb) in image.pixels.iter_mut().zip(eye.radiance.chunks_exact(3)) {
-        *px = [rgb[0], rgb[1], rgb[2]];
-    }
-    image
-}
-
 /// Compares both eyes with the CPU reference; on failure writes
 /// actual/expected/difference images and prints their folder.
 fn check_against_reference(
@@ -60,29 +51,13 @@ fn check_against_reference(
     let camera: Camera = common::room_camera(96, 80);
     let views = camera.stereo_views(0.3, DVec3::ZERO);
     let eyes = render_with(&gpu, solution, &views, samples, storage);
+    let tol = common::Tolerances {
+        mean: mean_tol,
+        p99: p99_tol,
+        fraction: fraction_tol,
+    };
     for (eye, (view, label)) in eyes.iter().zip(views.iter().zip(["left", "right"])) {
-        let expected = raster::render(solution, view, &raster::RenderOptions::default()).unwrap();
-        let actual = as_raster(eye);
-        let diff = raster::compare(&expected, &actual).unwrap();
-        if !(diff.mean_abs <= mean_tol
-            && diff.p99_abs <= p99_tol
-            && diff.differing_fraction <= fraction_tol)
-        {
-            let flat =
-                |img: &raster::Image| img.pixels.iter().flatten().copied().collect::<Vec<f32>>();
-            let dir = common::write_failure_images(
-                &format!("{name}-{label}"),
-                eye.width,
-                eye.height,
-                &flat(&actual),
-                &flat(&expected),
-            );
-            panic!(
-                "{name} {label} eye differs from the CPU reference: {diff:?} (tolerances: mean {mean_tol}, p99 {p99_tol}, differing fraction {fraction_tol}); images in {}",
-                dir.display()
-            );
-        }
-        eprintln!("{name} {label}: {diff:?}");
+        common::assert_matches_cpu_reference(&format!("{name}-{label}"), solution, view, eye, tol);
     }
     common::assert_validation_clean(&gpu);
 }
@@ -167,24 +142,6 @@ fn order_16_floor_matches_cpu_reference_with_f32_and_f16_coefficients() {
     }
 }
 
-/// Centroid (framebuffer coordinates) of pixels whose red channel exceeds
-/// `threshold`.
-fn centroid(eye: &EyeImage, threshold: f32) -> DVec2 {
-    let mut sum = DVec2::ZERO;
-    let mut count = 0.0;
-    for j in 0..eye.height {
-        for i in 0..eye.width {
-            let r = eye.radiance[((j * eye.width + i) * 3) as usize];
-            if r > threshold {
-                sum += DVec2::new(i as f64 + 0.5, j as f64 + 0.5);
-                count += 1.0;
-            }
-        }
-    }
-    assert!(count > 0.0, "no pixel above {threshold}");
-    sum / count
-}
-
 #[test]
 fn parallax_of_a_known_point_is_ipd_times_focal_over_depth() {
     // A bright square facing the camera at depth 3 in front of a dim back wall.
@@ -220,7 +177,10 @@ fn parallax_of_a_known_point_is_ipd_times_focal_over_depth() {
     let views = camera.stereo_views(ipd, DVec3::ZERO);
     let gpu = common::gpu();
     let eyes = render(&gpu, &solution, &views, 1);
-    let (left, right) = (centroid(&eyes[0], 1.0), centroid(&eyes[1], 1.0));
+    let (left, right) = (
+        common::centroid(&eyes[0], 1.0),
+        common::centroid(&eyes[1], 1.0),
+    );
     let (f, _) = views[0].focal_lengths_px();
     let expected = ipd * f / depth;
     let measured = left.x - right.x;
@@ -257,7 +217,7 @@ fn glossy_highlight_moves_on_the_floor_between_the_eyes() {
             .chunks_exact(3)
             .map(|p| p[0])
             .fold(0.0f32, f32::max);
-        let c = centroid(eye, 0.7 * max);
+        let c = common::centroid(eye, 0.7 * max);
         // Intersect the ray through the centroid with the floor y = 0.
         let ray = view.pixel_ray(c);
         let t = -view.position.y / ray.y;

@@ -329,6 +329,77 @@ pub fn cube_room(n: usize, resolution: u32) -> Solution {
     solution
 }
 
+/// A GPU eye image as a CPU raster image, for `raster::compare`.
+pub fn as_raster(eye: &runtime::render::EyeImage) -> solver::raster::Image {
+    let mut image = solver::raster::Image::new(eye.width, eye.height);
+    for (px, rgb) in image.pixels.iter_mut().zip(eye.radiance.chunks_exact(3)) {
+        *px = [rgb[0], rgb[1], rgb[2]];
+    }
+    image
+}
+
+/// Tolerances of a GPU image against the CPU reference, relative to the
+/// reference's mean radiance as `raster::compare` reports them.
+#[derive(Clone, Copy, Debug)]
+pub struct Tolerances {
+    pub mean: f64,
+    pub p99: f64,
+    /// Fraction of pixels allowed above `raster::DEFAULT_DIFF_THRESHOLD`.
+    pub fraction: f64,
+}
+
+/// Compares one GPU eye with the CPU reference of `solution` seen through
+/// `view`; on failure writes actual/expected/difference images and panics
+/// naming their folder.
+pub fn assert_matches_cpu_reference(
+    name: &str,
+    solution: &Solution,
+    view: &solver::camera::EyeView,
+    eye: &runtime::render::EyeImage,
+    tol: Tolerances,
+) {
+    use solver::raster;
+    let expected = raster::render(solution, view, &raster::RenderOptions::default()).unwrap();
+    let actual = as_raster(eye);
+    let diff = raster::compare(&expected, &actual).unwrap();
+    if !(diff.mean_abs <= tol.mean
+        && diff.p99_abs <= tol.p99
+        && diff.differing_fraction <= tol.fraction)
+    {
+        let flat = |img: &raster::Image| img.pixels.iter().flatten().copied().collect::<Vec<f32>>();
+        let dir = write_failure_images(
+            name,
+            eye.width,
+            eye.height,
+            &flat(&actual),
+            &flat(&expected),
+        );
+        panic!(
+            "{name} differs from the CPU reference: {diff:?} (tolerances: {tol:?}); images in {}",
+            dir.display()
+        );
+    }
+    eprintln!("{name}: {diff:?}");
+}
+
+/// Centroid (framebuffer coordinates) of pixels whose red channel exceeds
+/// `threshold`.
+pub fn centroid(eye: &runtime::render::EyeImage, threshold: f32) -> glam::DVec2 {
+    let mut sum = glam::DVec2::ZERO;
+    let mut count = 0.0;
+    for j in 0..eye.height {
+        for i in 0..eye.width {
+            let r = eye.radiance[((j * eye.width + i) * 3) as usize];
+            if r > threshold {
+                sum += glam::DVec2::new(i as f64 + 0.5, j as f64 + 0.5);
+                count += 1.0;
+            }
+        }
+    }
+    assert!(count > 0.0, "no pixel above {threshold}");
+    sum / count
+}
+
 pub fn write_failure_images(
     name: &str,
     width: u32,

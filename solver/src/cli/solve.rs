@@ -267,6 +267,27 @@ fn solve(
     }
 }
 
+/// The one-call solves (Gauss–Seidel, global cube) keep no checkpoints, so
+/// there is nothing to resume.
+fn refuse_resume(args: &SolveArgs, solve: &str) -> anyhow::Result<()> {
+    if args.resume {
+        bail!("--resume: the {solve} keeps no checkpoints; run without --resume");
+    }
+    Ok(())
+}
+
+/// A one-call solve's outcome. There is no checkpoint to keep or resume: an
+/// unconverged result is said by the caller and marked partial in the file, so
+/// the session's resume hint stays off.
+fn one_call_outcome(solution: crate::format::Solution, stats: RunStats) -> Outcome {
+    Outcome {
+        converged: true,
+        solution,
+        stats,
+        interrupted: false,
+    }
+}
+
 /// `--solver gauss-seidel`: one call, no checkpoints (nothing to resume).
 fn gauss_seidel(
     args: &SolveArgs,
@@ -275,9 +296,7 @@ fn gauss_seidel(
     threads: usize,
 ) -> anyhow::Result<Outcome> {
     use crate::solve::gauss_seidel::{solve_gauss_seidel, GaussSeidelLimits};
-    if args.resume {
-        bail!("--resume: the Gauss-Seidel solver keeps no checkpoints; run without --resume");
-    }
+    refuse_resume(args, "Gauss-Seidel solver")?;
     let result = solve_gauss_seidel(scene, settings, &GaussSeidelLimits::default())
         .map_err(plain)
         .with_context(|| format!("solving {} by Gauss-Seidel", args.scene.display()))?;
@@ -307,14 +326,7 @@ fn gauss_seidel(
         threads,
         unshot_fraction: result.solution.header.stats.unshot_fraction,
     };
-    // There is no checkpoint to keep or resume: an unconverged result is said
-    // above and marked partial in the file, so the session's resume hint is off.
-    Ok(Outcome {
-        converged: true,
-        solution: result.solution,
-        stats,
-        interrupted: false,
-    })
+    Ok(one_call_outcome(result.solution, stats))
 }
 
 /// `--mode directional --directional cube`: 001's global cubes gathered by
@@ -326,9 +338,7 @@ fn cube_solve(
     threads: usize,
 ) -> anyhow::Result<Outcome> {
     use crate::solve::cube::{solve_cube, CubeLimits};
-    if args.resume {
-        bail!("--resume: the global-cube solve keeps no checkpoints; run without --resume");
-    }
+    refuse_resume(args, "global-cube solve")?;
     let result = solve_cube(scene, settings, &CubeLimits::default())
         .map_err(plain)
         .with_context(|| format!("solving {} on global cubes", args.scene.display()))?;
@@ -365,14 +375,7 @@ fn cube_solve(
         threads,
         unshot_fraction: result.solution.header.stats.unshot_fraction,
     };
-    // As for Gauss-Seidel: an unconverged result is said above and marked
-    // partial in the file; there is no checkpoint to keep.
-    Ok(Outcome {
-        converged: true,
-        solution: result.solution,
-        stats,
-        interrupted: false,
-    })
+    Ok(one_call_outcome(result.solution, stats))
 }
 
 impl session::Shooter for Solver {
