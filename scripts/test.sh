@@ -10,6 +10,8 @@ export VK_ICD_FILENAMES="${VK_ICD_FILENAMES:-$(ls /usr/share/vulkan/icd.d/lvp_ic
 
 echo "== cargo fmt --check"
 cargo fmt --all -- --check
+echo "== architecture invariants"
+bash scripts/check-architecture.sh
 echo "== cargo clippy"
 cargo clippy --workspace --all-targets --locked -- -D warnings
 echo "== cargo test"

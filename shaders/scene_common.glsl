@@ -1,5 +1,5 @@
 // Shared declarations of the scene vertex shaders (included by scene_sh.vert and
-// scene_l0.vert). Conventions: runtime/src/render/mod.rs and solver/src/camera.rs.
+// scene_l0.vert). Conventions: runtime/src/render/mod.rs and solution/src/camera.rs.
 
 // Per-frame data: one view-projection matrix and eye position per view, indexed
 // by gl_ViewIndex (0 = left, 1 = right), in file (re-centred) coordinates.

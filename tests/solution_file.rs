@@ -5,9 +5,9 @@
 //! largest single allocation, so the hostile-header test can show that a file
 //! claiming 2^40 vertices makes the reader allocate nothing of that size.
 
-use solver::camera::{Camera, UpAxis};
-use solver::format::layout::{self, batch as bf, preamble as pf};
-use solver::format::{
+use solution::camera::{Camera, UpAxis};
+use solution::format::layout::{self, batch as bf, preamble as pf};
+use solution::format::{
     decode, encode, f16_scale_for, read_solution, write_solution, Batch, FormatError, Header,
     MappedSolution, Problem, Representation, ScalarType, Solution, SolveMode, SolveStats, Vertex,
 };
@@ -234,7 +234,7 @@ fn hostile_counts_allocate_nothing_near_their_size() {
         let err = result.expect_err("hostile count accepted");
         assert!(err.problem().is_some(), "{err}");
         // The reader's allocations are bounded by the file's length (see
-        // solver/src/format/read.rs); a reader trusting the count would ask for
+        // solution/src/format/read.rs); a reader trusting the count would ask for
         // at least `claimed` bytes.
         assert!(
             largest <= bad.len(),

@@ -29,7 +29,7 @@ fn main() -> anyhow::Result<()> {
         }
         other => anyhow::bail!("unknown kind {other:?} (diffuse, glossy or cube)"),
     };
-    solver::format::write_solution(std::path::Path::new(&args[0]), &solution)?;
+    solution::format::write_solution(std::path::Path::new(&args[0]), &solution)?;
     let vertices: usize = solution.batches.iter().map(|b| b.vertices.len()).sum();
     println!("wrote {} ({vertices} vertices)", args[0]);
     Ok(())

@@ -10,9 +10,9 @@ fn runtime() -> Command {
     Command::new(env!("CARGO_BIN_EXE_runtime"))
 }
 
-fn write_room(dir: &Path, name: &str, solution: &solver::format::Solution) -> std::path::PathBuf {
+fn write_room(dir: &Path, name: &str, solution: &solution::format::Solution) -> std::path::PathBuf {
     let path = dir.join(name);
-    solver::format::write_solution(&path, solution).unwrap();
+    solution::format::write_solution(&path, solution).unwrap();
     path
 }
 

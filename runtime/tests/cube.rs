@@ -1,6 +1,6 @@
 //! 001's global-cube batches on the GPU (`shaders/scene_cube.vert`) against the
-//! CPU reference rasterizer (`solver::raster`, which looks cubes up with
-//! `solver::cube::eval_rgb`), and the view dependence of a glossy cube floor.
+//! CPU reference rasterizer (`solution::raster`, which looks cubes up with
+//! `solution::cube::eval_rgb`), and the view dependence of a glossy cube floor.
 
 mod common;
 
@@ -10,8 +10,8 @@ use runtime::render::{
     CoefficientStorage, DrawKind, EyeImage, MultiviewMode, RendererDesc, StereoRenderer,
 };
 use runtime::session::OffscreenSwapchain;
-use solver::camera::EyeView;
-use solver::format::Solution;
+use solution::camera::EyeView;
+use solution::format::Solution;
 
 /// Cells along a cube face edge: D = 6·12² = 864 directions per vertex. A cell
 /// spans about 9° at the face centre, half the lobe's 19° half-width at half

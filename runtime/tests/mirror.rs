@@ -89,9 +89,9 @@ impl Drop for Xvfb {
     }
 }
 
-fn write_solution(dir: &Path, name: &str, solution: &solver::format::Solution) -> PathBuf {
+fn write_solution(dir: &Path, name: &str, solution: &solution::format::Solution) -> PathBuf {
     let path = dir.join(name);
-    solver::format::write_solution(&path, solution).unwrap();
+    solution::format::write_solution(&path, solution).unwrap();
     path
 }
 

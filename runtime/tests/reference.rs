@@ -1,4 +1,4 @@
-//! GPU images against the CPU reference rasterizer (`solver::raster`), stereo
+//! GPU images against the CPU reference rasterizer (`solution::raster`), stereo
 //! parallax, and the view dependence of a glossy floor.
 
 mod common;
@@ -7,8 +7,8 @@ use glam::DVec3;
 use runtime::gpu::Gpu;
 use runtime::render::{CoefficientStorage, EyeImage, MultiviewMode, RendererDesc, StereoRenderer};
 use runtime::session::OffscreenSwapchain;
-use solver::camera::{Camera, EyeView};
-use solver::format::Solution;
+use solution::camera::{Camera, EyeView};
+use solution::format::Solution;
 
 fn render(gpu: &Gpu, solution: &Solution, views: &[EyeView], samples: u32) -> Vec<EyeImage> {
     render_with(gpu, solution, views, samples, CoefficientStorage::F32)
@@ -145,7 +145,7 @@ fn order_16_floor_matches_cpu_reference_with_f32_and_f16_coefficients() {
 #[test]
 fn parallax_of_a_known_point_is_ipd_times_focal_over_depth() {
     // A bright square facing the camera at depth 3 in front of a dim back wall.
-    use solver::format::{Batch, Representation, ScalarType};
+    use solution::format::{Batch, Representation, ScalarType};
     let depth = 3.0;
     let quad = common::Quad {
         corner: DVec3::new(-0.15, 1.05, -depth),
@@ -157,7 +157,7 @@ fn parallax_of_a_known_point_is_ipd_times_focal_over_depth() {
     let marker = Batch {
         representation: Representation::Sh { order: 0 },
         scalar: ScalarType::F32,
-        coefficients: vec![(5.0 / solver::sh::Y00) as f32; vertices.len() * 3],
+        coefficients: vec![(5.0 / solution::sh::Y00) as f32; vertices.len() * 3],
         vertices,
         indices,
     };

@@ -43,7 +43,7 @@ fn one_line(out: &Output) -> String {
 fn without_a_runtime_says_so_in_one_line_and_suggests_the_mirror() {
     let dir = tempfile::tempdir().unwrap();
     let file = dir.path().join("room.sol");
-    solver::format::write_solution(&file, &common::diffuse_room(2)).unwrap();
+    solution::format::write_solution(&file, &common::diffuse_room(2)).unwrap();
     let out = runtime_xr(dir.path(), &[file.to_str().unwrap(), "--frames", "5"]);
     assert!(!out.status.success());
     assert_eq!(out.status.code(), Some(1), "exit status {:?}", out.status);
@@ -66,7 +66,7 @@ fn without_a_runtime_says_so_in_one_line_and_suggests_the_mirror() {
 fn bad_config_is_refused_with_file_and_line_before_openxr() {
     let dir = tempfile::tempdir().unwrap();
     let file = dir.path().join("room.sol");
-    solver::format::write_solution(&file, &common::diffuse_room(2)).unwrap();
+    solution::format::write_solution(&file, &common::diffuse_room(2)).unwrap();
     let config = dir.path().join("xr.toml");
     std::fs::write(&config, "snap_turn_deg = 45\nwalk_speed_m_s = 99\n").unwrap();
     let out = runtime_xr(
@@ -85,7 +85,7 @@ fn bad_config_is_refused_with_file_and_line_before_openxr() {
 fn bad_arguments_are_refused_in_one_line() {
     let dir = tempfile::tempdir().unwrap();
     let file = dir.path().join("room.sol");
-    solver::format::write_solution(&file, &common::diffuse_room(2)).unwrap();
+    solution::format::write_solution(&file, &common::diffuse_room(2)).unwrap();
     let out = runtime_xr(dir.path(), &[file.to_str().unwrap(), "--frames", "0"]);
     assert!(!out.status.success());
     assert!(one_line(&out).contains("--frames must be at least 1"));

@@ -15,7 +15,7 @@ use runtime::render::{RendererDesc, StereoRenderer};
 use runtime::session::{OffscreenSwapchain, Pose, ViewState};
 use runtime::xr::locomotion::{scene_yaw_deg, Locomotion, Placement};
 use serde_json::Value;
-use solver::camera::Fov;
+use solution::camera::Fov;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -107,7 +107,7 @@ fn headset_receives_the_renderers_image_of_the_located_eyes() {
     // changes pixels even where the geometry would not.
     let solution = common::glossy_room(4, 4);
     let file = dir.path().join("room.sol");
-    solver::format::write_solution(&file, &solution).unwrap();
+    solution::format::write_solution(&file, &solution).unwrap();
     let run = run_xr(dir.path(), &file, &["--frames", "6", "--validation"], &[]);
     check_clean(&run);
     let r = &run.report;
@@ -196,7 +196,7 @@ fn headset_receives_the_renderers_image_of_the_located_eyes() {
 fn lost_session_is_recreated_and_the_count_goes_on() {
     let dir = tempfile::tempdir().unwrap();
     let file = dir.path().join("room.sol");
-    solver::format::write_solution(&file, &common::diffuse_room(2)).unwrap();
+    solution::format::write_solution(&file, &common::diffuse_room(2)).unwrap();
     let run = run_xr(
         dir.path(),
         &file,
@@ -217,7 +217,7 @@ fn lost_session_is_recreated_and_the_count_goes_on() {
 fn menu_button_shows_the_help_panel_and_stage_falls_back_to_local() {
     let dir = tempfile::tempdir().unwrap();
     let file = dir.path().join("room.sol");
-    solver::format::write_solution(&file, &common::diffuse_room(2)).unwrap();
+    solution::format::write_solution(&file, &common::diffuse_room(2)).unwrap();
     let config = dir.path().join("xr.toml");
     std::fs::write(&config, "reference_space = \"stage\"\n").unwrap();
     let run = run_xr(

@@ -13,7 +13,7 @@
 use glam::DVec3;
 use solver::scene::load_scene;
 use solver::settings::{DirectionalRepresentation, Preset, SolverSettings};
-use solver::solve::cube::{solve_cube, CubeLimits, CubeResult};
+use solver::solve::cube_gather::{solve_cube, CubeLimits, CubeResult};
 use std::path::Path;
 use std::time::Instant;
 
@@ -38,7 +38,7 @@ fn main() {
         let start = Instant::now();
         let result = solve_cube(&scene, &settings, &limits).expect("the solve fits");
         let wall = start.elapsed().as_secs_f64();
-        let bytes = solver::format::encode(&result.solution)
+        let bytes = solution::format::encode(&result.solution)
             .expect("the solution encodes")
             .len();
         runs.push((k, result, wall, bytes));

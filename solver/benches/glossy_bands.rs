@@ -22,11 +22,11 @@
 //! 2-core bench machine in release).
 
 use glam::DVec3;
+use solution::format::SolveMode;
+use solution::sh;
 use solver::brdf;
-use solver::format::SolveMode;
 use solver::scene::{load_scene, Scene};
 use solver::settings::{Preset, SolverSettings};
-use solver::sh;
 use solver::solve::Solver;
 use std::fmt::Write as _;
 use std::path::Path;
@@ -82,7 +82,7 @@ fn solve(alpha: f64, target: f64) -> Run {
     while solver.step().is_some() {}
     let seconds = start.elapsed().as_secs_f64();
     let solution = solver.to_solution(false);
-    let file_bytes = solver::format::encode(&solution)
+    let file_bytes = solution::format::encode(&solution)
         .expect("solution encodes")
         .len();
     let mesh = solver.mesh();

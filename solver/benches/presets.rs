@@ -12,7 +12,7 @@
 //! the file to recompute it).
 //!
 //! **Error.** Each solution and the reference are drawn by the CPU rasterizer
-//! (`solver::raster`, linear radiance, what the runtime shows) from two fixed
+//! (`solution::raster`, linear radiance, what the runtime shows) from two fixed
 //! cameras at 256 × 256: the standard Cornell camera, and a view from a high front
 //! corner toward the blocks. The error is the relative RMS radiance difference
 //!
@@ -26,9 +26,9 @@
 //! Run: `cargo bench -p solver --bench presets` (env `PRESETS=draft,medium` picks
 //! presets). The figures in docs/benchmarks.md, "Solver presets", come from it.
 
-use solver::camera::Camera;
-use solver::format::Solution;
-use solver::raster::{render, RenderOptions};
+use solution::camera::Camera;
+use solution::format::Solution;
+use solution::raster::{render, RenderOptions};
 use solver::scene::{load_scene, ImportOptions, Scene};
 use solver::settings::{Preset, SettingsPatch, SolverSettings};
 use solver::solve::Solver;
@@ -107,7 +107,7 @@ fn cameras(standard: Camera) -> [Camera; 2] {
     ]
 }
 
-fn images(solution: &Solution, cameras: &[Camera]) -> Vec<solver::raster::Image> {
+fn images(solution: &Solution, cameras: &[Camera]) -> Vec<solution::raster::Image> {
     let offset = glam::DVec3::from_array(solution.header.recentre_offset);
     cameras
         .iter()
@@ -116,7 +116,7 @@ fn images(solution: &Solution, cameras: &[Camera]) -> Vec<solver::raster::Image>
 }
 
 /// Relative RMS radiance difference over all pixels and channels of all views.
-fn relative_rms(test: &[solver::raster::Image], reference: &[solver::raster::Image]) -> f64 {
+fn relative_rms(test: &[solution::raster::Image], reference: &[solution::raster::Image]) -> f64 {
     let (mut diff, mut norm) = (0.0f64, 0.0f64);
     for (t, r) in test.iter().zip(reference) {
         for (a, b) in t.pixels.iter().zip(&r.pixels) {
@@ -179,7 +179,7 @@ fn main() {
         "cornell-reference-{}-s{ref_samples}-t{ref_threshold:e}-seed+1000.sol",
         ref_preset.name()
     ));
-    let reference = match solver::format::read_solution(&cache) {
+    let reference = match solution::format::read_solution(&cache) {
         Ok(solution) => {
             eprintln!("presets: reference from {}", cache.display());
             solution
@@ -196,7 +196,7 @@ fn main() {
                 run.elements, run.vertices, run.shots, run.seconds
             );
             std::fs::create_dir_all(&cache_dir).unwrap();
-            solver::format::write_solution(&cache, &run.solution).unwrap();
+            solution::format::write_solution(&cache, &run.solution).unwrap();
             run.solution
         }
     };

@@ -5,8 +5,8 @@
 //! Run: `cargo bench -p solver --bench sh_bands`.
 
 use glam::{DVec3, Vec3};
+use solution::sh;
 use solver::brdf::{self, GlossyLobe, Window};
-use solver::sh;
 use std::hint::black_box;
 use std::time::Instant;
 

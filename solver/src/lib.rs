@@ -1,34 +1,26 @@
 //! Progressive-refinement radiosity with ray-cast vertex form factors, automatic
 //! meshing and spherical-harmonic directional radiance, after Remington (1992,
-//! `shared/seeds/000`), and the solution file that the runtime walks through.
+//! "A Radiosity Approach to Realistic Image Synthesis"), writing the solution file
+//! that the runtime walks through.
 //!
-//! The library is split by a feature so that the runtime links only what it needs:
+//! * [`scene`]: importers (OBJ + MTL, TOML scene, the thesis's legacy geometry and
+//!   display files), cleaning, re-centring, welding;
+//! * [`geometry`]: form factors, sampling, and the occlusion BVH;
+//! * [`mesh`]: patches, quadtree elements, shared vertices, triangulation;
+//! * [`brdf`]: the thesis's glossy lobe and its normalizations;
+//! * [`solve`]: progressive refinement, directional SH shooting, Gauss–Seidel and the
+//!   global-cube gather;
+//! * [`settings`] and the command line in [`cli`].
 //!
-//! * always built: [`format`] (the solution file), [`sh`] (spherical-harmonic
-//!   evaluation), [`cube`] (001's global-cube lookup), [`camera`] and [`raster`] (a small CPU rasterizer used by
-//!   `--preview` and by the runtime's reference renderer);
-//! * feature `solve` (default): [`scene`] (importers), [`geometry`] (form factors and
-//!   visibility), [`mesh`], [`brdf`], [`solve`] and the command line in [`cli`].
+//! The file format, SH and cube evaluation, the camera and the CPU rasterizer are the
+//! contract with the runtime and live in the `solution` crate.
 //!
 //! **Architecture Invariant:** this crate never depends on `ash`, `openxr` or `winit`.
 
-pub mod camera;
-pub mod cube;
-pub mod format;
-pub mod raster;
-pub mod sh;
-
-#[cfg(feature = "solve")]
 pub mod brdf;
-#[cfg(feature = "solve")]
 pub mod cli;
-#[cfg(feature = "solve")]
 pub mod geometry;
-#[cfg(feature = "solve")]
 pub mod mesh;
-#[cfg(feature = "solve")]
 pub mod scene;
-#[cfg(feature = "solve")]
 pub mod settings;
-#[cfg(feature = "solve")]
 pub mod solve;

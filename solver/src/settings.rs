@@ -6,8 +6,8 @@
 //! applies them in order. The presets live in `config/presets.toml`, embedded at
 //! build time so the binary never depends on the working directory.
 
-use crate::format::SolveMode;
 use serde::{Deserialize, Serialize};
+use solution::format::SolveMode;
 
 /// The presets file, embedded.
 pub const PRESETS_TOML: &str = include_str!("../../config/presets.toml");
@@ -15,7 +15,7 @@ pub const PRESETS_TOML: &str = include_str!("../../config/presets.toml");
 /// A named quality preset.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
 #[serde(rename_all = "lowercase")]
-#[cfg_attr(feature = "solve", derive(clap::ValueEnum))]
+#[derive(clap::ValueEnum)]
 pub enum Preset {
     Draft,
     #[default]
@@ -36,7 +36,7 @@ impl Preset {
 /// How the point-to-source form factor is computed (design notes, "Form factors").
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
 #[serde(rename_all = "lowercase")]
-#[cfg_attr(feature = "solve", derive(clap::ValueEnum))]
+#[derive(clap::ValueEnum)]
 pub enum FormFactorMethod {
     /// Exact unoccluded point-to-polygon factor × visible fraction of the rays.
     #[default]
@@ -52,7 +52,7 @@ pub enum FormFactorMethod {
 /// `crate::brdf::Normalization` for the measured difference).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
 #[serde(rename_all = "lowercase")]
-#[cfg_attr(feature = "solve", derive(clap::ValueEnum))]
+#[derive(clap::ValueEnum)]
 pub enum BrdfNormalization {
     /// 000's per-incidence C_R(μ_i): reflects exactly Ks of every beam, not reciprocal.
     #[default]
@@ -64,7 +64,7 @@ pub enum BrdfNormalization {
 /// How directional mode stores a glossy vertex's outgoing radiance (`--directional`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
 #[serde(rename_all = "lowercase")]
-#[cfg_attr(feature = "solve", derive(clap::ValueEnum))]
+#[derive(clap::ValueEnum)]
 pub enum DirectionalRepresentation {
     /// Spherical harmonics of an order chosen per material (000 ch. 4), shot progressively.
     #[default]

@@ -2,7 +2,7 @@
 //! parsed, the global-cube solve run, a valid solution with a cube batch
 //! written; bad resolutions and over-large cubes refused with clear messages.
 
-use solver::format::{read_solution, Representation, SolveMode};
+use solution::format::{read_solution, Representation, SolveMode};
 use std::path::PathBuf;
 use std::process::{Command, Output};
 

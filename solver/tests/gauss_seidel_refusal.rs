@@ -6,7 +6,7 @@
 //! shown to allocate nothing of the n² matrix's size.
 
 use glam::DVec3;
-use solver::camera::UpAxis;
+use solution::camera::UpAxis;
 use solver::scene::{Material, Polygon, Scene, SourceRef};
 use solver::settings::{Preset, SolverSettings};
 use solver::solve::gauss_seidel::{

@@ -1,8 +1,8 @@
 //! `solver info`: a solution written by the library is described as text and as
 //! JSON by the binary, and a corrupted or missing file is refused with its name.
 
-use solver::camera::{Camera, UpAxis};
-use solver::format::{
+use solution::camera::{Camera, UpAxis};
+use solution::format::{
     write_solution, Batch, Header, Representation, ScalarType, Solution, SolveMode, SolveStats,
     Vertex,
 };

@@ -1,7 +1,7 @@
 //! `solver solve --solver gauss-seidel` and `--form-factors hemicube` end to end:
 //! flags parsed, the solve run, a valid solution file written.
 
-use solver::format::{read_solution, Representation};
+use solution::format::{read_solution, Representation};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 

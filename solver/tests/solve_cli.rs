@@ -79,14 +79,14 @@ fn draft_on(scene: &Path, out: &Path, threads: u32) -> Command {
     cmd
 }
 
-fn read(path: &Path) -> solver::format::Solution {
-    solver::format::read_solution(path).expect("a valid solution file")
+fn read(path: &Path) -> solution::format::Solution {
+    solution::format::read_solution(path).expect("a valid solution file")
 }
 
 /// Radiance and geometry must be identical; the header may differ only in the
 /// wall-clock seconds and in the settings text (the runs had different shot
 /// budgets and checkpoint intervals).
-fn assert_same_result(a: &solver::format::Solution, b: &solver::format::Solution) {
+fn assert_same_result(a: &solution::format::Solution, b: &solution::format::Solution) {
     assert_eq!(a.batches.len(), b.batches.len());
     for (x, y) in a.batches.iter().zip(&b.batches) {
         assert_eq!(x.representation, y.representation);

@@ -103,11 +103,11 @@ pub fn parse_size(text: &str) -> Result<(u32, u32), String> {
         s.trim()
             .parse::<u32>()
             .ok()
-            .filter(|&v| (1..=solver::camera::MAX_IMAGE_SIDE).contains(&v))
+            .filter(|&v| (1..=solution::camera::MAX_IMAGE_SIDE).contains(&v))
             .ok_or_else(|| {
                 format!(
                     "size {text:?}: {s:?} is not a whole number of pixels in 1..={}",
-                    solver::camera::MAX_IMAGE_SIDE
+                    solution::camera::MAX_IMAGE_SIDE
                 )
             })
     };
@@ -115,8 +115,8 @@ pub fn parse_size(text: &str) -> Result<(u32, u32), String> {
 }
 
 /// Reads and validates a solution file, with the reader's one-line error.
-pub fn load_solution(path: &Path) -> Result<solver::format::Solution> {
-    solver::format::read_solution(path).map_err(anyhow::Error::new)
+pub fn load_solution(path: &Path) -> Result<solution::format::Solution> {
+    solution::format::read_solution(path).map_err(anyhow::Error::new)
 }
 
 /// Creates the GPU context, reporting a missing device with the packages to
@@ -126,7 +126,7 @@ pub fn open_gpu(validation: bool) -> Result<crate::gpu::Gpu> {
 }
 
 /// Prints what a `--max-order` cap costs, per batch.
-pub fn report_truncation(solution: &solver::format::Solution, cap: Option<u32>) {
+pub fn report_truncation(solution: &solution::format::Solution, cap: Option<u32>) {
     if let Some(cap) = cap {
         let lines = crate::render::truncation::truncation_report(&solution.batches, cap);
         if lines.is_empty() {

@@ -7,7 +7,7 @@ use crate::render::{RendererDesc, StereoRenderer, ToneSettings};
 use crate::session::OffscreenSwapchain;
 use anyhow::{Context, Result};
 use glam::DVec3;
-use solver::camera::Camera;
+use solution::camera::Camera;
 use std::path::PathBuf;
 
 #[derive(clap::Args, Debug, Clone)]

@@ -37,7 +37,7 @@
 //! flips over the pole.
 
 use glam::DVec3;
-use solver::camera::{Camera, UpAxis};
+use solution::camera::{Camera, UpAxis};
 
 /// Degrees per arrow-key press (000 appendix C.1).
 pub const ARROW_STEP_DEG: f64 = 1.0;

@@ -31,8 +31,8 @@ use anyhow::{Context, Result};
 use controls::{Command, Controls, Display, Input, Key, SceneFrame, Wireframe};
 use glam::DVec3;
 use present::{Layout, Overlay, Presenter};
-use solver::camera::{Camera, EyeView};
-use solver::format::Solution;
+use solution::camera::{Camera, EyeView};
+use solution::format::Solution;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::Instant;
@@ -735,7 +735,7 @@ fn hud_line(
     controls: &Controls,
     eye_w: u32,
     eye_h: u32,
-    header: &solver::format::Header,
+    header: &solution::format::Header,
 ) -> String {
     let time = match times.recent_mean_ms() {
         Some(ms) => format!("{ms:.1} ms {:.0} fps", 1e3 / ms.max(1e-3)),

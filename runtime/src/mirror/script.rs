@@ -88,11 +88,11 @@ impl Script {
                 let w = words.get(i).copied().unwrap_or("");
                 w.parse::<u32>()
                     .ok()
-                    .filter(|v| (1..=solver::camera::MAX_IMAGE_SIDE).contains(v))
+                    .filter(|v| (1..=solution::camera::MAX_IMAGE_SIDE).contains(v))
                     .ok_or_else(|| {
                         err(format!(
                             "{w:?} is not a window size in 1..={} pixels",
-                            solver::camera::MAX_IMAGE_SIDE
+                            solution::camera::MAX_IMAGE_SIDE
                         ))
                     })
             };

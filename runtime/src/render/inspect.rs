@@ -13,7 +13,7 @@ use super::passes::{self, Layouts, PassSet};
 use crate::gpu::{shaders, Buffer, Gpu, GpuError, VkContext};
 use crate::render::ToneSettings;
 use ash::vk;
-use solver::format::Solution;
+use solution::format::Solution;
 use std::sync::Arc;
 
 /// What to draw besides (or instead of) the shading.
@@ -370,13 +370,13 @@ fn line_pipeline(
     ];
     let bindings = [vk::VertexInputBindingDescription::default()
         .binding(0)
-        .stride(std::mem::size_of::<solver::format::Vertex>() as u32)
+        .stride(std::mem::size_of::<solution::format::Vertex>() as u32)
         .input_rate(if per_instance {
             vk::VertexInputRate::INSTANCE
         } else {
             vk::VertexInputRate::VERTEX
         })];
-    // solver::format::Vertex: position at 0, normal at 12.
+    // solution::format::Vertex: position at 0, normal at 12.
     let attributes = [0u32, 1].map(|i| {
         vk::VertexInputAttributeDescription::default()
             .location(i)

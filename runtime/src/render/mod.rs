@@ -13,8 +13,8 @@
 //! the resolution k in the same push constant).
 //!
 //! Conventions: positions are in file (re-centred) coordinates; views are
-//! `solver::camera::EyeView`s, projected with `EyeView::view_projection` and the
-//! clip planes of `solver::camera::clip_planes_for`, exactly as the CPU
+//! `solution::camera::EyeView`s, projected with `EyeView::view_projection` and the
+//! clip planes of `solution::camera::clip_planes_for`, exactly as the CPU
 //! reference rasterizer does.
 
 pub mod inspect;
@@ -35,8 +35,8 @@ use crate::gpu::{
 use ash::vk;
 use glam::DVec3;
 use passes::{BatchConstants, Layouts, PassDesc, PassSet};
-use solver::camera::{clip_planes_for, EyeView};
-use solver::format::Solution;
+use solution::camera::{clip_planes_for, EyeView};
+use solution::format::Solution;
 use std::sync::Arc;
 
 /// Options of the renderer.
@@ -558,7 +558,7 @@ impl StereoRenderer {
     }
 
     /// Near and far planes for an eye, shared with the CPU reference
-    /// (`solver::camera::clip_planes_for` over the header's bounds).
+    /// (`solution::camera::clip_planes_for` over the header's bounds).
     pub fn clip_planes(&self, view: &EyeView) -> (f64, f64) {
         clip_planes_for(view.position, self.bounds.0, self.bounds.1)
     }

@@ -112,8 +112,8 @@ pub fn probe_images(gpu: &Gpu) -> Result<(Vec<f32>, Vec<f32>), crate::render::Re
 
 /// A large diffuse floor under a camera looking along it: the floor crosses the
 /// near plane and both sides of the image, so every view clips it.
-fn probe_scene() -> (solver::format::Solution, solver::camera::Camera) {
-    use solver::format::{Batch, Representation, ScalarType, Vertex};
+fn probe_scene() -> (solution::format::Solution, solution::camera::Camera) {
+    use solution::format::{Batch, Representation, ScalarType, Vertex};
     let v = |x: f32, z: f32| Vertex {
         position: [x, 0.0, z],
         normal: [0.0, 1.0, 0.0],
@@ -129,10 +129,10 @@ fn probe_scene() -> (solver::format::Solution, solver::camera::Camera) {
             v(-10.0, -10.0),
         ],
         // Radiance 1 in every channel: c00 = 1 / Y00.
-        coefficients: vec![(1.0 / solver::sh::Y00) as f32; 12],
+        coefficients: vec![(1.0 / solution::sh::Y00) as f32; 12],
         indices: vec![0, 1, 2, 0, 2, 3],
     };
-    let camera = solver::camera::Camera {
+    let camera = solution::camera::Camera {
         eye: [0.0, 0.5, 0.0],
         target: [0.0, 0.3, -1.0],
         up: [0.0, 1.0, 0.0],
@@ -140,20 +140,20 @@ fn probe_scene() -> (solver::format::Solution, solver::camera::Camera) {
         width: 32,
         height: 32,
     };
-    let header = solver::format::Header {
+    let header = solution::format::Header {
         units_per_metre: 1.0,
-        up_axis: solver::camera::UpAxis::PosY,
+        up_axis: solution::camera::UpAxis::PosY,
         recentre_offset: [0.0; 3],
         camera,
         bounds_min: [-10.0, 0.0, -10.0],
         bounds_max: [10.0, 0.0, 10.0],
         partial: false,
-        mode: solver::format::SolveMode::Diffuse,
+        mode: solution::format::SolveMode::Diffuse,
         stats: Default::default(),
         settings_json: String::new(),
     };
     (
-        solver::format::Solution {
+        solution::format::Solution {
             header,
             batches: vec![batch],
         },

@@ -417,10 +417,10 @@ fn scene_pipeline(
             .module(frag)
             .name(c"main"),
     ];
-    // solver::format::Vertex: position, normal, tangent, 3 × f32 each, 36 bytes.
+    // solution::format::Vertex: position, normal, tangent, 3 × f32 each, 36 bytes.
     let bindings = [vk::VertexInputBindingDescription::default()
         .binding(0)
-        .stride(std::mem::size_of::<solver::format::Vertex>() as u32)
+        .stride(std::mem::size_of::<solution::format::Vertex>() as u32)
         .input_rate(vk::VertexInputRate::VERTEX)];
     let attributes: Vec<_> = (0..3)
         .map(|i| {
@@ -438,7 +438,7 @@ fn scene_pipeline(
         .topology(vk::PrimitiveTopology::TRIANGLE_LIST);
     // Front faces are counter-clockwise seen from the normal's side; after the
     // projection's y flip they stay counter-clockwise in Vulkan's framebuffer
-    // convention (solver/src/camera.rs), so back faces are culled as in the CPU
+    // convention (solution/src/camera.rs), so back faces are culled as in the CPU
     // rasterizer.
     let raster = vk::PipelineRasterizationStateCreateInfo::default()
         .polygon_mode(vk::PolygonMode::FILL)

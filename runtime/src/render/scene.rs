@@ -4,14 +4,14 @@
 
 use crate::gpu::{Buffer, Gpu, GpuError};
 use ash::vk;
-use solver::format::{Batch, Representation, Solution, Vertex};
+use solution::format::{Batch, Representation, Solution, Vertex};
 
 /// How SH coefficients are stored in the GPU's storage buffer.
 ///
 /// Measured (docs/benchmarks.md, "Runtime"): f16 halves the buffer and is within
 /// a few 1e-4 relative of f32 radiance; f32 is the default because on lavapipe the
 /// two cost the same per frame and f32 matches the solver's f32 evaluation to the
-/// tolerance `solver::sh::f32_basis_tolerance` states.
+/// tolerance `solution::sh::f32_basis_tolerance` states.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum)]
 pub enum CoefficientStorage {
     #[default]
@@ -26,7 +26,7 @@ pub enum SceneError {
     #[error(
         "batch {batch}: representation {representation:?} is not drawn by this renderer \
          (spherical harmonics and global cubes of 6·k² directions, 1 ≤ k ≤ {max}, are)",
-        max = solver::cube::MAX_RESOLUTION
+        max = solution::cube::MAX_RESOLUTION
     )]
     Representation {
         batch: usize,
@@ -53,7 +53,7 @@ pub enum DrawKind {
     /// Spherical harmonics: `scene_l0.vert` at order 0, else `scene_sh.vert`.
     Sh,
     /// 001's global cube with `resolution` (k) cells along a face edge:
-    /// `scene_cube.vert`, the bilinear lookup of `solver::cube::bilinear_f32`.
+    /// `scene_cube.vert`, the bilinear lookup of `solution::cube::bilinear_f32`.
     Cube { resolution: u32 },
 }
 
@@ -115,7 +115,7 @@ pub struct GpuScene {
 /// direction: for SH `max_v Σ_k |c_vk| · envelope(l_k)`, with `|Y_lm| ≤
 /// envelope(l) = √((2l+1)/(4π))` (Unsöld), only the evaluated orders counting;
 /// for a cube the largest |value|, since the bilinear weights are non-negative
-/// and sum to 1 (`solver::cube::bilinear`).
+/// and sum to 1 (`solution::cube::bilinear`).
 pub fn radiance_bound(batch: &Batch, order: u32) -> f64 {
     if let Representation::Cube { .. } = batch.representation {
         return batch
@@ -126,7 +126,7 @@ pub fn radiance_bound(batch: &Batch, order: u32) -> f64 {
     let n = batch.representation.coefficients_per_channel() as usize;
     let count = (order as usize + 1).pow(2).min(n);
     let envelope: Vec<f64> = (0..count)
-        .map(|k| solver::sh::envelope((k as f64).sqrt().floor() as u32))
+        .map(|k| solution::sh::envelope((k as f64).sqrt().floor() as u32))
         .collect();
     let mut bound = 0.0f64;
     for v in 0..batch.vertices.len() {
@@ -174,7 +174,7 @@ impl GpuScene {
             let (kind, order) = match batch.representation {
                 Representation::Sh { order } => (DrawKind::Sh, order),
                 Representation::Cube { directions } => {
-                    match solver::cube::resolution_from_directions(directions) {
+                    match solution::cube::resolution_from_directions(directions) {
                         Some(resolution) => (DrawKind::Cube { resolution }, 0),
                         None => {
                             return Err(SceneError::Representation {
@@ -335,7 +335,7 @@ impl GpuScene {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use solver::format::ScalarType;
+    use solution::format::ScalarType;
 
     #[test]
     fn cube_radiance_bound_is_the_largest_value_and_bounds_every_lookup() {
@@ -366,7 +366,7 @@ mod tests {
                         theta.sin() * phi.sin(),
                         theta.cos(),
                     );
-                    for c in solver::cube::eval_rgb(3, values, dir) {
+                    for c in solution::cube::eval_rgb(3, values, dir) {
                         assert!(c.abs() <= bound * (1.0 + 1e-12), "{c} > {bound}");
                     }
                 }

@@ -1,16 +1,16 @@
 //! Exposure and tone-map curve: linear radiance → display value in 0..1, then the
 //! sRGB transfer function (applied by the sRGB colour attachment on the GPU).
 //!
-//! The formulas are the shared ones of `solver::raster::tonemap` (the solver's
+//! The formulas are the shared ones of `solution::raster::tonemap` (the solver's
 //! `--preview` and the CPU reference use them), in this order per channel:
 //! `x = radiance · 2^exposure_stops`, `y = curve(max(x, 0))`, sRGB-encode `y`.
 //! `shaders/tonemap.frag` implements them in f32; [`ToneSettings::srgb8`] is the
 //! CPU twin the tests compare with.
 
 use serde::{Deserialize, Serialize};
-use solver::raster::tonemap as shared;
+use solution::raster::tonemap as shared;
 
-/// The curve applied after exposure (see `solver::raster::ToneCurve`).
+/// The curve applied after exposure (see `solution::raster::ToneCurve`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize, clap::ValueEnum)]
 #[serde(rename_all = "lowercase")]
 pub enum ToneCurve {

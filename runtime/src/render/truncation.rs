@@ -6,7 +6,7 @@
 //! (all vertices and channels together) the relative error is
 //! `sqrt(Σ_dropped c² / Σ_all c²)`.
 
-use solver::format::{Batch, Representation};
+use solution::format::{Batch, Representation};
 
 /// The error a cap costs one batch.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -69,7 +69,7 @@ pub fn truncation_report(batches: &[Batch], cap: u32) -> Vec<String> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use solver::format::{ScalarType, Vertex};
+    use solution::format::{ScalarType, Vertex};
 
     fn batch(order: u32, coefficients: Vec<f32>) -> Batch {
         Batch {
@@ -124,7 +124,7 @@ mod tests {
             .collect();
         let b = batch(order, coeffs.clone());
         let t = truncation_error(0, &b, 2).unwrap();
-        let (mu, w) = solver::sh::gauss_legendre(24);
+        let (mu, w) = solution::sh::gauss_legendre(24);
         let nphi = 48;
         let (mut diff2, mut full2) = (0.0, 0.0);
         let mut capped = coeffs.clone();
@@ -138,8 +138,8 @@ mod tests {
                 let phi = (j as f64 + 0.5) * std::f64::consts::TAU / nphi as f64;
                 let s = (1.0 - z * z).sqrt();
                 let d = glam::DVec3::new(s * phi.cos(), s * phi.sin(), *z);
-                let full = solver::sh::eval_rgb(order, &coeffs, d);
-                let part = solver::sh::eval_rgb(order, &capped, d);
+                let full = solution::sh::eval_rgb(order, &coeffs, d);
+                let part = solution::sh::eval_rgb(order, &capped, d);
                 let dw = wz * std::f64::consts::TAU / nphi as f64;
                 for c in 0..3 {
                     diff2 += (full[c] - part[c]).powi(2) * dw;

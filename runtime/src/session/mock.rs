@@ -8,7 +8,7 @@ use super::{
 use crate::gpu::Gpu;
 use crate::render::SwapchainDesc;
 use glam::DVec3;
-use solver::camera::{Fov, UpAxis};
+use solution::camera::{Fov, UpAxis};
 
 /// Options of a mock session.
 #[derive(Clone, Debug)]

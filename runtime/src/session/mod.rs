@@ -18,7 +18,7 @@ use crate::gpu::{Gpu, GpuError, Image, ImageDesc};
 use crate::render::{RenderError, StereoRenderer, SwapchainDesc};
 use ash::vk;
 use glam::{DQuat, DVec3};
-use solver::camera::{EyeView, Fov};
+use solution::camera::{EyeView, Fov};
 
 /// A pose in the solution's file (re-centred) coordinates, scene units:
 /// `orientation` rotates view space (+x right, +y up, looking down −z) into the

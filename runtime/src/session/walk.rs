@@ -18,7 +18,7 @@
 //! first and after the last key.
 
 use glam::{DQuat, DVec3};
-use solver::camera::UpAxis;
+use solution::camera::UpAxis;
 use std::path::Path;
 
 #[derive(Debug, thiserror::Error)]

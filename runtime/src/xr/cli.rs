@@ -17,7 +17,7 @@ use crate::gpu::Gpu;
 use crate::render::{RendererDesc, StereoRenderer, ToneSettings};
 use crate::session::{run_frame, Session};
 use anyhow::{bail, Context, Result};
-use solver::format::Solution;
+use solution::format::Solution;
 use std::path::PathBuf;
 use std::time::Instant;
 

@@ -24,7 +24,7 @@
 
 use crate::session::{Pose, ViewState};
 use glam::{DMat3, DQuat, DVec2, DVec3};
-use solver::camera::UpAxis;
+use solution::camera::UpAxis;
 
 /// Stick deflection that triggers a snap turn, and the deflection below which
 /// the stick must return before the next one (hysteresis, so one push is one
@@ -266,7 +266,7 @@ pub fn with_ipd(views: &[ViewState], ipd_m: f64) -> Vec<ViewState> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use solver::camera::Fov;
+    use solution::camera::Fov;
 
     const UPS: [UpAxis; 4] = [UpAxis::PosY, UpAxis::NegY, UpAxis::PosZ, UpAxis::NegZ];
 

@@ -129,7 +129,7 @@ pub fn choose_image_size(views: &[xr::ViewConfigurationView]) -> Result<(u32, u3
         (Some(w), Some(h), Some(mw), Some(mh)) => (w.min(mw), h.min(mh)),
         _ => return Err("no view sizes".into()),
     };
-    let max_side = solver::camera::MAX_IMAGE_SIDE;
+    let max_side = solution::camera::MAX_IMAGE_SIDE;
     if w == 0 || h == 0 || w > max_side || h > max_side {
         return Err(format!(
             "recommended image size {w}x{h} is outside 1..={max_side} pixels"

@@ -5,8 +5,8 @@
 
 use glam::DVec3;
 use runtime::gpu::{Gpu, GpuDesc};
-use solver::camera::{Camera, UpAxis};
-use solver::format::{Batch, Header, Representation, ScalarType, Solution, SolveMode, Vertex};
+use solution::camera::{Camera, UpAxis};
+use solution::format::{Batch, Header, Representation, ScalarType, Solution, SolveMode, Vertex};
 use std::path::PathBuf;
 use std::sync::Once;
 
@@ -193,7 +193,7 @@ pub fn diffuse_room(n: usize) -> Solution {
             let l = diffuse_radiance(DVec3::from(v.position.map(f64::from)));
             batch
                 .coefficients
-                .extend(l.iter().map(|x| (x / solver::sh::Y00) as f32));
+                .extend(l.iter().map(|x| (x / solution::sh::Y00) as f32));
         }
         batch.vertices.extend(vertices);
         batch.indices.extend(indices.iter().map(|i| i + base));
@@ -222,18 +222,18 @@ pub fn glossy_room(n: usize, order: u32) -> Solution {
     let (vertices, indices) = quads[0].vertices_and_indices();
     // Zonal lobe g(μ) = μ^e for μ > 0: Legendre coefficients by quadrature.
     let exponent = 12.0;
-    let (mu, w) = solver::sh::gauss_legendre(64);
+    let (mu, w) = solution::sh::gauss_legendre(64);
     let mut legendre = vec![0.0; order as usize + 1];
     let mut p = vec![0.0; order as usize + 1];
     for (x, wx) in mu.iter().zip(&w) {
         let g = if *x > 0.0 { x.powf(exponent) } else { 0.0 };
-        solver::sh::legendre_all(order, *x, &mut p);
+        solution::sh::legendre_all(order, *x, &mut p);
         for l in 0..=order as usize {
             legendre[l] += (2 * l + 1) as f64 / 2.0 * g * p[l] * wx;
         }
     }
-    let zonal = solver::sh::zonal_from_legendre(&legendre);
-    let count = solver::sh::coefficient_count(order);
+    let zonal = solution::sh::zonal_from_legendre(&legendre);
+    let count = solution::sh::coefficient_count(order);
     let mut rotated = vec![0.0; count];
     for v in &vertices {
         let pos = DVec3::from(v.position.map(f64::from));
@@ -241,13 +241,13 @@ pub fn glossy_room(n: usize, order: u32) -> Solution {
         // Mirror direction in the floor's frame (n = +y, t = +x, b = n × t = −z).
         let (nrm, tan) = (DVec3::Y, DVec3::X);
         let r = 2.0 * to_light.dot(nrm) * nrm - to_light;
-        let local = solver::sh::to_local(r, nrm, tan);
-        solver::sh::zonal_rotated(order, &zonal, local, &mut rotated);
+        let local = solution::sh::to_local(r, nrm, tan);
+        solution::sh::zonal_rotated(order, &zonal, local, &mut rotated);
         let base = diffuse_radiance(pos);
         for (k, lobe) in rotated.iter().enumerate() {
             for b in base {
                 let diffuse = if k == 0 {
-                    0.3 * b / solver::sh::Y00
+                    0.3 * b / solution::sh::Y00
                 } else {
                     0.0
                 };
@@ -286,7 +286,7 @@ pub fn cube_room(n: usize, resolution: u32) -> Solution {
     let (vertices, indices) = quads[0].vertices_and_indices();
     let directions = 6 * resolution * resolution;
     let cells: Vec<DVec3> = (0..directions)
-        .map(|d| solver::cube::cell_direction(resolution, d))
+        .map(|d| solution::cube::cell_direction(resolution, d))
         .collect();
     let mut coefficients = Vec::with_capacity(vertices.len() * cells.len() * 3);
     for v in &vertices {
@@ -295,7 +295,7 @@ pub fn cube_room(n: usize, resolution: u32) -> Solution {
         // The floor's frame: n = +y, t = +x (Quad), so b = n × t = −z.
         let (nrm, tan) = (DVec3::Y, DVec3::X);
         let r = 2.0 * to_light.dot(nrm) * nrm - to_light;
-        let local_r = solver::sh::to_local(r, nrm, tan);
+        let local_r = solution::sh::to_local(r, nrm, tan);
         let base = diffuse_radiance(pos);
         for cell in &cells {
             let lobe = 2.0 * cell.dot(local_r).max(0.0).powi(12);
@@ -330,8 +330,8 @@ pub fn cube_room(n: usize, resolution: u32) -> Solution {
 }
 
 /// A GPU eye image as a CPU raster image, for `raster::compare`.
-pub fn as_raster(eye: &runtime::render::EyeImage) -> solver::raster::Image {
-    let mut image = solver::raster::Image::new(eye.width, eye.height);
+pub fn as_raster(eye: &runtime::render::EyeImage) -> solution::raster::Image {
+    let mut image = solution::raster::Image::new(eye.width, eye.height);
     for (px, rgb) in image.pixels.iter_mut().zip(eye.radiance.chunks_exact(3)) {
         *px = [rgb[0], rgb[1], rgb[2]];
     }
@@ -354,11 +354,11 @@ pub struct Tolerances {
 pub fn assert_matches_cpu_reference(
     name: &str,
     solution: &Solution,
-    view: &solver::camera::EyeView,
+    view: &solution::camera::EyeView,
     eye: &runtime::render::EyeImage,
     tol: Tolerances,
 ) {
-    use solver::raster;
+    use solution::raster;
     let expected = raster::render(solution, view, &raster::RenderOptions::default()).unwrap();
     let actual = as_raster(eye);
     let diff = raster::compare(&expected, &actual).unwrap();

@@ -31,8 +31,8 @@ pub use window::{ringing, RingingStats, Window};
 /// The lobe normalizations the solver offers (setting `brdf_normalization`).
 pub use crate::settings::BrdfNormalization as Normalization;
 
-use crate::sh;
 use glam::DVec3;
+use solution::sh;
 use std::f64::consts::PI;
 use std::path::PathBuf;
 

@@ -17,7 +17,7 @@
 //! `D_{l+2}/D_l = −(l−1)/(l+4)` from `D_2 = 1/8` — no factorials, |D_l| ~ l^{-5/2}.
 
 use super::sanitize_alpha;
-use crate::sh;
+use solution::sh;
 use std::f64::consts::PI;
 
 /// `D_l = ∫₀¹ P_l(t) t dt` (see the module comment). Exact to rounding (< 1e-15

@@ -33,7 +33,7 @@
 //! integrate it to ~1e-12 (the checks above hold to 1e-9 in the tests).
 
 use super::{normalization, GlossyLobe};
-use crate::sh;
+use solution::sh;
 use std::f64::consts::PI;
 
 /// The reciprocity figures of one lobe and normalization (see the module

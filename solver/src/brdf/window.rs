@@ -10,8 +10,8 @@
 //! and the default chosen from them.
 
 use super::{lobe_of_angle, sanitize_alpha, LegendreFit};
-use crate::sh;
 use serde::{Deserialize, Serialize};
+use solution::sh;
 use std::f64::consts::PI;
 
 /// A window `w_l` (l = 0..=L) multiplying the Legendre coefficients of a lobe.

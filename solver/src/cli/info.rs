@@ -1,7 +1,7 @@
 //! `solver info FILE [--json]`: validates a solution file (all checksums) and
 //! prints its header and batches.
 
-use crate::format::{describe_json, describe_text, MappedSolution};
+use solution::format::{describe_json, describe_text, MappedSolution};
 use std::path::PathBuf;
 use std::process::ExitCode;
 

@@ -19,12 +19,12 @@ mod stats;
 pub use args::{SolveArgs, SolverKind, EXIT_INTERRUPTED};
 pub use stats::RunStats;
 
-use crate::camera::Camera;
 use crate::scene::{DisplayParams, ImportOptions, Scene};
 use crate::settings::{SettingsPatch, SolverSettings};
 use crate::solve::{Checkpoint, Solver};
 use anyhow::{bail, Context};
 use session::{Outcome, Session};
+use solution::camera::Camera;
 use std::path::Path;
 use std::process::ExitCode;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -104,7 +104,7 @@ pub fn run(args: SolveArgs) -> anyhow::Result<ExitCode> {
         threads,
         interrupted: &interrupted,
     };
-    let cube = settings.mode == crate::format::SolveMode::Directional
+    let cube = settings.mode == solution::format::SolveMode::Directional
         && settings.directional == crate::settings::DirectionalRepresentation::Cube;
     let outcome = match args.solver {
         _ if cube => pool.install(|| cube_solve(&args, &scene, &settings, threads))?,
@@ -279,7 +279,7 @@ fn refuse_resume(args: &SolveArgs, solve: &str) -> anyhow::Result<()> {
 /// A one-call solve's outcome. There is no checkpoint to keep or resume: an
 /// unconverged result is said by the caller and marked partial in the file, so
 /// the session's resume hint stays off.
-fn one_call_outcome(solution: crate::format::Solution, stats: RunStats) -> Outcome {
+fn one_call_outcome(solution: solution::format::Solution, stats: RunStats) -> Outcome {
     Outcome {
         converged: true,
         solution,
@@ -337,7 +337,7 @@ fn cube_solve(
     settings: &SolverSettings,
     threads: usize,
 ) -> anyhow::Result<Outcome> {
-    use crate::solve::cube::{solve_cube, CubeLimits};
+    use crate::solve::cube_gather::{solve_cube, CubeLimits};
     refuse_resume(args, "global-cube solve")?;
     let result = solve_cube(scene, settings, &CubeLimits::default())
         .map_err(plain)
@@ -346,7 +346,7 @@ fn cube_solve(
         "solver: global cube k = {} (D = {}): {:.1} MiB, transport {:.2} s, {} sweeps {:.2} s, \
          last change {:.1e}, γ = {:.3}, error bound {:.1e} (power {:.1e}){}",
         result.k,
-        crate::cube::direction_count(result.k),
+        solution::cube::direction_count(result.k),
         result.memory_bytes as f64 / (1u64 << 20) as f64,
         result.form_factor_seconds,
         result.sweeps,
@@ -396,7 +396,7 @@ impl session::Shooter for Solver {
             vertices: p.vertices as u64,
         }
     }
-    fn solution(&self, partial: bool) -> crate::format::Solution {
+    fn solution(&self, partial: bool) -> solution::format::Solution {
         self.to_solution(partial)
     }
     fn state(&self) -> Checkpoint {
@@ -419,7 +419,7 @@ fn finish(
         converged,
     } = outcome;
     if !interrupted {
-        crate::format::write_solution(&args.out, &solution)
+        solution::format::write_solution(&args.out, &solution)
             .with_context(|| format!("writing solution {}", args.out.display()))?;
     }
     eprintln!("solver: {}", stats.summary(settings.threshold));

@@ -1,7 +1,7 @@
 use super::*;
-use crate::camera::UpAxis;
 use crate::geometry::sampling::Rng;
 use crate::scene::{Material, Polygon, Scene};
+use solution::camera::UpAxis;
 
 fn scene_of(polygons: Vec<Vec<DVec3>>, patches: u32) -> Scene {
     Scene {

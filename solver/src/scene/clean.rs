@@ -25,9 +25,9 @@ use super::recentre::recentre;
 use super::text::{rgb, short};
 use super::weld::weld;
 use super::{Material, Polygon, Scene, SceneError, SourceRef, Warning};
-use crate::camera::{Camera, UpAxis};
 use crate::geometry::polygon::{ear_clip, newell_normal};
 use glam::DVec3;
+use solution::camera::{Camera, UpAxis};
 
 /// A polygon is planar enough to keep as one when no vertex lies farther from its
 /// Newell plane than this fraction of its bounding-box diagonal. Beyond it, it is

@@ -28,8 +28,8 @@
 
 use super::text::{numbered_lines, parse_real, read_text};
 use super::{SceneError, SourceRef, Warning};
-use crate::camera::Camera;
 use crate::settings::SettingsPatch;
+use solution::camera::Camera;
 use std::path::{Path, PathBuf};
 
 /// The largest image side a display file may ask for.

@@ -6,9 +6,9 @@
 //! [`Scene`]. Units: positions in scene units, `emission` is emitted radiance
 //! (W·sr⁻¹·m⁻², linear RGB), `kd`/`ks` are reflectances in [0, 1].
 
-use crate::camera::{Camera, UpAxis};
 use crate::settings::SettingsPatch;
 use glam::DVec3;
+use solution::camera::{Camera, UpAxis};
 use std::path::{Path, PathBuf};
 
 mod clean;

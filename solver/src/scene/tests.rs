@@ -3,7 +3,7 @@
 //! them (into a temporary folder).
 
 use super::*;
-use crate::format::SolveMode;
+use solution::format::SolveMode;
 use std::fs;
 
 fn config_dir() -> PathBuf {

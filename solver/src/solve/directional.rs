@@ -56,14 +56,14 @@ use super::shoot::{visible_samples, SamplePool, SampleScratch, Shot};
 use super::{ShotReport, SolveError, Solver};
 use crate::brdf::normalization::funk_hecke_d;
 use crate::brdf::GlossyLobe;
-use crate::format::{Batch, Representation, ScalarType, Solution, Vertex};
 use crate::mesh::{Mesh, NewVertex};
 use crate::scene::Scene;
 use crate::settings::SolverSettings;
-use crate::sh::{self, coefficient_count, Y00};
 use glam::DVec3;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
+use solution::format::{Batch, Representation, ScalarType, Solution, Vertex};
+use solution::sh::{self, coefficient_count, Y00};
 use std::collections::BTreeMap;
 use std::f64::consts::PI;
 use std::sync::Arc;
@@ -484,7 +484,7 @@ impl Solver {
     /// Sets up directional mode (called by [`Solver::new`]) or, in diffuse mode,
     /// records the warning for glossy materials treated as diffuse.
     pub(super) fn init_directional(&mut self, scene: &Scene) -> Result<(), SolveError> {
-        if self.settings.mode != crate::format::SolveMode::Directional {
+        if self.settings.mode != solution::format::SolveMode::Directional {
             self.warnings
                 .extend(diffuse_mode_warning(scene, &self.mesh));
             return Ok(());
@@ -802,7 +802,7 @@ impl Solver {
         let Some(d) = self.directional.as_deref() else {
             return;
         };
-        solution.header.mode = crate::format::SolveMode::Directional;
+        solution.header.mode = solution::format::SolveMode::Directional;
         let scale = (4.0 * PI).sqrt();
         // Per order: the batch and the map from mesh vertex to batch vertex.
         let mut batches: BTreeMap<u32, Batch> = BTreeMap::new();

@@ -2,9 +2,9 @@
 
 use super::tests::{material, scene_of};
 use super::*;
-use crate::format::Representation;
 use crate::settings::{BrdfNormalization, Preset};
-use crate::sh::{coefficient_count, gauss_legendre_on};
+use solution::format::Representation;
+use solution::sh::{coefficient_count, gauss_legendre_on};
 
 fn glossy_floor() -> (Scene, SolverSettings) {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../config/glossy_floor.toml");
@@ -39,7 +39,7 @@ fn exitance(order: u32, coefficients: &[f64]) -> DVec3 {
         let s = (1.0 - m * m).max(0.0).sqrt();
         for j in 0..n_phi {
             let phi = 2.0 * PI * j as f64 / n_phi as f64;
-            crate::sh::eval_basis(
+            solution::sh::eval_basis(
                 order,
                 DVec3::new(s * phi.cos(), s * phi.sin(), m),
                 &mut basis,
@@ -159,7 +159,7 @@ fn with_ks_zero_directional_mode_equals_the_diffuse_solver() {
         {
             let (order, sh) = b.vertex_sh(v as u32).unwrap();
             assert_eq!(order, 0);
-            let from_sh = DVec3::from_slice(sh) * crate::sh::Y00;
+            let from_sh = DVec3::from_slice(sh) * solution::sh::Y00;
             assert!(
                 (*la - from_sh).abs().max_element() <= 1e-6 * peak,
                 "{v}: {la} {from_sh}"
@@ -267,10 +267,10 @@ fn highlight_tracks_the_mirror_point_as_the_eye_moves() {
         for &v in &floor_vertices {
             let p = solver.mesh().vertices[v as usize].position + solver.offset();
             let s = &solver.mesh().surfaces[0];
-            let dir = crate::sh::to_local((eye - p).normalize(), s.normal, s.tangent);
+            let dir = solution::sh::to_local((eye - p).normalize(), s.normal, s.tangent);
             let (order, sh) = solver.vertex_sh(v).unwrap();
             let f32s: Vec<f32> = sh.iter().map(|&c| c as f32).collect();
-            let l = crate::sh::eval_rgb(order, &f32s, dir)[0];
+            let l = solution::sh::eval_rgb(order, &f32s, dir)[0];
             if l > best.1 {
                 best = (v, l);
             }
@@ -472,7 +472,7 @@ fn furnace_spread(solver: &Solver, exact: f64) -> (f64, f64, f64, f64, f64) {
             let s = (1.0 - m * m).sqrt();
             for j in 0..8 {
                 let phi = 2.0 * PI * j as f64 / 8.0;
-                crate::sh::eval_basis(
+                solution::sh::eval_basis(
                     order,
                     DVec3::new(s * phi.cos(), s * phi.sin(), m),
                     &mut basis,

@@ -47,12 +47,12 @@
 //! the mesh's exact count.
 
 use super::{human_bytes, SolveError, Solver};
-use crate::format::{Solution, SolveMode};
 use crate::geometry::hemicube::{Frame, Hemicube, HemicubeError, ItemBuffer, GOLDEN_ANGLE};
 use crate::scene::Scene;
 use crate::settings::SolverSettings;
 use glam::DVec3;
 use rayon::prelude::*;
+use solution::format::{Solution, SolveMode};
 use std::time::Instant;
 
 /// Bytes per stored form factor (f32).

@@ -51,7 +51,7 @@
 //! patches' unshot was gathered from) is not re-gathered.
 
 mod checkpoint;
-pub mod cube;
+pub mod cube_gather;
 pub mod directional;
 pub mod gauss_seidel;
 mod output;
@@ -61,7 +61,6 @@ pub mod shoot;
 pub use checkpoint::Checkpoint;
 pub use directional::{Directional, DirectionalCheckpoint, SourceChoice};
 
-use crate::format::SolveMode;
 use crate::geometry::visibility::Occluder;
 use crate::mesh::{Mesh, MeshError};
 use crate::scene::Scene;
@@ -69,6 +68,7 @@ use crate::settings::{SettingsError, SolverSettings};
 use glam::DVec3;
 use rayon::prelude::*;
 use shoot::{Received, RecordedShot, SamplePool, Scratch, Shot};
+use solution::format::SolveMode;
 use std::f64::consts::PI;
 use std::time::Instant;
 
@@ -154,9 +154,9 @@ pub struct Solver {
     offset: DVec3,
     /// From the scene, for the solution header.
     scene_recentre: DVec3,
-    scene_camera: Option<crate::camera::Camera>,
+    scene_camera: Option<solution::camera::Camera>,
     scene_units_per_metre: f64,
-    up_axis: crate::camera::UpAxis,
+    up_axis: solution::camera::UpAxis,
     /// Per surface.
     kd: Vec<DVec3>,
     emission: Vec<DVec3>,

@@ -2,11 +2,11 @@
 //! 6), and the ambient term for partial solutions.
 
 use super::Solver;
-use crate::camera::{Camera, UpAxis};
-use crate::format::{
+use glam::DVec3;
+use solution::camera::{Camera, UpAxis};
+use solution::format::{
     Batch, Header, Representation, ScalarType, Solution, SolveMode, SolveStats, Vertex,
 };
-use glam::DVec3;
 use std::f64::consts::PI;
 
 impl Solver {

@@ -414,8 +414,8 @@ pub fn refine(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::camera::UpAxis;
     use crate::scene::{Material, Polygon, Scene, SourceRef};
+    use solution::camera::UpAxis;
 
     /// One unit square, one patch: element 0 with corners 0..4.
     fn square_mesh() -> Mesh {

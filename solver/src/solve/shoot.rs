@@ -518,7 +518,7 @@ pub struct SampleScratch {
 /// The visible samples of `shot`'s source seen from vertex `v`'s receiving
 /// point, with their shares of F(v←s), into `scratch.samples`: the samples,
 /// culls and visibility of [`Shot::form_factor`], so the shares sum to its
-/// factor (tests `pair_factors_equal_the_shooters` in `solve/cube`, and the
+/// factor (tests `pair_factors_equal_the_shooters` in `solve/cube_gather`, and the
 /// Ks = 0 ≡ diffuse tests of directional mode). Returns the receiving
 /// point, the visible sample count and the rays traced. The directional
 /// transports (SH shooting and the global-cube gather) read their incoming

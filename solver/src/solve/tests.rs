@@ -1,8 +1,8 @@
 use super::*;
-use crate::camera::UpAxis;
-use crate::format::Representation;
 use crate::scene::{Material, Polygon, SourceRef};
 use crate::settings::Preset;
+use solution::camera::UpAxis;
+use solution::format::Representation;
 
 pub(crate) fn material(name: &str, kd: f64, emission: f64) -> Material {
     Material {

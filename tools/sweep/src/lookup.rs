@@ -12,8 +12,8 @@
 
 use crate::metrics::{relative_error_weighted, ErrorStats, MetricError};
 use glam::DVec3;
-use solver::format::Solution;
-use solver::raster::shade_vertices;
+use solution::format::Solution;
+use solution::raster::shade_vertices;
 
 /// A reference triangle, ready for point location.
 struct Triangle {
@@ -223,7 +223,7 @@ impl ReferenceLookup {
 /// average, not an average over wherever the adaptive mesher put vertices
 /// (which is densest exactly where the radiance is hardest: penumbrae and
 /// highlights).
-fn vertex_areas(batch: &solver::format::Batch) -> Vec<f64> {
+fn vertex_areas(batch: &solution::format::Batch) -> Vec<f64> {
     let mut area = vec![0.0; batch.vertices.len()];
     let p = |i: u32| {
         batch
@@ -245,7 +245,7 @@ fn vertex_areas(batch: &solver::format::Batch) -> Vec<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use solver::format::{Batch, Header, Representation, ScalarType, SolveMode, Vertex};
+    use solution::format::{Batch, Header, Representation, ScalarType, SolveMode, Vertex};
 
     /// A unit square in z = 0 facing +z as two triangles, diffuse (order 0),
     /// with vertex radiance `corner(x, y)` (stored as the Y00 coefficient).
@@ -264,7 +264,7 @@ mod tests {
                     normal: [0.0, 0.0, 1.0],
                     tangent: [1.0, 0.0, 0.0],
                 });
-                let c = (corner(x, y) / solver::sh::Y00) as f32;
+                let c = (corner(x, y) / solution::sh::Y00) as f32;
                 coefficients.extend([c, c, c]);
             }
         }

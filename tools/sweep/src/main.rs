@@ -99,12 +99,12 @@ pub struct PointResult {
 }
 
 /// The distinct representations of a solution's batches, in file order.
-fn representation_text(solution: &solver::format::Solution) -> String {
+fn representation_text(solution: &solution::format::Solution) -> String {
     let mut parts: Vec<String> = Vec::new();
     for batch in &solution.batches {
         let text = match batch.representation {
-            solver::format::Representation::Sh { order } => format!("L={order}"),
-            solver::format::Representation::Cube { directions } => format!("D={directions}"),
+            solution::format::Representation::Sh { order } => format!("L={order}"),
+            solution::format::Representation::Cube { directions } => format!("D={directions}"),
         };
         if !parts.contains(&text) {
             parts.push(text);
@@ -245,7 +245,7 @@ fn reference(args: &Args, scene: &SceneSpec, dir: &Path) -> anyhow::Result<Refer
     let point = points::reference_point(scene);
     let result = measure(args, scene, dir, &point, None)?;
     let point_dir = dir.join(point.id());
-    let solution = solver::format::read_solution(&point_dir.join("solution.sol"))
+    let solution = solution::format::read_solution(&point_dir.join("solution.sol"))
         .with_context(|| format!("reading the {} reference", scene.key))?;
     let offset = DVec3::from(solution.header.recentre_offset);
     let eye_file = DVec3::from(scene.vertex_eye) - offset;
@@ -406,7 +406,7 @@ fn measure(
                 Err(e) => notes.push(format!("image comparison: {e}")),
             }
         }
-        let vertex = solver::format::read_solution(&solution_path)
+        let vertex = solution::format::read_solution(&solution_path)
             .map_err(anyhow::Error::from)
             .and_then(|s| {
                 result.representation = Some(representation_text(&s));
@@ -475,7 +475,7 @@ fn truncated(
     let e = relative_error(&r, &t)?;
     result.image_error = Some(e.rel_l1);
     result.image_rmse = Some(e.rel_rmse);
-    let solution = solver::format::read_solution(&solution_path)?;
+    let solution = solution::format::read_solution(&solution_path)?;
     result.representation = Some(format!(
         "{} (drawn to L={order})",
         representation_text(&solution)

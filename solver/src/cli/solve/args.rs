@@ -1,6 +1,18 @@
 //! The flags of `solver solve` and the settings patch they make.
 
-use crate::format::SolveMode;
+use clap::builder::TypedValueParser;
+use solution::format::SolveMode;
+
+/// `--mode`'s parser. `SolveMode` lives in the contract crate, which does not depend
+/// on clap, so the command line maps its names here.
+fn solve_mode_parser() -> impl clap::builder::TypedValueParser<Value = SolveMode> {
+    clap::builder::PossibleValuesParser::new(["diffuse", "directional"]).map(|name| {
+        match name.as_str() {
+            "directional" => SolveMode::Directional,
+            _ => SolveMode::Diffuse,
+        }
+    })
+}
 use crate::settings::{
     BrdfNormalization, DirectionalRepresentation, FormFactorMethod, Preset, SettingsPatch,
 };
@@ -165,7 +177,7 @@ pub struct SolveArgs {
     /// diffuse (default) or directional (glossy, spherical harmonics).
     #[arg(
         long,
-        value_enum,
+        value_parser = solve_mode_parser(),
         value_name = "MODE",
         long_help = "diffuse (default): one radiance per vertex; MTL Ks is ignored with \
             a note. directional: glossy surfaces store outgoing radiance as spherical \

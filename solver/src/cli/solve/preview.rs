@@ -1,12 +1,12 @@
 //! `--preview PNG`: a CPU rendering of the solution (the same rasterizer the
 //! runtime's images are checked against), exposed and tone-mapped to sRGB.
 
-use crate::camera::Camera;
-use crate::format::Solution;
-use crate::raster::{self, RenderOptions, ToneCurve};
 use anyhow::Context;
 use glam::DVec3;
 use image::ImageEncoder;
+use solution::camera::Camera;
+use solution::format::Solution;
+use solution::raster::{self, RenderOptions, ToneCurve};
 use std::path::Path;
 
 /// Mid-grey key for the automatic exposure (Reinhard et al. 2002): the radiance

@@ -9,10 +9,10 @@
 use super::checkpoint::{self, Meta};
 use super::progress::{Reporter, Snapshot};
 use super::stats::RunStats;
-use crate::format::Solution;
 use anyhow::Context;
 use serde::de::DeserializeOwned;
 use serde::Serialize;
+use solution::format::Solution;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 
@@ -78,7 +78,7 @@ impl Session<'_> {
         checkpoint::write(&self.checkpoint_path, &meta, &shooter.state())?;
         let mut partial = shooter.solution(true);
         partial.header.stats.seconds = seconds;
-        crate::format::write_solution(self.out, &partial)
+        solution::format::write_solution(self.out, &partial)
             .with_context(|| format!("writing partial solution {}", self.out.display()))
     }
 
@@ -147,8 +147,10 @@ impl Session<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::format::{Batch, Header, Representation, ScalarType, SolveMode, SolveStats, Vertex};
     use serde::Deserialize;
+    use solution::format::{
+        Batch, Header, Representation, ScalarType, SolveMode, SolveStats, Vertex,
+    };
 
     /// A stand-in solver: each shot multiplies the unshot fraction by `decay`, and
     /// the "radiance" of its one triangle is the number of shots, so a solution
@@ -281,7 +283,7 @@ mod tests {
         // The last save was at shot 6 (a multiple of 3, before convergence at 7).
         let (meta, state): (Meta, ToyState) = s.load().unwrap();
         assert_eq!((meta.shots, state.shots), (6, 6));
-        let partial = crate::format::read_solution(s.out).unwrap();
+        let partial = solution::format::read_solution(s.out).unwrap();
         assert!(partial.header.partial);
         assert_eq!(partial.batches[0].coefficients[0], 6.0);
     }
@@ -296,7 +298,12 @@ mod tests {
         let outcome = s.run(interrupted, 0.0).unwrap();
         assert!(outcome.interrupted && !outcome.converged);
         assert_eq!(outcome.stats.shots, 4, "stops after the current shot");
-        assert!(crate::format::read_solution(s.out).unwrap().header.partial);
+        assert!(
+            solution::format::read_solution(s.out)
+                .unwrap()
+                .header
+                .partial
+        );
 
         FLAG.store(false, Ordering::SeqCst);
         let (meta, state): (Meta, ToyState) = s.load().unwrap();

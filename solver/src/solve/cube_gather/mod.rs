@@ -1,7 +1,7 @@
 //! Directional (glossy) radiosity on 001's global cubes (Immel, Cohen and
 //! Greenberg 1986, `shared/seeds/001`): each glossy vertex stores its outgoing
 //! radiance on the D = 6k² cell directions of a cube in its frame
-//! ([`crate::cube`]), and the whole system is gathered by Gauss–Seidel sweeps
+//! ([`solution::cube`]), and the whole system is gathered by Gauss–Seidel sweeps
 //! in light-propagation order — the documents' alternative to the thesis's
 //! spherical harmonics shot progressively (design notes, "The other methods in
 //! the documents").
@@ -80,14 +80,14 @@ mod transport;
 pub use lobe::{CellBrdf, ExactLobe};
 
 use super::{human_bytes, SolveError, Solver};
-use crate::cube;
-use crate::format::{Batch, Representation, ScalarType, Solution, SolveMode, Vertex};
 use crate::geometry::visibility::Occluder;
 use crate::scene::Scene;
 use crate::settings::SolverSettings;
 use crate::solve::shoot::{SamplePool, Shot};
 use glam::DVec3;
 use rayon::prelude::*;
+use solution::cube;
+use solution::format::{Batch, Representation, ScalarType, Solution, SolveMode, Vertex};
 use std::f64::consts::PI;
 use std::time::Instant;
 use transport::{PairInput, Receiver};
@@ -296,7 +296,7 @@ impl CubeResult {
             return DVec3::from_slice(values);
         }
         let (n, t) = self.frames[v as usize];
-        let local = crate::sh::to_local(dir.normalize_or_zero(), n, t);
+        let local = solution::sh::to_local(dir.normalize_or_zero(), n, t);
         let mut sum = DVec3::ZERO;
         for (cell, w) in cube::bilinear(self.k, local) {
             let s = self.cells.slot[cell as usize];

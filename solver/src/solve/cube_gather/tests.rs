@@ -1,10 +1,10 @@
 //! Tests of the global-cube gather: see [`super`].
 
 use super::*;
-use crate::camera::UpAxis;
 use crate::scene::{Material, Polygon, SourceRef};
 use crate::settings::{BrdfNormalization, DirectionalRepresentation, Preset};
-use crate::sh;
+use solution::camera::UpAxis;
+use solution::sh;
 
 fn material(name: &str, kd: f64, ks: f64, alpha: f64, emission: f64) -> Material {
     Material {
@@ -660,7 +660,7 @@ fn solution_has_a_cube_batch_for_glossy_vertices_and_round_trips() {
         }
     );
     assert_eq!(solution.batches[1].vertices.len(), 81);
-    let decoded = crate::format::decode(&crate::format::encode(solution).unwrap()).unwrap();
+    let decoded = solution::format::decode(&solution::format::encode(solution).unwrap()).unwrap();
     assert_eq!(&decoded, solution);
     // The stored cube, looked up as the runtime does, is the solver's radiance.
     let batch = &solution.batches[1];

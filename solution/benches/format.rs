@@ -1,12 +1,12 @@
 //! Throughput of the solution-file codec: encode, write (atomic, with fsync),
 //! validating map, decode, and materializing from the map.
 //!
-//! `cargo bench -p solver --bench format` (figures in docs/benchmarks.md).
+//! `cargo bench -p solution --bench format` (figures in docs/benchmarks.md).
 //! The workload is a scene-sized file: 300,000 diffuse vertices (L = 0, f32) and
 //! 30,000 glossy vertices (L = 6, 49 coefficients per channel, f16).
 
-use solver::camera::{Camera, UpAxis};
-use solver::format::{
+use solution::camera::{Camera, UpAxis};
+use solution::format::{
     decode, encode, f16_scale_for, write_solution, Batch, Header, MappedSolution, Representation,
     ScalarType, Solution, SolveMode, SolveStats, Vertex,
 };

@@ -8,7 +8,7 @@
 //! The SH mode normalizes the expansion it actually uses (design notes,
 //! "Directional mode"); the cube does the same with the lobe it actually uses,
 //! its point values on the H upper cells. With `Q_i = Σ_o g(ω_o·r_i) cosθ_o Ω_o`
-//! (Ω_o the exact cell solid angle, [`crate::cube::cell_solid_angle`]) — the
+//! (Ω_o the exact cell solid angle, [`solution::cube::cell_solid_angle`]) — the
 //! cube's own quadrature of `S(μ_i) = ∫_H g(ω·r_i) cosθ dω`:
 //!
 //! * `thesis`: `C_i = 1 / Q_i`, so every incident beam reflects exactly `Ks`

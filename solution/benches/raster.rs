@@ -1,17 +1,17 @@
-//! Speed of the CPU reference renderer (`solver::raster::render`): the vertex
+//! Speed of the CPU reference renderer (`solution::raster::render`): the vertex
 //! stage (SH toward the eye) and the whole frame, for a room of gridded walls.
 //!
-//! `cargo bench -p solver --bench raster` (figures in docs/benchmarks.md, section
+//! `cargo bench -p solution --bench raster` (figures in docs/benchmarks.md, section
 //! "CPU rasterizer"). The scene is a 10 × 4 × 8 room seen from inside, each of its
 //! six walls a grid of `GRID × GRID` quads with shared vertices; the floor is
 //! either diffuse (order 0) or glossy (order 8, 81 coefficients per channel).
 
 use glam::DVec3;
-use solver::camera::{Camera, UpAxis};
-use solver::format::{
+use solution::camera::{Camera, UpAxis};
+use solution::format::{
     Batch, Header, Representation, ScalarType, Solution, SolveMode, SolveStats, Vertex,
 };
-use solver::raster::{render, shade_vertices, RenderOptions};
+use solution::raster::{render, shade_vertices, RenderOptions};
 use std::hint::black_box;
 use std::time::Instant;
 

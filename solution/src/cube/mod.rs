@@ -20,7 +20,7 @@
 //! handful of instructions; the error it adds is bounded by the radiance change over
 //! half a cell, the same order as the bilinear error itself).
 //!
-//! This module is always built: the solver fills cubes, the runtime and the CPU
+//! The solver fills cubes, the runtime and the CPU
 //! reference renderer read them.
 
 use glam::{DVec3, Vec3};

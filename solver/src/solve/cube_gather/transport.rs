@@ -19,8 +19,8 @@
 
 use super::UpperCells;
 use crate::mesh::Mesh;
-use crate::sh;
 use crate::solve::shoot::{visible_samples, SamplePool, SampleScratch, Shot};
+use solution::sh;
 
 /// Transport from one source patch into one receiver.
 #[derive(Clone, Copy, Debug)]

@@ -60,7 +60,6 @@ pub enum ScalarType {
 /// Which transport the solve modelled: diffuse only, or directional (glossy) SH.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
 #[serde(rename_all = "lowercase")]
-#[cfg_attr(feature = "solve", derive(clap::ValueEnum))]
 pub enum SolveMode {
     #[default]
     Diffuse,

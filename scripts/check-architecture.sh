@@ -1,0 +1,35 @@
+#!/usr/bin/env bash
+# Checks the dependency invariants that ARCHITECTURE.md states, on the real
+# dependency graph (normal and build dependencies; dev-dependencies do not ship).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+fail=0
+# deps_of PACKAGE: the names of every crate PACKAGE links, one per line.
+deps_of() {
+  cargo tree --locked -p "$1" -e normal,build --prefix none --format '{p}' |
+    awk '{print $1}' | sort -u
+}
+# refuse PACKAGE FORBIDDEN...: fails when PACKAGE's graph contains one of them.
+refuse() {
+  local package=$1; shift
+  local graph; graph=$(deps_of "$package")
+  for forbidden in "$@"; do
+    if grep -qx "$forbidden" <<<"$graph"; then
+      echo "check-architecture: FAILED: $package depends on $forbidden" >&2
+      cargo tree --locked -p "$package" -e normal,build -i "$forbidden" >&2 || true
+      fail=1
+    fi
+  done
+}
+
+refuse runtime solver
+refuse solution solver runtime clap ash openxr winit
+refuse solver runtime ash openxr winit
+[ "$fail" -eq 0 ] || exit 1
+echo "check-architecture: runtime links no solver; solution links no solver, runtime, clap, ash, openxr, winit; solver links no ash, openxr, winit"
+
+# The runtime must build on its own: in a workspace build Cargo unifies features
+# and dependencies across members, which could hide a missing one.
+echo "== cargo build -p runtime (alone)"
+cargo build --locked -p runtime
