@@ -903,9 +903,10 @@ impl Presenter {
         let slot = &mut self.slots[frame.slot];
         let words = font::shader_words(&overlay.grid);
         let bytes: Vec<u8> = words.iter().flat_map(|w| w.to_le_bytes()).collect();
-        // The slot's fence was waited for in begin_frame: the GPU no longer
-        // reads this buffer.
-        slot.overlay.write(0, &bytes);
+        // SAFETY: the slot's fence was waited for in begin_frame and its command
+        // buffer is not resubmitted before this frame's submit below, so the GPU
+        // does not read this buffer now.
+        unsafe { slot.overlay.write(0, &bytes) };
         let dump_buffer = if dump {
             if !self.can_dump {
                 bail!("this window's swapchain images cannot be copied (no TRANSFER_SRC usage)");
@@ -1236,7 +1237,9 @@ impl Presenter {
         };
         // SAFETY: the fence belongs to this device.
         unsafe { device.wait_for_fences(&[slot.fence], true, u64::MAX) }.ctx("vkWaitForFences")?;
-        let data = buffer.read();
+        // SAFETY: the fence just waited for covers the only submission that
+        // writes `buffer`, which was made for this dump and is used by no other.
+        let data = unsafe { buffer.read() };
         let bgra = matches!(
             self.format.format,
             vk::Format::B8G8R8A8_SRGB | vk::Format::B8G8R8A8_UNORM

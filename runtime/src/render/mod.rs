@@ -624,7 +624,10 @@ impl StereoRenderer {
                 bytes.extend_from_slice(&f.to_le_bytes());
             }
         }
-        self.uniforms.write(0, &bytes);
+        // SAFETY: `render` waited for the frame fence before calling this, and
+        // the uniform buffer is used only by this renderer's command buffer, so
+        // no GPU work reads it now.
+        unsafe { self.uniforms.write(0, &bytes) };
     }
 
     fn record(&self, view_count: usize, image: usize) -> Result<(), GpuError> {
@@ -936,7 +939,9 @@ impl StereoRenderer {
                 );
             }
         })?;
-        let data = buffer.read();
+        // SAFETY: `one_shot` waited for the only submission that writes
+        // `buffer`, a buffer made for this read-back and used by nothing else.
+        let data = unsafe { buffer.read() };
         let unscale = 1.0 / self.scene.radiance_scale;
         let bgra = matches!(
             self.swapchain.format,

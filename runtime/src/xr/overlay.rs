@@ -166,7 +166,9 @@ fn upload(
             location: MemoryLocation::Mapped,
         },
     )?;
-    staging.write(0, pixels);
+    // SAFETY: the staging buffer was just created; no command buffer refers to
+    // it yet.
+    unsafe { staging.write(0, pixels) };
     let range = vk::ImageSubresourceRange {
         aspect_mask: vk::ImageAspectFlags::COLOR,
         base_mip_level: 0,
