@@ -13,6 +13,7 @@
 //! is enabled and every message it sends is logged to stderr and counted
 //! ([`ValidationLog`]); the tests assert that the count stays zero.
 
+pub mod barrier;
 mod resources;
 pub mod shaders;
 
