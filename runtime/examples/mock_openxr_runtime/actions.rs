@@ -12,6 +12,7 @@ pub(crate) unsafe extern "system" fn string_to_path(
     text: *const c_char,
     out: *mut xr::Path,
 ) -> xr::Result {
+    // SAFETY: the name is a NUL-terminated string (the loader's pointer contract: crate notes).
     let text = unsafe { cstr(text) }.to_owned();
     if !text.starts_with('/') {
         return xr::Result::ERROR_PATH_FORMAT_INVALID;
@@ -24,6 +25,7 @@ pub(crate) unsafe extern "system" fn string_to_path(
                 s.paths.len() - 1
             }
         };
+        // SAFETY: `out` is valid for writing (the loader's pointer contract: crate notes).
         unsafe { *out = xr::Path::from_raw(index as u64 + 1) };
         xr::Result::SUCCESS
     })
@@ -36,6 +38,7 @@ pub(crate) unsafe extern "system" fn create_action_set(
 ) -> xr::Result {
     with(|s| {
         let id = handle(s);
+        // SAFETY: `out` is valid for writing (the loader's pointer contract: crate notes).
         unsafe { *out = xr::ActionSet::from_raw(id) };
         xr::Result::SUCCESS
     })
@@ -46,10 +49,12 @@ pub(crate) unsafe extern "system" fn create_action(
     info: *const xr::ActionCreateInfo,
     out: *mut xr::Action,
 ) -> xr::Result {
+    // SAFETY: `info` is valid for reading and its name is NUL-terminated (the loader's pointer contract: crate notes).
     let name = unsafe { cstr((*info).action_name.as_ptr()) }.to_owned();
     with(|s| {
         let id = handle(s);
         s.actions.insert(id, name);
+        // SAFETY: `out` is valid for writing (the loader's pointer contract: crate notes).
         unsafe { *out = xr::Action::from_raw(id) };
         xr::Result::SUCCESS
     })
@@ -69,6 +74,7 @@ pub(crate) unsafe extern "system" fn suggest_bindings(
     _i: xr::Instance,
     info: *const xr::InteractionProfileSuggestedBinding,
 ) -> xr::Result {
+    // SAFETY: `info` is valid for reading (the loader's pointer contract: crate notes).
     let info = unsafe { &*info };
     with(|s| {
         let profile = s
@@ -119,11 +125,13 @@ pub(crate) unsafe extern "system" fn action_boolean(
     info: *const xr::ActionStateGetInfo,
     out: *mut xr::ActionStateBoolean,
 ) -> xr::Result {
+    // SAFETY: `info` is valid for reading (the loader's pointer contract: crate notes).
     let action = unsafe { (*info).action.into_raw() };
     let pressed = with(|s| {
         let help = s.actions.get(&action).is_some_and(|n| n == "help");
         help && s.help_at == Some(s.ended_total)
     });
+    // SAFETY: `out` is valid for writing (the loader's pointer contract: crate notes).
     let out = unsafe { &mut *out };
     out.current_state = pressed.into();
     out.changed_since_last_sync = pressed.into();
@@ -138,6 +146,7 @@ pub(crate) unsafe extern "system" fn action_vector2(
     out: *mut xr::ActionStateVector2f,
 ) -> xr::Result {
     let (x, y) = script::walk();
+    // SAFETY: `out` is valid for writing (the loader's pointer contract: crate notes).
     let out = unsafe { &mut *out };
     out.current_state = xr::Vector2f { x, y };
     out.changed_since_last_sync = false.into();

@@ -9,6 +9,7 @@ pub(crate) unsafe fn cstr<'a>(p: *const c_char) -> &'a str {
     if p.is_null() {
         ""
     } else {
+        // SAFETY: `p` is not null, and callers pass NUL-terminated strings from the application.
         unsafe { CStr::from_ptr(p) }.to_str().unwrap_or("")
     }
 }
@@ -26,6 +27,7 @@ pub(crate) unsafe fn fill<T: Copy>(
     out: *mut T,
     items: &[T],
 ) -> xr::Result {
+    // SAFETY: the caller guarantees that `count` is valid for writing.
     unsafe { *count = items.len() as u32 };
     if cap == 0 {
         return xr::Result::SUCCESS;
@@ -34,6 +36,7 @@ pub(crate) unsafe fn fill<T: Copy>(
         return xr::Result::ERROR_SIZE_INSUFFICIENT;
     }
     for (i, item) in items.iter().enumerate() {
+        // SAFETY: `i < items.len() <= cap`, and `out` holds `cap` elements (the caller's contract).
         unsafe { *out.add(i) = *item };
     }
     xr::Result::SUCCESS

@@ -28,6 +28,7 @@ pub(crate) unsafe extern "system" fn wait_frame(
         sess.frame_waited = true;
         let visible = sess.state == xr::SessionState::VISIBLE.into_raw()
             || sess.state == xr::SessionState::FOCUSED.into_raw();
+        // SAFETY: `out` is valid for writing (the loader's pointer contract: crate notes).
         let out = unsafe { &mut *out };
         out.predicted_display_time = xr::Time::from_nanos(sess.next_time);
         out.predicted_display_period = xr::Duration::from_nanos(FRAME_PERIOD_NS);
@@ -75,6 +76,7 @@ pub(crate) unsafe extern "system" fn end_frame(
     session: xr::Session,
     info: *const xr::FrameEndInfo,
 ) -> xr::Result {
+    // SAFETY: `info` is valid for reading (the loader's pointer contract: crate notes).
     let info = unsafe { &*info };
     with(|s| {
         let id = session.into_raw();
@@ -105,16 +107,19 @@ pub(crate) unsafe extern "system" fn end_frame(
         let mut shown_image: Option<(vk::Image, u32, u32)> = None;
         let mut submitted_eyes = [[0f32; 11]; 2];
         for i in 0..info.layer_count as usize {
+            // SAFETY: `i < layer_count`, and `layers` holds that many valid layer pointers (the loader's pointer contract: crate notes).
             let header = unsafe { &**info.layers.add(i) };
             if header.ty == xr::CompositionLayerProjection::TYPE {
                 projection = true;
                 let layer =
+                    // SAFETY: the header's `ty`, checked above, says which layer structure it begins; `layers[i]` is valid for reading (crate notes).
                     unsafe { &*(header as *const _ as *const xr::CompositionLayerProjection) };
                 if layer.view_count != 2 {
                     problems.push(format!("{} projection views", layer.view_count));
                     continue;
                 }
                 for v in 0..2usize {
+                    // SAFETY: `v < view_count`, and `views` holds that many views (the loader's pointer contract: crate notes).
                     let view = unsafe { &*layer.views.add(v) };
                     let (p, o, f) = (view.pose.position, view.pose.orientation, view.fov);
                     submitted_eyes[v] = [
@@ -177,6 +182,7 @@ pub(crate) unsafe extern "system" fn end_frame(
                 }
             } else if header.ty == xr::CompositionLayerQuad::TYPE {
                 quad = true;
+                // SAFETY: the header's `ty`, checked above, says which layer structure it begins; `layers[i]` is valid for reading (crate notes).
                 let layer = unsafe { &*(header as *const _ as *const xr::CompositionLayerQuad) };
                 match s.swapchains.get(&layer.sub_image.swapchain.into_raw()) {
                     Some(c) if c.released_once => {}

@@ -23,12 +23,15 @@ pub(crate) unsafe extern "system" fn enumerate_extensions(
     fixed(&mut ext.extension_name, "XR_KHR_vulkan_enable2");
     if cap > 0 && !out.is_null() {
         // Keep the caller's type/next as the spec asks; write the rest.
+        // SAFETY: `out` is valid for writing (the loader's pointer contract: crate notes).
         let slot = unsafe { &mut *out };
         slot.extension_name = ext.extension_name;
         slot.extension_version = ext.extension_version;
+        // SAFETY: `count` is valid for writing (the loader's pointer contract: crate notes).
         unsafe { *count = 1 };
         return xr::Result::SUCCESS;
     }
+    // SAFETY: `count` is valid for writing (the loader's pointer contract: crate notes).
     unsafe { *count = 1 };
     xr::Result::SUCCESS
 }
@@ -37,6 +40,7 @@ pub(crate) unsafe extern "system" fn create_instance(
     info: *const xr::InstanceCreateInfo,
     instance: *mut xr::Instance,
 ) -> xr::Result {
+    // SAFETY: `info` is valid for reading (the loader's pointer contract: crate notes).
     let info = unsafe { &*info };
     let version = info.application_info.api_version;
     with(|s| {
@@ -46,6 +50,7 @@ pub(crate) unsafe extern "system" fn create_instance(
             return xr::Result::ERROR_API_VERSION_UNSUPPORTED;
         }
         let names: Vec<&str> = (0..info.enabled_extension_count as usize)
+            // SAFETY: `info` names `enabled_extension_count` NUL-terminated strings (the loader's pointer contract: crate notes).
             .map(|i| unsafe { cstr(*info.enabled_extension_names.add(i)) })
             .collect();
         if !names.contains(&"XR_KHR_vulkan_enable2") {
@@ -56,6 +61,7 @@ pub(crate) unsafe extern "system" fn create_instance(
         }
         s.report.api_version = format!("{version}");
         s.instance = handle(s);
+        // SAFETY: `instance` is valid for writing (the loader's pointer contract: crate notes).
         unsafe { *instance = xr::Instance::from_raw(s.instance) };
         xr::Result::SUCCESS
     })
@@ -80,6 +86,7 @@ pub(crate) unsafe extern "system" fn instance_properties(
     _instance: xr::Instance,
     props: *mut xr::InstanceProperties,
 ) -> xr::Result {
+    // SAFETY: `props` is valid for writing (the loader's pointer contract: crate notes).
     let props = unsafe { &mut *props };
     props.runtime_version = xr::Version::new(0, 1, 0);
     fixed(&mut props.runtime_name, "mock runtime");
@@ -91,9 +98,11 @@ pub(crate) unsafe extern "system" fn get_system(
     info: *const xr::SystemGetInfo,
     system: *mut xr::SystemId,
 ) -> xr::Result {
+    // SAFETY: `info` is valid for reading (the loader's pointer contract: crate notes).
     if unsafe { (*info).form_factor } != xr::FormFactor::HEAD_MOUNTED_DISPLAY {
         return xr::Result::ERROR_FORM_FACTOR_UNSUPPORTED;
     }
+    // SAFETY: `system` is valid for writing (the loader's pointer contract: crate notes).
     unsafe { *system = xr::SystemId::from_raw(1) };
     xr::Result::SUCCESS
 }
@@ -105,6 +114,7 @@ pub(crate) unsafe extern "system" fn view_configurations(
     count: *mut u32,
     out: *mut xr::ViewConfigurationType,
 ) -> xr::Result {
+    // SAFETY: `count` is valid for writing and `out` for `cap` elements (the two-call idiom; crate notes).
     unsafe {
         fill(
             cap,
@@ -126,6 +136,7 @@ pub(crate) unsafe extern "system" fn blend_modes(
     if view != xr::ViewConfigurationType::PRIMARY_STEREO {
         return xr::Result::ERROR_VIEW_CONFIGURATION_TYPE_UNSUPPORTED;
     }
+    // SAFETY: `count` is valid for writing and `out` for `cap` elements (the two-call idiom; crate notes).
     unsafe { fill(cap, count, out, &[xr::EnvironmentBlendMode::OPAQUE]) }
 }
 
@@ -147,6 +158,7 @@ pub(crate) unsafe extern "system" fn view_configuration_views(
         recommended_swapchain_sample_count: 1,
         max_swapchain_sample_count: 1,
     };
+    // SAFETY: `count` is valid for writing and `out` for `cap` elements (the two-call idiom; crate notes).
     unsafe { fill(cap, count, out, &[v, v]) }
 }
 
@@ -167,6 +179,7 @@ pub(crate) unsafe extern "system" fn poll_event(
             if let Some(sess) = s.sessions.get_mut(&session) {
                 sess.state = state;
             }
+            // SAFETY: `buffer` is an XrEventDataBuffer, large enough for any event and valid for writing (the loader's pointer contract: crate notes).
             unsafe { std::ptr::write(buffer as *mut xr::EventDataSessionStateChanged, event) };
             xr::Result::SUCCESS
         }

@@ -22,12 +22,13 @@
 //!   (both layers, 4 bytes per pixel, in the swapchain's format).
 //!
 //! **Safety.** Every entry point is an `unsafe extern "system" fn` called by
-//! the OpenXR loader with the application's arguments; the one invariant the
-//! pointer dereferences below rely on (and which is not repeated at each of
-//! them) is the specification's: every input pointer is valid for reading its
-//! structure, every output pointer for writing it, and a capacity names how
-//! many elements an output array holds. Vulkan calls additionally rely on the
-//! handles being the ones this runtime created, as stated where they occur.
+//! the OpenXR loader with the application's arguments; the invariant the
+//! pointer dereferences rely on is the specification's (the loader's pointer
+//! contract): every input pointer is valid for reading its structure, every
+//! output pointer for writing it, and a capacity names how many elements an
+//! output array holds. Each `unsafe` block's `// SAFETY:` comment names the
+//! pointer it relies on; Vulkan calls additionally rely on the handles being
+//! the ones this runtime created, as stated where they occur.
 //!
 //! Views: 320×240 recommended per eye (the smallest conformant size), an IPD
 //! of 63 mm, asymmetric fields of view mirrored between the eyes, and a head

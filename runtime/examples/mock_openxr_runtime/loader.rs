@@ -16,6 +16,7 @@ pub unsafe extern "system" fn xrNegotiateLoaderRuntimeInterface(
     loader: *const openxr::sys::loader::XrNegotiateLoaderInfo,
     request: *mut openxr::sys::loader::XrNegotiateRuntimeRequest,
 ) -> xr::Result {
+    // SAFETY: the loader passes valid negotiation structures (see `# Safety`).
     let (loader, request) = unsafe { (&*loader, &mut *request) };
     request.runtime_interface_version = 1;
     request.runtime_api_version = loader.max_api_version;
@@ -39,6 +40,7 @@ unsafe extern "system" fn get_instance_proc_addr(
     name: *const c_char,
     function: *mut Option<xr::pfn::VoidFunction>,
 ) -> xr::Result {
+    // SAFETY: the name is a NUL-terminated string (the loader's pointer contract: crate notes).
     let name = unsafe { cstr(name) };
     let f = table!(name,
         "xrGetInstanceProcAddr" => get_instance_proc_addr,
@@ -103,6 +105,7 @@ unsafe extern "system" fn get_instance_proc_addr(
         "xrGetCurrentInteractionProfile" => unsupported,
         "xrPathToString" => unsupported,
     );
+    // SAFETY: `function` is valid for writing (the loader's pointer contract: crate notes).
     unsafe { *function = f };
     if f.is_some() {
         xr::Result::SUCCESS

@@ -11,15 +11,18 @@ pub(crate) unsafe extern "system" fn create_session(
     info: *const xr::SessionCreateInfo,
     out: *mut xr::Session,
 ) -> xr::Result {
+    // SAFETY: `info` is valid for reading (the loader's pointer contract: crate notes).
     let info = unsafe { &*info };
     with(|s| {
         if !s.requirements_queried {
             return xr::Result::ERROR_GRAPHICS_REQUIREMENTS_CALL_MISSING;
         }
         let binding = info.next as *const xr::GraphicsBindingVulkanKHR;
+        // SAFETY: `binding` is valid for reading (the loader's pointer contract: crate notes).
         if binding.is_null() || unsafe { (*binding).ty } != xr::GraphicsBindingVulkanKHR::TYPE {
             return violation(s, "session without a Vulkan graphics binding".into());
         }
+        // SAFETY: `binding` is valid for reading (the loader's pointer contract: crate notes).
         let b = unsafe { &*binding };
         let Some(v) = &s.vulkan else {
             return xr::Result::ERROR_GRAPHICS_DEVICE_INVALID;
@@ -47,6 +50,7 @@ pub(crate) unsafe extern "system" fn create_session(
         s.report.sessions_created += 1;
         push_state(s, id, xr::SessionState::IDLE);
         push_state(s, id, xr::SessionState::READY);
+        // SAFETY: `out` is valid for writing (the loader's pointer contract: crate notes).
         unsafe { *out = xr::Session::from_raw(id) };
         xr::Result::SUCCESS
     })
@@ -79,6 +83,7 @@ pub(crate) unsafe extern "system" fn begin_session(
     session: xr::Session,
     info: *const xr::SessionBeginInfo,
 ) -> xr::Result {
+    // SAFETY: `info` is valid for reading (the loader's pointer contract: crate notes).
     let view = unsafe { (*info).primary_view_configuration_type };
     with(|s| {
         let id = session.into_raw();

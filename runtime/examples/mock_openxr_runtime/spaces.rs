@@ -79,6 +79,7 @@ pub(crate) unsafe extern "system" fn reference_spaces(
     if !no_stage {
         spaces.push(xr::ReferenceSpaceType::STAGE);
     }
+    // SAFETY: `count` is valid for writing and `out` for `cap` elements (the two-call idiom; crate notes).
     unsafe { fill(cap, count, out, &spaces) }
 }
 
@@ -87,6 +88,7 @@ pub(crate) unsafe extern "system" fn create_reference_space(
     info: *const xr::ReferenceSpaceCreateInfo,
     out: *mut xr::Space,
 ) -> xr::Result {
+    // SAFETY: `info` is valid for reading (the loader's pointer contract: crate notes).
     let kind = unsafe { (*info).reference_space_type };
     with(|s| {
         if kind == xr::ReferenceSpaceType::STAGE && s.no_stage {
@@ -95,6 +97,7 @@ pub(crate) unsafe extern "system" fn create_reference_space(
         let id = handle(s);
         s.spaces.insert(id, (session.into_raw(), kind.into_raw()));
         s.report.reference_spaces.push(kind.into_raw());
+        // SAFETY: `out` is valid for writing (the loader's pointer contract: crate notes).
         unsafe { *out = xr::Space::from_raw(id) };
         xr::Result::SUCCESS
     })
@@ -127,6 +130,7 @@ pub(crate) unsafe extern "system" fn locate_space(
             .first_head
             .get_or_insert([p.x, p.y, p.z, q.x, q.y, q.z, q.w]);
     });
+    // SAFETY: `out` is valid for writing (the loader's pointer contract: crate notes).
     let out = unsafe { &mut *out };
     out.location_flags = xr::SpaceLocationFlags::ORIENTATION_VALID
         | xr::SpaceLocationFlags::POSITION_VALID
@@ -147,9 +151,12 @@ pub(crate) unsafe extern "system" fn locate_views(
     count: *mut u32,
     out: *mut xr::View,
 ) -> xr::Result {
+    // SAFETY: `info` is valid for reading (the loader's pointer contract: crate notes).
     let info = unsafe { &*info };
     let t = info.display_time.as_nanos();
     let views = eyes(t);
+    // SAFETY: `state` and `count` are valid for writing (the loader's pointer
+    // contract: crate notes).
     unsafe {
         (*state).view_state_flags = xr::ViewStateFlags::ORIENTATION_VALID
             | xr::ViewStateFlags::POSITION_VALID
@@ -164,6 +171,7 @@ pub(crate) unsafe extern "system" fn locate_views(
         return xr::Result::ERROR_SIZE_INSUFFICIENT;
     }
     for (i, v) in views.iter().enumerate() {
+        // SAFETY: `i < 2 <= cap`, and `out` holds `cap` views (the loader's pointer contract: crate notes).
         let slot = unsafe { &mut *out.add(i) };
         slot.pose = v.pose;
         slot.fov = v.fov;

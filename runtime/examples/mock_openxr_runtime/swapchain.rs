@@ -20,6 +20,7 @@ pub(crate) unsafe extern "system" fn swapchain_formats(
         vk::Format::B8G8R8A8_SRGB.as_raw() as i64,
         vk::Format::R8G8B8A8_SRGB.as_raw() as i64,
     ];
+    // SAFETY: `count` is valid for writing and `out` for `cap` elements (the two-call idiom; crate notes).
     unsafe { fill(cap, count, out, &formats) }
 }
 
@@ -28,6 +29,7 @@ pub(crate) unsafe extern "system" fn create_swapchain(
     info: *const xr::SwapchainCreateInfo,
     out: *mut xr::Swapchain,
 ) -> xr::Result {
+    // SAFETY: `info` is valid for reading (the loader's pointer contract: crate notes).
     let info = unsafe { &*info };
     with(|s| {
         s.report.swapchain_formats.push(info.format);
@@ -82,9 +84,11 @@ pub(crate) unsafe extern "system" fn create_swapchain(
             let Ok(image) = (unsafe { device.create_image(&create, None) }) else {
                 return xr::Result::ERROR_RUNTIME_FAILURE;
             };
+            // SAFETY: `image` was just made on this device.
             let req = unsafe { device.get_image_memory_requirements(image) };
             let memory_types = instance
                 .as_ref()
+                // SAFETY: `physical` is the device this instance named for the session.
                 .map(|i| unsafe { i.get_physical_device_memory_properties(physical) })
                 .unwrap_or_default();
             let type_index = (0..memory_types.memory_type_count)
@@ -93,9 +97,13 @@ pub(crate) unsafe extern "system" fn create_swapchain(
             let alloc = vk::MemoryAllocateInfo::default()
                 .allocation_size(req.size)
                 .memory_type_index(type_index);
+            // SAFETY: the allocate info is local; the memory is freed with the
+            // swapchain.
             let Ok(memory) = (unsafe { device.allocate_memory(&alloc, None) }) else {
                 return xr::Result::ERROR_RUNTIME_FAILURE;
             };
+            // SAFETY: the memory was allocated for this image's requirements and
+            // is bound once.
             if unsafe { device.bind_image_memory(image, memory, 0) }.is_err() {
                 return xr::Result::ERROR_RUNTIME_FAILURE;
             }
@@ -114,6 +122,7 @@ pub(crate) unsafe extern "system" fn create_swapchain(
                 ..Swapchain::default()
             },
         );
+        // SAFETY: `out` is valid for writing (the loader's pointer contract: crate notes).
         unsafe { *out = xr::Swapchain::from_raw(id) };
         xr::Result::SUCCESS
     })
@@ -149,6 +158,7 @@ pub(crate) unsafe extern "system" fn swapchain_images(
             .map(|c| c.images.iter().map(|(i, _)| i.as_raw()).collect())
             .unwrap_or_default()
     });
+    // SAFETY: `count` is valid for writing (the loader's pointer contract: crate notes).
     unsafe { *count = images.len() as u32 };
     if cap == 0 {
         return xr::Result::SUCCESS;
@@ -158,6 +168,8 @@ pub(crate) unsafe extern "system" fn swapchain_images(
     }
     let out = out as *mut xr::SwapchainImageVulkanKHR;
     for (i, image) in images.iter().enumerate() {
+        // SAFETY: `i < images.len() <= cap`, and `out` holds `cap` Vulkan image
+        // structures, valid for writing (the loader's pointer contract: crate notes).
         unsafe { (*out.add(i)).image = *image };
     }
     xr::Result::SUCCESS
@@ -182,6 +194,7 @@ pub(crate) unsafe extern "system" fn acquire_image(
         c.next = (c.next + 1) % c.images.len() as u32;
         c.acquired.push_back(i);
         c.waited = false;
+        // SAFETY: `index` is valid for writing (the loader's pointer contract: crate notes).
         unsafe { *index = i };
         xr::Result::SUCCESS
     })

@@ -10,6 +10,7 @@ pub(crate) unsafe extern "system" fn graphics_requirements(
     _s: xr::SystemId,
     out: *mut xr::GraphicsRequirementsVulkanKHR,
 ) -> xr::Result {
+    // SAFETY: `out` is valid for writing (the loader's pointer contract: crate notes).
     let out = unsafe { &mut *out };
     out.min_api_version_supported = xr::Version::new(1, 0, 0);
     out.max_api_version_supported = xr::Version::new(1, 3, 0);
@@ -26,6 +27,7 @@ pub(crate) unsafe extern "system" fn create_vulkan_instance(
     out: *mut xr::platform::VkInstance,
     vk_result: *mut xr::platform::VkResult,
 ) -> xr::Result {
+    // SAFETY: `info` is valid for reading (the loader's pointer contract: crate notes).
     let info = unsafe { &*info };
     with(|s| {
         if !s.requirements_queried {
@@ -42,7 +44,9 @@ pub(crate) unsafe extern "system" fn create_vulkan_instance(
                 get_instance_proc_addr: gipa,
             })
         };
+        // SAFETY: `vulkanCreateInfo` points to the application's valid Vulkan create info (the loader's pointer contract: crate notes).
         let create = unsafe { &*(info.vulkan_create_info as *const vk::InstanceCreateInfo) };
+        // SAFETY: a Vulkan create info's application info is null or valid for reading.
         let version = unsafe { create.p_application_info.as_ref() }
             .map(|a| a.api_version)
             .unwrap_or(0);
@@ -52,7 +56,9 @@ pub(crate) unsafe extern "system" fn create_vulkan_instance(
         // SAFETY: the application's create info, valid for the call (module notes).
         match unsafe { entry.create_instance(create, None) } {
             Ok(instance) => {
+                // SAFETY: `out` is valid for writing (the loader's pointer contract: crate notes).
                 unsafe { *out = instance.handle().as_raw() as usize as _ };
+                // SAFETY: `vk_result` is valid for writing (the loader's pointer contract: crate notes).
                 unsafe { *vk_result = 0 };
                 s.vulkan = Some(VulkanSide {
                     gipa,
@@ -63,6 +69,7 @@ pub(crate) unsafe extern "system" fn create_vulkan_instance(
                 });
                 s.report.vulkan_instance_created = true;
             }
+            // SAFETY: `vk_result` is valid for writing (the loader's pointer contract: crate notes).
             Err(e) => unsafe { *vk_result = e.as_raw() },
         }
         xr::Result::SUCCESS
@@ -74,6 +81,7 @@ pub(crate) unsafe extern "system" fn graphics_device(
     info: *const xr::VulkanGraphicsDeviceGetInfoKHR,
     out: *mut xr::platform::VkPhysicalDevice,
 ) -> xr::Result {
+    // SAFETY: `info` is valid for reading (the loader's pointer contract: crate notes).
     let info = unsafe { &*info };
     with(|s| {
         let Some(v) = s.vulkan.as_mut() else {
@@ -94,6 +102,7 @@ pub(crate) unsafe extern "system" fn graphics_device(
             return xr::Result::ERROR_RUNTIME_FAILURE;
         };
         v.physical = physical;
+        // SAFETY: `out` is valid for writing (the loader's pointer contract: crate notes).
         unsafe { *out = physical.as_raw() as usize as _ };
         xr::Result::SUCCESS
     })
@@ -105,6 +114,7 @@ pub(crate) unsafe extern "system" fn create_vulkan_device(
     out: *mut xr::platform::VkDevice,
     vk_result: *mut xr::platform::VkResult,
 ) -> xr::Result {
+    // SAFETY: `info` is valid for reading (the loader's pointer contract: crate notes).
     let info = unsafe { &*info };
     with(|s| {
         let Some(v) = s.vulkan.as_mut() else {
@@ -117,16 +127,20 @@ pub(crate) unsafe extern "system" fn create_vulkan_device(
         let Some(instance) = &v.instance else {
             return xr::Result::ERROR_CALL_ORDER_INVALID;
         };
+        // SAFETY: `vulkanCreateInfo` points to the application's valid Vulkan create info (the loader's pointer contract: crate notes).
         let create = unsafe { &*(info.vulkan_create_info as *const vk::DeviceCreateInfo) };
         // SAFETY: `physical` was checked to be the device named above; the
         // create info is the application's.
         match unsafe { instance.create_device(physical, create, None) } {
             Ok(device) => {
+                // SAFETY: `out` is valid for writing (the loader's pointer contract: crate notes).
                 unsafe { *out = device.handle().as_raw() as usize as _ };
+                // SAFETY: `vk_result` is valid for writing (the loader's pointer contract: crate notes).
                 unsafe { *vk_result = 0 };
                 v.device = Some(device);
                 s.report.vulkan_device_created = true;
             }
+            // SAFETY: `vk_result` is valid for writing (the loader's pointer contract: crate notes).
             Err(e) => unsafe { *vk_result = e.as_raw() },
         }
         let _ = v.gipa;
