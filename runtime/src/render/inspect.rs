@@ -1,4 +1,4 @@
-//! Mesh inspection (000 appendix D: prorad's `-w` wireframe and `-n` vertex
+//! Mesh inspection (Remington 1992, app. D: prorad's `-w` wireframe and `-n` vertex
 //! normals), drawn by the stereo renderer in its scene subpass when asked
 //! ([`super::StereoRenderer::set_inspect`]): element edges as lines over the
 //! shading or alone, and a short line along each vertex normal.

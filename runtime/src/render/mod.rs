@@ -9,8 +9,9 @@
 //! per view (masks 0b01 then 0b10) with the same shaders. Batches are drawn by
 //! increasing SH order: order 0 with the trivial `scene_l0.vert`, the rest with
 //! `scene_sh.vert` whose loop bound is the batch's order (push constant); then
-//! 001's global-cube batches with `scene_cube.vert` (four cells per channel,
-//! the resolution k in the same push constant).
+//! the global-cube batches (Immel, Cohen & Greenberg 1986, "The global cube")
+//! with `scene_cube.vert` (four cells per channel, the resolution k in the same
+//! push constant).
 //!
 //! Conventions: positions are in file (re-centred) coordinates; views are
 //! `solution::camera::EyeView`s, projected with `EyeView::view_projection` and the
@@ -522,7 +523,7 @@ impl StereoRenderer {
         &self.desc
     }
 
-    /// Mesh inspection for the next frames (000 appendix D `-w`, `-n`): element
+    /// Mesh inspection for the next frames (Remington 1992, app. D: `-w`, `-n`): element
     /// edges and vertex normals as lines. `solution` must be the one this
     /// renderer was made from (its triangles give the edges); the line
     /// pipelines are made on the first call that needs them.

@@ -1,6 +1,7 @@
-//! The in-headset help overlay (`radview`'s F1 help window): the controls as
-//! white text on a dark panel, in a static one-image swapchain shown as a quad
-//! layer over the scene while the menu button has it toggled on.
+//! The in-headset help overlay (`radview`'s F1 help window, Remington 1992,
+//! app. C.1): the controls as white text on a dark panel, in a static
+//! one-image swapchain shown as a quad layer over the scene while the menu
+//! button has it toggled on.
 //!
 //! The panel is world-locked: when it is toggled on it is placed
 //! [`PANEL_DISTANCE_M`] ahead of the head at eye height, facing it, and stays
