@@ -30,6 +30,7 @@ pub use multiview::MultiviewMode;
 pub use scene::{CoefficientStorage, DrawKind, GpuScene, SceneError};
 pub use tonemap::{ToneCurve, ToneSettings};
 
+use crate::gpu::barrier::{cmd_image_barriers, image_barrier};
 use crate::gpu::{
     Buffer, BufferDesc, Fence, Gpu, GpuError, Image, ImageDesc, MemoryLocation, VkContext,
 };
@@ -658,13 +659,11 @@ impl StereoRenderer {
         }
         // SAFETY: recording; the barriers name live images of this device.
         unsafe {
-            device.cmd_pipeline_barrier(
+            cmd_image_barriers(
+                device,
                 cmd,
                 vk::PipelineStageFlags::ALL_COMMANDS,
                 vk::PipelineStageFlags::ALL_COMMANDS,
-                vk::DependencyFlags::empty(),
-                &[],
-                &[],
                 &barriers,
             )
         };
@@ -906,13 +905,11 @@ impl StereoRenderer {
             // SAFETY: recording; images are live, the buffer holds every region,
             // and the frame's fence was waited for in `render`.
             unsafe {
-                device.cmd_pipeline_barrier(
+                cmd_image_barriers(
+                    device,
                     cmd,
                     vk::PipelineStageFlags::ALL_COMMANDS,
                     vk::PipelineStageFlags::TRANSFER,
-                    vk::DependencyFlags::empty(),
-                    &[],
-                    &[],
                     &to_src,
                 );
                 device.cmd_copy_image_to_buffer(
@@ -929,13 +926,11 @@ impl StereoRenderer {
                     buffer.raw,
                     &regions_lin,
                 );
-                device.cmd_pipeline_barrier(
+                cmd_image_barriers(
+                    device,
                     cmd,
                     vk::PipelineStageFlags::TRANSFER,
                     vk::PipelineStageFlags::ALL_COMMANDS,
-                    vk::DependencyFlags::empty(),
-                    &[],
-                    &[],
                     &back,
                 );
             }
@@ -1031,20 +1026,21 @@ fn layout_barrier(image: &Image, layout: vk::ImageLayout) -> vk::ImageMemoryBarr
     transition(image, vk::ImageLayout::UNDEFINED, layout)
 }
 
+/// A full-memory barrier moving every layer of `image` from `from` to `to`.
 fn transition(
     image: &Image,
     from: vk::ImageLayout,
     to: vk::ImageLayout,
 ) -> vk::ImageMemoryBarrier<'static> {
-    vk::ImageMemoryBarrier::default()
-        .src_access_mask(vk::AccessFlags::MEMORY_WRITE)
-        .dst_access_mask(vk::AccessFlags::MEMORY_READ | vk::AccessFlags::MEMORY_WRITE)
-        .old_layout(from)
-        .new_layout(to)
-        .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-        .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-        .image(image.raw)
-        .subresource_range(image.range())
+    image_barrier(
+        image.raw,
+        image.range(),
+        (from, vk::AccessFlags::MEMORY_WRITE),
+        (
+            to,
+            vk::AccessFlags::MEMORY_READ | vk::AccessFlags::MEMORY_WRITE,
+        ),
+    )
 }
 
 impl Drop for StereoRenderer {
