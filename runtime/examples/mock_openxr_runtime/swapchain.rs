@@ -236,7 +236,9 @@ pub(crate) unsafe extern "system" fn release_image(
 
 /// Copies both layers of a released swapchain image (8-bit, 4 channels, in
 /// COLOR_ATTACHMENT_OPTIMAL as OpenXR requires) to host memory, as a
-/// compositor would read them, and summarises them.
+/// compositor would read them, and summarises them: per eye the mean of R, G
+/// and B and the lit fraction, the fraction of pixels that differ between the
+/// eyes, and the bytes themselves.
 #[allow(clippy::type_complexity)]
 pub(crate) fn read_back(
     s: &State,
@@ -252,158 +254,232 @@ pub(crate) fn read_back(
         (Some(d), Some(i)) => (d, i),
         _ => return Err(vk::Result::ERROR_INITIALIZATION_FAILED),
     };
-    let (family, queue) = v.queue.ok_or(vk::Result::ERROR_INITIALIZATION_FAILED)?;
-    let layer_bytes = u64::from(w) * u64::from(h) * 4;
+    let queue = v.queue.ok_or(vk::Result::ERROR_INITIALIZATION_FAILED)?;
+    let target = Target {
+        device,
+        instance,
+        physical: v.physical,
+        queue,
+    };
     // SAFETY: the device and image are the session's (made through this
-    // runtime); the image was released, so the application is not using it,
-    // and the application's queue is free during xrEndFrame; on success every
-    // object made here is destroyed after the queue is idle (an error path
-    // leaks them, which a test tolerates).
+    // runtime, on `physical` of `instance`); the image was released, so the
+    // application is not using it, and the application's queue is free during
+    // xrEndFrame.
+    let bytes = unsafe { copy_layers(&target, image, w, h) }?;
+    let (left, right) = bytes.split_at(bytes.len() / 2);
+    let stats = [left, right]
+        .iter()
+        .map(|layer| layer_stats(layer, w * h))
+        .collect();
+    let differ = left
+        .chunks_exact(4)
+        .zip(right.chunks_exact(4))
+        .filter(|(a, b)| a[..3] != b[..3])
+        .count() as f64
+        / f64::from(w * h);
+    Ok((stats, differ, bytes))
+}
+
+/// The mean of R, G and B (0–255) and the fraction of pixels that are not
+/// black, of one layer of `pixels` 4-byte pixels.
+fn layer_stats(layer: &[u8], pixels: u32) -> [f64; 4] {
+    let n = f64::from(pixels);
+    let mut sum = [0.0f64; 3];
+    let mut lit = 0usize;
+    for px in layer.chunks_exact(4) {
+        for c in 0..3 {
+            sum[c] += f64::from(px[c]);
+        }
+        if px[..3].iter().any(|&b| b > 0) {
+            lit += 1;
+        }
+    }
+    [sum[0] / n, sum[1] / n, sum[2] / n, lit as f64 / n]
+}
+
+/// The session's Vulkan objects a read-back uses.
+struct Target<'a> {
+    device: &'a ash::Device,
+    instance: &'a ash::Instance,
+    physical: vk::PhysicalDevice,
+    /// Queue family and queue of the session's graphics binding.
+    queue: (u32, vk::Queue),
+}
+
+/// Copies both layers of `image` to host memory and returns their bytes, layer
+/// 0 first. On success every object made here is destroyed after the queue is
+/// idle; an error path leaks them, which a test tolerates.
+///
+/// # Safety
+///
+/// `target.device` was made on `target.physical` of `target.instance`, and
+/// `target.queue` is one of its queues, not in use by the application during
+/// the call; `image` is a live two-layer `w` × `h` 4-byte image of the device in
+/// COLOR_ATTACHMENT_OPTIMAL that nothing else uses meanwhile.
+unsafe fn copy_layers(
+    target: &Target<'_>,
+    image: vk::Image,
+    w: u32,
+    h: u32,
+) -> Result<Vec<u8>, vk::Result> {
+    let device = target.device;
+    let (family, queue) = target.queue;
+    let layer_bytes = u64::from(w) * u64::from(h) * 4;
+    // SAFETY: the caller guarantees the device, instance and physical device.
+    let (buffer, memory) = unsafe { host_buffer(target, layer_bytes * 2) }?;
+    let pool_info = vk::CommandPoolCreateInfo::default().queue_family_index(family);
+    // SAFETY: the family is the session's queue family on this device.
+    let pool = unsafe { device.create_command_pool(&pool_info, None) }?;
+    let alloc = vk::CommandBufferAllocateInfo::default()
+        .command_pool(pool)
+        .command_buffer_count(1);
+    // SAFETY: the pool was just made on this device.
+    let cmd = unsafe { device.allocate_command_buffers(&alloc) }?[0];
+    // SAFETY: a fresh command buffer; the caller guarantees the image, and the
+    // buffer holds both layers.
+    unsafe { record_layer_copy(device, cmd, image, buffer, w, h) }?;
+    let cmds = [cmd];
+    let submit = [vk::SubmitInfo::default().command_buffers(&cmds)];
+    // SAFETY: the command buffer was recorded and ended; the caller guarantees
+    // that the queue is free; waiting for idle ends the copy.
     unsafe {
-        let buffer = device.create_buffer(
-            &vk::BufferCreateInfo::default()
-                .size(layer_bytes * 2)
-                .usage(vk::BufferUsageFlags::TRANSFER_DST),
-            None,
-        )?;
-        let req = device.get_buffer_memory_requirements(buffer);
-        let props = instance.get_physical_device_memory_properties(v.physical);
-        let wanted = vk::MemoryPropertyFlags::HOST_VISIBLE | vk::MemoryPropertyFlags::HOST_COHERENT;
-        let type_index = (0..props.memory_type_count)
-            .find(|&i| {
-                req.memory_type_bits & (1 << i) != 0
-                    && props.memory_types[i as usize]
-                        .property_flags
-                        .contains(wanted)
-            })
-            .ok_or(vk::Result::ERROR_FEATURE_NOT_PRESENT)?;
-        let memory = device.allocate_memory(
-            &vk::MemoryAllocateInfo::default()
-                .allocation_size(req.size)
-                .memory_type_index(type_index),
-            None,
-        )?;
-        device.bind_buffer_memory(buffer, memory, 0)?;
-        let pool = device.create_command_pool(
-            &vk::CommandPoolCreateInfo::default().queue_family_index(family),
-            None,
-        )?;
-        let cmd = device.allocate_command_buffers(
-            &vk::CommandBufferAllocateInfo::default()
-                .command_pool(pool)
-                .command_buffer_count(1),
-        )?[0];
-        device.begin_command_buffer(cmd, &vk::CommandBufferBeginInfo::default())?;
-        let range = vk::ImageSubresourceRange {
-            aspect_mask: vk::ImageAspectFlags::COLOR,
-            base_mip_level: 0,
-            level_count: 1,
-            base_array_layer: 0,
-            layer_count: 2,
-        };
-        let barrier = |from, to, src, dst| {
-            vk::ImageMemoryBarrier::default()
-                .old_layout(from)
-                .new_layout(to)
-                .src_access_mask(src)
-                .dst_access_mask(dst)
-                .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-                .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-                .image(image)
-                .subresource_range(range)
-        };
-        device.cmd_pipeline_barrier(
-            cmd,
-            vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT,
-            vk::PipelineStageFlags::TRANSFER,
-            vk::DependencyFlags::empty(),
-            &[],
-            &[],
-            &[barrier(
-                vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
-                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                vk::AccessFlags::COLOR_ATTACHMENT_WRITE,
-                vk::AccessFlags::TRANSFER_READ,
-            )],
-        );
-        let regions: Vec<vk::BufferImageCopy> = (0..2u32)
-            .map(|layer| {
-                vk::BufferImageCopy::default()
-                    .buffer_offset(u64::from(layer) * layer_bytes)
-                    .image_subresource(vk::ImageSubresourceLayers {
-                        aspect_mask: vk::ImageAspectFlags::COLOR,
-                        mip_level: 0,
-                        base_array_layer: layer,
-                        layer_count: 1,
-                    })
-                    .image_extent(vk::Extent3D {
-                        width: w,
-                        height: h,
-                        depth: 1,
-                    })
-            })
-            .collect();
-        device.cmd_copy_image_to_buffer(
-            cmd,
-            image,
-            vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-            buffer,
-            &regions,
-        );
-        device.cmd_pipeline_barrier(
-            cmd,
-            vk::PipelineStageFlags::TRANSFER,
-            vk::PipelineStageFlags::BOTTOM_OF_PIPE,
-            vk::DependencyFlags::empty(),
-            &[],
-            &[],
-            &[barrier(
-                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
-                vk::AccessFlags::TRANSFER_READ,
-                vk::AccessFlags::empty(),
-            )],
-        );
-        device.end_command_buffer(cmd)?;
-        let cmds = [cmd];
-        device.queue_submit(
-            queue,
-            &[vk::SubmitInfo::default().command_buffers(&cmds)],
-            vk::Fence::null(),
-        )?;
+        device.queue_submit(queue, &submit, vk::Fence::null())?;
         device.queue_wait_idle(queue)?;
-        let ptr = device.map_memory(memory, 0, layer_bytes * 2, vk::MemoryMapFlags::empty())?
-            as *const u8;
-        let bytes = std::slice::from_raw_parts(ptr, (layer_bytes * 2) as usize).to_vec();
+    }
+    let size = layer_bytes * 2;
+    // SAFETY: the memory is host-visible and coherent, not mapped yet, and the
+    // copy that wrote it has finished (queue idle).
+    let ptr = unsafe { device.map_memory(memory, 0, size, vk::MemoryMapFlags::empty()) }?;
+    // SAFETY: the mapping covers `size` bytes and nothing writes them now.
+    let bytes = unsafe { std::slice::from_raw_parts(ptr as *const u8, size as usize) }.to_vec();
+    // SAFETY: the queue is idle, so nothing uses these objects; the memory is
+    // unmapped before it is freed.
+    unsafe {
         device.unmap_memory(memory);
         device.destroy_command_pool(pool, None);
         device.destroy_buffer(buffer, None);
         device.free_memory(memory, None);
+    }
+    Ok(bytes)
+}
 
-        let (left, right) = bytes.split_at(layer_bytes as usize);
-        let stats = [left, right]
-            .iter()
-            .map(|layer| {
-                let n = (w * h) as f64;
-                let mut sum = [0.0f64; 3];
-                let mut lit = 0usize;
-                for px in layer.chunks_exact(4) {
-                    for c in 0..3 {
-                        sum[c] += f64::from(px[c]);
-                    }
-                    if px[..3].iter().any(|&b| b > 0) {
-                        lit += 1;
-                    }
-                }
-                [sum[0] / n, sum[1] / n, sum[2] / n, lit as f64 / n]
-            })
-            .collect();
-        let differ = left
-            .chunks_exact(4)
-            .zip(right.chunks_exact(4))
-            .filter(|(a, b)| a[..3] != b[..3])
-            .count() as f64
-            / f64::from(w * h);
-        Ok((stats, differ, bytes))
+/// A host-visible, coherent transfer-destination buffer of `size` bytes and
+/// its bound memory.
+///
+/// # Safety
+///
+/// `target.device` was made on `target.physical` of `target.instance`.
+unsafe fn host_buffer(
+    target: &Target<'_>,
+    size: u64,
+) -> Result<(vk::Buffer, vk::DeviceMemory), vk::Result> {
+    let device = target.device;
+    let info = vk::BufferCreateInfo::default()
+        .size(size)
+        .usage(vk::BufferUsageFlags::TRANSFER_DST);
+    // SAFETY: the create info is local; the buffer is the caller's to destroy.
+    let buffer = unsafe { device.create_buffer(&info, None) }?;
+    // SAFETY: `buffer` was just made on this device, and the caller
+    // guarantees that `physical` is the device's.
+    let (req, props) = unsafe {
+        (
+            device.get_buffer_memory_requirements(buffer),
+            target
+                .instance
+                .get_physical_device_memory_properties(target.physical),
+        )
+    };
+    let wanted = vk::MemoryPropertyFlags::HOST_VISIBLE | vk::MemoryPropertyFlags::HOST_COHERENT;
+    let type_index = (0..props.memory_type_count)
+        .find(|&i| {
+            req.memory_type_bits & (1 << i) != 0
+                && props.memory_types[i as usize]
+                    .property_flags
+                    .contains(wanted)
+        })
+        .ok_or(vk::Result::ERROR_FEATURE_NOT_PRESENT)?;
+    let alloc = vk::MemoryAllocateInfo::default()
+        .allocation_size(req.size)
+        .memory_type_index(type_index);
+    // SAFETY: the allocate info is local; the memory is the caller's to free.
+    let memory = unsafe { device.allocate_memory(&alloc, None) }?;
+    // SAFETY: the memory was allocated for this buffer's requirements.
+    unsafe { device.bind_buffer_memory(buffer, memory, 0) }?;
+    Ok((buffer, memory))
+}
+
+/// Records, into a fresh `cmd`, the copy of both layers of `image` into
+/// `buffer` (layer 0 first), with the image moved to TRANSFER_SRC and back.
+///
+/// # Safety
+///
+/// `cmd` is a fresh command buffer of `device`; `image` is a live two-layer
+/// `w` × `h` image in COLOR_ATTACHMENT_OPTIMAL, and `buffer` holds
+/// `2 × w × h × 4` bytes.
+unsafe fn record_layer_copy(
+    device: &ash::Device,
+    cmd: vk::CommandBuffer,
+    image: vk::Image,
+    buffer: vk::Buffer,
+    w: u32,
+    h: u32,
+) -> Result<(), vk::Result> {
+    use vk::{AccessFlags as A, ImageLayout as L, PipelineStageFlags as S};
+    let layer_bytes = u64::from(w) * u64::from(h) * 4;
+    let range = vk::ImageSubresourceRange {
+        aspect_mask: vk::ImageAspectFlags::COLOR,
+        base_mip_level: 0,
+        level_count: 1,
+        base_array_layer: 0,
+        layer_count: 2,
+    };
+    let barrier = |(from, src), (to, dst)| {
+        [vk::ImageMemoryBarrier::default()
+            .old_layout(from)
+            .new_layout(to)
+            .src_access_mask(src)
+            .dst_access_mask(dst)
+            .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+            .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+            .image(image)
+            .subresource_range(range)]
+    };
+    let to_src = barrier(
+        (L::COLOR_ATTACHMENT_OPTIMAL, A::COLOR_ATTACHMENT_WRITE),
+        (L::TRANSFER_SRC_OPTIMAL, A::TRANSFER_READ),
+    );
+    let back = barrier(
+        (L::TRANSFER_SRC_OPTIMAL, A::TRANSFER_READ),
+        (L::COLOR_ATTACHMENT_OPTIMAL, A::empty()),
+    );
+    let regions: Vec<vk::BufferImageCopy> = (0..2u32)
+        .map(|layer| {
+            vk::BufferImageCopy::default()
+                .buffer_offset(u64::from(layer) * layer_bytes)
+                .image_subresource(vk::ImageSubresourceLayers {
+                    aspect_mask: vk::ImageAspectFlags::COLOR,
+                    mip_level: 0,
+                    base_array_layer: layer,
+                    layer_count: 1,
+                })
+                .image_extent(vk::Extent3D {
+                    width: w,
+                    height: h,
+                    depth: 1,
+                })
+        })
+        .collect();
+    let none = vk::DependencyFlags::empty();
+    // SAFETY: the caller guarantees the command buffer, the image's layout and
+    // the buffer's size; the first barrier puts the image in the copy's layout
+    // and the second returns it to the one OpenXR expects.
+    unsafe {
+        device.begin_command_buffer(cmd, &vk::CommandBufferBeginInfo::default())?;
+        let (src, dst) = (S::COLOR_ATTACHMENT_OUTPUT, S::TRANSFER);
+        device.cmd_pipeline_barrier(cmd, src, dst, none, &[], &[], &to_src);
+        device.cmd_copy_image_to_buffer(cmd, image, L::TRANSFER_SRC_OPTIMAL, buffer, &regions);
+        let (src, dst) = (S::TRANSFER, S::BOTTOM_OF_PIPE);
+        device.cmd_pipeline_barrier(cmd, src, dst, none, &[], &[], &back);
+        device.end_command_buffer(cmd)
     }
 }
