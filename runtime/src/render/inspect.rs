@@ -268,8 +268,14 @@ impl InspectGpu {
     /// Records the inspection lines into the scene subpass of pass set
     /// `set_index` (the scene's vertex buffer is bound; `frame_set` holds the
     /// per-frame uniforms).
+    ///
+    /// # Safety
+    ///
+    /// `cmd` is recording inside the scene subpass of pass set `set_index`,
+    /// and `vertices` is the scene's vertex buffer with its vertex count (the
+    /// buffer the edge indices were built against).
     #[allow(clippy::too_many_arguments)]
-    pub(super) fn record(
+    pub(super) unsafe fn record(
         &self,
         device: &ash::Device,
         cmd: vk::CommandBuffer,
@@ -283,9 +289,9 @@ impl InspectGpu {
         let Some(pipelines) = self.pipelines.get(set_index) else {
             return;
         };
-        // SAFETY: recording inside the scene subpass of the pass set these
-        // pipelines were made for; every handle is live; index ranges were
-        // built from the uploaded batches' own indices.
+        // SAFETY: the caller guarantees the subpass of the pass set these
+        // pipelines were made for and the vertex buffer; every handle is live;
+        // index ranges were built from the uploaded batches' own indices.
         unsafe {
             if mode.edges != Edges::Off {
                 if let Some(indices) = &self.edge_indices {

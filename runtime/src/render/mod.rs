@@ -679,13 +679,22 @@ impl StereoRenderer {
                 .enumerate()
                 .find(|(_, s)| s.desc.view_mask == mask)
                 .ok_or_else(|| GpuError::Unsupported(format!("no pass for view mask {mask:#b}")))?;
-            self.record_pass(cmd, index, set, target.framebuffers[index]);
+            // SAFETY: `cmd` was begun above and no render pass is open; the
+            // framebuffer is the target's for this pass set.
+            unsafe { self.record_pass(cmd, index, set, target.framebuffers[index]) };
         }
         // SAFETY: recording.
         unsafe { device.end_command_buffer(cmd) }.ctx("vkEndCommandBuffer")
     }
 
-    fn record_pass(
+    /// Records one pass set's render pass: the scene subpass (batches, then
+    /// the inspection lines) and the tone-map subpass.
+    ///
+    /// # Safety
+    ///
+    /// `cmd` is recording, outside a render pass, and `framebuffer` is this
+    /// renderer's framebuffer for `set` (index `set_index`).
+    unsafe fn record_pass(
         &self,
         cmd: vk::CommandBuffer,
         set_index: usize,
@@ -736,65 +745,23 @@ impl StereoRenderer {
         let mut tone_push = [0u8; 8];
         tone_push[0..4].copy_from_slice(&tone_gain.to_le_bytes());
         tone_push[4..8].copy_from_slice(&self.desc.tone.curve.code().to_le_bytes());
-        // SAFETY: recording outside a render pass; every handle is live and owned
-        // by this renderer; draws stay within the buffers (indices were checked
-        // against their batch's vertex count at upload).
+        // SAFETY: the caller guarantees that `cmd` is recording outside a
+        // render pass; the render pass, framebuffer and scene buffers are live
+        // and this renderer's, the framebuffer made for this pass set.
         unsafe {
             device.cmd_begin_render_pass(cmd, &begin, vk::SubpassContents::INLINE);
             device.cmd_set_viewport(cmd, 0, &viewport);
             device.cmd_set_scissor(cmd, 0, &[area]);
             device.cmd_bind_vertex_buffers(cmd, 0, &[self.scene.vertices.raw], &[0]);
             device.cmd_bind_index_buffer(cmd, self.scene.indices.raw, 0, vk::IndexType::UINT32);
-            let mut bound = None;
-            // Wireframe alone (prorad's -w) leaves the shading out.
-            let shaded = if self.inspect.edges == Edges::Only {
-                0
-            } else {
-                self.scene.draws.len()
-            };
-            for (draw, &ds) in self.scene.draws.iter().zip(&self.batch_sets).take(shaded) {
-                let pipeline = match draw.kind {
-                    DrawKind::Sh if draw.order == 0 => set.scene_l0,
-                    DrawKind::Sh => set.scene_sh,
-                    DrawKind::Cube { .. } => set.scene_cube,
-                };
-                if bound != Some(pipeline) {
-                    device.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, pipeline);
-                    bound = Some(pipeline);
-                }
-                device.cmd_bind_descriptor_sets(
-                    cmd,
-                    vk::PipelineBindPoint::GRAPHICS,
-                    self.layouts.scene_pipeline,
-                    0,
-                    &[ds],
-                    &[],
-                );
-                let constants = BatchConstants {
-                    order: draw.loop_parameter(),
-                    vertex_base: draw.vertex_base,
-                    coeff_base: 0,
-                    stride: draw.stride,
-                    scale: draw.storage_scale * self.scene.radiance_scale,
-                };
-                device.cmd_push_constants(
-                    cmd,
-                    self.layouts.scene_pipeline,
-                    vk::ShaderStageFlags::VERTEX,
-                    0,
-                    &constants.bytes(),
-                );
-                device.cmd_draw_indexed(
-                    cmd,
-                    draw.index_count,
-                    1,
-                    draw.first_index,
-                    draw.vertex_base as i32,
-                    0,
-                );
-            }
-            if let (Some(lines), Some(&frame_set)) = (&self.inspect_gpu, self.batch_sets.first()) {
-                if self.inspect.draws_lines() {
+        }
+        // SAFETY: inside the scene subpass of `set`, the scene's buffers bound.
+        unsafe { self.record_batches(cmd, set) };
+        if let (Some(lines), Some(&frame_set)) = (&self.inspect_gpu, self.batch_sets.first()) {
+            if self.inspect.draws_lines() {
+                // SAFETY: inside the scene subpass of pass set `set_index`; the
+                // lines index the scene's own vertex buffer.
+                unsafe {
                     lines.record(
                         device,
                         cmd,
@@ -804,9 +771,14 @@ impl StereoRenderer {
                         self.desc.tone,
                         self.scene.radiance_scale,
                         (&self.scene.vertices, self.scene.vertex_count),
-                    );
-                }
+                    )
+                };
             }
+        }
+        // SAFETY: inside the scene subpass of `set`; the tone-map pipeline and
+        // its descriptor set (the linear attachment as input) are this
+        // renderer's, and the push constants match its fragment range.
+        unsafe {
             device.cmd_next_subpass(cmd, vk::SubpassContents::INLINE);
             device.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, set.tonemap);
             device.cmd_bind_descriptor_sets(
@@ -826,6 +798,73 @@ impl StereoRenderer {
             );
             device.cmd_draw(cmd, 3, 1, 0, 0);
             device.cmd_end_render_pass(cmd);
+        }
+    }
+
+    /// Draws the scene's batches (none when the wireframe is shown alone),
+    /// binding each batch's pipeline, descriptor set and push constants.
+    ///
+    /// # Safety
+    ///
+    /// `cmd` is recording inside the scene subpass of `set`, with the scene's
+    /// vertex and index buffers bound.
+    unsafe fn record_batches(&self, cmd: vk::CommandBuffer, set: &PassSet) {
+        let device = &self.gpu_shared.device;
+        // Wireframe alone (prorad's -w) leaves the shading out.
+        let shaded = if self.inspect.edges == Edges::Only {
+            0
+        } else {
+            self.scene.draws.len()
+        };
+        let mut bound = None;
+        for (draw, &ds) in self.scene.draws.iter().zip(&self.batch_sets).take(shaded) {
+            let pipeline = match draw.kind {
+                DrawKind::Sh if draw.order == 0 => set.scene_l0,
+                DrawKind::Sh => set.scene_sh,
+                DrawKind::Cube { .. } => set.scene_cube,
+            };
+            if bound != Some(pipeline) {
+                // SAFETY: the caller guarantees the subpass; the pipeline was
+                // made for it.
+                unsafe { device.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, pipeline) };
+                bound = Some(pipeline);
+            }
+            let constants = BatchConstants {
+                order: draw.loop_parameter(),
+                vertex_base: draw.vertex_base,
+                coeff_base: 0,
+                stride: draw.stride,
+                scale: draw.storage_scale * self.scene.radiance_scale,
+            };
+            // SAFETY: the caller guarantees the subpass and the bound buffers;
+            // the batch's descriptor set is live; the draw stays within the
+            // buffers (indices were checked against their batch's vertex count
+            // at upload).
+            unsafe {
+                device.cmd_bind_descriptor_sets(
+                    cmd,
+                    vk::PipelineBindPoint::GRAPHICS,
+                    self.layouts.scene_pipeline,
+                    0,
+                    &[ds],
+                    &[],
+                );
+                device.cmd_push_constants(
+                    cmd,
+                    self.layouts.scene_pipeline,
+                    vk::ShaderStageFlags::VERTEX,
+                    0,
+                    &constants.bytes(),
+                );
+                device.cmd_draw_indexed(
+                    cmd,
+                    draw.index_count,
+                    1,
+                    draw.first_index,
+                    draw.vertex_base as i32,
+                    0,
+                );
+            }
         }
     }
 
