@@ -468,36 +468,28 @@ impl Presenter {
             .size(PUSH_SIZE)];
         self.render_pass = self.create_render_pass(device, false)?;
         self.overlay_pass = self.create_render_pass(device, true)?;
-        // SAFETY: create infos point to locals; every handle is stored in self
-        // at once, so Drop destroys it if a later step fails.
-        unsafe {
-            self.set_layout = device
-                .create_descriptor_set_layout(
-                    &vk::DescriptorSetLayoutCreateInfo::default().bindings(&bindings),
-                    None,
-                )
-                .ctx("vkCreateDescriptorSetLayout")?;
-            let sets = [self.set_layout];
-            self.pipeline_layout = device
-                .create_pipeline_layout(
-                    &vk::PipelineLayoutCreateInfo::default()
-                        .set_layouts(&sets)
-                        .push_constant_ranges(&push),
-                    None,
-                )
-                .ctx("vkCreatePipelineLayout")?;
-            self.sampler = device
-                .create_sampler(
-                    &vk::SamplerCreateInfo::default()
-                        .mag_filter(vk::Filter::NEAREST)
-                        .min_filter(vk::Filter::NEAREST)
-                        .address_mode_u(vk::SamplerAddressMode::CLAMP_TO_EDGE)
-                        .address_mode_v(vk::SamplerAddressMode::CLAMP_TO_EDGE)
-                        .address_mode_w(vk::SamplerAddressMode::CLAMP_TO_EDGE),
-                    None,
-                )
-                .ctx("vkCreateSampler")?;
-        }
+        // Every handle is stored in self at once, so Drop destroys it if a
+        // later step fails.
+        let set_info = vk::DescriptorSetLayoutCreateInfo::default().bindings(&bindings);
+        // SAFETY: the create info points to locals alive for the call.
+        self.set_layout = unsafe { device.create_descriptor_set_layout(&set_info, None) }
+            .ctx("vkCreateDescriptorSetLayout")?;
+        let sets = [self.set_layout];
+        let layout_info = vk::PipelineLayoutCreateInfo::default()
+            .set_layouts(&sets)
+            .push_constant_ranges(&push);
+        // SAFETY: the create info points to locals and to the live set layout.
+        self.pipeline_layout = unsafe { device.create_pipeline_layout(&layout_info, None) }
+            .ctx("vkCreatePipelineLayout")?;
+        let sampler_info = vk::SamplerCreateInfo::default()
+            .mag_filter(vk::Filter::NEAREST)
+            .min_filter(vk::Filter::NEAREST)
+            .address_mode_u(vk::SamplerAddressMode::CLAMP_TO_EDGE)
+            .address_mode_v(vk::SamplerAddressMode::CLAMP_TO_EDGE)
+            .address_mode_w(vk::SamplerAddressMode::CLAMP_TO_EDGE);
+        // SAFETY: a plain create info.
+        self.sampler =
+            unsafe { device.create_sampler(&sampler_info, None) }.ctx("vkCreateSampler")?;
         use crate::gpu::shaders::{create_module, COMPOSITE_FRAG, OVERLAY_FRAG, TONEMAP_VERT};
         let mut modules = Vec::new();
         let made = [TONEMAP_VERT, COMPOSITE_FRAG, OVERLAY_FRAG]
@@ -622,41 +614,34 @@ impl Presenter {
                 },
             )?;
             let layouts = [self.set_layout];
-            // SAFETY: the pool was sized for SLOTS sets; the pool and the
-            // layouts are live; the semaphore, fence and command buffer are
-            // destroyed in Drop.
-            let slot = unsafe {
-                let descriptor_set = device
-                    .allocate_descriptor_sets(
-                        &vk::DescriptorSetAllocateInfo::default()
-                            .descriptor_pool(self.descriptor_pool)
-                            .set_layouts(&layouts),
-                    )
-                    .ctx("vkAllocateDescriptorSets")?[0];
-                let command_buffer = device
-                    .allocate_command_buffers(
-                        &vk::CommandBufferAllocateInfo::default()
-                            .command_pool(self.command_pool)
-                            .level(vk::CommandBufferLevel::PRIMARY)
-                            .command_buffer_count(1),
-                    )
-                    .ctx("vkAllocateCommandBuffers")?[0];
-                let fence = device
-                    .create_fence(
-                        &vk::FenceCreateInfo::default().flags(vk::FenceCreateFlags::SIGNALED),
-                        None,
-                    )
-                    .ctx("vkCreateFence")?;
-                let acquired = device
-                    .create_semaphore(&vk::SemaphoreCreateInfo::default(), None)
+            let set_info = vk::DescriptorSetAllocateInfo::default()
+                .descriptor_pool(self.descriptor_pool)
+                .set_layouts(&layouts);
+            // SAFETY: the pool was sized for SLOTS sets and the pool and the
+            // layout are live; the set is freed with the pool.
+            let descriptor_set = unsafe { device.allocate_descriptor_sets(&set_info) }
+                .ctx("vkAllocateDescriptorSets")?[0];
+            let command_info = vk::CommandBufferAllocateInfo::default()
+                .command_pool(self.command_pool)
+                .level(vk::CommandBufferLevel::PRIMARY)
+                .command_buffer_count(1);
+            // SAFETY: the command pool is live and used from this thread only;
+            // the buffer is freed with the pool.
+            let command_buffer = unsafe { device.allocate_command_buffers(&command_info) }
+                .ctx("vkAllocateCommandBuffers")?[0];
+            let fence_info = vk::FenceCreateInfo::default().flags(vk::FenceCreateFlags::SIGNALED);
+            // SAFETY: a plain create info; the fence is destroyed in Drop.
+            let fence = unsafe { device.create_fence(&fence_info, None) }.ctx("vkCreateFence")?;
+            // SAFETY: a plain create info; the semaphore is destroyed in Drop.
+            let acquired =
+                unsafe { device.create_semaphore(&vk::SemaphoreCreateInfo::default(), None) }
                     .ctx("vkCreateSemaphore")?;
-                Slot {
-                    command_buffer,
-                    fence,
-                    acquired,
-                    overlay,
-                    descriptor_set,
-                }
+            let slot = Slot {
+                command_buffer,
+                fence,
+                acquired,
+                overlay,
+                descriptor_set,
             };
             self.slots.push(slot);
         }
