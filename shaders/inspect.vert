@@ -1,6 +1,6 @@
 #version 450
 #extension GL_EXT_multiview : require
-// Mesh inspection lines (000 appendix D: prorad's -w wireframe and -n normals),
+// Mesh inspection lines (Remington 1992, app. D: prorad's -w wireframe and -n normals),
 // drawn in the scene subpass into the linear radiance target.
 //
 // Edges: an indexed LINE_LIST over the batch's vertices (normal_length = 0).

@@ -1,9 +1,9 @@
 #version 450
 #extension GL_EXT_multiview : require
 #extension GL_GOOGLE_include_directive : require
-// Global-cube batches (001, Immel et al.): each vertex stores its outgoing
-// radiance on the D = 6k² cell centres of a cube in its local frame
-// (docs/solution-format.md, "Cube"); this view's radiance is the bilinear
+// Global-cube batches (Immel, Cohen & Greenberg 1986, "The global cube"):
+// each vertex stores its outgoing radiance on the D = 6k² cell centres of a
+// cube in its local frame (docs/solution-format.md, "Cube"); this view's radiance is the bilinear
 // lookup toward the eye, exactly the arithmetic of solver::cube::bilinear_f32
 // (whose tests state its rounding against the f64 solver::cube::bilinear):
 //   * the direction to the eye in the vertex frame (x = t, y = n × t, z = n),

@@ -1,5 +1,5 @@
-//! 001's global-cube batches on the GPU (`shaders/scene_cube.vert`) against the
-//! CPU reference rasterizer (`solution::raster`, which looks cubes up with
+//! The global-cube batches (Immel, Cohen & Greenberg 1986, "The global cube")
+//! on the GPU (`shaders/scene_cube.vert`) against the CPU reference rasterizer (`solution::raster`, which looks cubes up with
 //! `solution::cube::eval_rgb`), and the view dependence of a glossy cube floor.
 
 mod common;

@@ -183,7 +183,7 @@ fn keys_move_the_camera_as_specified_and_the_window_matches_the_offscreen_render
     let dir = tempfile::tempdir().unwrap();
     let solution = common::diffuse_room(4);
     let file = write_solution(dir.path(), "room.sol", &solution);
-    // Frame by frame (000 appendix C keys): azimuth 10 presses + a 100 px drag
+    // Frame by frame (Remington 1992, app. C.1 keys): azimuth 10 presses + a 100 px drag
     // (0.2°/px: 20°), elevation 10 presses, zoom in twice, move along the line
     // of sight 3 steps, screenshot; reset, walk forward for 9 frames, screenshot;
     // reset, and the last frame (20) is dumped.

@@ -1,5 +1,5 @@
 //! `runtime xr` end to end against a scripted OpenXR runtime
-//! (`examples/mock_openxr_runtime.rs`, loaded by Debian's OpenXR loader through
+//! (`examples/mock_openxr_runtime/`, loaded by Debian's OpenXR loader through
 //! `XR_RUNTIME_JSON`), on lavapipe: the session lifecycle, the conformance rules
 //! the mock enforces, session loss and recreation, the help overlay, and the
 //! pixels the runtime receives compared with the offscreen renderer's image of

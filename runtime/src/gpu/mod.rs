@@ -13,6 +13,7 @@
 //! is enabled and every message it sends is logged to stderr and counted
 //! ([`ValidationLog`]); the tests assert that the count stays zero.
 
+pub mod barrier;
 mod resources;
 pub mod shaders;
 
@@ -655,9 +656,9 @@ fn examine_device(
     else {
         return Err(format!("{name}: no graphics queue"));
     };
-    // SAFETY: as above; the features struct is a local.
     let mut multiview = vk::PhysicalDeviceMultiviewFeatures::default();
     let mut features = vk::PhysicalDeviceFeatures2::default().push_next(&mut multiview);
+    // SAFETY: `physical` belongs to this instance; the features chain is locals.
     unsafe { instance.get_physical_device_features2(physical, &mut features) };
     if multiview.multiview == vk::FALSE {
         return Err(format!("{name}: no multiview"));

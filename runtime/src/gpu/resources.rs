@@ -1,5 +1,26 @@
 //! Buffers and images: wrappers that own a `raw` handle and its memory, built from
 //! a small description, destroyed on drop.
+//!
+//! # GPU lifetimes
+//!
+//! The GPU runs behind the host: memory the host touches may still be read or
+//! written by a submitted command buffer. Two rules keep that sound, and this
+//! module chooses to state them as contracts rather than to track submissions:
+//!
+//! - **Host access is `unsafe`.** [`Buffer::write`] and [`Buffer::read`] are
+//!   `unsafe fn`s whose `# Safety` sections say what the GPU must not be doing
+//!   with the memory; every caller names, in a `// SAFETY:` comment, the fence
+//!   wait or `vkDeviceWaitIdle` that makes it so. The runtime's frame loops are
+//!   synchronous (each frame's fence is waited for before its resources are
+//!   touched again), so the proof is always a local one.
+//! - **Drop is immediate.** A wrapper destroys its handle when dropped, so its
+//!   owner must drop it only after waiting for the work that uses it (owners
+//!   wait on their fences, or for device idle, in their own `Drop`, and declare
+//!   fields newest-first: see the `gpu` module notes). Deferring destruction
+//!   to fences, as wgpu and kajiya do, would make drop safe in every order, but
+//!   needs every `vkQueueSubmit` to go through one tracker; with three
+//!   submitters (renderer, one-shot uploads, mirror) that each already wait,
+//!   the contract is the smaller, checkable design.
 
 use super::{DeviceShared, Gpu, GpuError, VkContext};
 use ash::vk;
@@ -103,17 +124,24 @@ impl Buffer {
 
     /// Copies `bytes` to `offset` of a mapped buffer.
     ///
+    /// # Safety
+    ///
+    /// No command buffer that reads or writes this buffer may be pending on the
+    /// GPU (its fence was waited for, or the device is idle, or it was never
+    /// submitted), so the host write races with no device access.
+    ///
     /// # Panics
     /// If the buffer is not mapped or the range is out of bounds (programming
     /// errors: sizes come from the renderer, not from input).
-    pub fn write(&mut self, offset: u64, bytes: &[u8]) {
+    pub unsafe fn write(&mut self, offset: u64, bytes: &[u8]) {
         let ptr = self.mapped.expect("Buffer::write on an unmapped buffer");
         assert!(
             offset + bytes.len() as u64 <= self.desc.size,
             "Buffer::write out of range"
         );
-        // SAFETY: the mapping covers `desc.size` bytes, checked above; the memory
-        // is coherent and the caller waited for the GPU to stop reading it.
+        // SAFETY: the mapping covers `desc.size` bytes, checked above, and the
+        // source is a separate host slice; the memory is coherent, and the caller
+        // guarantees that no pending GPU work uses it.
         unsafe {
             std::ptr::copy_nonoverlapping(
                 bytes.as_ptr(),
@@ -123,13 +151,21 @@ impl Buffer {
         };
     }
 
-    /// The mapped contents (after the GPU finished writing them).
+    /// The mapped contents.
+    ///
+    /// # Safety
+    ///
+    /// The GPU writes the caller wants to see have completed (their fence was
+    /// waited for, or they were a [`Gpu::one_shot`], which waits), and no command
+    /// buffer that writes this buffer is pending or is submitted while the
+    /// returned slice is alive.
     ///
     /// # Panics
     /// If the buffer is not mapped.
-    pub fn read(&self) -> &[u8] {
+    pub unsafe fn read(&self) -> &[u8] {
         let ptr = self.mapped.expect("Buffer::read on an unmapped buffer");
-        // SAFETY: the mapping covers `desc.size` bytes and lives as long as self.
+        // SAFETY: the mapping covers `desc.size` bytes and lives as long as self;
+        // the caller guarantees that the GPU does not write it meanwhile.
         unsafe { std::slice::from_raw_parts(ptr.as_ptr(), self.desc.size as usize) }
     }
 
@@ -148,7 +184,9 @@ impl Buffer {
                 location: MemoryLocation::Mapped,
             },
         )?;
-        staging.write(0, bytes);
+        // SAFETY: the staging buffer was just created and no command buffer
+        // refers to it yet.
+        unsafe { staging.write(0, bytes) };
         let buffer = Buffer::new(
             gpu,
             BufferDesc {
@@ -168,8 +206,9 @@ impl Buffer {
 
 impl Drop for Buffer {
     fn drop(&mut self) {
-        // SAFETY: owners wait for the GPU before dropping resources; the memory is
-        // unmapped implicitly when freed.
+        // SAFETY: owners drop a buffer only after waiting for the work that uses
+        // it (the module's lifetime rules); the memory is unmapped implicitly
+        // when freed.
         unsafe {
             self.shared.device.destroy_buffer(self.raw, None);
             self.shared.device.free_memory(self.memory, None);
@@ -302,7 +341,8 @@ fn create_view(gpu: &Gpu, raw: vk::Image, desc: &ImageDesc) -> Result<vk::ImageV
 
 impl Drop for Image {
     fn drop(&mut self) {
-        // SAFETY: owners wait for the GPU before dropping; a null view (failed
+        // SAFETY: owners drop an image only after waiting for the work that uses
+        // it (the module's lifetime rules); a null view (failed
         // construction) is ignored by vkDestroyImageView; a borrowed image is not
         // destroyed here.
         unsafe {

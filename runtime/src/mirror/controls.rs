@@ -2,9 +2,9 @@
 //! (no window, no GPU), so every key's effect is unit-tested here, and the
 //! hidden `--script` option drives the window through this same code.
 //!
-//! The keys are radview's (000 appendix C.1), plus a walk mode as walkthrough
-//! users expect, plus the inspection toggles of prorad's `-w` and `-n` (000
-//! appendix D):
+//! The keys are radview's (Remington 1992, app. C.1), plus a walk mode as
+//! walkthrough users expect, plus the inspection toggles of prorad's `-w` and
+//! `-n` (Remington 1992, app. D):
 //!
 //! * Left mouse drag: in orbit mode (the default) the viewpoint's azimuth and
 //!   elevation about the reference point change, [`DEG_PER_PIXEL`] per pixel,
@@ -39,7 +39,7 @@
 use glam::DVec3;
 use solution::camera::{Camera, UpAxis};
 
-/// Degrees per arrow-key press (000 appendix C.1).
+/// Degrees per arrow-key press (Remington 1992, app. C.1).
 pub const ARROW_STEP_DEG: f64 = 1.0;
 /// Degrees of azimuth / elevation (or of mouse look) per pixel of mouse drag.
 pub const DEG_PER_PIXEL: f64 = 0.2;
@@ -160,7 +160,7 @@ pub enum Display {
     Anaglyph,
 }
 
-/// Wireframe drawing (000 appendix D `-w`).
+/// Wireframe drawing (Remington 1992, app. D, `-w`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum Wireframe {
     #[default]
@@ -176,7 +176,7 @@ pub enum Wireframe {
 pub struct ViewOptions {
     pub display: Display,
     pub wireframe: Wireframe,
-    /// Vertex normals (000 appendix D `-n`).
+    /// Vertex normals (Remington 1992, app. D, `-n`).
     pub normals: bool,
     pub help: bool,
     /// The frame-time line.

@@ -1,6 +1,6 @@
 //! `runtime mirror`: a desktop window showing both eyes of a solution side by
 //! side (or one eye, or a red–cyan anaglyph), driven by radview's controls
-//! (000 appendix C) when no XR session runs.
+//! (Remington 1992, app. C) when no XR session runs.
 //!
 //! * [`controls`]: input events → camera and display state (pure, unit-tested).
 //! * [`present`]: the window's surface, swapchain and composite pass.
@@ -93,10 +93,10 @@ pub struct MirrorArgs {
     /// with MAILBOX or IMMEDIATE and never makes a frame wait.
     #[arg(long)]
     pub vsync: bool,
-    /// Start with the wireframe over the shading (key m cycles; 000 App. D -w).
+    /// Start with the wireframe over the shading (key m cycles; Remington 1992, app. D, -w).
     #[arg(long)]
     pub wireframe: bool,
-    /// Start with vertex normals drawn (key n; 000 App. D -n).
+    /// Start with vertex normals drawn (key n; Remington 1992, app. D, -n).
     #[arg(long)]
     pub normals: bool,
     /// F12 writes PREFIX-NNN-left/-right .png and .exr.

@@ -14,6 +14,7 @@
 //! per swapchain image a semaphore that the composite signals and the
 //! presentation waits for.
 
+use crate::gpu::barrier::{cmd_image_barriers, image_barrier};
 use crate::gpu::{Buffer, BufferDesc, Gpu, GpuError, Image, ImageDesc, MemoryLocation, VkContext};
 use crate::render::SwapchainDesc;
 use anyhow::{bail, Context, Result};
@@ -467,36 +468,28 @@ impl Presenter {
             .size(PUSH_SIZE)];
         self.render_pass = self.create_render_pass(device, false)?;
         self.overlay_pass = self.create_render_pass(device, true)?;
-        // SAFETY: create infos point to locals; every handle is stored in self
-        // at once, so Drop destroys it if a later step fails.
-        unsafe {
-            self.set_layout = device
-                .create_descriptor_set_layout(
-                    &vk::DescriptorSetLayoutCreateInfo::default().bindings(&bindings),
-                    None,
-                )
-                .ctx("vkCreateDescriptorSetLayout")?;
-            let sets = [self.set_layout];
-            self.pipeline_layout = device
-                .create_pipeline_layout(
-                    &vk::PipelineLayoutCreateInfo::default()
-                        .set_layouts(&sets)
-                        .push_constant_ranges(&push),
-                    None,
-                )
-                .ctx("vkCreatePipelineLayout")?;
-            self.sampler = device
-                .create_sampler(
-                    &vk::SamplerCreateInfo::default()
-                        .mag_filter(vk::Filter::NEAREST)
-                        .min_filter(vk::Filter::NEAREST)
-                        .address_mode_u(vk::SamplerAddressMode::CLAMP_TO_EDGE)
-                        .address_mode_v(vk::SamplerAddressMode::CLAMP_TO_EDGE)
-                        .address_mode_w(vk::SamplerAddressMode::CLAMP_TO_EDGE),
-                    None,
-                )
-                .ctx("vkCreateSampler")?;
-        }
+        // Every handle is stored in self at once, so Drop destroys it if a
+        // later step fails.
+        let set_info = vk::DescriptorSetLayoutCreateInfo::default().bindings(&bindings);
+        // SAFETY: the create info points to locals alive for the call.
+        self.set_layout = unsafe { device.create_descriptor_set_layout(&set_info, None) }
+            .ctx("vkCreateDescriptorSetLayout")?;
+        let sets = [self.set_layout];
+        let layout_info = vk::PipelineLayoutCreateInfo::default()
+            .set_layouts(&sets)
+            .push_constant_ranges(&push);
+        // SAFETY: the create info points to locals and to the live set layout.
+        self.pipeline_layout = unsafe { device.create_pipeline_layout(&layout_info, None) }
+            .ctx("vkCreatePipelineLayout")?;
+        let sampler_info = vk::SamplerCreateInfo::default()
+            .mag_filter(vk::Filter::NEAREST)
+            .min_filter(vk::Filter::NEAREST)
+            .address_mode_u(vk::SamplerAddressMode::CLAMP_TO_EDGE)
+            .address_mode_v(vk::SamplerAddressMode::CLAMP_TO_EDGE)
+            .address_mode_w(vk::SamplerAddressMode::CLAMP_TO_EDGE);
+        // SAFETY: a plain create info.
+        self.sampler =
+            unsafe { device.create_sampler(&sampler_info, None) }.ctx("vkCreateSampler")?;
         use crate::gpu::shaders::{create_module, COMPOSITE_FRAG, OVERLAY_FRAG, TONEMAP_VERT};
         let mut modules = Vec::new();
         let made = [TONEMAP_VERT, COMPOSITE_FRAG, OVERLAY_FRAG]
@@ -621,41 +614,34 @@ impl Presenter {
                 },
             )?;
             let layouts = [self.set_layout];
-            // SAFETY: the pool was sized for SLOTS sets; the pool and the
-            // layouts are live; the semaphore, fence and command buffer are
-            // destroyed in Drop.
-            let slot = unsafe {
-                let descriptor_set = device
-                    .allocate_descriptor_sets(
-                        &vk::DescriptorSetAllocateInfo::default()
-                            .descriptor_pool(self.descriptor_pool)
-                            .set_layouts(&layouts),
-                    )
-                    .ctx("vkAllocateDescriptorSets")?[0];
-                let command_buffer = device
-                    .allocate_command_buffers(
-                        &vk::CommandBufferAllocateInfo::default()
-                            .command_pool(self.command_pool)
-                            .level(vk::CommandBufferLevel::PRIMARY)
-                            .command_buffer_count(1),
-                    )
-                    .ctx("vkAllocateCommandBuffers")?[0];
-                let fence = device
-                    .create_fence(
-                        &vk::FenceCreateInfo::default().flags(vk::FenceCreateFlags::SIGNALED),
-                        None,
-                    )
-                    .ctx("vkCreateFence")?;
-                let acquired = device
-                    .create_semaphore(&vk::SemaphoreCreateInfo::default(), None)
+            let set_info = vk::DescriptorSetAllocateInfo::default()
+                .descriptor_pool(self.descriptor_pool)
+                .set_layouts(&layouts);
+            // SAFETY: the pool was sized for SLOTS sets and the pool and the
+            // layout are live; the set is freed with the pool.
+            let descriptor_set = unsafe { device.allocate_descriptor_sets(&set_info) }
+                .ctx("vkAllocateDescriptorSets")?[0];
+            let command_info = vk::CommandBufferAllocateInfo::default()
+                .command_pool(self.command_pool)
+                .level(vk::CommandBufferLevel::PRIMARY)
+                .command_buffer_count(1);
+            // SAFETY: the command pool is live and used from this thread only;
+            // the buffer is freed with the pool.
+            let command_buffer = unsafe { device.allocate_command_buffers(&command_info) }
+                .ctx("vkAllocateCommandBuffers")?[0];
+            let fence_info = vk::FenceCreateInfo::default().flags(vk::FenceCreateFlags::SIGNALED);
+            // SAFETY: a plain create info; the fence is destroyed in Drop.
+            let fence = unsafe { device.create_fence(&fence_info, None) }.ctx("vkCreateFence")?;
+            // SAFETY: a plain create info; the semaphore is destroyed in Drop.
+            let acquired =
+                unsafe { device.create_semaphore(&vk::SemaphoreCreateInfo::default(), None) }
                     .ctx("vkCreateSemaphore")?;
-                Slot {
-                    command_buffer,
-                    fence,
-                    acquired,
-                    overlay,
-                    descriptor_set,
-                }
+            let slot = Slot {
+                command_buffer,
+                fence,
+                acquired,
+                overlay,
+                descriptor_set,
             };
             self.slots.push(slot);
         }
@@ -898,45 +884,76 @@ impl Presenter {
         overlay: &Overlay,
         dump: bool,
     ) -> Result<Option<Dump>> {
-        let chain = self.chain.as_ref().context("no swapchain")?;
-        let extent = chain.extent;
-        let slot = &mut self.slots[frame.slot];
-        let words = font::shader_words(&overlay.grid);
-        let bytes: Vec<u8> = words.iter().flat_map(|w| w.to_le_bytes()).collect();
-        // The slot's fence was waited for in begin_frame: the GPU no longer
-        // reads this buffer.
-        slot.overlay.write(0, &bytes);
+        let extent = self.chain.as_ref().context("no swapchain")?.extent;
+        self.write_overlay(frame.slot, overlay);
         let dump_buffer = if dump {
-            if !self.can_dump {
-                bail!("this window's swapchain images cannot be copied (no TRANSFER_SRC usage)");
-            }
-            if !matches!(
-                self.format.format,
-                vk::Format::B8G8R8A8_SRGB
-                    | vk::Format::B8G8R8A8_UNORM
-                    | vk::Format::R8G8B8A8_SRGB
-                    | vk::Format::R8G8B8A8_UNORM
-            ) {
-                bail!(
-                    "cannot dump a window image of format {:?} (8-bit RGBA or BGRA only)",
-                    self.format.format
-                );
-            }
-            Some(Buffer::new(
-                gpu,
-                BufferDesc {
-                    size: u64::from(extent.width) * u64::from(extent.height) * 4,
-                    usage: vk::BufferUsageFlags::TRANSFER_DST,
-                    location: MemoryLocation::Mapped,
-                },
-            )?)
+            Some(self.dump_buffer(gpu, extent)?)
         } else {
             None
         };
+        self.record_frame(frame, layout, overlay, dump_buffer.as_ref())?;
+        self.submit_and_present(frame)?;
+        self.next_slot = (frame.slot + 1) % SLOTS;
+        match dump_buffer {
+            None => Ok(None),
+            Some(buffer) => self.read_dump(frame.slot, &buffer, extent).map(Some),
+        }
+    }
+
+    /// Uploads the overlay's text grid into the slot's overlay buffer.
+    fn write_overlay(&mut self, slot: usize, overlay: &Overlay) {
+        let words = font::shader_words(&overlay.grid);
+        let bytes: Vec<u8> = words.iter().flat_map(|w| w.to_le_bytes()).collect();
+        // SAFETY: the slot's fence was waited for in begin_frame and its command
+        // buffer is not resubmitted before this frame's submit, so the GPU does
+        // not read this buffer now.
+        unsafe { self.slots[slot].overlay.write(0, &bytes) };
+    }
+
+    /// A host-visible buffer for one window image, after checking that the
+    /// swapchain images can be copied and are 8-bit RGBA or BGRA.
+    fn dump_buffer(&self, gpu: &Gpu, extent: vk::Extent2D) -> Result<Buffer> {
+        if !self.can_dump {
+            bail!("this window's swapchain images cannot be copied (no TRANSFER_SRC usage)");
+        }
+        if !matches!(
+            self.format.format,
+            vk::Format::B8G8R8A8_SRGB
+                | vk::Format::B8G8R8A8_UNORM
+                | vk::Format::R8G8B8A8_SRGB
+                | vk::Format::R8G8B8A8_UNORM
+        ) {
+            bail!(
+                "cannot dump a window image of format {:?} (8-bit RGBA or BGRA only)",
+                self.format.format
+            );
+        }
+        Ok(Buffer::new(
+            gpu,
+            BufferDesc {
+                size: u64::from(extent.width) * u64::from(extent.height) * 4,
+                usage: vk::BufferUsageFlags::TRANSFER_DST,
+                location: MemoryLocation::Mapped,
+            },
+        )?)
+    }
+
+    /// Records the slot's command buffer: the eye image copied (or composited)
+    /// into the swapchain image, the overlay over it, and the copy to `dump`.
+    fn record_frame(
+        &self,
+        frame: Frame,
+        layout: Layout,
+        overlay: &Overlay,
+        dump: Option<&Buffer>,
+    ) -> Result<()> {
+        let chain = self.chain.as_ref().context("no swapchain")?;
+        let slot = &self.slots[frame.slot];
         let device = &self.shared.device;
         let cmd = slot.command_buffer;
         let eye = &self.eyes[frame.slot];
         let image = chain.images[frame.image as usize];
+        let extent = chain.extent;
         // Copy path: the eye images are already in the window's format, so
         // side by side and single eyes are plain image copies (a memcpy on a CPU
         // device), with the overlay blended over its own rectangle. Anaglyph
@@ -956,287 +973,160 @@ impl Presenter {
             overlay,
         );
         let overlay_area = overlay_rect(overlay, extent);
-        // SAFETY: the slot's fence was waited for, so its command buffer is not
-        // pending; every handle is live; the eye image was last written by the
-        // renderer's pass (layout COLOR_ATTACHMENT_OPTIMAL), an earlier
-        // submission on this queue.
-        unsafe {
-            device.reset_fences(&[slot.fence]).ctx("vkResetFences")?;
-            device
-                .reset_command_buffer(cmd, vk::CommandBufferResetFlags::empty())
-                .ctx("vkResetCommandBuffer")?;
-            device
-                .begin_command_buffer(
-                    cmd,
-                    &vk::CommandBufferBeginInfo::default()
-                        .flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT),
-                )
-                .ctx("vkBeginCommandBuffer")?;
-            let barrier = |image: vk::Image, range, from, to, src, dst| {
-                vk::ImageMemoryBarrier::default()
-                    .src_access_mask(src)
-                    .dst_access_mask(dst)
-                    .old_layout(from)
-                    .new_layout(to)
-                    .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-                    .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-                    .image(image)
-                    .subresource_range(range)
-            };
-            let full = vk::Rect2D {
-                offset: vk::Offset2D { x: 0, y: 0 },
+        // SAFETY: begin_frame waited for this slot's fence and nothing has
+        // submitted the slot since.
+        unsafe { begin_commands(device, cmd, slot.fence) }?;
+        // SAFETY (for the recordings below): `cmd` is recording, outside a render
+        // pass; the eye image and the swapchain image are live, and the eye image
+        // was last written by the renderer's pass (layout COLOR_ATTACHMENT_OPTIMAL),
+        // an earlier submission on this queue.
+        let target = match (copy, &copies) {
+            (true, Some((regions, covers))) => {
+                // SAFETY: as above.
+                let area =
+                    unsafe { record_copy(device, cmd, eye, image, regions, *covers, overlay_area) };
+                area.map(|area| (self.overlay_pass, self.overlay_pipeline, area))
+            }
+            _ => {
+                // SAFETY: as above.
+                unsafe { record_to_sampled(device, cmd, eye) };
+                let full = vk::Rect2D {
+                    offset: vk::Offset2D { x: 0, y: 0 },
+                    extent,
+                };
+                Some((self.render_pass, self.pipeline, full))
+            }
+        };
+        if let Some((pass, pipeline, area)) = target {
+            let pass = Composite {
+                pass,
+                pipeline,
+                framebuffer: chain.framebuffers[frame.image as usize],
+                descriptor_set: slot.descriptor_set,
+                area,
                 extent,
             };
-            let (pass, pipeline, area) = if let (true, Some((regions, covers))) = (copy, &copies) {
-                let to_copy = [
-                    barrier(
-                        eye.raw,
-                        eye.range(),
-                        vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
-                        vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                        vk::AccessFlags::COLOR_ATTACHMENT_WRITE,
-                        vk::AccessFlags::TRANSFER_READ,
-                    ),
-                    barrier(
-                        image,
-                        COLOR_RANGE,
-                        vk::ImageLayout::UNDEFINED,
-                        vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                        vk::AccessFlags::empty(),
-                        vk::AccessFlags::TRANSFER_WRITE,
-                    ),
-                ];
-                device.cmd_pipeline_barrier(
-                    cmd,
-                    vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT
-                        | vk::PipelineStageFlags::TRANSFER,
-                    vk::PipelineStageFlags::TRANSFER,
-                    vk::DependencyFlags::empty(),
-                    &[],
-                    &[],
-                    &to_copy,
-                );
-                if !covers {
-                    // An odd window width leaves a column no eye covers.
-                    device.cmd_clear_color_image(
-                        cmd,
-                        image,
-                        vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                        &vk::ClearColorValue {
-                            float32: [0.0, 0.0, 0.0, 1.0],
-                        },
-                        &[COLOR_RANGE],
-                    );
-                    let after_clear = [barrier(
-                        image,
-                        COLOR_RANGE,
-                        vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                        vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                        vk::AccessFlags::TRANSFER_WRITE,
-                        vk::AccessFlags::TRANSFER_WRITE,
-                    )];
-                    device.cmd_pipeline_barrier(
-                        cmd,
-                        vk::PipelineStageFlags::TRANSFER,
-                        vk::PipelineStageFlags::TRANSFER,
-                        vk::DependencyFlags::empty(),
-                        &[],
-                        &[],
-                        &after_clear,
-                    );
-                }
-                device.cmd_copy_image(
-                    cmd,
-                    eye.raw,
-                    vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                    image,
-                    vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                    regions,
-                );
-                match overlay_area {
-                    Some(area) => (self.overlay_pass, self.overlay_pipeline, Some(area)),
-                    None => {
-                        let to_present = [barrier(
-                            image,
-                            COLOR_RANGE,
-                            vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                            vk::ImageLayout::PRESENT_SRC_KHR,
-                            vk::AccessFlags::TRANSFER_WRITE,
-                            vk::AccessFlags::empty(),
-                        )];
-                        device.cmd_pipeline_barrier(
-                            cmd,
-                            vk::PipelineStageFlags::TRANSFER,
-                            vk::PipelineStageFlags::BOTTOM_OF_PIPE,
-                            vk::DependencyFlags::empty(),
-                            &[],
-                            &[],
-                            &to_present,
-                        );
-                        (self.overlay_pass, self.overlay_pipeline, None)
-                    }
-                }
-            } else {
-                let to_sampled = [barrier(
-                    eye.raw,
-                    eye.range(),
-                    vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
-                    vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
-                    vk::AccessFlags::COLOR_ATTACHMENT_WRITE,
-                    vk::AccessFlags::SHADER_READ,
-                )];
-                device.cmd_pipeline_barrier(
-                    cmd,
-                    vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT,
-                    vk::PipelineStageFlags::FRAGMENT_SHADER,
-                    vk::DependencyFlags::empty(),
-                    &[],
-                    &[],
-                    &to_sampled,
-                );
-                (self.render_pass, self.pipeline, Some(full))
-            };
-            if let Some(area) = area {
-                device.cmd_begin_render_pass(
-                    cmd,
-                    &vk::RenderPassBeginInfo::default()
-                        .render_pass(pass)
-                        .framebuffer(chain.framebuffers[frame.image as usize])
-                        .render_area(area),
-                    vk::SubpassContents::INLINE,
-                );
-                device.cmd_set_viewport(
-                    cmd,
-                    0,
-                    &[vk::Viewport {
-                        x: 0.0,
-                        y: 0.0,
-                        width: extent.width as f32,
-                        height: extent.height as f32,
-                        min_depth: 0.0,
-                        max_depth: 1.0,
-                    }],
-                );
-                device.cmd_set_scissor(cmd, 0, &[area]);
-                device.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, pipeline);
-                device.cmd_bind_descriptor_sets(
-                    cmd,
-                    vk::PipelineBindPoint::GRAPHICS,
-                    self.pipeline_layout,
-                    0,
-                    &[slot.descriptor_set],
-                    &[],
-                );
-                device.cmd_push_constants(
-                    cmd,
-                    self.pipeline_layout,
-                    vk::ShaderStageFlags::FRAGMENT,
-                    0,
-                    &push,
-                );
-                device.cmd_draw(cmd, 3, 1, 0, 0);
-                device.cmd_end_render_pass(cmd);
-            }
-            if let Some(buffer) = &dump_buffer {
-                let swap = |from, to, src, dst| {
-                    [vk::ImageMemoryBarrier::default()
-                        .src_access_mask(src)
-                        .dst_access_mask(dst)
-                        .old_layout(from)
-                        .new_layout(to)
-                        .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-                        .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-                        .image(image)
-                        .subresource_range(COLOR_RANGE)]
-                };
-                device.cmd_pipeline_barrier(
-                    cmd,
-                    vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT,
-                    vk::PipelineStageFlags::TRANSFER,
-                    vk::DependencyFlags::empty(),
-                    &[],
-                    &[],
-                    &swap(
-                        vk::ImageLayout::PRESENT_SRC_KHR,
-                        vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                        vk::AccessFlags::COLOR_ATTACHMENT_WRITE,
-                        vk::AccessFlags::TRANSFER_READ,
-                    ),
-                );
-                let region = [vk::BufferImageCopy::default()
-                    .image_subresource(vk::ImageSubresourceLayers {
-                        aspect_mask: vk::ImageAspectFlags::COLOR,
-                        mip_level: 0,
-                        base_array_layer: 0,
-                        layer_count: 1,
-                    })
-                    .image_extent(vk::Extent3D {
-                        width: extent.width,
-                        height: extent.height,
-                        depth: 1,
-                    })];
-                device.cmd_copy_image_to_buffer(
-                    cmd,
-                    image,
-                    vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                    buffer.raw,
-                    &region,
-                );
-                device.cmd_pipeline_barrier(
-                    cmd,
-                    vk::PipelineStageFlags::TRANSFER,
-                    vk::PipelineStageFlags::BOTTOM_OF_PIPE,
-                    vk::DependencyFlags::empty(),
-                    &[],
-                    &[],
-                    &swap(
-                        vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                        vk::ImageLayout::PRESENT_SRC_KHR,
-                        vk::AccessFlags::TRANSFER_READ,
-                        vk::AccessFlags::empty(),
-                    ),
-                );
-            }
-            device.end_command_buffer(cmd).ctx("vkEndCommandBuffer")?;
-            let waits = [slot.acquired];
-            let stages =
-                [vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT
-                    | vk::PipelineStageFlags::TRANSFER];
-            let signals = [chain.rendered[frame.image as usize]];
-            let cmds = [cmd];
-            let submit = [vk::SubmitInfo::default()
-                .wait_semaphores(&waits)
-                .wait_dst_stage_mask(&stages)
-                .command_buffers(&cmds)
-                .signal_semaphores(&signals)];
-            device
+            // SAFETY: as above; the framebuffer is the swapchain image's and the
+            // descriptor set (eye image, overlay buffer) is the slot's.
+            unsafe { self.record_composite(cmd, &pass, &push) };
+        }
+        if let Some(buffer) = dump {
+            // SAFETY: as above; the buffer holds one 4-byte texel per pixel.
+            unsafe { record_dump_copy(device, cmd, image, buffer, extent) };
+        }
+        // SAFETY: `cmd` is recording, outside a render pass.
+        unsafe { device.end_command_buffer(cmd) }.ctx("vkEndCommandBuffer")?;
+        Ok(())
+    }
+
+    /// Draws the full-screen triangle of `pass` (the composite, or the overlay
+    /// blended over the copied eyes) into `pass.area`.
+    ///
+    /// # Safety
+    ///
+    /// `cmd` is recording, outside a render pass; the framebuffer and the
+    /// descriptor set are live and the images they name are in the layouts the
+    /// render pass and the shader expect.
+    unsafe fn record_composite(&self, cmd: vk::CommandBuffer, pass: &Composite, push: &[u8]) {
+        let device = &self.shared.device;
+        let viewport = vk::Viewport {
+            x: 0.0,
+            y: 0.0,
+            width: pass.extent.width as f32,
+            height: pass.extent.height as f32,
+            min_depth: 0.0,
+            max_depth: 1.0,
+        };
+        let begin = vk::RenderPassBeginInfo::default()
+            .render_pass(pass.pass)
+            .framebuffer(pass.framebuffer)
+            .render_area(pass.area);
+        // SAFETY: the caller guarantees the command buffer and the objects; the
+        // pipeline was made for this render pass and this layout, and the push
+        // constants match the layout's fragment range.
+        unsafe {
+            device.cmd_begin_render_pass(cmd, &begin, vk::SubpassContents::INLINE);
+            device.cmd_set_viewport(cmd, 0, &[viewport]);
+            device.cmd_set_scissor(cmd, 0, &[pass.area]);
+            device.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, pass.pipeline);
+            device.cmd_bind_descriptor_sets(
+                cmd,
+                vk::PipelineBindPoint::GRAPHICS,
+                self.pipeline_layout,
+                0,
+                &[pass.descriptor_set],
+                &[],
+            );
+            device.cmd_push_constants(
+                cmd,
+                self.pipeline_layout,
+                vk::ShaderStageFlags::FRAGMENT,
+                0,
+                push,
+            );
+            device.cmd_draw(cmd, 3, 1, 0, 0);
+            device.cmd_end_render_pass(cmd);
+        }
+    }
+
+    /// Submits the slot's recorded command buffer (waiting for the acquire,
+    /// signalling the image's semaphore and the slot's fence) and presents the
+    /// image; an out-of-date or suboptimal swapchain is rebuilt next frame.
+    fn submit_and_present(&mut self, frame: Frame) -> Result<()> {
+        let chain = self.chain.as_ref().context("no swapchain")?;
+        let slot = &self.slots[frame.slot];
+        let waits = [slot.acquired];
+        let stages =
+            [vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT | vk::PipelineStageFlags::TRANSFER];
+        let signals = [chain.rendered[frame.image as usize]];
+        let cmds = [slot.command_buffer];
+        let submit = [vk::SubmitInfo::default()
+            .wait_semaphores(&waits)
+            .wait_dst_stage_mask(&stages)
+            .command_buffers(&cmds)
+            .signal_semaphores(&signals)];
+        // SAFETY: record_frame ended the command buffer; its fence was reset
+        // there; the acquire semaphore is signalled by this frame's acquire, and
+        // the image's semaphore was waited for by its last presentation.
+        unsafe {
+            self.shared
+                .device
                 .queue_submit(self.queue, &submit, slot.fence)
-                .ctx("vkQueueSubmit")?;
-            let swapchains = [chain.swapchain];
-            let indices = [frame.image];
-            let present = vk::PresentInfoKHR::default()
-                .wait_semaphores(&signals)
-                .swapchains(&swapchains)
-                .image_indices(&indices);
-            match self.swapchain_loader.queue_present(self.queue, &present) {
-                Ok(false) => {}
-                Ok(true) | Err(vk::Result::ERROR_OUT_OF_DATE_KHR) => self.needs_rebuild = true,
-                Err(e) => {
-                    return Err(GpuError::Vulkan {
-                        call: "vkQueuePresentKHR",
-                        result: e,
-                    }
-                    .into())
+        }
+        .ctx("vkQueueSubmit")?;
+        let swapchains = [chain.swapchain];
+        let indices = [frame.image];
+        let present = vk::PresentInfoKHR::default()
+            .wait_semaphores(&signals)
+            .swapchains(&swapchains)
+            .image_indices(&indices);
+        // SAFETY: the image was acquired in begin_frame and the submission above
+        // signals the semaphore the presentation waits for.
+        let presented = unsafe { self.swapchain_loader.queue_present(self.queue, &present) };
+        match presented {
+            Ok(false) => {}
+            Ok(true) | Err(vk::Result::ERROR_OUT_OF_DATE_KHR) => self.needs_rebuild = true,
+            Err(e) => {
+                return Err(GpuError::Vulkan {
+                    call: "vkQueuePresentKHR",
+                    result: e,
                 }
+                .into())
             }
         }
-        self.next_slot = (frame.slot + 1) % SLOTS;
-        let Some(buffer) = dump_buffer else {
-            return Ok(None);
-        };
+        Ok(())
+    }
+
+    /// Waits for the slot's submission and returns the dumped window image as
+    /// RGBA (swapping BGRA windows' channels).
+    fn read_dump(&self, slot: usize, buffer: &Buffer, extent: vk::Extent2D) -> Result<Dump> {
+        let device = &self.shared.device;
+        let fence = self.slots[slot].fence;
         // SAFETY: the fence belongs to this device.
-        unsafe { device.wait_for_fences(&[slot.fence], true, u64::MAX) }.ctx("vkWaitForFences")?;
-        let data = buffer.read();
+        unsafe { device.wait_for_fences(&[fence], true, u64::MAX) }.ctx("vkWaitForFences")?;
+        // SAFETY: the fence just waited for covers the only submission that
+        // writes `buffer`, which was made for this dump and is used by no other.
+        let data = unsafe { buffer.read() };
         let bgra = matches!(
             self.format.format,
             vk::Format::B8G8R8A8_SRGB | vk::Format::B8G8R8A8_UNORM
@@ -1247,11 +1137,208 @@ impl Presenter {
                 px.swap(0, 2);
             }
         }
-        Ok(Some(Dump {
+        Ok(Dump {
             width: extent.width,
             height: extent.height,
             rgba,
-        }))
+        })
+    }
+}
+
+/// One full-screen draw of the composite or overlay pipeline.
+struct Composite {
+    pass: vk::RenderPass,
+    pipeline: vk::Pipeline,
+    framebuffer: vk::Framebuffer,
+    descriptor_set: vk::DescriptorSet,
+    area: vk::Rect2D,
+    extent: vk::Extent2D,
+}
+
+/// Resets the slot's fence and command buffer and begins recording.
+///
+/// # Safety
+///
+/// The slot's fence was waited for since its last submission, so neither the
+/// fence nor the command buffer is in use by the queue.
+unsafe fn begin_commands(
+    device: &ash::Device,
+    cmd: vk::CommandBuffer,
+    fence: vk::Fence,
+) -> Result<(), GpuError> {
+    let begin =
+        vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
+    // SAFETY: the caller guarantees that neither object is pending; the
+    // command pool was made with RESET_COMMAND_BUFFER.
+    unsafe {
+        device.reset_fences(&[fence]).ctx("vkResetFences")?;
+        device
+            .reset_command_buffer(cmd, vk::CommandBufferResetFlags::empty())
+            .ctx("vkResetCommandBuffer")?;
+        device
+            .begin_command_buffer(cmd, &begin)
+            .ctx("vkBeginCommandBuffer")
+    }
+}
+
+/// The copy path: the eye layers copied into the swapchain image (cleared
+/// first when they do not cover it). Returns the overlay's rectangle, to be
+/// drawn next in the overlay pass; without an overlay, the image is moved to
+/// PRESENT_SRC here and None is returned.
+///
+/// # Safety
+///
+/// `cmd` is recording, outside a render pass; `eye` is in
+/// COLOR_ATTACHMENT_OPTIMAL after the renderer's pass; both images are live.
+unsafe fn record_copy(
+    device: &ash::Device,
+    cmd: vk::CommandBuffer,
+    eye: &Image,
+    image: vk::Image,
+    regions: &[vk::ImageCopy],
+    covers: bool,
+    overlay_area: Option<vk::Rect2D>,
+) -> Option<vk::Rect2D> {
+    use vk::{AccessFlags as A, ImageLayout as L, PipelineStageFlags as S};
+    let to_copy = [
+        image_barrier(
+            eye.raw,
+            eye.range(),
+            (L::COLOR_ATTACHMENT_OPTIMAL, A::COLOR_ATTACHMENT_WRITE),
+            (L::TRANSFER_SRC_OPTIMAL, A::TRANSFER_READ),
+        ),
+        image_barrier(
+            image,
+            COLOR_RANGE,
+            (L::UNDEFINED, A::empty()),
+            (L::TRANSFER_DST_OPTIMAL, A::TRANSFER_WRITE),
+        ),
+    ];
+    let write = (L::TRANSFER_DST_OPTIMAL, A::TRANSFER_WRITE);
+    // SAFETY: the caller guarantees the command buffer and the images; the
+    // barriers above put both images in the layouts the clear and the copy name.
+    unsafe {
+        cmd_image_barriers(
+            device,
+            cmd,
+            S::COLOR_ATTACHMENT_OUTPUT | S::TRANSFER,
+            S::TRANSFER,
+            &to_copy,
+        );
+        if !covers {
+            // An odd window width leaves a column no eye covers.
+            device.cmd_clear_color_image(
+                cmd,
+                image,
+                L::TRANSFER_DST_OPTIMAL,
+                &vk::ClearColorValue {
+                    float32: [0.0, 0.0, 0.0, 1.0],
+                },
+                &[COLOR_RANGE],
+            );
+            let after_clear = [image_barrier(image, COLOR_RANGE, write, write)];
+            cmd_image_barriers(device, cmd, S::TRANSFER, S::TRANSFER, &after_clear);
+        }
+        device.cmd_copy_image(
+            cmd,
+            eye.raw,
+            L::TRANSFER_SRC_OPTIMAL,
+            image,
+            L::TRANSFER_DST_OPTIMAL,
+            regions,
+        );
+    }
+    if overlay_area.is_none() {
+        let to_present = [image_barrier(
+            image,
+            COLOR_RANGE,
+            write,
+            (L::PRESENT_SRC_KHR, A::empty()),
+        )];
+        // SAFETY: as above; the copy left the image in TRANSFER_DST_OPTIMAL.
+        unsafe { cmd_image_barriers(device, cmd, S::TRANSFER, S::BOTTOM_OF_PIPE, &to_present) };
+    }
+    overlay_area
+}
+
+/// The composite path: the eye image made readable by the fragment shader.
+///
+/// # Safety
+///
+/// `cmd` is recording, outside a render pass; `eye` is live and in
+/// COLOR_ATTACHMENT_OPTIMAL after the renderer's pass.
+unsafe fn record_to_sampled(device: &ash::Device, cmd: vk::CommandBuffer, eye: &Image) {
+    use vk::{AccessFlags as A, ImageLayout as L, PipelineStageFlags as S};
+    let to_sampled = [image_barrier(
+        eye.raw,
+        eye.range(),
+        (L::COLOR_ATTACHMENT_OPTIMAL, A::COLOR_ATTACHMENT_WRITE),
+        (L::SHADER_READ_ONLY_OPTIMAL, A::SHADER_READ),
+    )];
+    // SAFETY: the caller guarantees the command buffer, the image and its layout.
+    unsafe {
+        cmd_image_barriers(
+            device,
+            cmd,
+            S::COLOR_ATTACHMENT_OUTPUT,
+            S::FRAGMENT_SHADER,
+            &to_sampled,
+        )
+    };
+}
+
+/// Copies the presented swapchain image into `buffer` (and back to
+/// PRESENT_SRC), for `--dump-last-frame`.
+///
+/// # Safety
+///
+/// `cmd` is recording, outside a render pass; `image` is live and in
+/// PRESENT_SRC_KHR (left there by the composite or overlay pass); `buffer`
+/// holds `extent` texels of 4 bytes.
+unsafe fn record_dump_copy(
+    device: &ash::Device,
+    cmd: vk::CommandBuffer,
+    image: vk::Image,
+    buffer: &Buffer,
+    extent: vk::Extent2D,
+) {
+    use vk::{AccessFlags as A, ImageLayout as L, PipelineStageFlags as S};
+    let to_src = [image_barrier(
+        image,
+        COLOR_RANGE,
+        (L::PRESENT_SRC_KHR, A::COLOR_ATTACHMENT_WRITE),
+        (L::TRANSFER_SRC_OPTIMAL, A::TRANSFER_READ),
+    )];
+    let back = [image_barrier(
+        image,
+        COLOR_RANGE,
+        (L::TRANSFER_SRC_OPTIMAL, A::TRANSFER_READ),
+        (L::PRESENT_SRC_KHR, A::empty()),
+    )];
+    let region = [vk::BufferImageCopy::default()
+        .image_subresource(vk::ImageSubresourceLayers {
+            aspect_mask: vk::ImageAspectFlags::COLOR,
+            mip_level: 0,
+            base_array_layer: 0,
+            layer_count: 1,
+        })
+        .image_extent(vk::Extent3D {
+            width: extent.width,
+            height: extent.height,
+            depth: 1,
+        })];
+    // SAFETY: the caller guarantees the command buffer, the image's layout and
+    // the buffer's size; the first barrier puts the image in the copy's layout.
+    unsafe {
+        cmd_image_barriers(
+            device,
+            cmd,
+            S::COLOR_ATTACHMENT_OUTPUT,
+            S::TRANSFER,
+            &to_src,
+        );
+        device.cmd_copy_image_to_buffer(cmd, image, L::TRANSFER_SRC_OPTIMAL, buffer.raw, &region);
+        cmd_image_barriers(device, cmd, S::TRANSFER, S::BOTTOM_OF_PIPE, &back);
     }
 }
 

@@ -1,4 +1,4 @@
-//! Mesh inspection (000 appendix D: prorad's `-w` wireframe and `-n` vertex
+//! Mesh inspection (Remington 1992, app. D: prorad's `-w` wireframe and `-n` vertex
 //! normals), drawn by the stereo renderer in its scene subpass when asked
 //! ([`super::StereoRenderer::set_inspect`]): element edges as lines over the
 //! shading or alone, and a short line along each vertex normal.
@@ -268,8 +268,14 @@ impl InspectGpu {
     /// Records the inspection lines into the scene subpass of pass set
     /// `set_index` (the scene's vertex buffer is bound; `frame_set` holds the
     /// per-frame uniforms).
+    ///
+    /// # Safety
+    ///
+    /// `cmd` is recording inside the scene subpass of pass set `set_index`,
+    /// and `vertices` is the scene's vertex buffer with its vertex count (the
+    /// buffer the edge indices were built against).
     #[allow(clippy::too_many_arguments)]
-    pub(super) fn record(
+    pub(super) unsafe fn record(
         &self,
         device: &ash::Device,
         cmd: vk::CommandBuffer,
@@ -283,67 +289,79 @@ impl InspectGpu {
         let Some(pipelines) = self.pipelines.get(set_index) else {
             return;
         };
-        // SAFETY: recording inside the scene subpass of the pass set these
-        // pipelines were made for; every handle is live; index ranges were
-        // built from the uploaded batches' own indices.
-        unsafe {
-            if mode.edges != Edges::Off {
-                if let Some(indices) = &self.edge_indices {
-                    device.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, pipelines.edges);
-                    device.cmd_bind_descriptor_sets(
+        if mode.edges != Edges::Off {
+            if let Some(indices) = &self.edge_indices {
+                let color = linear_for_display(EDGE_COLOR, tone, radiance_scale);
+                // SAFETY: the caller guarantees the subpass these pipelines were
+                // made for; every handle is live.
+                unsafe {
+                    self.bind_lines(
+                        device,
                         cmd,
-                        vk::PipelineBindPoint::GRAPHICS,
-                        self.layout,
-                        0,
-                        &[frame_set],
-                        &[],
-                    );
-                    let color = linear_for_display(EDGE_COLOR, tone, radiance_scale);
-                    device.cmd_push_constants(
-                        cmd,
-                        self.layout,
-                        vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT,
-                        0,
+                        pipelines.edges,
+                        frame_set,
                         &push_bytes(color, 0.0),
                     );
                     device.cmd_bind_vertex_buffers(cmd, 0, &[vertices.0.raw], &[0]);
                     device.cmd_bind_index_buffer(cmd, indices.raw, 0, vk::IndexType::UINT32);
-                    for r in &self.ranges {
-                        if r.count > 0 {
-                            device.cmd_draw_indexed(
-                                cmd,
-                                r.count,
-                                1,
-                                r.first,
-                                r.vertex_base as i32,
-                                0,
-                            );
-                        }
-                    }
+                }
+                for r in self.ranges.iter().filter(|r| r.count > 0) {
+                    // SAFETY: the edge indices and their ranges were built from
+                    // the uploaded batches' own indices, so every index names a
+                    // vertex of the buffer the caller bound.
+                    unsafe {
+                        device.cmd_draw_indexed(cmd, r.count, 1, r.first, r.vertex_base as i32, 0)
+                    };
                 }
             }
-            let vertex_count = u32::try_from(vertices.1).unwrap_or(u32::MAX);
-            if mode.normals && vertex_count > 0 {
-                device.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, pipelines.normals);
-                device.cmd_bind_descriptor_sets(
-                    cmd,
-                    vk::PipelineBindPoint::GRAPHICS,
-                    self.layout,
-                    0,
-                    &[frame_set],
-                    &[],
-                );
-                let color = linear_for_display(NORMAL_COLOR, tone, radiance_scale);
-                device.cmd_push_constants(
-                    cmd,
-                    self.layout,
-                    vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT,
-                    0,
-                    &push_bytes(color, self.normal_length.max(f32::MIN_POSITIVE)),
-                );
+        }
+        let vertex_count = u32::try_from(vertices.1).unwrap_or(u32::MAX);
+        if mode.normals && vertex_count > 0 {
+            let color = linear_for_display(NORMAL_COLOR, tone, radiance_scale);
+            let push = push_bytes(color, self.normal_length.max(f32::MIN_POSITIVE));
+            // SAFETY: as above; one instance per vertex of the buffer the caller
+            // names with its vertex count.
+            unsafe {
+                self.bind_lines(device, cmd, pipelines.normals, frame_set, &push);
                 device.cmd_bind_vertex_buffers(cmd, 0, &[vertices.0.raw], &[0]);
                 device.cmd_draw(cmd, 2, vertex_count, 0, 0);
             }
+        }
+    }
+
+    /// Binds a line pipeline with the frame's uniforms and its push constants.
+    ///
+    /// # Safety
+    ///
+    /// `cmd` is recording inside the subpass `pipeline` was made for, and
+    /// `frame_set` is live.
+    unsafe fn bind_lines(
+        &self,
+        device: &ash::Device,
+        cmd: vk::CommandBuffer,
+        pipeline: vk::Pipeline,
+        frame_set: vk::DescriptorSet,
+        push: &[u8],
+    ) {
+        // SAFETY: the caller guarantees the subpass and the set; the layout is
+        // this object's and the push constants match its range.
+        unsafe {
+            device.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, pipeline);
+            device.cmd_bind_descriptor_sets(
+                cmd,
+                vk::PipelineBindPoint::GRAPHICS,
+                self.layout,
+                0,
+                &[frame_set],
+                &[],
+            );
+            device.cmd_push_constants(
+                cmd,
+                self.layout,
+                vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT,
+                0,
+                push,
+            );
         }
     }
 }

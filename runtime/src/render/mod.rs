@@ -9,8 +9,9 @@
 //! per view (masks 0b01 then 0b10) with the same shaders. Batches are drawn by
 //! increasing SH order: order 0 with the trivial `scene_l0.vert`, the rest with
 //! `scene_sh.vert` whose loop bound is the batch's order (push constant); then
-//! 001's global-cube batches with `scene_cube.vert` (four cells per channel,
-//! the resolution k in the same push constant).
+//! the global-cube batches (Immel, Cohen & Greenberg 1986, "The global cube")
+//! with `scene_cube.vert` (four cells per channel, the resolution k in the same
+//! push constant).
 //!
 //! Conventions: positions are in file (re-centred) coordinates; views are
 //! `solution::camera::EyeView`s, projected with `EyeView::view_projection` and the
@@ -29,6 +30,7 @@ pub use multiview::MultiviewMode;
 pub use scene::{CoefficientStorage, DrawKind, GpuScene, SceneError};
 pub use tonemap::{ToneCurve, ToneSettings};
 
+use crate::gpu::barrier::{cmd_image_barriers, image_barrier};
 use crate::gpu::{
     Buffer, BufferDesc, Fence, Gpu, GpuError, Image, ImageDesc, MemoryLocation, VkContext,
 };
@@ -522,7 +524,7 @@ impl StereoRenderer {
         &self.desc
     }
 
-    /// Mesh inspection for the next frames (000 appendix D `-w`, `-n`): element
+    /// Mesh inspection for the next frames (Remington 1992, app. D: `-w`, `-n`): element
     /// edges and vertex normals as lines. `solution` must be the one this
     /// renderer was made from (its triangles give the edges); the line
     /// pipelines are made on the first call that needs them.
@@ -624,7 +626,10 @@ impl StereoRenderer {
                 bytes.extend_from_slice(&f.to_le_bytes());
             }
         }
-        self.uniforms.write(0, &bytes);
+        // SAFETY: `render` waited for the frame fence before calling this, and
+        // the uniform buffer is used only by this renderer's command buffer, so
+        // no GPU work reads it now.
+        unsafe { self.uniforms.write(0, &bytes) };
     }
 
     fn record(&self, view_count: usize, image: usize) -> Result<(), GpuError> {
@@ -654,13 +659,11 @@ impl StereoRenderer {
         }
         // SAFETY: recording; the barriers name live images of this device.
         unsafe {
-            device.cmd_pipeline_barrier(
+            cmd_image_barriers(
+                device,
                 cmd,
                 vk::PipelineStageFlags::ALL_COMMANDS,
                 vk::PipelineStageFlags::ALL_COMMANDS,
-                vk::DependencyFlags::empty(),
-                &[],
-                &[],
                 &barriers,
             )
         };
@@ -676,13 +679,22 @@ impl StereoRenderer {
                 .enumerate()
                 .find(|(_, s)| s.desc.view_mask == mask)
                 .ok_or_else(|| GpuError::Unsupported(format!("no pass for view mask {mask:#b}")))?;
-            self.record_pass(cmd, index, set, target.framebuffers[index]);
+            // SAFETY: `cmd` was begun above and no render pass is open; the
+            // framebuffer is the target's for this pass set.
+            unsafe { self.record_pass(cmd, index, set, target.framebuffers[index]) };
         }
         // SAFETY: recording.
         unsafe { device.end_command_buffer(cmd) }.ctx("vkEndCommandBuffer")
     }
 
-    fn record_pass(
+    /// Records one pass set's render pass: the scene subpass (batches, then
+    /// the inspection lines) and the tone-map subpass.
+    ///
+    /// # Safety
+    ///
+    /// `cmd` is recording, outside a render pass, and `framebuffer` is this
+    /// renderer's framebuffer for `set` (index `set_index`).
+    unsafe fn record_pass(
         &self,
         cmd: vk::CommandBuffer,
         set_index: usize,
@@ -733,65 +745,23 @@ impl StereoRenderer {
         let mut tone_push = [0u8; 8];
         tone_push[0..4].copy_from_slice(&tone_gain.to_le_bytes());
         tone_push[4..8].copy_from_slice(&self.desc.tone.curve.code().to_le_bytes());
-        // SAFETY: recording outside a render pass; every handle is live and owned
-        // by this renderer; draws stay within the buffers (indices were checked
-        // against their batch's vertex count at upload).
+        // SAFETY: the caller guarantees that `cmd` is recording outside a
+        // render pass; the render pass, framebuffer and scene buffers are live
+        // and this renderer's, the framebuffer made for this pass set.
         unsafe {
             device.cmd_begin_render_pass(cmd, &begin, vk::SubpassContents::INLINE);
             device.cmd_set_viewport(cmd, 0, &viewport);
             device.cmd_set_scissor(cmd, 0, &[area]);
             device.cmd_bind_vertex_buffers(cmd, 0, &[self.scene.vertices.raw], &[0]);
             device.cmd_bind_index_buffer(cmd, self.scene.indices.raw, 0, vk::IndexType::UINT32);
-            let mut bound = None;
-            // Wireframe alone (prorad's -w) leaves the shading out.
-            let shaded = if self.inspect.edges == Edges::Only {
-                0
-            } else {
-                self.scene.draws.len()
-            };
-            for (draw, &ds) in self.scene.draws.iter().zip(&self.batch_sets).take(shaded) {
-                let pipeline = match draw.kind {
-                    DrawKind::Sh if draw.order == 0 => set.scene_l0,
-                    DrawKind::Sh => set.scene_sh,
-                    DrawKind::Cube { .. } => set.scene_cube,
-                };
-                if bound != Some(pipeline) {
-                    device.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, pipeline);
-                    bound = Some(pipeline);
-                }
-                device.cmd_bind_descriptor_sets(
-                    cmd,
-                    vk::PipelineBindPoint::GRAPHICS,
-                    self.layouts.scene_pipeline,
-                    0,
-                    &[ds],
-                    &[],
-                );
-                let constants = BatchConstants {
-                    order: draw.loop_parameter(),
-                    vertex_base: draw.vertex_base,
-                    coeff_base: 0,
-                    stride: draw.stride,
-                    scale: draw.storage_scale * self.scene.radiance_scale,
-                };
-                device.cmd_push_constants(
-                    cmd,
-                    self.layouts.scene_pipeline,
-                    vk::ShaderStageFlags::VERTEX,
-                    0,
-                    &constants.bytes(),
-                );
-                device.cmd_draw_indexed(
-                    cmd,
-                    draw.index_count,
-                    1,
-                    draw.first_index,
-                    draw.vertex_base as i32,
-                    0,
-                );
-            }
-            if let (Some(lines), Some(&frame_set)) = (&self.inspect_gpu, self.batch_sets.first()) {
-                if self.inspect.draws_lines() {
+        }
+        // SAFETY: inside the scene subpass of `set`, the scene's buffers bound.
+        unsafe { self.record_batches(cmd, set) };
+        if let (Some(lines), Some(&frame_set)) = (&self.inspect_gpu, self.batch_sets.first()) {
+            if self.inspect.draws_lines() {
+                // SAFETY: inside the scene subpass of pass set `set_index`; the
+                // lines index the scene's own vertex buffer.
+                unsafe {
                     lines.record(
                         device,
                         cmd,
@@ -801,9 +771,14 @@ impl StereoRenderer {
                         self.desc.tone,
                         self.scene.radiance_scale,
                         (&self.scene.vertices, self.scene.vertex_count),
-                    );
-                }
+                    )
+                };
             }
+        }
+        // SAFETY: inside the scene subpass of `set`; the tone-map pipeline and
+        // its descriptor set (the linear attachment as input) are this
+        // renderer's, and the push constants match its fragment range.
+        unsafe {
             device.cmd_next_subpass(cmd, vk::SubpassContents::INLINE);
             device.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, set.tonemap);
             device.cmd_bind_descriptor_sets(
@@ -823,6 +798,73 @@ impl StereoRenderer {
             );
             device.cmd_draw(cmd, 3, 1, 0, 0);
             device.cmd_end_render_pass(cmd);
+        }
+    }
+
+    /// Draws the scene's batches (none when the wireframe is shown alone),
+    /// binding each batch's pipeline, descriptor set and push constants.
+    ///
+    /// # Safety
+    ///
+    /// `cmd` is recording inside the scene subpass of `set`, with the scene's
+    /// vertex and index buffers bound.
+    unsafe fn record_batches(&self, cmd: vk::CommandBuffer, set: &PassSet) {
+        let device = &self.gpu_shared.device;
+        // Wireframe alone (prorad's -w) leaves the shading out.
+        let shaded = if self.inspect.edges == Edges::Only {
+            0
+        } else {
+            self.scene.draws.len()
+        };
+        let mut bound = None;
+        for (draw, &ds) in self.scene.draws.iter().zip(&self.batch_sets).take(shaded) {
+            let pipeline = match draw.kind {
+                DrawKind::Sh if draw.order == 0 => set.scene_l0,
+                DrawKind::Sh => set.scene_sh,
+                DrawKind::Cube { .. } => set.scene_cube,
+            };
+            if bound != Some(pipeline) {
+                // SAFETY: the caller guarantees the subpass; the pipeline was
+                // made for it.
+                unsafe { device.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, pipeline) };
+                bound = Some(pipeline);
+            }
+            let constants = BatchConstants {
+                order: draw.loop_parameter(),
+                vertex_base: draw.vertex_base,
+                coeff_base: 0,
+                stride: draw.stride,
+                scale: draw.storage_scale * self.scene.radiance_scale,
+            };
+            // SAFETY: the caller guarantees the subpass and the bound buffers;
+            // the batch's descriptor set is live; the draw stays within the
+            // buffers (indices were checked against their batch's vertex count
+            // at upload).
+            unsafe {
+                device.cmd_bind_descriptor_sets(
+                    cmd,
+                    vk::PipelineBindPoint::GRAPHICS,
+                    self.layouts.scene_pipeline,
+                    0,
+                    &[ds],
+                    &[],
+                );
+                device.cmd_push_constants(
+                    cmd,
+                    self.layouts.scene_pipeline,
+                    vk::ShaderStageFlags::VERTEX,
+                    0,
+                    &constants.bytes(),
+                );
+                device.cmd_draw_indexed(
+                    cmd,
+                    draw.index_count,
+                    1,
+                    draw.first_index,
+                    draw.vertex_base as i32,
+                    0,
+                );
+            }
         }
     }
 
@@ -902,13 +944,11 @@ impl StereoRenderer {
             // SAFETY: recording; images are live, the buffer holds every region,
             // and the frame's fence was waited for in `render`.
             unsafe {
-                device.cmd_pipeline_barrier(
+                cmd_image_barriers(
+                    device,
                     cmd,
                     vk::PipelineStageFlags::ALL_COMMANDS,
                     vk::PipelineStageFlags::TRANSFER,
-                    vk::DependencyFlags::empty(),
-                    &[],
-                    &[],
                     &to_src,
                 );
                 device.cmd_copy_image_to_buffer(
@@ -925,18 +965,18 @@ impl StereoRenderer {
                     buffer.raw,
                     &regions_lin,
                 );
-                device.cmd_pipeline_barrier(
+                cmd_image_barriers(
+                    device,
                     cmd,
                     vk::PipelineStageFlags::TRANSFER,
                     vk::PipelineStageFlags::ALL_COMMANDS,
-                    vk::DependencyFlags::empty(),
-                    &[],
-                    &[],
                     &back,
                 );
             }
         })?;
-        let data = buffer.read();
+        // SAFETY: `one_shot` waited for the only submission that writes
+        // `buffer`, a buffer made for this read-back and used by nothing else.
+        let data = unsafe { buffer.read() };
         let unscale = 1.0 / self.scene.radiance_scale;
         let bgra = matches!(
             self.swapchain.format,
@@ -1025,20 +1065,21 @@ fn layout_barrier(image: &Image, layout: vk::ImageLayout) -> vk::ImageMemoryBarr
     transition(image, vk::ImageLayout::UNDEFINED, layout)
 }
 
+/// A full-memory barrier moving every layer of `image` from `from` to `to`.
 fn transition(
     image: &Image,
     from: vk::ImageLayout,
     to: vk::ImageLayout,
 ) -> vk::ImageMemoryBarrier<'static> {
-    vk::ImageMemoryBarrier::default()
-        .src_access_mask(vk::AccessFlags::MEMORY_WRITE)
-        .dst_access_mask(vk::AccessFlags::MEMORY_READ | vk::AccessFlags::MEMORY_WRITE)
-        .old_layout(from)
-        .new_layout(to)
-        .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-        .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-        .image(image.raw)
-        .subresource_range(image.range())
+    image_barrier(
+        image.raw,
+        image.range(),
+        (from, vk::AccessFlags::MEMORY_WRITE),
+        (
+            to,
+            vk::AccessFlags::MEMORY_READ | vk::AccessFlags::MEMORY_WRITE,
+        ),
+    )
 }
 
 impl Drop for StereoRenderer {

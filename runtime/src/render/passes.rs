@@ -97,46 +97,38 @@ impl Layouts {
             scene_set: vk::DescriptorSetLayout::null(),
             device: gpu.shared.clone(),
         };
-        // SAFETY: create infos point to locals; every handle is stored in
-        // `layouts` as soon as it exists, so Drop destroys it on any later error.
-        unsafe {
-            layouts.scene_set = device
-                .create_descriptor_set_layout(
-                    &vk::DescriptorSetLayoutCreateInfo::default().bindings(&scene_bindings),
-                    None,
-                )
+        // Every handle is stored in `layouts` as soon as it exists, so its Drop
+        // destroys it on any later error.
+        let scene_set_info = vk::DescriptorSetLayoutCreateInfo::default().bindings(&scene_bindings);
+        // SAFETY: the create info points to locals alive for the call.
+        layouts.scene_set = unsafe { device.create_descriptor_set_layout(&scene_set_info, None) }
+            .ctx("vkCreateDescriptorSetLayout")?;
+        let tonemap_set_info =
+            vk::DescriptorSetLayoutCreateInfo::default().bindings(&tonemap_bindings);
+        // SAFETY: as above.
+        layouts.tonemap_set =
+            unsafe { device.create_descriptor_set_layout(&tonemap_set_info, None) }
                 .ctx("vkCreateDescriptorSetLayout")?;
-            layouts.tonemap_set = device
-                .create_descriptor_set_layout(
-                    &vk::DescriptorSetLayoutCreateInfo::default().bindings(&tonemap_bindings),
-                    None,
-                )
-                .ctx("vkCreateDescriptorSetLayout")?;
-            let scene_push = [vk::PushConstantRange::default()
-                .stage_flags(vk::ShaderStageFlags::VERTEX)
-                .size(BatchConstants::SIZE)];
-            let sets = [layouts.scene_set];
-            layouts.scene_pipeline = device
-                .create_pipeline_layout(
-                    &vk::PipelineLayoutCreateInfo::default()
-                        .set_layouts(&sets)
-                        .push_constant_ranges(&scene_push),
-                    None,
-                )
-                .ctx("vkCreatePipelineLayout")?;
-            let tonemap_push = [vk::PushConstantRange::default()
-                .stage_flags(vk::ShaderStageFlags::FRAGMENT)
-                .size(8)];
-            let sets = [layouts.tonemap_set];
-            layouts.tonemap_pipeline = device
-                .create_pipeline_layout(
-                    &vk::PipelineLayoutCreateInfo::default()
-                        .set_layouts(&sets)
-                        .push_constant_ranges(&tonemap_push),
-                    None,
-                )
-                .ctx("vkCreatePipelineLayout")?;
-        }
+        let scene_push = [vk::PushConstantRange::default()
+            .stage_flags(vk::ShaderStageFlags::VERTEX)
+            .size(BatchConstants::SIZE)];
+        let sets = [layouts.scene_set];
+        let scene_info = vk::PipelineLayoutCreateInfo::default()
+            .set_layouts(&sets)
+            .push_constant_ranges(&scene_push);
+        // SAFETY: the create info points to locals and to the live set layout.
+        layouts.scene_pipeline = unsafe { device.create_pipeline_layout(&scene_info, None) }
+            .ctx("vkCreatePipelineLayout")?;
+        let tonemap_push = [vk::PushConstantRange::default()
+            .stage_flags(vk::ShaderStageFlags::FRAGMENT)
+            .size(8)];
+        let sets = [layouts.tonemap_set];
+        let tonemap_info = vk::PipelineLayoutCreateInfo::default()
+            .set_layouts(&sets)
+            .push_constant_ranges(&tonemap_push);
+        // SAFETY: as above.
+        layouts.tonemap_pipeline = unsafe { device.create_pipeline_layout(&tonemap_info, None) }
+            .ctx("vkCreatePipelineLayout")?;
         Ok(layouts)
     }
 }

@@ -5,7 +5,7 @@
 //! |------------|----------|-------------------------------------------------------|
 //! | `walk`     | vector2  | left stick/trackpad: walk along the head's heading    |
 //! | `turn`     | vector2  | right stick/trackpad x: snap turn                      |
-//! | `recentre` | boolean  | right stick click (menu on sticks-less controllers): back to the stored camera (`radview`'s `r`) |
+//! | `recentre` | boolean  | right stick click (menu on sticks-less controllers): back to the stored camera (`radview`'s `r`, Remington 1992, app. C.1) |
 //! | `help`     | boolean  | left menu button: toggle the help overlay (`radview`'s F1/F2) |
 //!
 //! Bindings can only be suggested before any action set is attached to a

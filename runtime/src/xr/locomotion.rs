@@ -16,8 +16,8 @@
 //! forward₀ is −z for a ±y-up scene and +y for a ±z-up one). Positions, the
 //! walking speed and the IPD are all in metres until this scale is applied.
 //!
-//! Controls (thesis appendix C's `radview` keys, translated to what XR users
-//! expect): the left stick walks along the head's heading, the right stick
+//! Controls (the `radview` keys of Remington 1992, app. C.1, translated to
+//! what XR users expect): the left stick walks along the head's heading, the right stick
 //! snap-turns about the head, and recentring puts the head back at the
 //! solution's stored camera, looking its way (`radview`'s `r`, "reset all
 //! parameters to default view").

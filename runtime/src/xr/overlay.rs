@@ -1,6 +1,7 @@
-//! The in-headset help overlay (`radview`'s F1 help window): the controls as
-//! white text on a dark panel, in a static one-image swapchain shown as a quad
-//! layer over the scene while the menu button has it toggled on.
+//! The in-headset help overlay (`radview`'s F1 help window, Remington 1992,
+//! app. C.1): the controls as white text on a dark panel, in a static
+//! one-image swapchain shown as a quad layer over the scene while the menu
+//! button has it toggled on.
 //!
 //! The panel is world-locked: when it is toggled on it is placed
 //! [`PANEL_DISTANCE_M`] ahead of the head at eye height, facing it, and stays
@@ -11,6 +12,7 @@ use super::input::HELP;
 use super::locomotion::heading_deg;
 use super::session::pose_to_xr;
 use super::{XrContext, XrError};
+use crate::gpu::barrier::{cmd_image_barriers, image_barrier};
 use crate::gpu::{Buffer, BufferDesc, Gpu, MemoryLocation};
 use crate::mirror::font::TextGrid;
 use crate::session::Pose;
@@ -166,7 +168,9 @@ fn upload(
             location: MemoryLocation::Mapped,
         },
     )?;
-    staging.write(0, pixels);
+    // SAFETY: the staging buffer was just created; no command buffer refers to
+    // it yet.
+    unsafe { staging.write(0, pixels) };
     let range = vk::ImageSubresourceRange {
         aspect_mask: vk::ImageAspectFlags::COLOR,
         base_mip_level: 0,
@@ -174,17 +178,19 @@ fn upload(
         base_array_layer: 0,
         layer_count: 1,
     };
-    let barrier = |from, to, src, dst| {
-        vk::ImageMemoryBarrier::default()
-            .src_access_mask(src)
-            .dst_access_mask(dst)
-            .old_layout(from)
-            .new_layout(to)
-            .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-            .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-            .image(image)
-            .subresource_range(range)
-    };
+    use vk::{AccessFlags as A, ImageLayout as L, PipelineStageFlags as S};
+    let to_dst = [image_barrier(
+        image,
+        range,
+        (L::UNDEFINED, A::empty()),
+        (L::TRANSFER_DST_OPTIMAL, A::TRANSFER_WRITE),
+    )];
+    let to_attachment = [image_barrier(
+        image,
+        range,
+        (L::TRANSFER_DST_OPTIMAL, A::TRANSFER_WRITE),
+        (L::COLOR_ATTACHMENT_OPTIMAL, A::empty()),
+    )];
     let region = vk::BufferImageCopy::default()
         .image_subresource(vk::ImageSubresourceLayers {
             aspect_mask: vk::ImageAspectFlags::COLOR,
@@ -202,41 +208,15 @@ fn upload(
         // acquired, waited-for swapchain image of this device, and the
         // staging buffer holds width × height × 4 bytes.
         unsafe {
-            device.cmd_pipeline_barrier(
-                cmd,
-                vk::PipelineStageFlags::TOP_OF_PIPE,
-                vk::PipelineStageFlags::TRANSFER,
-                vk::DependencyFlags::empty(),
-                &[],
-                &[],
-                &[barrier(
-                    vk::ImageLayout::UNDEFINED,
-                    vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                    vk::AccessFlags::empty(),
-                    vk::AccessFlags::TRANSFER_WRITE,
-                )],
-            );
+            cmd_image_barriers(device, cmd, S::TOP_OF_PIPE, S::TRANSFER, &to_dst);
             device.cmd_copy_buffer_to_image(
                 cmd,
                 staging.raw,
                 image,
-                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                L::TRANSFER_DST_OPTIMAL,
                 &[region],
             );
-            device.cmd_pipeline_barrier(
-                cmd,
-                vk::PipelineStageFlags::TRANSFER,
-                vk::PipelineStageFlags::BOTTOM_OF_PIPE,
-                vk::DependencyFlags::empty(),
-                &[],
-                &[],
-                &[barrier(
-                    vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                    vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
-                    vk::AccessFlags::TRANSFER_WRITE,
-                    vk::AccessFlags::empty(),
-                )],
-            );
+            cmd_image_barriers(device, cmd, S::TRANSFER, S::BOTTOM_OF_PIPE, &to_attachment);
         }
     })?;
     Ok(())
