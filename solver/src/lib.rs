@@ -23,6 +23,8 @@ pub mod brdf;
 #[cfg(feature = "solve")]
 pub mod cli;
 #[cfg(feature = "solve")]
+pub mod compare;
+#[cfg(feature = "solve")]
 pub mod geometry;
 #[cfg(feature = "solve")]
 pub mod mesh;
