@@ -46,7 +46,8 @@ fn load(name: &str) -> NpyArray {
     let path = fixtures().join(name);
     let file = std::fs::File::open(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     let len = file.metadata().unwrap().len();
-    read_npy(std::io::BufReader::new(file), len).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+    read_npy(std::io::BufReader::new(file), len)
+        .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
 }
 
 fn image(name: &str) -> Image {
@@ -88,7 +89,10 @@ fn check_case(case: &str) {
         .zip(&map.data)
         .map(|(a, b)| (a - b).abs())
         .enumerate()
-        .fold((0.0f32, 0), |(w, at), (i, d)| if d > w { (d, i) } else { (w, at) });
+        .fold(
+            (0.0f32, 0),
+            |(w, at), (i, d)| if d > w { (d, i) } else { (w, at) },
+        );
     println!(
         "{case}: mean {} (flip-evaluator {}), largest pixel difference {worst:e} at pixel {at}",
         result.mean, e["mean"]
@@ -100,13 +104,22 @@ fn check_case(case: &str) {
         map.data[at]
     );
     let mean_error = (result.mean as f64 - e["mean"].as_f64().unwrap()).abs();
-    assert!(mean_error <= MEAN_TOLERANCE, "{case}: mean differs by {mean_error}");
+    assert!(
+        mean_error <= MEAN_TOLERANCE,
+        "{case}: mean differs by {mean_error}"
+    );
 
     if variant == Variant::Hdr {
         let exposures = exposure_range(&reference).unwrap();
         assert_eq!(Some(exposures), result.exposures);
-        assert!((exposures.start as f64 - e["start_exposure"].as_f64().unwrap()).abs() <= EXPOSURE_TOLERANCE);
-        assert!((exposures.stop as f64 - e["stop_exposure"].as_f64().unwrap()).abs() <= EXPOSURE_TOLERANCE);
+        assert!(
+            (exposures.start as f64 - e["start_exposure"].as_f64().unwrap()).abs()
+                <= EXPOSURE_TOLERANCE
+        );
+        assert!(
+            (exposures.stop as f64 - e["stop_exposure"].as_f64().unwrap()).abs()
+                <= EXPOSURE_TOLERANCE
+        );
         assert_eq!(exposures.count as u64, e["num_exposures"].as_u64().unwrap());
     }
 }
@@ -134,5 +147,8 @@ fn ldr_flip_matches_flip_evaluator() {
 #[test]
 fn default_pixels_per_degree_is_flip_evaluators() {
     let ppd = expected()["cases"]["hdr_scene"]["ppd"].as_f64().unwrap();
-    assert_eq!(solver::compare::flip::default_pixels_per_degree() as f64, ppd);
+    assert_eq!(
+        solver::compare::flip::default_pixels_per_degree() as f64,
+        ppd
+    );
 }

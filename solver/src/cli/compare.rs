@@ -112,7 +112,10 @@ struct HeatmapReport {
 
 pub fn run(args: CompareArgs) -> anyhow::Result<ExitCode> {
     if !(args.heatmap_range > 0.0 && args.heatmap_range.is_finite()) {
-        bail!("--heatmap-range must be a positive number, not {}", args.heatmap_range);
+        bail!(
+            "--heatmap-range must be a positive number, not {}",
+            args.heatmap_range
+        );
     }
     let ppd = args.ppd.unwrap_or_else(default_pixels_per_degree);
     if !(ppd > 0.0 && ppd.is_finite()) {
@@ -136,7 +139,11 @@ pub fn run(args: CompareArgs) -> anyhow::Result<ExitCode> {
     let flip_report = match args.flip {
         FlipChoice::None => None,
         choice => {
-            let variant = if choice == FlipChoice::Hdr { Variant::Hdr } else { Variant::Ldr };
+            let variant = if choice == FlipChoice::Hdr {
+                Variant::Hdr
+            } else {
+                Variant::Ldr
+            };
             let result = flip(t, r, variant, ppd)
                 .with_context(|| format!("FLIP of {}", args.reference.display()))?;
             Some(FlipReport {
@@ -166,7 +173,10 @@ pub fn run(args: CompareArgs) -> anyhow::Result<ExitCode> {
         summary: summarize(t, r),
         lit_fraction: LIT_FRACTION,
         flip: flip_report,
-        reference_noise: reference.standard_error.as_ref().map(|se| reference_noise(r, se)),
+        reference_noise: reference
+            .standard_error
+            .as_ref()
+            .map(|se| reference_noise(r, se)),
         by_material: by(&reference.material_id),
         by_object: by(&reference.object_id),
         heatmap: heatmap_report,
@@ -198,7 +208,12 @@ fn write_heatmap(path: &Path, test: &Image, reference: &Image, range: f64) -> an
     let rgb = heatmap::render(&errors, range);
     let mut png = Vec::new();
     image::codecs::png::PngEncoder::new(&mut png)
-        .write_image(&rgb, test.width as u32, test.height as u32, image::ExtendedColorType::Rgb8)
+        .write_image(
+            &rgb,
+            test.width as u32,
+            test.height as u32,
+            image::ExtendedColorType::Rgb8,
+        )
         .with_context(|| format!("encoding {}", path.display()))?;
     super::solve::files::write_atomic(path, &png)
 }
@@ -209,14 +224,22 @@ fn describe(r: &Report) -> String {
     let mut out = String::new();
     let _ = writeln!(out, "test:      {} ({}×{})", r.test, r.width, r.height);
     let _ = writeln!(out, "reference: {}", r.reference);
-    let _ = writeln!(out, "mean radiance:       test {:.6}, reference {:.6}", s.test_mean, s.reference_mean);
+    let _ = writeln!(
+        out,
+        "mean radiance:       test {:.6}, reference {:.6}",
+        s.test_mean, s.reference_mean
+    );
     let _ = writeln!(out, "relative RMSE:       {:.6}", s.relative_rmse);
     let _ = writeln!(
         out,
         "MARE (luminance):    {:.6}  over {} of {} pixels lit (Y_ref > {:.3e})",
         s.mare, s.lit_pixels, s.pixels, s.lit_threshold
     );
-    let _ = writeln!(out, "mean signed error:   {:+.6}", s.mean_signed_relative_error);
+    let _ = writeln!(
+        out,
+        "mean signed error:   {:+.6}",
+        s.mean_signed_relative_error
+    );
     let (x, y, c) = s.max_abs_error_at;
     let _ = writeln!(
         out,
@@ -225,23 +248,41 @@ fn describe(r: &Report) -> String {
         ["R", "G", "B"][c]
     );
     if let Some(noise) = r.reference_noise {
-        let _ = writeln!(out, "reference noise:     {noise:.6}  (mean relative standard error of Y_ref, lit pixels)");
+        let _ = writeln!(
+            out,
+            "reference noise:     {noise:.6}  (mean relative standard error of Y_ref, lit pixels)"
+        );
     }
     if let Some(f) = &r.flip {
         let name = match f.variant {
             Variant::Hdr => "HDR-FLIP",
             Variant::Ldr => "LDR-FLIP",
         };
-        let _ = write!(out, "mean {name}:       {:.6}  ({:.2} pixels per degree", f.mean, f.pixels_per_degree);
+        let _ = write!(
+            out,
+            "mean {name}:       {:.6}  ({:.2} pixels per degree",
+            f.mean, f.pixels_per_degree
+        );
         if let Some(e) = f.exposures {
-            let _ = write!(out, "; {} exposures from {:+.3} to {:+.3} stops", e.count, e.start, e.stop);
+            let _ = write!(
+                out,
+                "; {} exposures from {:+.3} to {:+.3} stops",
+                e.count, e.start, e.stop
+            );
         }
         let _ = writeln!(out, ")");
     }
     for (title, rows) in [("material", &r.by_material), ("object", &r.by_object)] {
         if let Some(rows) = rows {
-            let _ = writeln!(out, "\nerror by {title}, largest share of absolute error first:");
-            let _ = writeln!(out, "  {:>6}  {:>10}  {:>8}  {:>9}  {:>9}  name", "share", "MARE", "signed", "pixels", "lit");
+            let _ = writeln!(
+                out,
+                "\nerror by {title}, largest share of absolute error first:"
+            );
+            let _ = writeln!(
+                out,
+                "  {:>6}  {:>10}  {:>8}  {:>9}  {:>9}  name",
+                "share", "MARE", "signed", "pixels", "lit"
+            );
             for g in rows {
                 let _ = writeln!(
                     out,

@@ -89,14 +89,30 @@ const CSF_CZ: [(f32, f32); 2] = [(34.1, 0.04), (13.5, 0.025)];
 
 /// Evaluates FLIP between `test` and `reference` (linear RGB) at `ppd` pixels per
 /// degree.
-pub fn flip(test: &Image, reference: &Image, variant: Variant, ppd: f32) -> Result<FlipResult, FlipError> {
+pub fn flip(
+    test: &Image,
+    reference: &Image,
+    variant: Variant,
+    ppd: f32,
+) -> Result<FlipResult, FlipError> {
     if test.width != reference.width || test.height != reference.height {
         return Err(FlipError::SizeMismatch);
     }
     match variant {
         Variant::Ldr => {
-            let clamp = |img: &Image| img.rgb.iter().map(|v| v.clamp(0.0, 1.0)).collect::<Vec<f32>>();
-            let map = ldr_flip(&clamp(reference), &clamp(test), reference.width, reference.height, ppd);
+            let clamp = |img: &Image| {
+                img.rgb
+                    .iter()
+                    .map(|v| v.clamp(0.0, 1.0))
+                    .collect::<Vec<f32>>()
+            };
+            let map = ldr_flip(
+                &clamp(reference),
+                &clamp(test),
+                reference.width,
+                reference.height,
+                ppd,
+            );
             Ok(FlipResult {
                 mean: mean_f32(&map),
                 map,
@@ -114,7 +130,14 @@ fn mean_f32(map: &[f32]) -> f32 {
 
 /// ACES filmic curve as fitted by Narkowicz (2015), with the 0.6 pre-exposure
 /// folded into the coefficients: (c²·t0 + c·t1 + t2) / (c²·t3 + c·t4 + t5).
-const ACES: [f32; 6] = [0.6 * 0.6 * 2.51, 0.6 * 0.03, 0.0, 0.6 * 0.6 * 2.43, 0.6 * 0.59, 0.14];
+const ACES: [f32; 6] = [
+    0.6 * 0.6 * 2.51,
+    0.6 * 0.03,
+    0.0,
+    0.6 * 0.6 * 2.43,
+    0.6 * 0.59,
+    0.14,
+];
 
 fn aces(c: f32) -> f32 {
     let t = &ACES;
@@ -162,7 +185,10 @@ fn hdr_flip(test: &Image, reference: &Image, ppd: f32) -> Result<FlipResult, Fli
         let exposure = exposures.start + i as f32 * step;
         let scale = 2.0f32.powf(exposure);
         let tone = |img: &Image| -> Vec<f32> {
-            img.rgb.iter().map(|&v| aces(v * scale).clamp(0.0, 1.0)).collect()
+            img.rgb
+                .iter()
+                .map(|&v| aces(v * scale).clamp(0.0, 1.0))
+                .collect()
         };
         let ldr = ldr_flip(&tone(reference), &tone(test), w, h, ppd);
         for (m, e) in map.iter_mut().zip(ldr) {
@@ -187,9 +213,21 @@ const INV_D65: [f32; 3] = [1.052156925, 1.0, 0.918357670];
 fn linear_rgb_to_xyz(c: [f32; 3]) -> [f32; 3] {
     // The sRGB-to-XYZ matrix with D65 white, as exact ratios.
     let m = [
-        [10135552.0 / 24577794.0, 8788810.0 / 24577794.0, 4435075.0 / 24577794.0],
-        [2613072.0 / 12288897.0, 8788810.0 / 12288897.0, 887015.0 / 12288897.0],
-        [1425312.0 / 73733382.0, 8788810.0 / 73733382.0, 70074185.0 / 73733382.0],
+        [
+            10135552.0 / 24577794.0,
+            8788810.0 / 24577794.0,
+            4435075.0 / 24577794.0,
+        ],
+        [
+            2613072.0 / 12288897.0,
+            8788810.0 / 12288897.0,
+            887015.0 / 12288897.0,
+        ],
+        [
+            1425312.0 / 73733382.0,
+            8788810.0 / 73733382.0,
+            70074185.0 / 73733382.0,
+        ],
     ];
     mat3(&m, c)
 }
@@ -233,7 +271,13 @@ fn xyz_to_lab(c: [f32; 3]) -> [f32; 3] {
     let delta_cube = delta * delta_sq;
     let factor = 1.0 / (3.0 * delta_sq);
     let term = 4.0f32 / 29.0;
-    let f = |t: f32| if t > delta_cube { t.powf(1.0 / 3.0) } else { factor * t + term };
+    let f = |t: f32| {
+        if t > delta_cube {
+            t.powf(1.0 / 3.0)
+        } else {
+            factor * t + term
+        }
+    };
     let x = f(c[0] * INV_D65[0]);
     let y = f(c[1] * INV_D65[1]);
     let z = f(c[2] * INV_D65[2]);
@@ -411,7 +455,14 @@ fn csf_rows(img: &[[f32; 3]], w: usize, f: &SpatialFilters) -> Vec<[f32; 4]> {
 }
 
 /// Vertical pass of the CSF at one pixel: the filtered YCxCz.
-fn csf_column(tmp: &[[f32; 4]], x: usize, y: usize, w: usize, h: usize, f: &SpatialFilters) -> [f32; 3] {
+fn csf_column(
+    tmp: &[[f32; 4]],
+    x: usize,
+    y: usize,
+    w: usize,
+    h: usize,
+    f: &SpatialFilters,
+) -> [f32; 3] {
     let r = f.y.len() / 2;
     let mut acc = [0.0f32; 4];
     for k in 0..f.y.len() {
@@ -439,7 +490,9 @@ fn colour_difference(
     let (ref_rows, test_rows) = (csf_rows(reference, w, f), csf_rows(test, w, f));
     let perceived = |tmp: &[[f32; 4]], x, y| {
         let rgb = xyz_to_linear_rgb(ycxcz_to_xyz(csf_column(tmp, x, y, w, h, f)));
-        hunt(xyz_to_lab(linear_rgb_to_xyz(rgb.map(|c| c.clamp(0.0, 1.0)))))
+        hunt(xyz_to_lab(linear_rgb_to_xyz(
+            rgb.map(|c| c.clamp(0.0, 1.0)),
+        )))
     };
     let mut out = vec![0.0f32; w * h];
     out.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
@@ -476,7 +529,14 @@ fn feature_rows(img: &[[f32; 3]], w: usize, f: &FeatureFilter) -> Vec<[f32; 3]> 
 }
 
 /// Edge and point strengths at one pixel: |∇(G∗Y)| and |(∂²x, ∂²y)(G∗Y)|.
-fn features_at(tmp: &[[f32; 3]], x: usize, y: usize, w: usize, h: usize, f: &FeatureFilter) -> (f32, f32) {
+fn features_at(
+    tmp: &[[f32; 3]],
+    x: usize,
+    y: usize,
+    w: usize,
+    h: usize,
+    f: &FeatureFilter,
+) -> (f32, f32) {
     let r = f.g.len() / 2;
     let (mut dx, mut ddx, mut dy, mut ddy) = (0.0f32, 0.0f32, 0.0f32, 0.0f32);
     for k in 0..f.g.len() {
@@ -521,7 +581,11 @@ mod tests {
                 [x, y, 0.5 * (x + y)]
             })
             .collect();
-        Image { width: w, height: h, rgb }
+        Image {
+            width: w,
+            height: h,
+            rgb,
+        }
     }
 
     #[test]

@@ -24,7 +24,12 @@ impl Image {
         Image {
             width,
             height,
-            rgb: rgb.iter().copied().cycle().take(width * height * 3).collect(),
+            rgb: rgb
+                .iter()
+                .copied()
+                .cycle()
+                .take(width * height * 3)
+                .collect(),
         }
     }
 

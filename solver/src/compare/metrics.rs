@@ -151,7 +151,11 @@ pub fn error_by_id(test: &Image, reference: &Image, ids: &IdChannel) -> Vec<Grou
             lit_pixels: a.lit,
             mare: a.abs_rel / a.lit.max(1) as f64,
             mean_signed: a.signed_rel / a.lit.max(1) as f64,
-            share_of_abs_error: if total_abs > 0.0 { a.abs / total_abs } else { 0.0 },
+            share_of_abs_error: if total_abs > 0.0 {
+                a.abs / total_abs
+            } else {
+                0.0
+            },
         })
         .collect();
     rows.sort_by(|a, b| {
@@ -226,11 +230,18 @@ mod tests {
         for k in [0.5f32, 0.9, 1.25, 3.0] {
             let image = varied(9, 4);
             let s = summarize(&scaled(&image, k), &image);
-            assert!((s.mare - (k as f64 - 1.0).abs()).abs() < 1e-6, "k={k}: {}", s.mare);
+            assert!(
+                (s.mare - (k as f64 - 1.0).abs()).abs() < 1e-6,
+                "k={k}: {}",
+                s.mare
+            );
             assert!((s.mean_signed_relative_error - (k as f64 - 1.0)).abs() < 1e-6);
             let uniform = Image::filled(6, 3, [0.3, 0.3, 0.3]);
             let s = summarize(&scaled(&uniform, k), &uniform);
-            assert!((s.relative_rmse - (k as f64 - 1.0).abs()).abs() < 1e-6, "k={k}");
+            assert!(
+                (s.relative_rmse - (k as f64 - 1.0).abs()).abs() < 1e-6,
+                "k={k}"
+            );
             assert!((s.mare - (k as f64 - 1.0).abs()).abs() < 1e-6);
         }
     }

@@ -98,7 +98,11 @@ pub fn read_npy(mut reader: impl Read, stream_len: u64) -> Result<NpyArray, NpyE
 
 /// Writes `data` with `shape` as a version 1.0 `.npy` stream (little-endian
 /// float32, C order), byte for byte as `numpy.save` does.
-pub fn write_npy(mut writer: impl std::io::Write, shape: &[usize], data: &[f32]) -> std::io::Result<()> {
+pub fn write_npy(
+    mut writer: impl std::io::Write,
+    shape: &[usize],
+    data: &[f32],
+) -> std::io::Result<()> {
     let dims: Vec<String> = shape.iter().map(|d| d.to_string()).collect();
     let shape_text = match dims.len() {
         1 => format!("({},)", dims[0]),
@@ -412,7 +416,9 @@ mod tests {
             assert!(
                 matches!(
                     result,
-                    Err(NpyError::TruncatedHeader | NpyError::SizeMismatch { .. } | NpyError::BadMagic)
+                    Err(NpyError::TruncatedHeader
+                        | NpyError::SizeMismatch { .. }
+                        | NpyError::BadMagic)
                 ),
                 "cut at {cut}: {result:?}"
             );
@@ -425,13 +431,23 @@ mod tests {
         // against the 0 payload bytes actually present.
         let header = "{'descr': '<f4', 'fortran_order': False, 'shape': (1048576, 1048576, 3), }\n";
         let result = decode(&raw(header, &[]));
-        assert!(matches!(result, Err(NpyError::SizeMismatch { expected, .. }) if expected == 12 << 40));
+        assert!(
+            matches!(result, Err(NpyError::SizeMismatch { expected, .. }) if expected == 12 << 40)
+        );
         // A product that overflows usize is refused as such.
-        let header = "{'descr': '<f4', 'fortran_order': False, 'shape': (18446744073709551615, 2, 3), }\n";
-        assert!(matches!(decode(&raw(header, &[])), Err(NpyError::ShapeOverflow { .. })));
+        let header =
+            "{'descr': '<f4', 'fortran_order': False, 'shape': (18446744073709551615, 2, 3), }\n";
+        assert!(matches!(
+            decode(&raw(header, &[])),
+            Err(NpyError::ShapeOverflow { .. })
+        ));
         // A single dimension that does not fit in usize is a syntax error.
-        let header = "{'descr': '<f4', 'fortran_order': False, 'shape': (99999999999999999999999, 3), }\n";
-        assert!(matches!(decode(&raw(header, &[])), Err(NpyError::Syntax { .. })));
+        let header =
+            "{'descr': '<f4', 'fortran_order': False, 'shape': (99999999999999999999999, 3), }\n";
+        assert!(matches!(
+            decode(&raw(header, &[])),
+            Err(NpyError::Syntax { .. })
+        ));
     }
 
     #[test]
@@ -448,8 +464,14 @@ mod tests {
     #[test]
     fn wrong_dtype_fortran_order_and_bad_syntax_are_refused() {
         let payload = vec![0u8; 8 * 3];
-        for (descr, ok) in [("<f8", false), (">f4", false), ("<i4", false), ("<f4", true)] {
-            let header = format!("{{'descr': '{descr}', 'fortran_order': False, 'shape': (2, 3), }}\n");
+        for (descr, ok) in [
+            ("<f8", false),
+            (">f4", false),
+            ("<i4", false),
+            ("<f4", true),
+        ] {
+            let header =
+                format!("{{'descr': '{descr}', 'fortran_order': False, 'shape': (2, 3), }}\n");
             let result = decode(&raw(&header, &payload[..2 * 3 * 4]));
             assert_eq!(result.is_ok(), ok, "{descr}: {result:?}");
             if !ok {
@@ -457,7 +479,10 @@ mod tests {
             }
         }
         let header = "{'descr': '<f4', 'fortran_order': True, 'shape': (2, 3), }\n";
-        assert!(matches!(decode(&raw(header, &payload[..24])), Err(NpyError::FortranOrder)));
+        assert!(matches!(
+            decode(&raw(header, &payload[..24])),
+            Err(NpyError::FortranOrder)
+        ));
         for header in [
             "{'descr': '<f4', 'fortran_order': False}\n",
             "{'descr': '<f4', 'fortran_order': False, 'shape': (2, -3), }\n",
@@ -469,14 +494,23 @@ mod tests {
         ] {
             let result = decode(&raw(header, &payload[..24]));
             assert!(
-                matches!(result, Err(NpyError::Syntax { .. } | NpyError::MissingKey(_))),
+                matches!(
+                    result,
+                    Err(NpyError::Syntax { .. } | NpyError::MissingKey(_))
+                ),
                 "{header:?}: {result:?}"
             );
         }
-        assert!(matches!(decode(b"PK\x03\x04 not npy at all"), Err(NpyError::BadMagic)));
+        assert!(matches!(
+            decode(b"PK\x03\x04 not npy at all"),
+            Err(NpyError::BadMagic)
+        ));
         let mut bytes = encode(&[1], &[1.0]);
         bytes[6] = 9;
-        assert!(matches!(decode(&bytes), Err(NpyError::Version { major: 9, .. })));
+        assert!(matches!(
+            decode(&bytes),
+            Err(NpyError::Version { major: 9, .. })
+        ));
     }
 
     #[test]
@@ -485,7 +519,10 @@ mod tests {
             "{{'descr': '<f4', 'fortran_order': False, 'shape': ({}), }}\n",
             "1, ".repeat(100)
         );
-        assert!(matches!(decode(&raw(&header, &[0; 4])), Err(NpyError::Syntax { .. })));
+        assert!(matches!(
+            decode(&raw(&header, &[0; 4])),
+            Err(NpyError::Syntax { .. })
+        ));
         let header = format!("{}\n", "(".repeat(10_000));
         assert!(decode(&raw(&header, &[])).is_err());
     }

@@ -31,7 +31,10 @@ pub enum ReadError {
     #[error("{}: the array has shape {shape:?}; an image must be (height, width, 3)", path.display())]
     NpyShape { path: PathBuf, shape: Vec<usize> },
     #[error("{}: invalid OpenEXR file: {source}", path.display())]
-    Exr { path: PathBuf, source: exr::error::Error },
+    Exr {
+        path: PathBuf,
+        source: exr::error::Error,
+    },
     #[error("{}: image is {width}×{height}, more than the {MAX_PIXELS}-pixel limit", path.display())]
     TooLarge {
         path: PathBuf,
@@ -194,9 +197,8 @@ fn read_exr(path: &Path) -> Result<LoadedImage, ReadError> {
         }
     }
 
-    let take = |name: &str| -> Result<Option<Vec<f32>>, ReadError> {
-        take_channel(path, &channels, name)
-    };
+    let take =
+        |name: &str| -> Result<Option<Vec<f32>>, ReadError> { take_channel(path, &channels, name) };
     let present = || {
         let mut names: Vec<&str> = channels.keys().map(String::as_str).collect();
         names.sort_unstable();
@@ -277,7 +279,9 @@ fn take_channel(
 
 fn interleave(planes: &[Vec<f32>]) -> Vec<f32> {
     let n = planes[0].len();
-    (0..n).flat_map(|i| planes.iter().map(move |p| p[i])).collect()
+    (0..n)
+        .flat_map(|i| planes.iter().map(move |p| p[i]))
+        .collect()
 }
 
 /// Converts an id channel (f32 holding integers, −1 for no hit) to indices.
@@ -309,4 +313,182 @@ fn parse_names(path: &Path, attribute: &str, text: &str) -> Result<Vec<String>, 
         attribute: attribute.into(),
         reason: e.to_string(),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use exr::prelude::*;
+
+    /// Writes `rgb` exactly as `runtime screenshot` does (runtime/src/cli/output.rs,
+    /// `write_exr`): `exr::prelude::write_rgb_file` with f32 R, G, B.
+    fn write_like_runtime(path: &Path, width: usize, height: usize, rgb: &[f32]) {
+        write_rgb_file(path, width, height, |x, y| {
+            let i = (y * width + x) * 3;
+            (rgb[i], rgb[i + 1], rgb[i + 2])
+        })
+        .unwrap();
+    }
+
+    /// Writes an EXR in the reference path tracer's contract: R, G, B, se.R, se.G,
+    /// se.B, material_id, object_id, and the `materials` / `objects` attributes.
+    fn write_reference(
+        path: &Path,
+        width: usize,
+        height: usize,
+        channels: &[(&str, Vec<f32>)],
+        attributes: &[(&str, &str)],
+    ) {
+        let list = channels
+            .iter()
+            .map(|(name, values)| AnyChannel::new(*name, FlatSamples::F32(values.clone())))
+            .collect();
+        let mut layer_attributes = LayerAttributes::default();
+        for (name, text) in attributes {
+            layer_attributes
+                .other
+                .insert(Text::from(*name), AttributeValue::Text(Text::from(*text)));
+        }
+        let layer = Layer::new(
+            (width, height),
+            layer_attributes,
+            Encoding::FAST_LOSSLESS,
+            AnyChannels::sort(list),
+        );
+        exr::prelude::Image::from_layer(layer).write().to_file(path).unwrap();
+    }
+
+    fn ramp(n: usize, scale: f32) -> Vec<f32> {
+        (0..n).map(|i| scale * (i as f32 + 0.5)).collect()
+    }
+
+    #[test]
+    fn reads_the_runtime_screenshot_exr_exactly() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("shot.exr");
+        let (w, h) = (5, 3);
+        let rgb = ramp(w * h * 3, 0.37);
+        write_like_runtime(&path, w, h, &rgb);
+        let loaded = read_image(&path).unwrap();
+        assert_eq!((loaded.image.width, loaded.image.height), (w, h));
+        // f32 channels round-trip bit for bit; row 0 is the top row on both sides.
+        assert_eq!(loaded.image.rgb, rgb);
+        assert!(loaded.standard_error.is_none() && loaded.material_id.is_none());
+    }
+
+    #[test]
+    fn reads_the_reference_contract() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("truth.exr");
+        let (w, h) = (4, 2);
+        let n = w * h;
+        let channels = [
+            ("R", ramp(n, 1.0)),
+            ("G", ramp(n, 2.0)),
+            ("B", ramp(n, 3.0)),
+            ("se.R", ramp(n, 0.1)),
+            ("se.G", ramp(n, 0.2)),
+            ("se.B", ramp(n, 0.3)),
+            ("material_id", vec![0.0, 0.0, 1.0, 1.0, -1.0, 2.0, 2.0, 0.0]),
+            ("object_id", vec![3.0; n]),
+        ];
+        write_reference(
+            &path,
+            w,
+            h,
+            &channels,
+            &[
+                ("materials", r#"["white", "red", "lamp"]"#),
+                ("objects", "[]"),
+            ],
+        );
+        let loaded = read_image(&path).unwrap();
+        assert_eq!(&loaded.image.rgb[..6], &[0.5, 1.0, 1.5, 1.5, 3.0, 4.5]);
+        let se = loaded.standard_error.unwrap();
+        assert!((se[3] - 0.15).abs() < 1e-7 && (se[5] - 0.45).abs() < 1e-7);
+        let materials = loaded.material_id.unwrap();
+        assert_eq!(materials.ids, vec![0, 0, 1, 1, -1, 2, 2, 0]);
+        assert_eq!(materials.names, vec!["white", "red", "lamp"]);
+        assert_eq!(materials.name(-1), "(no hit)");
+        let objects = loaded.object_id.unwrap();
+        assert_eq!(objects.name(3), "#3");
+    }
+
+    #[test]
+    fn bad_exr_contents_are_refused_with_the_file_name() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("bad.exr");
+        let n = 4;
+        let rgb = || {
+            vec![
+                ("R", vec![1.0; n]),
+                ("G", vec![1.0; n]),
+                ("B", vec![1.0; n]),
+            ]
+        };
+        let mut channels = rgb();
+        channels.push(("material_id", vec![0.0, 0.5, 1.0, 1.0]));
+        write_reference(&path, 2, 2, &channels, &[]);
+        let err = read_image(&path).unwrap_err();
+        assert!(matches!(err, ReadError::BadId { x: 1, y: 0, .. }), "{err}");
+        assert!(err.to_string().contains("bad.exr"));
+
+        let mut channels = rgb();
+        channels.push(("object_id", vec![0.0; n]));
+        write_reference(&path, 2, 2, &channels, &[("objects", "{not json")]);
+        assert!(matches!(read_image(&path), Err(ReadError::BadNames { .. })));
+
+        write_reference(
+            &path,
+            2,
+            2,
+            &[("R", vec![1.0; n]), ("B", vec![1.0; n])],
+            &[],
+        );
+        let err = read_image(&path).unwrap_err();
+        assert!(
+            matches!(&err, ReadError::MissingChannel { channel, .. } if channel == "G"),
+            "{err}"
+        );
+
+        // A truncated file is an error, not a panic.
+        write_like_runtime(&path, 8, 8, &[0.25; 192]);
+        let bytes = std::fs::read(&path).unwrap();
+        for cut in [4, 40, bytes.len() / 2, bytes.len() - 3] {
+            std::fs::write(&path, &bytes[..cut]).unwrap();
+            assert!(read_image(&path).is_err(), "cut at {cut}");
+        }
+    }
+
+    #[test]
+    fn npy_images_need_three_channels_and_unknown_files_are_named() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("a.npy");
+        let mut bytes = Vec::new();
+        crate::compare::npy::write_npy(&mut bytes, &[2, 3, 3], &ramp(18, 1.0)).unwrap();
+        std::fs::write(&path, &bytes).unwrap();
+        let image = read_image(&path).unwrap().image;
+        assert_eq!((image.width, image.height), (3, 2));
+        assert_eq!(image.rgb[17], 17.5);
+
+        bytes.clear();
+        crate::compare::npy::write_npy(&mut bytes, &[2, 3, 4], &ramp(24, 1.0)).unwrap();
+        std::fs::write(&path, &bytes).unwrap();
+        assert!(matches!(read_image(&path), Err(ReadError::NpyShape { .. })));
+        bytes.clear();
+        crate::compare::npy::write_npy(&mut bytes, &[0, 3, 3], &[]).unwrap();
+        std::fs::write(&path, &bytes).unwrap();
+        assert!(matches!(read_image(&path), Err(ReadError::Empty { .. })));
+
+        std::fs::write(&path, b"P6\n2 2\n255\n").unwrap();
+        let err = read_image(&path).unwrap_err();
+        assert!(
+            matches!(err, ReadError::UnknownFormat { .. }) && err.to_string().contains("a.npy")
+        );
+        let missing = dir.path().join("missing.exr");
+        assert!(read_image(&missing)
+            .unwrap_err()
+            .to_string()
+            .contains("missing.exr"));
+    }
 }
