@@ -8,7 +8,8 @@
 //!   evaluation), [`cube`] (001's global-cube lookup), [`camera`] and [`raster`] (a small CPU rasterizer used by
 //!   `--preview` and by the runtime's reference renderer);
 //! * feature `solve` (default): [`scene`] (importers), [`geometry`] (form factors and
-//!   visibility), [`mesh`], [`brdf`], [`solve`] and the command line in [`cli`].
+//!   visibility), [`mesh`], [`brdf`], [`solve`], [`compare`] (`solver compare`'s image metrics
+//!   and FLIP) and the command line in [`cli`].
 //!
 //! **Architecture Invariant:** this crate never depends on `ash`, `openxr` or `winit`.
 

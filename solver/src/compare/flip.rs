@@ -162,7 +162,7 @@ pub fn exposure_range(reference: &Image) -> Result<Exposures, FlipError> {
     };
     let mut y = reference.luminances();
     let y_max = y.iter().copied().fold(f32::NEG_INFINITY, f32::max);
-    if !(y_max > 0.0) {
+    if y_max.is_nan() || y_max <= 0.0 {
         return Err(FlipError::BlackReference);
     }
     let middle = y.len() / 2;
