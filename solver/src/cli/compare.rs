@@ -13,7 +13,8 @@ use anyhow::{bail, Context};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
-const LONG_ABOUT: &str = "\
+/// `solver compare --help`: what each metric measures.
+pub const LONG_ABOUT: &str = "\
 Compares a TEST image (e.g. a `runtime screenshot` EXR) with a REFERENCE image
 (e.g. `solver reference`'s path-traced EXR) and prints:
 
@@ -35,13 +36,13 @@ attributes `materials` / `objects` naming them), the luminance error is broken
 down per material and per object (MARE, mean signed error, pixel count, share of
 the total absolute luminance error), largest share first. When it carries `se.R`,
 `se.G`, `se.B`, the reference's own noise (mean relative standard error of
-luminance over lit pixels) is printed beside the error it bounds.
+luminance over lit pixels) is printed too: a test error no larger than it
+cannot be told apart from the truth's own noise.
 
 Inputs: OpenEXR (linear, channels R, G, B) or NumPy .npy (float32, shape
 height × width × 3, C order), recognised by content. Both must be the same size.";
 
 #[derive(clap::Args, Debug)]
-#[command(long_about = LONG_ABOUT)]
 pub struct CompareArgs {
     /// The image under test (OpenEXR or .npy).
     pub test: PathBuf,

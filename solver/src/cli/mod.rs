@@ -26,6 +26,7 @@ pub enum Command {
     /// Print a solution file's header (text, or JSON with --json).
     Info(info::InfoArgs),
     /// Compare a test image with a reference: relative RMSE, MARE, FLIP, per-material errors.
+    #[command(long_about = compare::LONG_ABOUT)]
     Compare(compare::CompareArgs),
 }
 

@@ -463,7 +463,7 @@ mod tests {
 
     #[test]
     fn wrong_dtype_fortran_order_and_bad_syntax_are_refused() {
-        let payload = vec![0u8; 8 * 3];
+        let payload = [0u8; 8 * 3];
         for (descr, ok) in [
             ("<f8", false),
             (">f4", false),

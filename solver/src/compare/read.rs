@@ -355,7 +355,10 @@ mod tests {
             Encoding::FAST_LOSSLESS,
             AnyChannels::sort(list),
         );
-        exr::prelude::Image::from_layer(layer).write().to_file(path).unwrap();
+        exr::prelude::Image::from_layer(layer)
+            .write()
+            .to_file(path)
+            .unwrap();
     }
 
     fn ramp(n: usize, scale: f32) -> Vec<f32> {
