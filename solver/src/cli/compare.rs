@@ -1,7 +1,7 @@
 //! `solver compare TEST REFERENCE`: how far a rendered image is from ground truth.
 //! Files, flags and printing live here; the measurements are `crate::compare`.
 
-use crate::compare::flip::{default_pixels_per_degree, flip, Exposures, Variant};
+use crate::compare::flip::{default_pixels_per_degree, flip_with_progress, Exposures, Variant};
 use crate::compare::heatmap;
 use crate::compare::image::{IdChannel, Image, LoadedImage};
 use crate::compare::metrics::{
@@ -10,6 +10,7 @@ use crate::compare::metrics::{
 };
 use crate::compare::read::read_image;
 use anyhow::{bail, Context};
+use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -145,7 +146,17 @@ pub fn run(args: CompareArgs) -> anyhow::Result<ExitCode> {
             } else {
                 Variant::Ldr
             };
-            let result = flip(t, r, variant, ppd)
+            // HDR-FLIP of a large image takes seconds: show the exposures on a terminal.
+            let show = std::io::stderr().is_terminal();
+            let mut progress = |done: usize, total: usize| {
+                if show {
+                    eprint!("\rHDR-FLIP: exposure {done} of {total}");
+                    if done == total {
+                        eprint!("\r\x1b[K");
+                    }
+                }
+            };
+            let result = flip_with_progress(t, r, variant, ppd, &mut progress)
                 .with_context(|| format!("FLIP of {}", args.reference.display()))?;
             Some(FlipReport {
                 variant,

@@ -95,6 +95,17 @@ pub fn flip(
     variant: Variant,
     ppd: f32,
 ) -> Result<FlipResult, FlipError> {
+    flip_with_progress(test, reference, variant, ppd, &mut |_, _| {})
+}
+
+/// [`flip`], calling `progress(done, total)` after each exposure (LDR-FLIP has one).
+pub fn flip_with_progress(
+    test: &Image,
+    reference: &Image,
+    variant: Variant,
+    ppd: f32,
+    progress: &mut dyn FnMut(usize, usize),
+) -> Result<FlipResult, FlipError> {
     if test.width != reference.width || test.height != reference.height {
         return Err(FlipError::SizeMismatch);
     }
@@ -119,7 +130,7 @@ pub fn flip(
                 exposures: None,
             })
         }
-        Variant::Hdr => hdr_flip(test, reference, ppd),
+        Variant::Hdr => hdr_flip(test, reference, ppd, progress),
     }
 }
 
@@ -176,7 +187,12 @@ pub fn exposure_range(reference: &Image) -> Result<Exposures, FlipError> {
     Ok(Exposures { start, stop, count })
 }
 
-fn hdr_flip(test: &Image, reference: &Image, ppd: f32) -> Result<FlipResult, FlipError> {
+fn hdr_flip(
+    test: &Image,
+    reference: &Image,
+    ppd: f32,
+    progress: &mut dyn FnMut(usize, usize),
+) -> Result<FlipResult, FlipError> {
     let exposures = exposure_range(reference)?;
     let (w, h) = (reference.width, reference.height);
     let step = (exposures.stop - exposures.start) / (exposures.count - 1) as f32;
@@ -196,6 +212,7 @@ fn hdr_flip(test: &Image, reference: &Image, ppd: f32) -> Result<FlipResult, Fli
                 *m = e;
             }
         }
+        progress(i + 1, exposures.count);
     }
     Ok(FlipResult {
         mean: mean_f32(&map),
