@@ -10,6 +10,7 @@
 //! * [`brdf`]: the thesis's glossy lobe and its normalizations;
 //! * [`solve`]: progressive refinement, directional SH shooting, Gauss–Seidel and the
 //!   global-cube gather;
+//! * [`compare`]: `solver compare`'s image metrics (relative RMSE, MARE, HDR-FLIP);
 //! * [`settings`] and the command line in [`cli`].
 //!
 //! The file format, SH and cube evaluation, the camera and the CPU rasterizer are the
@@ -19,6 +20,7 @@
 
 pub mod brdf;
 pub mod cli;
+pub mod compare;
 pub mod geometry;
 pub mod mesh;
 pub mod scene;

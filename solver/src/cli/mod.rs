@@ -4,6 +4,7 @@
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
 
+pub mod compare;
 pub mod info;
 pub mod solve;
 
@@ -24,6 +25,9 @@ pub enum Command {
     Solve(solve::SolveArgs),
     /// Print a solution file's header (text, or JSON with --json).
     Info(info::InfoArgs),
+    /// Compare a test image with a reference: relative RMSE, MARE, FLIP, per-material errors.
+    #[command(long_about = compare::LONG_ABOUT)]
+    Compare(compare::CompareArgs),
 }
 
 /// Runs the command line; errors are printed with their context chain.
@@ -32,6 +36,7 @@ pub fn main() -> ExitCode {
     let result = match cli.command {
         Command::Solve(args) => solve::run(args),
         Command::Info(args) => info::run(args),
+        Command::Compare(args) => compare::run(args),
     };
     match result {
         Ok(code) => code,

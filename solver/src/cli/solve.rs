@@ -10,7 +10,7 @@
 mod args;
 mod checkpoint;
 mod eta;
-mod files;
+pub(crate) mod files;
 mod preview;
 mod progress;
 mod session;
