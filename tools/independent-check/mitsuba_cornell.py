@@ -10,7 +10,7 @@ albedo Kd (Mitsuba's `diffuse` BSDF is black from behind), pixels that are the
 mean radiance over their square footprint (`box` reconstruction filter), and
 unbiased unlimited-depth paths (`path` with max_depth -1 and Russian roulette).
 Polygons are fan-triangulated, as the OBJ's header suggests for its slightly
-non-planar quads. Mitsuba's `scalar_rgb` variant renders linear RGB, the same
+non-planar quads. Mitsuba's `*_rgb` variants render linear RGB, the same
 colour model as the solver.
 
 Camera: Mitsuba's `look_at` puts camera +x at up × forward, which is the image's
@@ -95,10 +95,13 @@ def main():
     ap.add_argument("--size", default="256x256")
     ap.add_argument("--spp", type=int, default=1024)
     ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--variant", default="scalar_rgb",
+                    help="scalar_rgb, or llvm_ad_rgb (several times faster; needs a libLLVM, "
+                         "e.g. Debian's libllvm16, found through DRJIT_LIBLLVM_PATH)")
     args = ap.parse_args()
     width, height = (int(v) for v in args.size.lower().split("x"))
 
-    mi.set_variant("scalar_rgb")
+    mi.set_variant(args.variant)
     materials, groups = parse_obj(args.scene)
     workdir = os.path.dirname(os.path.abspath(args.out))
     scene = {"type": "scene", "integrator": {"type": "path", "max_depth": -1}}
@@ -130,7 +133,7 @@ def main():
     tmp = args.out + ".tmp.npy"
     np.save(tmp, image[:, :, :3])
     os.replace(tmp, args.out)
-    print(f"mitsuba {mi.__version__} scalar_rgb: {width}x{height} at {args.spp} spp "
+    print(f"mitsuba {mi.__version__} {args.variant}: {width}x{height} at {args.spp} spp "
           f"in {seconds:.1f} s -> {args.out} (mean {image[:, :, :3].mean():.5f})")
 
 
