@@ -13,10 +13,10 @@ Polygons are fan-triangulated, as the OBJ's header suggests for its slightly
 non-planar quads. Mitsuba's `*_rgb` variants render linear RGB, the same
 colour model as the solver.
 
-Camera: Mitsuba's `look_at` puts camera +x at up × forward, which is the image's
-left; the project's images (solution/src/camera.rs) have +x to the right, so the
-sensor's to_world is mirrored in x (a scale of -1 on camera x) to give the same
-image orientation and pixel centres.
+Camera: Mitsuba's `look_at` sensor has the project's image orientation (the
+eye's right is forward × up, row 0 at the top; checked once on the Cornell box,
+whose red wall at +x is on the left from the standard camera), so its pixels are
+those of `runtime screenshot --mono` and `solver reference`.
 
 Usage (pip install mitsuba numpy):
     python3 tools/independent-check/mitsuba_cornell.py SCENE.obj OUT.npy \
@@ -119,7 +119,7 @@ def main():
         "type": "perspective",
         "fov_axis": "y",
         "fov": args.fov_y,
-        "to_world": look @ mi.ScalarTransform4f.scale([-1, 1, 1]),
+        "to_world": look,
         "sampler": {"type": "independent", "sample_count": args.spp, "seed": args.seed},
         "film": {"type": "hdrfilm", "width": width, "height": height,
                  "rfilter": {"type": "box"}, "pixel_format": "rgb"},
