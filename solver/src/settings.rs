@@ -7,7 +7,7 @@
 //! build time so the binary never depends on the working directory.
 
 use serde::{Deserialize, Serialize};
-use solution::format::SolveMode;
+use solution::format::{SolveMode, MAX_SH_ORDER};
 
 /// The presets file, embedded.
 pub const PRESETS_TOML: &str = include_str!("../../config/presets.toml");
@@ -179,7 +179,7 @@ pub struct SettingsPatch {
 pub struct SettingsError {
     pub name: &'static str,
     pub value: String,
-    pub expected: &'static str,
+    pub expected: String,
 }
 
 impl SolverSettings {
@@ -288,7 +288,7 @@ impl SolverSettings {
             ok: bool,
             name: &'static str,
             value: impl ToString,
-            expected: &'static str,
+            expected: impl Into<String>,
         ) -> Result<(), SettingsError> {
             if ok {
                 Ok(())
@@ -296,7 +296,7 @@ impl SolverSettings {
                 Err(SettingsError {
                     name,
                     value: value.to_string(),
-                    expected,
+                    expected: expected.into(),
                 })
             }
         }
@@ -360,11 +360,12 @@ impl SolverSettings {
             self.sh_error_target,
             "0 < target < 1",
         )?;
+        // The one SH order limit the writer and every reader share.
         check(
-            self.max_sh_order <= 100,
+            self.max_sh_order <= MAX_SH_ORDER,
             "max_sh_order",
             self.max_sh_order,
-            "0 to 100",
+            format!("0 to {MAX_SH_ORDER} (solution::format::MAX_SH_ORDER)"),
         )?;
         check(
             (2..=256).contains(&self.cube_resolution),

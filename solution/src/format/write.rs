@@ -200,11 +200,17 @@ pub fn f16_scale_for(values: &[f32]) -> f32 {
 /// Checks everything the format requires of a solution: valid header values,
 /// counts that fit version 1, `coefficients.len() == vertices × coefficients per
 /// channel × 3`, whole triangles with indices below the vertex count, finite
-/// values, orthonormal frames, and f16 coefficients inside the half range.
+/// values, orthonormal frames, every vertex inside the header bounds, and f16
+/// coefficients inside the half range.
 pub fn check_solution(solution: &Solution) -> Result<(), Problem> {
-    validate::check_header(&solution.header)?;
+    let header = &solution.header;
+    validate::check_header(header)?;
+    let slack = validate::bounds_slack(header);
     for (b, batch) in solution.batches.iter().enumerate() {
         check_batch(b, batch)?;
+        for (v, vertex) in batch.vertices.iter().enumerate() {
+            validate::check_in_bounds(b, v as u64, vertex.position, header, slack)?;
+        }
     }
     Ok(())
 }

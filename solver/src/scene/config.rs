@@ -161,6 +161,13 @@ pub(crate) fn load_config(path: &Path) -> Result<ConfigScene, SceneError> {
             e.message().trim().replace('\n', "; "),
         )
     })?;
+    // Out-of-range solver settings are refused now, before any geometry is read.
+    // Every range check is per setting and every preset is in range, so a value
+    // the check refuses on top of the default preset is refused on top of any.
+    if let Some(solver) = &config.solver {
+        crate::settings::SolverSettings::resolve(Default::default(), &[solver.get_ref()])
+            .map_err(|e| err(solver.span(), "[solver]", e.to_string()))?;
+    }
     let dir = path.parent().unwrap_or(Path::new(""));
     // A file named by this config that cannot be read is reported at its line here.
     let reread = |name: &Spanned<String>, key: &str, file: &Path, e: SceneError| match e {
