@@ -297,7 +297,10 @@ fn hostile_values_are_refused_clearly_allocating_nothing_beyond_the_file() {
         let (result, largest) = largest_allocation(|| decode(&bad));
         let err = result.expect_err(name).to_string();
         assert!(err.contains(message), "{name}: {err}");
-        assert!(largest <= bad.len(), "{name}: largest allocation {largest} B");
+        assert!(
+            largest <= bad.len(),
+            "{name}: largest allocation {largest} B"
+        );
 
         let path = scratch("hostile-value.sol");
         std::fs::write(&path, &bad).unwrap();

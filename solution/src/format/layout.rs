@@ -139,7 +139,7 @@ pub const FRAME_POLYGON_NTB: u32 = 1;
 /// Y_1,1 ∝ +x (t) in the frame.
 pub const BASIS_SH_REAL_ORTHONORMAL: u32 = 1;
 
-/// Basis convention of cube batches (001's global cube): D = 6·k² directions at
+/// Basis convention of cube batches (Immel, Cohen and Greenberg's (1986) global cube): D = 6·k² directions at
 /// the centres of a k × k grid of cells on each face of the cube [−1, 1]³ in the
 /// frame (x = t, y = b, z = n). Faces in the order +x, −x, +y, −y, +z, −z; on the
 /// face of axis a with sign s the in-face axes are (u, v) = (y, z), (z, x), (x, y)

@@ -37,7 +37,7 @@ pub enum Representation {
     /// Real orthonormal spherical harmonics up to order `order` inclusive:
     /// `(order + 1)²` coefficients per channel, index `l² + l + m`.
     Sh { order: u32 },
-    /// 001's global cube: radiance on `directions` fixed directions per channel.
+    /// Immel, Cohen and Greenberg's (1986) global cube: radiance on `directions` fixed directions per channel.
     Cube { directions: u32 },
 }
 

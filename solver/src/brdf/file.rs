@@ -1,4 +1,4 @@
-//! Reflectance files (000 App. F): the Legendre coefficients of one material's lobe.
+//! Reflectance files (Remington 1992, App. F): the Legendre coefficients of one material's lobe.
 //!
 //! ```text
 //! lval <L> Ks <Ks> Kd <Kd>
@@ -9,7 +9,7 @@
 //! ```
 //!
 //! Line 1 is the header, then exactly L + 1 lines with one number each. Blank lines
-//! and lines starting with `#` are ignored (an extension: 000's files have none), so
+//! and lines starting with `#` are ignored (an extension: Remington's (1992) files have none), so
 //! that a file can carry the α it was made from. Every error names the file, the
 //! line and the offending text.
 
@@ -27,7 +27,7 @@ pub struct ReflectanceFile {
     pub order: u32,
     pub ks: f64,
     pub kd: f64,
-    /// `a_0 … a_L` (000 eq. 4.4).
+    /// `a_0 … a_L` (Remington 1992, eq. 4.4).
     pub coefficients: Vec<f64>,
 }
 

@@ -335,7 +335,7 @@ fn gauss_seidel(
     Ok(one_call_outcome(result.solution, stats))
 }
 
-/// `--mode directional --directional cube`: 001's global cubes gathered by
+/// `--mode directional --directional cube`: Immel, Cohen and Greenberg's (1986) global cubes gathered by
 /// Gauss-Seidel; one call, no checkpoints (nothing to resume).
 fn cube_solve(
     args: &SolveArgs,
