@@ -259,6 +259,15 @@ fn bad_input_gives_clear_messages() {
     let result = run(draft(&scene, &out).args(["--samples", "0"]));
     assert_eq!(result.status.code(), Some(1));
     assert!(stderr(&result).contains("--samples"), "{}", stderr(&result));
+    // Out-of-range flags are refused before the scene is read: with a missing
+    // scene the error is the flag's, not the file's.
+    let result = run(draft(&missing, &out).args(["--samples", "0"]));
+    assert_eq!(result.status.code(), Some(1));
+    let message = stderr(&result);
+    assert!(
+        message.contains("--samples") && !message.contains("no-such-scene.obj"),
+        "{message}"
+    );
     assert!(!out.exists(), "no solution from failed runs");
 }
 
@@ -266,7 +275,7 @@ fn bad_input_gives_clear_messages() {
 fn preview_has_the_display_files_image_size() {
     let dir = tempfile::tempdir().unwrap();
     let scene = write_room(dir.path(), "room", 10.0);
-    // 000 appendix A: comment, eye/lookat, up, fov, near/far, resolution,
+    // Remington 1992, appendix A: comment, eye/lookat, up, fov, near/far, resolution,
     // diameter, ambient, threshold. The eye is inside the room, looking at the
     // far wall, so every pixel sees a lit surface.
     let display = dir.path().join("room.display");

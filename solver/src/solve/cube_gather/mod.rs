@@ -1,5 +1,5 @@
-//! Directional (glossy) radiosity on 001's global cubes (Immel, Cohen and
-//! Greenberg 1986, `shared/seeds/001`): each glossy vertex stores its outgoing
+//! Directional (glossy) radiosity on Immel, Cohen and Greenberg's (1986) global cubes
+//! (`shared/seeds/001`): each glossy vertex stores its outgoing
 //! radiance on the D = 6k² cell directions of a cube in its frame
 //! ([`solution::cube`]), and the whole system is gathered by Gauss–Seidel sweeps
 //! in light-propagation order — the documents' alternative to the thesis's
@@ -22,7 +22,7 @@
 //!   F(v←s) of the progressive solver (exact point-to-polygon factor × visible
 //!   fraction of `samples` rays); a glossy receiver splats each visible
 //!   sample's share onto the incoming cells of its own cube.
-//! * Reflection (001 eq. 10's gather, with the thesis's BRDF, design notes
+//! * Reflection (Immel, Cohen and Greenberg 1986, eq. 10's gather, with the thesis's BRDF, design notes
 //!   "Directional mode"): with E_i = π Σ_s w_{v,s,i} L_s the irradiance
 //!   arriving through incoming cell i,
 //!
@@ -34,7 +34,7 @@
 //!
 //! ## Solution: Gauss–Seidel in light-propagation order
 //!
-//! Vertices are ordered as light spreads (001, Fig. 10): emitters' vertices,
+//! Vertices are ordered as light spreads (Immel, Cohen and Greenberg 1986, Fig. 10): emitters' vertices,
 //! then the vertices that gather from a patch of an already placed vertex, and
 //! so on; vertices no light reaches come last. A sweep updates the vertices in
 //! that order, in blocks of [`BLOCK`]: the vertices of a block are updated in
@@ -81,6 +81,7 @@ pub use lobe::{CellBrdf, ExactLobe};
 
 use super::{human_bytes, SolveError, Solver};
 use crate::geometry::visibility::Occluder;
+use crate::mesh::Mesh;
 use crate::scene::Scene;
 use crate::settings::SolverSettings;
 use crate::solve::shoot::{SamplePool, Shot};
@@ -330,11 +331,126 @@ struct SurfaceData {
 /// Solves `scene` on global cubes of `settings.cube_resolution` (see the module
 /// documentation). Uses `patches`, `samples`, `seed`, `form_factors`,
 /// `shadows` and `brdf_normalization`; `mode` must be directional.
+///
+/// Stages: check the inputs; mesh the scene (the progressive solver's mesh,
+/// gather weights and scene checks; its diffuse state is not used); per-surface
+/// materials; the memory check; cell BRDFs; transport (every source's pairs);
+/// Gauss–Seidel sweeps; error bounds; the solution file's batches and header.
 pub fn solve_cube(
     scene: &Scene,
     settings: &SolverSettings,
     limits: &CubeLimits,
 ) -> Result<CubeResult, CubeError> {
+    check_inputs(settings, limits)?;
+    let k = settings.cube_resolution;
+    let mut base = settings.clone();
+    base.mode = SolveMode::Diffuse;
+    base.adaptive = false;
+    let solver = Solver::new(scene, &base)?;
+    let mesh = solver.mesh();
+    let (surfaces, glossy_alphas) = surface_materials(scene, mesh)?;
+    let bytes = check_memory(k, mesh, &surfaces, glossy_alphas.len(), settings, limits)?;
+    let cells = UpperCells::new(k);
+    let brdfs = cell_brdfs(&glossy_alphas, settings, &cells, bytes)?;
+
+    let start = Instant::now();
+    let occluder = mesh_occluder(mesh);
+    let kd: Vec<DVec3> = surfaces.iter().map(|s| s.kd).collect();
+    let receivers = transport_pairs(mesh, settings, &surfaces, &cells, &occluder, &kd);
+    let form_factor_seconds = start.elapsed().as_secs_f64();
+
+    let start = Instant::now();
+    let state = State {
+        surfaces: &surfaces,
+        brdfs: &brdfs,
+        receivers: &receivers,
+        solver: &solver,
+        cells: &cells,
+        weights: normalized_patch_weights(&solver),
+    };
+    let sweep = run_sweeps(&state, mesh, limits);
+    let bounds = Bounds::new(&state, &sweep);
+    let solve_seconds = start.elapsed().as_secs_f64();
+    let rays: u64 = receivers.iter().map(|r| r.rays).sum();
+
+    let frames = vertex_frames(mesh);
+    let receiving_points = receiving_points(mesh, settings, &occluder, &kd);
+    let mut solution = solver.to_solution(false);
+    fill_batches(&solver, &sweep.values, &cells, k, &mut solution);
+    let report = CubeReport {
+        settings,
+        limits,
+        k,
+        upper_cells: cells.len(),
+        bytes,
+        sweep: &sweep,
+        bounds: &bounds,
+        rays,
+        seconds: form_factor_seconds + solve_seconds,
+    };
+    report.write_header(&mut solution);
+    let converged = sweep.converged(limits);
+    Ok(CubeResult {
+        solution,
+        k,
+        patches: mesh.patches.len(),
+        values: sweep.values,
+        frames,
+        cells,
+        receiving_points,
+        offset: solver.offset(),
+        vertex_areas: sweep.area,
+        sweeps: sweep.sweeps,
+        change: sweep.change,
+        gamma: bounds.gamma,
+        error_bound: bounds.error_bound,
+        power_bound: bounds.power_bound,
+        converged,
+        rays,
+        form_factor_seconds,
+        solve_seconds,
+        memory_bytes: bytes.min(u64::MAX as u128) as u64,
+    })
+}
+
+/// The occluder of the mesh's surfaces (the input polygons).
+fn mesh_occluder(mesh: &Mesh) -> Occluder {
+    Occluder::new(
+        &mesh
+            .surfaces
+            .iter()
+            .map(|s| s.vertices.as_slice())
+            .collect::<Vec<_>>(),
+    )
+}
+
+/// Each vertex's (normal, tangent) frame.
+fn vertex_frames(mesh: &Mesh) -> Vec<(DVec3, DVec3)> {
+    mesh.vertices
+        .iter()
+        .map(|v| {
+            let s = &mesh.surfaces[v.surface as usize];
+            (s.normal, s.tangent)
+        })
+        .collect()
+}
+
+/// Each vertex's receiving point, which depends only on the vertex and the
+/// occluder's ε (so any shot gives it).
+fn receiving_points(
+    mesh: &Mesh,
+    settings: &SolverSettings,
+    occluder: &Occluder,
+    kd: &[DVec3],
+) -> Vec<DVec3> {
+    let any_shot = Shot::for_patch(mesh, 0, 0, DVec3::ONE, settings, occluder, kd);
+    (0..mesh.vertices.len() as u32)
+        .map(|v| any_shot.receiving_point(mesh, v).0)
+        .collect()
+}
+
+/// Settings in range, directional mode, a usable tolerance.
+fn check_inputs(settings: &SolverSettings, limits: &CubeLimits) -> Result<(), CubeError> {
     settings.validate().map_err(SolveError::from)?;
     if settings.mode != SolveMode::Directional {
         return Err(CubeError::NotDirectional(settings.mode));
@@ -342,16 +458,16 @@ pub fn solve_cube(
     if !(limits.tolerance > 0.0 && limits.tolerance < 1.0) {
         return Err(CubeError::BadTolerance(limits.tolerance));
     }
-    let k = settings.cube_resolution;
-    // The mesh, gather weights and scene checks of the progressive solver; its
-    // diffuse state is not used.
-    let mut base = settings.clone();
-    base.mode = SolveMode::Diffuse;
-    base.adaptive = false;
-    let solver = Solver::new(scene, &base)?;
-    let mesh = solver.mesh();
+    Ok(())
+}
 
-    // Materials: glossy ones get a cell BRDF (built after the memory check).
+/// Per surface its material's reflectances and emission; glossy materials that
+/// a surface uses get an index into the returned α list (their cell BRDFs are
+/// built after the memory check).
+fn surface_materials(
+    scene: &Scene,
+    mesh: &Mesh,
+) -> Result<(Vec<SurfaceData>, Vec<f64>), CubeError> {
     let mut material_brdf: Vec<Option<usize>> = vec![None; scene.materials.len()];
     let mut glossy_alphas: Vec<f64> = Vec::new();
     let mut used = vec![false; scene.materials.len()];
@@ -377,7 +493,7 @@ pub fn solve_cube(
             glossy_alphas.push(alpha);
         }
     }
-    let surfaces: Vec<SurfaceData> = mesh
+    let surfaces = mesh
         .surfaces
         .iter()
         .map(|s| {
@@ -390,15 +506,32 @@ pub fn solve_cube(
             }
         })
         .collect();
-    let glossy = |v: usize| surfaces[mesh.vertices[v].surface as usize].brdf.is_some();
+    Ok((surfaces, glossy_alphas))
+}
+
+/// Whether vertex `v` lies on a glossy surface (and so stores a cube).
+fn is_glossy(mesh: &Mesh, surfaces: &[SurfaceData], v: usize) -> bool {
+    surfaces[mesh.vertices[v].surface as usize].brdf.is_some()
+}
+
+/// The [`memory_estimate`] of this solve, refused above `limits.max_bytes`
+/// before anything of that size is allocated.
+fn check_memory(
+    k: u32,
+    mesh: &Mesh,
+    surfaces: &[SurfaceData],
+    glossy_materials: usize,
+    settings: &SolverSettings,
+    limits: &CubeLimits,
+) -> Result<u128, CubeError> {
     let n = mesh.vertices.len();
-    let glossy_count = (0..n).filter(|&v| glossy(v)).count();
+    let glossy_count = (0..n).filter(|&v| is_glossy(mesh, surfaces, v)).count();
     let bytes = memory_estimate(
         k,
         n as u64,
         glossy_count as u64,
         mesh.patches.len() as u64,
-        glossy_alphas.len() as u64,
+        glossy_materials as u64,
         settings.samples,
     );
     if bytes > limits.max_bytes as u128 {
@@ -412,8 +545,16 @@ pub fn solve_cube(
             limit: limits.max_bytes,
         });
     }
-    let cells = UpperCells::new(k);
-    let h = cells.len();
+    Ok(bytes)
+}
+
+/// One cell BRDF per glossy material, built in parallel.
+fn cell_brdfs(
+    glossy_alphas: &[f64],
+    settings: &SolverSettings,
+    cells: &UpperCells,
+    bytes: u128,
+) -> Result<Vec<CellBrdf>, CubeError> {
     let mut brdfs: Vec<CellBrdf> = Vec::new();
     brdfs
         .try_reserve_exact(glossy_alphas.len())
@@ -431,18 +572,20 @@ pub fn solve_cube(
             })
             .collect::<Vec<_>>(),
     );
+    Ok(brdfs)
+}
 
-    // Transport, source by source (one sample pool alive at a time), each
-    // source's receivers in parallel; pairs are appended in source order.
-    let start = Instant::now();
-    let occluder = Occluder::new(
-        &mesh
-            .surfaces
-            .iter()
-            .map(|s| s.vertices.as_slice())
-            .collect::<Vec<_>>(),
-    );
-    let kd: Vec<DVec3> = surfaces.iter().map(|s| s.kd).collect();
+/// Transport, source by source (one sample pool alive at a time), each source's
+/// receivers in parallel; pairs are appended in source order.
+fn transport_pairs(
+    mesh: &Mesh,
+    settings: &SolverSettings,
+    surfaces: &[SurfaceData],
+    cells: &UpperCells,
+    occluder: &Occluder,
+    kd: &[DVec3],
+) -> Vec<Receiver> {
+    let n = mesh.vertices.len();
     let mut receivers: Vec<Receiver> = vec![Receiver::default(); n];
     for source in 0..mesh.patches.len() as u32 {
         let shot = Shot::for_patch(
@@ -451,8 +594,8 @@ pub fn solve_cube(
             source as u64,
             DVec3::ONE,
             settings,
-            &occluder,
-            &kd,
+            occluder,
+            kd,
         );
         let pool = SamplePool::new(&shot);
         let source_glossy = surfaces[shot.source_surface as usize].brdf.is_some();
@@ -463,8 +606,8 @@ pub fn solve_cube(
                     mesh,
                     shot: &shot,
                     pool: &pool,
-                    receiver_cells: glossy(v as usize).then_some(&cells),
-                    source_cells: source_glossy.then_some(&cells),
+                    receiver_cells: is_glossy(mesh, surfaces, v as usize).then_some(cells),
+                    source_cells: source_glossy.then_some(cells),
                 }
                 .pair(v, source, scratch)
             })
@@ -478,31 +621,57 @@ pub fn solve_cube(
             }
         }
     }
-    let form_factor_seconds = start.elapsed().as_secs_f64();
+    receivers
+}
 
-    let start = Instant::now();
-    let state = State {
-        surfaces: &surfaces,
-        brdfs: &brdfs,
-        receivers: &receivers,
-        solver: &solver,
-        cells: &cells,
-        weights: (0..mesh.patches.len() as u32)
-            .map(|p| {
-                let w = solver.patch_weights(p);
-                let total: f64 = w.iter().map(|e| e.1).sum();
-                if total > 0.0 {
-                    w.iter().map(|&(v, a)| (v, a / total)).collect()
-                } else {
-                    Vec::new()
-                }
-            })
-            .collect(),
-    };
+/// Each patch's gather weights, normalized to sum to 1 (empty for a patch with
+/// no weight).
+fn normalized_patch_weights(solver: &Solver) -> Vec<Vec<(u32, f64)>> {
+    (0..solver.mesh().patches.len() as u32)
+        .map(|p| {
+            let w = solver.patch_weights(p);
+            let total: f64 = w.iter().map(|e| e.1).sum();
+            if total > 0.0 {
+                w.iter().map(|&(v, a)| (v, a / total)).collect()
+            } else {
+                Vec::new()
+            }
+        })
+        .collect()
+}
+
+/// What the Gauss–Seidel sweeps leave.
+struct SweepOutcome {
+    /// Per vertex: RGB (diffuse) or RGB per upper cell (glossy).
+    values: Vec<Vec<f64>>,
+    /// Per vertex: the area it represents (its gather weights summed over its
+    /// patches).
+    area: Vec<f64>,
+    sweeps: u32,
+    /// The last sweep's largest change relative to the largest value.
+    change: f64,
+    /// The power the last sweep added, W.
+    added_power: f64,
+    /// Total emitted power, W.
+    emitted: f64,
+}
+
+impl SweepOutcome {
+    fn converged(&self, limits: &CubeLimits) -> bool {
+        self.change < limits.tolerance
+    }
+}
+
+/// Sweeps in light-propagation order, blocks of vertices in parallel, until the
+/// largest relative change is below the tolerance or the sweep limit is reached.
+fn run_sweeps(state: &State<'_>, mesh: &Mesh, limits: &CubeLimits) -> SweepOutcome {
+    let n = mesh.vertices.len();
+    let h = state.cells.len();
+    let surfaces = state.surfaces;
     let mut values: Vec<Vec<f64>> = (0..n)
         .map(|v| {
             let e = surfaces[mesh.vertices[v].surface as usize].emission;
-            if glossy(v) {
+            if is_glossy(mesh, surfaces, v) {
                 e.to_array().repeat(h)
             } else {
                 e.to_array().to_vec()
@@ -510,23 +679,19 @@ pub fn solve_cube(
         })
         .collect();
     let order = state.propagation_order();
-    let gamma = (0..n)
-        .into_par_iter()
-        .map(|v| state.row_sum(v as u32))
-        .reduce(|| 0.0, f64::max);
-    // Per vertex: the area it represents (its gather weights summed over its
-    // patches) and, per value, the weight that turns radiance into exitance
-    // (π for a diffuse vertex; cosθ_o × the cell's solid angle in a cube).
+    // Per value, the weight that turns radiance into exitance (π for a diffuse
+    // vertex; cosθ_o × the cell's solid angle in a cube).
     let mut area = vec![0.0; n];
     for p in 0..mesh.patches.len() as u32 {
-        for &(v, w) in solver.patch_weights(p) {
+        for &(v, w) in state.solver.patch_weights(p) {
             area[v as usize] += w;
         }
     }
-    let exitance_weight: Vec<f64> = cells
+    let exitance_weight: Vec<f64> = state
+        .cells
         .solid_angles
         .iter()
-        .zip(&cells.directions)
+        .zip(&state.cells.directions)
         .map(|(&solid, d)| d.z * solid)
         .collect();
     let emitted: f64 = mesh
@@ -571,95 +736,110 @@ pub fn solve_cube(
             break;
         }
     }
-    let converged = change < limits.tolerance;
-    let error_bound = if gamma < 1.0 {
-        gamma / (1.0 - gamma) * change
-    } else {
-        f64::INFINITY
-    };
-    let rho_max = surfaces
-        .iter()
-        .map(|s| (s.kd + s.ks).max_element())
-        .fold(0.0, f64::max);
-    let power_bound = if rho_max < 1.0 && emitted > 0.0 {
-        rho_max / (1.0 - rho_max) * added_power / emitted
-    } else {
-        f64::INFINITY
-    };
-    let solve_seconds = start.elapsed().as_secs_f64();
-    let rays: u64 = receivers.iter().map(|r| r.rays).sum();
-
-    let frames: Vec<(DVec3, DVec3)> = mesh
-        .vertices
-        .iter()
-        .map(|v| {
-            let s = &mesh.surfaces[v.surface as usize];
-            (s.normal, s.tangent)
-        })
-        .collect();
-    // The receiving point depends only on the vertex and the occluder's ε.
-    let any_shot = Shot::for_patch(mesh, 0, 0, DVec3::ONE, settings, &occluder, &kd);
-    let receiving_points: Vec<DVec3> = (0..n as u32)
-        .map(|v| any_shot.receiving_point(mesh, v).0)
-        .collect();
-    let mut solution = solver.to_solution(false);
-    fill_batches(&solver, &values, &cells, k, &mut solution);
-    let header = &mut solution.header;
-    header.mode = SolveMode::Directional;
-    header.partial = !converged;
-    header.stats.shots = sweeps as u64;
-    header.stats.rays = rays;
-    header.stats.seconds = form_factor_seconds + solve_seconds;
-    // As the Gauss–Seidel solver reports it: the power the last sweep still
-    // added, over the emitted power.
-    header.stats.unshot_fraction = if emitted > 0.0 {
-        added_power / emitted
-    } else {
-        0.0
-    };
-    header.stats.ambient = [0.0; 3];
-    if let Ok(serde_json::Value::Object(mut map)) = serde_json::to_value(settings) {
-        map.insert("solver".into(), "gauss-seidel".into());
-        map.insert(
-            "cube".into(),
-            serde_json::json!({
-                "k": k,
-                "directions": cube::direction_count(k),
-                "upper_cells": h,
-                "max_bytes": limits.max_bytes,
-                "memory_estimate": bytes as u64,
-                "max_sweeps": limits.max_sweeps,
-                "tolerance": limits.tolerance,
-                "sweeps": sweeps,
-                "change": change,
-                "gamma": gamma,
-                "error_bound": error_bound,
-                "power_bound": power_bound,
-            }),
-        );
-        header.settings_json = serde_json::Value::Object(map).to_string();
-    }
-    Ok(CubeResult {
-        solution,
-        k,
-        patches: mesh.patches.len(),
+    SweepOutcome {
         values,
-        frames,
-        cells,
-        receiving_points,
-        offset: solver.offset(),
-        vertex_areas: area,
+        area,
         sweeps,
         change,
-        gamma,
-        error_bound,
-        power_bound,
-        converged,
-        rays,
-        form_factor_seconds,
-        solve_seconds,
-        memory_bytes: bytes.min(u64::MAX as u128) as u64,
-    })
+        added_power,
+        emitted,
+    }
+}
+
+/// Error bounds of the result (see the module documentation).
+struct Bounds {
+    /// The largest row sum of the iteration (a contraction factor when < 1).
+    gamma: f64,
+    /// γ / (1 − γ) × the last change, relative to the largest value.
+    error_bound: f64,
+    /// ρ_max / (1 − ρ_max) × the last sweep's added power over the emitted power.
+    power_bound: f64,
+}
+
+impl Bounds {
+    fn new(state: &State<'_>, sweep: &SweepOutcome) -> Bounds {
+        let n = sweep.values.len();
+        let gamma = (0..n)
+            .into_par_iter()
+            .map(|v| state.row_sum(v as u32))
+            .reduce(|| 0.0, f64::max);
+        let error_bound = if gamma < 1.0 {
+            gamma / (1.0 - gamma) * sweep.change
+        } else {
+            f64::INFINITY
+        };
+        let rho_max = state
+            .surfaces
+            .iter()
+            .map(|s| (s.kd + s.ks).max_element())
+            .fold(0.0, f64::max);
+        let power_bound = if rho_max < 1.0 && sweep.emitted > 0.0 {
+            rho_max / (1.0 - rho_max) * sweep.added_power / sweep.emitted
+        } else {
+            f64::INFINITY
+        };
+        Bounds {
+            gamma,
+            error_bound,
+            power_bound,
+        }
+    }
+}
+
+/// What the solution header records about a cube solve.
+struct CubeReport<'a> {
+    settings: &'a SolverSettings,
+    limits: &'a CubeLimits,
+    k: u32,
+    upper_cells: usize,
+    bytes: u128,
+    sweep: &'a SweepOutcome,
+    bounds: &'a Bounds,
+    rays: u64,
+    seconds: f64,
+}
+
+impl CubeReport<'_> {
+    /// Mode, partial flag, statistics and the settings JSON with the cube's
+    /// figures.
+    fn write_header(&self, solution: &mut Solution) {
+        let (sweep, bounds) = (self.sweep, self.bounds);
+        let header = &mut solution.header;
+        header.mode = SolveMode::Directional;
+        header.partial = !sweep.converged(self.limits);
+        header.stats.shots = sweep.sweeps as u64;
+        header.stats.rays = self.rays;
+        header.stats.seconds = self.seconds;
+        // As the Gauss–Seidel solver reports it: the power the last sweep still
+        // added, over the emitted power.
+        header.stats.unshot_fraction = if sweep.emitted > 0.0 {
+            sweep.added_power / sweep.emitted
+        } else {
+            0.0
+        };
+        header.stats.ambient = [0.0; 3];
+        if let Ok(serde_json::Value::Object(mut map)) = serde_json::to_value(self.settings) {
+            map.insert("solver".into(), "gauss-seidel".into());
+            map.insert(
+                "cube".into(),
+                serde_json::json!({
+                    "k": self.k,
+                    "directions": cube::direction_count(self.k),
+                    "upper_cells": self.upper_cells,
+                    "max_bytes": self.limits.max_bytes,
+                    "memory_estimate": self.bytes as u64,
+                    "max_sweeps": self.limits.max_sweeps,
+                    "tolerance": self.limits.tolerance,
+                    "sweeps": sweep.sweeps,
+                    "change": sweep.change,
+                    "gamma": bounds.gamma,
+                    "error_bound": bounds.error_bound,
+                    "power_bound": bounds.power_bound,
+                }),
+            );
+            header.settings_json = serde_json::Value::Object(map).to_string();
+        }
+    }
 }
 
 /// What a sweep reads.
@@ -773,7 +953,7 @@ impl State<'_> {
         (diffuse + s.ks * glossy).max_element()
     }
 
-    /// 001, Fig. 10: emitters' vertices first, then the vertices that gather
+    /// Immel, Cohen and Greenberg 1986, Fig. 10: emitters' vertices first, then the vertices that gather
     /// from a patch holding an already placed vertex, and so on; vertices no
     /// light reaches last, each group in index order.
     fn propagation_order(&self) -> Vec<u32> {
