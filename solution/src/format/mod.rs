@@ -22,7 +22,7 @@ mod tests;
 
 pub use describe::{batch_json, describe_json, describe_text};
 pub use error::{FormatError, Problem};
-pub use read::{decode, read_solution, BatchInfo, MappedSolution};
+pub use read::{decode, read_solution, BatchInfo, BatchSection, MappedSolution};
 pub use validate::{F16_MAX, FRAME_TOLERANCE};
 pub use write::{check_solution, encode, f16_scale_for, write_solution};
 
