@@ -2,23 +2,37 @@
 //! (SH batches sorted by order, so diffuse batches share one trivial pipeline,
 //! then 001's global-cube batches by resolution, drawn by `scene_cube.vert`).
 
-use crate::gpu::{Buffer, Gpu, GpuError};
+use crate::gpu::{Buffer, BufferDesc, Gpu, GpuError, MemoryLocation};
 use ash::vk;
-use solution::format::{Batch, Representation, Solution, Vertex};
+use solution::format::{
+    layout, Batch, BatchSection, FormatError, MappedSolution, Representation, ScalarType, Solution,
+    Vertex,
+};
 
-/// How SH coefficients are stored in the GPU's storage buffer.
-///
-/// Measured (docs/benchmarks.md, "Runtime"): f16 halves the buffer and is within
-/// a few 1e-4 relative of f32 radiance; f32 is the default because on lavapipe the
-/// two cost the same per frame and f32 matches the solver's f32 evaluation to the
-/// tolerance `solution::sh::f32_basis_tolerance` states.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum)]
+/// How a scene's coefficients are stored in the GPU's storage buffer: as the
+/// file stores them (the shaders read either; f16 with the batch's scale as a
+/// push constant). In-memory solutions use their batches' [`ScalarType`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum CoefficientStorage {
     #[default]
     F32,
     /// IEEE half, two per 32-bit word, with a per-batch scale.
     F16,
 }
+
+impl CoefficientStorage {
+    pub fn of(scalar: ScalarType) -> CoefficientStorage {
+        match scalar {
+            ScalarType::F32 => CoefficientStorage::F32,
+            ScalarType::F16 { .. } => CoefficientStorage::F16,
+        }
+    }
+}
+
+/// The staging buffer of the mapped upload: sections pass through it in chunks
+/// of at most this many bytes, so the upload's host memory is bounded whatever
+/// the file's size (a larger chunk saves little: one submit per 64 MiB).
+pub const STAGING_BYTES: u64 = 64 << 20;
 
 /// Why a solution cannot be drawn.
 #[derive(Debug, thiserror::Error)]
@@ -43,6 +57,14 @@ pub enum SceneError {
         bytes: u64,
         limit: u64,
     },
+    #[error(
+        "batch {f16_batch} stores f16 coefficients and batch {f32_batch} f32; this renderer \
+         draws one storage type per scene (write the file with one scalar type)"
+    )]
+    MixedStorage { f32_batch: usize, f16_batch: usize },
+    /// A section's checksum failed while it was streamed to the GPU.
+    #[error(transparent)]
+    File(#[from] FormatError),
     #[error(transparent)]
     Gpu(#[from] GpuError),
 }
@@ -106,9 +128,34 @@ pub struct GpuScene {
     /// so that the brightest radiance any vertex can produce is at most 1 (see
     /// [`radiance_bound`]). The read-back and the tone map divide it out again.
     pub radiance_scale: f32,
+    /// The file's storage type (every batch has the same).
     pub storage: CoefficientStorage,
     pub vertex_count: u64,
     pub triangle_count: u64,
+}
+
+/// `|Y_lm| ≤ envelope(l) = √((2l+1)/(4π))` (Unsöld) for the first `count`
+/// coefficients, index `l² + l + m`.
+fn envelopes(count: usize) -> Vec<f64> {
+    (0..count)
+        .map(|k| solution::sh::envelope((k as f64).sqrt().floor() as u32))
+        .collect()
+}
+
+/// The SH bound of [`radiance_bound`] over vertices whose `n · 3` coefficients
+/// `value(v, i)` returns, only the first `envelope.len()` per channel counting.
+fn sh_bound(vertex_count: usize, n: usize, envelope: &[f64], value: impl Fn(usize) -> f32) -> f64 {
+    let mut bound = 0.0f64;
+    for v in 0..vertex_count {
+        let mut sum = [0.0f64; 3];
+        for (k, e) in envelope.iter().enumerate() {
+            for (c, s) in sum.iter_mut().enumerate() {
+                *s += f64::from(value((v * n + k) * 3 + c)).abs() * e;
+            }
+        }
+        bound = sum.into_iter().fold(bound, f64::max);
+    }
+    bound
 }
 
 /// An upper bound of the radiance a batch's vertices can produce in any
@@ -125,25 +172,78 @@ pub fn radiance_bound(batch: &Batch, order: u32) -> f64 {
     }
     let n = batch.representation.coefficients_per_channel() as usize;
     let count = (order as usize + 1).pow(2).min(n);
-    let envelope: Vec<f64> = (0..count)
-        .map(|k| solution::sh::envelope((k as f64).sqrt().floor() as u32))
-        .collect();
-    let mut bound = 0.0f64;
-    for v in 0..batch.vertices.len() {
-        for c in 0..3 {
-            let mut sum = 0.0;
-            for (k, e) in envelope.iter().enumerate() {
-                let value = batch
-                    .coefficients
-                    .get((v * n + k) * 3 + c)
-                    .copied()
-                    .unwrap_or(0.0);
-                sum += f64::from(value).abs() * e;
-            }
-            bound = bound.max(sum);
+    sh_bound(batch.vertices.len(), n, &envelopes(count), |i| {
+        batch.coefficients.get(i).copied().unwrap_or(0.0)
+    })
+}
+
+/// [`radiance_bound`] of stored coefficient bytes (a whole number of vertices
+/// for SH): f32, or f16 times `scale`. Reads the bytes; converts nothing that
+/// is uploaded.
+fn stored_radiance_bound(
+    bytes: &[u8],
+    representation: Representation,
+    scalar: ScalarType,
+    order: u32,
+    half_table: &[f32],
+) -> f64 {
+    let f32_at = |b: &[u8]| f32::from_le_bytes([b[0], b[1], b[2], b[3]]).abs();
+    // Magnitude only: the sign bit is masked off (the bound sums |c|).
+    let f16_at = |b: &[u8]| half_table[usize::from(u16::from_le_bytes([b[0], b[1]]) & 0x7FFF)];
+    match (representation, scalar) {
+        (Representation::Cube { .. }, ScalarType::F32) => bytes
+            .chunks_exact(4)
+            .fold(0.0f32, |m, b| m.max(f32_at(b)))
+            .into(),
+        // Finite halves without their sign order as their bit patterns do, so
+        // the largest magnitude is the largest masked pattern.
+        (Representation::Cube { .. }, ScalarType::F16 { scale }) => {
+            let top = bytes
+                .chunks_exact(2)
+                .map(|b| u16::from_le_bytes([b[0], b[1]]) & 0x7FFF)
+                .max()
+                .unwrap_or(0);
+            f64::from(half_table[usize::from(top)]) * f64::from(scale)
+        }
+        (Representation::Sh { .. }, ScalarType::F32) => {
+            sh_bound_stored(bytes, representation, order, 4, f32_at)
+        }
+        (Representation::Sh { .. }, ScalarType::F16 { scale }) => {
+            sh_bound_stored(bytes, representation, order, 2, f16_at) * f64::from(scale)
         }
     }
+}
+
+/// The SH bound of [`radiance_bound`] over stored vertices of `size`-byte
+/// scalars that `magnitude` reads.
+fn sh_bound_stored(
+    bytes: &[u8],
+    representation: Representation,
+    order: u32,
+    size: usize,
+    magnitude: impl Fn(&[u8]) -> f32,
+) -> f64 {
+    let n = representation.coefficients_per_channel() as usize;
+    let envelope = envelopes((order as usize + 1).pow(2).min(n));
+    let mut bound = 0.0f64;
+    for vertex in bytes.chunks_exact(n * 3 * size) {
+        let mut sum = [0.0f64; 3];
+        for (rgb, e) in vertex.chunks_exact(3 * size).zip(&envelope) {
+            for (c, s) in sum.iter_mut().enumerate() {
+                *s += f64::from(magnitude(&rgb[c * size..(c + 1) * size])) * e;
+            }
+        }
+        bound = sum.into_iter().fold(bound, f64::max);
+    }
     bound
+}
+
+/// Every half's magnitude as f32, indexed by its bits without the sign: the
+/// bound reads f16 coefficients through it (32 K entries, built once per upload).
+fn half_magnitudes() -> Vec<f32> {
+    (0..0x8000u16)
+        .map(|bits| half::f16::from_bits(bits).to_f32())
+        .collect()
 }
 
 fn vertex_bytes(vertices: &[Vertex], out: &mut Vec<u8>) {
@@ -159,19 +259,47 @@ fn align(value: u64, alignment: u64) -> u64 {
     value.div_ceil(a) * a
 }
 
-impl GpuScene {
-    /// Uploads `solution`. `max_order` caps the evaluated SH order (bands above it
-    /// are not read; see `crate::render::truncation`); cube batches ignore it.
-    pub fn new(
-        gpu: &Gpu,
-        solution: &Solution,
-        storage: CoefficientStorage,
+/// What the upload needs to know of a batch, from the file's tables or from an
+/// in-memory batch.
+#[derive(Clone, Copy, Debug)]
+struct BatchShape {
+    representation: Representation,
+    scalar: ScalarType,
+    vertex_count: u64,
+    index_count: u64,
+}
+
+impl BatchShape {
+    fn coefficient_bytes(&self) -> u64 {
+        let size = match self.scalar {
+            ScalarType::F32 => 4,
+            ScalarType::F16 { .. } => 2,
+        };
+        self.vertex_count * self.representation.coefficients_per_channel() * 3 * size
+    }
+}
+
+/// Where each batch goes in the three GPU buffers, in draw order.
+struct Plan {
+    /// `(batch index, draw)`, draw order; the draw's `index_count` is 0 for a
+    /// batch without triangles (its data is still uploaded).
+    batches: Vec<(usize, DrawBatch)>,
+    storage: CoefficientStorage,
+    vertex_total: u64,
+    index_total: u64,
+    coefficient_total: u64,
+}
+
+impl Plan {
+    fn new(
+        shapes: &[BatchShape],
         max_order: Option<u32>,
-    ) -> Result<GpuScene, SceneError> {
-        let limits = &gpu.info.limits;
-        let mut order_of = Vec::new();
-        for (i, batch) in solution.batches.iter().enumerate() {
-            let (kind, order) = match batch.representation {
+        limits: &vk::PhysicalDeviceLimits,
+    ) -> Result<Plan, SceneError> {
+        let storage = scene_storage(shapes)?;
+        let mut order_of = Vec::with_capacity(shapes.len());
+        for (i, shape) in shapes.iter().enumerate() {
+            let (kind, order) = match shape.representation {
                 Representation::Sh { order } => (DrawKind::Sh, order),
                 Representation::Cube { directions } => {
                     match solution::cube::resolution_from_directions(directions) {
@@ -179,102 +307,23 @@ impl GpuScene {
                         None => {
                             return Err(SceneError::Representation {
                                 batch: i,
-                                representation: batch.representation,
+                                representation: shape.representation,
                             })
                         }
                     }
                 }
             };
-            let n = batch.representation.coefficients_per_channel();
-            let expected = (batch.vertices.len() as u64)
-                .saturating_mul(n)
-                .saturating_mul(3);
-            if batch.coefficients.len() as u64 != expected {
-                return Err(SceneError::Inconsistent {
-                    batch: i,
-                    what: format!(
-                        "{} coefficients for {} vertices of {:?} (expected {expected})",
-                        batch.coefficients.len(),
-                        batch.vertices.len(),
-                        batch.representation
-                    ),
-                });
-            }
-            if !batch.indices.len().is_multiple_of(3) {
-                return Err(SceneError::Inconsistent {
-                    batch: i,
-                    what: format!(
-                        "{} indices is not a whole number of triangles",
-                        batch.indices.len()
-                    ),
-                });
-            }
-            if let Some(&bad) = batch
-                .indices
-                .iter()
-                .find(|&&ix| ix as usize >= batch.vertices.len())
-            {
-                return Err(SceneError::Inconsistent {
-                    batch: i,
-                    what: format!(
-                        "index {bad} is out of range for {} vertices",
-                        batch.vertices.len()
-                    ),
-                });
-            }
             order_of.push((kind, order, i));
         }
         // Diffuse first, then SH by order, then cubes by resolution: one switch
         // per pipeline, and draws of one loop bound together.
         order_of.sort();
-
-        let mut vertex_data = Vec::new();
-        let mut index_data = Vec::new();
-        let mut coeff_data: Vec<u8> = Vec::new();
-        let mut draws = Vec::new();
-        let mut bound = 0.0f64;
-        let mut vertex_base = 0u64;
-        let mut first_index = 0u64;
-        for &(kind, file_order, i) in &order_of {
-            let batch = &solution.batches[i];
-            let order = max_order.map_or(file_order, |m| m.min(file_order));
-            bound = bound.max(radiance_bound(batch, order));
-            let stride = batch.representation.coefficients_per_channel() * 3;
-            let offset = align(
-                coeff_data.len() as u64,
-                limits.min_storage_buffer_offset_alignment,
-            );
-            coeff_data.resize(offset as usize, 0);
-            let storage_scale = match storage {
-                CoefficientStorage::F32 => {
-                    for c in &batch.coefficients {
-                        coeff_data.extend_from_slice(&c.to_le_bytes());
-                    }
-                    1.0
-                }
-                CoefficientStorage::F16 => {
-                    // Scale so the largest magnitude is 1024: far below the half
-                    // maximum (65504), and values down to 6e-8 of it stay normal.
-                    let max = batch
-                        .coefficients
-                        .iter()
-                        .fold(0.0f32, |m, c| m.max(c.abs()));
-                    let scale = if max > 0.0 && max.is_finite() {
-                        max / 1024.0
-                    } else {
-                        1.0
-                    };
-                    for c in &batch.coefficients {
-                        let h = half::f16::from_f32(c / scale);
-                        coeff_data.extend_from_slice(&h.to_bits().to_le_bytes());
-                    }
-                    if !batch.coefficients.len().is_multiple_of(2) {
-                        coeff_data.extend_from_slice(&[0, 0]);
-                    }
-                    scale
-                }
-            };
-            let bytes = coeff_data.len() as u64 - offset;
+        let mut batches = Vec::with_capacity(shapes.len());
+        let (mut vertex_base, mut first_index, mut coefficient_end) = (0u64, 0u64, 0u64);
+        for (kind, file_order, i) in order_of {
+            let shape = &shapes[i];
+            let offset = align(coefficient_end, limits.min_storage_buffer_offset_alignment);
+            let bytes = shape.coefficient_bytes();
             if bytes > u64::from(limits.max_storage_buffer_range) {
                 return Err(SceneError::TooLarge {
                     batch: i,
@@ -282,39 +331,252 @@ impl GpuScene {
                     limit: u64::from(limits.max_storage_buffer_range),
                 });
             }
-            vertex_bytes(&batch.vertices, &mut vertex_data);
-            for ix in &batch.indices {
-                index_data.extend_from_slice(&ix.to_le_bytes());
-            }
             let too_big = |what: &str| SceneError::Inconsistent {
                 batch: i,
                 what: format!("{what} exceeds the 32-bit range of a draw"),
             };
-            if !batch.indices.is_empty() {
-                draws.push(DrawBatch {
-                    source: i,
-                    kind,
-                    file_order,
-                    order,
-                    first_index: u32::try_from(first_index).map_err(|_| too_big("index count"))?,
-                    index_count: u32::try_from(batch.indices.len())
-                        .map_err(|_| too_big("index count"))?,
-                    vertex_base: u32::try_from(vertex_base).map_err(|_| too_big("vertex count"))?,
-                    vertex_count: batch.vertices.len() as u32,
-                    coeff_offset: offset,
-                    coeff_bytes: bytes.max(4),
-                    stride: stride as u32,
-                    storage_scale,
-                });
-            }
-            vertex_base += batch.vertices.len() as u64;
-            first_index += batch.indices.len() as u64;
+            let u32_of = |value: u64, what: &str| u32::try_from(value).map_err(|_| too_big(what));
+            let draw = DrawBatch {
+                source: i,
+                kind,
+                file_order,
+                order: max_order.map_or(file_order, |m| m.min(file_order)),
+                first_index: u32_of(first_index, "index count")?,
+                index_count: u32_of(shape.index_count, "index count")?,
+                vertex_base: u32_of(vertex_base, "vertex count")?,
+                vertex_count: u32_of(shape.vertex_count, "vertex count")?,
+                coeff_offset: offset,
+                // f16 is read in 32-bit words: round up to whole words.
+                coeff_bytes: align(bytes, 4).max(4),
+                stride: u32_of(
+                    shape.representation.coefficients_per_channel() * 3,
+                    "stride",
+                )?,
+                storage_scale: match shape.scalar {
+                    ScalarType::F32 => 1.0,
+                    ScalarType::F16 { scale } => scale,
+                },
+            };
+            coefficient_end = offset + bytes;
+            vertex_base += shape.vertex_count;
+            first_index += shape.index_count;
+            batches.push((i, draw));
         }
-        let radiance_scale = if bound > 0.0 && bound.is_finite() {
-            (1.0 / bound) as f32
-        } else {
-            1.0
-        };
+        Ok(Plan {
+            batches,
+            storage,
+            vertex_total: vertex_base,
+            index_total: first_index,
+            coefficient_total: align(coefficient_end, 4),
+        })
+    }
+
+    fn draws(&self) -> Vec<DrawBatch> {
+        self.batches
+            .iter()
+            .filter(|(_, d)| d.index_count > 0)
+            .map(|(_, d)| d.clone())
+            .collect()
+    }
+}
+
+/// The one storage type of a scene's batches.
+fn scene_storage(shapes: &[BatchShape]) -> Result<CoefficientStorage, SceneError> {
+    let find = |storage| {
+        shapes
+            .iter()
+            .position(|s| CoefficientStorage::of(s.scalar) == storage)
+    };
+    match (find(CoefficientStorage::F32), find(CoefficientStorage::F16)) {
+        (Some(f32_batch), Some(f16_batch)) => Err(SceneError::MixedStorage {
+            f32_batch,
+            f16_batch,
+        }),
+        (None, Some(_)) => Ok(CoefficientStorage::F16),
+        _ => Ok(CoefficientStorage::F32),
+    }
+}
+
+fn radiance_scale(bound: f64) -> f32 {
+    if bound > 0.0 && bound.is_finite() {
+        (1.0 / bound) as f32
+    } else {
+        1.0
+    }
+}
+
+fn device_buffer(gpu: &Gpu, usage: vk::BufferUsageFlags, size: u64) -> Result<Buffer, GpuError> {
+    Buffer::new(
+        gpu,
+        BufferDesc {
+            size: size.max(4),
+            usage: usage | vk::BufferUsageFlags::TRANSFER_DST,
+            location: MemoryLocation::GpuOnly,
+        },
+    )
+}
+
+/// Which of the three scene buffers a copy fills.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Target {
+    Vertices,
+    Indices,
+    Coefficients,
+}
+
+/// Streams byte ranges into the scene buffers through one reused staging
+/// buffer: [`Uploader::push`] copies into staging memory, and a full staging
+/// buffer (or [`Uploader::finish`]) submits the copies and waits for them.
+struct Uploader<'a> {
+    gpu: &'a Gpu,
+    staging: Buffer,
+    fill: u64,
+    regions: Vec<(Target, vk::BufferCopy)>,
+    targets: [vk::Buffer; 3],
+    /// Submits so far (one per staging fill), for `--timings`.
+    submits: u32,
+}
+
+impl<'a> Uploader<'a> {
+    fn new(gpu: &'a Gpu, size: u64, targets: [vk::Buffer; 3]) -> Result<Self, GpuError> {
+        let staging = Buffer::new(
+            gpu,
+            BufferDesc {
+                size: size.max(4),
+                usage: vk::BufferUsageFlags::TRANSFER_SRC,
+                location: MemoryLocation::Mapped,
+            },
+        )?;
+        Ok(Uploader {
+            gpu,
+            staging,
+            fill: 0,
+            regions: Vec::new(),
+            targets,
+            submits: 0,
+        })
+    }
+
+    fn room(&self) -> u64 {
+        self.staging.desc.size - self.fill
+    }
+
+    /// Copies `bytes` (at most [`Uploader::room`]) to staging, bound for
+    /// `target` at `dst_offset`.
+    fn push(&mut self, target: Target, dst_offset: u64, bytes: &[u8]) -> Result<(), GpuError> {
+        if bytes.is_empty() {
+            return Ok(());
+        }
+        if bytes.len() as u64 > self.room() {
+            self.flush()?;
+        }
+        self.staging.write(self.fill, bytes);
+        self.regions.push((
+            target,
+            vk::BufferCopy {
+                src_offset: self.fill,
+                dst_offset,
+                size: bytes.len() as u64,
+            },
+        ));
+        self.fill += bytes.len() as u64;
+        Ok(())
+    }
+
+    /// Submits the pending copies and waits, so staging may be rewritten.
+    fn flush(&mut self) -> Result<(), GpuError> {
+        if self.regions.is_empty() {
+            return Ok(());
+        }
+        let (staging, targets, regions) = (self.staging.raw, self.targets, &self.regions);
+        self.gpu.one_shot(|device, cmd| {
+            for (k, target) in [Target::Vertices, Target::Indices, Target::Coefficients]
+                .into_iter()
+                .enumerate()
+            {
+                let list: Vec<vk::BufferCopy> = regions
+                    .iter()
+                    .filter(|(t, _)| *t == target)
+                    .map(|(_, r)| *r)
+                    .collect();
+                if !list.is_empty() {
+                    // SAFETY: `cmd` is recording; every region lies inside the
+                    // staging buffer (push kept `fill` ≤ its size) and inside its
+                    // target, which `Plan` sized to hold every batch at its
+                    // offset; both buffers outlive the wait in `one_shot`.
+                    unsafe { device.cmd_copy_buffer(cmd, staging, targets[k], &list) };
+                }
+            }
+        })?;
+        self.regions.clear();
+        self.fill = 0;
+        self.submits += 1;
+        Ok(())
+    }
+
+    fn finish(mut self) -> Result<u32, GpuError> {
+        self.flush()?;
+        Ok(self.submits)
+    }
+}
+
+/// Figures of one mapped upload (`--timings`).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct UploadStats {
+    /// Bytes copied from the file to the GPU.
+    pub bytes: u64,
+    /// Staging fills submitted.
+    pub submits: u32,
+}
+
+impl GpuScene {
+    /// Uploads an in-memory `solution`, storing coefficients as its batches'
+    /// scalar types say (f16 batches are rounded to half here, divided by their
+    /// scale). `max_order` caps the evaluated SH order (bands above it are not
+    /// read; see `crate::render::truncation`); cube batches ignore it.
+    pub fn new(
+        gpu: &Gpu,
+        solution: &Solution,
+        max_order: Option<u32>,
+    ) -> Result<GpuScene, SceneError> {
+        let mut shapes = Vec::with_capacity(solution.batches.len());
+        for (i, batch) in solution.batches.iter().enumerate() {
+            check_in_memory(i, batch)?;
+            shapes.push(BatchShape {
+                representation: batch.representation,
+                scalar: batch.scalar,
+                vertex_count: batch.vertices.len() as u64,
+                index_count: batch.indices.len() as u64,
+            });
+        }
+        let plan = Plan::new(&shapes, max_order, &gpu.info.limits)?;
+        let mut vertex_data = Vec::new();
+        let mut index_data = Vec::new();
+        let mut coeff_data: Vec<u8> = Vec::new();
+        let mut bound = 0.0f64;
+        for (i, draw) in &plan.batches {
+            let batch = &solution.batches[*i];
+            bound = bound.max(radiance_bound(batch, draw.order));
+            coeff_data.resize(draw.coeff_offset as usize, 0);
+            match batch.scalar {
+                ScalarType::F32 => {
+                    for c in &batch.coefficients {
+                        coeff_data.extend_from_slice(&c.to_le_bytes());
+                    }
+                }
+                ScalarType::F16 { scale } => {
+                    for c in &batch.coefficients {
+                        let h = half::f16::from_f32(c / scale);
+                        coeff_data.extend_from_slice(&h.to_bits().to_le_bytes());
+                    }
+                }
+            }
+            vertex_bytes(&batch.vertices, &mut vertex_data);
+            for ix in &batch.indices {
+                index_data.extend_from_slice(&ix.to_le_bytes());
+            }
+        }
+        coeff_data.resize(plan.coefficient_total.max(4) as usize, 0);
         let vertices = Buffer::with_data(gpu, vk::BufferUsageFlags::VERTEX_BUFFER, &vertex_data)?;
         let indices = Buffer::with_data(gpu, vk::BufferUsageFlags::INDEX_BUFFER, &index_data)?;
         let coefficients =
@@ -323,13 +585,223 @@ impl GpuScene {
             coefficients,
             indices,
             vertices,
-            draws,
-            radiance_scale,
-            storage,
-            vertex_count: vertex_base,
-            triangle_count: first_index / 3,
+            draws: plan.draws(),
+            radiance_scale: radiance_scale(bound),
+            storage: plan.storage,
+            vertex_count: plan.vertex_total,
+            triangle_count: plan.index_total / 3,
         })
     }
+
+    /// Uploads a mapped file as stored: vertices, indices and coefficients (f32,
+    /// or f16 whose scale the shader applies) are copied from the map to staging
+    /// memory in chunks of at most [`STAGING_BYTES`] and from there to device
+    /// buffers. Each section's CRC-32 is computed as its chunks pass and checked
+    /// against the file's ([`MappedSolution::verify_section`]), so `file` may be
+    /// opened with [`MappedSolution::open_deferring_checksums`]; a mismatch
+    /// refuses the file with the error naming file, batch and section.
+    pub fn from_mapped(
+        gpu: &Gpu,
+        file: &MappedSolution,
+        max_order: Option<u32>,
+    ) -> Result<(GpuScene, UploadStats), SceneError> {
+        Self::from_mapped_in_chunks(gpu, file, max_order, STAGING_BYTES)
+    }
+
+    /// [`GpuScene::from_mapped`] through a staging buffer of `staging_bytes`
+    /// (raised to one SH vertex's coefficients if that is larger, lowered to
+    /// the file's bulk if that is smaller): the tests stream through a tiny one
+    /// so that every section is split across chunks.
+    pub fn from_mapped_in_chunks(
+        gpu: &Gpu,
+        file: &MappedSolution,
+        max_order: Option<u32>,
+        staging_bytes: u64,
+    ) -> Result<(GpuScene, UploadStats), SceneError> {
+        let shapes: Vec<BatchShape> = file
+            .batches()
+            .iter()
+            .map(|info| BatchShape {
+                representation: info.representation,
+                scalar: info.scalar,
+                vertex_count: u64::from(info.vertex_count),
+                index_count: u64::from(info.index_count),
+            })
+            .collect();
+        let plan = Plan::new(&shapes, max_order, &gpu.info.limits)?;
+        let vertices = device_buffer(
+            gpu,
+            vk::BufferUsageFlags::VERTEX_BUFFER,
+            plan.vertex_total * layout::VERTEX_LEN as u64,
+        )?;
+        let indices = device_buffer(
+            gpu,
+            vk::BufferUsageFlags::INDEX_BUFFER,
+            plan.index_total * 4,
+        )?;
+        let coefficients = device_buffer(
+            gpu,
+            vk::BufferUsageFlags::STORAGE_BUFFER,
+            plan.coefficient_total,
+        )?;
+        let total: u64 = (0..shapes.len())
+            .map(|b| {
+                [
+                    BatchSection::Vertices,
+                    BatchSection::Coefficients,
+                    BatchSection::Indices,
+                ]
+                .iter()
+                .map(|&s| file.section_bytes(b, s).len() as u64)
+                .sum::<u64>()
+            })
+            .sum();
+        // SH bounds sum per vertex, so SH coefficient chunks hold whole vertices
+        // (one vertex is at most (1024 + 1)² · 3 · 4 ≈ 12.6 MB, under the
+        // default staging size); other sections split anywhere.
+        let unit = |shape: &BatchShape| match shape.representation {
+            Representation::Sh { .. } => {
+                shape.representation.coefficients_per_channel()
+                    * 3
+                    * layout::scalar_size(shape.scalar)
+            }
+            Representation::Cube { .. } => 1,
+        };
+        let largest_unit = shapes.iter().map(unit).max().unwrap_or(1);
+        let staging_size = staging_bytes.max(largest_unit).min(total);
+        let mut uploader = Uploader::new(
+            gpu,
+            staging_size,
+            [vertices.raw, indices.raw, coefficients.raw],
+        )?;
+        let half_table = match plan.storage {
+            CoefficientStorage::F16 => half_magnitudes(),
+            CoefficientStorage::F32 => Vec::new(),
+        };
+        let mut bound = 0.0f64;
+        for (b, draw) in &plan.batches {
+            let b = *b;
+            let shape = shapes[b];
+            let sections = [
+                (
+                    BatchSection::Vertices,
+                    Target::Vertices,
+                    u64::from(draw.vertex_base) * layout::VERTEX_LEN as u64,
+                ),
+                (
+                    BatchSection::Coefficients,
+                    Target::Coefficients,
+                    draw.coeff_offset,
+                ),
+                (
+                    BatchSection::Indices,
+                    Target::Indices,
+                    u64::from(draw.first_index) * 4,
+                ),
+            ];
+            for (section, target, dst) in sections {
+                let bytes = file.section_bytes(b, section);
+                let unit = match section {
+                    BatchSection::Coefficients => unit(&shape).max(1),
+                    _ => 1,
+                };
+                let mut hasher = crc32fast::Hasher::new();
+                let mut done = 0u64;
+                while done < bytes.len() as u64 {
+                    // Sections are whole units long, and staging holds at least
+                    // one unit, so after a flush `take` is positive.
+                    let remaining = bytes.len() as u64 - done;
+                    let mut take = (uploader.room() / unit * unit).min(remaining);
+                    if take == 0 {
+                        uploader.flush()?;
+                        take = (uploader.room() / unit * unit).min(remaining);
+                    }
+                    if take == 0 {
+                        return Err(SceneError::Inconsistent {
+                            batch: b,
+                            what: format!(
+                                "{section:?} of {remaining} bytes do not fit staging chunks of {unit}"
+                            ),
+                        });
+                    }
+                    let chunk = &bytes[done as usize..(done + take) as usize];
+                    hasher.update(chunk);
+                    if section == BatchSection::Coefficients {
+                        bound = bound.max(stored_radiance_bound(
+                            chunk,
+                            shape.representation,
+                            shape.scalar,
+                            draw.order,
+                            &half_table,
+                        ));
+                    }
+                    uploader.push(target, dst + done, chunk)?;
+                    done += take;
+                }
+                file.verify_section(b, section, hasher.finalize())?;
+            }
+        }
+        let stats = UploadStats {
+            bytes: total,
+            submits: uploader.finish()?,
+        };
+        Ok((
+            GpuScene {
+                coefficients,
+                indices,
+                vertices,
+                draws: plan.draws(),
+                radiance_scale: radiance_scale(bound),
+                storage: plan.storage,
+                vertex_count: plan.vertex_total,
+                triangle_count: plan.index_total / 3,
+            },
+            stats,
+        ))
+    }
+}
+
+/// The checks `MappedSolution` makes at open, for a solution built in memory:
+/// coefficient counts, whole triangles, indices in range.
+fn check_in_memory(i: usize, batch: &Batch) -> Result<(), SceneError> {
+    let n = batch.representation.coefficients_per_channel();
+    let expected = (batch.vertices.len() as u64)
+        .saturating_mul(n)
+        .saturating_mul(3);
+    if batch.coefficients.len() as u64 != expected {
+        return Err(SceneError::Inconsistent {
+            batch: i,
+            what: format!(
+                "{} coefficients for {} vertices of {:?} (expected {expected})",
+                batch.coefficients.len(),
+                batch.vertices.len(),
+                batch.representation
+            ),
+        });
+    }
+    if !batch.indices.len().is_multiple_of(3) {
+        return Err(SceneError::Inconsistent {
+            batch: i,
+            what: format!(
+                "{} indices is not a whole number of triangles",
+                batch.indices.len()
+            ),
+        });
+    }
+    if let Some(&bad) = batch
+        .indices
+        .iter()
+        .find(|&&ix| ix as usize >= batch.vertices.len())
+    {
+        return Err(SceneError::Inconsistent {
+            batch: i,
+            what: format!(
+                "index {bad} is out of range for {} vertices",
+                batch.vertices.len()
+            ),
+        });
+    }
+    Ok(())
 }
 
 #[cfg(test)]
