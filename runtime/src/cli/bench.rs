@@ -128,7 +128,7 @@ pub fn run(args: &BenchArgs) -> Result<BenchReport> {
     };
     let mut renderer = StereoRenderer::from_mapped(&gpu, &file, desc, &session.swapchain())?;
     timings.stage("vulkan and renderer");
-    timings.part("of which upload", renderer.upload_time());
+    timings.upload(renderer.upload_time(), renderer.upload_stats());
     let mut times = Vec::new();
     while !session.should_exit() {
         let start = Instant::now();

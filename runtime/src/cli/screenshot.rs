@@ -100,7 +100,7 @@ pub fn run(args: &ScreenshotArgs) -> Result<()> {
     };
     let mut renderer = StereoRenderer::from_mapped(&gpu, &file, desc, &swapchain.desc())?;
     timings.stage("renderer");
-    timings.part("of which upload", renderer.upload_time());
+    timings.upload(renderer.upload_time(), renderer.upload_stats());
     renderer.render(&views, 0)?;
     timings.stage("first frame");
     if args.render.timings {

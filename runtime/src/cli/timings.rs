@@ -34,6 +34,15 @@ impl Timings {
         self.stages.push((name, duration));
     }
 
+    /// The upload inside the renderer stage, and its parts.
+    pub fn upload(&mut self, total: Duration, stats: crate::render::UploadStats) {
+        self.part("of which upload", total);
+        self.part("(checksum", stats.checksum);
+        self.part("bound", stats.bound);
+        self.part("staging copy", stats.staging);
+        self.part("waiting for transfers)", stats.transfer);
+    }
+
     /// Time from the start to `at`.
     pub fn since_start(&self, at: Instant) -> Duration {
         at.saturating_duration_since(self.start)

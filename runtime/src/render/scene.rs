@@ -2,7 +2,7 @@
 //! (SH batches sorted by order, so diffuse batches share one trivial pipeline,
 //! then 001's global-cube batches by resolution, drawn by `scene_cube.vert`).
 
-use crate::gpu::{Buffer, BufferDesc, Gpu, GpuError, MemoryLocation};
+use crate::gpu::{Buffer, BufferDesc, Fence, Gpu, GpuError, MemoryLocation, VkContext};
 use ash::vk;
 use solution::format::{
     layout, Batch, BatchSection, FormatError, MappedSolution, Representation, ScalarType, Solution,
@@ -30,9 +30,15 @@ impl CoefficientStorage {
 }
 
 /// The staging buffer of the mapped upload: sections pass through it in chunks
-/// of at most this many bytes, so the upload's host memory is bounded whatever
-/// the file's size (a larger chunk saves little: one submit per 64 MiB).
+/// of at most half this many bytes (two halves, so that filling one overlaps
+/// the device's copy out of the other), so the upload's host memory is bounded
+/// whatever the file's size (a larger buffer saves little: one submit per
+/// 32 MiB).
 pub const STAGING_BYTES: u64 = 64 << 20;
+
+/// The piece of a section that the upload checksums, bounds and copies before
+/// moving on: small enough to stay in the L2 cache between the three.
+const PASS_BYTES: u64 = 256 << 10;
 
 /// Why a solution cannot be drawn.
 #[derive(Debug, thiserror::Error)]
@@ -184,7 +190,7 @@ fn stored_radiance_bound(
     bytes: &[u8],
     representation: Representation,
     scalar: ScalarType,
-    order: u32,
+    envelope: &[f64],
     half_table: &[f32],
 ) -> f64 {
     let f32_at = |b: &[u8]| f32::from_le_bytes([b[0], b[1], b[2], b[3]]).abs();
@@ -206,10 +212,10 @@ fn stored_radiance_bound(
             f64::from(half_table[usize::from(top)]) * f64::from(scale)
         }
         (Representation::Sh { .. }, ScalarType::F32) => {
-            sh_bound_stored(bytes, representation, order, 4, f32_at)
+            sh_bound_stored(bytes, representation, envelope, 4, f32_at)
         }
         (Representation::Sh { .. }, ScalarType::F16 { scale }) => {
-            sh_bound_stored(bytes, representation, order, 2, f16_at) * f64::from(scale)
+            sh_bound_stored(bytes, representation, envelope, 2, f16_at) * f64::from(scale)
         }
     }
 }
@@ -219,16 +225,15 @@ fn stored_radiance_bound(
 fn sh_bound_stored(
     bytes: &[u8],
     representation: Representation,
-    order: u32,
+    envelope: &[f64],
     size: usize,
     magnitude: impl Fn(&[u8]) -> f32,
 ) -> f64 {
     let n = representation.coefficients_per_channel() as usize;
-    let envelope = envelopes((order as usize + 1).pow(2).min(n));
     let mut bound = 0.0f64;
     for vertex in bytes.chunks_exact(n * 3 * size) {
         let mut sum = [0.0f64; 3];
-        for (rgb, e) in vertex.chunks_exact(3 * size).zip(&envelope) {
+        for (rgb, e) in vertex.chunks_exact(3 * size).zip(envelope) {
             for (c, s) in sum.iter_mut().enumerate() {
                 *s += f64::from(magnitude(&rgb[c * size..(c + 1) * size])) * e;
             }
@@ -424,45 +429,87 @@ enum Target {
     Coefficients,
 }
 
-/// Streams byte ranges into the scene buffers through one reused staging
-/// buffer: [`Uploader::push`] copies into staging memory, and a full staging
-/// buffer (or [`Uploader::finish`]) submits the copies and waits for them.
-struct Uploader<'a> {
-    gpu: &'a Gpu,
-    staging: Buffer,
+/// One half of the staging buffer: its own pending copies, command buffer and
+/// fence, so the host fills one half while the device copies out of the other.
+struct StagingHalf {
+    /// Where the half starts in the staging buffer, and its size.
+    offset: u64,
+    size: u64,
     fill: u64,
     regions: Vec<(Target, vk::BufferCopy)>,
+    cmd: vk::CommandBuffer,
+    fence: Fence,
+    /// Submitted and not yet waited for.
+    pending: bool,
+}
+
+/// Streams byte ranges into the scene buffers through one reused staging
+/// buffer in two halves: [`Uploader::push`] copies into the current half; a
+/// full half is submitted without waiting and filling goes on in the other,
+/// once the device has finished copying out of it.
+struct Uploader<'a> {
+    gpu: &'a Gpu,
+    // Declared before `staging`: dropped (and waited for) first.
+    halves: [StagingHalf; 2],
+    current: usize,
+    staging: Buffer,
     targets: [vk::Buffer; 3],
-    /// Submits so far (one per staging fill), for `--timings`.
+    /// Submits so far (one per filled half) and the time spent waiting for
+    /// them, for `--timings`.
     submits: u32,
+    transfer: std::time::Duration,
 }
 
 impl<'a> Uploader<'a> {
-    fn new(gpu: &'a Gpu, size: u64, targets: [vk::Buffer; 3]) -> Result<Self, GpuError> {
+    /// A staging buffer of two halves of `half` bytes each.
+    fn new(gpu: &'a Gpu, half: u64, targets: [vk::Buffer; 3]) -> Result<Self, GpuError> {
+        let half = half.max(4).div_ceil(4) * 4;
         let staging = Buffer::new(
             gpu,
             BufferDesc {
-                size: size.max(4),
+                size: 2 * half,
                 usage: vk::BufferUsageFlags::TRANSFER_SRC,
                 location: MemoryLocation::Mapped,
             },
         )?;
-        Ok(Uploader {
-            gpu,
-            staging,
+        let alloc = vk::CommandBufferAllocateInfo::default()
+            .command_pool(gpu.command_pool())
+            .level(vk::CommandBufferLevel::PRIMARY)
+            .command_buffer_count(2);
+        // SAFETY: the pool belongs to this device and is used from this thread;
+        // the buffers are freed in Drop after their fences are waited for.
+        let cmds = unsafe { gpu.device().allocate_command_buffers(&alloc) }
+            .ctx("vkAllocateCommandBuffers")?;
+        let half_at = |k: usize, fence: Fence| StagingHalf {
+            offset: k as u64 * half,
+            size: half,
             fill: 0,
             regions: Vec::new(),
+            cmd: cmds[k],
+            fence,
+            pending: false,
+        };
+        Ok(Uploader {
+            gpu,
+            halves: [
+                half_at(0, Fence::new(gpu, false)?),
+                half_at(1, Fence::new(gpu, false)?),
+            ],
+            current: 0,
+            staging,
             targets,
             submits: 0,
+            transfer: std::time::Duration::ZERO,
         })
     }
 
     fn room(&self) -> u64 {
-        self.staging.desc.size - self.fill
+        let half = &self.halves[self.current];
+        half.size - half.fill
     }
 
-    /// Copies `bytes` (at most [`Uploader::room`]) to staging, bound for
-    /// `target` at `dst_offset`.
+    /// Copies `bytes` (at most a half's size) to staging, bound for `target`
+    /// at `dst_offset`.
     fn push(&mut self, target: Target, dst_offset: u64, bytes: &[u8]) -> Result<(), GpuError> {
         if bytes.is_empty() {
             return Ok(());
@@ -470,53 +517,126 @@ impl<'a> Uploader<'a> {
         if bytes.len() as u64 > self.room() {
             self.flush()?;
         }
-        self.staging.write(self.fill, bytes);
-        self.regions.push((
-            target,
-            vk::BufferCopy {
-                src_offset: self.fill,
-                dst_offset,
-                size: bytes.len() as u64,
-            },
-        ));
-        self.fill += bytes.len() as u64;
+        let size = bytes.len() as u64;
+        let half = &mut self.halves[self.current];
+        let src_offset = half.offset + half.fill;
+        // The half is not pending (flush waited for it before making it
+        // current), so the device is not reading this range.
+        self.staging.write(src_offset, bytes);
+        // Consecutive pieces of one section continue the previous region.
+        match half.regions.last_mut() {
+            Some((t, r))
+                if *t == target
+                    && r.src_offset + r.size == src_offset
+                    && r.dst_offset + r.size == dst_offset =>
+            {
+                r.size += size;
+            }
+            _ => half.regions.push((
+                target,
+                vk::BufferCopy {
+                    src_offset,
+                    dst_offset,
+                    size,
+                },
+            )),
+        }
+        half.fill += size;
         Ok(())
     }
 
-    /// Submits the pending copies and waits, so staging may be rewritten.
+    /// Submits the current half's copies without waiting, then makes the other
+    /// half current once the device has finished with it.
     fn flush(&mut self) -> Result<(), GpuError> {
-        if self.regions.is_empty() {
-            return Ok(());
+        if !self.halves[self.current].regions.is_empty() {
+            self.submit(self.current)?;
         }
-        let (staging, targets, regions) = (self.staging.raw, self.targets, &self.regions);
-        self.gpu.one_shot(|device, cmd| {
-            for (k, target) in [Target::Vertices, Target::Indices, Target::Coefficients]
+        self.current ^= 1;
+        self.wait(self.current)
+    }
+
+    fn submit(&mut self, k: usize) -> Result<(), GpuError> {
+        let device = self.gpu.device();
+        let half = &mut self.halves[k];
+        let begin = vk::CommandBufferBeginInfo::default()
+            .flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
+        // SAFETY: the half is not pending (waited for before it was filled), so
+        // its command buffer may be re-recorded (the pool allows resets); every
+        // region lies inside the staging buffer (push kept `fill` ≤ the half)
+        // and inside its target, which `Plan` sized for every batch at its
+        // offset; the fence is unsignalled (reset after its last wait).
+        unsafe {
+            device
+                .begin_command_buffer(half.cmd, &begin)
+                .ctx("vkBeginCommandBuffer")?;
+            for (t, target) in [Target::Vertices, Target::Indices, Target::Coefficients]
                 .into_iter()
                 .enumerate()
             {
-                let list: Vec<vk::BufferCopy> = regions
+                let list: Vec<vk::BufferCopy> = half
+                    .regions
                     .iter()
-                    .filter(|(t, _)| *t == target)
+                    .filter(|(r, _)| *r == target)
                     .map(|(_, r)| *r)
                     .collect();
                 if !list.is_empty() {
-                    // SAFETY: `cmd` is recording; every region lies inside the
-                    // staging buffer (push kept `fill` ≤ its size) and inside its
-                    // target, which `Plan` sized to hold every batch at its
-                    // offset; both buffers outlive the wait in `one_shot`.
-                    unsafe { device.cmd_copy_buffer(cmd, staging, targets[k], &list) };
+                    device.cmd_copy_buffer(half.cmd, self.staging.raw, self.targets[t], &list);
                 }
             }
-        })?;
-        self.regions.clear();
-        self.fill = 0;
+            device
+                .end_command_buffer(half.cmd)
+                .ctx("vkEndCommandBuffer")?;
+            let cmds = [half.cmd];
+            let submit = [vk::SubmitInfo::default().command_buffers(&cmds)];
+            device
+                .queue_submit(self.gpu.queue, &submit, half.fence.raw)
+                .ctx("vkQueueSubmit")?;
+        }
+        half.pending = true;
+        half.regions.clear();
         self.submits += 1;
         Ok(())
     }
 
-    fn finish(mut self) -> Result<u32, GpuError> {
+    /// Waits for half `k`'s copies, leaving it empty and its fence reset.
+    fn wait(&mut self, k: usize) -> Result<(), GpuError> {
+        let half = &mut self.halves[k];
+        if half.pending {
+            let start = std::time::Instant::now();
+            half.fence.wait()?;
+            half.fence.reset()?;
+            half.pending = false;
+            self.transfer += start.elapsed();
+        }
+        half.fill = 0;
+        Ok(())
+    }
+
+    fn finish(mut self) -> Result<(u32, std::time::Duration), GpuError> {
         self.flush()?;
-        Ok(self.submits)
+        self.wait(self.current ^ 1)?;
+        self.wait(self.current)?;
+        Ok((self.submits, self.transfer))
+    }
+}
+
+impl Drop for Uploader<'_> {
+    fn drop(&mut self) {
+        for half in &self.halves {
+            if half.pending {
+                // An upload abandoned mid-way (a checksum mismatch): the device
+                // must stop reading staging memory before it is freed.
+                let _ = half.fence.wait();
+            }
+        }
+        let cmds = [self.halves[0].cmd, self.halves[1].cmd];
+        // SAFETY: no submission of these command buffers is pending (waited for
+        // above or in `finish`), and they came from this pool.
+        unsafe {
+            self.gpu
+                .device()
+                .free_command_buffers(self.gpu.command_pool(), &cmds)
+        };
     }
 }
 
@@ -527,6 +647,14 @@ pub struct UploadStats {
     pub bytes: u64,
     /// Staging fills submitted.
     pub submits: u32,
+    /// Host time computing the sections' CRC-32.
+    pub checksum: std::time::Duration,
+    /// Host time computing the radiance bound of the coefficients.
+    pub bound: std::time::Duration,
+    /// Host time copying from the map into staging memory.
+    pub staging: std::time::Duration,
+    /// Time waiting for the device's staging-to-buffer copies.
+    pub transfer: std::time::Duration,
 }
 
 impl GpuScene {
@@ -609,9 +737,10 @@ impl GpuScene {
     }
 
     /// [`GpuScene::from_mapped`] through a staging buffer of `staging_bytes`
-    /// (raised to one SH vertex's coefficients if that is larger, lowered to
-    /// the file's bulk if that is smaller): the tests stream through a tiny one
-    /// so that every section is split across chunks.
+    /// in two halves (the host fills one while the device copies out of the
+    /// other); a half is raised to one SH vertex's coefficients if that is
+    /// larger, and lowered to the file's bulk if that is smaller. The tests
+    /// stream through a tiny one so that every section is split across chunks.
     pub fn from_mapped_in_chunks(
         gpu: &Gpu,
         file: &MappedSolution,
@@ -667,21 +796,31 @@ impl GpuScene {
             }
             Representation::Cube { .. } => 1,
         };
+        // Two halves, each at least one unit, together at most `staging_bytes`
+        // (unless one unit is larger) and no larger than needed.
         let largest_unit = shapes.iter().map(unit).max().unwrap_or(1);
-        let staging_size = staging_bytes.max(largest_unit).min(total);
-        let mut uploader = Uploader::new(
-            gpu,
-            staging_size,
-            [vertices.raw, indices.raw, coefficients.raw],
-        )?;
+        let half = (staging_bytes / 2).max(largest_unit).min(total);
+        let mut uploader = Uploader::new(gpu, half, [vertices.raw, indices.raw, coefficients.raw])?;
         let half_table = match plan.storage {
             CoefficientStorage::F16 => half_magnitudes(),
             CoefficientStorage::F32 => Vec::new(),
         };
         let mut bound = 0.0f64;
+        let mut stats = UploadStats {
+            bytes: total,
+            ..UploadStats::default()
+        };
         for (b, draw) in &plan.batches {
             let b = *b;
             let shape = shapes[b];
+            let envelope = match shape.representation {
+                Representation::Sh { .. } => envelopes(
+                    (draw.order as usize + 1)
+                        .pow(2)
+                        .min(shape.representation.coefficients_per_channel() as usize),
+                ),
+                Representation::Cube { .. } => Vec::new(),
+            };
             let sections = [
                 (
                     BatchSection::Vertices,
@@ -710,7 +849,11 @@ impl GpuScene {
                 while done < bytes.len() as u64 {
                     // Sections are whole units long, and staging holds at least
                     // one unit, so after a flush `take` is positive.
-                    let remaining = bytes.len() as u64 - done;
+                    // Pieces of about PASS_BYTES stay in the cache between the
+                    // checksum, the bound and the copy, so the map is read from
+                    // memory once.
+                    let remaining =
+                        (bytes.len() as u64 - done).min((PASS_BYTES / unit).max(1) * unit);
                     let mut take = (uploader.room() / unit * unit).min(remaining);
                     if take == 0 {
                         uploader.flush()?;
@@ -725,26 +868,36 @@ impl GpuScene {
                         });
                     }
                     let chunk = &bytes[done as usize..(done + take) as usize];
+                    let start = std::time::Instant::now();
                     hasher.update(chunk);
+                    let hashed = std::time::Instant::now();
+                    stats.checksum += hashed - start;
                     if section == BatchSection::Coefficients {
                         bound = bound.max(stored_radiance_bound(
                             chunk,
                             shape.representation,
                             shape.scalar,
-                            draw.order,
+                            &envelope,
                             &half_table,
                         ));
                     }
+                    let bounded = std::time::Instant::now();
+                    stats.bound += bounded - hashed;
+                    let transfer_before = uploader.transfer;
                     uploader.push(target, dst + done, chunk)?;
+                    // A push that flushed spent part of its time waiting.
+                    stats.staging += bounded
+                        .elapsed()
+                        .saturating_sub(uploader.transfer - transfer_before);
                     done += take;
                 }
                 file.verify_section(b, section, hasher.finalize())?;
+                // The bytes are in staging or on the device: the map's pages
+                // need not stay resident beside the device copy.
+                file.release_section(b, section);
             }
         }
-        let stats = UploadStats {
-            bytes: total,
-            submits: uploader.finish()?,
-        };
+        (stats.submits, stats.transfer) = uploader.finish()?;
         Ok((
             GpuScene {
                 coefficients,

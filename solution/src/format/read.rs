@@ -1071,6 +1071,39 @@ impl MappedSolution {
             BatchSection::Indices => self.index_bytes(batch),
         }
     }
+
+    /// Tells the kernel that this process is done with batch `batch`'s
+    /// `section` for now (`madvise(MADV_DONTNEED)`, rounded out to whole pages):
+    /// its pages leave the process's resident set but stay in the page cache,
+    /// and a later read maps them again. The runtime calls it once a section is
+    /// on the GPU, so the map and the GPU copy are not both resident. Advisory:
+    /// failure (or a platform without `madvise`) changes nothing.
+    ///
+    /// # Panics
+    /// If `batch >= self.batches().len()`.
+    pub fn release_section(&self, batch: usize, section: BatchSection) {
+        let bytes = self.section_bytes(batch, section);
+        if bytes.is_empty() {
+            return;
+        }
+        #[cfg(unix)]
+        {
+            let offset = bytes.as_ptr() as usize - self.map.as_ptr() as usize;
+            // SAFETY: the map is a read-only shared mapping of a file, so
+            // MADV_DONTNEED only drops page-table entries: a later access faults
+            // the same file bytes back in from the page cache (nothing was
+            // written through the map, so nothing is lost), and `&[u8]` borrows
+            // of the map keep seeing the same contents under the invariant of
+            // `open` (the file is replaced by rename, never edited in place).
+            let _ = unsafe {
+                self.map.unchecked_advise_range(
+                    memmap2::UncheckedAdvice::DontNeed,
+                    offset,
+                    bytes.len(),
+                )
+            };
+        }
+    }
 }
 
 /// One of a batch's three bulk sections.
