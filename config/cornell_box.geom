@@ -1,4 +1,4 @@
-Cornell box (published measurements, millimetres, +y up) in the legacy geometry format of 000 appendix B
+Cornell box (published measurements, millimetres, +y up) in the legacy geometry format of Remington 1992, appendix B
 ccw nopurge
 points 64 patches 16 attributes 4
 552.8 0.0 0.0 normal 0.000000 1.000000 0.000000

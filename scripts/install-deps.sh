@@ -20,6 +20,7 @@ if [ "${1:-run}" = "test" ]; then
     vulkan-validationlayers  # VK_LAYER_KHRONOS_validation for the validation-clean tests
     xvfb                     # a virtual X server for the mirror-window tests
     xauth
+    jq                       # scripts/check-msrv.sh reads `cargo metadata`
   )
 fi
 

@@ -12,6 +12,8 @@ echo "== cargo fmt --check"
 cargo fmt --all -- --check
 echo "== architecture invariants"
 bash scripts/check-architecture.sh
+echo "== minimum supported Rust version of the dependencies"
+bash scripts/check-msrv.sh
 echo "== cargo clippy"
 cargo clippy --workspace --all-targets --locked -- -D warnings
 echo "== cargo test"

@@ -6,10 +6,11 @@
 //! claiming 2^40 vertices makes the reader allocate nothing of that size.
 
 use solution::camera::{Camera, UpAxis};
-use solution::format::layout::{self, batch as bf, preamble as pf};
+use solution::format::layout::{self, batch as bf, header as hf, preamble as pf};
 use solution::format::{
-    decode, encode, f16_scale_for, read_solution, write_solution, Batch, FormatError, Header,
-    MappedSolution, Problem, Representation, ScalarType, Solution, SolveMode, SolveStats, Vertex,
+    check_frame_cost, decode, encode, f16_scale_for, frame_cost, read_solution, write_solution,
+    Batch, FormatError, Header, MappedSolution, Problem, Representation, ScalarType, Solution,
+    SolveMode, SolveStats, Vertex, DEFAULT_MAX_FRAME_COST, MAX_FRAME_COST_FLAG, MAX_SH_ORDER,
 };
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
@@ -251,6 +252,91 @@ fn hostile_counts_allocate_nothing_near_their_size() {
         assert!(largest <= bad.len(), "mapped: {largest} B");
         std::fs::remove_file(&path).unwrap();
     }
+}
+
+/// Values the contract refuses although every count and checksum is right: an SH
+/// order above [`MAX_SH_ORDER`], a header camera that `Camera::validate` refuses,
+/// bounds that leave a vertex out. Each is refused with a message naming the
+/// value, from memory and from disk, allocating no more than the file's size.
+#[test]
+fn hostile_values_are_refused_clearly_allocating_nothing_beyond_the_file() {
+    let bytes = encode(&grid_solution(3)).unwrap();
+    let header = layout::PREAMBLE_LEN;
+    let batch1 = header + layout::HEADER_LEN + layout::BATCH_ENTRY_LEN;
+    let cases: [(&str, usize, Vec<u8>, &str); 4] = [
+        (
+            "SH order above the limit",
+            batch1 + bf::REPRESENTATION_PARAMETER,
+            (MAX_SH_ORDER + 1).to_le_bytes().to_vec(),
+            "batch 1: SH order is 65, above the limit of 64",
+        ),
+        (
+            "camera field of view",
+            header + hf::CAMERA_FOV_Y_DEG,
+            179.5f64.to_le_bytes().to_vec(),
+            "header: camera",
+        ),
+        (
+            "camera image size",
+            header + hf::CAMERA_WIDTH,
+            100_000u32.to_le_bytes().to_vec(),
+            "header: camera",
+        ),
+        (
+            // The grid reaches x = 3; these bounds stop at x = 2.
+            "bounds that exclude vertices",
+            header + hf::BOUNDS_MAX,
+            2f32.to_le_bytes().to_vec(),
+            "batch 0: vertex 3 position [3.0, 0.0, 0.0] lies outside the header bounds",
+        ),
+    ];
+    for (name, at, value, message) in cases {
+        let mut bad = bytes.clone();
+        bad[at..at + value.len()].copy_from_slice(&value);
+        fix_metadata_crc(&mut bad);
+        let (result, largest) = largest_allocation(|| decode(&bad));
+        let err = result.expect_err(name).to_string();
+        assert!(err.contains(message), "{name}: {err}");
+        assert!(
+            largest <= bad.len(),
+            "{name}: largest allocation {largest} B"
+        );
+
+        let path = scratch("hostile-value.sol");
+        std::fs::write(&path, &bad).unwrap();
+        let (result, largest) = largest_allocation(|| MappedSolution::open(&path));
+        let err = result.expect_err(name);
+        assert_eq!(err.path(), Some(path.as_path()), "{name}");
+        assert!(err.to_string().contains(message), "{name}: {err}");
+        assert!(largest <= bad.len(), "{name}: mapped, {largest} B");
+        std::fs::remove_file(&path).unwrap();
+    }
+}
+
+/// The per-frame cost bound is the runtime's to apply (the reader opens the file
+/// whatever its cost): below the default it passes; above a limit it is refused
+/// naming the file, the cost, the limit and the override flag.
+#[test]
+fn frame_cost_above_the_limit_is_refused_without_the_override() {
+    let path = scratch("frame-cost.sol");
+    write_solution(&path, &grid_solution(3)).unwrap();
+    let mapped = MappedSolution::open(&path).unwrap();
+    // 16 vertices at L = 0 (1 term) and 16 at L = 3 (16 terms).
+    let cost = frame_cost(mapped.batches());
+    assert_eq!(cost, 16 + 16 * 16);
+    check_frame_cost(&path, cost, DEFAULT_MAX_FRAME_COST).unwrap();
+    let err = check_frame_cost(&path, cost, cost - 1).unwrap_err();
+    let text = err.to_string();
+    for part in [
+        path.display().to_string(),
+        format!("{cost} basis terms per view"),
+        format!("limit of {}", cost - 1),
+        MAX_FRAME_COST_FLAG.to_string(),
+    ] {
+        assert!(text.contains(&part), "{part:?} missing from: {text}");
+    }
+    assert!(matches!(err.problem(), Some(Problem::FrameCost { .. })));
+    std::fs::remove_file(&path).unwrap();
 }
 
 #[test]

@@ -1,6 +1,6 @@
 //! End-to-end physics of the solver core on the Cornell box, through the OBJ
 //! importer: adaptive meshing follows the shadows and leaves smooth light
-//! coarse (000 §3.3).
+//! coarse (Remington 1992, §3.3).
 
 use glam::DVec3;
 use solver::geometry::visibility::Occluder;

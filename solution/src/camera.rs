@@ -10,7 +10,7 @@
 use glam::{DMat3, DMat4, DQuat, DVec2, DVec3, DVec4};
 use serde::{Deserialize, Serialize};
 
-/// The world axis that points up for the viewer (000 appendix C allows y, -y, z, -z).
+/// The world axis that points up for the viewer (Remington 1992, appendix C allows y, -y, z, -z).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize, Default)]
 #[serde(rename_all = "lowercase")]
 pub enum UpAxis {

@@ -1,6 +1,7 @@
 //! The contract between the solver and the runtime: everything both programs must
 //! agree on, and nothing else.
 //!
+//! * [`atomic`]: the one atomic file writer every program's output goes through;
 //! * [`format`]: the solution file (in-memory types, byte layout, the atomic writer,
 //!   the memory-mapped validating reader, `describe` for `solver info`);
 //! * [`sh`]: real orthonormal spherical harmonics in f64, and the f32 twin that the
@@ -16,6 +17,7 @@
 //! runtime, nor on `ash`, `openxr` or `winit`; the runtime depends on it and never on
 //! the solver (checked by `scripts/test.sh` with `cargo tree -p runtime`).
 
+pub mod atomic;
 pub mod camera;
 pub mod cube;
 pub mod format;

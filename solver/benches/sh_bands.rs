@@ -145,7 +145,7 @@ fn main() {
     }
     println!();
     println!("## Ringing remedies at the default target's order");
-    println!("min: lowest value of the lobe (peak 1); L2: relative L2 error vs the exact lobe; peak: max |error| (relative to the peak 1); neg: negative mass / lobe mass; clamp L2: L2 error after clamping at 0; offset L2 / energy: 000 App. G remedy (a), constant added so that min ≥ 0, and its share of the energy.");
+    println!("min: lowest value of the lobe (peak 1); L2: relative L2 error vs the exact lobe; peak: max |error| (relative to the peak 1); neg: negative mass / lobe mass; clamp L2: L2 error after clamping at 0; offset L2 / energy: Remington 1992, App. G remedy (a), constant added so that min ≥ 0, and its share of the energy.");
     println!();
     println!("| α | L | window | min | L2 | peak | neg | clamp L2 | offset L2 | offset energy |");
     println!("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |");

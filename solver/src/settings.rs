@@ -7,7 +7,7 @@
 //! build time so the binary never depends on the working directory.
 
 use serde::{Deserialize, Serialize};
-use solution::format::SolveMode;
+use solution::format::{SolveMode, MAX_SH_ORDER};
 
 /// The presets file, embedded.
 pub const PRESETS_TOML: &str = include_str!("../../config/presets.toml");
@@ -41,10 +41,10 @@ pub enum FormFactorMethod {
     /// Exact unoccluded point-to-polygon factor × visible fraction of the rays.
     #[default]
     Analytic,
-    /// 000 eq. 3.1 (disc approximation per sample), kept to measure against.
+    /// Remington 1992, eq. 3.1 (disc approximation per sample), kept to measure against.
     Wallace,
     /// The exact unoccluded factor × visibility read from a hemicube item
-    /// buffer on the shooting patch (002; `hemicube_resolution`).
+    /// buffer on the shooting patch (radiosity lecture notes; `hemicube_resolution`).
     Hemicube,
 }
 
@@ -54,7 +54,7 @@ pub enum FormFactorMethod {
 #[serde(rename_all = "lowercase")]
 #[derive(clap::ValueEnum)]
 pub enum BrdfNormalization {
-    /// 000's per-incidence C_R(μ_i): reflects exactly Ks of every beam, not reciprocal.
+    /// Remington's (1992) per-incidence C_R(μ_i): reflects exactly Ks of every beam, not reciprocal.
     #[default]
     Thesis,
     /// One constant per material: reciprocal, albedo Ks at normal incidence, ≤ Ks elsewhere.
@@ -66,10 +66,10 @@ pub enum BrdfNormalization {
 #[serde(rename_all = "lowercase")]
 #[derive(clap::ValueEnum)]
 pub enum DirectionalRepresentation {
-    /// Spherical harmonics of an order chosen per material (000 ch. 4), shot progressively.
+    /// Spherical harmonics of an order chosen per material (Remington 1992, ch. 4), shot progressively.
     #[default]
     Sh,
-    /// 001's global cube of 6k² directions (`cube_resolution`), gathered by Gauss–Seidel.
+    /// Immel, Cohen and Greenberg's (1986) global cube of 6k² directions (`cube_resolution`), gathered by Gauss–Seidel.
     Cube,
 }
 
@@ -95,11 +95,11 @@ pub struct SolverSettings {
     pub form_factors: FormFactorMethod,
     /// Visibility rays per (receiving vertex, source patch).
     pub samples: u32,
-    /// Cells per side of a hemicube's top face (002; even, 2 to 2048): the
+    /// Cells per side of a hemicube's top face (radiosity lecture notes; even, 2 to 2048): the
     /// Gauss–Seidel gather's form factors and the hemicube shooter's item buffer.
     #[serde(default = "default_hemicube_resolution")]
     pub hemicube_resolution: u32,
-    /// Trace visibility rays at all (000 appendix D `-t` turns them off).
+    /// Trace visibility rays at all (Remington 1992, appendix D `-t` turns them off).
     pub shadows: bool,
     /// Stop when total unshot power < threshold × total emitted power.
     pub threshold: f64,
@@ -110,7 +110,7 @@ pub struct SolverSettings {
     pub threads: Option<usize>,
     /// Default N × N patches per polygon when the scene does not set it.
     pub patches: u32,
-    /// Adaptive subdivision after each shot (000 §3.3).
+    /// Adaptive subdivision after each shot (Remington 1992, §3.3).
     pub adaptive: bool,
     /// Split an ordinary edge when |ΔL| exceeds this fraction of the local radiance.
     pub edge_threshold: f64,
@@ -131,7 +131,7 @@ pub struct SolverSettings {
     /// Normalization of glossy lobes: the thesis's per-incidence one or a reciprocal one.
     #[serde(default)]
     pub brdf_normalization: BrdfNormalization,
-    /// Directional mode's representation: SH (default) or 001's global cube.
+    /// Directional mode's representation: SH (default) or Immel, Cohen and Greenberg's (1986) global cube.
     #[serde(default)]
     pub directional: DirectionalRepresentation,
     /// Cells per face edge k of the global cube (D = 6k² directions per vertex).
@@ -179,7 +179,7 @@ pub struct SettingsPatch {
 pub struct SettingsError {
     pub name: &'static str,
     pub value: String,
-    pub expected: &'static str,
+    pub expected: String,
 }
 
 impl SolverSettings {
@@ -288,7 +288,7 @@ impl SolverSettings {
             ok: bool,
             name: &'static str,
             value: impl ToString,
-            expected: &'static str,
+            expected: impl Into<String>,
         ) -> Result<(), SettingsError> {
             if ok {
                 Ok(())
@@ -296,7 +296,7 @@ impl SolverSettings {
                 Err(SettingsError {
                     name,
                     value: value.to_string(),
-                    expected,
+                    expected: expected.into(),
                 })
             }
         }
@@ -360,11 +360,12 @@ impl SolverSettings {
             self.sh_error_target,
             "0 < target < 1",
         )?;
+        // The one SH order limit the writer and every reader share.
         check(
-            self.max_sh_order <= 100,
+            self.max_sh_order <= MAX_SH_ORDER,
             "max_sh_order",
             self.max_sh_order,
-            "0 to 100",
+            format!("0 to {MAX_SH_ORDER} (solution::format::MAX_SH_ORDER)"),
         )?;
         check(
             (2..=256).contains(&self.cube_resolution),

@@ -31,7 +31,7 @@ fn solve(out: &PathBuf, extra: &[&str]) -> Output {
 
 #[test]
 fn directional_cube_writes_a_cube_batch_for_the_glossy_floor() {
-    // The scene config sets mode = directional; --directional cube picks 001's cubes.
+    // The scene config sets mode = directional; --directional cube picks Immel, Cohen and Greenberg's (1986) cubes.
     let out = scratch("k4.sol");
     let run = solve(&out, &["--directional", "cube", "--cube-resolution", "4"]);
     let stderr = String::from_utf8_lossy(&run.stderr);

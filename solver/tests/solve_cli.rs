@@ -266,7 +266,7 @@ fn bad_input_gives_clear_messages() {
 fn preview_has_the_display_files_image_size() {
     let dir = tempfile::tempdir().unwrap();
     let scene = write_room(dir.path(), "room", 10.0);
-    // 000 appendix A: comment, eye/lookat, up, fov, near/far, resolution,
+    // Remington 1992, appendix A: comment, eye/lookat, up, fov, near/far, resolution,
     // diameter, ambient, threshold. The eye is inside the room, looking at the
     // far wall, so every pixel sees a lit surface.
     let display = dir.path().join("room.display");

@@ -1,4 +1,4 @@
-//! 001's global cube (Immel, Cohen and Greenberg 1986, `shared/seeds/001`): a vertex's
+//! Immel, Cohen and Greenberg's (1986) global cube (“A Radiosity Method for Non-Diffuse Environments”, `shared/seeds/001`): a vertex's
 //! outgoing radiance stored on D = 6k² fixed directions, the centres of a k × k grid
 //! of cells on each face of the cube [−1, 1]³ in the vertex's local frame, and looked
 //! up toward the eye by bilinear interpolation between the four nearest cell centres.

@@ -145,6 +145,13 @@ pub enum Problem {
     #[error("{what}: {reason}")]
     Invalid { what: String, reason: String },
 
+    #[error("the per-frame cost is {cost} basis terms per view (Σ vertices × (L + 1)², 4 per global-cube vertex), above the limit of {limit}; pass {flag} {cost} (or more) to draw it anyway")]
+    FrameCost {
+        cost: u64,
+        limit: u64,
+        flag: &'static str,
+    },
+
     #[error("batch {batch}: coefficient {position} is {value}; divided by the f16 scale {scale} it is outside the half-precision range (±65504); use a larger scale (see format::f16_scale_for)")]
     F16Overflow {
         batch: usize,

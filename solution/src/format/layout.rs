@@ -139,7 +139,7 @@ pub const FRAME_POLYGON_NTB: u32 = 1;
 /// Y_1,1 ∝ +x (t) in the frame.
 pub const BASIS_SH_REAL_ORTHONORMAL: u32 = 1;
 
-/// Basis convention of cube batches (001's global cube): D = 6·k² directions at
+/// Basis convention of cube batches (Immel, Cohen and Greenberg's (1986) global cube): D = 6·k² directions at
 /// the centres of a k × k grid of cells on each face of the cube [−1, 1]³ in the
 /// frame (x = t, y = b, z = n). Faces in the order +x, −x, +y, −y, +z, −z; on the
 /// face of axis a with sign s the in-face axes are (u, v) = (y, z), (z, x), (x, y)
@@ -154,11 +154,25 @@ pub const SECTION_VERTICES: u32 = 2;
 pub const SECTION_COEFFICIENTS: u32 = 3;
 pub const SECTION_INDICES: u32 = 4;
 
-/// The largest SH order a file may hold: (L + 1)² = 1,050,625 coefficients per
-/// channel. The design notes' most demanding lobe (α = 0.02 to 2 % error) needs
-/// L ≈ 100; the cap stops a hostile header from making a reader size tables by an
-/// absurd order even when the batch has no vertices.
-pub const MAX_SH_ORDER: u32 = 1024;
+/// The largest SH order L anything in the project handles: the solver's settings
+/// (`max_sh_order`), the writer and the reader all refuse more. 64 is the solver's
+/// default cap, and the order at which two costs that grow with L are still
+/// acceptable:
+///
+/// * **f32 accuracy.** The runtime evaluates the basis in f32; its error bound
+///   [`crate::sh::f32_basis_tolerance`] grows as (L + 1)² and is 1.0e-3 of the
+///   band's envelope at L = 64 (test `f32_matches_f64_within_stated_tolerance`
+///   checks it at this order), about twice the half-float colour target's 2⁻¹¹;
+///   at L = 100 it would be 2.4e-3, five times that target.
+/// * **Shader cost.** A vertex costs (L + 1)² basis terms per view: 4,225 at
+///   L = 64 against 10,201 at L = 100 (2.4×), and the per-frame bound
+///   [`super::DEFAULT_MAX_FRAME_COST`] is spent that much faster.
+///
+/// Lobes that need more (α below about 0.04 at the default 1e-3 error target; the
+/// design notes' α = 0.02 needs about 100) are capped at this order with the
+/// solver's warning. The cap also stops a hostile header from making a reader size
+/// anything by an absurd order even when the batch has no vertices.
+pub const MAX_SH_ORDER: u32 = 64;
 
 /// The largest cube resolution k (D = 6k² ≤ 6,291,456 directions), for the same
 /// reason as [`MAX_SH_ORDER`].

@@ -22,8 +22,12 @@ mod tests;
 
 pub use describe::{batch_json, describe_json, describe_text};
 pub use error::{FormatError, Problem};
+pub use layout::MAX_SH_ORDER;
 pub use read::{decode, read_solution, BatchInfo, BatchSection, MappedSolution};
-pub use validate::{F16_MAX, FRAME_TOLERANCE};
+pub use validate::{
+    check_frame_cost, frame_cost, terms_per_vertex, BOUNDS_RELATIVE_SLACK, DEFAULT_MAX_FRAME_COST,
+    F16_MAX, FRAME_TOLERANCE, MAX_FRAME_COST_FLAG,
+};
 pub use write::{check_solution, encode, f16_scale_for, write_solution};
 
 /// How a batch stores each vertex's outgoing radiance.
@@ -33,15 +37,16 @@ pub enum Representation {
     /// Real orthonormal spherical harmonics up to order `order` inclusive:
     /// `(order + 1)²` coefficients per channel, index `l² + l + m`.
     Sh { order: u32 },
-    /// 001's global cube: radiance on `directions` fixed directions per channel.
+    /// Immel, Cohen and Greenberg's (1986) global cube: radiance on `directions` fixed directions per channel.
     Cube { directions: u32 },
 }
 
 impl Representation {
-    /// Coefficients per colour channel per vertex.
+    /// Coefficients per colour channel per vertex (saturating: order u32::MAX, which
+    /// no validated file holds, would need 2⁶⁴).
     pub fn coefficients_per_channel(self) -> u64 {
         match self {
-            Representation::Sh { order } => (order as u64 + 1) * (order as u64 + 1),
+            Representation::Sh { order } => (order as u64 + 1).saturating_mul(order as u64 + 1),
             Representation::Cube { directions } => directions as u64,
         }
     }

@@ -13,7 +13,13 @@
 //! 4. section alignment, bounds (in u128, so no sum can wrap), overlap, zero
 //!    padding; vertex, coefficient and index counts against section lengths;
 //! 5. section CRCs; then the content: UTF-8 settings, finite values, orthonormal
-//!    frames, indices below the vertex count.
+//!    frames, positions inside the header bounds, indices below the vertex count.
+//!
+//! Each stage is one function below (`read_preamble`, `checked_metadata`,
+//! `block_layout`, `read_header`, `read_section_table`, `read_batch_table`,
+//! `check_placement`, `check_section_sizes`, `check_checksums`,
+//! `check_content`). The per-frame cost bound ([`super::check_frame_cost`]) is
+//! not a reader check: the runtime applies it with the user's limit.
 //!
 //! The only vectors it allocates hold one element per batch or per section (each
 //! ≤ the file length divided by that entry's on-disk size), and the settings text
@@ -123,6 +129,44 @@ impl Sections {
         }
     }
 
+    /// Assigns `role` to section `index`, checking that the section exists, has
+    /// the expected kind and has no other role.
+    fn claim(&mut self, index: u32, role: Role, kind: u32) -> Result<(), Problem> {
+        let what = match role {
+            Role::Settings => "header: settings section".to_string(),
+            Role::Vertices(b) => format!("batch {b}: vertices section"),
+            Role::Coefficients(b) => format!("batch {b}: coefficients section"),
+            Role::Indices(b) => format!("batch {b}: indices section"),
+            Role::Unused => "a section reference".to_string(),
+        };
+        let i = index as usize;
+        let Some(entry) = self.entries.get(i) else {
+            return Err(Problem::MissingSection {
+                what,
+                index,
+                count: self.entries.len() as u32,
+            });
+        };
+        if entry.kind != kind {
+            return Err(Problem::WrongSectionKind {
+                what,
+                index,
+                kind: entry.kind,
+                expected: kind,
+                expected_name: layout::section_kind_name(kind),
+            });
+        }
+        if self.roles[i] != Role::Unused {
+            return Err(Problem::SectionReused {
+                index,
+                first: role_name(self.roles[i]),
+                second: role_name(role),
+            });
+        }
+        self.roles[i] = role;
+        Ok(())
+    }
+
     /// The byte range of a section whose bounds `parse` has checked.
     fn range(&self, index: usize) -> Range<usize> {
         self.entries.get(index).map_or(0..0, |e| {
@@ -166,8 +210,8 @@ fn reserved(field: &str, value: u64, newer: bool) -> Result<(), Problem> {
     Ok(())
 }
 
-/// Validates the bytes of a whole solution file (see the module documentation for
-/// the order of the checks).
+/// Validates the bytes of a whole solution file, stage by stage (see the module
+/// documentation for the order of the checks).
 pub(crate) fn parse(bytes: &[u8]) -> Result<Parsed, Problem> {
     parse_checking(bytes, true)
 }
@@ -177,11 +221,52 @@ pub(crate) fn parse(bytes: &[u8]) -> Result<Parsed, Problem> {
 /// [`MappedSolution::open_deferring_checksums`] verifies those as the runtime
 /// streams them to the GPU.
 fn parse_checking(bytes: &[u8], batch_checksums: bool) -> Result<Parsed, Problem> {
-    use layout::{batch as bf, header as hf, preamble as pf, section as sf};
-    let len = bytes.len() as u64;
+    let preamble = read_preamble(bytes)?;
+    let metadata = checked_metadata(bytes, &preamble)?;
+    let blocks = block_layout(&preamble, metadata.len() as u64)?;
+    let (mut header, settings_section) =
+        read_header(&metadata[blocks.header.clone()], preamble.newer)?;
+    let mut sections = read_section_table(&metadata[blocks.sections.clone()], &blocks)?;
+    sections.claim(settings_section, Role::Settings, layout::SECTION_SETTINGS)?;
+    let (batches, batch_sections) =
+        read_batch_table(&metadata[blocks.batches.clone()], &blocks, &mut sections)?;
+    if !blocks.newer {
+        check_every_section_used(&sections)?;
+    }
+    check_placement(bytes, metadata.len() as u64, &sections)?;
+    check_section_sizes(&batches, &batch_sections, &sections)?;
+    check_checksums(bytes, &sections, batch_checksums)?;
+    header.settings_json = settings_text(bytes, &sections, settings_section as usize)?;
+    let slack = validate::bounds_slack(&header);
+    let mut ranges = Vec::with_capacity(batches.len());
+    for (b, (info, refs)) in batches.iter().zip(&batch_sections).enumerate() {
+        let range = refs.map(|section| sections.range(section));
+        check_content(b, info, bytes, &range, &header, slack)?;
+        ranges.push(range);
+    }
+    Ok(Parsed {
+        version: (preamble.major, preamble.minor),
+        file_len: bytes.len() as u64,
+        header,
+        batches,
+        ranges,
+    })
+}
 
-    // 1. Preamble: is it ours, which version, is it whole?
-    let Some(pre) = bytes
+/// The preamble's fields once stage 1 has accepted them.
+struct Preamble<'a> {
+    fields: Fields<'a>,
+    major: u16,
+    minor: u16,
+    /// The file's minor version is newer than this reader's.
+    newer: bool,
+}
+
+/// Stage 1: is it ours, which version, is it whole?
+fn read_preamble(bytes: &[u8]) -> Result<Preamble<'_>, Problem> {
+    use layout::preamble as pf;
+    let len = bytes.len() as u64;
+    let Some(fields) = bytes
         .get(..layout::PREAMBLE_LEN)
         .and_then(|b| Fields::new(b, layout::PREAMBLE_LEN))
     else {
@@ -198,8 +283,8 @@ fn parse_checking(bytes: &[u8], batch_checksums: bool) -> Result<Parsed, Problem
             expected: layout::MAGIC,
         });
     }
-    let major = pre.u16(pf::VERSION_MAJOR);
-    let minor = pre.u16(pf::VERSION_MINOR);
+    let major = fields.u16(pf::VERSION_MAJOR);
+    let minor = fields.u16(pf::VERSION_MINOR);
     if major != layout::VERSION_MAJOR {
         return Err(Problem::UnsupportedVersion {
             major,
@@ -208,17 +293,28 @@ fn parse_checking(bytes: &[u8], batch_checksums: bool) -> Result<Parsed, Problem
             known_minor: layout::VERSION_MINOR,
         });
     }
-    let newer = minor > layout::VERSION_MINOR;
-    let declared = pre.u64(pf::FILE_LENGTH);
+    let declared = fields.u64(pf::FILE_LENGTH);
     if declared != len {
         return Err(Problem::LengthMismatch {
             declared,
             actual: len,
         });
     }
+    Ok(Preamble {
+        fields,
+        major,
+        minor,
+        newer: minor > layout::VERSION_MINOR,
+    })
+}
 
-    // 2. Metadata region and its checksum.
-    let metadata_len = pre.u64(pf::METADATA_LENGTH);
+/// Stage 2: the metadata region (preamble, header, tables) lies inside the file
+/// and its checksum matches, so every count and offset read from it afterwards is
+/// what the writer wrote.
+fn checked_metadata<'a>(bytes: &'a [u8], preamble: &Preamble<'_>) -> Result<&'a [u8], Problem> {
+    use layout::preamble as pf;
+    let len = bytes.len() as u64;
+    let metadata_len = preamble.fields.u64(pf::METADATA_LENGTH);
     if metadata_len < layout::PREAMBLE_LEN as u64 {
         return Err(Problem::BadLength {
             what: "the metadata length".into(),
@@ -234,7 +330,7 @@ fn parse_checking(bytes: &[u8], batch_checksums: bool) -> Result<Parsed, Problem
         });
     }
     let metadata = &bytes[..metadata_len as usize];
-    let stored = pre.u32(pf::METADATA_CRC);
+    let stored = preamble.fields.u32(pf::METADATA_CRC);
     let computed = layout::metadata_crc(metadata);
     if stored != computed {
         return Err(Problem::Checksum {
@@ -243,8 +339,27 @@ fn parse_checking(bytes: &[u8], batch_checksums: bool) -> Result<Parsed, Problem
             computed,
         });
     }
+    Ok(metadata)
+}
 
-    // 3. Block lengths and counts must tile the metadata exactly.
+/// Where the header and the two tables lie inside the metadata, and their entry
+/// sizes.
+struct Blocks {
+    header: Range<usize>,
+    batches: Range<usize>,
+    sections: Range<usize>,
+    batch_entry_len: usize,
+    section_entry_len: usize,
+    section_count: u32,
+    newer: bool,
+}
+
+/// Stage 3, first part: block lengths and counts must tile the metadata exactly
+/// (summed in u128, so no hostile count can wrap), and the preamble's reserved
+/// words must be zero.
+fn block_layout(preamble: &Preamble<'_>, metadata_len: u64) -> Result<Blocks, Problem> {
+    use layout::preamble as pf;
+    let (pre, newer) = (&preamble.fields, preamble.newer);
     let header_len = check_block_len(
         "the header length",
         pre.u32(pf::HEADER_LENGTH),
@@ -288,18 +403,31 @@ fn parse_checking(bytes: &[u8], batch_checksums: bool) -> Result<Parsed, Problem
         pre.u64(pf::RESERVED_1),
         newer,
     )?;
-    // From here on every block lies inside `metadata` because the sum above matched.
+    // Every block lies inside the metadata because the sum above matched.
     let header_start = layout::PREAMBLE_LEN;
     let batches_start = header_start + header_len;
     let sections_start = batches_start + batch_count as usize * batch_entry_len;
+    Ok(Blocks {
+        header: header_start..batches_start,
+        batches: batches_start..sections_start,
+        sections: sections_start..metadata_len as usize,
+        batch_entry_len,
+        section_entry_len,
+        section_count,
+        newer,
+    })
+}
 
-    let hb = Fields::new(&metadata[header_start..batches_start], layout::HEADER_LEN).ok_or_else(
-        || Problem::BadLength {
-            what: "the header length".into(),
-            value: header_len as u64,
-            reason: "shorter than version 1.0's header".into(),
-        },
-    )?;
+/// Stage 3, the header: codes, reserved word and every value
+/// ([`validate::check_header`]). Returns the header (settings text still empty)
+/// and the index of its settings section.
+fn read_header(block: &[u8], newer: bool) -> Result<(Header, u32), Problem> {
+    use layout::header as hf;
+    let hb = Fields::new(block, layout::HEADER_LEN).ok_or_else(|| Problem::BadLength {
+        what: "the header length".into(),
+        value: block.len() as u64,
+        reason: "shorter than version 1.0's header".into(),
+    })?;
     let up_code = hb.u32(hf::UP_AXIS);
     let up_axis = UpAxis::from_code(up_code).ok_or_else(|| Problem::UnknownCode {
         field: "header: up axis".into(),
@@ -321,7 +449,7 @@ fn parse_checking(bytes: &[u8], batch_checksums: bool) -> Result<Parsed, Problem
         }
     };
     reserved("header: reserved word", hb.u32(hf::RESERVED).into(), newer)?;
-    let mut header = Header {
+    let header = Header {
         units_per_metre: hb.f64(hf::UNITS_PER_METRE),
         up_axis,
         recentre_offset: hb.f64x3(hf::RECENTRE_OFFSET),
@@ -348,20 +476,23 @@ fn parse_checking(bytes: &[u8], batch_checksums: bool) -> Result<Parsed, Problem
         settings_json: String::new(),
     };
     validate::check_header(&header)?;
+    Ok((header, hb.u32(hf::SETTINGS_SECTION)))
+}
 
-    // Section table (its length was checked above: section_count entries fit).
-    let mut entries = Vec::with_capacity(section_count as usize);
-    for (i, raw) in metadata[sections_start..]
-        .chunks_exact(section_entry_len)
-        .enumerate()
-    {
+/// Stage 3, the section table: known kinds, zero reserved fields. Every section
+/// starts unused; the header and batches claim theirs.
+fn read_section_table(table: &[u8], blocks: &Blocks) -> Result<Sections, Problem> {
+    use layout::section as sf;
+    // The table's length was checked against the metadata: section_count entries.
+    let mut entries = Vec::with_capacity(blocks.section_count as usize);
+    for (i, raw) in table.chunks_exact(blocks.section_entry_len).enumerate() {
         let f = Fields::new(raw, layout::SECTION_ENTRY_LEN).ok_or_else(|| Problem::BadLength {
             what: "the section entry length".into(),
-            value: section_entry_len as u64,
+            value: blocks.section_entry_len as u64,
             reason: "shorter than version 1.0's entry".into(),
         })?;
         let kind = f.u32(sf::KIND);
-        if !(layout::SECTION_SETTINGS..=layout::SECTION_INDICES).contains(&kind) && !newer {
+        if !(layout::SECTION_SETTINGS..=layout::SECTION_INDICES).contains(&kind) && !blocks.newer {
             return Err(Problem::UnknownCode {
                 field: format!("section {i}: kind"),
                 code: kind,
@@ -370,7 +501,7 @@ fn parse_checking(bytes: &[u8], batch_checksums: bool) -> Result<Parsed, Problem
         reserved(
             &format!("section {i}: reserved field"),
             f.u64(sf::RESERVED),
-            newer,
+            blocks.newer,
         )?;
         entries.push(SectionEntry {
             kind,
@@ -379,188 +510,202 @@ fn parse_checking(bytes: &[u8], batch_checksums: bool) -> Result<Parsed, Problem
             length: f.u64(sf::LENGTH),
         });
     }
-    let mut sections = Sections {
+    Ok(Sections {
         roles: vec![Role::Unused; entries.len()],
         entries,
-    };
+    })
+}
 
-    // Assigns a role to a section, checking the reference.
-    let claim = |sections: &mut Sections, index: u32, role: Role, kind: u32| {
-        let what = match role {
-            Role::Settings => "header: settings section".to_string(),
-            Role::Vertices(b) => format!("batch {b}: vertices section"),
-            Role::Coefficients(b) => format!("batch {b}: coefficients section"),
-            Role::Indices(b) => format!("batch {b}: indices section"),
-            Role::Unused => "a section reference".to_string(),
-        };
-        let i = index as usize;
-        let Some(entry) = sections.entries.get(i) else {
-            return Err(Problem::MissingSection {
-                what,
-                index,
-                count: section_count,
-            });
-        };
-        if entry.kind != kind {
-            return Err(Problem::WrongSectionKind {
-                what,
-                index,
-                kind: entry.kind,
-                expected: kind,
-                expected_name: layout::section_kind_name(kind),
-            });
-        }
-        if sections.roles[i] != Role::Unused {
-            return Err(Problem::SectionReused {
-                index,
-                first: role_name(sections.roles[i]),
-                second: role_name(role),
-            });
-        }
-        sections.roles[i] = role;
-        Ok(())
-    };
-    claim(
-        &mut sections,
-        hb.u32(hf::SETTINGS_SECTION),
-        Role::Settings,
-        layout::SECTION_SETTINGS,
-    )?;
-
-    // Batch table.
-    let mut batches = Vec::with_capacity(batch_count as usize);
-    let mut batch_sections = Vec::with_capacity(batch_count as usize);
-    for (b, raw) in metadata[batches_start..sections_start]
-        .chunks_exact(batch_entry_len)
-        .enumerate()
-    {
+/// Stage 3, the batch table: each entry ([`read_batch_entry`]) with the indices of
+/// its vertices, coefficients and indices sections.
+fn read_batch_table(
+    table: &[u8],
+    blocks: &Blocks,
+    sections: &mut Sections,
+) -> Result<(Vec<BatchInfo>, Vec<[usize; 3]>), Problem> {
+    let count = table.len() / blocks.batch_entry_len.max(1);
+    let mut batches = Vec::with_capacity(count);
+    let mut batch_sections = Vec::with_capacity(count);
+    for (b, raw) in table.chunks_exact(blocks.batch_entry_len).enumerate() {
         let f = Fields::new(raw, layout::BATCH_ENTRY_LEN).ok_or_else(|| Problem::BadLength {
             what: "the batch entry length".into(),
-            value: batch_entry_len as u64,
+            value: blocks.batch_entry_len as u64,
             reason: "shorter than version 1.0's entry".into(),
         })?;
-        let parameter = f.u32(bf::REPRESENTATION_PARAMETER);
-        let representation = match f.u32(bf::REPRESENTATION) {
-            layout::REPRESENTATION_SH => Representation::Sh { order: parameter },
-            layout::REPRESENTATION_CUBE => Representation::Cube {
-                directions: parameter,
-            },
-            code => {
-                return Err(Problem::UnknownCode {
-                    field: format!("batch {b}: representation"),
-                    code,
-                })
-            }
-        };
-        validate::check_representation(b, representation)?;
-        let scale = f.f32(bf::SCALE);
-        let scalar = match f.u32(bf::SCALAR) {
-            layout::SCALAR_F32 => {
-                if scale != 1.0 {
-                    return Err(Problem::Invalid {
-                        what: format!("batch {b}: f32 batch with scale {scale}"),
-                        reason: "f32 batches store scale 1".into(),
-                    });
-                }
-                ScalarType::F32
-            }
-            layout::SCALAR_F16 => ScalarType::F16 { scale },
-            code => {
-                return Err(Problem::UnknownCode {
-                    field: format!("batch {b}: scalar type"),
-                    code,
-                })
-            }
-        };
-        validate::check_scalar(b, scalar)?;
-        let frame_convention = f.u32(bf::FRAME_CONVENTION);
-        if frame_convention != layout::FRAME_POLYGON_NTB {
+        let (info, refs) = read_batch_entry(b, &f, blocks.newer, sections)?;
+        batches.push(info);
+        batch_sections.push(refs);
+    }
+    Ok((batches, batch_sections))
+}
+
+/// One batch-table entry: representation, scalar type, conventions, counts, and
+/// the sections it claims.
+fn read_batch_entry(
+    b: usize,
+    f: &Fields<'_>,
+    newer: bool,
+    sections: &mut Sections,
+) -> Result<(BatchInfo, [usize; 3]), Problem> {
+    use layout::batch as bf;
+    let representation = batch_representation(b, f)?;
+    let scalar = batch_scalar(b, f)?;
+    let (frame_convention, basis_convention) = batch_conventions(b, f, representation)?;
+    reserved(
+        &format!("batch {b}: reserved field"),
+        f.u32(bf::RESERVED).into(),
+        newer,
+    )?;
+    let (vertex_count, index_count) = batch_counts(b, f)?;
+    let refs = [
+        (
+            bf::VERTICES_SECTION,
+            Role::Vertices(b),
+            layout::SECTION_VERTICES,
+        ),
+        (
+            bf::COEFFICIENTS_SECTION,
+            Role::Coefficients(b),
+            layout::SECTION_COEFFICIENTS,
+        ),
+        (
+            bf::INDICES_SECTION,
+            Role::Indices(b),
+            layout::SECTION_INDICES,
+        ),
+    ];
+    let mut indices = [0usize; 3];
+    for (k, (at, role, kind)) in refs.into_iter().enumerate() {
+        let index = f.u32(at);
+        sections.claim(index, role, kind)?;
+        indices[k] = index as usize;
+    }
+    let info = BatchInfo {
+        representation,
+        scalar,
+        vertex_count,
+        index_count,
+        frame_convention,
+        basis_convention,
+    };
+    Ok((info, indices))
+}
+
+fn batch_representation(b: usize, f: &Fields<'_>) -> Result<Representation, Problem> {
+    use layout::batch as bf;
+    let parameter = f.u32(bf::REPRESENTATION_PARAMETER);
+    let representation = match f.u32(bf::REPRESENTATION) {
+        layout::REPRESENTATION_SH => Representation::Sh { order: parameter },
+        layout::REPRESENTATION_CUBE => Representation::Cube {
+            directions: parameter,
+        },
+        code => {
             return Err(Problem::UnknownCode {
-                field: format!("batch {b}: frame convention"),
-                code: frame_convention,
-            });
+                field: format!("batch {b}: representation"),
+                code,
+            })
         }
-        let basis_convention = f.u32(bf::BASIS_CONVENTION);
-        if basis_convention != layout::basis_convention(representation) {
-            return Err(Problem::UnknownCode {
-                field: format!(
-                    "batch {b}: basis convention for {}",
-                    match representation {
-                        Representation::Sh { .. } => "spherical harmonics",
-                        Representation::Cube { .. } => "a global cube",
-                    }
-                ),
-                code: basis_convention,
-            });
-        }
-        reserved(
-            &format!("batch {b}: reserved field"),
-            f.u32(bf::RESERVED).into(),
-            newer,
-        )?;
-        let vertex_count = f.u64(bf::VERTEX_COUNT);
-        let index_count = f.u64(bf::INDEX_COUNT);
-        for (what, count) in [("vertex count", vertex_count), ("index count", index_count)] {
-            if count > layout::MAX_COUNT {
-                return Err(Problem::TooLarge {
-                    what: format!("batch {b}: {what}"),
-                    value: count,
-                    limit: layout::MAX_COUNT,
-                    reason: "indices and draw counts are u32",
+    };
+    validate::check_representation(b, representation)?;
+    Ok(representation)
+}
+
+fn batch_scalar(b: usize, f: &Fields<'_>) -> Result<ScalarType, Problem> {
+    use layout::batch as bf;
+    let scale = f.f32(bf::SCALE);
+    let scalar = match f.u32(bf::SCALAR) {
+        layout::SCALAR_F32 => {
+            if scale != 1.0 {
+                return Err(Problem::Invalid {
+                    what: format!("batch {b}: f32 batch with scale {scale}"),
+                    reason: "f32 batches store scale 1".into(),
                 });
             }
+            ScalarType::F32
         }
-        if !index_count.is_multiple_of(3) {
-            return Err(Problem::NotTriangles {
-                batch: b,
-                count: index_count,
-            });
+        layout::SCALAR_F16 => ScalarType::F16 { scale },
+        code => {
+            return Err(Problem::UnknownCode {
+                field: format!("batch {b}: scalar type"),
+                code,
+            })
         }
-        let refs = [
-            (
-                bf::VERTICES_SECTION,
-                Role::Vertices(b),
-                layout::SECTION_VERTICES,
-            ),
-            (
-                bf::COEFFICIENTS_SECTION,
-                Role::Coefficients(b),
-                layout::SECTION_COEFFICIENTS,
-            ),
-            (
-                bf::INDICES_SECTION,
-                Role::Indices(b),
-                layout::SECTION_INDICES,
-            ),
-        ];
-        let mut indices = [0usize; 3];
-        for (k, (at, role, kind)) in refs.into_iter().enumerate() {
-            let index = f.u32(at);
-            claim(&mut sections, index, role, kind)?;
-            indices[k] = index as usize;
-        }
-        batches.push(BatchInfo {
-            representation,
-            scalar,
-            // Both fit: checked against MAX_COUNT = u32::MAX above.
-            vertex_count: vertex_count as u32,
-            index_count: index_count as u32,
-            frame_convention,
-            basis_convention,
-        });
-        batch_sections.push(indices);
-    }
-    if !newer {
-        if let Some(i) = sections.roles.iter().position(|r| *r == Role::Unused) {
-            return Err(Problem::UnusedSection {
-                index: i as u32,
-                kind_name: layout::section_kind_name(sections.entries[i].kind),
-            });
-        }
-    }
+    };
+    validate::check_scalar(b, scalar)?;
+    Ok(scalar)
+}
 
-    // 4. Section placement: aligned, inside the file, after the metadata, disjoint,
-    //    with zero padding between.
+/// `(frame_convention, basis_convention)`: the only ones version 1 defines.
+fn batch_conventions(
+    b: usize,
+    f: &Fields<'_>,
+    representation: Representation,
+) -> Result<(u32, u32), Problem> {
+    use layout::batch as bf;
+    let frame_convention = f.u32(bf::FRAME_CONVENTION);
+    if frame_convention != layout::FRAME_POLYGON_NTB {
+        return Err(Problem::UnknownCode {
+            field: format!("batch {b}: frame convention"),
+            code: frame_convention,
+        });
+    }
+    let basis_convention = f.u32(bf::BASIS_CONVENTION);
+    if basis_convention != layout::basis_convention(representation) {
+        return Err(Problem::UnknownCode {
+            field: format!(
+                "batch {b}: basis convention for {}",
+                match representation {
+                    Representation::Sh { .. } => "spherical harmonics",
+                    Representation::Cube { .. } => "a global cube",
+                }
+            ),
+            code: basis_convention,
+        });
+    }
+    Ok((frame_convention, basis_convention))
+}
+
+/// `(vertex_count, index_count)`, u64 on disk, at most [`layout::MAX_COUNT`], and
+/// the indices a whole number of triangles.
+fn batch_counts(b: usize, f: &Fields<'_>) -> Result<(u32, u32), Problem> {
+    use layout::batch as bf;
+    let vertex_count = f.u64(bf::VERTEX_COUNT);
+    let index_count = f.u64(bf::INDEX_COUNT);
+    for (what, count) in [("vertex count", vertex_count), ("index count", index_count)] {
+        if count > layout::MAX_COUNT {
+            return Err(Problem::TooLarge {
+                what: format!("batch {b}: {what}"),
+                value: count,
+                limit: layout::MAX_COUNT,
+                reason: "indices and draw counts are u32",
+            });
+        }
+    }
+    if !index_count.is_multiple_of(3) {
+        return Err(Problem::NotTriangles {
+            batch: b,
+            count: index_count,
+        });
+    }
+    // Both fit: checked against MAX_COUNT = u32::MAX above.
+    Ok((vertex_count as u32, index_count as u32))
+}
+
+/// A version-1.0 file uses every section it lists.
+fn check_every_section_used(sections: &Sections) -> Result<(), Problem> {
+    match sections.roles.iter().position(|r| *r == Role::Unused) {
+        Some(i) => Err(Problem::UnusedSection {
+            index: i as u32,
+            kind_name: layout::section_kind_name(sections.entries[i].kind),
+        }),
+        None => Ok(()),
+    }
+}
+
+/// Stage 4, placement: every section aligned, inside the file (summed in u128),
+/// after the metadata, disjoint from the others, with zero padding between.
+fn check_placement(bytes: &[u8], metadata_len: u64, sections: &Sections) -> Result<(), Problem> {
+    let len = bytes.len() as u64;
     for (i, e) in sections.entries.iter().enumerate() {
         if e.offset % layout::SECTION_ALIGN != 0 {
             return Err(Problem::Misaligned {
@@ -601,10 +746,17 @@ fn parse_checking(bytes: &[u8], batch_checksums: bool) -> Result<Parsed, Problem
         cursor = e.offset + e.length;
         previous = Some(i);
     }
-    check_zero(bytes, cursor, len)?;
+    check_zero(bytes, cursor, len)
+}
 
-    // Counts against section lengths.
-    for (b, (info, refs)) in batches.iter().zip(&batch_sections).enumerate() {
+/// Stage 4, sizes: each batch's vertex, coefficient and index counts against the
+/// lengths of the sections it claims (in u128).
+fn check_section_sizes(
+    batches: &[BatchInfo],
+    batch_sections: &[[usize; 3]],
+    sections: &Sections,
+) -> Result<(), Problem> {
+    for (b, (info, refs)) in batches.iter().zip(batch_sections).enumerate() {
         let vertex_count = u64::from(info.vertex_count);
         let per_channel = info.coefficients_per_channel();
         let expectations = [
@@ -637,8 +789,16 @@ fn parse_checking(bytes: &[u8], batch_checksums: bool) -> Result<Parsed, Problem
             }
         }
     }
+    Ok(())
+}
 
-    // 5. Section checksums, then content.
+/// Stage 5, first part: every section's CRC (the batches' sections only if
+/// `batch_checksums`; see [`parse_checking`]).
+fn check_checksums(
+    bytes: &[u8],
+    sections: &Sections,
+    batch_checksums: bool,
+) -> Result<(), Problem> {
     for (i, e) in sections.entries.iter().enumerate() {
         let deferred = matches!(
             sections.roles[i],
@@ -656,32 +816,17 @@ fn parse_checking(bytes: &[u8], batch_checksums: bool) -> Result<Parsed, Problem
             });
         }
     }
-    let settings_index = hb.u32(hf::SETTINGS_SECTION) as usize;
-    header.settings_json = std::str::from_utf8(&bytes[sections.range(settings_index)])
+    Ok(())
+}
+
+/// Stage 5, the settings section's text (it must be UTF-8).
+fn settings_text(bytes: &[u8], sections: &Sections, index: usize) -> Result<String, Problem> {
+    std::str::from_utf8(&bytes[sections.range(index)])
+        .map(str::to_string)
         .map_err(|e| Problem::Invalid {
-            what: sections.name(settings_index),
+            what: sections.name(index),
             reason: format!("the settings are not UTF-8 text: {e}"),
-        })?
-        .to_string();
-
-    let mut ranges = Vec::with_capacity(batches.len());
-    for (b, (info, refs)) in batches.iter().zip(&batch_sections).enumerate() {
-        let range = [
-            sections.range(refs[0]),
-            sections.range(refs[1]),
-            sections.range(refs[2]),
-        ];
-        check_content(b, info, bytes, &range)?;
-        ranges.push(range);
-    }
-
-    Ok(Parsed {
-        version: (major, minor),
-        file_len: len,
-        header,
-        batches,
-        ranges,
-    })
+        })
 }
 
 fn check_zero(bytes: &[u8], from: u64, to: u64) -> Result<(), Problem> {
@@ -709,18 +854,24 @@ fn vertex_at(chunk: &[u8]) -> Vertex {
     }
 }
 
+/// Stage 5, content of one batch: finite values, orthonormal frames, positions
+/// inside the header bounds (within `slack`), indices below the vertex count.
 fn check_content(
     b: usize,
     info: &BatchInfo,
     bytes: &[u8],
     ranges: &[Range<usize>; 3],
+    header: &Header,
+    slack: f32,
 ) -> Result<(), Problem> {
     let [vertices, coefficients, indices] = ranges;
     for (v, chunk) in bytes[vertices.clone()]
         .chunks_exact(layout::VERTEX_LEN)
         .enumerate()
     {
-        validate::check_vertex(b, v as u64, &vertex_at(chunk))?;
+        let vertex = vertex_at(chunk);
+        validate::check_vertex(b, v as u64, &vertex)?;
+        validate::check_in_bounds(b, v as u64, vertex.position, header, slack)?;
     }
     let coefficient_bytes = &bytes[coefficients.clone()];
     let bad = match info.scalar {

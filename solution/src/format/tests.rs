@@ -326,13 +326,19 @@ fn counts_near_2_pow_40_are_refused_before_allocating() {
     }
     let p = problem(&patch(&bytes, pf::METADATA_LENGTH, &big.to_le_bytes()));
     assert!(matches!(p, Problem::OutOfBounds { .. }), "{p}");
-    // An absurd SH order with the vertex count unchanged.
-    let p = problem(&patch(
-        &bytes,
-        batch_at(1) + bf::REPRESENTATION_PARAMETER,
-        &u32::MAX.to_le_bytes(),
-    ));
-    assert!(matches!(p, Problem::TooLarge { .. }), "{p}");
+    // An absurd SH order with the vertex count unchanged, and the first order
+    // above the one limit that settings, writer and reader share.
+    for order in [u32::MAX, MAX_SH_ORDER + 1] {
+        let p = problem(&patch(
+            &bytes,
+            batch_at(1) + bf::REPRESENTATION_PARAMETER,
+            &order.to_le_bytes(),
+        ));
+        assert!(
+            matches!(p, Problem::TooLarge { limit, .. } if limit == u64::from(MAX_SH_ORDER)),
+            "{p}"
+        );
+    }
 }
 
 #[test]
@@ -571,6 +577,13 @@ fn writer_refuses_invalid_solutions() {
         ("units", |s| s.header.units_per_metre = 0.0),
         ("fov", |s| s.header.camera.fov_y_deg = 180.0),
         ("bounds", |s| s.header.bounds_min[0] = 1e9),
+        ("vertex outside the bounds", |s| {
+            s.header.bounds_max[0] = 2.5
+        }),
+        ("camera image size", |s| s.header.camera.width = 100_000),
+        ("camera field of view", |s| {
+            s.header.camera.fov_y_deg = 179.5
+        }),
         ("unshot NaN", |s| s.header.stats.unshot_fraction = f64::NAN),
         ("cube directions", |s| {
             s.batches[2].representation = Representation::Cube { directions: 7 }
@@ -580,7 +593,7 @@ fn writer_refuses_invalid_solutions() {
         }),
         ("SH order", |s| {
             s.batches[0].representation = Representation::Sh {
-                order: layout::MAX_SH_ORDER + 1,
+                order: MAX_SH_ORDER + 1,
             }
         }),
     ];

@@ -1,9 +1,12 @@
 //! Value checks shared by the writer (which refuses to write an invalid solution)
 //! and the reader (which refuses to return one), so both sides enforce one contract.
 
+use super::error::FormatError;
 use super::error::Problem;
 use super::layout::{MAX_CUBE_RESOLUTION, MAX_SH_ORDER};
+use super::read::BatchInfo;
 use super::{Header, Representation, ScalarType, Vertex};
+use std::path::Path;
 
 /// How far from unit length the stored normal and tangent, and how far from zero
 /// their dot product, may be. A vector normalized in f32 is within about 1e-7 of
@@ -41,8 +44,9 @@ fn non_negative_finite(what: &str, v: f64) -> Result<(), Problem> {
     Ok(())
 }
 
-/// Checks every header value: finite numbers, a positive scale, a usable camera,
-/// ordered bounds, non-negative statistics.
+/// Checks every header value: finite numbers, a positive scale, a camera that
+/// [`Camera::validate`](crate::camera::Camera::validate) accepts, ordered bounds,
+/// non-negative statistics.
 pub fn check_header(h: &Header) -> Result<(), Problem> {
     if !(h.units_per_metre.is_finite() && h.units_per_metre > 0.0) {
         return Err(Problem::Invalid {
@@ -51,34 +55,12 @@ pub fn check_header(h: &Header) -> Result<(), Problem> {
         });
     }
     finite3("header: recentre_offset", h.recentre_offset)?;
-    let cam = &h.camera;
-    finite3("header: camera eye", cam.eye)?;
-    finite3("header: camera target", cam.target)?;
-    finite3("header: camera up", cam.up)?;
-    if cam.eye == cam.target {
-        return Err(Problem::Invalid {
-            what: format!("header: camera eye and target are both {:?}", cam.eye),
-            reason: "the view direction is undefined".into(),
-        });
-    }
-    if cam.up == [0.0; 3] {
-        return Err(Problem::Invalid {
-            what: "header: camera up is the zero vector".into(),
-            reason: "the camera's roll is undefined".into(),
-        });
-    }
-    if !(cam.fov_y_deg.is_finite() && cam.fov_y_deg > 0.0 && cam.fov_y_deg < 180.0) {
-        return Err(Problem::Invalid {
-            what: format!("header: camera fov_y_deg is {}", cam.fov_y_deg),
-            reason: "it must lie strictly between 0 and 180 degrees".into(),
-        });
-    }
-    if cam.width == 0 || cam.height == 0 {
-        return Err(Problem::Invalid {
-            what: format!("header: camera image is {}x{}", cam.width, cam.height),
-            reason: "both sides must be at least one pixel".into(),
-        });
-    }
+    // The header camera obeys the same rules as every other camera in the project
+    // (the solver's scene config, the display file, `--camera` flags).
+    h.camera.validate().map_err(|e| Problem::Invalid {
+        what: format!("header: camera {:?}", h.camera),
+        reason: e.to_string(),
+    })?;
     finite3("header: bounds_min", h.bounds_min)?;
     finite3("header: bounds_max", h.bounds_max)?;
     if (0..3).any(|k| h.bounds_min[k] > h.bounds_max[k]) {
@@ -109,7 +91,7 @@ pub fn check_representation(batch: usize, r: Representation) -> Result<(), Probl
                     what: format!("batch {batch}: SH order"),
                     value: order.into(),
                     limit: MAX_SH_ORDER.into(),
-                    reason: "no lobe in the design notes needs more (α = 0.02 needs about 100)",
+                    reason: "f32 evaluation error and shader cost grow as (L + 1)² (see format::MAX_SH_ORDER)",
                 });
             }
         }
@@ -183,6 +165,103 @@ pub fn check_vertex(batch: usize, index: u64, v: &Vertex) -> Result<(), Problem>
     Ok(())
 }
 
+/// How far outside the header bounds a vertex may lie, relative to the bounds'
+/// largest coordinate magnitude: 4 f32 ulps (4 · 2⁻²³ ≈ 4.8e-7). The solver takes
+/// the bounds from the stored f32 positions themselves, so they hold exactly; a
+/// writer that computes them in f64 and rounds once is off by at most one ulp of
+/// the largest coordinate. Anything further out is a header that does not describe
+/// its vertices (the runtime places its camera and walk limits by the bounds).
+pub const BOUNDS_RELATIVE_SLACK: f32 = 4.0 * f32::EPSILON;
+
+/// The absolute slack [`check_in_bounds`] allows for these bounds.
+pub fn bounds_slack(h: &Header) -> f32 {
+    let scale = h
+        .bounds_min
+        .iter()
+        .chain(&h.bounds_max)
+        .fold(0.0f32, |m, x| m.max(x.abs()));
+    BOUNDS_RELATIVE_SLACK * scale
+}
+
+/// Checks that a vertex position lies inside the header bounds, within `slack`
+/// (from [`bounds_slack`]) on every axis.
+pub fn check_in_bounds(
+    batch: usize,
+    index: u64,
+    position: [f32; 3],
+    h: &Header,
+    slack: f32,
+) -> Result<(), Problem> {
+    let inside = (0..3)
+        .all(|k| position[k] >= h.bounds_min[k] - slack && position[k] <= h.bounds_max[k] + slack);
+    if inside {
+        Ok(())
+    } else {
+        Err(Problem::Invalid {
+            what: format!(
+                "batch {batch}: vertex {index} position {position:?} lies outside the header bounds {:?}..{:?}",
+                h.bounds_min, h.bounds_max
+            ),
+            reason: format!(
+                "every vertex must lie inside the bounds (slack {slack:e}, {BOUNDS_RELATIVE_SLACK:e} of the largest coordinate)"
+            ),
+        })
+    }
+}
+
+/// Basis terms one vertex of this batch costs per view, as `runtime bench`
+/// counts them: (L + 1)² for SH order L, the 4 bilinear taps of a global-cube
+/// lookup (whatever its direction count D).
+pub fn terms_per_vertex(representation: Representation) -> u64 {
+    match representation {
+        Representation::Sh { .. } => representation.coefficients_per_channel(),
+        Representation::Cube { .. } => 4,
+    }
+}
+
+/// The per-frame cost of a file: Σ over batches of vertices × [`terms_per_vertex`],
+/// per view (a stereo frame costs twice this). Saturates rather than wraps.
+pub fn frame_cost(batches: &[BatchInfo]) -> u64 {
+    batches.iter().fold(0u64, |sum, b| {
+        sum.saturating_add(
+            u64::from(b.vertex_count).saturating_mul(terms_per_vertex(b.representation)),
+        )
+    })
+}
+
+/// The default bound on [`frame_cost`]: 10⁸ basis terms per view.
+///
+/// Measured basis (docs/benchmarks.md, "Runtime"): `runtime bench` on lavapipe,
+/// the slowest device the project renders on, sustained 7.1e6 basis terms/s on a
+/// frame-bound scene (glossy L = 8, N = 52, no MSAA), a lower bound on its shader
+/// throughput. At that rate a file at the bound takes at most 14 s per view there,
+/// the longest a frame may take and still serve `bench` and `screenshot` as checks;
+/// a hardware GPU evaluates basis terms at least a thousand times faster. A
+/// 1M-triangle diffuse scene (about 10⁶ vertices at L = 0, one term each) costs 1%
+/// of the bound; 20,000 vertices at the largest order [`super::MAX_SH_ORDER`]
+/// (4,225 terms) cost 85%. Larger files are refused unless the user raises the
+/// bound with `--max-frame-cost` (see [`check_frame_cost`]).
+pub const DEFAULT_MAX_FRAME_COST: u64 = 100_000_000;
+
+/// The command-line flag that overrides [`DEFAULT_MAX_FRAME_COST`].
+pub const MAX_FRAME_COST_FLAG: &str = "--max-frame-cost";
+
+/// Refuses a file whose [`frame_cost`] exceeds `limit`. The reader does not call
+/// this itself: the runtime does, with the limit its `--max-frame-cost` flag sets.
+pub fn check_frame_cost(path: &Path, cost: u64, limit: u64) -> Result<(), FormatError> {
+    if cost <= limit {
+        return Ok(());
+    }
+    Err(FormatError::in_file(
+        path,
+        Problem::FrameCost {
+            cost,
+            limit,
+            flag: MAX_FRAME_COST_FLAG,
+        },
+    ))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -225,5 +304,81 @@ mod tests {
             check_vertex(0, 0, &nan),
             Err(Problem::NonFinite { .. })
         ));
+    }
+
+    fn info(representation: Representation, vertex_count: u32) -> BatchInfo {
+        BatchInfo {
+            representation,
+            scalar: ScalarType::F32,
+            vertex_count,
+            index_count: 0,
+            frame_convention: super::super::layout::FRAME_POLYGON_NTB,
+            basis_convention: super::super::layout::basis_convention(representation),
+        }
+    }
+
+    #[test]
+    fn frame_cost_counts_terms_per_vertex_per_view() {
+        let diffuse = info(Representation::Sh { order: 0 }, 1_000_000);
+        let glossy = info(
+            Representation::Sh {
+                order: MAX_SH_ORDER,
+            },
+            1000,
+        );
+        let cube = info(Representation::Cube { directions: 864 }, 500);
+        // 10⁶ · 1 + 1000 · 65² + 500 · 4 (the cube's four bilinear taps).
+        assert_eq!(
+            frame_cost(&[diffuse, glossy, cube]),
+            1_000_000 + 4_225_000 + 2000
+        );
+        assert_eq!(frame_cost(&[]), 0);
+        // A hostile table cannot wrap the sum.
+        let huge = info(Representation::Sh { order: u32::MAX }, u32::MAX);
+        assert_eq!(frame_cost(&[huge, huge]), u64::MAX);
+    }
+
+    #[test]
+    fn default_frame_cost_admits_a_million_triangle_diffuse_scene() {
+        let path = Path::new("scene.sol");
+        // A 1M-triangle mesh has about 0.5-1M vertices; allow 1M at L = 0 with a
+        // factor of 10 to spare.
+        let diffuse = info(Representation::Sh { order: 0 }, 1_000_000);
+        assert!(10 * frame_cost(&[diffuse]) <= DEFAULT_MAX_FRAME_COST);
+        check_frame_cost(path, frame_cost(&[diffuse]), DEFAULT_MAX_FRAME_COST).unwrap();
+        // 24,000 vertices at the largest order cost 101.4M terms: refused.
+        let glossy = info(
+            Representation::Sh {
+                order: MAX_SH_ORDER,
+            },
+            24_000,
+        );
+        let err = check_frame_cost(path, frame_cost(&[glossy]), DEFAULT_MAX_FRAME_COST)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.starts_with("scene.sol: the per-frame cost is 101400000 basis terms per view"),
+            "{err}"
+        );
+        assert!(err.contains("above the limit of 100000000"), "{err}");
+        assert!(err.contains("--max-frame-cost"), "{err}");
+    }
+
+    #[test]
+    fn vertices_must_lie_inside_the_bounds_within_the_slack() {
+        let header = crate::format::tests::sample_solution().header;
+        let slack = bounds_slack(&header);
+        // The largest coordinate magnitude is 279.6: 4 ulps of it.
+        assert_eq!(slack, 279.6 * BOUNDS_RELATIVE_SLACK);
+        let edge = header.bounds_max;
+        assert!(check_in_bounds(0, 0, edge, &header, slack).is_ok());
+        let just_out = [edge[0] + 0.5 * slack, edge[1], edge[2]];
+        assert!(check_in_bounds(0, 0, just_out, &header, slack).is_ok());
+        let out = [edge[0], edge[1], edge[2] + 1e-3];
+        let err = check_in_bounds(2, 7, out, &header, slack).unwrap_err();
+        assert!(
+            err.to_string().starts_with("batch 2: vertex 7 position"),
+            "{err}"
+        );
     }
 }

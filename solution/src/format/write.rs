@@ -3,8 +3,8 @@
 //! The layout is planned from the counts alone, so sections are streamed in
 //! chunks (no second copy of the coefficients in memory) and the metadata, whose
 //! section checksums are only known at the end, is written last over a zeroed
-//! placeholder. [`write_solution`] does this in a temporary file beside the target
-//! and renames it into place.
+//! placeholder. [`write_solution`] does this through the atomic writer
+//! ([`crate::atomic`]).
 
 use super::error::{FormatError, Problem};
 use super::layout::{self, FieldsMut};
@@ -87,11 +87,11 @@ pub(crate) fn encode_with(
     Ok(out.into_inner())
 }
 
-/// Writes `solution` to `path` atomically: the bytes go to a new temporary file in
-/// the same directory, which is flushed to disk (fsync) and then renamed over
-/// `path`, so a crash or a full disk never leaves a partial file under the final
-/// name, and a reader that has the old file mapped keeps its (unchanged) inode.
-/// An invalid solution is refused before any file is created.
+/// Writes `solution` to `path` atomically ([`crate::atomic::write_atomically`]: a
+/// temporary file in the same directory, fsync, rename, directory fsync), so a
+/// crash or a full disk never leaves a partial file under the final name, and a
+/// reader that has the old file mapped keeps its (unchanged) inode. An invalid
+/// solution is refused before any file is created.
 pub fn write_solution(path: &Path, solution: &Solution) -> Result<(), FormatError> {
     write_solution_with(path, solution, &EncodeOptions::default())
 }
@@ -103,77 +103,12 @@ pub(crate) fn write_solution_with(
 ) -> Result<(), FormatError> {
     check_solution(solution).map_err(|p| FormatError::in_file(path, p))?;
     let plan = plan(solution, options).map_err(|p| FormatError::in_file(path, p))?;
-    let Some(file_name) = path.file_name() else {
-        return Err(FormatError::in_file(
-            path,
-            Problem::Invalid {
-                what: "the output path".into(),
-                reason: "it does not name a file".into(),
-            },
-        ));
-    };
-    let dir = match path.parent() {
-        Some(parent) if !parent.as_os_str().is_empty() => parent.to_path_buf(),
-        _ => PathBuf::from("."),
-    };
-    let temp = dir.join(temp_name(file_name));
-    let file = std::fs::OpenOptions::new()
-        .write(true)
-        .create_new(true)
-        .open(&temp)
-        .map_err(|e| FormatError::io("create the temporary file", &temp, e))?;
-    let result = (|| {
+    crate::atomic::write_atomically(path, |file| {
         let mut writer = std::io::BufWriter::with_capacity(1 << 20, file);
-        write_planned(&mut writer, solution, &plan, options)
-            .map_err(|e| FormatError::io("write", &temp, e))?;
-        let file = writer
-            .into_inner()
-            .map_err(|e| FormatError::io("write", &temp, e.into_error()))?;
-        file.sync_all()
-            .map_err(|e| FormatError::io("flush to disk", &temp, e))?;
-        drop(file);
-        std::fs::rename(&temp, path).map_err(|e| FormatError::io("rename into place", path, e))
-    })();
-    if result.is_err() {
-        // Best effort: the error being returned is the one worth reporting.
-        let _ = std::fs::remove_file(&temp);
-        return result;
-    }
-    sync_directory(&dir);
-    Ok(())
-}
-
-/// A name no other writer uses at the same time: hidden, with the process id, a
-/// per-process counter and the clock, so concurrent writers (threads or processes)
-/// never share a temporary file.
-fn temp_name(file_name: &std::ffi::OsStr) -> std::ffi::OsString {
-    use std::sync::atomic::{AtomicU64, Ordering};
-    static COUNTER: AtomicU64 = AtomicU64::new(0);
-    let nanos = std::time::SystemTime::now()
-        .duration_since(std::time::UNIX_EPOCH)
-        .map(|d| d.subsec_nanos())
-        .unwrap_or(0);
-    let mut name = std::ffi::OsString::from(".");
-    name.push(file_name);
-    name.push(format!(
-        ".{}.{}.{}.tmp",
-        std::process::id(),
-        COUNTER.fetch_add(1, Ordering::Relaxed),
-        nanos
-    ));
-    name
-}
-
-/// Makes the rename itself durable (POSIX: the directory entry lives in the
-/// directory's data). Failure only weakens durability after a power cut, not
-/// atomicity, so it is not reported.
-fn sync_directory(dir: &Path) {
-    #[cfg(unix)]
-    if let Ok(d) = std::fs::File::open(dir) {
-        let _ = d.sync_all();
-    }
-    #[cfg(not(unix))]
-    let _ = dir;
+        write_planned(&mut writer, solution, &plan, options)?;
+        writer.flush()
+    })
+    .map_err(|e| FormatError::io(e.action, &e.path, e.source))
 }
 
 /// The power-of-two f16 scale that maps the largest magnitude in `values` to at
@@ -200,11 +135,17 @@ pub fn f16_scale_for(values: &[f32]) -> f32 {
 /// Checks everything the format requires of a solution: valid header values,
 /// counts that fit version 1, `coefficients.len() == vertices × coefficients per
 /// channel × 3`, whole triangles with indices below the vertex count, finite
-/// values, orthonormal frames, and f16 coefficients inside the half range.
+/// values, orthonormal frames, every vertex inside the header bounds, and f16
+/// coefficients inside the half range.
 pub fn check_solution(solution: &Solution) -> Result<(), Problem> {
-    validate::check_header(&solution.header)?;
+    let header = &solution.header;
+    validate::check_header(header)?;
+    let slack = validate::bounds_slack(header);
     for (b, batch) in solution.batches.iter().enumerate() {
         check_batch(b, batch)?;
+        for (v, vertex) in batch.vertices.iter().enumerate() {
+            validate::check_in_bounds(b, v as u64, vertex.position, header, slack)?;
+        }
     }
     Ok(())
 }

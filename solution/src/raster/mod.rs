@@ -12,7 +12,7 @@
 //!    [`RenderOptions::max_order`] (the first `(L'+1)²` coefficients of each
 //!    channel). Negative radiance (ringing of a truncated expansion) is clamped to
 //!    0 per vertex, before interpolation, unless [`RenderOptions::clamp_negative`]
-//!    is off. Discrete-direction (001's global cube) batches are looked up toward
+//!    is off. Discrete-direction (Immel, Cohen and Greenberg's (1986) global cube) batches are looked up toward
 //!    the same local direction by [`crate::cube::eval_rgb`] (bilinear between the
 //!    four nearest cell centres of the face the direction leaves through; the
 //!    order cap does not apply to them), and clamped the same way.
@@ -433,7 +433,7 @@ pub fn shade_vertices(
 enum Lookup {
     /// Spherical harmonics up to this (possibly capped) order.
     Sh { order: u32 },
-    /// 001's global cube with `resolution` cells along a face edge.
+    /// Immel, Cohen and Greenberg's (1986) global cube with `resolution` cells along a face edge.
     Cube { resolution: u32 },
 }
 

@@ -19,7 +19,7 @@
 //! Y_lm = √2 · P̄_l|m|(cos θ) · sin(|m|φ) m < 0
 //! ```
 //!
-//! **How it is computed.** 000 (App. G) builds `Y_lm` from factorial ratios
+//! **How it is computed.** Remington 1992 (App. G) builds `Y_lm` from factorial ratios
 //! `d_lm = 2(l−m)!/(l+m)!`, which overflow f32 at 35! and f64 at 171!. Here the
 //! normalisation is folded into the recurrences instead, and the factor `sin^m θ` is
 //! kept together with `e^{imφ}` as `(x + iy)^m = sin^m θ · e^{imφ}`, so that
@@ -420,7 +420,7 @@ pub fn orthonormal_frame(normal: DVec3, tangent: DVec3) -> Option<(DVec3, DVec3)
 /// out[index(l, m)] = zonal[l] · √(4π/(2l+1)) · Y_lm(axis)
 /// ```
 ///
-/// For the glossy lobe `g(μ0) = Σ a_l P_l(μ0)` (000 eq. 4.4) the zonal coefficients
+/// For the glossy lobe `g(μ0) = Σ a_l P_l(μ0)` (Remington 1992, eq. 4.4) the zonal coefficients
 /// are `zonal[l] = a_l · √(4π/(2l+1))`, so `out = a_l · 4π/(2l+1) · Y_lm(r)`, the
 /// design notes' `c_lm += ΔE · C_R · a_l · 4π/(2l+1) · Y_lm(r)` once scaled by
 /// `ΔE · C_R`. Degrees beyond `zonal.len()` get 0. Overwrites `out[..count]`.

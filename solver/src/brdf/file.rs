@@ -1,4 +1,4 @@
-//! Reflectance files (000 App. F): the Legendre coefficients of one material's lobe.
+//! Reflectance files (Remington 1992, App. F): the Legendre coefficients of one material's lobe.
 //!
 //! ```text
 //! lval <L> Ks <Ks> Kd <Kd>
@@ -9,13 +9,12 @@
 //! ```
 //!
 //! Line 1 is the header, then exactly L + 1 lines with one number each. Blank lines
-//! and lines starting with `#` are ignored (an extension: 000's files have none), so
+//! and lines starting with `#` are ignored (an extension: Remington's (1992) files have none), so
 //! that a file can carry the α it was made from. Every error names the file, the
 //! line and the offending text.
 
 use super::BrdfError;
-use std::io::Write;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// Largest `lval` accepted: checked before anything sized by it is allocated.
 /// (L = 4096 is already a lobe of α ≈ 0.002; see `brdf::MIN_ALPHA`.)
@@ -28,7 +27,7 @@ pub struct ReflectanceFile {
     pub order: u32,
     pub ks: f64,
     pub kd: f64,
-    /// `a_0 … a_L` (000 eq. 4.4).
+    /// `a_0 … a_L` (Remington 1992, eq. 4.4).
     pub coefficients: Vec<f64>,
 }
 
@@ -159,8 +158,8 @@ pub fn format_reflectance(file: &ReflectanceFile) -> String {
     s
 }
 
-/// Writes a reflectance file atomically: a temporary file in the same folder,
-/// flushed to disk, then renamed over `path`, so a crash never leaves a half file.
+/// Writes a reflectance file atomically ([`solution::atomic::write_atomically`]),
+/// so a crash never leaves a half file.
 /// `file.coefficients.len()` must be `order + 1` (checked).
 pub fn write_reflectance_file(path: &Path, file: &ReflectanceFile) -> Result<(), BrdfError> {
     let io = |source| BrdfError::Io {
@@ -178,23 +177,6 @@ pub fn write_reflectance_file(path: &Path, file: &ReflectanceFile) -> Result<(),
             ),
         )));
     }
-    let dir = path
-        .parent()
-        .filter(|p| !p.as_os_str().is_empty())
-        .unwrap_or(Path::new("."));
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    let tmp: PathBuf = dir.join(format!(".{name}.tmp-{}", std::process::id()));
-    let result = (|| {
-        let mut f = std::fs::File::create(&tmp)?;
-        f.write_all(format_reflectance(file).as_bytes())?;
-        f.sync_all()?;
-        std::fs::rename(&tmp, path)
-    })();
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    }
-    result.map_err(io)
+    solution::atomic::write_bytes_atomically(path, format_reflectance(file).as_bytes())
+        .map_err(|e| io(e.source))
 }

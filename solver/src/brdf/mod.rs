@@ -1,10 +1,10 @@
-//! The glossy lobe of 000 chapter 4 and its Legendre expansion (000 eqs. 4.2–4.4,
+//! The glossy lobe of Remington 1992, chapter 4 and its Legendre expansion (Remington 1992, eqs. 4.2–4.4,
 //! App. E–G; design notes, "Directional mode").
 //!
 //! The lobe about the mirror direction r is `g(μ0) = exp(−(1−μ0)/(α²(1+μ0)))`,
-//! `μ0 = ω_o·r`, where α is the RMS surface slope (000 eq. 4.2). It is expanded as
-//! `g ≈ Σ_{l≤L} a_l P_l(μ0)` with `a_l = (2l+1)/2 ∫₋₁¹ g P_l dμ0` (000 eq. 4.4),
-//! which 000 computed with Mathematica (App. E) and this module computes by
+//! `μ0 = ω_o·r`, where α is the RMS surface slope (Remington 1992, eq. 4.2). It is expanded as
+//! `g ≈ Σ_{l≤L} a_l P_l(μ0)` with `a_l = (2l+1)/2 ∫₋₁¹ g P_l dμ0` (Remington 1992, eq. 4.4),
+//! which Remington 1992 computed with Mathematica (App. E) and this module computes by
 //! Gauss–Legendre quadrature ([`legendre_coefficients`]). The order L follows from
 //! α and a relative L2 error target ([`choose_order`]); [`fit_error`] reproduces the
 //! design notes' table. The BRDF is `f_s = C_R(μ_i) · g(ω_o·r)` with `C_R` chosen so
@@ -14,7 +14,7 @@
 //!
 //! Submodules: [`normalization`] (`D_l`, `C_R`, its table and an independent 2-D
 //! quadrature of the exact lobe), [`window`] (ringing remedies and their
-//! measurement), [`file`] (000 App. F reflectance files).
+//! measurement), [`file`] (Remington 1992, App. F reflectance files).
 
 pub mod file;
 pub mod normalization;
@@ -73,7 +73,7 @@ pub fn alpha_from_ns(ns: f64) -> f64 {
     (2.0 / (ns.max(0.0) + 2.0)).sqrt()
 }
 
-/// The lobe `g(μ0) = exp(−(1−μ0)/(α²(1+μ0)))` (000 eq. 4.2), 1 at the mirror
+/// The lobe `g(μ0) = exp(−(1−μ0)/(α²(1+μ0)))` (Remington 1992, eq. 4.2), 1 at the mirror
 /// direction and 0 at μ0 = −1 (its limit). Values of μ0 outside [−1, 1] are clamped.
 pub fn lobe(alpha: f64, mu0: f64) -> f64 {
     let mu0 = mu0.clamp(-1.0, 1.0);
@@ -84,7 +84,7 @@ pub fn lobe(alpha: f64, mu0: f64) -> f64 {
 }
 
 /// The same lobe as a function of the angle θ0 from the mirror direction, using
-/// `(1−μ0)/(1+μ0) = tan²(θ0/2)` (000 eq. G.4), which keeps full relative precision
+/// `(1−μ0)/(1+μ0) = tan²(θ0/2)` (Remington 1992, eq. G.4), which keeps full relative precision
 /// near θ0 = 0 where `1 − cos θ0` would cancel.
 pub fn lobe_of_angle(alpha: f64, theta0: f64) -> f64 {
     if theta0 >= PI {
@@ -155,7 +155,7 @@ fn projections(mu: &[f64], wg: &[f64], max_degree: u32) -> Vec<f64> {
     out
 }
 
-/// Legendre coefficients `a_0 … a_order` of the lobe (000 eq. 4.4):
+/// Legendre coefficients `a_0 … a_order` of the lobe (Remington 1992, eq. 4.4):
 /// `a_l = (2l+1)/2 ∫₋₁¹ g(μ) P_l(μ) dμ`.
 ///
 /// Accuracy: absolute error below ~1e-14 · a_0 · (2l+1) (rounding of the quadrature
@@ -475,8 +475,8 @@ impl GlossyLobe {
 /// the (windowed, truncated) lobe `a` for incidence μ (Funk–Hecke, see
 /// [`normalization`]).
 ///
-/// Why this variant (design notes, "Directional mode"; 001 requires a BRDF to
-/// be reciprocal and to conserve energy, 001 eqs. 13–16): the lobe
+/// Why this variant (design notes, "Directional mode"; Immel, Cohen and Greenberg 1986 requires a BRDF to
+/// be reciprocal and to conserve energy, Immel, Cohen and Greenberg 1986, eqs. 13–16): the lobe
 /// `g(ω_o·r_i)` is already symmetric, since `ω_o·mirror(ω_i) =
 /// ω_i·mirror(ω_o)`; only the thesis's `C_R(μ_i)` breaks reciprocity. Any
 /// normalizer `c(μ_i, μ_o)` symmetric in its arguments restores it; of those:
@@ -484,7 +484,7 @@ impl GlossyLobe {
 /// * the geometric mean `Ks / √(S(μ_i) S(μ_o))` is reciprocal but not bounded:
 ///   toward grazing S falls (the horizon clips the lobe and the cosine weights
 ///   it down) so `1/√S(μ_o)` rises and the albedo exceeds Ks for some
-///   incidences, which breaks 001's other requirement (measured by quadrature
+///   incidences, which breaks Immel, Cohen and Greenberg's (1986) other requirement (measured by quadrature
 ///   of the expansion at target 1e-3: albedo up to 1.097 Ks at α = 1, 1.072 Ks
 ///   at α = 0.3, 1.010 Ks at α = 0.1; a glossy furnace could then exceed
 ///   Le/(1 − ρ));

@@ -1,8 +1,8 @@
 //! The normalization `C_R(μ_i)` that makes the lobe reflect exactly `Ks`
-//! (design notes, "Directional mode"; corrects 000 eq. G.13–G.18).
+//! (design notes, "Directional mode"; corrects Remington 1992, eq. G.13–G.18).
 //!
 //! The reflected fraction for incidence μ_i is `∫_H f_s cos θ_o dω_o`, with the
-//! cosine weight that 000 eq. G.13 leaves out. With `g ≈ Σ a_l P_l(ω_o·r)` and
+//! cosine weight that Remington 1992, eq. G.13 leaves out. With `g ≈ Σ a_l P_l(ω_o·r)` and
 //! `h(t) = t` for t > 0 (0 otherwise), the Funk–Hecke theorem gives
 //! `∫_{S²} P_l(ω·r) h(ω·n) dω = 2π P_l(r·n) ∫₀¹ P_l(t) t dt = 2π D_l P_l(μ_i)`
 //! (r·n = μ_i for the mirror direction), hence
@@ -76,7 +76,7 @@ pub fn hemisphere_integral(a: &[f64], mu_i: f64) -> f64 {
             .sum::<f64>()
 }
 
-/// `C_R(μ_i) = Ks / (2π Σ_l a_l D_l P_l(μ_i))` (design notes; 000 eq. G.18 with the
+/// `C_R(μ_i) = Ks / (2π Σ_l a_l D_l P_l(μ_i))` (design notes; Remington 1992, eq. G.18 with the
 /// cosine weight). `ks` is the lobe's reflectance (1 for the shape alone), `a` the
 /// (windowed) Legendre coefficients actually used. μ_i is clamped to [0, 1].
 ///
@@ -155,7 +155,7 @@ pub(crate) fn exact_hemisphere_integral_with(alpha: f64, mu_i: f64, refine: usiz
             // form: tan²(θ0/2) = (1 − μ0)/(1 + μ0) with 1 − μ0 from a stable sum.
             let one_minus = 2.0 * ((0.5 * (theta - theta_r)).sin().powi(2))
                 + sin_t * sin_r * 2.0 * (0.5 * phi).sin().powi(2);
-            // The lobe g(μ0) of 000 eq. 4.2, written with the stable 1 − μ0.
+            // The lobe g(μ0) of Remington 1992, eq. 4.2, written with the stable 1 − μ0.
             if 1.0 + mu0 <= 0.0 {
                 0.0
             } else {

@@ -1,6 +1,6 @@
 //! How far a normalized lobe is from reciprocal, and what that does to a glossy
-//! furnace (design notes, "Directional mode": 000's per-incidence `C_R(μ_i)` is
-//! not reciprocal, which 001 requires of a BRDF).
+//! furnace (design notes, "Directional mode": Remington's (1992) per-incidence `C_R(μ_i)` is
+//! not reciprocal, which Immel, Cohen and Greenberg 1986 requires of a BRDF).
 //!
 //! The BRDF is `f(ω_i, ω_o) = c(μ_i) · g_L(ω_o·r_i)` with `g_L = Σ_l w_l a_l P_l`
 //! the lobe the solver stores. The lobe factor is symmetric (`ω_o·mirror(ω_i) =
@@ -19,7 +19,7 @@
 //! * the reverse albedo `A(μ_o) = ∫ f cosθ_i dω_i = ∫ c(μ_i) K μ_i dμ_i`: the
 //!   radiance a surface sends toward ω_o per unit of uniform incident radiance,
 //!   i.e. one bounce of a glossy furnace. A reciprocal BRDF has `A = forward
-//!   albedo`; 000's has `A ≠ Ks`, so a furnace of uniform emission is not uniform
+//!   albedo`; Remington's (1992) has `A ≠ Ks`, so a furnace of uniform emission is not uniform
 //!   even though every beam reflects exactly Ks. Its cosine-weighted mean is
 //!   exactly Ks (`∫ A cosθ_o dω_o = ∫ Ks cosθ_i dω_i = π Ks`), checked here too.
 //! * the pointwise reciprocity error `|f_io − f_oi| / ((f_io + f_oi)/2) =

@@ -21,7 +21,7 @@ fn lobe_shape() {
             assert!(d <= tol, "alpha {alpha} theta {theta}: {d:e} > {tol:e}");
         }
     }
-    // 000 eq. 4.1: g = exp(−tan²(θ0/2)/α²); at tan(θ0/2) = α it is 1/e.
+    // Remington 1992, eq. 4.1: g = exp(−tan²(θ0/2)/α²); at tan(θ0/2) = α it is 1/e.
     let alpha: f64 = 0.2;
     let theta = 2.0 * alpha.atan();
     assert!((lobe_of_angle(alpha, theta) - (-1.0f64).exp()).abs() < 1e-15);

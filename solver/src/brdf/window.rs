@@ -1,7 +1,7 @@
 //! Remedies for the ringing of a truncated Legendre lobe, and their measurement.
 //!
 //! A truncated expansion of a peaked lobe oscillates around it and can go negative
-//! (Gibbs). 000 App. G proposes (a) adding a small diffuse component so the sum is
+//! (Gibbs). Remington 1992, App. G proposes (a) adding a small diffuse component so the sum is
 //! positive, or (b) "fixing up" the coefficients. Here (b) is a window `w_l`
 //! applied to `a_l` (σ-factors and friends smooth the truncation at the cost of a
 //! wider lobe), and the renderer may also clamp negative radiance at evaluation.
@@ -76,7 +76,7 @@ pub struct RingingStats {
     pub negative_mass: f64,
     /// Relative L2 error of the clamped lobe `max(0, g_w)` (clamp at evaluation).
     pub clamped_l2_error: f64,
-    /// Relative L2 error of `g_w − min(0, min_value)`: 000 App. G remedy (a), a
+    /// Relative L2 error of `g_w − min(0, min_value)`: Remington 1992, App. G remedy (a), a
     /// constant ("small diffuse") added so that the lobe is nowhere negative.
     pub offset_l2_error: f64,
     /// That constant's share of the lobe's integral, `2·offset / ∫ g_w dμ0`: the

@@ -57,6 +57,12 @@ pub fn run(args: SolveArgs) -> anyhow::Result<ExitCode> {
         }
         None => None,
     };
+    // Refuse out-of-range flags before importing or meshing anything: flags take
+    // precedence over every other source, so an error now is an error in the
+    // final settings. The scene config's own values are checked as it is read,
+    // before its geometry; all are checked again once combined.
+    let no_patch = SettingsPatch::default();
+    resolve_settings(&args, &no_patch, &no_patch, &args.patch())?;
     let options = ImportOptions {
         strict: args.strict,
         units_per_metre: args.units_per_metre,
@@ -329,7 +335,7 @@ fn gauss_seidel(
     Ok(one_call_outcome(result.solution, stats))
 }
 
-/// `--mode directional --directional cube`: 001's global cubes gathered by
+/// `--mode directional --directional cube`: Immel, Cohen and Greenberg's (1986) global cubes gathered by
 /// Gauss-Seidel; one call, no checkpoints (nothing to resume).
 fn cube_solve(
     args: &SolveArgs,

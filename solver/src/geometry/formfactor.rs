@@ -2,10 +2,10 @@
 //! polygon.
 //!
 //! * [`point_to_polygon`]: the exact, unoccluded factor by Lambert's contour
-//!   formula (Baum, Rushmeier and Winget 1989, reference 3 of 000). This is the
+//!   formula (Baum, Rushmeier and Winget 1989, reference 3 of Remington 1992). This is the
 //!   solver's default (design notes, "Form factors"): it stays right near the
-//!   source, where 000's disc approximation gives a room's corner nothing.
-//! * [`wallace`]: 000 eq. 3.1 (after Wallace, Elmquist and Haines 1989), the
+//!   source, where Remington's (1992) disc approximation gives a room's corner nothing.
+//! * [`wallace`]: Remington 1992, eq. 3.1 (after Wallace, Elmquist and Haines 1989), the
 //!   sampled disc approximation with its visibility factors, kept as an option
 //!   to measure against.
 //!
@@ -366,7 +366,7 @@ fn on_plane_limit(p: DVec3, n: DVec3, ns: DVec3, polygon: &[DVec3], tolerance: f
     sum
 }
 
-/// 000 eq. 3.1 (Wallace, Elmquist and Haines 1989), the sampled disc
+/// Remington 1992, eq. 3.1 (Wallace, Elmquist and Haines 1989), the sampled disc
 /// approximation of the form factor from a differential area at `p` (unit
 /// normal `n`) to a source of area `source_area` and unit normal
 /// `source_normal`, sampled at `samples`:

@@ -1,4 +1,4 @@
-//! Hemicube form factors (002, "The Hemicube method"; 001, "The global cube",
+//! Hemicube form factors (radiosity lecture notes, "The Hemicube method"; Immel, Cohen and Greenberg 1986, "The global cube",
 //! after Cohen and Greenberg 1985).
 //!
 //! A hemicube of half-side 1 sits on a point with its top face at height 1 above
@@ -8,23 +8,23 @@
 //! projected onto the five faces with a depth test, so each cell holds the
 //! nearest polygon seen through it (an *item buffer*); the form factor from the
 //! point to a polygon is the sum of the *delta form factors* of the cells that
-//! hold it (002). The five frusta partition the upper hemisphere exactly, so in
+//! hold it (radiosity lecture notes). The five frusta partition the upper hemisphere exactly, so in
 //! a closed scene the factors sum to one.
 //!
 //! ## Delta form factors
 //!
-//! 002 gives the midpoint values ΔF = ΔA / (π (x² + y² + 1)²) on the top face and
+//! The radiosity lecture notes give the midpoint values ΔF = ΔA / (π (x² + y² + 1)²) on the top face and
 //! ΔF = z ΔA / (π (y² + z² + 1)²) on a side. Here each cell's delta form factor
 //! is instead the *exact* factor from the point to the cell, computed once per
 //! resolution by Lambert's contour formula
 //! ([`super::formfactor::point_to_polygon`]). The midpoint values differ from
-//! the exact ones by O(h²) relative (a unit test checks it against 002's
+//! the exact ones by O(h²) relative (a unit test checks it against the radiosity lecture notes'
 //! formulas) and make a closed scene sum to 1 + O(h²); the exact ones sum to
 //! one within f64 rounding, so the only error left is the item buffer's.
 //!
 //! ## Item buffer: rasterised, not ray-cast
 //!
-//! 002 offers both: a ray per cell through its centre (nearest hit), or
+//! The radiosity lecture notes offer both: a ray per cell through its centre (nearest hit), or
 //! projecting each polygon onto the faces with a z-buffer. The polygons are
 //! rasterised here, because
 //! * the answer needed is *which* polygon is nearest, and the solver's
@@ -68,7 +68,7 @@
 //! 2e-4 and 6e-4 at R = 64, 1.3e-5 and 1.5e-4 at R = 256. Callers that build
 //! many hemicubes therefore rotate each one about its normal by a different
 //! angle (the up hint), which turns the grid-aligned bias into noise that
-//! averages out over patches. The aliasing 001 warns about is a different
+//! averages out over patches. The aliasing Immel, Cohen and Greenberg 1986 warns about is a different
 //! thing again: a polygon smaller than a cell may be missed, or counted as a
 //! whole cell; that error shrinks only once the cells are smaller than the
 //! polygon's projection.
@@ -346,7 +346,7 @@ impl Hemicube {
     }
 }
 
-/// 002's midpoint delta form factor of buffer cell `index` at resolution `r`:
+/// The radiosity lecture notes' midpoint delta form factor of buffer cell `index` at resolution `r`:
 /// ΔA / (π (x² + y² + 1)²) on the top face, z ΔA / (π (y² + z² + 1)²) on a side,
 /// at the cell's centre. Kept to check the exact values against.
 pub fn midpoint_delta(resolution: u32, index: usize) -> f64 {

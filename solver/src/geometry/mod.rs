@@ -3,12 +3,12 @@
 //! ray/triangle) and the occlusion BVH that answers visibility rays.
 //!
 //! * [`formfactor`]: the exact unoccluded point-to-polygon form factor (Lambert's
-//!   contour formula, Baum et al. 1989) and 000's sampled disc formula (eq. 3.1),
+//!   contour formula, Baum et al. 1989) and Remington's (1992) sampled disc formula (eq. 3.1),
 //!   kept to measure against (design notes, "Form factors").
-//! * [`hemicube`]: hemicube form factors (002, 001): exact delta form factors
+//! * [`hemicube`]: hemicube form factors (radiosity lecture notes, Immel, Cohen and Greenberg 1986): exact delta form factors
 //!   and a rasterised item buffer with depth, for gathering and shooting.
 //! * [`sampling`]: a small deterministic PRNG whose streams do not depend on the
-//!   thread count, and stratified, jittered points on a convex polygon (000 §6.2).
+//!   thread count, and stratified, jittered points on a convex polygon (Remington 1992, §6.2).
 //! * [`polygon`]: clipping against a plane, triangulation, ray/triangle tests.
 //! * [`visibility`]: [`visibility::Occluder`], an any-hit BVH over the input
 //!   polygons for segment visibility, with a shared-origin packet path.

@@ -1,5 +1,5 @@
 //! Deterministic random numbers and stratified sampling of source polygons
-//! (000 §6.2: "a jittered sampling of the source").
+//! (Remington 1992, §6.2: "a jittered sampling of the source").
 //!
 //! Every random decision in the solver draws from an [`Rng`] created for that
 //! decision's identity (seed, shot, receiving vertex, ...), never from a shared

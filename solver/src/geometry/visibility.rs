@@ -1,5 +1,5 @@
 //! Segment visibility for ray-cast form factors: an any-hit BVH over the scene's
-//! input polygons (000 §3.4: rays are tested against the input polygons, never
+//! input polygons (Remington 1992, §3.4: rays are tested against the input polygons, never
 //! against the hundreds of mesh elements each one becomes).
 //!
 //! **Structure.** The polygons are triangulated and put in a 4-wide BVH
@@ -325,7 +325,7 @@ impl Occluder {
     }
 
     /// Per-target visibility from a shared origin into `out` (cleared first),
-    /// the δ_i of 000 eq. 3.1; the same answers as [`Occluder::visible`].
+    /// the δ_i of Remington 1992, eq. 3.1; the same answers as [`Occluder::visible`].
     pub fn visible_each(&self, origin: DVec3, targets: &[DVec3], out: &mut Vec<bool>) {
         out.clear();
         for chunk in targets.chunks(MAX_PACKET) {

@@ -1,4 +1,4 @@
-//! Meshing for progressive refinement (000 §3.3–3.4): polygons into patches,
+//! Meshing for progressive refinement (Remington 1992, §3.3–3.4): polygons into patches,
 //! patches into quadtrees of elements, with one shared table of vertices.
 //!
 //! * Each input polygon becomes a *surface* with one frame (design notes, "Local
@@ -91,7 +91,7 @@ impl Element {
     }
 }
 
-/// A shooting unit: a user-level subdivision of a polygon (000 §3.3).
+/// A shooting unit: a user-level subdivision of a polygon (Remington 1992, §3.3).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Patch {
     pub surface: u32,
@@ -111,7 +111,7 @@ impl Patch {
 }
 
 /// A vertex created by a split, with the vertices whose average interpolates
-/// the radiance of earlier shots at it (000 §3.3).
+/// the radiance of earlier shots at it (Remington 1992, §3.3).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct NewVertex {
     pub id: u32,

@@ -4,7 +4,7 @@
 //! grid (N × N per polygon) refined by quadtree splits. Positions are integers
 //! over a fixed denominator `D = N · 2^SUBDIVISION_BITS`, so two elements that
 //! meet at a point compute the same key for it, exactly, and share the vertex
-//! (000 §3.4: "it is desirable to only store information for each vertex once").
+//! (Remington 1992, §3.4: "it is desirable to only store information for each vertex once").
 //!
 //! A surface is either one convex quad, parameterised bilinearly by (s, t), or a
 //! set of triangular pieces (a triangle, or the triangulation of any other

@@ -1,5 +1,5 @@
 //! Triangulation of a leaf element together with the T-vertices on its edges
-//! (000 §3.4), so that the displayed mesh has no cracks and no pixel drop.
+//! (Remington 1992, §3.4), so that the displayed mesh has no cracks and no pixel drop.
 //!
 //! A leaf element is convex; the finer neighbours' vertices that lie on its edges
 //! ("hanging" vertices) make some boundary points collinear. The output must use

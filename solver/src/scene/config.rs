@@ -4,14 +4,14 @@
 //! ```toml
 //! geometry = ["cornell_box.obj"]      # OBJ or legacy files, relative to this file
 //! units_per_metre = 1000              # scene units per metre (default 1)
-//! up = "y"                            # viewer's up axis: y, -y, z, -z (000 appendix C)
+//! up = "y"                            # viewer's up axis: y, -y, z, -z (Remington 1992, appendix C)
 //! mode = "diffuse"                    # or "directional" (glossy SH)
-//! display = "cornell_box.display"     # optional 000 appendix A display file
+//! display = "cornell_box.display"     # optional Remington 1992, appendix A display file
 //!
 //! [materials.white]                   # by material name (legacy: "attribute K" or "material N")
 //! kd = [0.725, 0.71, 0.68]            # a number or [r, g, b]
 //! ks = 0.0
-//! alpha = 0.1                         # RMS slope (000 eq. 4.1); overrides MTL Ns
+//! alpha = 0.1                         # RMS slope (Remington 1992, eq. 4.1); overrides MTL Ns
 //! emission = [0, 0, 0]                # emitted radiance, W·sr⁻¹·m⁻²
 //! patches = 4                         # N × N patches for polygons of this material
 //!
@@ -161,6 +161,13 @@ pub(crate) fn load_config(path: &Path) -> Result<ConfigScene, SceneError> {
             e.message().trim().replace('\n', "; "),
         )
     })?;
+    // Out-of-range solver settings are refused now, before any geometry is read.
+    // Every range check is per setting and every preset is in range, so a value
+    // the check refuses on top of the default preset is refused on top of any.
+    if let Some(solver) = &config.solver {
+        crate::settings::SolverSettings::resolve(Default::default(), &[solver.get_ref()])
+            .map_err(|e| err(solver.span(), "[solver]", e.to_string()))?;
+    }
     let dir = path.parent().unwrap_or(Path::new(""));
     // A file named by this config that cannot be read is reported at its line here.
     let reread = |name: &Spanned<String>, key: &str, file: &Path, e: SceneError| match e {

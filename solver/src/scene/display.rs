@@ -1,4 +1,4 @@
-//! The legacy display parameter file of 000 appendix A.
+//! The legacy display parameter file of Remington 1992, appendix A.
 //!
 //! ```text
 //! line 1  comment
@@ -17,12 +17,12 @@
 //! `threshold` (line 9). Lines may not be left out or reordered; blank lines
 //! after line 9 are allowed.
 //!
-//! **Threshold conversion.** 000 stops when the shooting patch's unshot energy,
+//! **Threshold conversion.** Remington 1992 stops when the shooting patch's unshot energy,
 //! as a fraction of the total, times 1000 falls below `a`. This solver stops
 //! when the *total* unshot power falls below `threshold` × total emitted power
 //! (design notes, "Progressive refinement"). The shooting patch holds the most
 //! unshot power, so its share never exceeds the total's: taking
-//! `threshold = a / 1000` stops no earlier than 000 would (the total fraction
+//! `threshold = a / 1000` stops no earlier than Remington 1992 would (the total fraction
 //! below a/1000 implies the shooting patch's is too), i.e. it is the conservative
 //! reading. `a` must lie in (0, 1000).
 
@@ -54,7 +54,7 @@ pub struct DisplayParams {
     pub warnings: Vec<Warning>,
 }
 
-/// Reads a display parameter file (000 appendix A).
+/// Reads a display parameter file (Remington 1992, appendix A).
 pub fn load_display_file(path: &Path) -> Result<DisplayParams, SceneError> {
     let text = read_text(path)?;
     parse_display(path, &text)
@@ -263,7 +263,7 @@ mod tests {
         assert_eq!((d.camera.width, d.camera.height), (512, 512));
         assert_eq!((d.near, d.far, d.diameter), (10.0, 3000.0, 1000.0));
         assert_eq!(d.settings.ambient, Some(true));
-        // 000's "share × 1000" of 5 is a total unshot fraction of 5 / 1000.
+        // Remington's (1992) "share × 1000" of 5 is a total unshot fraction of 5 / 1000.
         assert_eq!(d.settings.threshold, Some(0.005));
         assert!(d.warnings.is_empty());
     }

@@ -1,12 +1,12 @@
-//! The legacy geometry file of 000 appendix B (the "AFIT geom" format with
-//! 000's additions), also accepted with the extension `.geom`.
+//! The legacy geometry file of Remington 1992, appendix B (the "AFIT geom" format with
+//! Remington's (1992) additions), also accepted with the extension `.geom`.
 //!
 //! ```text
 //! line 1   title (free text)
 //! line 2   [ccw] [cw] [purge] [nopurge]           (may be empty or left out)
 //! line 3   points N patches M attributes K        (`polygons` is accepted for `patches`)
 //! N lines  x y z [normal nx ny nz]
-//! M lines  n i1 … in attribute a [patch p]        (000 writes n = 4; 3 or more accepted)
+//! M lines  n i1 … in attribute a [patch p]        (Remington 1992 writes n = 4; 3 or more accepted)
 //! K lines  color r g b [emit r g b] [material m]
 //! ```
 //!
@@ -29,7 +29,7 @@ use super::{SceneError, SourceRef};
 use glam::DVec3;
 use std::path::Path;
 
-/// The largest polygon-line vertex count accepted (000 uses 4).
+/// The largest polygon-line vertex count accepted (Remington 1992 uses 4).
 const MAX_POLYGON_VERTICES: u64 = 1024;
 /// The largest `patch p` accepted (as the solver's `patches` setting).
 pub(crate) const MAX_PATCHES: u32 = 256;
@@ -169,7 +169,7 @@ pub(crate) fn parse_legacy_text(path: &Path, text: &str) -> Result<RawScene, Sce
         let n = parse_count(tokens[0], "vertex count").map_err(&e)?;
         if !(3..=MAX_POLYGON_VERTICES).contains(&n) {
             return Err(e(format!(
-                "vertex count {n} is out of range (3 to {MAX_POLYGON_VERTICES}; 000 writes 4)"
+                "vertex count {n} is out of range (3 to {MAX_POLYGON_VERTICES}; Remington 1992 writes 4)"
             )));
         }
         let n = n as usize;

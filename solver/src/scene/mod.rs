@@ -2,7 +2,7 @@
 //! f64, with the settings that travel into the solution header.
 //!
 //! Importers for OBJ + MTL, the TOML scene config, the legacy geometry file
-//! (000 appendix B) and the display parameter file (000 appendix A) all produce a
+//! (Remington 1992, appendix B) and the display parameter file (Remington 1992, appendix A) all produce a
 //! [`Scene`]. Units: positions in scene units, `emission` is emitted radiance
 //! (W·sr⁻¹·m⁻², linear RGB), `kd`/`ks` are reflectances in [0, 1].
 
@@ -67,7 +67,7 @@ pub struct Material {
     pub kd: DVec3,
     /// Reflectance of the glossy lobe, linear RGB.
     pub ks: DVec3,
-    /// RMS surface slope of the glossy lobe (000 eq. 4.1).
+    /// RMS surface slope of the glossy lobe (Remington 1992, eq. 4.1).
     pub alpha: f64,
     /// Emitted radiance, linear RGB, one-sided toward the polygon normal.
     pub emission: DVec3,
@@ -91,7 +91,7 @@ pub struct Polygon {
     pub vertex_normals: Option<Vec<DVec3>>,
     /// Index into [`Scene::materials`].
     pub material: usize,
-    /// User-set patch subdivision (000 appendix B `patch N`): N × N patches.
+    /// User-set patch subdivision (Remington 1992, appendix B `patch N`): N × N patches.
     pub patches: u32,
     pub source: SourceRef,
 }
@@ -204,7 +204,7 @@ pub struct LoadedScene {
 
 /// Imports a scene, choosing the reader by extension (case-insensitive):
 /// `.obj` (with its MTL libraries), `.toml` (a scene config naming geometry
-/// files), anything else (e.g. `.geom`) the legacy geometry file of 000
+/// files), anything else (e.g. `.geom`) the legacy geometry file of Remington 1992
 /// appendix B. Positions are re-centred in f64, polygons cleaned and welded;
 /// see [`Scene::warnings`] for what was changed.
 pub fn load_scene(path: &Path, options: &ImportOptions) -> Result<LoadedScene, SceneError> {
@@ -252,7 +252,7 @@ pub fn load_scene(path: &Path, options: &ImportOptions) -> Result<LoadedScene, S
                 path,
                 None,
                 "",
-                "this is a display parameter file (000 appendix A), not a scene: name it as \
+                "this is a display parameter file (Remington 1992, appendix A), not a scene: name it as \
                  `display = ...` in a TOML scene config, or pass it to the solver separately",
             ))
         }

@@ -6,7 +6,7 @@
 //!
 //! Meaning of the keys (design notes): `Kd` diffuse reflectance, `Ks` reflectance
 //! of the glossy lobe, `Ke` emitted radiance (W·sr⁻¹·m⁻², one-sided), and `Ns`
-//! the Phong exponent, converted to the RMS slope of 000 eq. 4.1 by
+//! the Phong exponent, converted to the RMS slope of Remington 1992, eq. 4.1 by
 //! α = sqrt(2 / (Ns + 2)). Every other key (textures, `Ka`, `d`, `illum`, PBR
 //! extensions) is read past: radiosity uses none of them.
 

@@ -791,6 +791,12 @@ fn every_malformed_toml_line_names_file_line_and_what() {
             3,
             "out of range",
         ),
+        // Refused before the (missing) geometry is read: the settings come first.
+        (
+            "geometry = [\"missing.obj\"]\n\n[solver]\nmax_sh_order = 65\n".to_owned(),
+            3,
+            "setting `max_sh_order` = 65 is out of range: 0 to 64",
+        ),
         ("geometry = []\n".to_owned(), 1, "names no file"),
         (
             "geometry = [\"missing.obj\"]\n".to_owned(),

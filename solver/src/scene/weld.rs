@@ -15,7 +15,7 @@
 //! one edge. Collinear vertices left on the union's boundary (where two strips
 //! met) are removed, as in cleaning; a neighbour that still has such a vertex on
 //! its edge meets the welded polygon in a T-vertex, which the mesher must handle
-//! anyway (000 §3.4).
+//! anyway (Remington 1992, §3.4).
 
 use super::clean::COLLINEAR_TOLERANCE;
 use super::planar::is_convex;

@@ -1,5 +1,5 @@
 //! Directional (glossy) shooting: radiance and unshot radiance as spherical
-//! harmonics per vertex and per patch (000 ch. 4, Fig. 4.7; design notes,
+//! harmonics per vertex and per patch (Remington 1992, ch. 4, Fig. 4.7; design notes,
 //! "Directional mode").
 //!
 //! ## State
@@ -27,7 +27,7 @@
 //!
 //! For every visible source sample i with form-factor share F_i (analytic
 //! method: the exact unoccluded factor divided evenly over the samples, the
-//! visible ones kept; Wallace: 000 eq. 3.1's per-sample term), with ω_i the
+//! visible ones kept; Wallace: Remington 1992, eq. 3.1's per-sample term), with ω_i the
 //! direction from the receiver to the sample:
 //!
 //! * ΔE_i = U_s(−ω_i) · π · F_i, U_s evaluated from the source's SH in the
@@ -76,7 +76,7 @@ pub enum SourceChoice {
     /// (design notes, "Progressive refinement"): the default.
     #[default]
     Hemisphere,
-    /// 000's choice by the [0,0] term alone, A · c₀₀ (kept to measure against).
+    /// Remington's (1992) choice by the [0,0] term alone, A · c₀₀ (kept to measure against).
     ZerothTerm,
 }
 
@@ -495,7 +495,7 @@ impl Solver {
         Ok(())
     }
 
-    /// One directional shot (000 Fig. 4.7): see the module documentation.
+    /// One directional shot (Remington 1992, Fig. 4.7): see the module documentation.
     pub(super) fn step_directional(&mut self) -> Option<ShotReport> {
         let mut d = self.directional.take()?;
         let report = self.shoot_directional(&mut d);

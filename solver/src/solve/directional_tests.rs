@@ -400,7 +400,7 @@ fn resumed_directional_solve_equals_an_uninterrupted_one() {
     assert!(err.to_string().contains("brdf_normalization"), "{err}");
 }
 
-/// Source choice by hemispherical unshot power (design notes) against 000's
+/// Source choice by hemispherical unshot power (design notes) against Remington's (1992)
 /// [0,0] term alone: prints the shots each needs to reach the threshold, and
 /// checks both converge to the same floor radiance (within the threshold's
 /// share of the emitted power, as either stops with that much unshot).

@@ -1,5 +1,5 @@
-//! Full-matrix gathering radiosity solved by Gauss–Seidel (002, "Radiosity"
-//! and "The Hemicube method"; 001, "Global solution"): the seeds' own
+//! Full-matrix gathering radiosity solved by Gauss–Seidel (radiosity lecture notes, "Radiosity"
+//! and "The Hemicube method"; Immel, Cohen and Greenberg 1986, "Global solution"): the seeds' own
 //! alternative to progressive refinement, kept as a baseline to measure it
 //! against (design notes, "The other methods in the documents").
 //!
@@ -9,23 +9,23 @@
 //!    (it *is* the progressive solver's mesh: [`Solver::new`] validates the
 //!    scene and settings and builds it), without adaptive subdivision.
 //! 2. Row i of the form-factor matrix comes from a hemicube on the *receiving*
-//!    patch i (002: gathering), at its centre, over every patch as a target:
+//!    patch i (radiosity lecture notes: gathering), at its centre, over every patch as a target:
 //!    F_ij = Σ of the delta form factors of the cells where patch j is the
 //!    nearest surface ([`crate::geometry::hemicube`]). Each hemicube is rotated
 //!    about its normal by the golden angle times the patch index, so the O(h)
 //!    bias of cell edges lined up with a box room's walls becomes noise that
 //!    averages out over patches (see the hemicube module's accuracy notes).
-//!    This is the centre-point approximation of 002 ("we can consider the terms
-//!    in the integral to be constant over A_i"); 001's averaging over several
+//!    This is the centre-point approximation of the radiosity lecture notes ("we can consider the terms
+//!    in the integral to be constant over A_i"); Immel, Cohen and Greenberg's (1986) averaging over several
 //!    points of the patch is not done.
-//! 3. The matrix equation B_i = E_i + ρ_i Σ_j F_ij B_j (002) is solved by
-//!    Gauss–Seidel (001): start from B = E, update each patch in turn with the
-//!    newest values of the others, in light-propagation order (001, Fig. 10:
+//! 3. The matrix equation B_i = E_i + ρ_i Σ_j F_ij B_j (radiosity lecture notes) is solved by
+//!    Gauss–Seidel (Immel, Cohen and Greenberg 1986): start from B = E, update each patch in turn with the
+//!    newest values of the others, in light-propagation order (Immel, Cohen and Greenberg 1986, Fig. 10:
 //!    emitters first, then the patches that see them, and so on). In radiance
 //!    units throughout (B = πL on both sides, so the π cancels): L_i = Le_i +
 //!    ρ_i Σ_j F_ij L_j, per RGB channel.
 //! 4. Vertex radiance is the average of the adjacent patches' radiance weighted
-//!    by the area of each patch the vertex represents (002, step 4, "average
+//!    by the area of each patch the vertex represents (radiosity lecture notes, step 4, "average
 //!    the radiosity values at the corners of each patch"; the weights are the
 //!    progressive solver's gather weights, [`Solver::patch_weights`]).
 //!
@@ -267,7 +267,7 @@ pub fn solve_gauss_seidel(
             for (&f, &l) in row.iter().zip(&radiance) {
                 gathered += l * f as f64;
             }
-            // 002: B_i = E_i + ρ_i Σ_j F_ij B_j, in radiance.
+            // The radiosity lecture notes: B_i = E_i + ρ_i Σ_j F_ij B_j, in radiance.
             let updated = emission[i] + kd[i] * gathered;
             let delta = (updated - radiance[i]).abs();
             largest_change = largest_change.max(delta.max_element());
@@ -291,7 +291,7 @@ pub fn solve_gauss_seidel(
         f64::INFINITY
     };
 
-    // 002 step 4: vertex radiance from the adjacent patches, area-weighted.
+    // The radiosity lecture notes step 4: vertex radiance from the adjacent patches, area-weighted.
     let mut sums = vec![DVec3::ZERO; mesh.vertices.len()];
     let mut weights = vec![0.0; mesh.vertices.len()];
     for (p, l) in radiance.iter().enumerate() {
@@ -382,7 +382,7 @@ fn gather_row(
     }
 }
 
-/// 001, Fig. 10: emitters first, then the patches that gather from them, then
+/// Immel, Cohen and Greenberg 1986, Fig. 10: emitters first, then the patches that gather from them, then
 /// those that gather from these, …; patches no light reaches come last, each
 /// group in index order.
 fn propagation_order(factors: &[f32], emission: &[DVec3], n: usize) -> Vec<usize> {

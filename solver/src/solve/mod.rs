@@ -1,4 +1,4 @@
-//! Diffuse progressive-refinement radiosity (000 §3.7, Fig. 3.6) with ray-cast
+//! Diffuse progressive-refinement radiosity (Remington 1992, §3.7, Fig. 3.6) with ray-cast
 //! vertex form factors (§3.6) and adaptive meshing (§3.3, step 5c).
 //!
 //! The [`Solver`] is the pure core: no files, terminals or flags. The command
@@ -17,7 +17,7 @@
 //!   triangle it is a corner of ([`Mesh::patch_triangles`]), so a patch's unshot
 //!   power π · U_p · A_p is the integral of the displayed ΔL over the patch, and
 //!   a vertex shared by four patches gives each its share instead of all to the
-//!   first. 000 (step 5a) gathers the same area-weighted average into the patch
+//!   first. Remington 1992 (step 5a) gathers the same area-weighted average into the patch
 //!   and zeroes the vertices; doing it right after the shot means vertex unshot
 //!   never outlives its shot, so a split never has to interpolate unshot
 //!   radiance of earlier shots: that energy is already held by the patch,
@@ -27,7 +27,7 @@
 //!   exactly, and interpolates only the rest (see `refine.rs`).
 //! * Power = π · U · A per channel for a diffuse emitter; totals sum the three
 //!   channels. The source each step is the patch with the most unshot power
-//!   (000 shoots patches, not elements: the source count stays fixed as
+//!   (Remington 1992 shoots patches, not elements: the source count stays fixed as
 //!   elements refine, and the user-set patch grid is what bounds the error of
 //!   treating a source as uniform).
 //!
@@ -317,7 +317,7 @@ impl Solver {
             || self.unshot_power <= 0.0
     }
 
-    /// One shot (000 Fig. 3.6 steps 5a–5c): the patch with the most unshot power
+    /// One shot (Remington 1992, Fig. 3.6 steps 5a–5c): the patch with the most unshot power
     /// shoots to every vertex, the mesh is refined where the result varies too
     /// much, and the shot's ΔL is gathered into the patches. `None` when done.
     pub fn step(&mut self) -> Option<ShotReport> {
@@ -540,7 +540,7 @@ impl Solver {
             .sum()
     }
 
-    /// The patch with the most unshot power (000 step 5a); ties go to the
+    /// The patch with the most unshot power (Remington 1992 step 5a); ties go to the
     /// lowest index.
     fn choose_source(&self) -> u32 {
         let mut best = (0u32, f64::NEG_INFINITY);

@@ -1,4 +1,4 @@
-//! The solution the solver hands to the file writer (000 Fig. 3.6 steps 5d and
+//! The solution the solver hands to the file writer (Remington 1992, Fig. 3.6 steps 5d and
 //! 6), and the ambient term for partial solutions.
 
 use super::Solver;
@@ -11,7 +11,7 @@ use std::f64::consts::PI;
 
 impl Solver {
     /// The ambient radiance of Cohen, Chen, Wallace and Greenberg (1988), the
-    /// term 000's display file switches on (appendix A, line 8): the light not
+    /// term Remington's (1992) display file switches on (appendix A, line 8): the light not
     /// yet shot, spread uniformly and reflected by an average surface forever.
     ///
     /// With A_j the patch areas, U_j their unshot radiance and ρ_j their

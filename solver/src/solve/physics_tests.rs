@@ -334,7 +334,7 @@ fn adaptively_refined_cornell_mesh_has_no_cracks() {
 
 #[test]
 fn wallace_form_factors_darken_the_furnace_near_edges_as_the_design_notes_say() {
-    // 000 eq. 3.1 gives a vertex on an edge shared with the source nothing
+    // Remington 1992, eq. 3.1 gives a vertex on an edge shared with the source nothing
     // (every cos θ_s is 0 there), so the furnace comes out dark, most at the
     // cube's edges (design notes: "about 15% dark"); the analytic default does
     // not (see the furnace test above). This checks the option is wired and

@@ -1,4 +1,4 @@
-//! Adaptive subdivision after a shot (000 §3.3 and Fig. 3.6 step 5c).
+//! Adaptive subdivision after a shot (Remington 1992, §3.3 and Fig. 3.6 step 5c).
 //!
 //! An element edge whose end vertices differ in visibility of the source is on
 //! a shadow boundary. A leaf splits when the radiance difference across one of
@@ -13,11 +13,11 @@
 //!
 //! New vertices get the radiance of earlier shots interpolated from the corners
 //! that define them (edge midpoint: the two ends; quad centre: the four
-//! corners), 000's "accumulated radiosity interpolated from the vertices on
+//! corners), Remington's (1992) "accumulated radiosity interpolated from the vertices on
 //! either side", and are then shot to by the current source; their children are
 //! tested again, recursively, until every edge passes or can split no more.
 //!
-//! 000 argues the interpolation is accurate because an edge with a large
+//! Remington 1992 argues the interpolation is accurate because an edge with a large
 //! difference would have been split when its light was shot. That holds only if
 //! every shot's structure is resolved as it is shot, which a test on partial
 //! sums does badly (the first of 16 light patches makes every surface look
@@ -39,7 +39,7 @@
 //! interpolation the patches' unshot was gathered from; the difference is
 //! below the split threshold by construction and is not re-gathered.)
 //!
-//! 000 refines only after emitters shoot; here every shot may refine, since
+//! Remington 1992 refines only after emitters shoot; here every shot may refine, since
 //! indirect light casts shadows too, and an edge that already passed is only
 //! tested again when the shot changed one of its ends.
 
@@ -104,7 +104,7 @@ impl Criteria {
     /// the radiance the vertex is heading for. Measuring against the partial
     /// sum L alone refines every surface lit only indirectly (a ceiling) early
     /// in the solve, when a few shots make up all of its light and each
-    /// varies across it by tens of percent; 000 avoided this by refining only
+    /// varies across it by tens of percent; Remington 1992 avoided this by refining only
     /// after emitters shot (step 5c).
     ///
     ///

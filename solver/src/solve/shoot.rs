@@ -1,4 +1,4 @@
-//! One shot's transport from the source patch to receiving vertices (000 Fig. 3.6,
+//! One shot's transport from the source patch to receiving vertices (Remington 1992, Fig. 3.6,
 //! `Shoot(SP)`, and §3.6 for the form factor).
 //!
 //! Everything that depends only on the source is prepared once per shot
@@ -77,7 +77,7 @@ const POOL_STREAM: u64 = 1 << 62;
 pub struct SamplePool {
     samples: usize,
     sets: u32,
-    /// On the source's surface (the points 000 eq. 3.1 evaluates).
+    /// On the source's surface (the points Remington 1992, eq. 3.1 evaluates).
     on_source: Vec<DVec3>,
     /// The same lifted `scene_epsilon` off the source: the rays' targets.
     lifted: Vec<DVec3>,
@@ -188,7 +188,7 @@ impl RecordedShot {
     }
 
     /// The recorded shots rebuilt against the current mesh, for the replay to
-    /// new vertices after a split (000 §3.3, step 5c); the diffuse and the SH
+    /// new vertices after a split (Remington 1992, §3.3, step 5c); the diffuse and the SH
     /// refinements replay exactly these. The shots borrow the occluder and the
     /// reflectances, not the mesh, so the mesh can be split while they live.
     pub fn rebuild_all<'a>(
@@ -277,9 +277,9 @@ impl Shot<'_> {
     ///   "Form factors"): a pooled set ([`SamplePool`]) when the whole source is
     ///   above it, else a set drawn on the clipped part
     ///   ([`Shot::draw_visible_part_samples`]).
-    /// * `Wallace`: 000 eq. 3.1 over a pooled set on the whole source.
+    /// * `Wallace`: Remington 1992, eq. 3.1 over a pooled set on the whole source.
     /// * `Hemicube`: the exact unoccluded factor when the source's centre is
-    ///   visible by a hemicube item buffer on it (002, "on the shooting patch
+    ///   visible by a hemicube item buffer on it (radiosity lecture notes, "on the shooting patch
     ///   when shooting"; see [`Shot::hemicube_visible`]), else 0. No rays are
     ///   traced.
     ///
@@ -379,7 +379,7 @@ impl Shot<'_> {
     /// cell grid's aliasing does not line up from shot to shot. It is rendered
     /// once per shot, on the first query (a shot that never asks, such as a
     /// replayed shot no new vertex needs, renders nothing). It is a one-point
-    /// view of the source, like 000's single sample: hard shadows as seen from
+    /// view of the source, like Remington's (1992) single sample: hard shadows as seen from
     /// the source's centre. The buffer finds the candidate occluders and each
     /// is tested exactly against the segment, so walls meeting at a room's
     /// corner or a box's edges cast no false shadows.
@@ -480,7 +480,7 @@ impl Shot<'_> {
         stratified_points(part, self.samples, &mut rng, points);
     }
 
-    /// ΔL_v = Kd · U_s · F(v←s) (000 Fig. 3.6: ΔRad = SP.unshotRad ·
+    /// ΔL_v = Kd · U_s · F(v←s) (Remington 1992, Fig. 3.6: ΔRad = SP.unshotRad ·
     /// V.reflectance · F, in radiance: L = B/π on both sides).
     pub fn receive(
         &self,
@@ -561,7 +561,7 @@ pub fn visible_samples(
             // Equal shares, as the SH shooter divides the factor: the samples
             // are uniform in area, so the incoming directions of a source much
             // larger than its distance are spread by area rather than by
-            // differential factor (weighting by 000 eq. 3.1's term was tried:
+            // differential factor (weighting by Remington 1992, eq. 3.1's term was tried:
             // with 16 samples it concentrates a corner's light on a few cells
             // and raised the largest row sum γ of a glossy furnace from 0.87
             // to 0.999).
@@ -592,7 +592,7 @@ pub fn visible_samples(
                 scratch.flags.resize(scratch.points.len(), true);
                 0
             };
-            // 000 eq. 3.1 term by term: each sample's disc is A/n.
+            // Remington 1992, eq. 3.1 term by term: each sample's disc is A/n.
             let disc = s.area / scratch.points.len().max(1) as f64;
             let mut visible = 0;
             for (p, &f) in scratch.points.iter().zip(&scratch.flags) {

@@ -304,7 +304,7 @@ fn measure(
     }
     // The config's relative paths are made absolute, so it may live anywhere.
     let config_path = point_dir.join("scene.toml");
-    std::fs::write(&config_path, &config)?;
+    report::write_atomic(&config_path, &config)?;
     let solution_path = point_dir.join("solution.sol");
     let stats_path = point_dir.join("stats.json");
     let mut command = Command::new(&args.solver);
@@ -427,8 +427,9 @@ fn measure(
     if reference.is_some() {
         std::fs::remove_file(&solution_path).ok();
     }
-    std::fs::write(&result_path, serde_json::to_string_pretty(&result)?)?;
-    std::fs::write(&key_path, key)?;
+    // The result before its key: a point counts as done only when both exist.
+    report::write_atomic(&result_path, &serde_json::to_string_pretty(&result)?)?;
+    report::write_atomic(&key_path, &key)?;
     Ok(result)
 }
 

@@ -342,7 +342,7 @@ pub fn points(scene: &SceneSpec, quick: bool, has_cube: bool, help: &str) -> Vec
                     ],
                 ));
             }
-            // 002's full-matrix gather: no adaptive meshing, so the patches are
+            // The radiosity lecture notes' full-matrix gather: no adaptive meshing, so the patches are
             // the mesh.
             for (n, r) in [(4, 64), (8, 128), (12, 128)] {
                 out.push(with_flags(
@@ -470,7 +470,7 @@ pub fn points(scene: &SceneSpec, quick: bool, has_cube: bool, help: &str) -> Vec
                         };
                         for d in cube_values(flag) {
                             let label = if flag == "--cube-resolution" {
-                                // 001's global cube: D = 6k² directions.
+                                // Immel, Cohen and Greenberg's (1986) global cube: D = 6k² directions.
                                 format!("cube k={d} (D={}) patches={CUBE_PATCHES}", 6 * d * d)
                             } else {
                                 format!("cube {flag} {d} patches={CUBE_PATCHES}")

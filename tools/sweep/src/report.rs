@@ -343,10 +343,8 @@ fn preset_section(md: &mut String, results: &[PointResult]) {
     md.push('\n');
 }
 
-/// Writes `text` to `path` through a temporary file and a rename.
-fn write_atomic(path: &Path, text: &str) -> anyhow::Result<()> {
-    let tmp = path.with_extension("tmp");
-    std::fs::write(&tmp, text).with_context(|| format!("writing {}", tmp.display()))?;
-    std::fs::rename(&tmp, path).with_context(|| format!("renaming to {}", path.display()))?;
-    Ok(())
+/// Writes `text` to `path` through the contract crate's one atomic writer.
+pub(crate) fn write_atomic(path: &Path, text: &str) -> anyhow::Result<()> {
+    solution::atomic::write_bytes_atomically(path, text.as_bytes())
+        .with_context(|| format!("writing {}", path.display()))
 }

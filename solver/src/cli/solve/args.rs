@@ -21,10 +21,10 @@ use std::path::PathBuf;
 /// Which solver `--solver` runs.
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum SolverKind {
-    /// Progressive refinement (000 §3.7).
+    /// Progressive refinement (Remington 1992, §3.7).
     #[default]
     Progressive,
-    /// The full matrix solved by Gauss-Seidel (002, 001).
+    /// The full matrix solved by Gauss-Seidel (radiosity lecture notes, Immel, Cohen and Greenberg 1986).
     GaussSeidel,
 }
 
@@ -36,7 +36,7 @@ const AFTER_LONG_HELP: &str = "\
 Settings come from four places; a higher one overrides a lower one key by key:
   1. these flags
   2. the TOML scene config (when SCENE is a .toml file)
-  3. the legacy display file (--display, 000 appendix A)
+  3. the legacy display file (--display, Remington 1992, appendix A)
   4. the preset (--preset, default medium; config/presets.toml)
 
 No lost work: every --checkpoint-every shots the solver saves OUT.checkpoint and
@@ -126,7 +126,7 @@ pub struct SolveArgs {
     /// Trace no visibility rays: no shadows, much faster.
     #[arg(
         long,
-        long_help = "Trace no visibility rays (000 appendix D `-t`): every vertex sees \
+        long_help = "Trace no visibility rays (Remington 1992, appendix D `-t`): every vertex sees \
             every source, so there are no shadows. Much faster; for checking a scene, \
             not for results."
     )]
@@ -139,10 +139,10 @@ pub struct SolveArgs {
         value_name = "METHOD",
         long_help = "How the point-to-source form factor is computed. analytic \
             (default): the exact point-to-polygon factor times the visible fraction of \
-            the rays; correct near the source and in corners. wallace: 000 eq. 3.1's \
+            the rays; correct near the source and in corners. wallace: Remington 1992, eq. 3.1's \
             disc approximation per sample, slightly cheaper, dark near shared edges \
             (kept to measure against). hemicube: the exact factor times the visibility \
-            read from a hemicube on the shooting patch's centre (002), no rays; hard \
+            read from a hemicube on the shooting patch's centre (radiosity lecture notes), no rays; hard \
             shadows as seen from the source's centre (directional mode uses analytic)."
     )]
     pub form_factors: Option<FormFactorMethod>,
@@ -166,7 +166,7 @@ pub struct SolveArgs {
         default_value_t = SolverKind::Progressive,
         long_help = "progressive (default): progressive refinement, shooting the \
             brightest patch each step, with adaptive meshing, checkpoints and --resume. \
-            gauss-seidel: 002's full matrix B = E + ρFB with form factors from a \
+            gauss-seidel: the radiosity lecture notes' full matrix B = E + ρFB with form factors from a \
             hemicube on each receiving patch, solved by Gauss-Seidel sweeps; no \
             adaptive meshing, checkpoints or --resume; refused when the n × n f32 \
             matrix would exceed 2 GiB (about 23 000 patches). A baseline to measure \
@@ -193,21 +193,21 @@ pub struct SolveArgs {
         value_enum,
         value_name = "NORM",
         long_help = "How glossy lobes are normalized (directional mode). thesis \
-            (default): 000's C_R(μ_i), which reflects exactly Ks of every incident beam \
+            (default): Remington's (1992) C_R(μ_i), which reflects exactly Ks of every incident beam \
             but is not reciprocal (f(ω_i, ω_o) ≠ f(ω_o, ω_i); a glossy furnace is not \
             uniform). reciprocal: one constant per material, reciprocal, reflecting Ks \
             at normal incidence and less toward grazing (docs/sh-bands.md)."
     )]
     pub brdf_normalization: Option<BrdfNormalization>,
 
-    /// Directional representation: sh (default) or cube (001's global cube).
+    /// Directional representation: sh (default) or cube (Immel, Cohen and Greenberg's (1986) global cube).
     #[arg(
         long,
         value_enum,
         value_name = "REPR",
         long_help = "How --mode directional stores glossy radiance. sh (default): \
             spherical harmonics of an order chosen per material, shot progressively with \
-            adaptive meshing. cube: 001's global cube, radiance on D = 6k² directions \
+            adaptive meshing. cube: Immel, Cohen and Greenberg's (1986) global cube, radiance on D = 6k² directions \
             per glossy vertex (k = --cube-resolution), gathered by Gauss-Seidel sweeps in \
             light-propagation order on the fixed patch mesh (no adaptive meshing, \
             checkpoints or --resume); the BRDF is evaluated exactly at each direction, \
@@ -264,7 +264,7 @@ pub struct SolveArgs {
     #[arg(
         long,
         long_help = "Do not add Cohen et al.'s ambient term (the estimated light not yet \
-            shot, 000 appendix A line 8) to partial solutions. With it, early partial \
+            shot, Remington 1992, appendix A line 8) to partial solutions. With it, early partial \
             solutions look about as bright as the converged one; without it they show \
             only the light shot so far."
     )]
@@ -281,11 +281,11 @@ pub struct SolveArgs {
     )]
     pub resume: bool,
 
-    /// Legacy display parameter file (000 appendix A).
+    /// Legacy display parameter file (Remington 1992, appendix A).
     #[arg(
         long,
         value_name = "FILE",
-        long_help = "A legacy display parameter file (000 appendix A): its camera is used \
+        long_help = "A legacy display parameter file (Remington 1992, appendix A): its camera is used \
             by --preview and stored in the solution when the scene names none; its \
             ambient and threshold lines become settings of the lowest precedence."
     )]

@@ -2,7 +2,7 @@
 //!
 //! Progressive refinement converges roughly geometrically: each shot removes a
 //! share of the remaining unshot power, so ln(unshot fraction) falls about linearly
-//! in time (000 §3.7; Cohen et al. 1988). The estimator fits a straight line to
+//! in time (Remington 1992, §3.7; Cohen et al. 1988). The estimator fits a straight line to
 //! (time, ln u) over a trailing window of samples and extrapolates to
 //! ln(threshold). The solve also stops at a shot budget, so the estimate is the
 //! sooner of that extrapolation and the budget at the current shot rate.

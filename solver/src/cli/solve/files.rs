@@ -6,34 +6,14 @@
 //! `format::write_solution`, which is atomic in the same way.
 
 use anyhow::Context;
-use std::ffi::OsString;
-use std::io::Write;
 use std::path::{Path, PathBuf};
 
-/// Writes `bytes` to `path` atomically: a temporary file in the same folder (so the
-/// rename never crosses a file system), flushed to disk, then renamed over `path`.
+/// Writes `bytes` to `path` atomically through the contract crate's one writer
+/// ([`solution::atomic::write_atomically`]: temporary file in the same folder,
+/// fsync, rename, directory fsync).
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
-    let tmp = temp_path(path);
-    let result = (|| -> std::io::Result<()> {
-        let mut file = std::fs::File::create(&tmp)?;
-        file.write_all(bytes)?;
-        file.sync_all()?;
-        drop(file);
-        std::fs::rename(&tmp, path)
-    })();
-    if result.is_err() {
-        // Best effort: a failed write must not leave the temporary file behind.
-        let _ = std::fs::remove_file(&tmp);
-    }
-    result.with_context(|| format!("writing {}", path.display()))
-}
-
-/// `dir/.name.tmp-PID`: hidden, unique per process, in the target's folder.
-fn temp_path(path: &Path) -> PathBuf {
-    let mut name = OsString::from(".");
-    name.push(path.file_name().unwrap_or_else(|| "output".as_ref()));
-    name.push(format!(".tmp-{}", std::process::id()));
-    path.with_file_name(name)
+    solution::atomic::write_bytes_atomically(path, bytes)
+        .with_context(|| format!("writing {}", path.display()))
 }
 
 /// `OUT.checkpoint`: the full output name with `.checkpoint` appended, so that
@@ -45,8 +25,8 @@ pub fn checkpoint_path(out: &Path) -> PathBuf {
 }
 
 /// Creates the folder that will hold `path` when it is missing, and checks that a
-/// file can be created there (by creating and removing the temporary file that
-/// [`write_atomic`] would use).
+/// file can be created there (by creating and removing a temporary file beside it,
+/// as [`write_atomic`] will).
 pub fn check_writable(path: &Path) -> anyhow::Result<()> {
     if path.file_name().is_none() || path.is_dir() {
         anyhow::bail!("output {} is not a file name", path.display());
@@ -57,13 +37,17 @@ pub fn check_writable(path: &Path) -> anyhow::Result<()> {
                 .with_context(|| format!("creating folder {}", parent.display()))?;
         }
     }
-    let probe = temp_path(path);
-    std::fs::OpenOptions::new()
-        .write(true)
-        .create_new(true)
-        .open(&probe)
+    let dir = match path.parent() {
+        Some(parent) if !parent.as_os_str().is_empty() => parent,
+        _ => Path::new("."),
+    };
+    let probe = tempfile::Builder::new()
+        .prefix(".tmp")
+        .tempfile_in(dir)
         .with_context(|| format!("cannot write {}", path.display()))?;
-    std::fs::remove_file(&probe).with_context(|| format!("removing {}", probe.display()))
+    probe
+        .close()
+        .with_context(|| format!("removing the probe file in {}", dir.display()))
 }
 
 #[cfg(test)]

@@ -56,7 +56,7 @@ fn the_setting_accepts_exactly_the_resolutions_the_hemicube_does() {
 fn delta_form_factors_sum_to_one_and_match_002_midpoint_formulas() {
     // The exact cell factors tile the hemisphere: their sum is 1 up to f64
     // rounding of 3R² contour integrals (each ~1e-16 relative of its O(1)
-    // terms), so 1e-10. 002's midpoint values ΔA/(πr⁴) and zΔA/(πr⁴) are the
+    // terms), so 1e-10. The radiosity lecture notes' midpoint values ΔA/(πr⁴) and zΔA/(πr⁴) are the
     // one-point quadrature of the same integrals, with a relative error of
     // order h² times the kernel's relative curvature; measured: at most 0.67 h²
     // over all cells and resolutions below, so each cell's

@@ -1,6 +1,6 @@
 //! The BRDF of a material on the cells of a global cube:
 //! `f_r(ω_i, ω_o) = Kd/π + Ks · C_i · g(ω_o · r_i)` with the thesis's lobe `g`
-//! ([`brdf::lobe`], 000 eq. 4.2) evaluated exactly at the cell directions — not
+//! ([`brdf::lobe`], Remington 1992, eq. 4.2) evaluated exactly at the cell directions — not
 //! its Legendre expansion, so the cube has no truncation and no ringing.
 //!
 //! ## Normalization

@@ -1,5 +1,5 @@
-//! Directional (glossy) radiosity on 001's global cubes (Immel, Cohen and
-//! Greenberg 1986, `shared/seeds/001`): each glossy vertex stores its outgoing
+//! Directional (glossy) radiosity on Immel, Cohen and Greenberg's (1986) global cubes
+//! (`shared/seeds/001`): each glossy vertex stores its outgoing
 //! radiance on the D = 6k² cell directions of a cube in its frame
 //! ([`solution::cube`]), and the whole system is gathered by Gauss–Seidel sweeps
 //! in light-propagation order — the documents' alternative to the thesis's
@@ -22,7 +22,7 @@
 //!   F(v←s) of the progressive solver (exact point-to-polygon factor × visible
 //!   fraction of `samples` rays); a glossy receiver splats each visible
 //!   sample's share onto the incoming cells of its own cube.
-//! * Reflection (001 eq. 10's gather, with the thesis's BRDF, design notes
+//! * Reflection (Immel, Cohen and Greenberg 1986, eq. 10's gather, with the thesis's BRDF, design notes
 //!   "Directional mode"): with E_i = π Σ_s w_{v,s,i} L_s the irradiance
 //!   arriving through incoming cell i,
 //!
@@ -34,7 +34,7 @@
 //!
 //! ## Solution: Gauss–Seidel in light-propagation order
 //!
-//! Vertices are ordered as light spreads (001, Fig. 10): emitters' vertices,
+//! Vertices are ordered as light spreads (Immel, Cohen and Greenberg 1986, Fig. 10): emitters' vertices,
 //! then the vertices that gather from a patch of an already placed vertex, and
 //! so on; vertices no light reaches come last. A sweep updates the vertices in
 //! that order, in blocks of [`BLOCK`]: the vertices of a block are updated in
@@ -773,7 +773,7 @@ impl State<'_> {
         (diffuse + s.ks * glossy).max_element()
     }
 
-    /// 001, Fig. 10: emitters' vertices first, then the vertices that gather
+    /// Immel, Cohen and Greenberg 1986, Fig. 10: emitters' vertices first, then the vertices that gather
     /// from a patch holding an already placed vertex, and so on; vertices no
     /// light reaches last, each group in index order.
     fn propagation_order(&self) -> Vec<u32> {

@@ -7,7 +7,7 @@
 //! point-to-polygon factor at v's receiving point times the visible fraction of
 //! `samples` stratified, jittered rays, from the same pooled or clipped sample
 //! sets (shot index = the source's patch index, so the streams depend only on
-//! the seed, the source and the receiver). The `wallace` method uses 000 eq.
+//! the seed, the source and the receiver). The `wallace` method uses Remington 1992, eq.
 //! 3.1's per-sample terms and `hemicube` is treated as analytic, as the SH
 //! directional mode does: a direction per visible sample is needed.
 //!

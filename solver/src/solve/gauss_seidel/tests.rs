@@ -275,7 +275,7 @@ fn gauss_seidel_and_progressive_refinement_agree_on_the_cornell_box() {
 
 // The progressive solver with hemicube form factors (the hemicube on the
 // shooting patch, `FormFactorMethod::Hemicube`): tests beside the gathering
-// ones, since both are 002's hemicube methods.
+// ones, since both are the radiosity lecture notes' hemicube methods.
 
 use crate::settings::FormFactorMethod;
 
