@@ -75,7 +75,7 @@ pub fn run(args: &BenchArgs) -> Result<BenchReport> {
     let mut timings = Timings::start();
     args.render.check()?;
     anyhow::ensure!(args.frames > 0, "--frames must be at least 1");
-    let file = open_solution(&args.solution)?;
+    let file = open_solution(&args.solution, args.render.max_frame_cost)?;
     timings.stage("open and validate");
     report_truncation_mapped(&file, args.render.max_order);
     let header = file.header();

@@ -79,6 +79,13 @@ pub struct RenderOptions {
     /// Enable the Vulkan validation layer (also: RUNTIME_VALIDATION=1).
     #[arg(long)]
     pub validation: bool,
+    /// Refuse files whose per-view cost, Σ vertices × basis terms per vertex
+    /// ((L+1)² for SH, 4 for a global cube), exceeds N. What it trades: the
+    /// default (10⁸, seconds per frame on lavapipe) keeps a crafted or huge file
+    /// from stalling the GPU for seconds or longer — a watchdog may reset the
+    /// device — while a larger N lets big solutions load on fast GPUs.
+    #[arg(long, value_name = "N", default_value_t = solution::format::DEFAULT_MAX_FRAME_COST)]
+    pub max_frame_cost: u64,
     /// Print on stderr how long each stage took, from the command's start to
     /// the first frame submitted (open, validate, upload, ...).
     #[arg(long)]
@@ -128,8 +135,15 @@ pub fn load_solution(path: &Path) -> Result<solution::format::Solution> {
 /// section). Coefficients are stored on the GPU as the file stores them.
 ///
 /// [`StereoRenderer::from_mapped`]: crate::render::StereoRenderer::from_mapped
-pub fn open_solution(path: &Path) -> Result<solution::format::MappedSolution> {
-    solution::format::MappedSolution::open_deferring_checksums(path).map_err(anyhow::Error::new)
+///
+/// Files whose per-view cost (`solution::format::frame_cost`) exceeds
+/// `max_frame_cost` are refused with the format's message naming the flag.
+pub fn open_solution(path: &Path, max_frame_cost: u64) -> Result<solution::format::MappedSolution> {
+    use solution::format::{check_frame_cost, frame_cost, MappedSolution};
+    let file = MappedSolution::open_deferring_checksums(path).map_err(anyhow::Error::new)?;
+    check_frame_cost(path, frame_cost(file.batches()), max_frame_cost)
+        .map_err(anyhow::Error::new)?;
+    Ok(file)
 }
 
 /// Creates the GPU context, reporting a missing device with the packages to

@@ -59,7 +59,7 @@ pub fn run(args: &ScreenshotArgs) -> Result<()> {
             args.ipd
         );
     }
-    let file = open_solution(&args.solution)?;
+    let file = open_solution(&args.solution, args.render.max_frame_cost)?;
     timings.stage("open and validate");
     let header = file.header();
     let (width, height) = args
