@@ -962,6 +962,70 @@ mod tests {
     use super::*;
     use solution::format::ScalarType;
 
+    /// The bound the mapped upload computes from stored bytes is the bound of
+    /// the in-memory batch: equal for f32 (same values, same f64 sums), and for
+    /// f16 the bound of the rounded values, within 2⁻¹¹ relative of the f32
+    /// one (each |c| rounds by at most that, and the sum has positive terms).
+    #[test]
+    fn stored_bound_matches_the_in_memory_bound() {
+        let order = 3u32;
+        let n = (order as usize + 1).pow(2);
+        let vertices = 5;
+        let coefficients: Vec<f32> = (0..vertices * n * 3)
+            .map(|i| ((i * 37 % 23) as f32 - 11.0) * 0.37)
+            .collect();
+        let batch = Batch {
+            representation: Representation::Sh { order },
+            scalar: ScalarType::F32,
+            vertices: vec![Vertex::default(); vertices],
+            coefficients: coefficients.clone(),
+            indices: vec![],
+        };
+        let f32_bytes: Vec<u8> = coefficients.iter().flat_map(|c| c.to_le_bytes()).collect();
+        let scale = solution::format::f16_scale_for(&coefficients);
+        let f16_bytes: Vec<u8> = coefficients
+            .iter()
+            .flat_map(|c| half::f16::from_f32(c / scale).to_bits().to_le_bytes())
+            .collect();
+        let table = half_magnitudes();
+        for cap in [order, 1] {
+            let expected = radiance_bound(&batch, cap);
+            let envelope = envelopes((cap as usize + 1).pow(2));
+            let from_f32 = stored_radiance_bound(
+                &f32_bytes,
+                batch.representation,
+                ScalarType::F32,
+                &envelope,
+                &table,
+            );
+            assert!(
+                (from_f32 - expected).abs() <= 1e-12 * expected,
+                "{from_f32} vs {expected}"
+            );
+            let from_f16 = stored_radiance_bound(
+                &f16_bytes,
+                batch.representation,
+                ScalarType::F16 { scale },
+                &envelope,
+                &table,
+            );
+            assert!(
+                (from_f16 - expected).abs() <= 2f64.powi(-11) * expected,
+                "{from_f16} vs {expected}"
+            );
+        }
+        // A cube: the largest magnitude, through the bit patterns for f16.
+        let cube = Representation::Cube { directions: 6 };
+        let largest = coefficients
+            .iter()
+            .fold(0.0f64, |m, c| m.max(f64::from(c.abs())));
+        let from_f32 = stored_radiance_bound(&f32_bytes, cube, ScalarType::F32, &[], &table);
+        assert_eq!(from_f32, largest);
+        let from_f16 =
+            stored_radiance_bound(&f16_bytes, cube, ScalarType::F16 { scale }, &[], &table);
+        assert!((from_f16 - largest).abs() <= 2f64.powi(-11) * largest);
+    }
+
     #[test]
     fn cube_radiance_bound_is_the_largest_value_and_bounds_every_lookup() {
         // k = 3, two vertices with values of both signs.
