@@ -156,6 +156,38 @@ fn bad_solution_files_are_refused_with_one_clear_line() {
 }
 
 #[test]
+fn a_file_above_the_frame_cost_bound_is_refused_naming_the_flag() {
+    // The glossy room at N = 4, L = 8: 25 floor vertices × 81 terms plus 75
+    // wall vertices × 1 term = 2100 basis terms per view
+    // (solution::format::frame_cost), so a bound of 2099 refuses it and 2100
+    // lets it through.
+    let dir = tempfile::tempdir().unwrap();
+    let file = write_room(dir.path(), "glossy.sol", &common::glossy_room(4, 8));
+    let shot = |bound: &str| {
+        runtime()
+            .args(["screenshot"])
+            .arg(&file)
+            .args(["--size", "16x16", "--max-frame-cost", bound, "--out"])
+            .arg(dir.path().join("shot"))
+            .output()
+            .unwrap()
+    };
+    let out = shot("2099");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "a file above the bound was drawn");
+    for part in ["glossy.sol", "2100", "2099", "--max-frame-cost"] {
+        assert!(stderr.contains(part), "{stderr:?} lacks {part:?}");
+    }
+    assert_eq!(stderr.trim().lines().count(), 1, "{stderr}");
+    let out = shot("2100");
+    assert!(
+        out.status.success(),
+        "at the bound: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+#[test]
 fn no_vulkan_device_fails_with_the_package_names() {
     let dir = tempfile::tempdir().unwrap();
     let file = write_room(dir.path(), "room.sol", &common::diffuse_room(2));

@@ -34,11 +34,13 @@ fn render(
         height: h,
         max_samples: 1,
         multiview: MultiviewMode::Auto,
-        storage,
         max_order,
         ..RendererDesc::default()
     };
-    let mut renderer = StereoRenderer::new(gpu, solution, desc, &swapchain.desc()).unwrap();
+    // Written with its values stored as `storage` and uploaded as stored.
+    let (_dir, file) = common::mapped(&common::stored_as(solution, storage));
+    let mut renderer = StereoRenderer::from_mapped(gpu, &file, desc, &swapchain.desc()).unwrap();
+    assert_eq!(renderer.scene().storage, storage);
     let draws = &renderer.scene().draws;
     assert_eq!(draws.len(), 2);
     assert_eq!(

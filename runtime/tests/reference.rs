@@ -14,6 +14,8 @@ fn render(gpu: &Gpu, solution: &Solution, views: &[EyeView], samples: u32) -> Ve
     render_with(gpu, solution, views, samples, CoefficientStorage::F32)
 }
 
+/// Renders `solution` written to a file with its coefficients stored as
+/// `storage`, uploaded from the map as stored (`StereoRenderer::from_mapped`).
 fn render_with(
     gpu: &Gpu,
     solution: &Solution,
@@ -28,10 +30,11 @@ fn render_with(
         height: h,
         max_samples: samples,
         multiview: MultiviewMode::Auto,
-        storage,
         ..RendererDesc::default()
     };
-    let mut renderer = StereoRenderer::new(gpu, solution, desc, &swapchain.desc()).unwrap();
+    let (_dir, file) = common::mapped(&common::stored_as(solution, storage));
+    let mut renderer = StereoRenderer::from_mapped(gpu, &file, desc, &swapchain.desc()).unwrap();
+    assert_eq!(renderer.scene().storage, storage);
     renderer.render(views, 0).unwrap();
     renderer.read_back(gpu, 0, views.len()).unwrap()
 }
@@ -124,10 +127,11 @@ fn msaa_image_stays_close_to_cpu_reference() {
 
 #[test]
 fn order_16_floor_matches_cpu_reference_with_f32_and_f16_coefficients() {
-    // The storage choice (docs/benchmarks.md, "Runtime"): f16 rounds each
-    // coefficient to 2⁻¹¹ relative (per-batch scale keeps them normal), and the
-    // radiance sums (L+1)² = 289 such terms whose signs vary, so its error is a
-    // few 1e-4 of the lobe's peak; the bounds are those of the f32 case.
+    // The file's storage type, uploaded as stored: f16 rounds each coefficient
+    // to 2⁻¹¹ relative (the writer's per-batch power-of-two scale keeps them
+    // normal), and the radiance sums (L+1)² = 289 such terms whose signs vary,
+    // so its error is a few 1e-4 of the lobe's peak; the bounds are those of
+    // the f32 case. The reference is the f32 solution before rounding.
     let solution = common::glossy_room(12, 16);
     for storage in [CoefficientStorage::F32, CoefficientStorage::F16] {
         check_against_reference(

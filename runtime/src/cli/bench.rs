@@ -1,6 +1,8 @@
 //! `runtime bench`: offscreen stereo frames through the mock session.
 
-use super::{load_solution, open_gpu, parse_size, report_truncation, RenderOptions};
+use super::{
+    open_gpu, open_solution, parse_size, report_truncation_mapped, RenderOptions, Timings,
+};
 use crate::render::{DrawKind, RendererDesc, StereoRenderer, ToneSettings};
 use crate::session::{run_frame, HeadPath, MockDesc, MockSession, Session};
 use anyhow::Result;
@@ -70,11 +72,13 @@ fn percentile(sorted: &[f64], p: f64) -> f64 {
 }
 
 pub fn run(args: &BenchArgs) -> Result<BenchReport> {
+    let mut timings = Timings::start();
     args.render.check()?;
     anyhow::ensure!(args.frames > 0, "--frames must be at least 1");
-    let solution = load_solution(&args.solution)?;
-    report_truncation(&solution, args.render.max_order);
-    let header = &solution.header;
+    let file = open_solution(&args.solution, args.render.max_frame_cost)?;
+    timings.stage("open and validate");
+    report_truncation_mapped(&file, args.render.max_order);
+    let header = file.header();
     let offset = DVec3::from(header.recentre_offset);
     let path = match &args.walk {
         Some(file) => HeadPath::load(file)?,
@@ -116,14 +120,15 @@ pub fn run(args: &BenchArgs) -> Result<BenchReport> {
         height,
         max_samples: args.render.samples,
         multiview: args.render.multiview,
-        storage: args.render.coefficients,
         max_order: args.render.max_order,
         tone: ToneSettings {
             exposure_stops: args.render.exposure,
             curve: args.render.tonemap,
         },
     };
-    let mut renderer = StereoRenderer::new(&gpu, &solution, desc, &session.swapchain())?;
+    let mut renderer = StereoRenderer::from_mapped(&gpu, &file, desc, &session.swapchain())?;
+    timings.stage("vulkan and renderer");
+    timings.upload(renderer.upload_time(), renderer.upload_stats());
     let mut times = Vec::new();
     while !session.should_exit() {
         let start = Instant::now();
@@ -132,6 +137,9 @@ pub fn run(args: &BenchArgs) -> Result<BenchReport> {
         if report.timing.index >= u64::from(args.warmup) {
             times.push(ms);
         }
+    }
+    if args.render.timings {
+        eprintln!("{}", timings.line(renderer.first_submit()));
     }
     times.sort_by(f64::total_cmp);
     let median_ms = percentile(&times, 50.0);
@@ -173,7 +181,7 @@ pub fn run(args: &BenchArgs) -> Result<BenchReport> {
         device: gpu.info.describe(),
         multiview: format!("{:?}", renderer.multiview_path()),
         samples: renderer.samples(),
-        coefficients: format!("{:?}", args.render.coefficients),
+        coefficients: format!("{:?}", scene.storage),
         max_order: args.render.max_order,
     };
     if args.json {
@@ -187,7 +195,7 @@ pub fn run(args: &BenchArgs) -> Result<BenchReport> {
             report.device,
             renderer.multiview_path(),
             report.samples,
-            args.render.coefficients
+            scene.storage
         );
         println!(
             "median {:.2} ms, p99 {:.2} ms per stereo frame; {} vertices, {} triangles; {:.3e} SH evaluations/s ({:.3e} basis terms/s)",

@@ -3,10 +3,12 @@
 mod bench;
 mod output;
 mod screenshot;
+mod timings;
 
 pub use bench::{BenchArgs, BenchReport};
 pub use output::{write_exr, write_png};
 pub use screenshot::ScreenshotArgs;
+pub use timings::Timings;
 
 use anyhow::{bail, Context, Result};
 use clap::{Parser, Subcommand};
@@ -74,12 +76,20 @@ pub struct RenderOptions {
     /// multiview clipping is broken; a single multiview pass elsewhere).
     #[arg(long, value_enum, default_value_t = crate::render::MultiviewMode::Auto)]
     pub multiview: crate::render::MultiviewMode,
-    /// GPU storage of SH coefficients.
-    #[arg(long, value_enum, default_value_t = crate::render::CoefficientStorage::F32)]
-    pub coefficients: crate::render::CoefficientStorage,
     /// Enable the Vulkan validation layer (also: RUNTIME_VALIDATION=1).
     #[arg(long)]
     pub validation: bool,
+    /// Refuse files whose per-view cost, Σ vertices × basis terms per vertex
+    /// ((L+1)² for SH, 4 for a global cube), exceeds N. What it trades: the
+    /// default (10⁸, seconds per frame on lavapipe) keeps a crafted or huge file
+    /// from stalling the GPU for seconds or longer — a watchdog may reset the
+    /// device — while a larger N lets big solutions load on fast GPUs.
+    #[arg(long, value_name = "N", default_value_t = solution::format::DEFAULT_MAX_FRAME_COST)]
+    pub max_frame_cost: u64,
+    /// Print on stderr how long each stage took, from the command's start to
+    /// the first frame submitted (open, validate, upload, ...).
+    #[arg(long)]
+    pub timings: bool,
 }
 
 impl RenderOptions {
@@ -119,10 +129,36 @@ pub fn load_solution(path: &Path) -> Result<solution::format::Solution> {
     solution::format::read_solution(path).map_err(anyhow::Error::new)
 }
 
+/// Maps and validates a solution file for [`StereoRenderer::from_mapped`]:
+/// every check but the CRC-32 of the batches' sections, which the upload
+/// computes as it streams them and refuses the file on (naming file, batch and
+/// section). Coefficients are stored on the GPU as the file stores them.
+///
+/// [`StereoRenderer::from_mapped`]: crate::render::StereoRenderer::from_mapped
+///
+/// Files whose per-view cost (`solution::format::frame_cost`) exceeds
+/// `max_frame_cost` are refused with the format's message naming the flag.
+pub fn open_solution(path: &Path, max_frame_cost: u64) -> Result<solution::format::MappedSolution> {
+    use solution::format::{check_frame_cost, frame_cost, MappedSolution};
+    let file = MappedSolution::open_deferring_checksums(path).map_err(anyhow::Error::new)?;
+    check_frame_cost(path, frame_cost(file.batches()), max_frame_cost)
+        .map_err(anyhow::Error::new)?;
+    Ok(file)
+}
+
 /// Creates the GPU context, reporting a missing device with the packages to
 /// install.
 pub fn open_gpu(validation: bool) -> Result<crate::gpu::Gpu> {
     crate::gpu::Gpu::new(&crate::gpu::GpuDesc { validation }).context("cannot start Vulkan")
+}
+
+/// [`report_truncation`] for a mapped file. Only with `--max-order`: the
+/// Parseval error needs every coefficient, so the file is decoded in memory
+/// for it (the upload itself never is).
+pub fn report_truncation_mapped(file: &solution::format::MappedSolution, cap: Option<u32>) {
+    if cap.is_some() {
+        report_truncation(&file.to_solution(), cap);
+    }
 }
 
 /// Prints what a `--max-order` cap costs, per batch.

@@ -1,7 +1,8 @@
 //! `runtime screenshot`: one stereo pair (or a mono image) to PNG and EXR.
 
 use super::{
-    load_solution, open_gpu, parse_size, report_truncation, write_exr, write_png, RenderOptions,
+    open_gpu, open_solution, parse_size, report_truncation_mapped, write_exr, write_png,
+    RenderOptions, Timings,
 };
 use crate::render::{RendererDesc, StereoRenderer, ToneSettings};
 use crate::session::OffscreenSwapchain;
@@ -50,6 +51,7 @@ fn vec3(v: &Option<Vec<f64>>, default: [f64; 3]) -> [f64; 3] {
 }
 
 pub fn run(args: &ScreenshotArgs) -> Result<()> {
+    let mut timings = Timings::start();
     args.render.check()?;
     if !(args.ipd.is_finite() && args.ipd >= 0.0) {
         anyhow::bail!(
@@ -57,8 +59,9 @@ pub fn run(args: &ScreenshotArgs) -> Result<()> {
             args.ipd
         );
     }
-    let solution = load_solution(&args.solution)?;
-    let header = &solution.header;
+    let file = open_solution(&args.solution, args.render.max_frame_cost)?;
+    timings.stage("open and validate");
+    let header = file.header();
     let (width, height) = args
         .size
         .unwrap_or((header.camera.width, header.camera.height));
@@ -71,7 +74,7 @@ pub fn run(args: &ScreenshotArgs) -> Result<()> {
         height,
     };
     camera.validate().context("invalid camera")?;
-    report_truncation(&solution, args.render.max_order);
+    report_truncation_mapped(&file, args.render.max_order);
     let offset = DVec3::from(header.recentre_offset);
     let views = if args.mono {
         vec![camera.mono_view(offset)]
@@ -83,20 +86,26 @@ pub fn run(args: &ScreenshotArgs) -> Result<()> {
 
     let gpu = open_gpu(args.render.validation)?;
     let swapchain = OffscreenSwapchain::new(&gpu, width, height, 1)?;
+    timings.stage("vulkan");
     let desc = RendererDesc {
         width,
         height,
         max_samples: args.render.samples,
         multiview: args.render.multiview,
-        storage: args.render.coefficients,
         max_order: args.render.max_order,
         tone: ToneSettings {
             exposure_stops: args.render.exposure,
             curve: args.render.tonemap,
         },
     };
-    let mut renderer = StereoRenderer::new(&gpu, &solution, desc, &swapchain.desc())?;
+    let mut renderer = StereoRenderer::from_mapped(&gpu, &file, desc, &swapchain.desc())?;
+    timings.stage("renderer");
+    timings.upload(renderer.upload_time(), renderer.upload_stats());
     renderer.render(&views, 0)?;
+    timings.stage("first frame");
+    if args.render.timings {
+        eprintln!("{}", timings.line(renderer.first_submit()));
+    }
     let eyes = renderer.read_back(&gpu, 0, views.len())?;
     let names: Vec<String> = if args.mono {
         vec![String::new()]

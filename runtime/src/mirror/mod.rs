@@ -575,7 +575,6 @@ impl App {
                 height: eye_h,
                 max_samples: self.args.render.samples,
                 multiview: self.args.render.multiview,
-                storage: self.args.render.coefficients,
                 max_order: self.args.render.max_order,
                 tone,
             };

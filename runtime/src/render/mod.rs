@@ -27,7 +27,7 @@ pub mod truncation;
 
 pub use inspect::{Edges, Inspect};
 pub use multiview::MultiviewMode;
-pub use scene::{CoefficientStorage, DrawKind, GpuScene, SceneError};
+pub use scene::{CoefficientStorage, DrawKind, GpuScene, SceneError, UploadStats};
 pub use tonemap::{ToneCurve, ToneSettings};
 
 use crate::gpu::barrier::{cmd_image_barriers, image_barrier};
@@ -38,7 +38,7 @@ use ash::vk;
 use glam::DVec3;
 use passes::{BatchConstants, Layouts, PassDesc, PassSet};
 use solution::camera::{clip_planes_for, EyeView};
-use solution::format::Solution;
+use solution::format::{Header, MappedSolution, Solution};
 use std::sync::Arc;
 
 /// Options of the renderer.
@@ -51,7 +51,6 @@ pub struct RendererDesc {
     /// turns MSAA off.
     pub max_samples: u32,
     pub multiview: MultiviewMode,
-    pub storage: CoefficientStorage,
     /// Cap on the evaluated SH order (`--max-order`).
     pub max_order: Option<u32>,
     pub tone: ToneSettings,
@@ -64,7 +63,6 @@ impl Default for RendererDesc {
             height: 512,
             max_samples: 4,
             multiview: MultiviewMode::Auto,
-            storage: CoefficientStorage::default(),
             max_order: None,
             tone: ToneSettings::default(),
         }
@@ -139,9 +137,30 @@ pub struct StereoRenderer {
     gpu_shared: Arc<crate::gpu::DeviceShared>,
     queue: vk::Queue,
     command_pool: vk::CommandPool,
+    /// How long the scene upload took in [`StereoRenderer::new`] (`--timings`).
+    upload_time: std::time::Duration,
+    /// When the first frame's commands were submitted (`--timings`).
+    first_submit: Option<std::time::Instant>,
+    /// Bytes and submits of a mapped upload (zero for in-memory solutions).
+    upload_stats: UploadStats,
 }
 
 const UNIFORM_SIZE: u64 = 2 * 64 + 2 * 16;
+
+fn check_swapchain(desc: &RendererDesc, swapchain: &SwapchainDesc) -> Result<(), RenderError> {
+    if swapchain.width != desc.width || swapchain.height != desc.height {
+        return Err(RenderError::Usage(format!(
+            "swapchain images are {}x{} but the renderer was asked for {}x{}",
+            swapchain.width, swapchain.height, desc.width, desc.height
+        )));
+    }
+    if swapchain.layers < 2 || swapchain.images.is_empty() {
+        return Err(RenderError::Usage(
+            "the swapchain needs at least one image with two layers".into(),
+        ));
+    }
+    Ok(())
+}
 
 fn sample_count(gpu: &Gpu, max: u32) -> vk::SampleCountFlags {
     let limits = &gpu.info.limits;
@@ -179,48 +198,109 @@ fn depth_format(gpu: &Gpu) -> Result<vk::Format, GpuError> {
     Err(GpuError::Unsupported("no depth format".into()))
 }
 
+fn header_bounds(header: &Header) -> (DVec3, DVec3) {
+    (
+        DVec3::from(header.bounds_min.map(f64::from)),
+        DVec3::from(header.bounds_max.map(f64::from)),
+    )
+}
+
+/// The pass sets of a renderer drawing coefficients stored as `storage`: one
+/// per pass of a stereo frame, then (if not among them) the mono pass.
+fn pass_sets(
+    gpu: &Gpu,
+    layouts: &Layouts,
+    path: multiview::MultiviewPath,
+    template: PassDesc,
+) -> Result<Vec<PassSet>, GpuError> {
+    let mut masks: Vec<u32> = path.stereo_masks().to_vec();
+    if !masks.contains(&0b01) {
+        masks.push(0b01);
+    }
+    masks
+        .into_iter()
+        .map(|view_mask| {
+            PassSet::new(
+                gpu,
+                layouts,
+                PassDesc {
+                    view_mask,
+                    ..template
+                },
+            )
+        })
+        .collect()
+}
+
 impl StereoRenderer {
-    /// Uploads `solution` and prepares to draw into `swapchain`'s images.
+    /// Uploads an in-memory `solution` (coefficients stored as its batches'
+    /// scalar types say) and prepares to draw into `swapchain`'s images.
     pub fn new(
         gpu: &Gpu,
         solution: &Solution,
         desc: RendererDesc,
         swapchain: &SwapchainDesc,
     ) -> Result<StereoRenderer, RenderError> {
-        if swapchain.width != desc.width || swapchain.height != desc.height {
-            return Err(RenderError::Usage(format!(
-                "swapchain images are {}x{} but the renderer was asked for {}x{}",
-                swapchain.width, swapchain.height, desc.width, desc.height
-            )));
-        }
-        if swapchain.layers < 2 || swapchain.images.is_empty() {
-            return Err(RenderError::Usage(
-                "the swapchain needs at least one image with two layers".into(),
-            ));
-        }
+        check_swapchain(&desc, swapchain)?;
+        let upload_start = std::time::Instant::now();
+        let scene = GpuScene::new(gpu, solution, desc.max_order)?;
+        let upload_time = upload_start.elapsed();
+        let mut renderer = Self::from_scene(gpu, scene, &solution.header, desc, swapchain)?;
+        renderer.upload_time = upload_time;
+        Ok(renderer)
+    }
+
+    /// Uploads a mapped solution file as stored ([`GpuScene::from_mapped`]: in
+    /// bounded chunks, each section's checksum verified on the way) and prepares
+    /// to draw into `swapchain`'s images.
+    pub fn from_mapped(
+        gpu: &Gpu,
+        file: &MappedSolution,
+        desc: RendererDesc,
+        swapchain: &SwapchainDesc,
+    ) -> Result<StereoRenderer, RenderError> {
+        check_swapchain(&desc, swapchain)?;
+        let upload_start = std::time::Instant::now();
+        let (scene, stats) = GpuScene::from_mapped(gpu, file, desc.max_order)?;
+        let upload_time = upload_start.elapsed();
+        let mut renderer = Self::from_scene(gpu, scene, file.header(), desc, swapchain)?;
+        renderer.upload_time = upload_time;
+        renderer.upload_stats = stats;
+        Ok(renderer)
+    }
+
+    /// Bytes and staging submits of the upload ([`StereoRenderer::from_mapped`]).
+    pub fn upload_stats(&self) -> UploadStats {
+        self.upload_stats
+    }
+
+    /// Prepares to draw an uploaded `scene` (whose file's header is `header`)
+    /// into `swapchain`'s images.
+    pub fn from_scene(
+        gpu: &Gpu,
+        scene: GpuScene,
+        header: &Header,
+        desc: RendererDesc,
+        swapchain: &SwapchainDesc,
+    ) -> Result<StereoRenderer, RenderError> {
+        check_swapchain(&desc, swapchain)?;
+        let bounds = header_bounds(header);
         let path = multiview::resolve(gpu, desc.multiview);
         let samples = sample_count(gpu, desc.max_samples);
         let depth_format = depth_format(gpu)?;
-        let scene = GpuScene::new(gpu, solution, desc.storage, desc.max_order)?;
         let layouts = Layouts::new(gpu)?;
-        let mut pass_sets = Vec::new();
-        let mut masks: Vec<u32> = path.stereo_masks().to_vec();
-        if !masks.contains(&0b01) {
-            masks.push(0b01);
-        }
-        for mask in masks {
-            pass_sets.push(PassSet::new(
-                gpu,
-                &layouts,
-                PassDesc {
-                    view_mask: mask,
-                    samples,
-                    depth_format,
-                    output_format: swapchain.format,
-                    storage: desc.storage,
-                },
-            )?);
-        }
+        let pass_sets = pass_sets(
+            gpu,
+            &layouts,
+            path,
+            PassDesc {
+                view_mask: 0b01,
+                samples,
+                depth_format,
+                output_format: swapchain.format,
+                storage: scene.storage,
+            },
+        )?;
         let (depth, linear, msaa) =
             frame_images(gpu, desc.width, desc.height, samples, depth_format)?;
         let uniforms = Buffer::new(
@@ -260,14 +340,14 @@ impl StereoRenderer {
             desc,
             samples,
             path,
-            bounds: (
-                DVec3::from(solution.header.bounds_min.map(f64::from)),
-                DVec3::from(solution.header.bounds_max.map(f64::from)),
-            ),
+            bounds,
             swapchain: swapchain.clone(),
             gpu_shared: gpu.shared.clone(),
             queue: gpu.queue,
             command_pool: gpu.command_pool(),
+            upload_time: std::time::Duration::ZERO,
+            first_submit: None,
+            upload_stats: UploadStats::default(),
         };
         renderer.create_descriptors()?;
         for &raw in &swapchain.images {
@@ -329,14 +409,25 @@ impl StereoRenderer {
         Ok(())
     }
 
-    /// Replaces the drawn solution (a reloaded file), keeping the pipelines and
-    /// images. On error the previous solution stays.
+    /// Replaces the drawn solution (a reloaded file), keeping the images and,
+    /// unless its storage type differs, the pipelines. On error the previous
+    /// solution stays.
     pub fn set_solution(&mut self, gpu: &Gpu, solution: &Solution) -> Result<(), RenderError> {
-        let scene = GpuScene::new(gpu, solution, self.desc.storage, self.desc.max_order)?;
-        let bounds = (
-            DVec3::from(solution.header.bounds_min.map(f64::from)),
-            DVec3::from(solution.header.bounds_max.map(f64::from)),
-        );
+        let scene = GpuScene::new(gpu, solution, self.desc.max_order)?;
+        let bounds = header_bounds(&solution.header);
+        // A file of the other storage type needs the other shaders.
+        let new_passes = match self.pass_sets.first() {
+            Some(first) if first.desc.storage != scene.storage => Some(pass_sets(
+                gpu,
+                &self.layouts,
+                self.path,
+                PassDesc {
+                    storage: scene.storage,
+                    ..first.desc
+                },
+            )?),
+            _ => None,
+        };
         let inspect_gpu = if self.inspect.draws_lines() {
             let diagonal = (bounds.1 - bounds.0).length() as f32;
             Some(inspect::InspectGpu::new(
@@ -344,13 +435,24 @@ impl StereoRenderer {
                 solution,
                 &scene.draws,
                 &self.layouts,
-                &self.pass_sets,
+                new_passes.as_ref().unwrap_or(&self.pass_sets),
                 diagonal,
             )?)
         } else {
             None
         };
         self.wait_idle();
+        if let Some(passes) = new_passes {
+            // The framebuffers belong to the old passes' render passes: remade
+            // for the new ones, as on a resize.
+            for target in std::mem::take(&mut self.targets) {
+                self.destroy_target(target);
+            }
+            self.pass_sets = passes;
+            for raw in self.swapchain.images.clone() {
+                self.add_target(gpu, raw)?;
+            }
+        }
         // SAFETY: the device is idle; the pool's sets are used by no pending
         // command buffer, and new ones are made right after.
         unsafe {
@@ -604,8 +706,20 @@ impl StereoRenderer {
                 .queue_submit(self.queue, &submit, self.fence.raw)
         }
         .ctx("vkQueueSubmit")?;
+        self.first_submit
+            .get_or_insert_with(std::time::Instant::now);
         self.fence.wait()?;
         Ok(())
+    }
+
+    /// How long [`StereoRenderer::new`] spent uploading the scene.
+    pub fn upload_time(&self) -> std::time::Duration {
+        self.upload_time
+    }
+
+    /// When [`StereoRenderer::render`] first submitted a frame.
+    pub fn first_submit(&self) -> Option<std::time::Instant> {
+        self.first_submit
     }
 
     fn write_uniforms(&mut self, views: &[EyeView]) {

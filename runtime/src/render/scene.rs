@@ -2,23 +2,43 @@
 //! (SH batches sorted by order, so diffuse batches share one trivial pipeline,
 //! then 001's global-cube batches by resolution, drawn by `scene_cube.vert`).
 
-use crate::gpu::{Buffer, Gpu, GpuError};
+use crate::gpu::{Buffer, BufferDesc, Fence, Gpu, GpuError, MemoryLocation, VkContext};
 use ash::vk;
-use solution::format::{Batch, Representation, Solution, Vertex};
+use solution::format::{
+    layout, Batch, BatchSection, FormatError, MappedSolution, Representation, ScalarType, Solution,
+    Vertex,
+};
 
-/// How SH coefficients are stored in the GPU's storage buffer.
-///
-/// Measured (docs/benchmarks.md, "Runtime"): f16 halves the buffer and is within
-/// a few 1e-4 relative of f32 radiance; f32 is the default because on lavapipe the
-/// two cost the same per frame and f32 matches the solver's f32 evaluation to the
-/// tolerance `solution::sh::f32_basis_tolerance` states.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum)]
+/// How a scene's coefficients are stored in the GPU's storage buffer: as the
+/// file stores them (the shaders read either; f16 with the batch's scale as a
+/// push constant). In-memory solutions use their batches' [`ScalarType`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum CoefficientStorage {
     #[default]
     F32,
     /// IEEE half, two per 32-bit word, with a per-batch scale.
     F16,
 }
+
+impl CoefficientStorage {
+    pub fn of(scalar: ScalarType) -> CoefficientStorage {
+        match scalar {
+            ScalarType::F32 => CoefficientStorage::F32,
+            ScalarType::F16 { .. } => CoefficientStorage::F16,
+        }
+    }
+}
+
+/// The staging buffer of the mapped upload: sections pass through it in chunks
+/// of at most half this many bytes (two halves, so that filling one overlaps
+/// the device's copy out of the other), so the upload's host memory is bounded
+/// whatever the file's size (a larger buffer saves little: one submit per
+/// 32 MiB).
+pub const STAGING_BYTES: u64 = 64 << 20;
+
+/// The piece of a section that the upload checksums, bounds and copies before
+/// moving on: small enough to stay in the L2 cache between the three.
+const PASS_BYTES: u64 = 256 << 10;
 
 /// Why a solution cannot be drawn.
 #[derive(Debug, thiserror::Error)]
@@ -43,6 +63,14 @@ pub enum SceneError {
         bytes: u64,
         limit: u64,
     },
+    #[error(
+        "batch {f16_batch} stores f16 coefficients and batch {f32_batch} f32; this renderer \
+         draws one storage type per scene (write the file with one scalar type)"
+    )]
+    MixedStorage { f32_batch: usize, f16_batch: usize },
+    /// A section's checksum failed while it was streamed to the GPU.
+    #[error(transparent)]
+    File(#[from] FormatError),
     #[error(transparent)]
     Gpu(#[from] GpuError),
 }
@@ -106,9 +134,34 @@ pub struct GpuScene {
     /// so that the brightest radiance any vertex can produce is at most 1 (see
     /// [`radiance_bound`]). The read-back and the tone map divide it out again.
     pub radiance_scale: f32,
+    /// The file's storage type (every batch has the same).
     pub storage: CoefficientStorage,
     pub vertex_count: u64,
     pub triangle_count: u64,
+}
+
+/// `|Y_lm| ≤ envelope(l) = √((2l+1)/(4π))` (Unsöld) for the first `count`
+/// coefficients, index `l² + l + m`.
+fn envelopes(count: usize) -> Vec<f64> {
+    (0..count)
+        .map(|k| solution::sh::envelope((k as f64).sqrt().floor() as u32))
+        .collect()
+}
+
+/// The SH bound of [`radiance_bound`] over vertices whose `n · 3` coefficients
+/// `value(v, i)` returns, only the first `envelope.len()` per channel counting.
+fn sh_bound(vertex_count: usize, n: usize, envelope: &[f64], value: impl Fn(usize) -> f32) -> f64 {
+    let mut bound = 0.0f64;
+    for v in 0..vertex_count {
+        let mut sum = [0.0f64; 3];
+        for (k, e) in envelope.iter().enumerate() {
+            for (c, s) in sum.iter_mut().enumerate() {
+                *s += f64::from(value((v * n + k) * 3 + c)).abs() * e;
+            }
+        }
+        bound = sum.into_iter().fold(bound, f64::max);
+    }
+    bound
 }
 
 /// An upper bound of the radiance a batch's vertices can produce in any
@@ -125,25 +178,117 @@ pub fn radiance_bound(batch: &Batch, order: u32) -> f64 {
     }
     let n = batch.representation.coefficients_per_channel() as usize;
     let count = (order as usize + 1).pow(2).min(n);
-    let envelope: Vec<f64> = (0..count)
-        .map(|k| solution::sh::envelope((k as f64).sqrt().floor() as u32))
+    sh_bound(batch.vertices.len(), n, &envelopes(count), |i| {
+        batch.coefficients.get(i).copied().unwrap_or(0.0)
+    })
+}
+
+/// [`radiance_bound`] of stored coefficient bytes (a whole number of vertices
+/// for SH): f32, or f16 times `scale`. Reads the bytes; converts nothing that
+/// is uploaded.
+fn stored_radiance_bound(
+    bytes: &[u8],
+    representation: Representation,
+    scalar: ScalarType,
+    envelope: &[f64],
+    half_table: &[f32],
+) -> f64 {
+    let f32_at = |b: &[u8]| f32::from_le_bytes([b[0], b[1], b[2], b[3]]).abs();
+    // Magnitude only: the sign bit is masked off (the bound sums |c|).
+    let f16_at = |b: &[u8]| half_table[usize::from(u16::from_le_bytes([b[0], b[1]]) & 0x7FFF)];
+    match (representation, scalar) {
+        (Representation::Cube { .. }, ScalarType::F32) => bytes
+            .chunks_exact(4)
+            .fold(0.0f32, |m, b| m.max(f32_at(b)))
+            .into(),
+        // Finite halves without their sign order as their bit patterns do, so
+        // the largest magnitude is the largest masked pattern.
+        (Representation::Cube { .. }, ScalarType::F16 { scale }) => {
+            let top = bytes
+                .chunks_exact(2)
+                .map(|b| u16::from_le_bytes([b[0], b[1]]) & 0x7FFF)
+                .max()
+                .unwrap_or(0);
+            f64::from(half_table[usize::from(top)]) * f64::from(scale)
+        }
+        (Representation::Sh { .. }, ScalarType::F32) => {
+            sh_bound_f32(bytes, representation, envelope)
+        }
+        (Representation::Sh { .. }, ScalarType::F16 { scale }) => {
+            sh_bound_stored(bytes, representation, envelope, 2, f16_at) * f64::from(scale)
+        }
+    }
+}
+
+/// The SH bound of [`radiance_bound`] over stored f32 vertices, summed in f32
+/// over twelve lanes (four RGB triples, which the compiler vectorizes) so that
+/// it keeps pace with the copy. A sum of m non-negative f32 products is within
+/// (m + 1)·2⁻²⁴ relative of the exact one (Higham 2002, §4.2), so scaling it up
+/// by that keeps it an upper bound.
+fn sh_bound_f32(bytes: &[u8], representation: Representation, envelope: &[f64]) -> f64 {
+    let n = representation.coefficients_per_channel() as usize;
+    let lanes: Vec<f32> = (0..envelope.len() * 3)
+        .map(|i| envelope[i / 3] as f32)
         .collect();
+    let slack = 1.0 + (envelope.len() as f64 + 1.0) * 2f64.powi(-24);
     let mut bound = 0.0f64;
-    for v in 0..batch.vertices.len() {
-        for c in 0..3 {
-            let mut sum = 0.0;
-            for (k, e) in envelope.iter().enumerate() {
-                let value = batch
-                    .coefficients
-                    .get((v * n + k) * 3 + c)
-                    .copied()
-                    .unwrap_or(0.0);
-                sum += f64::from(value).abs() * e;
+    for vertex in bytes.chunks_exact(n * 3 * 4) {
+        let used = &vertex[..lanes.len() * 4];
+        let mut acc = [0.0f32; 12];
+        let mut values = used.chunks_exact(48);
+        let mut weights = lanes.chunks_exact(12);
+        for (v, e) in (&mut values).zip(&mut weights) {
+            for j in 0..12 {
+                let x = f32::from_le_bytes([v[4 * j], v[4 * j + 1], v[4 * j + 2], v[4 * j + 3]]);
+                acc[j] += x.abs() * e[j];
             }
-            bound = bound.max(sum);
+        }
+        // The rest starts at a whole RGB triple, so lane j is still channel j % 3.
+        for (j, (v, e)) in values
+            .remainder()
+            .chunks_exact(4)
+            .zip(weights.remainder())
+            .enumerate()
+        {
+            acc[j] += f32::from_le_bytes([v[0], v[1], v[2], v[3]]).abs() * e;
+        }
+        for c in 0..3 {
+            let sum = acc[c] + acc[c + 3] + acc[c + 6] + acc[c + 9];
+            bound = bound.max(f64::from(sum) * slack);
         }
     }
     bound
+}
+
+/// The SH bound of [`radiance_bound`] over stored vertices of `size`-byte
+/// scalars that `magnitude` reads.
+fn sh_bound_stored(
+    bytes: &[u8],
+    representation: Representation,
+    envelope: &[f64],
+    size: usize,
+    magnitude: impl Fn(&[u8]) -> f32,
+) -> f64 {
+    let n = representation.coefficients_per_channel() as usize;
+    let mut bound = 0.0f64;
+    for vertex in bytes.chunks_exact(n * 3 * size) {
+        let mut sum = [0.0f64; 3];
+        for (rgb, e) in vertex.chunks_exact(3 * size).zip(envelope) {
+            for (c, s) in sum.iter_mut().enumerate() {
+                *s += f64::from(magnitude(&rgb[c * size..(c + 1) * size])) * e;
+            }
+        }
+        bound = sum.into_iter().fold(bound, f64::max);
+    }
+    bound
+}
+
+/// Every half's magnitude as f32, indexed by its bits without the sign: the
+/// bound reads f16 coefficients through it (32 K entries, built once per upload).
+fn half_magnitudes() -> Vec<f32> {
+    (0..0x8000u16)
+        .map(|bits| half::f16::from_bits(bits).to_f32())
+        .collect()
 }
 
 fn vertex_bytes(vertices: &[Vertex], out: &mut Vec<u8>) {
@@ -159,19 +304,47 @@ fn align(value: u64, alignment: u64) -> u64 {
     value.div_ceil(a) * a
 }
 
-impl GpuScene {
-    /// Uploads `solution`. `max_order` caps the evaluated SH order (bands above it
-    /// are not read; see `crate::render::truncation`); cube batches ignore it.
-    pub fn new(
-        gpu: &Gpu,
-        solution: &Solution,
-        storage: CoefficientStorage,
+/// What the upload needs to know of a batch, from the file's tables or from an
+/// in-memory batch.
+#[derive(Clone, Copy, Debug)]
+struct BatchShape {
+    representation: Representation,
+    scalar: ScalarType,
+    vertex_count: u64,
+    index_count: u64,
+}
+
+impl BatchShape {
+    fn coefficient_bytes(&self) -> u64 {
+        let size = match self.scalar {
+            ScalarType::F32 => 4,
+            ScalarType::F16 { .. } => 2,
+        };
+        self.vertex_count * self.representation.coefficients_per_channel() * 3 * size
+    }
+}
+
+/// Where each batch goes in the three GPU buffers, in draw order.
+struct Plan {
+    /// `(batch index, draw)`, draw order; the draw's `index_count` is 0 for a
+    /// batch without triangles (its data is still uploaded).
+    batches: Vec<(usize, DrawBatch)>,
+    storage: CoefficientStorage,
+    vertex_total: u64,
+    index_total: u64,
+    coefficient_total: u64,
+}
+
+impl Plan {
+    fn new(
+        shapes: &[BatchShape],
         max_order: Option<u32>,
-    ) -> Result<GpuScene, SceneError> {
-        let limits = &gpu.info.limits;
-        let mut order_of = Vec::new();
-        for (i, batch) in solution.batches.iter().enumerate() {
-            let (kind, order) = match batch.representation {
+        limits: &vk::PhysicalDeviceLimits,
+    ) -> Result<Plan, SceneError> {
+        let storage = scene_storage(shapes)?;
+        let mut order_of = Vec::with_capacity(shapes.len());
+        for (i, shape) in shapes.iter().enumerate() {
+            let (kind, order) = match shape.representation {
                 Representation::Sh { order } => (DrawKind::Sh, order),
                 Representation::Cube { directions } => {
                     match solution::cube::resolution_from_directions(directions) {
@@ -179,102 +352,23 @@ impl GpuScene {
                         None => {
                             return Err(SceneError::Representation {
                                 batch: i,
-                                representation: batch.representation,
+                                representation: shape.representation,
                             })
                         }
                     }
                 }
             };
-            let n = batch.representation.coefficients_per_channel();
-            let expected = (batch.vertices.len() as u64)
-                .saturating_mul(n)
-                .saturating_mul(3);
-            if batch.coefficients.len() as u64 != expected {
-                return Err(SceneError::Inconsistent {
-                    batch: i,
-                    what: format!(
-                        "{} coefficients for {} vertices of {:?} (expected {expected})",
-                        batch.coefficients.len(),
-                        batch.vertices.len(),
-                        batch.representation
-                    ),
-                });
-            }
-            if !batch.indices.len().is_multiple_of(3) {
-                return Err(SceneError::Inconsistent {
-                    batch: i,
-                    what: format!(
-                        "{} indices is not a whole number of triangles",
-                        batch.indices.len()
-                    ),
-                });
-            }
-            if let Some(&bad) = batch
-                .indices
-                .iter()
-                .find(|&&ix| ix as usize >= batch.vertices.len())
-            {
-                return Err(SceneError::Inconsistent {
-                    batch: i,
-                    what: format!(
-                        "index {bad} is out of range for {} vertices",
-                        batch.vertices.len()
-                    ),
-                });
-            }
             order_of.push((kind, order, i));
         }
         // Diffuse first, then SH by order, then cubes by resolution: one switch
         // per pipeline, and draws of one loop bound together.
         order_of.sort();
-
-        let mut vertex_data = Vec::new();
-        let mut index_data = Vec::new();
-        let mut coeff_data: Vec<u8> = Vec::new();
-        let mut draws = Vec::new();
-        let mut bound = 0.0f64;
-        let mut vertex_base = 0u64;
-        let mut first_index = 0u64;
-        for &(kind, file_order, i) in &order_of {
-            let batch = &solution.batches[i];
-            let order = max_order.map_or(file_order, |m| m.min(file_order));
-            bound = bound.max(radiance_bound(batch, order));
-            let stride = batch.representation.coefficients_per_channel() * 3;
-            let offset = align(
-                coeff_data.len() as u64,
-                limits.min_storage_buffer_offset_alignment,
-            );
-            coeff_data.resize(offset as usize, 0);
-            let storage_scale = match storage {
-                CoefficientStorage::F32 => {
-                    for c in &batch.coefficients {
-                        coeff_data.extend_from_slice(&c.to_le_bytes());
-                    }
-                    1.0
-                }
-                CoefficientStorage::F16 => {
-                    // Scale so the largest magnitude is 1024: far below the half
-                    // maximum (65504), and values down to 6e-8 of it stay normal.
-                    let max = batch
-                        .coefficients
-                        .iter()
-                        .fold(0.0f32, |m, c| m.max(c.abs()));
-                    let scale = if max > 0.0 && max.is_finite() {
-                        max / 1024.0
-                    } else {
-                        1.0
-                    };
-                    for c in &batch.coefficients {
-                        let h = half::f16::from_f32(c / scale);
-                        coeff_data.extend_from_slice(&h.to_bits().to_le_bytes());
-                    }
-                    if !batch.coefficients.len().is_multiple_of(2) {
-                        coeff_data.extend_from_slice(&[0, 0]);
-                    }
-                    scale
-                }
-            };
-            let bytes = coeff_data.len() as u64 - offset;
+        let mut batches = Vec::with_capacity(shapes.len());
+        let (mut vertex_base, mut first_index, mut coefficient_end) = (0u64, 0u64, 0u64);
+        for (kind, file_order, i) in order_of {
+            let shape = &shapes[i];
+            let offset = align(coefficient_end, limits.min_storage_buffer_offset_alignment);
+            let bytes = shape.coefficient_bytes();
             if bytes > u64::from(limits.max_storage_buffer_range) {
                 return Err(SceneError::TooLarge {
                     batch: i,
@@ -282,39 +376,375 @@ impl GpuScene {
                     limit: u64::from(limits.max_storage_buffer_range),
                 });
             }
-            vertex_bytes(&batch.vertices, &mut vertex_data);
-            for ix in &batch.indices {
-                index_data.extend_from_slice(&ix.to_le_bytes());
-            }
             let too_big = |what: &str| SceneError::Inconsistent {
                 batch: i,
                 what: format!("{what} exceeds the 32-bit range of a draw"),
             };
-            if !batch.indices.is_empty() {
-                draws.push(DrawBatch {
-                    source: i,
-                    kind,
-                    file_order,
-                    order,
-                    first_index: u32::try_from(first_index).map_err(|_| too_big("index count"))?,
-                    index_count: u32::try_from(batch.indices.len())
-                        .map_err(|_| too_big("index count"))?,
-                    vertex_base: u32::try_from(vertex_base).map_err(|_| too_big("vertex count"))?,
-                    vertex_count: batch.vertices.len() as u32,
-                    coeff_offset: offset,
-                    coeff_bytes: bytes.max(4),
-                    stride: stride as u32,
-                    storage_scale,
-                });
-            }
-            vertex_base += batch.vertices.len() as u64;
-            first_index += batch.indices.len() as u64;
+            let u32_of = |value: u64, what: &str| u32::try_from(value).map_err(|_| too_big(what));
+            let draw = DrawBatch {
+                source: i,
+                kind,
+                file_order,
+                order: max_order.map_or(file_order, |m| m.min(file_order)),
+                first_index: u32_of(first_index, "index count")?,
+                index_count: u32_of(shape.index_count, "index count")?,
+                vertex_base: u32_of(vertex_base, "vertex count")?,
+                vertex_count: u32_of(shape.vertex_count, "vertex count")?,
+                coeff_offset: offset,
+                // f16 is read in 32-bit words: round up to whole words.
+                coeff_bytes: align(bytes, 4).max(4),
+                stride: u32_of(
+                    shape.representation.coefficients_per_channel() * 3,
+                    "stride",
+                )?,
+                storage_scale: match shape.scalar {
+                    ScalarType::F32 => 1.0,
+                    ScalarType::F16 { scale } => scale,
+                },
+            };
+            coefficient_end = offset + bytes;
+            vertex_base += shape.vertex_count;
+            first_index += shape.index_count;
+            batches.push((i, draw));
         }
-        let radiance_scale = if bound > 0.0 && bound.is_finite() {
-            (1.0 / bound) as f32
-        } else {
-            1.0
+        Ok(Plan {
+            batches,
+            storage,
+            vertex_total: vertex_base,
+            index_total: first_index,
+            coefficient_total: align(coefficient_end, 4),
+        })
+    }
+
+    fn draws(&self) -> Vec<DrawBatch> {
+        self.batches
+            .iter()
+            .filter(|(_, d)| d.index_count > 0)
+            .map(|(_, d)| d.clone())
+            .collect()
+    }
+}
+
+/// The one storage type of a scene's batches.
+fn scene_storage(shapes: &[BatchShape]) -> Result<CoefficientStorage, SceneError> {
+    let find = |storage| {
+        shapes
+            .iter()
+            .position(|s| CoefficientStorage::of(s.scalar) == storage)
+    };
+    match (find(CoefficientStorage::F32), find(CoefficientStorage::F16)) {
+        (Some(f32_batch), Some(f16_batch)) => Err(SceneError::MixedStorage {
+            f32_batch,
+            f16_batch,
+        }),
+        (None, Some(_)) => Ok(CoefficientStorage::F16),
+        _ => Ok(CoefficientStorage::F32),
+    }
+}
+
+fn radiance_scale(bound: f64) -> f32 {
+    if bound > 0.0 && bound.is_finite() {
+        (1.0 / bound) as f32
+    } else {
+        1.0
+    }
+}
+
+fn device_buffer(gpu: &Gpu, usage: vk::BufferUsageFlags, size: u64) -> Result<Buffer, GpuError> {
+    Buffer::new(
+        gpu,
+        BufferDesc {
+            size: size.max(4),
+            usage: usage | vk::BufferUsageFlags::TRANSFER_DST,
+            location: MemoryLocation::GpuOnly,
+        },
+    )
+}
+
+/// Which of the three scene buffers a copy fills.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Target {
+    Vertices,
+    Indices,
+    Coefficients,
+}
+
+/// One half of the staging buffer: its own pending copies, command buffer and
+/// fence, so the host fills one half while the device copies out of the other.
+struct StagingHalf {
+    /// Where the half starts in the staging buffer, and its size.
+    offset: u64,
+    size: u64,
+    fill: u64,
+    regions: Vec<(Target, vk::BufferCopy)>,
+    cmd: vk::CommandBuffer,
+    fence: Fence,
+    /// Submitted and not yet waited for.
+    pending: bool,
+}
+
+/// Streams byte ranges into the scene buffers through one reused staging
+/// buffer in two halves: [`Uploader::push`] copies into the current half; a
+/// full half is submitted without waiting and filling goes on in the other,
+/// once the device has finished copying out of it.
+struct Uploader<'a> {
+    gpu: &'a Gpu,
+    // Declared before `staging`: dropped (and waited for) first.
+    halves: [StagingHalf; 2],
+    current: usize,
+    staging: Buffer,
+    targets: [vk::Buffer; 3],
+    /// Submits so far (one per filled half) and the time spent waiting for
+    /// them, for `--timings`.
+    submits: u32,
+    transfer: std::time::Duration,
+}
+
+impl<'a> Uploader<'a> {
+    /// A staging buffer of two halves of `half` bytes each.
+    fn new(gpu: &'a Gpu, half: u64, targets: [vk::Buffer; 3]) -> Result<Self, GpuError> {
+        let half = half.max(4).div_ceil(4) * 4;
+        let staging = Buffer::new(
+            gpu,
+            BufferDesc {
+                size: 2 * half,
+                usage: vk::BufferUsageFlags::TRANSFER_SRC,
+                location: MemoryLocation::Mapped,
+            },
+        )?;
+        let alloc = vk::CommandBufferAllocateInfo::default()
+            .command_pool(gpu.command_pool())
+            .level(vk::CommandBufferLevel::PRIMARY)
+            .command_buffer_count(2);
+        // SAFETY: the pool belongs to this device and is used from this thread;
+        // the buffers are freed in Drop after their fences are waited for.
+        let cmds = unsafe { gpu.device().allocate_command_buffers(&alloc) }
+            .ctx("vkAllocateCommandBuffers")?;
+        let half_at = |k: usize, fence: Fence| StagingHalf {
+            offset: k as u64 * half,
+            size: half,
+            fill: 0,
+            regions: Vec::new(),
+            cmd: cmds[k],
+            fence,
+            pending: false,
         };
+        Ok(Uploader {
+            gpu,
+            halves: [
+                half_at(0, Fence::new(gpu, false)?),
+                half_at(1, Fence::new(gpu, false)?),
+            ],
+            current: 0,
+            staging,
+            targets,
+            submits: 0,
+            transfer: std::time::Duration::ZERO,
+        })
+    }
+
+    fn room(&self) -> u64 {
+        let half = &self.halves[self.current];
+        half.size - half.fill
+    }
+
+    /// Copies `bytes` (at most a half's size) to staging, bound for `target`
+    /// at `dst_offset`.
+    fn push(&mut self, target: Target, dst_offset: u64, bytes: &[u8]) -> Result<(), GpuError> {
+        if bytes.is_empty() {
+            return Ok(());
+        }
+        if bytes.len() as u64 > self.room() {
+            self.flush()?;
+        }
+        let size = bytes.len() as u64;
+        let half = &mut self.halves[self.current];
+        let src_offset = half.offset + half.fill;
+        // SAFETY: the half is not pending (flush waited for its fence before
+        // making it current), so no device work reads this range of staging.
+        unsafe { self.staging.write(src_offset, bytes) };
+        // Consecutive pieces of one section continue the previous region.
+        match half.regions.last_mut() {
+            Some((t, r))
+                if *t == target
+                    && r.src_offset + r.size == src_offset
+                    && r.dst_offset + r.size == dst_offset =>
+            {
+                r.size += size;
+            }
+            _ => half.regions.push((
+                target,
+                vk::BufferCopy {
+                    src_offset,
+                    dst_offset,
+                    size,
+                },
+            )),
+        }
+        half.fill += size;
+        Ok(())
+    }
+
+    /// Submits the current half's copies without waiting, then makes the other
+    /// half current once the device has finished with it.
+    fn flush(&mut self) -> Result<(), GpuError> {
+        if !self.halves[self.current].regions.is_empty() {
+            self.submit(self.current)?;
+        }
+        self.current ^= 1;
+        self.wait(self.current)
+    }
+
+    fn submit(&mut self, k: usize) -> Result<(), GpuError> {
+        let device = self.gpu.device();
+        let half = &mut self.halves[k];
+        let begin = vk::CommandBufferBeginInfo::default()
+            .flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
+        // SAFETY: the half is not pending (waited for before it was filled), so
+        // its command buffer may be re-recorded (the pool allows resets); every
+        // region lies inside the staging buffer (push kept `fill` ≤ the half)
+        // and inside its target, which `Plan` sized for every batch at its
+        // offset; the fence is unsignalled (reset after its last wait).
+        unsafe {
+            device
+                .begin_command_buffer(half.cmd, &begin)
+                .ctx("vkBeginCommandBuffer")?;
+            for (t, target) in [Target::Vertices, Target::Indices, Target::Coefficients]
+                .into_iter()
+                .enumerate()
+            {
+                let list: Vec<vk::BufferCopy> = half
+                    .regions
+                    .iter()
+                    .filter(|(r, _)| *r == target)
+                    .map(|(_, r)| *r)
+                    .collect();
+                if !list.is_empty() {
+                    device.cmd_copy_buffer(half.cmd, self.staging.raw, self.targets[t], &list);
+                }
+            }
+            device
+                .end_command_buffer(half.cmd)
+                .ctx("vkEndCommandBuffer")?;
+            let cmds = [half.cmd];
+            let submit = [vk::SubmitInfo::default().command_buffers(&cmds)];
+            device
+                .queue_submit(self.gpu.queue, &submit, half.fence.raw)
+                .ctx("vkQueueSubmit")?;
+        }
+        half.pending = true;
+        half.regions.clear();
+        self.submits += 1;
+        Ok(())
+    }
+
+    /// Waits for half `k`'s copies, leaving it empty and its fence reset.
+    fn wait(&mut self, k: usize) -> Result<(), GpuError> {
+        let half = &mut self.halves[k];
+        if half.pending {
+            let start = std::time::Instant::now();
+            half.fence.wait()?;
+            half.fence.reset()?;
+            half.pending = false;
+            self.transfer += start.elapsed();
+        }
+        half.fill = 0;
+        Ok(())
+    }
+
+    fn finish(mut self) -> Result<(u32, std::time::Duration), GpuError> {
+        self.flush()?;
+        self.wait(self.current ^ 1)?;
+        self.wait(self.current)?;
+        Ok((self.submits, self.transfer))
+    }
+}
+
+impl Drop for Uploader<'_> {
+    fn drop(&mut self) {
+        for half in &self.halves {
+            if half.pending {
+                // An upload abandoned mid-way (a checksum mismatch): the device
+                // must stop reading staging memory before it is freed.
+                let _ = half.fence.wait();
+            }
+        }
+        let cmds = [self.halves[0].cmd, self.halves[1].cmd];
+        // SAFETY: no submission of these command buffers is pending (waited for
+        // above or in `finish`), and they came from this pool.
+        unsafe {
+            self.gpu
+                .device()
+                .free_command_buffers(self.gpu.command_pool(), &cmds)
+        };
+    }
+}
+
+/// Figures of one mapped upload (`--timings`).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct UploadStats {
+    /// Bytes copied from the file to the GPU.
+    pub bytes: u64,
+    /// Staging fills submitted.
+    pub submits: u32,
+    /// Host time computing the sections' CRC-32.
+    pub checksum: std::time::Duration,
+    /// Host time computing the radiance bound of the coefficients.
+    pub bound: std::time::Duration,
+    /// Host time copying from the map into staging memory.
+    pub staging: std::time::Duration,
+    /// Time waiting for the device's staging-to-buffer copies.
+    pub transfer: std::time::Duration,
+}
+
+impl GpuScene {
+    /// Uploads an in-memory `solution`, storing coefficients as its batches'
+    /// scalar types say (f16 batches are rounded to half here, divided by their
+    /// scale). `max_order` caps the evaluated SH order (bands above it are not
+    /// read; see `crate::render::truncation`); cube batches ignore it.
+    pub fn new(
+        gpu: &Gpu,
+        solution: &Solution,
+        max_order: Option<u32>,
+    ) -> Result<GpuScene, SceneError> {
+        let mut shapes = Vec::with_capacity(solution.batches.len());
+        for (i, batch) in solution.batches.iter().enumerate() {
+            check_in_memory(i, batch)?;
+            shapes.push(BatchShape {
+                representation: batch.representation,
+                scalar: batch.scalar,
+                vertex_count: batch.vertices.len() as u64,
+                index_count: batch.indices.len() as u64,
+            });
+        }
+        let plan = Plan::new(&shapes, max_order, &gpu.info.limits)?;
+        let mut vertex_data = Vec::new();
+        let mut index_data = Vec::new();
+        let mut coeff_data: Vec<u8> = Vec::new();
+        let mut bound = 0.0f64;
+        for (i, draw) in &plan.batches {
+            let batch = &solution.batches[*i];
+            bound = bound.max(radiance_bound(batch, draw.order));
+            coeff_data.resize(draw.coeff_offset as usize, 0);
+            match batch.scalar {
+                ScalarType::F32 => {
+                    for c in &batch.coefficients {
+                        coeff_data.extend_from_slice(&c.to_le_bytes());
+                    }
+                }
+                ScalarType::F16 { scale } => {
+                    for c in &batch.coefficients {
+                        let h = half::f16::from_f32(c / scale);
+                        coeff_data.extend_from_slice(&h.to_bits().to_le_bytes());
+                    }
+                }
+            }
+            vertex_bytes(&batch.vertices, &mut vertex_data);
+            for ix in &batch.indices {
+                index_data.extend_from_slice(&ix.to_le_bytes());
+            }
+        }
+        coeff_data.resize(plan.coefficient_total.max(4) as usize, 0);
         let vertices = Buffer::with_data(gpu, vk::BufferUsageFlags::VERTEX_BUFFER, &vertex_data)?;
         let indices = Buffer::with_data(gpu, vk::BufferUsageFlags::INDEX_BUFFER, &index_data)?;
         let coefficients =
@@ -323,19 +753,322 @@ impl GpuScene {
             coefficients,
             indices,
             vertices,
-            draws,
-            radiance_scale,
-            storage,
-            vertex_count: vertex_base,
-            triangle_count: first_index / 3,
+            draws: plan.draws(),
+            radiance_scale: radiance_scale(bound),
+            storage: plan.storage,
+            vertex_count: plan.vertex_total,
+            triangle_count: plan.index_total / 3,
         })
     }
+
+    /// Uploads a mapped file as stored: vertices, indices and coefficients (f32,
+    /// or f16 whose scale the shader applies) are copied from the map to staging
+    /// memory in chunks of at most [`STAGING_BYTES`] and from there to device
+    /// buffers. Each section's CRC-32 is computed as its chunks pass and checked
+    /// against the file's ([`MappedSolution::verify_section`]), so `file` may be
+    /// opened with [`MappedSolution::open_deferring_checksums`]; a mismatch
+    /// refuses the file with the error naming file, batch and section.
+    pub fn from_mapped(
+        gpu: &Gpu,
+        file: &MappedSolution,
+        max_order: Option<u32>,
+    ) -> Result<(GpuScene, UploadStats), SceneError> {
+        Self::from_mapped_in_chunks(gpu, file, max_order, STAGING_BYTES)
+    }
+
+    /// [`GpuScene::from_mapped`] through a staging buffer of `staging_bytes`
+    /// in two halves (the host fills one while the device copies out of the
+    /// other); a half is raised to one SH vertex's coefficients if that is
+    /// larger, and lowered to the file's bulk if that is smaller. The tests
+    /// stream through a tiny one so that every section is split across chunks.
+    pub fn from_mapped_in_chunks(
+        gpu: &Gpu,
+        file: &MappedSolution,
+        max_order: Option<u32>,
+        staging_bytes: u64,
+    ) -> Result<(GpuScene, UploadStats), SceneError> {
+        let shapes: Vec<BatchShape> = file
+            .batches()
+            .iter()
+            .map(|info| BatchShape {
+                representation: info.representation,
+                scalar: info.scalar,
+                vertex_count: u64::from(info.vertex_count),
+                index_count: u64::from(info.index_count),
+            })
+            .collect();
+        let plan = Plan::new(&shapes, max_order, &gpu.info.limits)?;
+        let vertices = device_buffer(
+            gpu,
+            vk::BufferUsageFlags::VERTEX_BUFFER,
+            plan.vertex_total * layout::VERTEX_LEN as u64,
+        )?;
+        let indices = device_buffer(
+            gpu,
+            vk::BufferUsageFlags::INDEX_BUFFER,
+            plan.index_total * 4,
+        )?;
+        let coefficients = device_buffer(
+            gpu,
+            vk::BufferUsageFlags::STORAGE_BUFFER,
+            plan.coefficient_total,
+        )?;
+        let total: u64 = (0..shapes.len())
+            .map(|b| {
+                [
+                    BatchSection::Vertices,
+                    BatchSection::Coefficients,
+                    BatchSection::Indices,
+                ]
+                .iter()
+                .map(|&s| file.section_bytes(b, s).len() as u64)
+                .sum::<u64>()
+            })
+            .sum();
+        // SH bounds sum per vertex, so SH coefficient chunks hold whole vertices
+        // (one vertex is at most (1024 + 1)² · 3 · 4 ≈ 12.6 MB, under the
+        // default staging size); other sections split anywhere.
+        let unit = |shape: &BatchShape| match shape.representation {
+            Representation::Sh { .. } => {
+                shape.representation.coefficients_per_channel()
+                    * 3
+                    * layout::scalar_size(shape.scalar)
+            }
+            Representation::Cube { .. } => 1,
+        };
+        // Two halves, each at least one unit, together at most `staging_bytes`
+        // (unless one unit is larger) and no larger than needed.
+        let largest_unit = shapes.iter().map(unit).max().unwrap_or(1);
+        let half = (staging_bytes / 2).max(largest_unit).min(total);
+        let mut uploader = Uploader::new(gpu, half, [vertices.raw, indices.raw, coefficients.raw])?;
+        let half_table = match plan.storage {
+            CoefficientStorage::F16 => half_magnitudes(),
+            CoefficientStorage::F32 => Vec::new(),
+        };
+        let mut bound = 0.0f64;
+        let mut stats = UploadStats {
+            bytes: total,
+            ..UploadStats::default()
+        };
+        for (b, draw) in &plan.batches {
+            let b = *b;
+            let shape = shapes[b];
+            let envelope = match shape.representation {
+                Representation::Sh { .. } => envelopes(
+                    (draw.order as usize + 1)
+                        .pow(2)
+                        .min(shape.representation.coefficients_per_channel() as usize),
+                ),
+                Representation::Cube { .. } => Vec::new(),
+            };
+            let sections = [
+                (
+                    BatchSection::Vertices,
+                    Target::Vertices,
+                    u64::from(draw.vertex_base) * layout::VERTEX_LEN as u64,
+                ),
+                (
+                    BatchSection::Coefficients,
+                    Target::Coefficients,
+                    draw.coeff_offset,
+                ),
+                (
+                    BatchSection::Indices,
+                    Target::Indices,
+                    u64::from(draw.first_index) * 4,
+                ),
+            ];
+            for (section, target, dst) in sections {
+                let bytes = file.section_bytes(b, section);
+                let unit = match section {
+                    BatchSection::Coefficients => unit(&shape).max(1),
+                    _ => 1,
+                };
+                let mut hasher = crc32fast::Hasher::new();
+                let mut done = 0u64;
+                while done < bytes.len() as u64 {
+                    // Sections are whole units long, and staging holds at least
+                    // one unit, so after a flush `take` is positive.
+                    // Pieces of about PASS_BYTES stay in the cache between the
+                    // checksum, the bound and the copy, so the map is read from
+                    // memory once.
+                    let remaining =
+                        (bytes.len() as u64 - done).min((PASS_BYTES / unit).max(1) * unit);
+                    let mut take = (uploader.room() / unit * unit).min(remaining);
+                    if take == 0 {
+                        uploader.flush()?;
+                        take = (uploader.room() / unit * unit).min(remaining);
+                    }
+                    if take == 0 {
+                        return Err(SceneError::Inconsistent {
+                            batch: b,
+                            what: format!(
+                                "{section:?} of {remaining} bytes do not fit staging chunks of {unit}"
+                            ),
+                        });
+                    }
+                    let chunk = &bytes[done as usize..(done + take) as usize];
+                    let start = std::time::Instant::now();
+                    hasher.update(chunk);
+                    let hashed = std::time::Instant::now();
+                    stats.checksum += hashed - start;
+                    if section == BatchSection::Coefficients {
+                        bound = bound.max(stored_radiance_bound(
+                            chunk,
+                            shape.representation,
+                            shape.scalar,
+                            &envelope,
+                            &half_table,
+                        ));
+                    }
+                    let bounded = std::time::Instant::now();
+                    stats.bound += bounded - hashed;
+                    let transfer_before = uploader.transfer;
+                    uploader.push(target, dst + done, chunk)?;
+                    // A push that flushed spent part of its time waiting.
+                    stats.staging += bounded
+                        .elapsed()
+                        .saturating_sub(uploader.transfer - transfer_before);
+                    done += take;
+                }
+                file.verify_section(b, section, hasher.finalize())?;
+                // The bytes are in staging or on the device: the map's pages
+                // need not stay resident beside the device copy.
+                file.release_section(b, section);
+            }
+        }
+        (stats.submits, stats.transfer) = uploader.finish()?;
+        Ok((
+            GpuScene {
+                coefficients,
+                indices,
+                vertices,
+                draws: plan.draws(),
+                radiance_scale: radiance_scale(bound),
+                storage: plan.storage,
+                vertex_count: plan.vertex_total,
+                triangle_count: plan.index_total / 3,
+            },
+            stats,
+        ))
+    }
+}
+
+/// The checks `MappedSolution` makes at open, for a solution built in memory:
+/// coefficient counts, whole triangles, indices in range.
+fn check_in_memory(i: usize, batch: &Batch) -> Result<(), SceneError> {
+    let n = batch.representation.coefficients_per_channel();
+    let expected = (batch.vertices.len() as u64)
+        .saturating_mul(n)
+        .saturating_mul(3);
+    if batch.coefficients.len() as u64 != expected {
+        return Err(SceneError::Inconsistent {
+            batch: i,
+            what: format!(
+                "{} coefficients for {} vertices of {:?} (expected {expected})",
+                batch.coefficients.len(),
+                batch.vertices.len(),
+                batch.representation
+            ),
+        });
+    }
+    if !batch.indices.len().is_multiple_of(3) {
+        return Err(SceneError::Inconsistent {
+            batch: i,
+            what: format!(
+                "{} indices is not a whole number of triangles",
+                batch.indices.len()
+            ),
+        });
+    }
+    if let Some(&bad) = batch
+        .indices
+        .iter()
+        .find(|&&ix| ix as usize >= batch.vertices.len())
+    {
+        return Err(SceneError::Inconsistent {
+            batch: i,
+            what: format!(
+                "index {bad} is out of range for {} vertices",
+                batch.vertices.len()
+            ),
+        });
+    }
+    Ok(())
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use solution::format::ScalarType;
+
+    /// The bound the mapped upload computes from stored bytes is the bound of
+    /// the in-memory batch: for f32 an upper bound within the f32 summation's
+    /// rounding (the f32 envelope rounds too, by 2⁻²⁴ per term), and for
+    /// f16 the bound of the rounded values, within 2⁻¹¹ relative of the f32
+    /// one (each |c| rounds by at most that, and the sum has positive terms).
+    #[test]
+    fn stored_bound_matches_the_in_memory_bound() {
+        let order = 3u32;
+        let n = (order as usize + 1).pow(2);
+        let vertices = 5;
+        let coefficients: Vec<f32> = (0..vertices * n * 3)
+            .map(|i| ((i * 37 % 23) as f32 - 11.0) * 0.37)
+            .collect();
+        let batch = Batch {
+            representation: Representation::Sh { order },
+            scalar: ScalarType::F32,
+            vertices: vec![Vertex::default(); vertices],
+            coefficients: coefficients.clone(),
+            indices: vec![],
+        };
+        let f32_bytes: Vec<u8> = coefficients.iter().flat_map(|c| c.to_le_bytes()).collect();
+        let scale = solution::format::f16_scale_for(&coefficients);
+        let f16_bytes: Vec<u8> = coefficients
+            .iter()
+            .flat_map(|c| half::f16::from_f32(c / scale).to_bits().to_le_bytes())
+            .collect();
+        let table = half_magnitudes();
+        for cap in [order, 1] {
+            let expected = radiance_bound(&batch, cap);
+            let envelope = envelopes((cap as usize + 1).pow(2));
+            let from_f32 = stored_radiance_bound(
+                &f32_bytes,
+                batch.representation,
+                ScalarType::F32,
+                &envelope,
+                &table,
+            );
+            // Summed in f32 and scaled up by its rounding bound (sh_bound_f32):
+            // never below the f64 bound, at most 2·(16 + 1)·2⁻²⁴ above it.
+            assert!(
+                from_f32 >= expected * (1.0 - 1e-15)
+                    && from_f32 <= expected * (1.0 + 34.0 * 2f64.powi(-24)),
+                "{from_f32} vs {expected}"
+            );
+            let from_f16 = stored_radiance_bound(
+                &f16_bytes,
+                batch.representation,
+                ScalarType::F16 { scale },
+                &envelope,
+                &table,
+            );
+            assert!(
+                (from_f16 - expected).abs() <= 2f64.powi(-11) * expected,
+                "{from_f16} vs {expected}"
+            );
+        }
+        // A cube: the largest magnitude, through the bit patterns for f16.
+        let cube = Representation::Cube { directions: 6 };
+        let largest = coefficients
+            .iter()
+            .fold(0.0f64, |m, c| m.max(f64::from(c.abs())));
+        let from_f32 = stored_radiance_bound(&f32_bytes, cube, ScalarType::F32, &[], &table);
+        assert_eq!(from_f32, largest);
+        let from_f16 =
+            stored_radiance_bound(&f16_bytes, cube, ScalarType::F16 { scale }, &[], &table);
+        assert!((from_f16 - largest).abs() <= 2f64.powi(-11) * largest);
+    }
 
     #[test]
     fn cube_radiance_bound_is_the_largest_value_and_bounds_every_lookup() {

@@ -86,7 +86,6 @@ fn renderer_desc(args: &XrArgs, width: u32, height: u32) -> RendererDesc {
         // Auto: the per-view path on lavapipe (its multiview clipping bug
         // spoils XR swapchain images too), a single pass elsewhere.
         multiview: args.render.multiview,
-        storage: args.render.coefficients,
         max_order: args.render.max_order,
         tone: ToneSettings {
             exposure_stops: args.render.exposure,

@@ -429,3 +429,30 @@ pub fn write_failure_images(
     save("difference-x10.png", &diff, 10.0);
     dir
 }
+
+/// `solution` with every batch stored on disk as `storage`: f32, or IEEE half
+/// with the writer's per-batch power-of-two scale
+/// (`solution::format::f16_scale_for`). In memory the values stay f32; the
+/// writer rounds them to half.
+pub fn stored_as(solution: &Solution, storage: runtime::render::CoefficientStorage) -> Solution {
+    let mut stored = solution.clone();
+    for batch in &mut stored.batches {
+        batch.scalar = match storage {
+            runtime::render::CoefficientStorage::F32 => ScalarType::F32,
+            runtime::render::CoefficientStorage::F16 => ScalarType::F16 {
+                scale: solution::format::f16_scale_for(&batch.coefficients),
+            },
+        };
+    }
+    stored
+}
+
+/// Writes `solution` to a file in a new temporary folder (kept alive by the
+/// returned guard) and maps it with every check, checksums included.
+pub fn mapped(solution: &Solution) -> (tempfile::TempDir, solution::format::MappedSolution) {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("scene.sol");
+    solution::format::write_solution(&path, solution).unwrap();
+    let file = solution::format::MappedSolution::open(&path).unwrap();
+    (dir, file)
+}

@@ -23,7 +23,7 @@ mod tests;
 pub use describe::{batch_json, describe_json, describe_text};
 pub use error::{FormatError, Problem};
 pub use layout::MAX_SH_ORDER;
-pub use read::{decode, read_solution, BatchInfo, MappedSolution};
+pub use read::{decode, read_solution, BatchInfo, BatchSection, MappedSolution};
 pub use validate::{
     check_frame_cost, frame_cost, terms_per_vertex, BOUNDS_RELATIVE_SLACK, DEFAULT_MAX_FRAME_COST,
     F16_MAX, FRAME_TOLERANCE, MAX_FRAME_COST_FLAG,

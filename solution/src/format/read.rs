@@ -213,6 +213,14 @@ fn reserved(field: &str, value: u64, newer: bool) -> Result<(), Problem> {
 /// Validates the bytes of a whole solution file, stage by stage (see the module
 /// documentation for the order of the checks).
 pub(crate) fn parse(bytes: &[u8]) -> Result<Parsed, Problem> {
+    parse_checking(bytes, true)
+}
+
+/// [`parse`], optionally leaving out the CRC-32 of the batches' vertex,
+/// coefficient and index sections (the settings section is always checked):
+/// [`MappedSolution::open_deferring_checksums`] verifies those as the runtime
+/// streams them to the GPU.
+fn parse_checking(bytes: &[u8], batch_checksums: bool) -> Result<Parsed, Problem> {
     let preamble = read_preamble(bytes)?;
     let metadata = checked_metadata(bytes, &preamble)?;
     let blocks = block_layout(&preamble, metadata.len() as u64)?;
@@ -227,7 +235,7 @@ pub(crate) fn parse(bytes: &[u8]) -> Result<Parsed, Problem> {
     }
     check_placement(bytes, metadata.len() as u64, &sections)?;
     check_section_sizes(&batches, &batch_sections, &sections)?;
-    check_checksums(bytes, &sections)?;
+    check_checksums(bytes, &sections, batch_checksums)?;
     header.settings_json = settings_text(bytes, &sections, settings_section as usize)?;
     let slack = validate::bounds_slack(&header);
     let mut ranges = Vec::with_capacity(batches.len());
@@ -784,9 +792,21 @@ fn check_section_sizes(
     Ok(())
 }
 
-/// Stage 5, first part: every section's CRC.
-fn check_checksums(bytes: &[u8], sections: &Sections) -> Result<(), Problem> {
+/// Stage 5, first part: every section's CRC (the batches' sections only if
+/// `batch_checksums`; see [`parse_checking`]).
+fn check_checksums(
+    bytes: &[u8],
+    sections: &Sections,
+    batch_checksums: bool,
+) -> Result<(), Problem> {
     for (i, e) in sections.entries.iter().enumerate() {
+        let deferred = matches!(
+            sections.roles[i],
+            Role::Vertices(_) | Role::Coefficients(_) | Role::Indices(_)
+        );
+        if deferred && !batch_checksums {
+            continue;
+        }
         let computed = crc32fast::hash(&bytes[sections.range(i)]);
         if computed != e.crc {
             return Err(Problem::Checksum {
@@ -1062,5 +1082,292 @@ impl MappedSolution {
     /// f32 and multiplied by their scale).
     pub fn to_solution(&self) -> Solution {
         materialize(&self.map, &self.parsed)
+    }
+
+    /// Maps and validates a solution file like [`open`](Self::open), except
+    /// that the CRC-32 of each batch's vertex, coefficient and index sections is
+    /// not computed: the caller checks each one with
+    /// [`verify_section`](Self::verify_section) as it copies the section, so
+    /// the file's bulk is read once for checksum and copy together. Every other
+    /// check runs (the metadata and settings checksums, bounds, counts, finite
+    /// values, frames, indices below the vertex count), so nothing the checksums
+    /// guard is needed for memory safety; a caller that never verifies only
+    /// loses the detection of corrupted bytes.
+    pub fn open_deferring_checksums(path: impl AsRef<Path>) -> Result<Self, FormatError> {
+        Self::map_and_parse(path.as_ref(), false)
+    }
+
+    fn map_and_parse(path: &Path, batch_checksums: bool) -> Result<Self, FormatError> {
+        let file = std::fs::File::open(path).map_err(|e| FormatError::io("open", path, e))?;
+        let len = file
+            .metadata()
+            .map_err(|e| FormatError::io("inspect", path, e))?
+            .len();
+        if len < layout::PREAMBLE_LEN as u64 {
+            return Err(FormatError::in_file(
+                path,
+                Problem::TooShort {
+                    len,
+                    min: layout::PREAMBLE_LEN as u64,
+                },
+            ));
+        }
+        // SAFETY: as in `open`: the map is read as immutable bytes, which holds
+        // while no process edits or truncates the file in place; solution
+        // writers write a temporary file and rename it over the old name, which
+        // leaves the mapped inode untouched. Later accesses are bounds-checked,
+        // so an in-place edit can yield wrong pixels, never out-of-bounds reads.
+        let map = unsafe { memmap2::Mmap::map(&file) }
+            .map_err(|e| FormatError::io("memory-map", path, e))?;
+        let parsed =
+            parse_checking(&map, batch_checksums).map_err(|p| FormatError::in_file(path, p))?;
+        Ok(MappedSolution {
+            path: path.to_path_buf(),
+            map,
+            parsed,
+        })
+    }
+
+    /// Index in the section table of batch `batch`'s `section`, read from the
+    /// batch table (whose checksum `open` verified); `None` if out of range.
+    fn section_index(&self, batch: usize, section: BatchSection) -> Option<usize> {
+        use layout::{batch as bf, preamble as pf};
+        let pre = Fields::new(self.map.get(..layout::PREAMBLE_LEN)?, layout::PREAMBLE_LEN)?;
+        let header_len = pre.u32(pf::HEADER_LENGTH) as usize;
+        let entry_len = pre.u32(pf::BATCH_ENTRY_LENGTH) as usize;
+        let start = layout::PREAMBLE_LEN + header_len + batch.checked_mul(entry_len)?;
+        let entry = Fields::new(
+            self.map.get(start..start + entry_len)?,
+            layout::BATCH_ENTRY_LEN,
+        )?;
+        let at = match section {
+            BatchSection::Vertices => bf::VERTICES_SECTION,
+            BatchSection::Coefficients => bf::COEFFICIENTS_SECTION,
+            BatchSection::Indices => bf::INDICES_SECTION,
+        };
+        Some(entry.u32(at) as usize)
+    }
+
+    /// The CRC-32 (IEEE) the file stores for batch `batch`'s `section`: what
+    /// `crc32fast::hash` of [`vertex_bytes`](Self::vertex_bytes) (or the
+    /// coefficient or index bytes) must equal.
+    ///
+    /// # Panics
+    /// If `batch >= self.batches().len()`.
+    pub fn section_crc(&self, batch: usize, section: BatchSection) -> u32 {
+        assert!(
+            batch < self.parsed.batches.len(),
+            "batch {batch} out of range"
+        );
+        use layout::{preamble as pf, section as sf};
+        let entry = || {
+            let index = self.section_index(batch, section)?;
+            let pre = Fields::new(self.map.get(..layout::PREAMBLE_LEN)?, layout::PREAMBLE_LEN)?;
+            let metadata = pre.u64(pf::METADATA_LENGTH) as usize;
+            let count = pre.u32(pf::SECTION_COUNT) as usize;
+            let entry_len = pre.u32(pf::SECTION_ENTRY_LENGTH) as usize;
+            let start = metadata.checked_sub(count.checked_mul(entry_len)?)?
+                + index.checked_mul(entry_len)?;
+            let f = Fields::new(
+                self.map.get(start..start + entry_len)?,
+                layout::SECTION_ENTRY_LEN,
+            )?;
+            Some(f.u32(sf::CRC))
+        };
+        // The tables were validated at open, so the lookup succeeds; a file
+        // edited in place since can only make verification fail.
+        entry().unwrap_or(0)
+    }
+
+    /// Checks `computed`, the CRC-32 of batch `batch`'s `section` as the caller
+    /// read it, against the stored one: on mismatch, the same error `open`
+    /// gives (naming the file, the section and its batch).
+    ///
+    /// # Panics
+    /// If `batch >= self.batches().len()`.
+    pub fn verify_section(
+        &self,
+        batch: usize,
+        section: BatchSection,
+        computed: u32,
+    ) -> Result<(), FormatError> {
+        let stored = self.section_crc(batch, section);
+        if stored == computed {
+            return Ok(());
+        }
+        let index = self.section_index(batch, section).unwrap_or(usize::MAX);
+        let what = match section {
+            BatchSection::Vertices => "vertices",
+            BatchSection::Coefficients => "coefficients",
+            BatchSection::Indices => "indices",
+        };
+        Err(FormatError::in_file(
+            &self.path,
+            Problem::Checksum {
+                what: format!("section {index} ({what} of batch {batch})"),
+                stored,
+                computed,
+            },
+        ))
+    }
+
+    /// The bytes of batch `batch`'s `section`.
+    ///
+    /// # Panics
+    /// If `batch >= self.batches().len()`.
+    pub fn section_bytes(&self, batch: usize, section: BatchSection) -> &[u8] {
+        match section {
+            BatchSection::Vertices => self.vertex_bytes(batch),
+            BatchSection::Coefficients => self.coefficient_bytes(batch),
+            BatchSection::Indices => self.index_bytes(batch),
+        }
+    }
+
+    /// Tells the kernel that this process is done with batch `batch`'s
+    /// `section` for now (`madvise(MADV_DONTNEED)`, rounded out to whole pages):
+    /// its pages leave the process's resident set but stay in the page cache,
+    /// and a later read maps them again. The runtime calls it once a section is
+    /// on the GPU, so the map and the GPU copy are not both resident. Advisory:
+    /// failure (or a platform without `madvise`) changes nothing.
+    ///
+    /// # Panics
+    /// If `batch >= self.batches().len()`.
+    pub fn release_section(&self, batch: usize, section: BatchSection) {
+        let bytes = self.section_bytes(batch, section);
+        if bytes.is_empty() {
+            return;
+        }
+        #[cfg(unix)]
+        {
+            let offset = bytes.as_ptr() as usize - self.map.as_ptr() as usize;
+            // SAFETY: the map is a read-only shared mapping of a file, so
+            // MADV_DONTNEED only drops page-table entries: a later access faults
+            // the same file bytes back in from the page cache (nothing was
+            // written through the map, so nothing is lost), and `&[u8]` borrows
+            // of the map keep seeing the same contents under the invariant of
+            // `open` (the file is replaced by rename, never edited in place).
+            let _ = unsafe {
+                self.map.unchecked_advise_range(
+                    memmap2::UncheckedAdvice::DontNeed,
+                    offset,
+                    bytes.len(),
+                )
+            };
+        }
+    }
+}
+
+/// One of a batch's three bulk sections.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum BatchSection {
+    Vertices,
+    Coefficients,
+    Indices,
+}
+
+#[cfg(test)]
+mod deferred_checksum_tests {
+    use super::super::tests::sample_solution;
+    use super::super::write_solution;
+    use super::*;
+
+    fn written() -> (tempfile::TempDir, PathBuf) {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("sample.sol");
+        write_solution(&path, &sample_solution()).unwrap();
+        (dir, path)
+    }
+
+    const SECTIONS: [BatchSection; 3] = [
+        BatchSection::Vertices,
+        BatchSection::Coefficients,
+        BatchSection::Indices,
+    ];
+
+    /// Every stored CRC is the CRC-32 of the section's bytes, and verifying it
+    /// passes: the getter reads the same table entry `parse` checks.
+    #[test]
+    fn stored_crcs_match_the_sections_and_verify() {
+        let (_dir, path) = written();
+        let file = MappedSolution::open_deferring_checksums(&path).unwrap();
+        for b in 0..file.batches().len() {
+            for section in SECTIONS {
+                let bytes = file.section_bytes(b, section);
+                let crc = crc32fast::hash(bytes);
+                assert_eq!(file.section_crc(b, section), crc, "batch {b} {section:?}");
+                file.verify_section(b, section, crc).unwrap();
+            }
+        }
+    }
+
+    /// One flipped coefficient byte: `open` refuses the file; the deferring
+    /// constructor accepts it (the byte stays a finite half), and verifying the
+    /// section gives the very error `open` gave.
+    #[test]
+    fn a_flipped_coefficient_byte_is_refused_by_both_paths_with_one_error() {
+        let (_dir, path) = written();
+        let (batch, offset) = {
+            let file = MappedSolution::open(&path).unwrap();
+            // Batch 1 is the f16 glossy triangle; flip the low byte of its first
+            // half, which changes the mantissa only (still finite).
+            let base = file.map.as_ptr() as usize;
+            (1, file.coefficient_bytes(1).as_ptr() as usize - base)
+        };
+        let mut bytes = std::fs::read(&path).unwrap();
+        bytes[offset] ^= 0x01;
+        std::fs::write(&path, &bytes).unwrap();
+
+        let refused = MappedSolution::open(&path).unwrap_err().to_string();
+        assert!(refused.contains("CRC-32"), "{refused}");
+        assert!(refused.contains("coefficients of batch 1"), "{refused}");
+        assert!(refused.contains("sample.sol"), "{refused}");
+
+        let file = MappedSolution::open_deferring_checksums(&path).unwrap();
+        let computed = crc32fast::hash(file.coefficient_bytes(batch));
+        let streamed = file
+            .verify_section(batch, BatchSection::Coefficients, computed)
+            .unwrap_err()
+            .to_string();
+        assert_eq!(streamed, refused);
+        // The untouched sections still verify.
+        for section in [BatchSection::Vertices, BatchSection::Indices] {
+            let crc = crc32fast::hash(file.section_bytes(batch, section));
+            file.verify_section(batch, section, crc).unwrap();
+        }
+    }
+
+    /// The deferring constructor still refuses what the checksums do not guard:
+    /// a corrupted settings section (its CRC is always checked) and a bad
+    /// metadata checksum.
+    #[test]
+    fn deferring_still_checks_metadata_and_settings() {
+        let (_dir, path) = written();
+        let clean = std::fs::read(&path).unwrap();
+        let settings_at = {
+            let file = MappedSolution::open(&path).unwrap();
+            let text = &file.header().settings_json;
+            let at = clean
+                .windows(text.len())
+                .position(|w| w == text.as_bytes())
+                .unwrap();
+            at
+        };
+        let mut bytes = clean.clone();
+        bytes[settings_at] ^= 0x01;
+        std::fs::write(&path, &bytes).unwrap();
+        let error = MappedSolution::open_deferring_checksums(&path)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            error.contains("CRC-32") && error.contains("settings"),
+            "{error}"
+        );
+        let mut bytes = clean;
+        bytes[layout::PREAMBLE_LEN] ^= 0x01;
+        std::fs::write(&path, &bytes).unwrap();
+        let error = MappedSolution::open_deferring_checksums(&path)
+            .unwrap_err()
+            .to_string();
+        assert!(error.contains("header and tables"), "{error}");
     }
 }
