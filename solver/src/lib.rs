@@ -27,6 +27,8 @@ pub mod geometry;
 #[cfg(feature = "solve")]
 pub mod mesh;
 #[cfg(feature = "solve")]
+pub mod reference;
+#[cfg(feature = "solve")]
 pub mod scene;
 #[cfg(feature = "solve")]
 pub mod settings;
