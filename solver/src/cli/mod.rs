@@ -5,6 +5,7 @@ use clap::{Parser, Subcommand};
 use std::process::ExitCode;
 
 pub mod info;
+pub mod reference;
 pub mod solve;
 
 /// Progressive-refinement radiosity solver: a scene in, a view-independent
@@ -24,6 +25,8 @@ pub enum Command {
     Solve(solve::SolveArgs),
     /// Print a solution file's header (text, or JSON with --json).
     Info(info::InfoArgs),
+    /// Path-trace an unbiased reference image (EXR with standard errors) of a scene.
+    Reference(reference::ReferenceArgs),
 }
 
 /// Runs the command line; errors are printed with their context chain.
@@ -32,6 +35,7 @@ pub fn main() -> ExitCode {
     let result = match cli.command {
         Command::Solve(args) => solve::run(args),
         Command::Info(args) => info::run(args),
+        Command::Reference(args) => reference::run(args),
     };
     match result {
         Ok(code) => code,
