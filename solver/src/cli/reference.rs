@@ -19,7 +19,6 @@ use crate::reference::{id_buffers, Accumulator, Integrator, Physics, RenderScene
 use crate::scene::ImportOptions;
 use crate::settings::{BrdfNormalization, Preset, SettingsPatch, SolverSettings};
 use anyhow::{bail, Context};
-use glam::DVec3;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
@@ -223,8 +222,11 @@ impl ReferenceArgs {
 
     /// The total budget of samples per pixel.
     fn budget(&self) -> u64 {
-        self.spp
-            .unwrap_or(if self.target_error.is_some() { 65536 } else { 256 })
+        self.spp.unwrap_or(if self.target_error.is_some() {
+            65536
+        } else {
+            256
+        })
     }
 }
 
@@ -259,9 +261,11 @@ pub fn run(args: ReferenceArgs) -> anyhow::Result<ExitCode> {
         brdf_normalization: args.brdf_normalization,
         ..SettingsPatch::default()
     };
-    let settings =
-        SolverSettings::resolve(Preset::default(), &[&display_patch, &loaded.settings, &flags])
-            .context("resolving the mode and normalization")?;
+    let settings = SolverSettings::resolve(
+        Preset::default(),
+        &[&display_patch, &loaded.settings, &flags],
+    )
+    .context("resolving the mode and normalization")?;
     let physics = Physics {
         mode: settings.mode,
         normalization: settings.brdf_normalization,
@@ -281,7 +285,11 @@ pub fn run(args: ReferenceArgs) -> anyhow::Result<ExitCode> {
 
     let (lo, hi) = render.bounds();
     let default = scene.camera.unwrap_or_else(|| {
-        crate::solve::default_camera(lo + scene.recentre_offset, hi + scene.recentre_offset, scene.up_axis)
+        crate::solve::default_camera(
+            lo + scene.recentre_offset,
+            hi + scene.recentre_offset,
+            scene.up_axis,
+        )
     });
     let (width, height) = args.size.unwrap_or((default.width, default.height));
     let camera = Camera {
@@ -304,7 +312,9 @@ pub fn run(args: ReferenceArgs) -> anyhow::Result<ExitCode> {
     let (materials, objects) = pool.install(|| id_buffers(&integrator, &view));
     let seconds = start.elapsed().as_secs_f64();
     let error = image.mean_relative_error();
-    write_reference_exr(&args.out, &image, &materials, &objects, &render, &args, physics, error)?;
+    write_reference_exr(
+        &args.out, &image, &materials, &objects, &render, &args, physics, error,
+    )?;
     let error_text = error.map_or("no lit pixel".to_string(), |e| format!("{e:.4}"));
     eprintln!(
         "solver: {} spp in {} passes, {:.1} s; mean relative standard error over lit pixels {}",
@@ -351,7 +361,11 @@ fn report_scene(render: &RenderScene, args: &ReferenceArgs) {
 }
 
 /// Passes of `--pass-spp` samples until the budget or the target error.
-fn render_passes(integrator: &Integrator, view: &crate::camera::EyeView, args: &ReferenceArgs) -> Accumulator {
+fn render_passes(
+    integrator: &Integrator,
+    view: &crate::camera::EyeView,
+    args: &ReferenceArgs,
+) -> Accumulator {
     let pixels = view.width as u64 * view.height as u64;
     let budget = args.budget();
     let bar = progress_bar(pixels * budget);
@@ -397,16 +411,26 @@ fn progress_bar(length: u64) -> ProgressBar {
 /// Fails early, before rendering, when the output's folder is missing or the
 /// name is not an .exr.
 fn check_writable(path: &Path) -> anyhow::Result<()> {
-    let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
     if ext.as_deref() != Some("exr") {
-        bail!("{}: the reference image is written as OpenEXR: name it *.exr", path.display());
+        bail!(
+            "{}: the reference image is written as OpenEXR: name it *.exr",
+            path.display()
+        );
     }
     let dir = match path.parent() {
         Some(p) if !p.as_os_str().is_empty() => p,
         _ => Path::new("."),
     };
     if !dir.is_dir() {
-        bail!("{}: folder {} does not exist", path.display(), dir.display());
+        bail!(
+            "{}: folder {} does not exist",
+            path.display(),
+            dir.display()
+        );
     }
     Ok(())
 }
@@ -444,7 +468,13 @@ fn write_reference_exr(
 ) -> anyhow::Result<()> {
     use exr::prelude::*;
     let channel = |name: &str, values: Vec<f32>| AnyChannel::new(name, FlatSamples::F32(values));
-    let mean = |c: usize| image.pixels.iter().map(|p| p.mean(c) as f32).collect::<Vec<_>>();
+    let mean = |c: usize| {
+        image
+            .pixels
+            .iter()
+            .map(|p| p.mean(c) as f32)
+            .collect::<Vec<_>>()
+    };
     let se = |c: usize| {
         image
             .pixels
@@ -465,12 +495,14 @@ fn write_reference_exr(
     ];
     let mut attributes = LayerAttributes::default();
     let text = |s: String| AttributeValue::Text(Text::new_or_panic(s));
-    attributes
-        .other
-        .insert(Text::from("materials"), text(ascii_json(&render.material_names)));
-    attributes
-        .other
-        .insert(Text::from("objects"), text(ascii_json(&render.object_names)));
+    attributes.other.insert(
+        Text::from("materials"),
+        text(ascii_json(&render.material_names)),
+    );
+    attributes.other.insert(
+        Text::from("objects"),
+        text(ascii_json(&render.object_names)),
+    );
     let info = serde_json::json!({
         "spp": image.samples_per_pixel(),
         "passes": image.passes,
@@ -489,7 +521,10 @@ fn write_reference_exr(
         Encoding::FAST_LOSSLESS,
         AnyChannels::sort(SmallVec::from_vec(channels)),
     );
-    let mut name = path.file_name().map(|n| n.to_os_string()).unwrap_or_default();
+    let mut name = path
+        .file_name()
+        .map(|n| n.to_os_string())
+        .unwrap_or_default();
     name.push(format!(".tmp-{}", std::process::id()));
     let tmp = path.with_file_name(name);
     let written = Image::from_layer(layer)
