@@ -143,12 +143,13 @@ impl Integrator<'_> {
             throughput *= sample.f * (sample.wi.dot(n) / sample.pdf);
             if depth >= ROULETTE_AFTER {
                 let survive = throughput.max_element().min(1.0);
-                if !(survive > 0.0) || rng.next_f64() >= survive {
+                if survive.is_nan() || survive <= 0.0 || rng.next_f64() >= survive {
                     break;
                 }
                 throughput /= survive;
             }
-            if !(throughput.max_element() > 0.0) {
+            let largest = throughput.max_element();
+            if largest.is_nan() || largest <= 0.0 {
                 break;
             }
             let Some(next) = self.intersect(hit.point, sample.wi) else {
@@ -174,7 +175,7 @@ impl Integrator<'_> {
         let emitter = &scene.surfaces[light.polygon];
         let to_light = light.point - hit.point;
         let distance_sq = to_light.length_squared();
-        if !(distance_sq > 0.0) {
+        if distance_sq.is_nan() || distance_sq <= 0.0 {
             return DVec3::ZERO;
         }
         let wi = to_light / distance_sq.sqrt();
@@ -185,7 +186,8 @@ impl Integrator<'_> {
         }
         let bsdf = &scene.bsdfs[surface.material];
         let f = bsdf.eval(wi, wo, surface.normal);
-        if !(f.max_element() > 0.0) || !scene.occluder.visible(hit.point, light.point) {
+        let largest = f.max_element();
+        if largest.is_nan() || largest <= 0.0 || !scene.occluder.visible(hit.point, light.point) {
             return DVec3::ZERO;
         }
         let pdf_l = light.pdf_area * distance_sq / cos_l;

@@ -49,7 +49,7 @@ impl Occluder {
             return None;
         }
         let len = dir.length();
-        if !(len > 0.0) {
+        if len.is_nan() || len <= 0.0 {
             return None;
         }
         let d = to_f32(dir);
@@ -60,7 +60,7 @@ impl Occluder {
         } else {
             f32::INFINITY
         };
-        if !(best_t > t_min) {
+        if best_t.is_nan() || best_t <= t_min {
             return None;
         }
         let inv = d.map(|x| {
