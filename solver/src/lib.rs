@@ -10,6 +10,7 @@
 //! * [`brdf`]: the thesis's glossy lobe and its normalizations;
 //! * [`solve`]: progressive refinement, directional SH shooting, Gauss–Seidel and the
 //!   global-cube gather;
+//! * [`reference`]: the unbiased path tracer of `solver reference`, the ground truth;
 //! * [`compare`]: `solver compare`'s image metrics (relative RMSE, MARE, HDR-FLIP);
 //! * [`settings`] and the command line in [`cli`].
 //!
@@ -23,6 +24,7 @@ pub mod cli;
 pub mod compare;
 pub mod geometry;
 pub mod mesh;
+pub mod reference;
 pub mod scene;
 pub mod settings;
 pub mod solve;

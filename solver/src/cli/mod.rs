@@ -6,6 +6,7 @@ use std::process::ExitCode;
 
 pub mod compare;
 pub mod info;
+pub mod reference;
 pub mod solve;
 
 /// Progressive-refinement radiosity solver: a scene in, a view-independent
@@ -28,6 +29,8 @@ pub enum Command {
     /// Compare a test image with a reference: relative RMSE, MARE, FLIP, per-material errors.
     #[command(long_about = compare::LONG_ABOUT)]
     Compare(compare::CompareArgs),
+    /// Path-trace an unbiased reference image (EXR with standard errors) of a scene.
+    Reference(reference::ReferenceArgs),
 }
 
 /// Runs the command line; errors are printed with their context chain.
@@ -37,6 +40,7 @@ pub fn main() -> ExitCode {
         Command::Solve(args) => solve::run(args),
         Command::Info(args) => info::run(args),
         Command::Compare(args) => compare::run(args),
+        Command::Reference(args) => reference::run(args),
     };
     match result {
         Ok(code) => code,

@@ -7,7 +7,7 @@
 //! checkpoint and a partial solution every K shots ([`session`]), then write the
 //! solution, the stats and the preview.
 
-mod args;
+pub(crate) mod args;
 mod checkpoint;
 mod eta;
 pub(crate) mod files;
@@ -147,7 +147,7 @@ fn check_checkpoint_state(args: &SolveArgs, checkpoint_path: &Path) -> anyhow::R
 /// `--display` file also replaces the camera of a display file that the TOML
 /// config names, but not the config's own `[camera]` (the config ranks above any
 /// display file).
-fn adopt_display_camera(
+pub(crate) fn adopt_display_camera(
     scene: &mut Scene,
     flag: Option<&DisplayParams>,
     named_by_config: Option<&DisplayParams>,
@@ -196,7 +196,7 @@ fn resolve_settings(
 /// An error as one line: its message, then each source whose text the message
 /// does not already contain (library errors often quote their source, and anyhow
 /// would print it twice).
-fn plain<E: std::error::Error>(err: E) -> anyhow::Error {
+pub(crate) fn plain<E: std::error::Error>(err: E) -> anyhow::Error {
     let mut message = err.to_string();
     let mut source = err.source();
     while let Some(s) = source {
@@ -210,7 +210,7 @@ fn plain<E: std::error::Error>(err: E) -> anyhow::Error {
 }
 
 /// Prints each import warning once (`file:line (item): message`).
-fn print_warnings(warnings: &[crate::scene::Warning]) {
+pub(crate) fn print_warnings(warnings: &[crate::scene::Warning]) {
     let mut seen = std::collections::HashSet::new();
     for warning in warnings {
         let line = warning.to_string();

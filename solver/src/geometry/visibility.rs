@@ -32,6 +32,9 @@ use super::polygon::triangulate;
 use glam::DVec3;
 use std::mem::MaybeUninit;
 
+pub mod closest;
+pub use closest::ClosestHit;
+
 /// Relative size of [`Occluder::scene_epsilon`]: a fraction of the scene's
 /// bounding-box diagonal.
 pub const SCENE_EPSILON: f64 = 1e-5;

@@ -55,6 +55,7 @@ pub mod cube_gather;
 pub mod directional;
 pub mod gauss_seidel;
 mod output;
+pub(crate) use output::default_camera;
 mod refine;
 pub mod shoot;
 

@@ -120,7 +120,7 @@ impl Solver {
 /// names none: 45° vertical field of view, looking horizontally along the axis
 /// perpendicular to `up` that OpenGL would use (−z for a y-up scene, +y for a
 /// z-up one), from far enough that the bounding sphere fits.
-fn default_camera(lo: DVec3, hi: DVec3, up: UpAxis) -> Camera {
+pub(crate) fn default_camera(lo: DVec3, hi: DVec3, up: UpAxis) -> Camera {
     let centre = (lo + hi) * 0.5;
     let radius = ((hi - lo).length() * 0.5).max(1e-9);
     let fov_y_deg: f64 = 45.0;

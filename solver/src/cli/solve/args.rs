@@ -5,7 +5,7 @@ use solution::format::SolveMode;
 
 /// `--mode`'s parser. `SolveMode` lives in the contract crate, which does not depend
 /// on clap, so the command line maps its names here.
-fn solve_mode_parser() -> impl clap::builder::TypedValueParser<Value = SolveMode> {
+pub(crate) fn solve_mode_parser() -> impl clap::builder::TypedValueParser<Value = SolveMode> {
     clap::builder::PossibleValuesParser::new(["diffuse", "directional"]).map(|name| {
         match name.as_str() {
             "directional" => SolveMode::Directional,

@@ -1,0 +1,154 @@
+//! The scene as the reference path tracer sees it: the imported polygons with
+//! their planes, one [`Bsdf`] per material, the closest-hit BVH and the emitter
+//! distribution; plus the material and object names the image's id channels
+//! index.
+
+use super::bsdf::Bsdf;
+use super::emitters::Emitters;
+use super::lobe::ExactLobe;
+use crate::geometry::visibility::Occluder;
+use crate::scene::Scene;
+use crate::settings::BrdfNormalization;
+use glam::DVec3;
+use rayon::prelude::*;
+use solution::format::SolveMode;
+use std::collections::BTreeMap;
+use std::sync::Arc;
+
+/// One polygon: vertices (re-centred scene coordinates), unit normal (Newell),
+/// material and object indices.
+#[derive(Clone, Debug)]
+pub struct Surface {
+    pub vertices: Vec<DVec3>,
+    pub normal: DVec3,
+    pub material: usize,
+    pub object: usize,
+}
+
+/// How the scene's materials are reflected: `solver solve`'s `--mode` and
+/// `--brdf-normalization`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub struct Physics {
+    pub mode: SolveMode,
+    pub normalization: BrdfNormalization,
+}
+
+/// Everything the integrator reads; `Send + Sync`, built once.
+pub struct RenderScene {
+    pub surfaces: Vec<Surface>,
+    pub bsdfs: Vec<Bsdf>,
+    pub occluder: Occluder,
+    pub emitters: Emitters,
+    pub material_names: Vec<String>,
+    pub object_names: Vec<String>,
+    /// Largest reflectance `max(Kd + Ks)` over the channels of the used materials:
+    /// the bound on what each bounce keeps of the light's power.
+    pub max_albedo: f64,
+    /// Glossy lobes built, by α: their tables' sizes and measured errors.
+    pub lobes: Vec<Arc<ExactLobe>>,
+}
+
+/// The object a polygon belongs to: the OBJ object or group its face came from
+/// (the importer names faces "face N of object NAME"), else its source file.
+fn object_name(source: &crate::scene::SourceRef) -> String {
+    match source.item.split_once(" of object ") {
+        Some((_, name)) => name.to_string(),
+        None => source
+            .file
+            .file_name()
+            .map(|f| f.to_string_lossy().into_owned())
+            .unwrap_or_default(),
+    }
+}
+
+impl RenderScene {
+    /// Prepares `scene` (as `scene::load_scene` returns it) for rendering with
+    /// `physics`. Glossy lobes (directional mode only) are tabulated once per
+    /// distinct α, in parallel.
+    pub fn new(scene: &Scene, physics: Physics) -> RenderScene {
+        let glossy = physics.mode == SolveMode::Directional;
+        let mut alphas: Vec<u64> = scene
+            .materials
+            .iter()
+            .filter(|m| glossy && m.is_glossy())
+            .map(|m| m.alpha.to_bits())
+            .collect();
+        alphas.sort_unstable();
+        alphas.dedup();
+        let lobes: BTreeMap<u64, Arc<ExactLobe>> = alphas
+            .par_iter()
+            .map(|&a| {
+                let lobe = ExactLobe::new(f64::from_bits(a), physics.normalization);
+                (a, Arc::new(lobe))
+            })
+            .collect();
+        let bsdfs: Vec<Bsdf> = scene
+            .materials
+            .iter()
+            .map(|m| {
+                let lobe = if glossy && m.is_glossy() {
+                    lobes.get(&m.alpha.to_bits()).cloned()
+                } else {
+                    None
+                };
+                Bsdf::new(m.kd, m.ks, lobe, m.emission)
+            })
+            .collect();
+        let mut object_names: Vec<String> = Vec::new();
+        let mut object_index = BTreeMap::new();
+        let surfaces: Vec<Surface> = scene
+            .polygons
+            .iter()
+            .map(|p| {
+                let name = object_name(&p.source);
+                let next = object_index.len();
+                let object = *object_index.entry(name.clone()).or_insert_with(|| {
+                    object_names.push(name);
+                    next
+                });
+                Surface {
+                    vertices: p.vertices.clone(),
+                    normal: p.normal(),
+                    material: p.material,
+                    object,
+                }
+            })
+            .collect();
+        let occluder = Occluder::from_polygons(&scene.polygons);
+        let list: Vec<&[DVec3]> = surfaces.iter().map(|s| s.vertices.as_slice()).collect();
+        let emission: Vec<DVec3> = surfaces
+            .iter()
+            .map(|s| bsdfs[s.material].emission)
+            .collect();
+        let emitters = Emitters::new(&list, &emission);
+        let max_albedo = surfaces
+            .iter()
+            .map(|s| (bsdfs[s.material].kd + bsdfs[s.material].ks).max_element())
+            .fold(0.0, f64::max);
+        RenderScene {
+            surfaces,
+            bsdfs,
+            occluder,
+            emitters,
+            material_names: scene.materials.iter().map(|m| m.name.clone()).collect(),
+            object_names,
+            max_albedo,
+            lobes: lobes.into_values().collect(),
+        }
+    }
+
+    /// The scene's bounds (re-centred coordinates).
+    pub fn bounds(&self) -> (DVec3, DVec3) {
+        let mut lo = DVec3::splat(f64::INFINITY);
+        let mut hi = DVec3::splat(f64::NEG_INFINITY);
+        for v in self.surfaces.iter().flat_map(|s| &s.vertices) {
+            lo = lo.min(*v);
+            hi = hi.max(*v);
+        }
+        if lo.x > hi.x {
+            (DVec3::ZERO, DVec3::ZERO)
+        } else {
+            (lo, hi)
+        }
+    }
+}
