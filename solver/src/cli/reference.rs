@@ -163,7 +163,7 @@ pub struct ReferenceArgs {
     #[arg(long)]
     pub strict: bool,
 
-    /// Legacy display parameter file (000 appendix A): its camera when the scene names none.
+    /// Legacy display parameter file (Remington 1992, app. A): its camera when the scene names none.
     #[arg(long, value_name = "FILE")]
     pub display: Option<PathBuf>,
 }
