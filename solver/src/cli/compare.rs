@@ -41,7 +41,10 @@ luminance over lit pixels) is printed too: a test error no larger than it
 cannot be told apart from the truth's own noise.
 
 Inputs: OpenEXR (linear, channels R, G, B) or NumPy .npy (float32, shape
-height × width × 3, C order), recognised by content. Both must be the same size.";
+height × width × 3, C order), recognised by content. Both must be the same size,
+or the test an integer multiple k of the reference's on both sides: then each
+k × k block of the test is averaged (box filter) to the reference's pixel
+footprint, so a supersampled render compares with a footprint-mean truth.";
 
 #[derive(clap::Args, Debug)]
 pub struct CompareArgs {
@@ -123,8 +126,17 @@ pub fn run(args: CompareArgs) -> anyhow::Result<ExitCode> {
     if !(ppd > 0.0 && ppd.is_finite()) {
         bail!("--ppd must be a positive number, not {ppd}");
     }
-    let test = load(&args.test)?;
+    let mut test = load(&args.test)?;
     let reference = load(&args.reference)?;
+    let (width, height) = (reference.image.width, reference.image.height);
+    if let Some(factor) = test.image.supersampling_factor(width, height) {
+        eprintln!(
+            "solver: note: the test image is {factor}× the reference's size on both \
+             sides; comparing its {factor}×{factor} box-filtered means (each reference \
+             pixel is the mean over its footprint)"
+        );
+        test.image = test.image.box_downsample(factor);
+    }
     let (t, r) = (&test.image, &reference.image);
     if (t.width, t.height) != (r.width, r.height) {
         bail!(

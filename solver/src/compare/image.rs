@@ -33,6 +33,41 @@ impl Image {
         }
     }
 
+    /// The mean of each `factor × factor` block of pixels: a supersampled render
+    /// brought to a reference's pixel footprints, since a reference pixel is the
+    /// mean radiance over its square (design notes, "Truth, not self-consistency").
+    /// `factor` must divide both sides; the caller checks it.
+    pub fn box_downsample(&self, factor: usize) -> Image {
+        let (width, height) = (self.width / factor, self.height / factor);
+        let mut rgb = vec![0f32; width * height * 3];
+        let weight = 1.0 / (factor * factor) as f64;
+        for y in 0..height {
+            for x in 0..width {
+                for c in 0..3 {
+                    let mut sum = 0f64;
+                    for j in 0..factor {
+                        let row = (y * factor + j) * self.width;
+                        for i in 0..factor {
+                            sum += self.rgb[(row + x * factor + i) * 3 + c] as f64;
+                        }
+                    }
+                    rgb[(y * width + x) * 3 + c] = (sum * weight) as f32;
+                }
+            }
+        }
+        Image { width, height, rgb }
+    }
+
+    /// The integer factor by which this image is a supersampled version of one of
+    /// `width × height` (the same factor on both sides), if it is one.
+    pub fn supersampling_factor(&self, width: usize, height: usize) -> Option<usize> {
+        if width == 0 || height == 0 || !self.width.is_multiple_of(width) {
+            return None;
+        }
+        let factor = self.width / width;
+        (factor > 1 && self.height == height * factor).then_some(factor)
+    }
+
     pub fn pixel_count(&self) -> usize {
         self.width * self.height
     }
@@ -99,5 +134,29 @@ impl LoadedImage {
             material_id: None,
             object_id: None,
         }
+    }
+}
+
+#[cfg(test)]
+mod downsample_tests {
+    use super::*;
+
+    #[test]
+    fn box_downsample_averages_each_block() {
+        // A 4×2 image with pixel values 0..8 (all channels alike) at factor 2:
+        // blocks {0,1,4,5} and {2,3,6,7} average to 2.5 and 4.5 exactly.
+        let rgb = (0..8).flat_map(|v| [v as f32; 3]).collect();
+        let image = Image {
+            width: 4,
+            height: 2,
+            rgb,
+        };
+        let small = image.box_downsample(2);
+        assert_eq!((small.width, small.height), (2, 1));
+        assert_eq!(small.rgb, vec![2.5, 2.5, 2.5, 4.5, 4.5, 4.5]);
+        assert_eq!(image.supersampling_factor(2, 1), Some(2));
+        assert_eq!(image.supersampling_factor(4, 2), None);
+        assert_eq!(image.supersampling_factor(3, 1), None);
+        assert_eq!(image.supersampling_factor(2, 2), None);
     }
 }
