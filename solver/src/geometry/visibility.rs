@@ -177,6 +177,18 @@ impl Occluder {
         self.triangles.len()
     }
 
+    /// The plane of stored triangle `i` in scene coordinates, as a point on it and
+    /// its (unnormalised) counter-clockwise normal, widened from the stored f32.
+    /// A hit refined on this plane lies on the surface that was hit, which the
+    /// polygon's own (Newell) plane need not be for a slightly non-planar input
+    /// polygon: the Cornell box's red wall is 0.8 mm out of plane, far more than
+    /// [`Occluder::scene_epsilon`].
+    pub fn triangle_plane(&self, i: usize) -> Option<(DVec3, DVec3)> {
+        let t = self.triangles.get(i)?;
+        let widen = |v: [f32; 3]| DVec3::new(v[0] as f64, v[1] as f64, v[2] as f64);
+        Some((widen(t.v0) + self.centre, widen(t.n)))
+    }
+
     /// The input polygon that stored triangle `i` came from (for diagnostics).
     pub fn polygon_of_triangle(&self, i: usize) -> Option<usize> {
         self.polygon_of.get(i).map(|&p| p as usize)

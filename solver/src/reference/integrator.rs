@@ -63,17 +63,24 @@ impl Integrator<'_> {
             .closest_hit(origin, dir, f64::INFINITY)?;
         let s = &self.scene.surfaces[hit.polygon];
         let denom = s.normal.dot(dir);
-        let t = if denom != 0.0 {
-            let exact = s.normal.dot(s.vertices[0] - origin) / denom;
-            // Keep the f32 answer if the plane's is far from it (a degenerate
-            // polygon whose Newell normal is unreliable).
-            if (exact - hit.t).abs() <= 1e-3 * hit.t.max(self.scene.occluder.scene_epsilon()) {
-                exact
-            } else {
-                hit.t
+        // The hit is refined in f64 on the plane of the triangle that was hit, not
+        // on the polygon's Newell plane: on a slightly non-planar polygon the two
+        // differ by more than the ray offset, and a point placed behind the real
+        // surface would see that surface's back (a black band across the Cornell
+        // box's red wall, found by the comparison with Mitsuba 3).
+        let t = match self.scene.occluder.triangle_plane(hit.triangle) {
+            Some((point, n)) if n.dot(dir) != 0.0 => {
+                let exact = n.dot(point - origin) / n.dot(dir);
+                // Keep the f32 answer if the plane's is far from it (a sliver
+                // triangle whose normal is unreliable).
+                let window = 1e-3 * hit.t.max(self.scene.occluder.scene_epsilon());
+                if (exact - hit.t).abs() <= window {
+                    exact
+                } else {
+                    hit.t
+                }
             }
-        } else {
-            hit.t
+            _ => hit.t,
         };
         Some(SurfaceHit {
             polygon: hit.polygon,
