@@ -124,11 +124,6 @@ pub fn parse_size(text: &str) -> Result<(u32, u32), String> {
     Ok((parse(w)?, parse(h)?))
 }
 
-/// Reads and validates a solution file, with the reader's one-line error.
-pub fn load_solution(path: &Path) -> Result<solution::format::Solution> {
-    solution::format::read_solution(path).map_err(anyhow::Error::new)
-}
-
 /// Maps and validates a solution file for [`StereoRenderer::from_mapped`]:
 /// every check but the CRC-32 of the batches' sections, which the upload
 /// computes as it streams them and refuses the file on (naming file, batch and
