@@ -1,4 +1,7 @@
-//! The `runtime` command line: `screenshot` and `bench`.
+//! The `runtime` command line: `screenshot` and `bench`, and what all four
+//! commands share (`mirror` and `xr` live in their own modules): every one
+//! opens its file with [`open_solution`] (mapped, `--max-frame-cost` checked)
+//! and uploads it with `StereoRenderer::from_mapped`.
 
 mod bench;
 mod output;
