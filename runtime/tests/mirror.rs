@@ -552,3 +552,40 @@ fn without_a_display_the_mirror_says_so_with_its_own_status() {
     );
     assert!(stderr.contains("cannot open a window"), "{stderr}");
 }
+
+#[test]
+fn a_file_above_the_frame_cost_bound_is_refused_before_the_window() {
+    // The glossy room at N = 4, L = 8 costs 2100 basis terms per view
+    // (25 floor vertices × 81 terms plus 75 wall vertices × 1 term,
+    // solution::format::frame_cost; as in tests/cli.rs). The bound is checked
+    // when the file is opened, before any window: with no display, 2099 is
+    // refused with the format's one-line message and 2100 gets as far as the
+    // missing display.
+    let dir = tempfile::tempdir().unwrap();
+    let file = write_solution(dir.path(), "glossy.sol", &common::glossy_room(4, 8));
+    common::use_lavapipe_unless_chosen();
+    let mirror = |bound: &str| {
+        Command::new(env!("CARGO_BIN_EXE_runtime"))
+            .env_remove("DISPLAY")
+            .env_remove("WAYLAND_DISPLAY")
+            .arg("mirror")
+            .arg(&file)
+            .args(["--max-frame-cost", bound])
+            .output()
+            .unwrap()
+    };
+    let out = mirror("2099");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    for part in ["glossy.sol", "2100", "2099", "--max-frame-cost"] {
+        assert!(stderr.contains(part), "{stderr:?} lacks {part:?}");
+    }
+    assert_eq!(stderr.trim().lines().count(), 1, "{stderr}");
+    let out = mirror("2100");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(
+        out.status.code(),
+        Some(runtime::mirror::NO_DISPLAY_EXIT_CODE),
+        "at the bound the file is not refused: {stderr}"
+    );
+}

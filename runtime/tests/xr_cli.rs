@@ -95,3 +95,34 @@ fn bad_arguments_are_refused_in_one_line() {
     assert!(!out.status.success());
     assert!(one_line(&out).contains("missing.sol"));
 }
+
+#[test]
+fn a_file_above_the_frame_cost_bound_is_refused_before_openxr() {
+    // The glossy room at N = 4, L = 8 costs 2100 basis terms per view
+    // (25 floor vertices × 81 terms plus 75 wall vertices × 1 term,
+    // solution::format::frame_cost; as in tests/cli.rs), so a bound of 2099
+    // refuses it with the format's one-line message, and 2100 lets it through
+    // to OpenXR, which is absent here.
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("glossy.sol");
+    solution::format::write_solution(&file, &common::glossy_room(4, 8)).unwrap();
+    let xr = |bound: &str| {
+        runtime_xr(
+            dir.path(),
+            &[file.to_str().unwrap(), "--max-frame-cost", bound],
+        )
+    };
+    let out = xr("2099");
+    assert!(!out.status.success(), "a file above the bound was opened");
+    let line = one_line(&out);
+    for part in ["glossy.sol", "2100", "2099", "--max-frame-cost"] {
+        assert!(line.contains(part), "{line:?} lacks {part:?}");
+    }
+    assert!(!line.contains("OpenXR"), "refused after OpenXR: {line}");
+    let out = xr("2100");
+    let line = one_line(&out);
+    assert!(
+        line.contains("no OpenXR runtime"),
+        "at the bound the file is not refused: {line}"
+    );
+}

@@ -1,4 +1,7 @@
-//! The `runtime` command line: `screenshot` and `bench`.
+//! The `runtime` command line: `screenshot` and `bench`, and what all four
+//! commands share (`mirror` and `xr` live in their own modules): every one
+//! opens its file with [`open_solution`] (mapped, `--max-frame-cost` checked)
+//! and uploads it with `StereoRenderer::from_mapped`.
 
 mod bench;
 mod output;
@@ -122,11 +125,6 @@ pub fn parse_size(text: &str) -> Result<(u32, u32), String> {
             })
     };
     Ok((parse(w)?, parse(h)?))
-}
-
-/// Reads and validates a solution file, with the reader's one-line error.
-pub fn load_solution(path: &Path) -> Result<solution::format::Solution> {
-    solution::format::read_solution(path).map_err(anyhow::Error::new)
 }
 
 /// Maps and validates a solution file for [`StereoRenderer::from_mapped`]:

@@ -23,7 +23,7 @@ pub mod stats;
 pub mod watch;
 
 use crate::cli::{
-    load_solution, parse_size, report_truncation, write_exr, write_png, RenderOptions,
+    open_solution, parse_size, report_truncation_mapped, write_exr, write_png, RenderOptions,
 };
 use crate::gpu::{Gpu, GpuDesc};
 use crate::render::{Edges, Inspect, RendererDesc, StereoRenderer, ToneSettings};
@@ -32,7 +32,7 @@ use controls::{Command, Controls, Display, Input, Key, SceneFrame, Wireframe};
 use glam::DVec3;
 use present::{Layout, Overlay, Presenter};
 use solution::camera::{Camera, EyeView};
-use solution::format::Solution;
+use solution::format::MappedSolution;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::Instant;
@@ -122,8 +122,8 @@ fn vec3(v: &Option<Vec<f64>>, default: [f64; 3]) -> [f64; 3] {
     }
 }
 
-fn scene_frame(solution: &Solution) -> SceneFrame {
-    let h = &solution.header;
+fn scene_frame(file: &MappedSolution) -> SceneFrame {
+    let h = file.header();
     let lo = DVec3::from(h.bounds_min.map(f64::from));
     let hi = DVec3::from(h.bounds_max.map(f64::from));
     let diagonal = (hi - lo).length();
@@ -153,9 +153,12 @@ pub fn run(args: &MirrorArgs) -> Result<()> {
     // The file's version is noted before it is read, so a rewrite while it is
     // being read is seen as a new version by --watch.
     let watch = args.watch.then(|| watch::Watch::new(&args.solution));
-    let solution = load_solution(&args.solution)?;
-    report_truncation(&solution, args.render.max_order);
-    let header = &solution.header;
+    // Mapped, not read: the upload streams it as stored. It stays mapped
+    // while it is drawn, for the renderer made on the first frame and for the
+    // edge lists of the wireframe (which read its index sections only).
+    let solution = open_solution(&args.solution, args.render.max_frame_cost)?;
+    report_truncation_mapped(&solution, args.render.max_order);
+    let header = solution.header();
     let camera = Camera {
         eye: vec3(&args.eye, header.camera.eye),
         target: vec3(&args.target, header.camera.target),
@@ -220,7 +223,7 @@ pub fn run(args: &MirrorArgs) -> Result<()> {
 
 struct App {
     args: MirrorArgs,
-    solution: Solution,
+    solution: MappedSolution,
     controls: Controls,
     script: Option<script::Script>,
     watch: Option<watch::Watch>,
@@ -460,21 +463,25 @@ impl App {
             if let Some(stamp) = watch.poll(now) {
                 // The renderer takes the new scene (keeping its pipelines); a
                 // file it cannot draw is refused like one that fails to read.
-                let loaded = load_solution(&self.args.solution).and_then(|solution| {
-                    if let Some(renderer) = state.renderer.as_mut() {
-                        renderer.set_solution(&state.gpu, &solution)?;
-                    }
-                    Ok(solution)
-                });
+                let loaded = open_solution(&self.args.solution, self.args.render.max_frame_cost)
+                    .and_then(|solution| {
+                        if let Some(renderer) = state.renderer.as_mut() {
+                            renderer.set_mapped(&state.gpu, &solution)?;
+                        }
+                        Ok(solution)
+                    });
                 match loaded {
                     Ok(solution) => {
                         watch.loaded(stamp);
                         self.controls.set_scene(scene_frame(&solution));
                         self.solution = solution;
                         state.reloads += 1;
-                        let h = &self.solution.header;
-                        let (v, t) = self.solution.batches.iter().fold((0, 0), |(v, t), b| {
-                            (v + b.vertices.len(), t + b.indices.len() / 3)
+                        let h = self.solution.header();
+                        let (v, t) = self.solution.batches().iter().fold((0, 0), |(v, t), b| {
+                            (
+                                v + u64::from(b.vertex_count),
+                                t + u64::from(b.triangle_count()),
+                            )
                         });
                         eprintln!(
                             "reloaded: shots={} partial={} vertices={v} triangles={t}",
@@ -578,7 +585,7 @@ impl App {
                 max_order: self.args.render.max_order,
                 tone,
             };
-            state.renderer = Some(StereoRenderer::new(
+            state.renderer = Some(StereoRenderer::from_mapped(
                 &state.gpu,
                 &self.solution,
                 desc,
@@ -603,7 +610,7 @@ impl App {
 
         // The eyes: both for a screenshot (always a pair) and for the stereo
         // layouts; one otherwise.
-        let header = &self.solution.header;
+        let header = self.solution.header();
         let camera = self.controls.camera(eye_w, eye_h);
         camera.validate().context("the view has become invalid")?;
         let offset = DVec3::from(header.recentre_offset);

@@ -13,7 +13,7 @@ use super::passes::{self, Layouts, PassSet};
 use crate::gpu::{shaders, Buffer, Gpu, GpuError, VkContext};
 use crate::render::ToneSettings;
 use ash::vk;
-use solution::format::Solution;
+use solution::format::MappedSolution;
 use std::sync::Arc;
 
 /// What to draw besides (or instead of) the shading.
@@ -146,12 +146,13 @@ impl Drop for InspectGpu {
 }
 
 impl InspectGpu {
-    /// Builds the edge lists of `solution` (which must be the one the scene was
+    /// Builds the edge lists of `file` (which must be the one the scene was
     /// uploaded from: `draws` name its batches) and one pair of pipelines per
-    /// pass set.
+    /// pass set. Only the index sections are read (and decoded), not the whole
+    /// file.
     pub(super) fn new(
         gpu: &Gpu,
-        solution: &Solution,
+        file: &MappedSolution,
         draws: &[super::scene::DrawBatch],
         layouts: &Layouts,
         pass_sets: &[PassSet],
@@ -161,22 +162,25 @@ impl InspectGpu {
         let mut ranges = Vec::new();
         let mut first = 0u64;
         for draw in draws {
-            let batch = solution.batches.get(draw.source).ok_or_else(|| {
+            let batch = file.batches().get(draw.source).ok_or_else(|| {
                 super::RenderError::Usage(format!(
                     "inspection was given a solution without batch {} of the uploaded one",
                     draw.source
                 ))
             })?;
-            if batch.indices.len() as u32 != draw.index_count {
+            if batch.index_count != draw.index_count {
                 return Err(super::RenderError::Usage(format!(
                     "inspection was given a different solution (batch {} has {} indices, \
                      {} were uploaded)",
-                    draw.source,
-                    batch.indices.len(),
-                    draw.index_count
+                    draw.source, batch.index_count, draw.index_count
                 )));
             }
-            let edges = unique_edges(&batch.indices);
+            let indices: Vec<u32> = file
+                .index_bytes(draw.source)
+                .chunks_exact(4)
+                .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+                .collect();
+            let edges = unique_edges(&indices);
             for [a, b] in &edges {
                 index_data.extend_from_slice(&a.to_le_bytes());
                 index_data.extend_from_slice(&b.to_le_bytes());

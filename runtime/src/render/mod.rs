@@ -409,12 +409,15 @@ impl StereoRenderer {
         Ok(())
     }
 
-    /// Replaces the drawn solution (a reloaded file), keeping the images and,
-    /// unless its storage type differs, the pipelines. On error the previous
-    /// solution stays.
-    pub fn set_solution(&mut self, gpu: &Gpu, solution: &Solution) -> Result<(), RenderError> {
-        let scene = GpuScene::new(gpu, solution, self.desc.max_order)?;
-        let bounds = header_bounds(&solution.header);
+    /// Replaces the drawn solution with a reloaded, mapped `file` (uploaded as
+    /// [`StereoRenderer::from_mapped`] does), keeping the images and, unless its
+    /// storage type differs, the pipelines. On error the previous solution
+    /// stays.
+    pub fn set_mapped(&mut self, gpu: &Gpu, file: &MappedSolution) -> Result<(), RenderError> {
+        let upload_start = std::time::Instant::now();
+        let (scene, stats) = GpuScene::from_mapped(gpu, file, self.desc.max_order)?;
+        let upload_time = upload_start.elapsed();
+        let bounds = header_bounds(file.header());
         // A file of the other storage type needs the other shaders.
         let new_passes = match self.pass_sets.first() {
             Some(first) if first.desc.storage != scene.storage => Some(pass_sets(
@@ -432,7 +435,7 @@ impl StereoRenderer {
             let diagonal = (bounds.1 - bounds.0).length() as f32;
             Some(inspect::InspectGpu::new(
                 gpu,
-                solution,
+                file,
                 &scene.draws,
                 &self.layouts,
                 new_passes.as_ref().unwrap_or(&self.pass_sets),
@@ -465,6 +468,8 @@ impl StereoRenderer {
         self.scene = scene;
         self.bounds = bounds;
         self.inspect_gpu = inspect_gpu;
+        self.upload_time = upload_time;
+        self.upload_stats = stats;
         self.create_descriptors()?;
         Ok(())
     }
@@ -627,20 +632,20 @@ impl StereoRenderer {
     }
 
     /// Mesh inspection for the next frames (Remington 1992, app. D: `-w`, `-n`): element
-    /// edges and vertex normals as lines. `solution` must be the one this
+    /// edges and vertex normals as lines. `file` must be the one this
     /// renderer was made from (its triangles give the edges); the line
     /// pipelines are made on the first call that needs them.
     pub fn set_inspect(
         &mut self,
         gpu: &Gpu,
-        solution: &Solution,
+        file: &MappedSolution,
         mode: Inspect,
     ) -> Result<(), RenderError> {
         if mode.draws_lines() && self.inspect_gpu.is_none() {
             let diagonal = (self.bounds.1 - self.bounds.0).length() as f32;
             self.inspect_gpu = Some(inspect::InspectGpu::new(
                 gpu,
-                solution,
+                file,
                 &self.scene.draws,
                 &self.layouts,
                 &self.pass_sets,

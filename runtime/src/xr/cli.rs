@@ -12,12 +12,12 @@ use super::lifecycle::ExitReason;
 use super::session::XrSession;
 use super::system::{quiet_loader_log, XrSystem};
 use super::vulkan::create_gpu;
-use crate::cli::{load_solution, report_truncation, RenderOptions};
+use crate::cli::{open_solution, report_truncation_mapped, RenderOptions};
 use crate::gpu::Gpu;
 use crate::render::{RendererDesc, StereoRenderer, ToneSettings};
 use crate::session::{run_frame, Session};
 use anyhow::{bail, Context, Result};
-use solution::format::Solution;
+use solution::format::MappedSolution;
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -97,12 +97,12 @@ fn renderer_desc(args: &XrArgs, width: u32, height: u32) -> RendererDesc {
 fn new_renderer(
     args: &XrArgs,
     gpu: &Gpu,
-    solution: &Solution,
+    file: &MappedSolution,
     session: &XrSession,
 ) -> Result<StereoRenderer> {
     let swapchain = session.swapchain();
     let desc = renderer_desc(args, swapchain.width, swapchain.height);
-    StereoRenderer::new(gpu, solution, desc, &swapchain).context("cannot prepare the renderer")
+    StereoRenderer::from_mapped(gpu, file, desc, &swapchain).context("cannot prepare the renderer")
 }
 
 /// Runs `runtime xr`.
@@ -112,8 +112,10 @@ pub fn run(args: XrArgs) -> Result<()> {
         bail!("--frames must be at least 1");
     }
     let config = XrConfig::load_or_default(args.config.as_deref())?;
-    let solution = load_solution(&args.solution)?;
-    report_truncation(&solution, args.render.max_order);
+    // Mapped, not read: the upload streams it as stored. It stays mapped for
+    // the session, since a lost session's new swapchain needs a new renderer.
+    let file = open_solution(&args.solution, args.render.max_frame_cost)?;
+    report_truncation_mapped(&file, args.render.max_order);
 
     quiet_loader_log();
     let system = XrSystem::new()?;
@@ -122,9 +124,9 @@ pub fn run(args: XrArgs) -> Result<()> {
         system.runtime, system.api_version, system.width, system.height
     );
     let gpu = create_gpu(&system, args.render.validation)?;
-    let mut session = XrSession::new(&system, &gpu, &solution.header, config)?;
+    let mut session = XrSession::new(&system, &gpu, file.header(), config)?;
     session.prepare_overlay(&gpu);
-    let renderer = new_renderer(&args, &gpu, &solution, &session)?;
+    let renderer = new_renderer(&args, &gpu, &file, &session)?;
     let mut app = XrApp {
         session,
         renderer,
@@ -138,7 +140,7 @@ pub fn run(args: XrArgs) -> Result<()> {
     while !app.session.should_exit() {
         if app.session.swapchain_generation() != generation {
             // A lost session was recreated with a new swapchain.
-            app.renderer = new_renderer(&args, &app.gpu, &solution, &app.session)?;
+            app.renderer = new_renderer(&args, &app.gpu, &file, &app.session)?;
             app.session.prepare_overlay(&app.gpu);
             generation = app.session.swapchain_generation();
         }
