@@ -913,6 +913,10 @@ impl GpuScene {
                     let hashed = std::time::Instant::now();
                     stats.checksum += hashed - start;
                     if section == BatchSection::Coefficients {
+                        // The finite check the mapped open left to this pass,
+                        // while the piece is in the cache.
+                        let first = done / layout::scalar_size(shape.scalar);
+                        file.verify_finite_coefficients(b, first, chunk)?;
                         bound = bound.max(stored_radiance_bound(
                             chunk,
                             shape.representation,

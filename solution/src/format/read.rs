@@ -217,9 +217,11 @@ pub(crate) fn parse(bytes: &[u8]) -> Result<Parsed, Problem> {
 }
 
 /// [`parse`], optionally leaving out the CRC-32 of the batches' vertex,
-/// coefficient and index sections (the settings section is always checked):
+/// coefficient and index sections (the settings section is always checked) and
+/// the finite-value check of the coefficients, the file's bulk:
 /// [`MappedSolution::open_deferring_checksums`] verifies those as the runtime
-/// streams them to the GPU.
+/// streams them to the GPU ([`MappedSolution::verify_section`],
+/// [`MappedSolution::verify_finite_coefficients`]).
 fn parse_checking(bytes: &[u8], batch_checksums: bool) -> Result<Parsed, Problem> {
     let preamble = read_preamble(bytes)?;
     let metadata = checked_metadata(bytes, &preamble)?;
@@ -241,7 +243,7 @@ fn parse_checking(bytes: &[u8], batch_checksums: bool) -> Result<Parsed, Problem
     let mut ranges = Vec::with_capacity(batches.len());
     for (b, (info, refs)) in batches.iter().zip(&batch_sections).enumerate() {
         let range = refs.map(|section| sections.range(section));
-        check_content(b, info, bytes, &range, &header, slack)?;
+        check_content(b, info, bytes, &range, &header, slack, batch_checksums)?;
         ranges.push(range);
     }
     Ok(Parsed {
@@ -856,6 +858,8 @@ fn vertex_at(chunk: &[u8]) -> Vertex {
 
 /// Stage 5, content of one batch: finite values, orthonormal frames, positions
 /// inside the header bounds (within `slack`), indices below the vertex count.
+/// Without `coefficients`, the coefficients' finite check is left to the caller
+/// (the streaming upload), which reads them anyway.
 fn check_content(
     b: usize,
     info: &BatchInfo,
@@ -863,8 +867,9 @@ fn check_content(
     ranges: &[Range<usize>; 3],
     header: &Header,
     slack: f32,
+    coefficients: bool,
 ) -> Result<(), Problem> {
-    let [vertices, coefficients, indices] = ranges;
+    let [vertices, coefficients_range, indices] = ranges;
     for (v, chunk) in bytes[vertices.clone()]
         .chunks_exact(layout::VERTEX_LEN)
         .enumerate()
@@ -873,23 +878,8 @@ fn check_content(
         validate::check_vertex(b, v as u64, &vertex)?;
         validate::check_in_bounds(b, v as u64, vertex.position, header, slack)?;
     }
-    let coefficient_bytes = &bytes[coefficients.clone()];
-    let bad = match info.scalar {
-        ScalarType::F32 => coefficient_bytes
-            .chunks_exact(4)
-            .position(|c| !f32::from_le_bytes([c[0], c[1], c[2], c[3]]).is_finite())
-            .map(|k| (k, "f32")),
-        // A half is Inf or NaN when its exponent bits are all ones.
-        ScalarType::F16 { .. } => coefficient_bytes
-            .chunks_exact(2)
-            .position(|c| u16::from_le_bytes([c[0], c[1]]) & 0x7C00 == 0x7C00)
-            .map(|k| (k, "f16")),
-    };
-    if let Some((k, kind)) = bad {
-        return Err(Problem::NonFinite {
-            what: format!("batch {b}: coefficient {k} ({kind})"),
-            value: "Inf or NaN".into(),
-        });
+    if coefficients {
+        check_finite_coefficients(b, info.scalar, 0, &bytes[coefficients_range.clone()])?;
     }
     let vertex_count = u64::from(info.vertex_count);
     if let Some((position, index)) = bytes[indices.clone()]
@@ -906,6 +896,36 @@ fn check_content(
         });
     }
     Ok(())
+}
+
+/// Refuses the first Inf or NaN among coefficient bytes that start at
+/// coefficient `first` of batch `b`'s section.
+fn check_finite_coefficients(
+    b: usize,
+    scalar: ScalarType,
+    first: u64,
+    bytes: &[u8],
+) -> Result<(), Problem> {
+    let bad = match scalar {
+        // An f32 is Inf or NaN when its exponent bits are all ones; testing the
+        // bits (rather than `is_finite`) lets the loop vectorize.
+        ScalarType::F32 => bytes
+            .chunks_exact(4)
+            .position(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]) & 0x7F80_0000 == 0x7F80_0000)
+            .map(|k| (k, "f32")),
+        // A half is Inf or NaN when its exponent bits are all ones.
+        ScalarType::F16 { .. } => bytes
+            .chunks_exact(2)
+            .position(|c| u16::from_le_bytes([c[0], c[1]]) & 0x7C00 == 0x7C00)
+            .map(|k| (k, "f16")),
+    };
+    match bad {
+        Some((k, kind)) => Err(Problem::NonFinite {
+            what: format!("batch {b}: coefficient {} ({kind})", first + k as u64),
+            value: "Inf or NaN".into(),
+        }),
+        None => Ok(()),
+    }
 }
 
 /// Builds the in-memory solution from validated bytes. Infallible: `parse` checked
@@ -1090,9 +1110,11 @@ impl MappedSolution {
     /// [`verify_section`](Self::verify_section) as it copies the section, so
     /// the file's bulk is read once for checksum and copy together. Every other
     /// check runs (the metadata and settings checksums, bounds, counts, finite
-    /// values, frames, indices below the vertex count), so nothing the checksums
-    /// guard is needed for memory safety; a caller that never verifies only
-    /// loses the detection of corrupted bytes.
+    /// vertices, frames, indices below the vertex count) except the coefficients'
+    /// finite check, which the caller makes as it streams them
+    /// ([`verify_finite_coefficients`](Self::verify_finite_coefficients)); nothing
+    /// the deferred checks guard is needed for memory safety, so a caller that
+    /// never verifies only loses the detection of corrupted or non-finite values.
     pub fn open_deferring_checksums(path: impl AsRef<Path>) -> Result<Self, FormatError> {
         Self::map_and_parse(path.as_ref(), false)
     }
@@ -1177,6 +1199,24 @@ impl MappedSolution {
         // The tables were validated at open, so the lookup succeeds; a file
         // edited in place since can only make verification fail.
         entry().unwrap_or(0)
+    }
+
+    /// Checks that `bytes`, batch `batch`'s coefficients from coefficient
+    /// `first` on, hold no Inf or NaN: the check that
+    /// [`open_deferring_checksums`](Self::open_deferring_checksums) leaves to the
+    /// streaming upload (which reads every coefficient anyway). On failure, the
+    /// error `open` gives for the same value (file, batch, coefficient index).
+    ///
+    /// # Panics
+    /// If `batch >= self.batches().len()`.
+    pub fn verify_finite_coefficients(
+        &self,
+        batch: usize,
+        first: u64,
+        bytes: &[u8],
+    ) -> Result<(), FormatError> {
+        check_finite_coefficients(batch, self.parsed.batches[batch].scalar, first, bytes)
+            .map_err(|p| FormatError::in_file(&self.path, p))
     }
 
     /// Checks `computed`, the CRC-32 of batch `batch`'s `section` as the caller
@@ -1298,6 +1338,46 @@ mod deferred_checksum_tests {
                 file.verify_section(b, section, crc).unwrap();
             }
         }
+    }
+
+    /// A NaN coefficient: `open` refuses the file (at its checksum, which the
+    /// edit breaks, before the content check); the deferring constructor leaves
+    /// the coefficients' finite check to the stream, where
+    /// `verify_finite_coefficients` names the coefficient by its index in the
+    /// section, also when the piece checked starts past the section's start.
+    #[test]
+    fn a_nan_coefficient_is_refused_by_the_streaming_finite_check() {
+        let (_dir, path) = written();
+        let (offset, scalar) = {
+            let file = MappedSolution::open(&path).unwrap();
+            let base = file.map.as_ptr() as usize;
+            (
+                file.coefficient_bytes(0).as_ptr() as usize - base,
+                file.batches()[0].scalar,
+            )
+        };
+        assert_eq!(scalar, ScalarType::F32, "batch 0 of the sample stores f32");
+        let mut bytes = std::fs::read(&path).unwrap();
+        // Coefficient 2 of batch 0 becomes a quiet NaN.
+        bytes[offset + 8..offset + 12].copy_from_slice(&f32::NAN.to_le_bytes());
+        std::fs::write(&path, &bytes).unwrap();
+
+        assert!(MappedSolution::open(&path).is_err());
+        let file = MappedSolution::open_deferring_checksums(&path).unwrap();
+        let coefficients = file.coefficient_bytes(0);
+        let whole = file
+            .verify_finite_coefficients(0, 0, coefficients)
+            .unwrap_err()
+            .to_string();
+        assert!(whole.contains("batch 0: coefficient 2 (f32)"), "{whole}");
+        assert!(whole.contains("sample.sol"), "{whole}");
+        let piece = file
+            .verify_finite_coefficients(0, 1, &coefficients[4..])
+            .unwrap_err()
+            .to_string();
+        assert_eq!(piece, whole);
+        file.verify_finite_coefficients(0, 3, &coefficients[12..])
+            .unwrap();
     }
 
     /// One flipped coefficient byte: `open` refuses the file; the deferring
