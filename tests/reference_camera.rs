@@ -10,47 +10,8 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-fn binary(name: &str) -> PathBuf {
-    // tests run from target/<profile>/deps/; the binaries are in target/<profile>/.
-    let exe = std::env::current_exe().unwrap();
-    let dir = exe.parent().and_then(Path::parent).unwrap();
-    let path = dir.join(name);
-    assert!(
-        path.exists(),
-        "{} is missing: build it first with `cargo build -p solver -p runtime`",
-        path.display()
-    );
-    path
-}
-
-fn lavapipe(cmd: &mut Command) {
-    if std::env::var_os("VK_ICD_FILENAMES").is_some()
-        || std::env::var_os("VK_DRIVER_FILES").is_some()
-    {
-        return;
-    }
-    if let Ok(entries) = std::fs::read_dir("/usr/share/vulkan/icd.d") {
-        let mut found: Vec<PathBuf> = entries
-            .flatten()
-            .map(|e| e.path())
-            .filter(|p| {
-                p.file_name()
-                    .and_then(|n| n.to_str())
-                    .is_some_and(|n| n.starts_with("lvp_icd"))
-            })
-            .collect();
-        found.sort();
-        if let Some(icd) = found.first() {
-            cmd.env("VK_ICD_FILENAMES", icd);
-        }
-    }
-}
-
-fn run(cmd: &mut Command, what: &str) {
-    let out = cmd.output().unwrap();
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert!(out.status.success(), "{what} failed: {stderr}");
-}
+mod common;
+use common::{binary, lavapipe, run};
 
 /// The R channel of an EXR, row-major, and its width.
 fn red(path: &Path) -> (Vec<f32>, usize) {

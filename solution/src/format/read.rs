@@ -1010,40 +1010,7 @@ impl MappedSolution {
     /// checksums) before returning; only per-batch and per-section tables (bounded
     /// by the file's length) are allocated.
     pub fn open(path: impl AsRef<Path>) -> Result<Self, FormatError> {
-        let path = path.as_ref();
-        let file = std::fs::File::open(path).map_err(|e| FormatError::io("open", path, e))?;
-        let len = file
-            .metadata()
-            .map_err(|e| FormatError::io("inspect", path, e))?
-            .len();
-        if len < layout::PREAMBLE_LEN as u64 {
-            // Also avoids mapping an empty file, which some platforms refuse.
-            return Err(FormatError::in_file(
-                path,
-                Problem::TooShort {
-                    len,
-                    min: layout::PREAMBLE_LEN as u64,
-                },
-            ));
-        }
-        // SAFETY: `Mmap` hands out `&[u8]` that Rust assumes immutable for the
-        // map's lifetime. That holds as long as no process modifies or truncates
-        // the file while it is mapped. The solver never writes a solution file in
-        // place: `write_solution` writes a new temporary file and renames it over
-        // the old name, which leaves the inode we mapped untouched (readers of the
-        // old file keep the old bytes). Another tool truncating the file in place
-        // would make later accesses fault (SIGBUS) and in-place edits would change
-        // bytes after validation; the reader never trusts validated values for
-        // memory safety (all later slicing is bounds-checked), so such edits can
-        // only yield wrong pixels, not out-of-bounds access.
-        let map = unsafe { memmap2::Mmap::map(&file) }
-            .map_err(|e| FormatError::io("memory-map", path, e))?;
-        let parsed = parse(&map).map_err(|p| FormatError::in_file(path, p))?;
-        Ok(MappedSolution {
-            path: path.to_path_buf(),
-            map,
-            parsed,
-        })
+        Self::map_and_parse(path.as_ref(), true)
     }
 
     pub fn path(&self) -> &Path {
@@ -1126,6 +1093,7 @@ impl MappedSolution {
             .map_err(|e| FormatError::io("inspect", path, e))?
             .len();
         if len < layout::PREAMBLE_LEN as u64 {
+            // Also avoids mapping an empty file, which some platforms refuse.
             return Err(FormatError::in_file(
                 path,
                 Problem::TooShort {
@@ -1134,11 +1102,16 @@ impl MappedSolution {
                 },
             ));
         }
-        // SAFETY: as in `open`: the map is read as immutable bytes, which holds
-        // while no process edits or truncates the file in place; solution
-        // writers write a temporary file and rename it over the old name, which
-        // leaves the mapped inode untouched. Later accesses are bounds-checked,
-        // so an in-place edit can yield wrong pixels, never out-of-bounds reads.
+        // SAFETY: `Mmap` hands out `&[u8]` that Rust assumes immutable for the
+        // map's lifetime. That holds as long as no process modifies or truncates
+        // the file while it is mapped. The solver never writes a solution file in
+        // place: `write_solution` writes a new temporary file and renames it over
+        // the old name, which leaves the inode we mapped untouched (readers of the
+        // old file keep the old bytes). Another tool truncating the file in place
+        // would make later accesses fault (SIGBUS) and in-place edits would change
+        // bytes after validation; the reader never trusts validated values for
+        // memory safety (all later slicing is bounds-checked), so such edits can
+        // only yield wrong pixels, not out-of-bounds access.
         let map = unsafe { memmap2::Mmap::map(&file) }
             .map_err(|e| FormatError::io("memory-map", path, e))?;
         let parsed =

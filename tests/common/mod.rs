@@ -1,0 +1,56 @@
+//! Helpers of the end-to-end tests that drive both programs' binaries.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+/// The path of a workspace binary. The root package cannot use
+/// `CARGO_BIN_EXE_*` for other packages' binaries, so it finds them beside the
+/// test executable: tests run from target/<profile>/deps/, the binaries are in
+/// target/<profile>/.
+pub fn binary(name: &str) -> PathBuf {
+    let exe = std::env::current_exe().unwrap();
+    let dir = exe.parent().and_then(Path::parent).unwrap();
+    let path = dir.join(name);
+    assert!(
+        path.exists(),
+        "{} is missing: build it first with `cargo build -p solver -p runtime`",
+        path.display()
+    );
+    path
+}
+
+/// Points the Vulkan loader at lavapipe unless the caller chose a driver.
+pub fn lavapipe(cmd: &mut Command) {
+    if std::env::var_os("VK_ICD_FILENAMES").is_some()
+        || std::env::var_os("VK_DRIVER_FILES").is_some()
+    {
+        return;
+    }
+    let mut found: Vec<PathBuf> = std::fs::read_dir("/usr/share/vulkan/icd.d")
+        .into_iter()
+        .flatten()
+        .flatten()
+        .map(|e| e.path())
+        .filter(|p| {
+            p.file_name()
+                .and_then(|n| n.to_str())
+                .is_some_and(|n| n.starts_with("lvp_icd"))
+        })
+        .collect();
+    found.sort();
+    assert!(
+        !found.is_empty(),
+        "no lavapipe ICD in /usr/share/vulkan/icd.d: install Debian's mesa-vulkan-drivers \
+         (scripts/install-deps.sh does)"
+    );
+    cmd.env("VK_ICD_FILENAMES", &found[0]);
+}
+
+pub fn run(cmd: &mut Command, what: &str) {
+    let out = cmd.output().unwrap();
+    assert!(
+        out.status.success(),
+        "{what} failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
