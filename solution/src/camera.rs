@@ -349,6 +349,27 @@ impl EyeView {
     }
 }
 
+/// Parses an image size `WIDTHxHEIGHT` (e.g. `1024x768`), each side a whole number
+/// of pixels in `1..=MAX_IMAGE_SIDE`: the `--size` flag of every program that makes
+/// images, so they accept and refuse the same sizes with the same message.
+pub fn parse_image_size(text: &str) -> Result<(u32, u32), String> {
+    let (w, h) = text
+        .split_once(['x', 'X'])
+        .ok_or_else(|| format!("size {text:?} is not WIDTHxHEIGHT (e.g. 1024x1024)"))?;
+    let parse = |s: &str| {
+        s.trim()
+            .parse::<u32>()
+            .ok()
+            .filter(|&v| (1..=MAX_IMAGE_SIDE).contains(&v))
+            .ok_or_else(|| {
+                format!(
+                    "size {text:?}: {s:?} is not a whole number of pixels in 1..={MAX_IMAGE_SIDE}"
+                )
+            })
+    };
+    Ok((parse(w)?, parse(h)?))
+}
+
 /// Near and far clip distances for viewing a scene whose (file-coordinate) bounds
 /// are `bounds_min..bounds_max` from `eye`: both renderers call this so that they
 /// clip identically.

@@ -107,25 +107,8 @@ impl RenderOptions {
     }
 }
 
-/// Parses `WxH` (e.g. `1024x768`).
-pub fn parse_size(text: &str) -> Result<(u32, u32), String> {
-    let (w, h) = text
-        .split_once(['x', 'X'])
-        .ok_or_else(|| format!("size {text:?} is not WIDTHxHEIGHT (e.g. 1024x1024)"))?;
-    let parse = |s: &str| {
-        s.trim()
-            .parse::<u32>()
-            .ok()
-            .filter(|&v| (1..=solution::camera::MAX_IMAGE_SIDE).contains(&v))
-            .ok_or_else(|| {
-                format!(
-                    "size {text:?}: {s:?} is not a whole number of pixels in 1..={}",
-                    solution::camera::MAX_IMAGE_SIDE
-                )
-            })
-    };
-    Ok((parse(w)?, parse(h)?))
-}
+/// `--size WxH`: the contract crate's parser, shared with `solver reference`.
+pub use solution::camera::parse_image_size as parse_size;
 
 /// Maps and validates a solution file for [`StereoRenderer::from_mapped`]:
 /// every check but the CRC-32 of the batches' sections, which the upload

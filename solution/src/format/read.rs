@@ -673,22 +673,7 @@ fn batch_counts(b: usize, f: &Fields<'_>) -> Result<(u32, u32), Problem> {
     use layout::batch as bf;
     let vertex_count = f.u64(bf::VERTEX_COUNT);
     let index_count = f.u64(bf::INDEX_COUNT);
-    for (what, count) in [("vertex count", vertex_count), ("index count", index_count)] {
-        if count > layout::MAX_COUNT {
-            return Err(Problem::TooLarge {
-                what: format!("batch {b}: {what}"),
-                value: count,
-                limit: layout::MAX_COUNT,
-                reason: "indices and draw counts are u32",
-            });
-        }
-    }
-    if !index_count.is_multiple_of(3) {
-        return Err(Problem::NotTriangles {
-            batch: b,
-            count: index_count,
-        });
-    }
+    validate::check_counts(b, vertex_count, index_count)?;
     // Both fit: checked against MAX_COUNT = u32::MAX above.
     Ok((vertex_count as u32, index_count as u32))
 }

@@ -3,7 +3,7 @@
 
 use super::error::FormatError;
 use super::error::Problem;
-use super::layout::{MAX_CUBE_RESOLUTION, MAX_SH_ORDER};
+use super::layout::{self, MAX_CUBE_RESOLUTION, MAX_SH_ORDER};
 use super::read::BatchInfo;
 use super::{Header, Representation, ScalarType, Vertex};
 use std::path::Path;
@@ -260,6 +260,29 @@ pub fn check_frame_cost(path: &Path, cost: u64, limit: u64) -> Result<(), Format
             flag: MAX_FRAME_COST_FLAG,
         },
     ))
+}
+
+/// A batch's vertex and index counts: each at most [`layout::MAX_COUNT`] (indices
+/// and draw counts are u32), and the indices a whole number of triangles. The
+/// writer checks a batch's lengths and the reader the counts on disk with it.
+pub fn check_counts(batch: usize, vertex_count: u64, index_count: u64) -> Result<(), Problem> {
+    for (what, count) in [("vertex count", vertex_count), ("index count", index_count)] {
+        if count > layout::MAX_COUNT {
+            return Err(Problem::TooLarge {
+                what: format!("batch {batch}: {what}"),
+                value: count,
+                limit: layout::MAX_COUNT,
+                reason: "indices and draw counts are u32",
+            });
+        }
+    }
+    if !index_count.is_multiple_of(3) {
+        return Err(Problem::NotTriangles {
+            batch,
+            count: index_count,
+        });
+    }
+    Ok(())
 }
 
 #[cfg(test)]

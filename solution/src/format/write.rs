@@ -155,22 +155,7 @@ fn check_batch(b: usize, batch: &Batch) -> Result<(), Problem> {
     validate::check_scalar(b, batch.scalar)?;
     let vertex_count = batch.vertices.len() as u64;
     let index_count = batch.indices.len() as u64;
-    for (what, count) in [("vertex count", vertex_count), ("index count", index_count)] {
-        if count > layout::MAX_COUNT {
-            return Err(Problem::TooLarge {
-                what: format!("batch {b}: {what}"),
-                value: count,
-                limit: layout::MAX_COUNT,
-                reason: "indices and draw counts are u32",
-            });
-        }
-    }
-    if !index_count.is_multiple_of(3) {
-        return Err(Problem::NotTriangles {
-            batch: b,
-            count: index_count,
-        });
-    }
+    validate::check_counts(b, vertex_count, index_count)?;
     let per_channel = batch.representation.coefficients_per_channel();
     let expected = u128::from(vertex_count) * u128::from(per_channel) * 3;
     if expected != batch.coefficients.len() as u128 {

@@ -64,7 +64,7 @@ pub struct ReferenceArgs {
     #[arg(
         long,
         value_name = "WxH",
-        value_parser = parse_size,
+        value_parser = solution::camera::parse_image_size,
         long_help = "Image size, WIDTHxHEIGHT (default: the scene's camera). Time grows \
             with the pixel count at a given noise."
     )]
@@ -166,25 +166,6 @@ pub struct ReferenceArgs {
     /// Legacy display parameter file (Remington 1992, app. A): its camera when the scene names none.
     #[arg(long, value_name = "FILE")]
     pub display: Option<PathBuf>,
-}
-
-fn parse_size(text: &str) -> Result<(u32, u32), String> {
-    let (w, h) = text
-        .split_once(['x', 'X'])
-        .ok_or_else(|| format!("size {text:?} is not WIDTHxHEIGHT (e.g. 256x256)"))?;
-    let parse = |s: &str| {
-        s.trim()
-            .parse::<u32>()
-            .ok()
-            .filter(|&v| (1..=solution::camera::MAX_IMAGE_SIDE).contains(&v))
-            .ok_or_else(|| {
-                format!(
-                    "size {text:?}: {s:?} is not a whole number of pixels in 1..={}",
-                    solution::camera::MAX_IMAGE_SIDE
-                )
-            })
-    };
-    Ok((parse(w)?, parse(h)?))
 }
 
 fn vec3(v: &Option<Vec<f64>>, default: [f64; 3]) -> [f64; 3] {
@@ -556,6 +537,7 @@ mod tests {
 
     #[test]
     fn sizes_and_outputs_are_checked() {
+        use solution::camera::parse_image_size as parse_size;
         assert_eq!(parse_size("64x48"), Ok((64, 48)));
         assert!(parse_size("64").is_err() && parse_size("0x4").is_err());
         assert!(check_writable(Path::new("out.png")).is_err());

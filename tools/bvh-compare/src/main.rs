@@ -10,6 +10,9 @@
 //! none of these dependencies enter the project's build or its Cargo.lock. Every
 //! method traces exactly the same segments; the visible counts are printed so that
 //! they can be compared (f32 methods may differ on rays grazing an edge).
+//!
+//! A developer's benchmark on the bundled scenes, never run on a user's file: a
+//! failing Embree call (no device, no memory) ends it with `expect`'s message.
 
 #[path = "../../../solver/benches/common/workload.rs"]
 mod workload;
