@@ -5,6 +5,19 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/install-deps.sh test
 
+# A clean build of every test target needs about 3 GB of disk (measured with
+# CARGO_INCREMENTAL=0, which a one-shot CI build gains nothing from). Say so
+# plainly rather than fail midway with "No space left on device" from rustc.
+export CARGO_INCREMENTAL="${CARGO_INCREMENTAL:-0}"
+need_gb=5
+target_dir="${CARGO_TARGET_DIR:-target}"
+mkdir -p "$target_dir"
+free_gb=$(df -Pk "$target_dir" | awk 'NR == 2 { print int($4 / 1048576) }')
+if [ "$free_gb" -lt "$need_gb" ]; then
+    echo "test.sh: only ${free_gb} GB free under $target_dir; a clean build needs about ${need_gb} GB" >&2
+    exit 1
+fi
+
 # lavapipe is the Vulkan device of the GPU tests unless the caller picks another.
 export VK_ICD_FILENAMES="${VK_ICD_FILENAMES:-$(ls /usr/share/vulkan/icd.d/lvp_icd*.json 2>/dev/null | head -n1)}"
 
