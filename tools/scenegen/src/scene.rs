@@ -1,0 +1,152 @@
+//! A generated scene and its files: `NAME.obj` (triangles, `vn` where a
+//! surface is smooth), `NAME.mtl` (Kd reflectance, Ke emitted radiance in
+//! W·sr⁻¹·m⁻², linear RGB, one-sided toward the winding's front) and
+//! `NAME.toml`, the solver's scene config (solver/src/scene/config.rs), which
+//! states the units (millimetres: `units_per_metre = 1000`), +y up and a camera
+//! inside the scene.
+
+use crate::mesh::Mesh;
+use anyhow::Context;
+use solution::atomic::write_atomically;
+use std::fmt::Write as _;
+use std::io::Write as _;
+use std::path::{Path, PathBuf};
+
+/// A material as the MTL file states it.
+#[derive(Clone, Debug)]
+pub struct Material {
+    pub name: &'static str,
+    /// Diffuse reflectance, linear RGB, in [0, 1).
+    pub kd: [f64; 3],
+    /// Emitted radiance, W·sr⁻¹·m⁻² (zero for a reflector).
+    pub ke: [f64; 3],
+}
+
+/// The initial camera written to the TOML config (scene coordinates, mm).
+#[derive(Clone, Debug)]
+pub struct Camera {
+    pub eye: [f64; 3],
+    pub target: [f64; 3],
+    pub fov_y_deg: f64,
+}
+
+#[derive(Clone, Debug)]
+pub struct Scene {
+    /// One line saying what the scene is and which parameters made it.
+    pub description: String,
+    pub mesh: Mesh,
+    pub materials: Vec<Material>,
+    pub camera: Camera,
+}
+
+/// Where [`write_scene`] put the three files.
+#[derive(Clone, Debug)]
+pub struct ScenePaths {
+    pub obj: PathBuf,
+    pub mtl: PathBuf,
+    pub toml: PathBuf,
+}
+
+/// Writes `dir/stem.{obj,mtl,toml}`, each atomically.
+pub fn write_scene(scene: &Scene, dir: &Path, stem: &str) -> anyhow::Result<ScenePaths> {
+    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    let paths = ScenePaths {
+        obj: dir.join(format!("{stem}.obj")),
+        mtl: dir.join(format!("{stem}.mtl")),
+        toml: dir.join(format!("{stem}.toml")),
+    };
+    write_text(&paths.obj, &obj_text(scene, &format!("{stem}.mtl")))?;
+    write_text(&paths.mtl, &mtl_text(scene))?;
+    write_text(&paths.toml, &toml_text(scene, &format!("{stem}.obj")))?;
+    Ok(paths)
+}
+
+fn write_text(path: &Path, text: &str) -> anyhow::Result<()> {
+    write_atomically(path, |file| {
+        let mut out = std::io::BufWriter::new(file);
+        out.write_all(text.as_bytes())?;
+        out.flush()
+    })
+    .with_context(|| format!("writing {}", path.display()))
+}
+
+/// The OBJ text. Positions with 4 decimals (0.1 µm in millimetres: far below
+/// the smallest generated feature, about 0.5 mm), normals with 6.
+pub fn obj_text(scene: &Scene, mtl_name: &str) -> String {
+    let mesh = &scene.mesh;
+    let mut s = String::with_capacity(48 * (mesh.positions.len() + mesh.triangle_count()));
+    let _ = writeln!(s, "# {}", scene.description);
+    let _ = writeln!(
+        s,
+        "# Written by tools/scenegen. Units: millimetres, right-handed, +y up.\n\
+         # {} triangles. Faces are wound counter-clockwise seen from their lit side\n\
+         # (into a room, out of a solid); vn are smooth normals on curved surfaces.",
+        mesh.triangle_count()
+    );
+    let _ = writeln!(s, "mtllib {mtl_name}");
+    for p in &mesh.positions {
+        let _ = writeln!(s, "v {:.4} {:.4} {:.4}", p[0], p[1], p[2]);
+    }
+    for n in &mesh.normals {
+        let _ = writeln!(s, "vn {:.6} {:.6} {:.6}", n[0], n[1], n[2]);
+    }
+    for object in &mesh.objects {
+        let _ = writeln!(s, "o {0}\ng {0}\nusemtl {1}", object.name, object.material);
+        for t in &object.triangles {
+            s.push('f');
+            for c in t {
+                let _ = match c.normal {
+                    Some(n) => write!(s, " {}//{}", c.position + 1, n + 1),
+                    None => write!(s, " {}", c.position + 1),
+                };
+            }
+            s.push('\n');
+        }
+    }
+    s
+}
+
+pub fn mtl_text(scene: &Scene) -> String {
+    let mut s = String::from(
+        "# Kd: diffuse reflectance (linear RGB). Ke: emitted radiance, W*sr^-1*m^-2\n\
+         # (linear RGB), one-sided toward the face's front.\n",
+    );
+    for m in &scene.materials {
+        let _ = writeln!(
+            s,
+            "\nnewmtl {}\nKd {} {} {}\nKs 0 0 0",
+            m.name, m.kd[0], m.kd[1], m.kd[2]
+        );
+        if m.ke.iter().any(|&e| e > 0.0) {
+            let _ = writeln!(s, "Ke {} {} {}", m.ke[0], m.ke[1], m.ke[2]);
+        }
+    }
+    s
+}
+
+pub fn toml_text(scene: &Scene, obj_name: &str) -> String {
+    let c = &scene.camera;
+    format!(
+        "# {}\n# Scene config for `solver solve` (solver/src/scene/config.rs), written by tools/scenegen.\n\
+         # No patch or solver overrides: the preset decides the meshing, as for a user's model.\n\n\
+         geometry = [\"{obj_name}\"]\n\
+         units_per_metre = 1000      # the OBJ is in millimetres\n\
+         up = \"y\"\n\
+         mode = \"diffuse\"            # every material has Ks = 0\n\n\
+         [camera]\n\
+         eye = [{:.1}, {:.1}, {:.1}]\n\
+         target = [{:.1}, {:.1}, {:.1}]\n\
+         up = [0.0, 1.0, 0.0]\n\
+         fov_y_deg = {:.4}\n\
+         width = 512\n\
+         height = 512\n",
+        scene.description,
+        c.eye[0],
+        c.eye[1],
+        c.eye[2],
+        c.target[0],
+        c.target[1],
+        c.target[2],
+        c.fov_y_deg
+    )
+}
