@@ -1,0 +1,107 @@
+//! End to end: each family at about 1k triangles, written to files and
+//! solved by the real `solver` binary (`--preset draft`, a budget of 3 shots,
+//! `--strict` so that any import warning — a degenerate, non-planar or
+//! mis-wound face — fails the test), then described by `solver info`.
+
+use scenegen::{generate, scene::write_scene, Family};
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+/// The workspace's solver binary (debug, else release). Another package's
+/// binary has no `CARGO_BIN_EXE_*`, so it is found in the target folder.
+fn solver() -> PathBuf {
+    let target = std::env::var_os("CARGO_TARGET_DIR")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../../target"));
+    ["debug", "release"]
+        .iter()
+        .map(|profile| target.join(profile).join("solver"))
+        .find(|p| p.exists())
+        .unwrap_or_else(|| {
+            panic!(
+                "no solver binary in {}: build it first with `cargo build -p solver`",
+                target.display()
+            )
+        })
+}
+
+fn json(bytes: &[u8]) -> serde_json::Value {
+    serde_json::from_slice(bytes)
+        .unwrap_or_else(|e| panic!("not JSON ({e}): {}", String::from_utf8_lossy(bytes)))
+}
+
+#[test]
+fn the_solver_accepts_every_family() {
+    let solver = solver();
+    let dir = tempfile::tempdir().unwrap();
+    for family in Family::ALL {
+        let scene = generate(family, 1000, 1).unwrap();
+        let paths = write_scene(&scene, dir.path(), family.name()).unwrap();
+        let out = dir.path().join(format!("{}.sol", family.name()));
+        let stats = dir.path().join(format!("{}.json", family.name()));
+        let run = Command::new(&solver)
+            .arg("solve")
+            .arg(&paths.toml)
+            .arg("--out")
+            .arg(&out)
+            .args([
+                "--preset",
+                "draft",
+                "--max-shots",
+                "3",
+                "--strict",
+                "--threads",
+                "2",
+            ])
+            .arg("--stats-json")
+            .arg(&stats)
+            .output()
+            .unwrap();
+        assert!(
+            run.status.success(),
+            "{}: {}",
+            family.name(),
+            String::from_utf8_lossy(&run.stderr)
+        );
+        let stats = json(&std::fs::read(&stats).unwrap());
+        assert_eq!(stats["shots"], 3, "{}: {stats}", family.name());
+        // Three shots of the light(s) leave less than all of the power unshot.
+        assert!(stats["unshot_fraction"].as_f64().unwrap() < 1.0, "{stats}");
+
+        let info = Command::new(&solver)
+            .arg("info")
+            .arg("--json")
+            .arg(&out)
+            .output()
+            .unwrap();
+        assert!(
+            info.status.success(),
+            "{}",
+            String::from_utf8_lossy(&info.stderr)
+        );
+        let header = json(&info.stdout);
+        assert_eq!(header["units_per_metre"], 1000.0, "{header}");
+        // The solution's bounds span the generated geometry: same extent per
+        // axis. Bounds are stored in f32 around the re-centred origin (about
+        // 8 m here, so a resolution of 1e-3 mm); 0.01 mm is above that.
+        let mut lo = [f64::INFINITY; 3];
+        let mut hi = [f64::NEG_INFINITY; 3];
+        for p in &scene.mesh.positions {
+            for a in 0..3 {
+                lo[a] = lo[a].min(p[a]);
+                hi[a] = hi[a].max(p[a]);
+            }
+        }
+        for a in 0..3 {
+            let extent = header["bounds_max"][a].as_f64().unwrap()
+                - header["bounds_min"][a].as_f64().unwrap();
+            assert!(
+                (extent - (hi[a] - lo[a])).abs() < 0.01,
+                "{} axis {a}: {extent} vs {}",
+                family.name(),
+                hi[a] - lo[a]
+            );
+        }
+        assert_eq!(header["camera"]["eye"][0], scene.camera.eye[0], "{header}");
+    }
+}
