@@ -7,6 +7,7 @@
 //! OBJ + MTL + a TOML scene config ([`scene`]). [`bench`] drives the release
 //! `solver` over families × sizes × presets and reports cost and growth.
 
+pub mod bench;
 pub mod cornell;
 pub mod floorplan;
 pub mod mesh;
