@@ -89,6 +89,75 @@ pub fn csv(rows: &[Row]) -> String {
     s
 }
 
+/// Reads back the rows [`csv`] wrote (to merge several benchmark runs into
+/// one report). Errors name the line.
+pub fn parse_csv(text: &str) -> Result<Vec<Row>, String> {
+    let mut rows = Vec::new();
+    for (i, line) in text.lines().enumerate().skip(1) {
+        if line.trim().is_empty() {
+            continue;
+        }
+        rows.push(parse_row(line).map_err(|e| format!("line {}: {e}: {line}", i + 1))?);
+    }
+    Ok(rows)
+}
+
+fn parse_row(line: &str) -> Result<Row, String> {
+    // The status is the one quoted field (it may hold commas); split around it.
+    let (head, rest) = line.split_once(",\"").ok_or("no quoted status")?;
+    let (status, tail) = rest.split_once("\",").ok_or("unterminated status")?;
+    let head: Vec<&str> = head.split(',').collect();
+    let tail: Vec<&str> = tail.split(',').collect();
+    if head.len() != 4 || tail.len() != 10 {
+        return Err(format!(
+            "{} + 1 + {} fields, not 4 + 1 + 10",
+            head.len(),
+            tail.len()
+        ));
+    }
+    fn num<T: std::str::FromStr>(field: &str, name: &str) -> Result<T, String> {
+        field
+            .parse()
+            .map_err(|_| format!("{name} `{field}` is not a number"))
+    }
+    fn maybe<T: std::str::FromStr>(field: &str, name: &str) -> Result<Option<T>, String> {
+        if field.is_empty() {
+            Ok(None)
+        } else {
+            num(field, name).map(Some)
+        }
+    }
+    let status = if status == "converged" {
+        Status::Converged
+    } else if status == "shot budget" {
+        Status::ShotBudget
+    } else if let Some(limit) = status
+        .strip_prefix("> limit (")
+        .and_then(|r| r.strip_suffix(" s)"))
+    {
+        Status::OverLimit(num(limit, "limit")?)
+    } else {
+        Status::Failed(status.strip_prefix("failed: ").unwrap_or(status).to_owned())
+    };
+    Ok(Row {
+        family: head[0].to_owned(),
+        target: num(head[1], "target_triangles")?,
+        triangles: num(head[2], "triangles")?,
+        preset: head[3].to_owned(),
+        status,
+        wall_seconds: num(tail[0], "wall_s")?,
+        cpu_seconds: num(tail[1], "cpu_s")?,
+        peak_rss_bytes: num(tail[2], "peak_rss_bytes")?,
+        elements: maybe(tail[3], "elements")?,
+        vertices: maybe(tail[4], "vertices")?,
+        shots: maybe(tail[5], "shots")?,
+        rays: maybe(tail[6], "rays")?,
+        unshot_fraction: maybe(tail[7], "unshot_fraction")?,
+        solution_bytes: maybe(tail[8], "solution_bytes")?,
+        checkpoint_bytes: num(tail[9], "checkpoint_bytes")?,
+    })
+}
+
 /// The least-squares slope of ln y against ln x, or None with fewer than two
 /// distinct x. On log–log axes a slope of 1 is linear growth.
 pub fn log_log_slope(points: &[(f64, f64)]) -> Option<f64> {
@@ -251,5 +320,16 @@ mod tests {
         assert!((g.rss_slope.unwrap() - 1.0).abs() < 1e-12);
         assert!(markdown(&rows).contains("> limit (120 s)"));
         assert_eq!(csv(&rows).lines().count(), 5);
+        // The CSV reads back to the same rows (the markdown of both agrees).
+        let back = parse_csv(&csv(&rows)).unwrap();
+        assert_eq!(markdown(&back), markdown(&rows));
+        let failed = [row(10, 1.0, Status::Failed("Exited(1): a, b".into()))];
+        assert_eq!(
+            parse_csv(&csv(&failed)).unwrap()[0].status,
+            failed[0].status
+        );
+        assert!(parse_csv("header\nf,1,2\n")
+            .unwrap_err()
+            .starts_with("line 2"));
     }
 }

@@ -3,7 +3,7 @@
 
 use anyhow::{bail, Context};
 use clap::Parser;
-use scenegen::bench::{run, Config};
+use scenegen::bench::{report, run, write_reports, Config};
 use scenegen::Family;
 use std::path::PathBuf;
 use std::time::Duration;
@@ -55,10 +55,27 @@ struct Args {
     /// Keep each run's scene, solution and solver log.
     #[arg(long)]
     keep: bool,
+    /// Run nothing: merge these scale.csv files (comma-separated, in order)
+    /// into one set of reports in --out.
+    #[arg(long, value_delimiter = ',')]
+    merge: Vec<PathBuf>,
 }
 
 fn main() -> anyhow::Result<()> {
     let args = Args::parse();
+    if !args.merge.is_empty() {
+        let mut rows = Vec::new();
+        for path in &args.merge {
+            let text = std::fs::read_to_string(path)
+                .with_context(|| format!("reading {}", path.display()))?;
+            rows.extend(
+                report::parse_csv(&text).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?,
+            );
+        }
+        write_reports(&args.out, &rows)?;
+        println!("{}", report::markdown(&rows));
+        return Ok(());
+    }
     if !args.solver.exists() {
         bail!(
             "{} does not exist: build it with `cargo build --release -p solver` or pass --solver",
@@ -90,7 +107,7 @@ fn main() -> anyhow::Result<()> {
     if !args.keep {
         std::fs::remove_dir_all(&work_dir).ok();
     }
-    println!("{}", scenegen::bench::report::markdown(&rows));
+    println!("{}", report::markdown(&rows));
     eprintln!("scale-bench: reports in {}", args.out.display());
     Ok(())
 }
