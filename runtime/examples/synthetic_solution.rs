@@ -133,9 +133,15 @@ fn main() -> anyhow::Result<()> {
             room
         }
         "city" => {
-            anyhow::ensure!((1..=200).contains(&n), "N must be in 1..=200 buildings per side");
+            anyhow::ensure!(
+                (1..=200).contains(&n),
+                "N must be in 1..=200 buildings per side"
+            );
             let cells = param(10)?;
-            anyhow::ensure!((1..=100).contains(&cells), "P must be in 1..=100 cells per face side");
+            anyhow::ensure!(
+                (1..=100).contains(&cells),
+                "P must be in 1..=100 cells per face side"
+            );
             common::city(n, cells as usize)
         }
         other => anyhow::bail!("unknown kind {other:?} (diffuse, glossy, cube, sized or city)"),

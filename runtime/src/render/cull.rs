@@ -239,9 +239,7 @@ pub fn visible_ranges(
         // Ranges before `start` belong to another draw: never merged into.
         let len = out.len();
         match out.last_mut() {
-            Some((first, count))
-                if len > start && *first + *count == chunk.first_triangle =>
-            {
+            Some((first, count)) if len > start && *first + *count == chunk.first_triangle => {
                 *count += chunk.triangle_count;
             }
             _ => out.push((chunk.first_triangle, chunk.triangle_count)),

@@ -264,12 +264,7 @@ impl StereoRenderer {
     ) -> Result<StereoRenderer, RenderError> {
         check_swapchain(&desc, swapchain)?;
         let upload_start = std::time::Instant::now();
-        let scene = GpuScene::new(
-            gpu,
-            solution,
-            desc.max_order,
-            desc.culling.chunk_triangles,
-        )?;
+        let scene = GpuScene::new(gpu, solution, desc.max_order, desc.culling.chunk_triangles)?;
         let upload_time = upload_start.elapsed();
         let mut renderer = Self::from_scene(gpu, scene, &solution.header, desc, swapchain)?;
         renderer.upload_time = upload_time;

@@ -796,8 +796,11 @@ impl GpuScene {
             }
             let mut stored_vertices = Vec::with_capacity(batch.vertices.len() * layout::VERTEX_LEN);
             vertex_bytes(&batch.vertices, &mut stored_vertices);
-            let stored_indices: Vec<u8> =
-                batch.indices.iter().flat_map(|ix| ix.to_le_bytes()).collect();
+            let stored_indices: Vec<u8> = batch
+                .indices
+                .iter()
+                .flat_map(|ix| ix.to_le_bytes())
+                .collect();
             let (reordered, chunks) =
                 chunked_indices(&stored_vertices, &stored_indices, chunk_triangles);
             draw.chunks = chunks;
@@ -837,13 +840,7 @@ impl GpuScene {
         file: &MappedSolution,
         max_order: Option<u32>,
     ) -> Result<(GpuScene, UploadStats), SceneError> {
-        Self::from_mapped_with(
-            gpu,
-            file,
-            max_order,
-            DEFAULT_CHUNK_TRIANGLES,
-            STAGING_BYTES,
-        )
+        Self::from_mapped_with(gpu, file, max_order, DEFAULT_CHUNK_TRIANGLES, STAGING_BYTES)
     }
 
     /// [`GpuScene::from_mapped`] through a staging buffer of `staging_bytes`
@@ -857,13 +854,7 @@ impl GpuScene {
         max_order: Option<u32>,
         staging_bytes: u64,
     ) -> Result<(GpuScene, UploadStats), SceneError> {
-        Self::from_mapped_with(
-            gpu,
-            file,
-            max_order,
-            DEFAULT_CHUNK_TRIANGLES,
-            staging_bytes,
-        )
+        Self::from_mapped_with(gpu, file, max_order, DEFAULT_CHUNK_TRIANGLES, staging_bytes)
     }
 
     /// [`GpuScene::from_mapped_in_chunks`] with chunks of at most

@@ -506,10 +506,19 @@ pub fn city(n: usize, m: usize) -> Solution {
             let to_sun = (sun - pos).normalize();
             let r = 2.0 * to_sun.dot(nrm) * nrm - to_sun;
             let lobe = &zonal.iter().find(|(o, _)| *o == order).expect("lobe").1;
-            solution::sh::zonal_rotated(order, lobe, solution::sh::to_local(r, nrm, tan), &mut rotated);
+            solution::sh::zonal_rotated(
+                order,
+                lobe,
+                solution::sh::to_local(r, nrm, tan),
+                &mut rotated,
+            );
             for (k, l) in rotated.iter().enumerate() {
                 for b in base_radiance {
-                    let d = if k == 0 { 0.3 * b / solution::sh::Y00 } else { 0.0 };
+                    let d = if k == 0 {
+                        0.3 * b / solution::sh::Y00
+                    } else {
+                        0.0
+                    };
                     target.coefficients.push((d + 2.0 * l) as f32);
                 }
             }
@@ -528,19 +537,45 @@ pub fn city(n: usize, m: usize) -> Solution {
     );
     for i in 0..n {
         for j in 0..n {
-            let hash = ((i as f64 * 12.9898 + j as f64 * 78.233).sin() * 43758.5453).fract().abs();
+            let hash = ((i as f64 * 12.9898 + j as f64 * 78.233).sin() * 43758.5453)
+                .fract()
+                .abs();
             let h = 5.0 + 20.0 * hash;
             let (x0, z0) = (-half + 10.0 * i as f64 + 2.0, -half + 10.0 * j as f64 + 2.0);
             let (x1, z1) = (x0 + 6.0, z0 + 6.0);
             let (dx, dz) = (x1 - x0, z1 - z0);
-            let target = if (i + 2 * j) % 4 == 0 { &mut glossy } else { &mut diffuse };
+            let target = if (i + 2 * j) % 4 == 0 {
+                &mut glossy
+            } else {
+                &mut diffuse
+            };
             // Outward normals u × v: roof +y, walls ±z and ±x.
             for (corner, u, v) in [
-                (DVec3::new(x0, h, z1), DVec3::new(dx, 0.0, 0.0), DVec3::new(0.0, 0.0, -dz)),
-                (DVec3::new(x0, 0.0, z1), DVec3::new(dx, 0.0, 0.0), DVec3::new(0.0, h, 0.0)),
-                (DVec3::new(x1, 0.0, z0), DVec3::new(-dx, 0.0, 0.0), DVec3::new(0.0, h, 0.0)),
-                (DVec3::new(x1, 0.0, z1), DVec3::new(0.0, 0.0, -dz), DVec3::new(0.0, h, 0.0)),
-                (DVec3::new(x0, 0.0, z0), DVec3::new(0.0, 0.0, dz), DVec3::new(0.0, h, 0.0)),
+                (
+                    DVec3::new(x0, h, z1),
+                    DVec3::new(dx, 0.0, 0.0),
+                    DVec3::new(0.0, 0.0, -dz),
+                ),
+                (
+                    DVec3::new(x0, 0.0, z1),
+                    DVec3::new(dx, 0.0, 0.0),
+                    DVec3::new(0.0, h, 0.0),
+                ),
+                (
+                    DVec3::new(x1, 0.0, z0),
+                    DVec3::new(-dx, 0.0, 0.0),
+                    DVec3::new(0.0, h, 0.0),
+                ),
+                (
+                    DVec3::new(x1, 0.0, z1),
+                    DVec3::new(0.0, 0.0, -dz),
+                    DVec3::new(0.0, h, 0.0),
+                ),
+                (
+                    DVec3::new(x0, 0.0, z0),
+                    DVec3::new(0.0, 0.0, dz),
+                    DVec3::new(0.0, h, 0.0),
+                ),
             ] {
                 add(target, Quad { corner, u, v, n: m });
             }
