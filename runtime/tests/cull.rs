@@ -64,8 +64,9 @@ fn culling_changes_no_pixel_of_a_city_street() {
         let (culled, kept) = render(&file, views, on);
         let (full, all) = render(&file, views, off);
         assert_eq!(all.triangles_drawn, all.triangles);
-        // The street view sees under half of the city: at least half of the
-        // triangles' chunks are dropped (measured: about a fifth are kept).
+        // The street view sees under half of the city (the half behind the
+        // eye and the blocks beside the street's wedge): over half of the
+        // triangles' chunks are dropped.
         assert!(
             2 * kept.triangles_drawn < kept.triangles,
             "culling kept {} of {} triangles",
