@@ -8,7 +8,11 @@
 //!   D = 6k², default 12;
 //! - `sized`: the glossy room with N chosen so that the file is about N MiB
 //!   (P = the floor's SH order, default 16), for the upload benchmark of
-//!   docs/benchmarks.md ("Opening a solution").
+//!   docs/benchmarks.md ("Opening a solution");
+//! - `city`: N × N box buildings with faces of P × P cells (default 10) on a
+//!   glossy ground (`common::city`): 10·N²·P² + 32·N² triangles, for the
+//!   runtime at scale (docs/benchmarks.md, "Runtime at scale"; N = 32 gives
+//!   1.06M triangles).
 //!
 //! A last argument `f16` stores the directional batch (the floor) as IEEE half
 //! with the writer's per-batch scale.
@@ -84,7 +88,7 @@ fn main() -> anyhow::Result<()> {
     }
     anyhow::ensure!(
         args.len() >= 3,
-        "usage: synthetic_solution OUT.sol diffuse|glossy|cube|sized N [P] [f16]"
+        "usage: synthetic_solution OUT.sol diffuse|glossy|cube|sized|city N [P] [f16]"
     );
     let n: usize = args[2].parse()?;
     let param = |default: u32| -> anyhow::Result<u32> {
@@ -128,13 +132,34 @@ fn main() -> anyhow::Result<()> {
             );
             room
         }
-        other => anyhow::bail!("unknown kind {other:?} (diffuse, glossy, cube or sized)"),
+        "city" => {
+            anyhow::ensure!(
+                (1..=200).contains(&n),
+                "N must be in 1..=200 buildings per side"
+            );
+            let cells = param(10)?;
+            anyhow::ensure!(
+                (1..=100).contains(&cells),
+                "P must be in 1..=100 cells per face side"
+            );
+            common::city(n, cells as usize)
+        }
+        other => anyhow::bail!("unknown kind {other:?} (diffuse, glossy, cube, sized or city)"),
     };
     if f16 {
         to_f16(&mut solution);
     }
     solution::format::write_solution(std::path::Path::new(&args[0]), &solution)?;
     let vertices: usize = solution.batches.iter().map(|b| b.vertices.len()).sum();
-    println!("wrote {} ({vertices} vertices)", args[0]);
+    let triangles: usize = solution.batches.iter().map(|b| b.indices.len() / 3).sum();
+    // Read back through the validating reader, as the runtime opens it.
+    let written = solution::format::MappedSolution::open(std::path::Path::new(&args[0]))?;
+    println!(
+        "wrote {} ({vertices} vertices, {triangles} triangles, {} batches; per-frame cost {} basis terms per view, limit {})",
+        args[0],
+        solution.batches.len(),
+        solution::format::frame_cost(written.batches()),
+        solution::format::DEFAULT_MAX_FRAME_COST
+    );
     Ok(())
 }

@@ -44,6 +44,7 @@ pub struct BenchReport {
     /// Median and 99th-percentile wall time per stereo frame (record, submit and
     /// wait for the GPU), milliseconds.
     pub median_ms: f64,
+    pub p95_ms: f64,
     pub p99_ms: f64,
     pub frames: u32,
     pub width: u32,
@@ -61,6 +62,19 @@ pub struct BenchReport {
     pub samples: u32,
     pub coefficients: String,
     pub max_order: Option<u32>,
+    /// Whether chunks were culled against the eyes' frusta (`--no-cull`), and
+    /// the chunk size.
+    pub culling: bool,
+    pub chunk_triangles: u32,
+    /// Chunks and triangles drawn per stereo frame (summed over its passes:
+    /// the per-view path counts each eye's pass), averaged over the timed
+    /// frames, against the totals of those passes.
+    pub chunks_drawn: f64,
+    pub chunks: u64,
+    pub triangles_drawn: f64,
+    pub triangles_per_frame: u64,
+    /// Draw calls per stereo frame, averaged (neighbouring visible chunks merge).
+    pub draws: f64,
 }
 
 fn percentile(sorted: &[f64], p: f64) -> f64 {
@@ -125,24 +139,34 @@ pub fn run(args: &BenchArgs) -> Result<BenchReport> {
             exposure_stops: args.render.exposure,
             curve: args.render.tonemap,
         },
+        culling: args.render.culling(),
     };
     let mut renderer = StereoRenderer::from_mapped(&gpu, &file, desc, &session.swapchain())?;
     timings.stage("vulkan and renderer");
     timings.upload(renderer.upload_time(), renderer.upload_stats());
     let mut times = Vec::new();
+    let mut kept = crate::render::CullStats::default();
     while !session.should_exit() {
         let start = Instant::now();
         let report = run_frame(&mut session, &mut renderer)?;
         let ms = start.elapsed().as_secs_f64() * 1e3;
         if report.timing.index >= u64::from(args.warmup) {
             times.push(ms);
+            let frame = renderer.cull_stats();
+            kept.chunks = frame.chunks;
+            kept.triangles = frame.triangles;
+            kept.chunks_drawn += frame.chunks_drawn;
+            kept.triangles_drawn += frame.triangles_drawn;
+            kept.draws += frame.draws;
         }
     }
+    let timed = times.len().max(1) as f64;
     if args.render.timings {
         eprintln!("{}", timings.line(renderer.first_submit()));
     }
     times.sort_by(f64::total_cmp);
     let median_ms = percentile(&times, 50.0);
+    let p95_ms = percentile(&times, 95.0);
     let p99_ms = percentile(&times, 99.0);
     let scene = renderer.scene();
     let evals: u64 = scene
@@ -170,6 +194,7 @@ pub fn run(args: &BenchArgs) -> Result<BenchReport> {
     };
     let report = BenchReport {
         median_ms,
+        p95_ms,
         p99_ms,
         frames: args.frames,
         width,
@@ -183,6 +208,13 @@ pub fn run(args: &BenchArgs) -> Result<BenchReport> {
         samples: renderer.samples(),
         coefficients: format!("{:?}", scene.storage),
         max_order: args.render.max_order,
+        culling: !args.render.no_cull,
+        chunk_triangles: args.render.chunk_triangles,
+        chunks_drawn: kept.chunks_drawn as f64 / timed,
+        chunks: kept.chunks,
+        triangles_drawn: kept.triangles_drawn as f64 / timed,
+        triangles_per_frame: kept.triangles,
+        draws: kept.draws as f64 / timed,
     };
     if args.json {
         println!("{}", serde_json::to_string(&report)?);
@@ -198,9 +230,20 @@ pub fn run(args: &BenchArgs) -> Result<BenchReport> {
             scene.storage
         );
         println!(
-            "median {:.2} ms, p99 {:.2} ms per stereo frame; {} vertices, {} triangles; {:.3e} SH evaluations/s ({:.3e} basis terms/s)",
-            median_ms, p99_ms, report.vertices, report.triangles, report.sh_evals_per_second,
+            "median {:.2} ms, p95 {:.2} ms, p99 {:.2} ms per stereo frame; {} vertices, {} triangles; {:.3e} SH evaluations/s ({:.3e} basis terms/s)",
+            median_ms, p95_ms, p99_ms, report.vertices, report.triangles, report.sh_evals_per_second,
             report.sh_terms_per_second
+        );
+        println!(
+            "culling {} (chunks of ≤ {} triangles): {:.1} of {} chunks, {:.0} of {} triangles ({:.1}%) and {:.1} draws per stereo frame",
+            if report.culling { "on" } else { "off" },
+            report.chunk_triangles,
+            report.chunks_drawn,
+            report.chunks,
+            report.triangles_drawn,
+            report.triangles_per_frame,
+            100.0 * report.triangles_drawn / (report.triangles_per_frame.max(1) as f64),
+            report.draws
         );
     }
     let log = gpu.validation_log();

@@ -93,9 +93,28 @@ pub struct RenderOptions {
     /// the first frame submitted (open, validate, upload, ...).
     #[arg(long)]
     pub timings: bool,
+    /// Draw every chunk of every batch, without testing it against the eyes'
+    /// frusta (for measuring what culling saves; the image is the same).
+    #[arg(long)]
+    pub no_cull: bool,
+    /// The most triangles per spatial chunk, the unit that culling keeps or
+    /// drops. What it trades: smaller chunks fit the frusta closer (fewer
+    /// triangles drawn) but cost one box test and up to one draw each and a
+    /// longer partition at load; larger ones the reverse.
+    #[arg(long, value_name = "N", default_value_t = crate::render::cull::DEFAULT_CHUNK_TRIANGLES,
+          value_parser = clap::value_parser!(u32).range(1..))]
+    pub chunk_triangles: u32,
 }
 
 impl RenderOptions {
+    /// The renderer's culling settings from `--no-cull` and `--chunk-triangles`.
+    pub fn culling(&self) -> crate::render::Culling {
+        crate::render::Culling {
+            enabled: !self.no_cull,
+            chunk_triangles: self.chunk_triangles,
+        }
+    }
+
     pub fn check(&self) -> Result<()> {
         if !(self.exposure.is_finite() && self.exposure.abs() <= 64.0) {
             bail!(

@@ -97,6 +97,7 @@ pub fn run(args: &ScreenshotArgs) -> Result<()> {
             exposure_stops: args.render.exposure,
             curve: args.render.tonemap,
         },
+        culling: args.render.culling(),
     };
     let mut renderer = StereoRenderer::from_mapped(&gpu, &file, desc, &swapchain.desc())?;
     timings.stage("renderer");

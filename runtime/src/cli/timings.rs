@@ -40,7 +40,8 @@ impl Timings {
         self.part("(checksum", stats.checksum);
         self.part("bound", stats.bound);
         self.part("staging copy", stats.staging);
-        self.part("waiting for transfers)", stats.transfer);
+        self.part("waiting for transfers", stats.transfer);
+        self.part("chunk partition)", stats.partition);
     }
 
     /// Time from the start to `at`.

@@ -584,6 +584,7 @@ impl App {
                 multiview: self.args.render.multiview,
                 max_order: self.args.render.max_order,
                 tone,
+                culling: self.args.render.culling(),
             };
             state.renderer = Some(StereoRenderer::from_mapped(
                 &state.gpu,

@@ -18,6 +18,7 @@
 //! clip planes of `solution::camera::clip_planes_for`, exactly as the CPU
 //! reference rasterizer does.
 
+pub mod cull;
 pub mod inspect;
 pub mod multiview;
 mod passes;
@@ -25,6 +26,7 @@ pub mod scene;
 pub mod tonemap;
 pub mod truncation;
 
+pub use cull::{CullStats, Culling};
 pub use inspect::{Edges, Inspect};
 pub use multiview::MultiviewMode;
 pub use scene::{CoefficientStorage, DrawKind, GpuScene, SceneError, UploadStats};
@@ -54,6 +56,8 @@ pub struct RendererDesc {
     /// Cap on the evaluated SH order (`--max-order`).
     pub max_order: Option<u32>,
     pub tone: ToneSettings,
+    /// Chunk size and per-chunk frustum culling ([`cull`]).
+    pub culling: Culling,
 }
 
 impl Default for RendererDesc {
@@ -65,6 +69,7 @@ impl Default for RendererDesc {
             multiview: MultiviewMode::Auto,
             max_order: None,
             tone: ToneSettings::default(),
+            culling: Culling::default(),
         }
     }
 }
@@ -101,6 +106,16 @@ pub struct EyeImage {
     pub srgb: Vec<u8>,
     /// Linear radiance RGB (W·sr⁻¹·m⁻²), row-major, row 0 at the top.
     pub radiance: Vec<f32>,
+}
+
+/// The triangle ranges one pass of a frame draws, from [`cull::visible_ranges`].
+#[derive(Clone, Debug, Default)]
+struct PassRanges {
+    view_mask: u32,
+    /// `(first triangle, count)` per draw, counted from the draw's first index.
+    ranges: Vec<(u32, u32)>,
+    /// Which of `ranges` belong to each of the scene's draws.
+    per_draw: Vec<std::ops::Range<usize>>,
 }
 
 /// Per-swapchain-image state: the output view and one framebuffer per pass set.
@@ -143,6 +158,12 @@ pub struct StereoRenderer {
     first_submit: Option<std::time::Instant>,
     /// Bytes and submits of a mapped upload (zero for in-memory solutions).
     upload_stats: UploadStats,
+    /// The frusta of the views of the frame being drawn (layer 0, layer 1).
+    frusta: [cull::Frustum; 2],
+    /// What each pass of the frame being drawn draws.
+    pass_ranges: Vec<PassRanges>,
+    /// What culling kept in the last frame.
+    cull_stats: CullStats,
 }
 
 const UNIFORM_SIZE: u64 = 2 * 64 + 2 * 16;
@@ -243,7 +264,7 @@ impl StereoRenderer {
     ) -> Result<StereoRenderer, RenderError> {
         check_swapchain(&desc, swapchain)?;
         let upload_start = std::time::Instant::now();
-        let scene = GpuScene::new(gpu, solution, desc.max_order)?;
+        let scene = GpuScene::new(gpu, solution, desc.max_order, desc.culling.chunk_triangles)?;
         let upload_time = upload_start.elapsed();
         let mut renderer = Self::from_scene(gpu, scene, &solution.header, desc, swapchain)?;
         renderer.upload_time = upload_time;
@@ -261,7 +282,13 @@ impl StereoRenderer {
     ) -> Result<StereoRenderer, RenderError> {
         check_swapchain(&desc, swapchain)?;
         let upload_start = std::time::Instant::now();
-        let (scene, stats) = GpuScene::from_mapped(gpu, file, desc.max_order)?;
+        let (scene, stats) = GpuScene::from_mapped_with(
+            gpu,
+            file,
+            desc.max_order,
+            desc.culling.chunk_triangles,
+            scene::STAGING_BYTES,
+        )?;
         let upload_time = upload_start.elapsed();
         let mut renderer = Self::from_scene(gpu, scene, file.header(), desc, swapchain)?;
         renderer.upload_time = upload_time;
@@ -348,6 +375,9 @@ impl StereoRenderer {
             upload_time: std::time::Duration::ZERO,
             first_submit: None,
             upload_stats: UploadStats::default(),
+            frusta: [cull::Frustum::from_view_projection(glam::DMat4::IDENTITY); 2],
+            pass_ranges: Vec::new(),
+            cull_stats: CullStats::default(),
         };
         renderer.create_descriptors()?;
         for &raw in &swapchain.images {
@@ -415,7 +445,13 @@ impl StereoRenderer {
     /// stays.
     pub fn set_mapped(&mut self, gpu: &Gpu, file: &MappedSolution) -> Result<(), RenderError> {
         let upload_start = std::time::Instant::now();
-        let (scene, stats) = GpuScene::from_mapped(gpu, file, self.desc.max_order)?;
+        let (scene, stats) = GpuScene::from_mapped_with(
+            gpu,
+            file,
+            self.desc.max_order,
+            self.desc.culling.chunk_triangles,
+            scene::STAGING_BYTES,
+        )?;
         let upload_time = upload_start.elapsed();
         let bounds = header_bounds(file.header());
         // A file of the other storage type needs the other shaders.
@@ -700,6 +736,7 @@ impl StereoRenderer {
         self.fence.wait()?;
         self.fence.reset()?;
         self.write_uniforms(views);
+        self.cull(views.len());
         self.record(views.len(), image)?;
         let cmds = [self.command_buffer];
         let submit = [vk::SubmitInfo::default().command_buffers(&cmds)];
@@ -727,6 +764,55 @@ impl StereoRenderer {
         self.first_submit
     }
 
+    /// What culling kept in the last frame drawn, summed over its passes.
+    pub fn cull_stats(&self) -> CullStats {
+        self.cull_stats
+    }
+
+    /// The view masks of a frame's passes: mono draws layer 0 alone.
+    fn frame_masks(&self, view_count: usize) -> Vec<u32> {
+        if view_count == 1 {
+            vec![0b01]
+        } else {
+            self.path.stereo_masks().to_vec()
+        }
+    }
+
+    /// Chooses, for each pass of the frame, the chunks of each draw that the
+    /// pass's views may see ([`cull::visible_ranges`] against the frusta that
+    /// `write_uniforms` set: one eye's on the per-view path, both eyes' for a
+    /// multiview pass). The one culling path of every command: screenshot,
+    /// bench, mirror and xr all draw through [`StereoRenderer::render`].
+    fn cull(&mut self, view_count: usize) {
+        let mut stats = CullStats::default();
+        let mut passes = std::mem::take(&mut self.pass_ranges);
+        passes.clear();
+        for view_mask in self.frame_masks(view_count) {
+            let frusta: Vec<cull::Frustum> = (0..2)
+                .filter(|v| view_mask & (1 << v) != 0)
+                .map(|v| self.frusta[v])
+                .collect();
+            let mut pass = PassRanges {
+                view_mask,
+                ..PassRanges::default()
+            };
+            for draw in &self.scene.draws {
+                let start = pass.ranges.len();
+                cull::visible_ranges(
+                    &draw.chunks,
+                    &frusta,
+                    self.desc.culling.enabled,
+                    &mut stats,
+                    &mut pass.ranges,
+                );
+                pass.per_draw.push(start..pass.ranges.len());
+            }
+            passes.push(pass);
+        }
+        self.pass_ranges = passes;
+        self.cull_stats = stats;
+    }
+
     fn write_uniforms(&mut self, views: &[EyeView]) {
         let mut bytes = Vec::with_capacity(UNIFORM_SIZE as usize);
         let mut eyes = Vec::new();
@@ -734,7 +820,9 @@ impl StereoRenderer {
             // Mono: layer 1 is not drawn; repeat the view so the data is defined.
             let view = &views[i.min(views.len() - 1)];
             let (near, far) = self.clip_planes(view);
-            let m = view.view_projection(near, far).as_mat4();
+            let projection = view.view_projection(near, far);
+            self.frusta[i] = cull::Frustum::from_view_projection(projection);
+            let m = projection.as_mat4();
             for f in m.to_cols_array() {
                 bytes.extend_from_slice(&f.to_le_bytes());
             }
@@ -786,12 +874,7 @@ impl StereoRenderer {
                 &barriers,
             )
         };
-        let masks: Vec<u32> = if view_count == 1 {
-            vec![0b01]
-        } else {
-            self.path.stereo_masks().to_vec()
-        };
-        for mask in masks {
+        for mask in self.frame_masks(view_count) {
             let (index, set) = self
                 .pass_sets
                 .iter()
@@ -935,8 +1018,26 @@ impl StereoRenderer {
         } else {
             self.scene.draws.len()
         };
+        let Some(pass) = self
+            .pass_ranges
+            .iter()
+            .find(|p| p.view_mask == set.desc.view_mask)
+        else {
+            return;
+        };
         let mut bound = None;
-        for (draw, &ds) in self.scene.draws.iter().zip(&self.batch_sets).take(shaded) {
+        for ((draw, &ds), drawn) in self
+            .scene
+            .draws
+            .iter()
+            .zip(&self.batch_sets)
+            .zip(&pass.per_draw)
+            .take(shaded)
+        {
+            let ranges = &pass.ranges[drawn.clone()];
+            if ranges.is_empty() {
+                continue;
+            }
             let pipeline = match draw.kind {
                 DrawKind::Sh if draw.order == 0 => set.scene_l0,
                 DrawKind::Sh => set.scene_sh,
@@ -956,9 +1057,9 @@ impl StereoRenderer {
                 scale: draw.storage_scale * self.scene.radiance_scale,
             };
             // SAFETY: the caller guarantees the subpass and the bound buffers;
-            // the batch's descriptor set is live; the draw stays within the
+            // the batch's descriptor set is live; each draw stays within the
             // buffers (indices were checked against their batch's vertex count
-            // at upload).
+            // at upload, and the chunks cover the batch's triangles).
             unsafe {
                 device.cmd_bind_descriptor_sets(
                     cmd,
@@ -975,14 +1076,16 @@ impl StereoRenderer {
                     0,
                     &constants.bytes(),
                 );
-                device.cmd_draw_indexed(
-                    cmd,
-                    draw.index_count,
-                    1,
-                    draw.first_index,
-                    draw.vertex_base as i32,
-                    0,
-                );
+                for &(first_triangle, triangles) in ranges {
+                    device.cmd_draw_indexed(
+                        cmd,
+                        3 * triangles,
+                        1,
+                        draw.first_index + 3 * first_triangle,
+                        draw.vertex_base as i32,
+                        0,
+                    );
+                }
             }
         }
     }

@@ -2,8 +2,10 @@
 //! (SH batches sorted by order, so diffuse batches share one trivial pipeline,
 //! then 001's global-cube batches by resolution, drawn by `scene_cube.vert`).
 
+use super::cull::{partition, Chunk, DEFAULT_CHUNK_TRIANGLES};
 use crate::gpu::{Buffer, BufferDesc, Fence, Gpu, GpuError, MemoryLocation, VkContext};
 use ash::vk;
+use glam::DVec3;
 use solution::format::{
     layout, Batch, BatchSection, FormatError, MappedSolution, Representation, ScalarType, Solution,
     Vertex,
@@ -108,6 +110,10 @@ pub struct DrawBatch {
     pub stride: u32,
     /// Multiplies stored values to get radiance (the f16 scale; 1 for f32).
     pub storage_scale: f32,
+    /// The batch's spatial chunks ([`super::cull`]), covering its triangles in
+    /// the order of the uploaded (reordered) index buffer; triangle numbers
+    /// count from `first_index / 3`.
+    pub chunks: Vec<Chunk>,
 }
 
 impl DrawBatch {
@@ -299,6 +305,48 @@ fn vertex_bytes(vertices: &[Vertex], out: &mut Vec<u8>) {
     }
 }
 
+/// A batch's stored index bytes (`u32` little-endian) reordered chunk by
+/// chunk ([`partition`] into chunks of at most `chunk_triangles`), with the
+/// chunks; `vertex_bytes` is the batch's vertex section (positions first in
+/// each [`layout::VERTEX_LEN`]-byte vertex). The vertex data is only read. An
+/// index without a vertex (which the file's checks exclude) makes its
+/// triangle's chunk box non-finite, which culling always keeps.
+fn chunked_indices(
+    vertex_bytes: &[u8],
+    index_bytes: &[u8],
+    chunk_triangles: u32,
+) -> (Vec<u8>, Vec<Chunk>) {
+    let index = |i: usize| {
+        let b = &index_bytes[4 * i..4 * i + 4];
+        u32::from_le_bytes([b[0], b[1], b[2], b[3]])
+    };
+    let position = |v: u32| {
+        let start = v as usize * layout::VERTEX_LEN;
+        match vertex_bytes.get(start..start + 12) {
+            Some(b) => DVec3::from_array(std::array::from_fn(|a| {
+                f64::from(f32::from_le_bytes([
+                    b[4 * a],
+                    b[4 * a + 1],
+                    b[4 * a + 2],
+                    b[4 * a + 3],
+                ]))
+            })),
+            None => DVec3::NAN,
+        }
+    };
+    let triangles = (index_bytes.len() / 12) as u32;
+    let parts = partition(
+        triangles,
+        |t, k| position(index(3 * t as usize + k)),
+        chunk_triangles,
+    );
+    let mut out = Vec::with_capacity(index_bytes.len());
+    for &t in &parts.order {
+        out.extend_from_slice(&index_bytes[12 * t as usize..12 * t as usize + 12]);
+    }
+    (out, parts.chunks)
+}
+
 fn align(value: u64, alignment: u64) -> u64 {
     let a = alignment.max(4);
     value.div_ceil(a) * a
@@ -401,6 +449,7 @@ impl Plan {
                     ScalarType::F32 => 1.0,
                     ScalarType::F16 { scale } => scale,
                 },
+                chunks: Vec::new(),
             };
             coefficient_end = offset + bytes;
             vertex_base += shape.vertex_count;
@@ -695,6 +744,8 @@ pub struct UploadStats {
     pub staging: std::time::Duration,
     /// Time waiting for the device's staging-to-buffer copies.
     pub transfer: std::time::Duration,
+    /// Host time partitioning the batches into spatial chunks.
+    pub partition: std::time::Duration,
 }
 
 impl GpuScene {
@@ -702,10 +753,14 @@ impl GpuScene {
     /// scalar types say (f16 batches are rounded to half here, divided by their
     /// scale). `max_order` caps the evaluated SH order (bands above it are not
     /// read; see `crate::render::truncation`); cube batches ignore it.
+    ///
+    /// Batches are partitioned into chunks of at most `chunk_triangles` for
+    /// culling, as [`GpuScene::from_mapped_with`] does.
     pub fn new(
         gpu: &Gpu,
         solution: &Solution,
         max_order: Option<u32>,
+        chunk_triangles: u32,
     ) -> Result<GpuScene, SceneError> {
         let mut shapes = Vec::with_capacity(solution.batches.len());
         for (i, batch) in solution.batches.iter().enumerate() {
@@ -717,12 +772,12 @@ impl GpuScene {
                 index_count: batch.indices.len() as u64,
             });
         }
-        let plan = Plan::new(&shapes, max_order, &gpu.info.limits)?;
+        let mut plan = Plan::new(&shapes, max_order, &gpu.info.limits)?;
         let mut vertex_data = Vec::new();
         let mut index_data = Vec::new();
         let mut coeff_data: Vec<u8> = Vec::new();
         let mut bound = 0.0f64;
-        for (i, draw) in &plan.batches {
+        for (i, draw) in &mut plan.batches {
             let batch = &solution.batches[*i];
             bound = bound.max(radiance_bound(batch, draw.order));
             coeff_data.resize(draw.coeff_offset as usize, 0);
@@ -739,10 +794,18 @@ impl GpuScene {
                     }
                 }
             }
-            vertex_bytes(&batch.vertices, &mut vertex_data);
-            for ix in &batch.indices {
-                index_data.extend_from_slice(&ix.to_le_bytes());
-            }
+            let mut stored_vertices = Vec::with_capacity(batch.vertices.len() * layout::VERTEX_LEN);
+            vertex_bytes(&batch.vertices, &mut stored_vertices);
+            let stored_indices: Vec<u8> = batch
+                .indices
+                .iter()
+                .flat_map(|ix| ix.to_le_bytes())
+                .collect();
+            let (reordered, chunks) =
+                chunked_indices(&stored_vertices, &stored_indices, chunk_triangles);
+            draw.chunks = chunks;
+            vertex_data.extend_from_slice(&stored_vertices);
+            index_data.extend_from_slice(&reordered);
         }
         coeff_data.resize(plan.coefficient_total.max(4) as usize, 0);
         let vertices = Buffer::with_data(gpu, vk::BufferUsageFlags::VERTEX_BUFFER, &vertex_data)?;
@@ -768,12 +831,16 @@ impl GpuScene {
     /// against the file's ([`MappedSolution::verify_section`]), so `file` may be
     /// opened with [`MappedSolution::open_deferring_checksums`]; a mismatch
     /// refuses the file with the error naming file, batch and section.
+    ///
+    /// Each batch's triangles are partitioned into spatial chunks of at most
+    /// [`DEFAULT_CHUNK_TRIANGLES`] for culling ([`super::cull`]); its index
+    /// section goes to the GPU in chunk order (checksummed as stored).
     pub fn from_mapped(
         gpu: &Gpu,
         file: &MappedSolution,
         max_order: Option<u32>,
     ) -> Result<(GpuScene, UploadStats), SceneError> {
-        Self::from_mapped_in_chunks(gpu, file, max_order, STAGING_BYTES)
+        Self::from_mapped_with(gpu, file, max_order, DEFAULT_CHUNK_TRIANGLES, STAGING_BYTES)
     }
 
     /// [`GpuScene::from_mapped`] through a staging buffer of `staging_bytes`
@@ -787,6 +854,18 @@ impl GpuScene {
         max_order: Option<u32>,
         staging_bytes: u64,
     ) -> Result<(GpuScene, UploadStats), SceneError> {
+        Self::from_mapped_with(gpu, file, max_order, DEFAULT_CHUNK_TRIANGLES, staging_bytes)
+    }
+
+    /// [`GpuScene::from_mapped_in_chunks`] with chunks of at most
+    /// `chunk_triangles` triangles for culling.
+    pub fn from_mapped_with(
+        gpu: &Gpu,
+        file: &MappedSolution,
+        max_order: Option<u32>,
+        chunk_triangles: u32,
+        staging_bytes: u64,
+    ) -> Result<(GpuScene, UploadStats), SceneError> {
         let shapes: Vec<BatchShape> = file
             .batches()
             .iter()
@@ -797,7 +876,7 @@ impl GpuScene {
                 index_count: u64::from(info.index_count),
             })
             .collect();
-        let plan = Plan::new(&shapes, max_order, &gpu.info.limits)?;
+        let mut plan = Plan::new(&shapes, max_order, &gpu.info.limits)?;
         let vertices = device_buffer(
             gpu,
             vk::BufferUsageFlags::VERTEX_BUFFER,
@@ -850,9 +929,19 @@ impl GpuScene {
             bytes: total,
             ..UploadStats::default()
         };
-        for (b, draw) in &plan.batches {
+        for (b, draw) in &mut plan.batches {
             let b = *b;
             let shape = shapes[b];
+            // The batch's chunks and its indices in chunk order, read from the
+            // map before its sections stream (the vertices are still resident).
+            let partition_start = std::time::Instant::now();
+            let (reordered, chunks) = chunked_indices(
+                file.section_bytes(b, BatchSection::Vertices),
+                file.section_bytes(b, BatchSection::Indices),
+                chunk_triangles,
+            );
+            draw.chunks = chunks;
+            stats.partition += partition_start.elapsed();
             let envelope = match shape.representation {
                 Representation::Sh { .. } => envelopes(
                     (draw.order as usize + 1)
@@ -880,6 +969,12 @@ impl GpuScene {
             ];
             for (section, target, dst) in sections {
                 let bytes = file.section_bytes(b, section);
+                // The checksum covers the stored bytes; the GPU gets the
+                // indices in chunk order (the same length).
+                let source = match section {
+                    BatchSection::Indices => &reordered[..],
+                    _ => bytes,
+                };
                 let unit = match section {
                     BatchSection::Coefficients => unit(&shape).max(1),
                     _ => 1,
@@ -928,7 +1023,11 @@ impl GpuScene {
                     let bounded = std::time::Instant::now();
                     stats.bound += bounded - hashed;
                     let transfer_before = uploader.transfer;
-                    uploader.push(target, dst + done, chunk)?;
+                    uploader.push(
+                        target,
+                        dst + done,
+                        &source[done as usize..(done + take) as usize],
+                    )?;
                     // A push that flushed spent part of its time waiting.
                     stats.staging += bounded
                         .elapsed()

@@ -91,6 +91,7 @@ fn renderer_desc(args: &XrArgs, width: u32, height: u32) -> RendererDesc {
             exposure_stops: args.render.exposure,
             curve: args.render.tonemap,
         },
+        culling: args.render.culling(),
     }
 }
 

@@ -220,19 +220,7 @@ pub fn glossy_room(n: usize, order: u32) -> Solution {
         indices: Vec::new(),
     };
     let (vertices, indices) = quads[0].vertices_and_indices();
-    // Zonal lobe g(μ) = μ^e for μ > 0: Legendre coefficients by quadrature.
-    let exponent = 12.0;
-    let (mu, w) = solution::sh::gauss_legendre(64);
-    let mut legendre = vec![0.0; order as usize + 1];
-    let mut p = vec![0.0; order as usize + 1];
-    for (x, wx) in mu.iter().zip(&w) {
-        let g = if *x > 0.0 { x.powf(exponent) } else { 0.0 };
-        solution::sh::legendre_all(order, *x, &mut p);
-        for l in 0..=order as usize {
-            legendre[l] += (2 * l + 1) as f64 / 2.0 * g * p[l] * wx;
-        }
-    }
-    let zonal = solution::sh::zonal_from_legendre(&legendre);
+    let zonal = lobe_zonal(order);
     let count = solution::sh::coefficient_count(order);
     let mut rotated = vec![0.0; count];
     for v in &vertices {
@@ -455,4 +443,170 @@ pub fn mapped(solution: &Solution) -> (tempfile::TempDir, solution::format::Mapp
     solution::format::write_solution(&path, solution).unwrap();
     let file = solution::format::MappedSolution::open(&path).unwrap();
     (dir, file)
+}
+
+/// The SH coefficients (per channel, index l² + l + m) of the zonal lobe
+/// g(μ) = μ¹² for μ > 0, by Gauss–Legendre quadrature of its Legendre
+/// expansion: the glossy lobe of [`glossy_room`] and [`city`].
+fn lobe_zonal(order: u32) -> Vec<f64> {
+    let (mu, w) = solution::sh::gauss_legendre(64);
+    let mut legendre = vec![0.0; order as usize + 1];
+    let mut p = vec![0.0; order as usize + 1];
+    for (x, wx) in mu.iter().zip(&w) {
+        let g = if *x > 0.0 { x.powf(12.0) } else { 0.0 };
+        solution::sh::legendre_all(order, *x, &mut p);
+        for l in 0..=order as usize {
+            legendre[l] += (2 * l + 1) as f64 / 2.0 * g * p[l] * wx;
+        }
+    }
+    solution::sh::zonal_from_legendre(&legendre)
+}
+
+/// A synthetic city for the runtime at scale (docs/benchmarks.md, "Runtime at
+/// scale"): `n × n` box buildings (four walls and a roof, each face `m × m`
+/// cells, so 10·m² triangles and 5·(m + 1)² vertices per building) on a 10 m
+/// grid with 4 m streets, heights 5–25 m from a hash of the block, standing on
+/// a glossy ground of order 3 (`4n × 4n` cells). Every fourth building is glossy
+/// at order 2 (its own batch); the rest are diffuse (order 0). Radiance is the
+/// smooth [`diffuse_radiance`] plus, on glossy surfaces, the lobe of
+/// [`glossy_room`] about the mirror direction of a sun 500 m up. The header
+/// camera stands in a street at eye height near the city's centre, looking
+/// down the street: most of the city is behind or beside it.
+pub fn city(n: usize, m: usize) -> Solution {
+    let half = 5.0 * n as f64;
+    let sun = DVec3::new(0.3 * half, 500.0, 0.2 * half);
+    let batch = |order| Batch {
+        representation: Representation::Sh { order },
+        scalar: ScalarType::F32,
+        vertices: Vec::new(),
+        coefficients: Vec::new(),
+        indices: Vec::new(),
+    };
+    let (mut diffuse, mut glossy, mut ground) = (batch(0), batch(2), batch(3));
+    let zonal = [(2, lobe_zonal(2)), (3, lobe_zonal(3))];
+    let add = |target: &mut Batch, quad: Quad| {
+        let (vertices, indices) = quad.vertices_and_indices();
+        let base = target.vertices.len() as u32;
+        let Representation::Sh { order } = target.representation else {
+            unreachable!("the city's batches are SH")
+        };
+        let count = solution::sh::coefficient_count(order);
+        let mut rotated = vec![0.0; count];
+        for v in &vertices {
+            let pos = DVec3::from(v.position.map(f64::from));
+            let base_radiance = diffuse_radiance(pos * 0.1);
+            if order == 0 {
+                target
+                    .coefficients
+                    .extend(base_radiance.iter().map(|x| (x / solution::sh::Y00) as f32));
+                continue;
+            }
+            let nrm = DVec3::from(v.normal.map(f64::from));
+            let tan = DVec3::from(v.tangent.map(f64::from));
+            let to_sun = (sun - pos).normalize();
+            let r = 2.0 * to_sun.dot(nrm) * nrm - to_sun;
+            let lobe = &zonal.iter().find(|(o, _)| *o == order).expect("lobe").1;
+            solution::sh::zonal_rotated(
+                order,
+                lobe,
+                solution::sh::to_local(r, nrm, tan),
+                &mut rotated,
+            );
+            for (k, l) in rotated.iter().enumerate() {
+                for b in base_radiance {
+                    let d = if k == 0 {
+                        0.3 * b / solution::sh::Y00
+                    } else {
+                        0.0
+                    };
+                    target.coefficients.push((d + 2.0 * l) as f32);
+                }
+            }
+        }
+        target.vertices.extend(vertices);
+        target.indices.extend(indices.iter().map(|i| i + base));
+    };
+    add(
+        &mut ground,
+        Quad {
+            corner: DVec3::new(-half, 0.0, half),
+            u: DVec3::new(2.0 * half, 0.0, 0.0),
+            v: DVec3::new(0.0, 0.0, -2.0 * half),
+            n: 4 * n,
+        },
+    );
+    for i in 0..n {
+        for j in 0..n {
+            let hash = ((i as f64 * 12.9898 + j as f64 * 78.233).sin() * 43758.5453)
+                .fract()
+                .abs();
+            let h = 5.0 + 20.0 * hash;
+            let (x0, z0) = (-half + 10.0 * i as f64 + 2.0, -half + 10.0 * j as f64 + 2.0);
+            let (x1, z1) = (x0 + 6.0, z0 + 6.0);
+            let (dx, dz) = (x1 - x0, z1 - z0);
+            let target = if (i + 2 * j) % 4 == 0 {
+                &mut glossy
+            } else {
+                &mut diffuse
+            };
+            // Outward normals u × v: roof +y, walls ±z and ±x.
+            for (corner, u, v) in [
+                (
+                    DVec3::new(x0, h, z1),
+                    DVec3::new(dx, 0.0, 0.0),
+                    DVec3::new(0.0, 0.0, -dz),
+                ),
+                (
+                    DVec3::new(x0, 0.0, z1),
+                    DVec3::new(dx, 0.0, 0.0),
+                    DVec3::new(0.0, h, 0.0),
+                ),
+                (
+                    DVec3::new(x1, 0.0, z0),
+                    DVec3::new(-dx, 0.0, 0.0),
+                    DVec3::new(0.0, h, 0.0),
+                ),
+                (
+                    DVec3::new(x1, 0.0, z1),
+                    DVec3::new(0.0, 0.0, -dz),
+                    DVec3::new(0.0, h, 0.0),
+                ),
+                (
+                    DVec3::new(x0, 0.0, z0),
+                    DVec3::new(0.0, 0.0, dz),
+                    DVec3::new(0.0, h, 0.0),
+                ),
+            ] {
+                add(target, Quad { corner, u, v, n: m });
+            }
+        }
+    }
+    let mut lo = [f32::INFINITY; 3];
+    let mut hi = [f32::NEG_INFINITY; 3];
+    for b in [&diffuse, &glossy, &ground] {
+        for v in &b.vertices {
+            for a in 0..3 {
+                lo[a] = lo[a].min(v.position[a]);
+                hi[a] = hi[a].max(v.position[a]);
+            }
+        }
+    }
+    // In the street west of the centre column of blocks, at eye height,
+    // looking north (−z) down the street.
+    let street_x = -half + 10.0 * (n / 2) as f64;
+    let camera = Camera {
+        eye: [street_x, 1.7, 0.0],
+        target: [street_x, 1.7, -half],
+        up: [0.0, 1.0, 0.0],
+        fov_y_deg: 70.0,
+        width: 512,
+        height: 512,
+    };
+    let mut header = header(lo, hi, camera);
+    header.mode = SolveMode::Directional;
+    let batches = [diffuse, glossy, ground]
+        .into_iter()
+        .filter(|b| !b.indices.is_empty())
+        .collect();
+    Solution { header, batches }
 }
