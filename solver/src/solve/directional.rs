@@ -547,6 +547,7 @@ impl Solver {
             self.recorded.push(RecordedShot {
                 index: self.shots,
                 patch: source,
+                receivers: self.mesh.vertices.len() as u32,
                 unshot: equivalent.to_array().map(f64::to_bits),
             });
             self.recorded_pools
