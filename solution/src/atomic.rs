@@ -73,7 +73,7 @@ pub fn write_atomically(
 
 /// Writes `bytes` to `path` atomically (see [`write_atomically`]).
 pub fn write_bytes_atomically(path: &Path, bytes: &[u8]) -> Result<(), AtomicWriteError> {
-    write_atomically(path, |file| io::Write::write_all(file, bytes))
+    write_atomically(path, |file| file.write_all(bytes))
 }
 
 /// Writes `path` atomically through a buffer: `write` streams into a
