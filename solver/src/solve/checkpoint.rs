@@ -18,13 +18,17 @@
 //! gives the same bits (see `directional/state.rs`). That costs one pass of the
 //! recorded shots over the mesh, a few shots' time. The diffuse mode's `direct`
 //! (three f64 per vertex) is stored: it is small beside the solution's vertex.
+//! Directional mode's diffuse proxies (per vertex c₀₀ Y₀₀, per patch the
+//! hemisphere-equivalent unshot) are recomputed from the coefficients, by the
+//! expressions every step ends with, so they are not stored either.
 //!
 //! Format: a sequence of sections, each a 4-byte tag, a u64 element count and the
 //! elements, little-endian; every f64 as its IEEE bits, so values round-trip bit
 //! for bit. In order: `HEAD` (one record: fingerprint, shots, rays, seconds,
 //! mode), `SPLT` (u32 per split), `RECS` (40 bytes per recorded shot: index u64,
 //! patch u32, receivers u32, unshot 3 × f64), `RADI` (3 × f64 per vertex),
-//! `UNSH` (3 × f64 per patch), `DIRC` (3 × f64 per vertex, or none); in
+//! `UNSH` (3 × f64 per patch), `DIRC` (3 × f64 per vertex; these three are
+//! empty in directional mode); in
 //! directional mode then `SHOR` (u32 order per surface), `BRDF` (one u32),
 //! `SHRA` (f64 per radiance coefficient), `SHUN` (f64 per patch coefficient),
 //! `SHRL` (u32 coefficient count per recorded shot) and `SHRU` (their f64s).
@@ -362,11 +366,14 @@ impl Solver {
             s.u32(r.receivers)?;
             r.unshot.iter().try_for_each(|&b| s.u64(b))?;
         }
-        s.dvec3s(b"RADI", &self.radiance)?;
-        s.dvec3s(b"UNSH", &self.patch_unshot)?;
-        // Directional mode keeps no diffuse `direct` (its recorded-shot part is
-        // per coefficient, and recomputed on resume).
-        let keeps_direct = self.directional.is_none() && self.direct.len() == self.radiance.len();
+        // Directional mode stores none of the diffuse arrays: the radiance and
+        // unshot proxies are recomputed from the coefficients on resume (as every
+        // step ends by recomputing them), and its recorded-shot part is per
+        // coefficient, recomputed too.
+        let diffuse = self.directional.is_none();
+        let keeps_direct = diffuse && self.direct.len() == self.radiance.len();
+        s.dvec3s(b"RADI", if diffuse { &self.radiance } else { &[] })?;
+        s.dvec3s(b"UNSH", if diffuse { &self.patch_unshot } else { &[] })?;
         s.dvec3s(b"DIRC", if keeps_direct { &self.direct } else { &[] })?;
         if let Some(d) = self.directional.as_deref() {
             let sections = d.checkpoint_sections();
@@ -433,7 +440,16 @@ impl Solver {
             .mesh
             .replay(&checkpoint.split_log)
             .map_err(|e| SolveError::CheckpointMismatch(e.to_string()))?;
-        if checkpoint.radiance.len() != solver.mesh.vertices.len()
+        // A directional checkpoint stores no diffuse proxies (they are recomputed
+        // below); a diffuse one stores both.
+        let proxies_derived = checkpoint.directional.is_some()
+            && checkpoint.radiance.is_empty()
+            && checkpoint.patch_unshot.is_empty();
+        if proxies_derived {
+            solver
+                .radiance
+                .resize(solver.mesh.vertices.len(), DVec3::ZERO);
+        } else if checkpoint.radiance.len() != solver.mesh.vertices.len()
             || !(checkpoint.direct.is_empty()
                 || checkpoint.direct.len() == solver.mesh.vertices.len())
             || checkpoint.patch_unshot.len() != solver.mesh.patches.len()
@@ -446,8 +462,10 @@ impl Solver {
                 solver.mesh.patches.len()
             ));
         }
-        solver.radiance = checkpoint.radiance;
-        solver.patch_unshot = checkpoint.patch_unshot;
+        if !proxies_derived {
+            solver.radiance = checkpoint.radiance;
+            solver.patch_unshot = checkpoint.patch_unshot;
+        }
         solver.direct = if checkpoint.direct.is_empty() {
             vec![DVec3::ZERO; solver.mesh.vertices.len()]
         } else {
@@ -510,6 +528,7 @@ impl Solver {
             .restore_directional(checkpoint.directional)
             .map_err(SolveError::CheckpointMismatch)?;
         if directional {
+            solver.restore_diffuse_proxies();
             solver.recompute_directional_direct();
         }
         solver.unshot_power = solver.total_unshot_power();

@@ -16,7 +16,9 @@
 use super::{DirScratch, DirShot, Directional, Tables};
 use crate::solve::shoot::{RecordedShot, SamplePool, Shot};
 use crate::solve::Solver;
+use glam::DVec3;
 use rayon::prelude::*;
+use solution::sh::Y00;
 
 /// The directional arrays a checkpoint stores, borrowed.
 pub(in crate::solve) struct CheckpointSections<'a> {
@@ -51,6 +53,30 @@ fn make_dir_shot<'a>(
         source_order: tables.surface_order[source_surface],
         source_tangent: tables.tangent[source_surface],
         tables,
+    }
+}
+
+impl Solver {
+    /// Recomputes the diffuse proxies of a directional solve from its
+    /// coefficients, exactly as the end of every directional step does (radiance
+    /// c₀₀ Y₀₀ per vertex, the hemisphere-equivalent unshot per patch); before
+    /// the first shot they are still what `Solver::new` set.
+    pub(in crate::solve) fn restore_diffuse_proxies(&mut self) {
+        let Some(d) = self.directional.as_deref() else {
+            return;
+        };
+        if self.shots == 0 {
+            return;
+        }
+        for v in 0..self.mesh.vertices.len() {
+            let o = d.vertex_offset[v];
+            self.radiance[v] = DVec3::from_slice(&d.radiance[o..o + 3]) * Y00;
+        }
+        for p in 0..self.mesh.patches.len() {
+            let order = d.surface_order[self.mesh.patches[p].surface as usize];
+            let range = d.patch_range(&self.mesh, p);
+            self.patch_unshot[p] = d.hemisphere_equivalent(order, &d.patch_unshot[range]);
+        }
     }
 }
 
