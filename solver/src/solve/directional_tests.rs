@@ -417,6 +417,56 @@ fn resumed_directional_solve_equals_an_uninterrupted_one() {
     assert!(err.to_string().contains("brdf_normalization"), "{err}");
 }
 
+/// Bytes written to a sink that keeps only their count.
+struct Counting(u64);
+
+impl std::io::Write for Counting {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        self.0 += buf.len() as u64;
+        Ok(buf.len())
+    }
+    fn flush(&mut self) -> std::io::Result<()> {
+        Ok(())
+    }
+}
+
+#[test]
+fn directional_checkpoint_is_at_most_twice_the_solution() {
+    // The bound's reason: each SH coefficient is stored once in each file, as an
+    // f64 in the checkpoint (exact resume needs its bits) and as an f32 in the
+    // solution, so the coefficients alone are exactly 2×. What else the
+    // checkpoint stores per vertex (the RGB f64 diffuse proxy, 24 B, and ~1 B of
+    // split log) is less than twice what the solution adds per vertex (36 B of
+    // position, normal, tangent, and 12 B per triangle, ~2 per vertex), and the
+    // per-patch coefficients are few beside the per-vertex ones once the mesh
+    // refines. Storing the recorded-shot part (as large as the radiance) made it
+    // about 4×; it is recomputed on resume now. (The checkpoint file's envelope
+    // adds a constant: a few kB of settings JSON.)
+    let (scene, mut settings) = glossy_floor();
+    settings.max_shots = 6;
+    settings.adaptive = true;
+    let solver = run(&scene, &settings);
+    assert!(
+        solver.progress().vertices > 4 * solver.mesh().patches.len(),
+        "the test should refine"
+    );
+    let mut checkpoint = Counting(0);
+    solver.write_checkpoint(&mut checkpoint).unwrap();
+    let solution = solution::format::encode(&solver.to_solution(false))
+        .unwrap()
+        .len() as u64;
+    let ratio = checkpoint.0 as f64 / solution as f64;
+    eprintln!(
+        "glossy floor: checkpoint {} B, solution {solution} B, ratio {ratio:.3}",
+        checkpoint.0
+    );
+    assert!(
+        ratio <= 2.0,
+        "checkpoint {} B > 2 × solution {solution} B",
+        checkpoint.0
+    );
+}
+
 /// Source choice by hemispherical unshot power (design notes) against Remington's (1992)
 /// [0,0] term alone: prints the shots each needs to reach the threshold, and
 /// checks both converge to the same floor radiance (within the threshold's
