@@ -440,7 +440,7 @@ mod tests {
 
     impl Payload for Floats {
         fn read_payload(reader: &mut dyn Read, length: u64) -> Result<Self, String> {
-            if length % 8 != 0 {
+            if !length.is_multiple_of(8) {
                 return Err(format!("{length} bytes is not a whole number of f64s"));
             }
             let mut out = Vec::new();
@@ -449,7 +449,7 @@ mod tests {
                 reader.read_exact(&mut b).map_err(|e| e.to_string())?;
                 out.push(f64::from_le_bytes(b));
             }
-            Ok(out).map(Floats)
+            Ok(Floats(out))
         }
     }
 
