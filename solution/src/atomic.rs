@@ -2,7 +2,8 @@
 //! solution files, checkpoints, statistics, previews and screenshots, reflectance
 //! tables, sweep reports.
 //!
-//! [`write_atomically`] writes into a new temporary file in the target's own
+//! [`write_atomically`] (and [`write_atomically_buffered`], which streams through a
+//! buffer) writes into a new temporary file in the target's own
 //! directory (so the final rename never crosses a file system), flushes it to disk
 //! (`fsync`), renames it over the target and flushes the directory, so that the
 //! rename itself survives a power cut. A crash, a full disk or a failing encoder
@@ -11,7 +12,7 @@
 //! keeps its (unchanged) inode. On any error the temporary file is removed.
 
 use std::fs::File;
-use std::io;
+use std::io::{self, BufWriter, Write};
 use std::path::{Path, PathBuf};
 
 /// A step of an atomic write failed; `path` is the target (or, for the temporary
@@ -72,7 +73,31 @@ pub fn write_atomically(
 
 /// Writes `bytes` to `path` atomically (see [`write_atomically`]).
 pub fn write_bytes_atomically(path: &Path, bytes: &[u8]) -> Result<(), AtomicWriteError> {
-    write_atomically(path, |file| io::Write::write_all(file, bytes))
+    write_atomically(path, |file| file.write_all(bytes))
+}
+
+/// Writes `path` atomically through a buffer: `write` streams into a
+/// [`BufWriter`] over the temporary file (so a large file is written section by
+/// section, never assembled in memory first), which is then flushed, synced,
+/// renamed and its directory synced exactly as by [`write_atomically`].
+///
+/// `write` may seek the `BufWriter` (seeking flushes it first), for instance to
+/// patch a length or checksum in a header once the content is known. A failure
+/// inside `write`, or while flushing its last buffered bytes, leaves the target
+/// untouched and removes the temporary file.
+pub fn write_atomically_buffered(
+    path: &Path,
+    write: impl FnOnce(&mut BufWriter<&mut File>) -> io::Result<()>,
+) -> Result<(), AtomicWriteError> {
+    write_atomically(path, |file| {
+        // 1 MiB: large enough that sections of f64s go out in few system calls.
+        let mut buffered = BufWriter::with_capacity(1 << 20, file);
+        write(&mut buffered)?;
+        // `into_inner` flushes and reports a failed flush (dropping a BufWriter
+        // would swallow it).
+        buffered.into_inner().map_err(|e| e.into_error())?;
+        Ok(())
+    })
 }
 
 /// Hidden temporary names (`.tmp` + random), created with the mode an ordinary
@@ -104,7 +129,7 @@ fn sync_directory(dir: &Path) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use std::io::Write;
+    use std::io::{Seek, SeekFrom};
 
     fn entries(dir: &Path) -> Vec<String> {
         let mut names: Vec<String> = std::fs::read_dir(dir)
@@ -176,5 +201,49 @@ mod tests {
         std::fs::write(&plain_path, b"{}").unwrap();
         let plain = std::fs::metadata(&plain_path).unwrap().permissions().mode() & 0o777;
         assert_eq!(atomic, plain, "atomic {atomic:o}, File::create {plain:o}");
+    }
+
+    #[test]
+    fn buffered_writes_stream_seek_and_round_trip() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("state.ckpt");
+        // 3 MiB in 1 KiB pieces: more than the 1 MiB buffer, so the data goes
+        // through several flushes; then the length is patched at the front, as the
+        // checkpoint writer patches its header.
+        let piece: Vec<u8> = (0..1024u32).map(|i| (i * 7 % 251) as u8).collect();
+        write_atomically_buffered(&path, |w| {
+            w.write_all(&0u64.to_le_bytes())?;
+            for _ in 0..3 * 1024 {
+                w.write_all(&piece)?;
+            }
+            let end = w.stream_position()?;
+            w.seek(SeekFrom::Start(0))?;
+            w.write_all(&(end - 8).to_le_bytes())?;
+            Ok(())
+        })
+        .unwrap();
+        let back = std::fs::read(&path).unwrap();
+        assert_eq!(back.len(), 8 + 3 * 1024 * 1024);
+        assert_eq!(u64::from_le_bytes(back[..8].try_into().unwrap()), 3 << 20);
+        assert!(back[8..].chunks(1024).all(|c| c == piece.as_slice()));
+        assert_eq!(entries(dir.path()), ["state.ckpt"]);
+    }
+
+    #[test]
+    fn buffered_failure_midway_leaves_the_target_untouched_and_no_temporary() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("state.ckpt");
+        std::fs::write(&path, b"previous checkpoint").unwrap();
+        // 2 MiB are already written (and partly flushed to the temporary file)
+        // when the encoder fails.
+        let err = write_atomically_buffered(&path, |w| {
+            w.write_all(&vec![0xAB; 2 << 20])?;
+            Err(io::Error::other("section encoder failed"))
+        })
+        .unwrap_err();
+        assert_eq!(err.action, "write");
+        assert!(err.to_string().contains("state.ckpt"), "{err}");
+        assert_eq!(std::fs::read(&path).unwrap(), b"previous checkpoint");
+        assert_eq!(entries(dir.path()), ["state.ckpt"]);
     }
 }

@@ -405,8 +405,8 @@ impl session::Shooter for Solver {
     fn solution(&self, partial: bool) -> solution::format::Solution {
         self.to_solution(partial)
     }
-    fn state(&self) -> Checkpoint {
-        self.checkpoint()
+    fn write_state(&self, mut w: &mut dyn std::io::Write) -> std::io::Result<()> {
+        self.write_checkpoint(&mut w)
     }
 }
 

@@ -1,84 +1,405 @@
-//! The solver's state between shots, for checkpoint files.
+//! The solver's state between shots, for checkpoint files: written streaming,
+//! read back with every size checked before anything is allocated.
 //!
 //! Between shots the state is: the mesh (rebuilt exactly by replaying its split
-//! log on a fresh mesh of the same scene), each vertex's radiance and the part
-//! of it from recorded (emitter) shots, the list of those shots, each patch's
-//! unshot radiance, and the counters. Vertex ΔL is always zero between shots
-//! (it is gathered into the patches), and random samples are drawn from
-//! stateless streams (seed, shot, vertex), so nothing else is needed for a
-//! resumed solve to end bit-identical to an uninterrupted one. Floating-point
-//! values are stored as their IEEE bit patterns, so any serde format (JSON
-//! included, with or without exact float parsing) restores them exactly.
+//! log on a fresh mesh of the same scene), each vertex's radiance, the list of
+//! recorded (emitter) shots, each patch's unshot radiance, and the counters.
+//! Vertex ΔL is always zero between shots (it is gathered into the patches), and
+//! random samples are drawn from stateless streams (seed, shot, vertex), so
+//! nothing else is needed for a resumed solve to end bit-identical to an
+//! uninterrupted one.
+//!
+//! What is not stored because it is recomputed exactly: directional mode's
+//! per-coefficient part of the radiance from recorded shots (`direct`, as large
+//! as the radiance itself; it made a checkpoint four times the solution file).
+//! Each recorded shot knows how many vertices it was shot to
+//! ([`super::shoot::RecordedShot::receivers`]); a resume shoots it again to those
+//! vertices and replays it to the later ones, in the order the solve did, which
+//! gives the same bits (see `directional/state.rs`). That costs one pass of the
+//! recorded shots over the mesh, a few shots' time. The diffuse mode's `direct`
+//! (three f64 per vertex) is stored: it is small beside the solution's vertex.
+//! Directional mode's diffuse proxies (per vertex c₀₀ Y₀₀, per patch the
+//! hemisphere-equivalent unshot) are recomputed from the coefficients, by the
+//! expressions every step ends with, so they are not stored either.
+//!
+//! Format: a sequence of sections, each a 4-byte tag, a u64 element count and the
+//! elements, little-endian; every f64 as its IEEE bits, so values round-trip bit
+//! for bit. In order: `HEAD` (one record: fingerprint, shots, rays, seconds,
+//! mode), `SPLT` (u32 per split), `RECS` (40 bytes per recorded shot: index u64,
+//! patch u32, receivers u32, unshot 3 × f64), `RADI` (3 × f64 per vertex),
+//! `UNSH` (3 × f64 per patch), `DIRC` (3 × f64 per vertex; these three are
+//! empty in directional mode); in
+//! directional mode then `SHOR` (u32 order per surface), `BRDF` (one u32),
+//! `SHRA` (f64 per radiance coefficient), `SHUN` (f64 per patch coefficient),
+//! `SHRL` (u32 coefficient count per recorded shot) and `SHRU` (their f64s).
+//! The file envelope around it (magic, settings, checksum) is the command line's
+//! (`cli/solve/checkpoint.rs`).
 
 use super::{SolveError, Solver};
 use crate::scene::Scene;
-use crate::settings::SolverSettings;
+use crate::settings::{BrdfNormalization, SolverSettings};
 use glam::DVec3;
-use serde::{Deserialize, Serialize};
+use std::io::{self, Read, Write};
 
 /// Bump when the meaning of the fields changes.
-pub const CHECKPOINT_VERSION: u32 = 1;
+pub const CHECKPOINT_VERSION: u32 = 2;
 
-/// Everything [`Solver::resume`] needs. See the module documentation.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+/// Everything [`Solver::resume`] needs, as read back from a checkpoint. See the
+/// module documentation. (Writing streams from the solver itself:
+/// [`Solver::write_checkpoint`].)
+#[derive(Clone, Debug, PartialEq)]
 pub struct Checkpoint {
     pub version: u32,
-    /// FNV-1a of the meshed scene (surfaces, patch counts, materials), hex: a
+    /// FNV-1a of the meshed scene (surfaces, patch counts, materials): a
     /// checkpoint of another scene is refused.
-    pub fingerprint: String,
+    pub fingerprint: u64,
     pub shots: u64,
     pub rays: u64,
     pub seconds: f64,
     /// The elements split so far, in order.
     pub split_log: Vec<u32>,
-    /// Per vertex: radiance as f64 bit patterns (RGB).
-    pub radiance: Vec<[u64; 3]>,
-    /// Per patch: unshot radiance as f64 bit patterns (RGB).
-    pub patch_unshot: Vec<[u64; 3]>,
-    /// Per vertex: the part of the radiance from recorded shots (bits); empty
-    /// when the mode does not keep it (directional).
-    #[serde(default)]
-    pub direct: Vec<[u64; 3]>,
+    /// Per vertex: radiance (RGB).
+    pub radiance: Vec<DVec3>,
+    /// Per patch: unshot radiance (RGB).
+    pub patch_unshot: Vec<DVec3>,
+    /// Per vertex: the part of the radiance from recorded shots; empty when the
+    /// mode does not keep it (directional).
+    pub direct: Vec<DVec3>,
     /// The recorded (emitter) shots, in order.
-    #[serde(default)]
     pub recorded: Vec<super::shoot::RecordedShot>,
     /// Directional mode's SH coefficients; absent for a diffuse solve.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub directional: Option<super::DirectionalCheckpoint>,
 }
 
-fn to_bits(v: DVec3) -> [u64; 3] {
-    [v.x.to_bits(), v.y.to_bits(), v.z.to_bits()]
+/// A checkpoint's solver state cannot be read: `field` names the section.
+#[derive(Debug, thiserror::Error)]
+pub enum StateError {
+    #[error("section {field}: {detail}")]
+    Bad { field: &'static str, detail: String },
+    #[error("section {field}: {source}")]
+    Io {
+        field: &'static str,
+        #[source]
+        source: io::Error,
+    },
 }
 
-fn from_bits(b: [u64; 3]) -> DVec3 {
-    DVec3::new(
-        f64::from_bits(b[0]),
-        f64::from_bits(b[1]),
-        f64::from_bits(b[2]),
-    )
+/// Writes sections of little-endian elements.
+struct SectionWriter<'w, W: Write>(&'w mut W);
+
+impl<W: Write> SectionWriter<'_, W> {
+    fn start(&mut self, tag: &[u8; 4], count: usize) -> io::Result<()> {
+        self.0.write_all(tag)?;
+        self.0.write_all(&(count as u64).to_le_bytes())
+    }
+    fn u32(&mut self, v: u32) -> io::Result<()> {
+        self.0.write_all(&v.to_le_bytes())
+    }
+    fn u64(&mut self, v: u64) -> io::Result<()> {
+        self.0.write_all(&v.to_le_bytes())
+    }
+    fn f64(&mut self, v: f64) -> io::Result<()> {
+        self.u64(v.to_bits())
+    }
+    fn dvec3(&mut self, v: DVec3) -> io::Result<()> {
+        self.f64(v.x)?;
+        self.f64(v.y)?;
+        self.f64(v.z)
+    }
+    fn u32s(&mut self, tag: &[u8; 4], values: &[u32]) -> io::Result<()> {
+        self.start(tag, values.len())?;
+        values.iter().try_for_each(|&v| self.u32(v))
+    }
+    fn f64s(&mut self, tag: &[u8; 4], values: &[f64]) -> io::Result<()> {
+        self.start(tag, values.len())?;
+        values.iter().try_for_each(|&v| self.f64(v))
+    }
+    fn dvec3s(&mut self, tag: &[u8; 4], values: &[DVec3]) -> io::Result<()> {
+        self.start(tag, values.len())?;
+        values.iter().try_for_each(|&v| self.dvec3(v))
+    }
+}
+
+/// Reads sections, never allocating more than the bytes still unread can fill.
+struct SectionReader<'r, R: Read> {
+    reader: &'r mut R,
+    /// Bytes of the state not read yet.
+    remaining: u64,
+}
+
+impl<R: Read> SectionReader<'_, R> {
+    fn bytes<const N: usize>(&mut self, field: &'static str) -> Result<[u8; N], StateError> {
+        if self.remaining < N as u64 {
+            return Err(StateError::Bad {
+                field,
+                detail: "the state ends early (truncated)".into(),
+            });
+        }
+        let mut b = [0u8; N];
+        self.reader
+            .read_exact(&mut b)
+            .map_err(|source| StateError::Io { field, source })?;
+        self.remaining -= N as u64;
+        Ok(b)
+    }
+    fn u32(&mut self, field: &'static str) -> Result<u32, StateError> {
+        Ok(u32::from_le_bytes(self.bytes(field)?))
+    }
+    fn u64(&mut self, field: &'static str) -> Result<u64, StateError> {
+        Ok(u64::from_le_bytes(self.bytes(field)?))
+    }
+    fn f64(&mut self, field: &'static str) -> Result<f64, StateError> {
+        Ok(f64::from_bits(self.u64(field)?))
+    }
+    fn dvec3(&mut self, field: &'static str) -> Result<DVec3, StateError> {
+        Ok(DVec3::new(
+            self.f64(field)?,
+            self.f64(field)?,
+            self.f64(field)?,
+        ))
+    }
+
+    /// Reads the tag and count of the next section, which must be `field`, and
+    /// checks that `count` elements of `width` bytes fit in what is left.
+    fn start(&mut self, field: &'static str, width: u64) -> Result<usize, StateError> {
+        let tag = self.bytes::<4>(field)?;
+        if tag != *field.as_bytes() {
+            return Err(StateError::Bad {
+                field,
+                detail: format!(
+                    "expected this section, found tag {:?}",
+                    String::from_utf8_lossy(&tag)
+                ),
+            });
+        }
+        let count = self.u64(field)?;
+        match count.checked_mul(width) {
+            Some(bytes) if bytes <= self.remaining => Ok(count as usize),
+            _ => Err(StateError::Bad {
+                field,
+                detail: format!(
+                    "announces {count} elements of {width} bytes, only {} bytes remain \
+                     (truncated or corrupted)",
+                    self.remaining
+                ),
+            }),
+        }
+    }
+    /// A whole section of elements read by `element`; the vector's capacity is
+    /// the checked count.
+    fn section<T>(
+        &mut self,
+        field: &'static str,
+        width: u64,
+        mut element: impl FnMut(&mut Self) -> Result<T, StateError>,
+    ) -> Result<Vec<T>, StateError> {
+        let count = self.start(field, width)?;
+        let mut out = Vec::with_capacity(count);
+        for _ in 0..count {
+            out.push(element(self)?);
+        }
+        Ok(out)
+    }
+    fn u32s(&mut self, field: &'static str) -> Result<Vec<u32>, StateError> {
+        self.section(field, 4, |r| r.u32(field))
+    }
+    fn f64s(&mut self, field: &'static str) -> Result<Vec<f64>, StateError> {
+        self.section(field, 8, |r| r.f64(field))
+    }
+    fn dvec3s(&mut self, field: &'static str) -> Result<Vec<DVec3>, StateError> {
+        self.section(field, 24, |r| r.dvec3(field))
+    }
+}
+
+const MODE_DIFFUSE: u32 = 0;
+const MODE_DIRECTIONAL: u32 = 1;
+
+impl Checkpoint {
+    /// Reads the state of [`Solver::write_checkpoint`] from `reader`, of which
+    /// exactly `length` bytes belong to it. Sizes are checked against the bytes
+    /// left before any allocation, so a truncated or damaged state is an error
+    /// naming its section, never a huge allocation.
+    pub fn read_from(reader: &mut impl Read, length: u64) -> Result<Checkpoint, StateError> {
+        let mut r = SectionReader {
+            reader,
+            remaining: length,
+        };
+        r.start("HEAD", 48).and_then(|n| match n {
+            1 => Ok(()),
+            _ => Err(StateError::Bad {
+                field: "HEAD",
+                detail: format!("{n} records, expected 1"),
+            }),
+        })?;
+        let version = r.u32("HEAD")?;
+        let mode = r.u32("HEAD")?;
+        let fingerprint = r.u64("HEAD")?;
+        let shots = r.u64("HEAD")?;
+        let rays = r.u64("HEAD")?;
+        let seconds = r.f64("HEAD")?;
+        let _reserved = r.u64("HEAD")?;
+        if version != CHECKPOINT_VERSION {
+            return Err(StateError::Bad {
+                field: "HEAD",
+                detail: format!(
+                    "state version {version}, this solver reads version {CHECKPOINT_VERSION}"
+                ),
+            });
+        }
+        let split_log = r.u32s("SPLT")?;
+        let recorded = r.section("RECS", 40, |r| {
+            Ok(super::shoot::RecordedShot {
+                index: r.u64("RECS")?,
+                patch: r.u32("RECS")?,
+                receivers: r.u32("RECS")?,
+                unshot: [r.u64("RECS")?, r.u64("RECS")?, r.u64("RECS")?],
+            })
+        })?;
+        let radiance = r.dvec3s("RADI")?;
+        let patch_unshot = r.dvec3s("UNSH")?;
+        let direct = r.dvec3s("DIRC")?;
+        let directional = match mode {
+            MODE_DIFFUSE => None,
+            MODE_DIRECTIONAL => Some(read_directional(&mut r)?),
+            other => {
+                return Err(StateError::Bad {
+                    field: "HEAD",
+                    detail: format!("unknown mode {other}"),
+                })
+            }
+        };
+        if r.remaining != 0 {
+            return Err(StateError::Bad {
+                field: "SHRU",
+                detail: format!("{} bytes follow the last section", r.remaining),
+            });
+        }
+        Ok(Checkpoint {
+            version,
+            fingerprint,
+            shots,
+            rays,
+            seconds,
+            split_log,
+            radiance,
+            patch_unshot,
+            direct,
+            recorded,
+            directional,
+        })
+    }
+}
+
+fn read_directional<R: Read>(
+    r: &mut SectionReader<'_, R>,
+) -> Result<super::DirectionalCheckpoint, StateError> {
+    let surface_order = r.u32s("SHOR")?;
+    let brdf = r.u32s("BRDF")?;
+    let brdf_normalization = match brdf.as_slice() {
+        [0] => BrdfNormalization::Thesis,
+        [1] => BrdfNormalization::Reciprocal,
+        other => {
+            return Err(StateError::Bad {
+                field: "BRDF",
+                detail: format!("unknown lobe normalization {other:?}"),
+            })
+        }
+    };
+    let radiance = r.f64s("SHRA")?.into_iter().map(f64::to_bits).collect();
+    let patch_unshot = r.f64s("SHUN")?.into_iter().map(f64::to_bits).collect();
+    let lengths = r.u32s("SHRL")?;
+    let flat = r.f64s("SHRU")?;
+    let total: u64 = lengths.iter().map(|&n| n as u64).sum();
+    if total != flat.len() as u64 {
+        return Err(StateError::Bad {
+            field: "SHRU",
+            detail: format!(
+                "{} coefficients, the lengths in SHRL add up to {total}",
+                flat.len()
+            ),
+        });
+    }
+    let mut at = 0usize;
+    let recorded_unshot = lengths
+        .iter()
+        .map(|&n| {
+            let part = flat[at..at + n as usize]
+                .iter()
+                .map(|x| x.to_bits())
+                .collect();
+            at += n as usize;
+            part
+        })
+        .collect();
+    Ok(super::DirectionalCheckpoint {
+        surface_order,
+        radiance,
+        patch_unshot,
+        direct: Vec::new(),
+        recorded_unshot,
+        brdf_normalization,
+    })
 }
 
 impl Solver {
-    /// The state between shots.
-    pub fn checkpoint(&self) -> Checkpoint {
-        Checkpoint {
-            version: CHECKPOINT_VERSION,
-            fingerprint: self.fingerprint(),
-            shots: self.shots,
-            rays: self.rays,
-            seconds: self.seconds,
-            split_log: self.mesh.split_log.clone(),
-            radiance: self.radiance.iter().map(|&v| to_bits(v)).collect(),
-            patch_unshot: self.patch_unshot.iter().map(|&v| to_bits(v)).collect(),
-            direct: if self.direct.len() == self.radiance.len() {
-                self.direct.iter().map(|&v| to_bits(v)).collect()
-            } else {
-                Vec::new()
-            },
-            recorded: self.recorded.clone(),
-            directional: self.directional_checkpoint(),
+    /// Writes the state between shots to `w`, section by section straight from
+    /// the solver's own arrays (no copy of the state is made; buffer `w`).
+    pub fn write_checkpoint(&self, w: &mut impl Write) -> io::Result<()> {
+        let mut s = SectionWriter(w);
+        s.start(b"HEAD", 1)?;
+        s.u32(CHECKPOINT_VERSION)?;
+        s.u32(if self.directional.is_some() {
+            MODE_DIRECTIONAL
+        } else {
+            MODE_DIFFUSE
+        })?;
+        s.u64(self.fingerprint())?;
+        s.u64(self.shots)?;
+        s.u64(self.rays)?;
+        s.f64(self.seconds)?;
+        s.u64(0)?;
+        s.u32s(b"SPLT", &self.mesh.split_log)?;
+        s.start(b"RECS", self.recorded.len())?;
+        for r in &self.recorded {
+            s.u64(r.index)?;
+            s.u32(r.patch)?;
+            s.u32(r.receivers)?;
+            r.unshot.iter().try_for_each(|&b| s.u64(b))?;
         }
+        // Directional mode stores none of the diffuse arrays: the radiance and
+        // unshot proxies are recomputed from the coefficients on resume (as every
+        // step ends by recomputing them), and its recorded-shot part is per
+        // coefficient, recomputed too.
+        let diffuse = self.directional.is_none();
+        let keeps_direct = diffuse && self.direct.len() == self.radiance.len();
+        s.dvec3s(b"RADI", if diffuse { &self.radiance } else { &[] })?;
+        s.dvec3s(b"UNSH", if diffuse { &self.patch_unshot } else { &[] })?;
+        s.dvec3s(b"DIRC", if keeps_direct { &self.direct } else { &[] })?;
+        if let Some(d) = self.directional.as_deref() {
+            let sections = d.checkpoint_sections();
+            s.u32s(b"SHOR", sections.surface_order)?;
+            s.u32s(
+                b"BRDF",
+                &[match self.settings.brdf_normalization {
+                    BrdfNormalization::Thesis => 0,
+                    BrdfNormalization::Reciprocal => 1,
+                }],
+            )?;
+            s.f64s(b"SHRA", sections.radiance)?;
+            s.f64s(b"SHUN", sections.patch_unshot)?;
+            let lengths: Vec<u32> = sections
+                .recorded_unshot
+                .iter()
+                .map(|u| u.len() as u32)
+                .collect();
+            s.u32s(b"SHRL", &lengths)?;
+            let total = sections.recorded_unshot.iter().map(Vec::len).sum();
+            s.start(b"SHRU", total)?;
+            for u in sections.recorded_unshot {
+                u.iter().try_for_each(|&x| s.f64(x))?;
+            }
+        }
+        Ok(())
     }
 
     /// Rebuilds a solver from `checkpoint` on the same scene. With the same
@@ -100,8 +421,8 @@ impl Solver {
         let mut solver = Solver::new(scene, settings)?;
         if checkpoint.fingerprint != solver.fingerprint() {
             return mismatch(format!(
-                "its scene fingerprint is {}, this scene's is {} (another scene, or another \
-                 patch count)",
+                "its scene fingerprint is {:016x}, this scene's is {:016x} (another scene, or \
+                 another patch count)",
                 checkpoint.fingerprint,
                 solver.fingerprint()
             ));
@@ -119,7 +440,16 @@ impl Solver {
             .mesh
             .replay(&checkpoint.split_log)
             .map_err(|e| SolveError::CheckpointMismatch(e.to_string()))?;
-        if checkpoint.radiance.len() != solver.mesh.vertices.len()
+        // A directional checkpoint stores no diffuse proxies (they are recomputed
+        // below); a diffuse one stores both.
+        let proxies_derived = checkpoint.directional.is_some()
+            && checkpoint.radiance.is_empty()
+            && checkpoint.patch_unshot.is_empty();
+        if proxies_derived {
+            solver
+                .radiance
+                .resize(solver.mesh.vertices.len(), DVec3::ZERO);
+        } else if checkpoint.radiance.len() != solver.mesh.vertices.len()
             || !(checkpoint.direct.is_empty()
                 || checkpoint.direct.len() == solver.mesh.vertices.len())
             || checkpoint.patch_unshot.len() != solver.mesh.patches.len()
@@ -132,19 +462,30 @@ impl Solver {
                 solver.mesh.patches.len()
             ));
         }
-        solver.radiance = checkpoint.radiance.into_iter().map(from_bits).collect();
-        solver.patch_unshot = checkpoint.patch_unshot.into_iter().map(from_bits).collect();
+        if !proxies_derived {
+            solver.radiance = checkpoint.radiance;
+            solver.patch_unshot = checkpoint.patch_unshot;
+        }
         solver.direct = if checkpoint.direct.is_empty() {
             vec![DVec3::ZERO; solver.mesh.vertices.len()]
         } else {
-            checkpoint.direct.into_iter().map(from_bits).collect()
+            checkpoint.direct
         };
-        let patches = solver.mesh.patches.len() as u32;
-        if let Some(bad) = checkpoint
-            .recorded
-            .iter()
-            .find(|r| r.patch >= patches || r.index >= checkpoint.shots)
-        {
+        let (patches, vertices) = (
+            solver.mesh.patches.len() as u32,
+            solver.mesh.vertices.len() as u32,
+        );
+        // Receivers never decrease along the recorded shots (the mesh only
+        // grows), and none exceeds the mesh.
+        let mut receivers = 0;
+        if let Some(bad) = checkpoint.recorded.iter().find(|r| {
+            let bad = r.patch >= patches
+                || r.index >= checkpoint.shots
+                || r.receivers < receivers
+                || r.receivers > vertices;
+            receivers = r.receivers;
+            bad
+        }) {
             return mismatch(format!("its recorded shot {bad:?} does not fit the solve"));
         }
         solver.recorded = checkpoint.recorded;
@@ -182,15 +523,20 @@ impl Solver {
         solver.shots = checkpoint.shots;
         solver.rays = checkpoint.rays;
         solver.seconds = checkpoint.seconds;
+        let directional = checkpoint.directional.is_some();
         solver
             .restore_directional(checkpoint.directional)
             .map_err(SolveError::CheckpointMismatch)?;
+        if directional {
+            solver.restore_diffuse_proxies();
+            solver.recompute_directional_direct();
+        }
         solver.unshot_power = solver.total_unshot_power();
         Ok(solver)
     }
 
     /// FNV-1a over what the mesh and the transport are built from.
-    fn fingerprint(&self) -> String {
+    fn fingerprint(&self) -> u64 {
         let mut h: u64 = 0xcbf2_9ce4_8422_2325;
         let mut eat = |x: u64| {
             for b in x.to_le_bytes() {
@@ -215,6 +561,109 @@ impl Solver {
             }
         }
         eat(self.mesh.patches.len() as u64);
-        format!("{h:016x}")
+        h
+    }
+}
+
+#[cfg(test)]
+impl Checkpoint {
+    /// `solver`'s state written to memory and read back, as a file would be.
+    pub(super) fn round_trip(solver: &Solver) -> Checkpoint {
+        let mut bytes = Vec::new();
+        solver.write_checkpoint(&mut bytes).unwrap();
+        Checkpoint::read_from(&mut bytes.as_slice(), bytes.len() as u64).unwrap()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sample() -> Checkpoint {
+        Checkpoint {
+            version: CHECKPOINT_VERSION,
+            fingerprint: 0x0123_4567_89ab_cdef,
+            shots: 9,
+            rays: 12345,
+            seconds: 1.0 / 3.0,
+            split_log: vec![0, 3, 7],
+            radiance: vec![DVec3::new(0.1, 1.0 / 3.0, -0.0), DVec3::splat(2.5e-300)],
+            patch_unshot: vec![DVec3::new(1e-7, 0.0, 5.0)],
+            direct: vec![DVec3::ONE, DVec3::ZERO],
+            recorded: vec![super::super::shoot::RecordedShot {
+                index: 4,
+                patch: 0,
+                receivers: 2,
+                unshot: [1, 2, 3],
+            }],
+            directional: None,
+        }
+    }
+
+    /// The sample's sections, as [`Solver::write_checkpoint`] lays them out.
+    fn encode(c: &Checkpoint) -> Vec<u8> {
+        let mut out = Vec::new();
+        let mut s = SectionWriter(&mut out);
+        s.start(b"HEAD", 1).unwrap();
+        s.u32(c.version).unwrap();
+        s.u32(MODE_DIFFUSE).unwrap();
+        s.u64(c.fingerprint).unwrap();
+        s.u64(c.shots).unwrap();
+        s.u64(c.rays).unwrap();
+        s.f64(c.seconds).unwrap();
+        s.u64(0).unwrap();
+        s.u32s(b"SPLT", &c.split_log).unwrap();
+        s.start(b"RECS", c.recorded.len()).unwrap();
+        for r in &c.recorded {
+            s.u64(r.index).unwrap();
+            s.u32(r.patch).unwrap();
+            s.u32(r.receivers).unwrap();
+            r.unshot.iter().for_each(|&b| s.u64(b).unwrap());
+        }
+        s.dvec3s(b"RADI", &c.radiance).unwrap();
+        s.dvec3s(b"UNSH", &c.patch_unshot).unwrap();
+        s.dvec3s(b"DIRC", &c.direct).unwrap();
+        out
+    }
+
+    #[test]
+    fn sections_round_trip_bit_for_bit() {
+        let c = sample();
+        let bytes = encode(&c);
+        let back = Checkpoint::read_from(&mut bytes.as_slice(), bytes.len() as u64).unwrap();
+        // PartialEq on f64 would accept -0.0 for 0.0: compare the bits.
+        assert_eq!(back.radiance[0].z.to_bits(), (-0.0f64).to_bits());
+        assert_eq!(back.seconds.to_bits(), c.seconds.to_bits());
+        assert_eq!(back, c);
+    }
+
+    #[test]
+    fn every_truncation_is_an_error_naming_a_section() {
+        let bytes = encode(&sample());
+        for cut in 0..bytes.len() {
+            let err = Checkpoint::read_from(&mut &bytes[..cut], cut as u64).unwrap_err();
+            let message = err.to_string();
+            assert!(message.starts_with("section "), "cut at {cut}: {message}");
+        }
+    }
+
+    #[test]
+    fn a_huge_count_is_refused_before_allocating() {
+        let mut bytes = encode(&sample());
+        // The RADI count: after HEAD (4 + 8 + 48), SPLT (12 + 12), RECS (12 + 40).
+        let at = 4 + 8 + 48 + 12 + 12 + 12 + 40 + 4;
+        assert_eq!(&bytes[at - 4..at], b"RADI");
+        bytes[at..at + 8].copy_from_slice(&(u64::MAX / 2).to_le_bytes());
+        let err = Checkpoint::read_from(&mut bytes.as_slice(), bytes.len() as u64).unwrap_err();
+        let message = err.to_string();
+        assert!(
+            message.contains("RADI") && message.contains("only"),
+            "{message}"
+        );
+        // A flipped tag names the section that was expected.
+        let mut bytes = encode(&sample());
+        bytes[at - 4] = b'X';
+        let err = Checkpoint::read_from(&mut bytes.as_slice(), bytes.len() as u64).unwrap_err();
+        assert!(err.to_string().contains("section RADI"), "{err}");
     }
 }

@@ -69,6 +69,8 @@ use std::f64::consts::PI;
 use std::sync::Arc;
 use std::time::Instant;
 
+mod state;
+
 /// How the next source patch is chosen.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum SourceChoice {
@@ -129,8 +131,10 @@ pub fn min_glossy_edge(alpha: f64, view_distance: f64) -> f64 {
     0.5 * alpha * view_distance
 }
 
-/// The directional part of a [`super::Checkpoint`]: coefficients as f64 bit
-/// patterns, and the orders they were computed with.
+/// The directional part of a [`super::Checkpoint`] as read back: coefficients
+/// as f64 bit patterns, and the orders they were computed with. `direct` is
+/// empty in checkpoints of this version: it is recomputed on resume (see
+/// `directional/state.rs`).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct DirectionalCheckpoint {
     pub surface_order: Vec<u32>,
@@ -547,6 +551,7 @@ impl Solver {
             self.recorded.push(RecordedShot {
                 index: self.shots,
                 patch: source,
+                receivers: self.mesh.vertices.len() as u32,
                 unshot: equivalent.to_array().map(f64::to_bits),
             });
             self.recorded_pools
@@ -686,23 +691,6 @@ impl Solver {
             vertices: self.mesh.vertices.len(),
             splits,
         }
-    }
-
-    /// The directional part of a checkpoint.
-    pub(super) fn directional_checkpoint(&self) -> Option<DirectionalCheckpoint> {
-        let d = self.directional.as_deref()?;
-        Some(DirectionalCheckpoint {
-            surface_order: d.surface_order.clone(),
-            radiance: d.radiance.iter().map(|x| x.to_bits()).collect(),
-            patch_unshot: d.patch_unshot.iter().map(|x| x.to_bits()).collect(),
-            direct: d.direct.iter().map(|x| x.to_bits()).collect(),
-            recorded_unshot: d
-                .recorded_unshot
-                .iter()
-                .map(|u| u.iter().map(|x| x.to_bits()).collect())
-                .collect(),
-            brdf_normalization: self.settings.brdf_normalization,
-        })
     }
 
     /// Restores the directional state after the mesh was replayed; an error

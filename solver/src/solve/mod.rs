@@ -350,6 +350,7 @@ impl Solver {
             self.recorded.push(RecordedShot {
                 index: self.shots,
                 patch: source,
+                receivers: self.mesh.vertices.len() as u32,
                 unshot: unshot.to_array().map(f64::to_bits),
             });
         }

@@ -177,9 +177,8 @@ fn resumed_solve_ends_bit_identical_to_an_uninterrupted_one() {
     for _ in 0..10 {
         first.step().unwrap();
     }
-    let json = serde_json::to_string(&first.checkpoint()).unwrap();
+    let state = Checkpoint::round_trip(&first);
     drop(first);
-    let state: Checkpoint = serde_json::from_str(&json).unwrap();
     let mut resumed = Solver::resume(&scene, &settings, state).unwrap();
     assert_eq!(resumed.progress().shots, 10);
     while resumed.step().is_some() {}
@@ -199,7 +198,7 @@ fn resumed_solve_ends_bit_identical_to_an_uninterrupted_one() {
     // Another scene's checkpoint is refused, naming why.
     let mut other = scene.clone();
     other.polygons[0].vertices[0].x += 1.0;
-    let err = Solver::resume(&other, &settings, whole.checkpoint())
+    let err = Solver::resume(&other, &settings, Checkpoint::round_trip(&whole))
         .err()
         .unwrap();
     assert!(matches!(err, SolveError::CheckpointMismatch(_)), "{err}");

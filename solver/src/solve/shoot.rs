@@ -178,6 +178,11 @@ pub struct RecordedShot {
     /// The shot's 0-based index (its RNG streams).
     pub index: u64,
     pub patch: u32,
+    /// The vertex count when it was shot: vertices below it received the shot
+    /// itself, later ones its replay when a split created them (so a resume can
+    /// recompute every vertex's recorded-shot part instead of storing it; see
+    /// `solve/checkpoint.rs`).
+    pub receivers: u32,
     /// U_s as f64 bit patterns (RGB), exact through any serde format.
     pub unshot: [u64; 3],
 }

@@ -11,22 +11,42 @@
 //! | 8 | length P of the payload |
 //! | 4 | CRC-32 of meta + payload |
 //! | M | meta: JSON [`Meta`] (scene fingerprint, resolved settings, seconds so far) |
-//! | P | payload: the solver's `Checkpoint`, as JSON |
+//! | P | payload: the solver's state in binary sections (`solve/checkpoint.rs`) |
 //!
-//! JSON keeps the payload self-describing and readable with `jq`; serde_json is
-//! built with `float_roundtrip`, so every f64 reads back bit-exact and a resumed
-//! solve ends with the same numbers as an uninterrupted one.
+//! Written streaming: the payload goes straight from the solver's arrays through a
+//! buffer into the atomic writer's temporary file, and the lengths and checksum
+//! are patched into the header at the end. Read streaming too: the header's
+//! lengths are checked against the file's size, the meta block against
+//! [`MAX_META`], and the payload's sections against the bytes left, before
+//! anything is allocated; the checksum is verified as the payload streams by.
 
 use crate::scene::Scene;
 use crate::settings::SolverSettings;
-use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
+use std::fs::File;
+use std::io::{self, BufReader, Read, Seek, SeekFrom, Write};
 use std::path::Path;
 
 const MAGIC: &[u8; 8] = b"RADCKPT\0";
 /// Bump when the envelope or the meaning of the payload changes.
-pub const VERSION: u32 = 1;
+pub const VERSION: u32 = 2;
 const PREFIX: usize = 8 + 4 + 4 + 8 + 4;
+/// The most bytes a meta block may have (it is a few kilobytes of JSON: the
+/// fingerprint, the scene's path and the settings).
+pub const MAX_META: u64 = 16 << 20;
+
+/// A checkpoint's payload as read back: the state a solver resumes from.
+pub trait Payload: Sized {
+    /// Reads exactly `length` bytes of payload from `reader`; the error names
+    /// the part of the state that is wrong.
+    fn read_payload(reader: &mut dyn Read, length: u64) -> Result<Self, String>;
+}
+
+impl Payload for crate::solve::Checkpoint {
+    fn read_payload(mut reader: &mut dyn Read, length: u64) -> Result<Self, String> {
+        crate::solve::Checkpoint::read_from(&mut reader, length).map_err(|e| e.to_string())
+    }
+}
 
 /// What the checkpoint says about the solve it came from.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -170,26 +190,73 @@ pub fn result_settings(settings: &SolverSettings) -> serde_json::Value {
     value
 }
 
-/// Writes a checkpoint atomically.
-pub fn write<T: Serialize>(path: &Path, meta: &Meta, state: &T) -> anyhow::Result<()> {
-    let meta_bytes = serde_json::to_vec(meta)?;
-    let payload = serde_json::to_vec(state)?;
-    let mut crc = crc32fast::Hasher::new();
-    crc.update(&meta_bytes);
-    crc.update(&payload);
-    let mut bytes = Vec::with_capacity(PREFIX + meta_bytes.len() + payload.len());
-    bytes.extend_from_slice(MAGIC);
-    bytes.extend_from_slice(&VERSION.to_le_bytes());
-    bytes.extend_from_slice(&(meta_bytes.len() as u32).to_le_bytes());
-    bytes.extend_from_slice(&(payload.len() as u64).to_le_bytes());
-    bytes.extend_from_slice(&crc.finalize().to_le_bytes());
-    bytes.extend_from_slice(&meta_bytes);
-    bytes.extend_from_slice(&payload);
-    super::files::write_atomic(path, &bytes)
+/// Counts and checksums what passes through to the file.
+struct Summing<'a, W: Write> {
+    inner: &'a mut W,
+    crc: crc32fast::Hasher,
+    bytes: u64,
 }
 
-/// Reads a checkpoint and checks that it belongs to this scene and these settings.
-pub fn read<T: DeserializeOwned>(
+impl<W: Write> Write for Summing<'_, W> {
+    fn write(&mut self, buf: &[u8]) -> io::Result<usize> {
+        let n = self.inner.write(buf)?;
+        self.crc.update(&buf[..n]);
+        self.bytes += n as u64;
+        Ok(n)
+    }
+    fn flush(&mut self) -> io::Result<()> {
+        self.inner.flush()
+    }
+}
+
+/// Writes a checkpoint atomically, streaming: `payload` writes the solver's state
+/// into the temporary file (through a buffer), then the header gets the lengths
+/// and the checksum.
+pub fn write(
+    path: &Path,
+    meta: &Meta,
+    payload: impl FnOnce(&mut dyn Write) -> io::Result<()>,
+) -> anyhow::Result<()> {
+    let meta_bytes = serde_json::to_vec(meta)?;
+    solution::atomic::write_atomically_buffered(path, |file| {
+        file.write_all(&[0u8; PREFIX])?;
+        let mut summing = Summing {
+            inner: &mut *file,
+            crc: crc32fast::Hasher::new(),
+            bytes: 0,
+        };
+        summing.write_all(&meta_bytes)?;
+        payload(&mut summing)?;
+        let payload_len = summing.bytes - meta_bytes.len() as u64;
+        let crc = summing.crc.finalize();
+        file.seek(SeekFrom::Start(0))?;
+        file.write_all(MAGIC)?;
+        file.write_all(&VERSION.to_le_bytes())?;
+        file.write_all(&(meta_bytes.len() as u32).to_le_bytes())?;
+        file.write_all(&payload_len.to_le_bytes())?;
+        file.write_all(&crc.to_le_bytes())?;
+        Ok(())
+    })
+    .map_err(|e| anyhow::Error::new(e).context(format!("writing checkpoint {}", path.display())))
+}
+
+/// Checksums what is read through it.
+struct Checking<R: Read> {
+    inner: R,
+    crc: crc32fast::Hasher,
+}
+
+impl<R: Read> Read for Checking<R> {
+    fn read(&mut self, buf: &mut [u8]) -> io::Result<usize> {
+        let n = self.inner.read(buf)?;
+        self.crc.update(&buf[..n]);
+        Ok(n)
+    }
+}
+
+/// Reads a checkpoint and checks that it belongs to this scene and these
+/// settings; streaming, with every length checked before it sizes anything.
+pub fn read<T: Payload>(
     path: &Path,
     scene_fp: &str,
     scene_path: &str,
@@ -200,21 +267,22 @@ pub fn read<T: DeserializeOwned>(
         path: name.clone(),
         detail,
     };
-    let bytes = std::fs::read(path).map_err(|source| CheckpointError::Io {
+    let io_error = |source| CheckpointError::Io {
         path: name.clone(),
         source,
-    })?;
-    if bytes.len() < 8 || &bytes[..8] != MAGIC {
+    };
+    let file = File::open(path).map_err(io_error)?;
+    let file_len = file.metadata().map_err(io_error)?.len();
+    let mut reader = BufReader::with_capacity(1 << 20, file);
+    let mut prefix = [0u8; PREFIX];
+    let got = read_up_to(&mut reader, &mut prefix).map_err(io_error)?;
+    if got < 8 || &prefix[..8] != MAGIC {
         return Err(CheckpointError::NotACheckpoint { path: name });
     }
-    if bytes.len() < PREFIX {
-        return Err(corrupt(format!(
-            "{} bytes, shorter than its header",
-            bytes.len()
-        )));
+    if got < PREFIX {
+        return Err(corrupt(format!("{got} bytes, shorter than its header")));
     }
-    let u32_at =
-        |at: usize| u32::from_le_bytes([bytes[at], bytes[at + 1], bytes[at + 2], bytes[at + 3]]);
+    let u32_at = |at: usize| u32::from_le_bytes(prefix[at..at + 4].try_into().unwrap());
     let version = u32_at(8);
     if version != VERSION {
         return Err(CheckpointError::Version {
@@ -223,28 +291,34 @@ pub fn read<T: DeserializeOwned>(
         });
     }
     let meta_len = u32_at(12) as u64;
-    let mut payload_len = [0u8; 8];
-    payload_len.copy_from_slice(&bytes[16..24]);
-    let payload_len = u64::from_le_bytes(payload_len);
+    let payload_len = u64::from_le_bytes(prefix[16..24].try_into().unwrap());
     let stored_crc = u32_at(24);
     // The lengths come from the file: check them against its real size before
-    // slicing (no allocation is sized by them).
+    // reading (the meta block's buffer is sized by its length, so it is capped too).
     let expected = (PREFIX as u64)
         .checked_add(meta_len)
         .and_then(|n| n.checked_add(payload_len));
-    if expected != Some(bytes.len() as u64) {
+    if expected != Some(file_len) {
         return Err(corrupt(format!(
             "header announces {meta_len} + {payload_len} bytes of content, the file has {}",
-            bytes.len() - PREFIX
+            file_len - PREFIX as u64
         )));
     }
-    let content = &bytes[PREFIX..];
-    if crc32fast::hash(content) != stored_crc {
-        return Err(corrupt("checksum mismatch".into()));
+    if meta_len > MAX_META {
+        return Err(corrupt(format!(
+            "meta block of {meta_len} bytes, more than {MAX_META}"
+        )));
     }
-    let (meta_bytes, payload) = content.split_at(meta_len as usize);
+    let mut checking = Checking {
+        inner: reader,
+        crc: crc32fast::Hasher::new(),
+    };
+    let mut meta_bytes = vec![0u8; meta_len as usize];
+    checking
+        .read_exact(&mut meta_bytes)
+        .map_err(|e| corrupt(format!("meta block: {e}")))?;
     let meta: Meta =
-        serde_json::from_slice(meta_bytes).map_err(|e| corrupt(format!("meta block: {e}")))?;
+        serde_json::from_slice(&meta_bytes).map_err(|e| corrupt(format!("meta block: {e}")))?;
     if meta.scene_fingerprint != scene_fp {
         return Err(CheckpointError::OtherScene {
             path: name,
@@ -259,9 +333,28 @@ pub fn read<T: DeserializeOwned>(
             differences,
         });
     }
-    let state: T =
-        serde_json::from_slice(payload).map_err(|e| corrupt(format!("solver state: {e}")))?;
+    // A damaged payload usually fails its own checks first (they name the
+    // section); one that still decodes fails the checksum.
+    let state = T::read_payload(&mut checking, payload_len)
+        .map_err(|e| corrupt(format!("solver state: {e}")))?;
+    if checking.crc.finalize() != stored_crc {
+        return Err(corrupt("checksum mismatch".into()));
+    }
     Ok((meta, state))
+}
+
+/// Reads until `buf` is full or the file ends; the count read.
+fn read_up_to(reader: &mut impl Read, buf: &mut [u8]) -> io::Result<usize> {
+    let mut got = 0;
+    while got < buf.len() {
+        match reader.read(&mut buf[got..]) {
+            Ok(0) => break,
+            Ok(n) => got += n,
+            Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
+            Err(e) => return Err(e),
+        }
+    }
+    Ok(got)
 }
 
 /// `samples: 4 in the checkpoint, 8 now; …`, empty when equal.
@@ -341,18 +434,47 @@ mod tests {
         assert_ne!(scene_fingerprint(&a), scene_fingerprint(&brighter));
     }
 
+    /// A test payload: f64s as their bits.
+    #[derive(Debug, PartialEq)]
+    struct Floats(Vec<f64>);
+
+    impl Payload for Floats {
+        fn read_payload(reader: &mut dyn Read, length: u64) -> Result<Self, String> {
+            if !length.is_multiple_of(8) {
+                return Err(format!("{length} bytes is not a whole number of f64s"));
+            }
+            let mut out = Vec::new();
+            for _ in 0..length / 8 {
+                let mut b = [0u8; 8];
+                reader.read_exact(&mut b).map_err(|e| e.to_string())?;
+                out.push(f64::from_le_bytes(b));
+            }
+            Ok(Floats(out))
+        }
+    }
+
+    fn write_floats(path: &Path, meta: &Meta, values: &[f64]) {
+        write(path, meta, |w| {
+            values
+                .iter()
+                .try_for_each(|v| w.write_all(&v.to_le_bytes()))
+        })
+        .unwrap();
+    }
+
     #[test]
     fn round_trip_is_bit_exact() {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("c");
         let settings = SolverSettings::preset(Preset::Draft);
-        // Values whose shortest decimal form is long: a lossy float parser would
-        // change their last bit.
-        let state: Vec<f64> = (1..200)
+        // Values whose shortest decimal form is long, and -0.0: a lossy encoding
+        // would change their last bit.
+        let mut state: Vec<f64> = (1..200)
             .map(|i| (i as f64).sqrt() * 1e-7 + 1.0 / 3.0)
             .collect();
-        write(&path, &meta(&settings), &state).unwrap();
-        let (m, back): (Meta, Vec<f64>) = read(
+        state.push(-0.0);
+        write_floats(&path, &meta(&settings), &state);
+        let (m, back): (Meta, Floats) = read(
             &path,
             "00000000000000aa",
             "box.obj",
@@ -360,9 +482,10 @@ mod tests {
         )
         .unwrap();
         assert_eq!(m.shots, 7);
+        assert_eq!(back.0.len(), state.len());
         assert!(state
             .iter()
-            .zip(&back)
+            .zip(&back.0)
             .all(|(a, b)| a.to_bits() == b.to_bits()));
     }
 
@@ -371,15 +494,15 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("c");
         let settings = SolverSettings::preset(Preset::Draft);
-        write(&path, &meta(&settings), &vec![1.0f64]).unwrap();
+        write_floats(&path, &meta(&settings), &[1.0, 2.0]);
         let ours = result_settings(&settings);
 
-        let err = read::<Vec<f64>>(&path, "00000000000000bb", "other.obj", &ours).unwrap_err();
+        let err = read::<Floats>(&path, "00000000000000bb", "other.obj", &ours).unwrap_err();
         assert!(matches!(err, CheckpointError::OtherScene { .. }), "{err}");
 
         let mut other = settings.clone();
         other.samples += 1;
-        let err = read::<Vec<f64>>(
+        let err = read::<Floats>(
             &path,
             "00000000000000aa",
             "box.obj",
@@ -392,7 +515,7 @@ mod tests {
         let mut more = settings.clone();
         more.max_shots *= 10;
         more.threads = Some(1);
-        read::<Vec<f64>>(
+        read::<Floats>(
             &path,
             "00000000000000aa",
             "box.obj",
@@ -404,18 +527,49 @@ mod tests {
         let last = bytes.len() - 1;
         bytes[last] ^= 1;
         std::fs::write(&path, &bytes).unwrap();
-        let err = read::<Vec<f64>>(&path, "00000000000000aa", "box.obj", &ours).unwrap_err();
+        let err = read::<Floats>(&path, "00000000000000aa", "box.obj", &ours).unwrap_err();
         assert!(matches!(err, CheckpointError::Corrupt { .. }), "{err}");
+        assert!(err.to_string().contains("checksum"), "{err}");
 
         std::fs::write(&path, &bytes[..PREFIX + 3]).unwrap();
-        let err = read::<Vec<f64>>(&path, "00000000000000aa", "box.obj", &ours).unwrap_err();
+        let err = read::<Floats>(&path, "00000000000000aa", "box.obj", &ours).unwrap_err();
         assert!(matches!(err, CheckpointError::Corrupt { .. }), "{err}");
+        assert!(
+            err.to_string().contains(&path.display().to_string()),
+            "{err}"
+        );
 
         std::fs::write(&path, b"not a checkpoint at all").unwrap();
-        let err = read::<Vec<f64>>(&path, "00000000000000aa", "box.obj", &ours).unwrap_err();
+        let err = read::<Floats>(&path, "00000000000000aa", "box.obj", &ours).unwrap_err();
         assert!(
             matches!(err, CheckpointError::NotACheckpoint { .. }),
             "{err}"
         );
+    }
+
+    #[test]
+    fn lying_lengths_are_refused_before_allocating() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("c");
+        let settings = SolverSettings::preset(Preset::Draft);
+        write_floats(&path, &meta(&settings), &[1.0, 2.0]);
+        let ours = result_settings(&settings);
+        let good = std::fs::read(&path).unwrap();
+        // A meta length of 4 GiB − 1 and a payload length that makes the sum
+        // match no file: refused by the size check, no buffer of that size made.
+        let mut bytes = good.clone();
+        bytes[12..16].copy_from_slice(&u32::MAX.to_le_bytes());
+        std::fs::write(&path, &bytes).unwrap();
+        let err = read::<Floats>(&path, "00000000000000aa", "box.obj", &ours).unwrap_err();
+        assert!(err.to_string().contains("header announces"), "{err}");
+        // Lengths that add up to the file's size but give the payload's bytes to
+        // a meta block: the JSON does not parse, named as the meta block.
+        let mut bytes = good;
+        let meta_len = u32::from_le_bytes(bytes[12..16].try_into().unwrap());
+        bytes[12..16].copy_from_slice(&(meta_len + 8).to_le_bytes());
+        bytes[16..24].copy_from_slice(&8u64.to_le_bytes());
+        std::fs::write(&path, &bytes).unwrap();
+        let err = read::<Floats>(&path, "00000000000000aa", "box.obj", &ours).unwrap_err();
+        assert!(err.to_string().contains("meta block"), "{err}");
     }
 }

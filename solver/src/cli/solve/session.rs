@@ -10,16 +10,15 @@ use super::checkpoint::{self, Meta};
 use super::progress::{Reporter, Snapshot};
 use super::stats::RunStats;
 use anyhow::Context;
-use serde::de::DeserializeOwned;
-use serde::Serialize;
 use solution::format::Solution;
+use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 
 /// What the loop needs from a solver.
 pub trait Shooter {
-    /// The resumable state, as saved in checkpoints.
-    type State: Serialize + DeserializeOwned;
+    /// The resumable state, as read back from checkpoints.
+    type State: checkpoint::Payload;
     /// Shoots the source with the most unshot power; `false` when there was none.
     fn step(&mut self) -> bool;
     /// Below the threshold or at the shot budget.
@@ -27,7 +26,8 @@ pub trait Shooter {
     fn snapshot(&self) -> Snapshot;
     /// The solution as it stands; `partial` marks files written mid-solve.
     fn solution(&self, partial: bool) -> Solution;
-    fn state(&self) -> Self::State;
+    /// Streams the resumable state into a checkpoint (no copy of it is made).
+    fn write_state(&self, w: &mut dyn Write) -> std::io::Result<()>;
 }
 
 /// Where the loop writes and what it stamps on its checkpoints.
@@ -58,7 +58,7 @@ pub struct Outcome {
 
 impl Session<'_> {
     /// Reads the checkpoint for `--resume`; refuses another scene's or settings'.
-    pub fn load<S: DeserializeOwned>(&self) -> anyhow::Result<(Meta, S)> {
+    pub fn load<S: checkpoint::Payload>(&self) -> anyhow::Result<(Meta, S)> {
         Ok(checkpoint::read(
             &self.checkpoint_path,
             &self.meta.scene_fingerprint,
@@ -75,7 +75,7 @@ impl Session<'_> {
             shots: shooter.snapshot().shots,
             ..self.meta.clone()
         };
-        checkpoint::write(&self.checkpoint_path, &meta, &shooter.state())?;
+        checkpoint::write(&self.checkpoint_path, &meta, |w| shooter.write_state(w))?;
         let mut partial = shooter.solution(true);
         partial.header.stats.seconds = seconds;
         solution::format::write_solution(self.out, &partial)
@@ -147,7 +147,7 @@ impl Session<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use serde::Deserialize;
+    use serde::{Deserialize, Serialize};
     use solution::format::{
         Batch, Header, Representation, ScalarType, SolveMode, SolveStats, Vertex,
     };
@@ -225,8 +225,14 @@ mod tests {
                 }],
             }
         }
-        fn state(&self) -> ToyState {
-            self.state
+        fn write_state(&self, w: &mut dyn Write) -> std::io::Result<()> {
+            serde_json::to_writer(w, &self.state).map_err(std::io::Error::other)
+        }
+    }
+
+    impl checkpoint::Payload for ToyState {
+        fn read_payload(reader: &mut dyn std::io::Read, length: u64) -> Result<Self, String> {
+            serde_json::from_reader(std::io::Read::take(reader, length)).map_err(|e| e.to_string())
         }
     }
 

@@ -1,0 +1,163 @@
+//! Directional mode's part of a checkpoint: the arrays written (borrowed, for
+//! streaming), and the per-coefficient recorded-shot part (`direct`), which is
+//! not written but recomputed on resume.
+//!
+//! Why the recomputation is exact: `direct` at a vertex changes in two places
+//! only. A vertex that exists when a recorded shot is shot receives it from
+//! the shot's own sample pool (`d.direct += c`, in shot order); a vertex that a
+//! split creates receives all the recorded shots so far from their replay pools,
+//! summed from zero in order (`DirField::receive`). A recorded shot's
+//! `receivers` is the vertex count when it was shot, and vertex ids only grow,
+//! so vertex v got the shots with `v >= receivers` (a prefix) by replay at its
+//! creation and the rest directly, later. Both receives are pure functions of
+//! (shot, pool, vertex) — the samples come from stateless streams — so doing
+//! the same additions in the same order gives the same bits.
+
+use super::{DirScratch, DirShot, Directional, Tables};
+use crate::solve::shoot::{RecordedShot, SamplePool, Shot};
+use crate::solve::Solver;
+use glam::DVec3;
+use rayon::prelude::*;
+use solution::sh::Y00;
+
+/// The directional arrays a checkpoint stores, borrowed.
+pub(in crate::solve) struct CheckpointSections<'a> {
+    pub surface_order: &'a [u32],
+    pub radiance: &'a [f64],
+    pub patch_unshot: &'a [f64],
+    pub recorded_unshot: &'a [Vec<f64>],
+}
+
+impl Directional {
+    pub(in crate::solve) fn checkpoint_sections(&self) -> CheckpointSections<'_> {
+        CheckpointSections {
+            surface_order: &self.surface_order,
+            radiance: &self.radiance,
+            patch_unshot: &self.patch_unshot,
+            recorded_unshot: &self.recorded_unshot,
+        }
+    }
+}
+
+fn make_dir_shot<'a>(
+    shot: &'a Shot<'a>,
+    pool: &'a SamplePool,
+    unshot: &'a [f64],
+    source_surface: usize,
+    tables: &'a Tables,
+) -> DirShot<'a> {
+    DirShot {
+        shot,
+        pool,
+        unshot,
+        source_order: tables.surface_order[source_surface],
+        source_tangent: tables.tangent[source_surface],
+        tables,
+    }
+}
+
+impl Solver {
+    /// Recomputes the diffuse proxies of a directional solve from its
+    /// coefficients, exactly as the end of every directional step does (radiance
+    /// c₀₀ Y₀₀ per vertex, the hemisphere-equivalent unshot per patch); before
+    /// the first shot they are still what `Solver::new` set.
+    pub(in crate::solve) fn restore_diffuse_proxies(&mut self) {
+        let Some(d) = self.directional.as_deref() else {
+            return;
+        };
+        if self.shots == 0 {
+            return;
+        }
+        for v in 0..self.mesh.vertices.len() {
+            let o = d.vertex_offset[v];
+            self.radiance[v] = DVec3::from_slice(&d.radiance[o..o + 3]) * Y00;
+        }
+        for p in 0..self.mesh.patches.len() {
+            let order = d.surface_order[self.mesh.patches[p].surface as usize];
+            let range = d.patch_range(&self.mesh, p);
+            self.patch_unshot[p] = d.hemisphere_equivalent(order, &d.patch_unshot[range]);
+        }
+    }
+}
+
+/// Vertices recomputed per parallel block: bounds the temporary copies.
+const BLOCK: usize = 4096;
+
+impl Solver {
+    /// Recomputes `direct` of every vertex from the recorded shots (see the
+    /// module documentation); called by `Solver::resume` after the mesh was
+    /// replayed and the directional state restored. Nothing else changes.
+    pub(in crate::solve) fn recompute_directional_direct(&mut self) {
+        let Some(mut d) = self.directional.take() else {
+            return;
+        };
+        let tables = Tables {
+            surface_order: d.surface_order.clone(),
+            ks: d.ks.clone(),
+            lobes: d.lobes.clone(),
+            tangent: self.mesh.surfaces.iter().map(|s| s.tangent).collect(),
+        };
+        let shots = RecordedShot::rebuild_all(
+            &self.recorded,
+            &self.mesh,
+            &self.settings,
+            &self.occluder,
+            &self.kd,
+        );
+        // The pool each recorded shot was shot with (the replay pools are the
+        // solver's `recorded_pools`, already rebuilt).
+        let own_pools: Vec<SamplePool> = shots.iter().map(SamplePool::new).collect();
+        let recorded_unshot = std::mem::take(&mut d.recorded_unshot);
+        let dir_shot = |i: usize, pool| {
+            let surface = shots[i].source_surface as usize;
+            make_dir_shot(&shots[i], pool, &recorded_unshot[i], surface, &tables)
+        };
+        let direct: Vec<DirShot> = (0..shots.len())
+            .map(|i| dir_shot(i, &own_pools[i]))
+            .collect();
+        let replay: Vec<DirShot> = (0..shots.len())
+            .map(|i| dir_shot(i, &self.recorded_pools[i]))
+            .collect();
+        let (mesh, kd, recorded) = (&self.mesh, &self.kd, &self.recorded);
+        let mut sums: Vec<Vec<f64>> = Vec::new();
+        for start in (0..mesh.vertices.len()).step_by(BLOCK) {
+            let end = (start + BLOCK).min(mesh.vertices.len());
+            (start as u32..end as u32)
+                .into_par_iter()
+                .map_init(DirScratch::default, |scratch, v| {
+                    let mut sum = vec![0.0; d.vertex_range(mesh, v as usize).len()];
+                    for (i, r) in recorded.iter().enumerate() {
+                        let shot = if v >= r.receivers {
+                            &replay[i]
+                        } else {
+                            &direct[i]
+                        };
+                        let got = shot.receive(mesh, kd, v, scratch);
+                        for (s, c) in sum.iter_mut().zip(&got.coefficients) {
+                            *s += c;
+                        }
+                    }
+                    sum
+                })
+                .collect_into_vec(&mut sums);
+            for (v, sum) in (start..end).zip(&sums) {
+                let o = d.vertex_offset[v];
+                d.direct[o..o + sum.len()].copy_from_slice(sum);
+            }
+        }
+        drop((direct, replay));
+        d.recorded_unshot = recorded_unshot;
+        self.directional = Some(d);
+    }
+}
+
+#[cfg(test)]
+impl Solver {
+    /// The per-coefficient recorded-shot part, as bits (for the resume tests).
+    pub(in crate::solve) fn directional_direct_bits(&self) -> Vec<u64> {
+        self.directional
+            .as_deref()
+            .map(|d| d.direct.iter().map(|x| x.to_bits()).collect())
+            .unwrap_or_default()
+    }
+}
