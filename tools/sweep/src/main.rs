@@ -88,6 +88,12 @@ struct Args {
     /// size divided by a whole number.
     #[arg(long, value_name = "SCENE/CAMERA=EXR", value_parser = truth::parse_given)]
     truth: Vec<(String, PathBuf)>,
+    /// Only these cameras get a truth (e.g. `--truth-cameras cornell/front`,
+    /// whose truth is the committed fixture): the truth columns are then the
+    /// mean over these cameras alone, and a scene with none has no truth
+    /// columns. Default: every camera.
+    #[arg(long, value_delimiter = ',', value_name = "SCENE/CAMERA")]
+    truth_cameras: Option<Vec<String>>,
     /// Skip the truths: only the error against the converged solution.
     #[arg(long)]
     no_truth: bool,
@@ -229,7 +235,13 @@ fn main() -> anyhow::Result<()> {
                 given: &args.truth,
             };
             let mut truths = Vec::new();
-            for camera in &scene.cameras {
+            let wanted = |camera: &points::Camera| {
+                let name = format!("{}/{}", scene.key, camera.name);
+                args.truth_cameras
+                    .as_ref()
+                    .is_none_or(|only| only.contains(&name))
+            };
+            for camera in scene.cameras.iter().filter(|c| wanted(c)) {
                 let t = truth::truth(&options, &scene, camera, &dir)?;
                 println!(
                     "   truth {}: {}×{}, noise {}",

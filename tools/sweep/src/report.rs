@@ -114,7 +114,7 @@ fn truth_paragraph(md: &mut String, truths: &[Truth], reference: &PointResult) {
     }
     let _ = writeln!(
         md,
-        "Path-traced truths (`solver reference`, one per camera):\n"
+        "Path-traced truths (`solver reference`; the truth columns are the mean over these cameras, each camera alike):\n"
     );
     for t in truths {
         let _ = writeln!(
