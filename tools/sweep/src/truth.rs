@@ -65,7 +65,7 @@ pub fn parse_given(text: &str) -> Result<(String, PathBuf), String> {
 /// must divide both sides.
 pub fn truth_size(camera: &Camera, divisor: Option<u32>) -> anyhow::Result<(u32, u32)> {
     let k = divisor.unwrap_or(camera.truth_divisor);
-    if k == 0 || camera.width % k != 0 || camera.height % k != 0 {
+    if k == 0 || !camera.width.is_multiple_of(k) || !camera.height.is_multiple_of(k) {
         bail!(
             "truth divisor {k} does not divide camera {}'s {}×{}",
             camera.name,
