@@ -62,9 +62,11 @@ struct Args {
     /// Only these axes (see the report's tables), e.g. samples,presets.
     #[arg(long, value_delimiter = ',')]
     axes: Option<Vec<String>>,
-    /// Leave out the points whose label starts with one of these (e.g.
-    /// `--skip C7,reference` drops the dearest combination and the floor row):
-    /// for a reduced sweep on a loaded machine; the report says which.
+    /// Leave out the points whose label starts with one of these, or with the
+    /// part after `SCENE/` in that scene only (e.g. `--skip C7,reference` drops
+    /// the dearest combination and the floor rows, `--skip "glossy/--preset
+    /// medium"` one preset of one scene): for a reduced sweep on a loaded
+    /// machine; the report's command line says which.
     #[arg(long, value_delimiter = ',', value_name = "LABEL")]
     skip: Vec<String>,
     /// Re-measure points whose results are cached.
@@ -266,11 +268,7 @@ fn main() -> anyhow::Result<()> {
                     continue;
                 }
             }
-            if args
-                .skip
-                .iter()
-                .any(|s| point.label.starts_with(s.as_str()))
-            {
+            if skipped(&args.skip, scene.key, &point.label) {
                 continue;
             }
             let mut result = measure(&args, &scene, &dir, &point, Some(&reference))?;
@@ -320,6 +318,28 @@ fn main() -> anyhow::Result<()> {
     report::write(&docs, &all, &machine, &notes)?;
     println!("report written to {}", docs.join("tradeoffs.md").display());
     Ok(())
+}
+
+/// Whether `--skip` leaves out the point `label` of scene `scene`.
+fn skipped(skip: &[String], scene: &str, label: &str) -> bool {
+    skip.iter().any(|s| match s.split_once('/') {
+        Some((only, prefix)) if only == scene => label.starts_with(prefix),
+        Some(_) => false,
+        None => label.starts_with(s.as_str()),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn skip_matches_label_prefixes_in_all_or_one_scene() {
+        let skip = ["C7".to_string(), "glossy/--preset medium".to_string()];
+        assert!(super::skipped(&skip, "cornell", "C7: n=16"));
+        assert!(super::skipped(&skip, "glossy", "--preset medium"));
+        assert!(!super::skipped(&skip, "cornell", "--preset medium"));
+        assert!(!super::skipped(&skip, "cornell", "C6: n=16"));
+        assert!(!super::skipped(&[], "cornell", "C7"));
+    }
 }
 
 /// Compares the point's screenshots (in `point_dir`, one per camera) with the

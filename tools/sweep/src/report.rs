@@ -131,7 +131,9 @@ fn truth_paragraph(md: &mut String, truths: &[Truth], reference: &PointResult) {
     if let Some(e) = &reference.truth {
         let _ = writeln!(
             md,
-            "\nThe converged reference itself measures MARE {} against the truths (HDR-FLIP {},              mean signed error {:+.2}%): that is the bias which the `image err` column,              measured against it, cannot see.",
+            "\nThe converged reference itself measures MARE {} against the truths (HDR-FLIP {}, \
+             mean signed error {:+.2}%): that is its own bias, which the `image err` column, \
+             measured against it, cannot see.",
             fmt_err(Some(e.mare)),
             fmt_flip(e.flip),
             100.0 * e.mean_signed
