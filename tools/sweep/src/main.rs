@@ -329,19 +329,6 @@ fn skipped(skip: &[String], scene: &str, label: &str) -> bool {
     })
 }
 
-#[cfg(test)]
-mod tests {
-    #[test]
-    fn skip_matches_label_prefixes_in_all_or_one_scene() {
-        let skip = ["C7".to_string(), "glossy/--preset medium".to_string()];
-        assert!(super::skipped(&skip, "cornell", "C7: n=16"));
-        assert!(super::skipped(&skip, "glossy", "--preset medium"));
-        assert!(!super::skipped(&skip, "cornell", "--preset medium"));
-        assert!(!super::skipped(&skip, "cornell", "C6: n=16"));
-        assert!(!super::skipped(&[], "cornell", "C7"));
-    }
-}
-
 /// Compares the point's screenshots (in `point_dir`, one per camera) with the
 /// truths; a point without images (a failed solve) gets none, and a failed
 /// comparison is a note on the row, not the end of the sweep.
@@ -712,4 +699,17 @@ fn cpu_model() -> String {
                 .map(|m| m.trim().to_string())
         })
         .unwrap_or_else(|| "unknown CPU".into())
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn skip_matches_label_prefixes_in_all_or_one_scene() {
+        let skip = ["C7".to_string(), "glossy/--preset medium".to_string()];
+        assert!(super::skipped(&skip, "cornell", "C7: n=16"));
+        assert!(super::skipped(&skip, "glossy", "--preset medium"));
+        assert!(!super::skipped(&skip, "cornell", "--preset medium"));
+        assert!(!super::skipped(&skip, "cornell", "C6: n=16"));
+        assert!(!super::skipped(&[], "cornell", "C7"));
+    }
 }
