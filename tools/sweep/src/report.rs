@@ -191,6 +191,32 @@ pub fn write(
          the build that measured them (see the notes).\n",
         machine.binaries
     );
+    let truths: Vec<String> = all
+        .iter()
+        .flat_map(|r| {
+            r.truths.iter().map(|t| {
+                format!(
+                    "`{}/{}` {}×{}, noise {}",
+                    r.scene.key,
+                    t.camera,
+                    t.width,
+                    t.height,
+                    t.noise
+                        .map_or("unknown".into(), |n| format!("{:.2}%", 100.0 * n))
+                )
+            })
+        })
+        .collect();
+    let _ = writeln!(
+        md,
+        "Path-traced truths of this run (`solver reference`; noise = the truth's own mean \
+         relative standard error of luminance over lit pixels, details per scene below): {}.\n",
+        if truths.is_empty() {
+            "none".to_string()
+        } else {
+            truths.join("; ")
+        }
+    );
     let _ = writeln!(
         md,
         "Columns: **CPU s** and **wall s** of the `solver solve` process; **Mrays** \
