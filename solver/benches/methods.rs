@@ -17,10 +17,18 @@
 //! summed), and the difference of the mean over all surfaces. Reference: a fine
 //! progressive solve (analytic, 8 × 8 patches, 32 rays, threshold 2e-4, no
 //! adaptive meshing, so that its mesh is the patch grid and its surface means are
-//! unbiased by refinement), cached in `target/bench-cache/`.
+//! unbiased by refinement), cached in `target/bench-cache/`. That reference is
+//! itself a radiosity solution, so these two columns measure agreement with
+//! it, not accuracy; beside them each solver's MARE and HDR-FLIP against the
+//! committed 64 × 64 path-traced truth of the standard camera
+//! (`tests/fixtures/cornell_truth_64.exr`, `common/truth.rs`; bias plus the
+//! truth's 0.5% noise), the solution rasterized at 512² and box-filtered.
 //!
 //! Run: `cargo bench -p solver --bench methods`. The figures in
 //! docs/benchmarks.md, "Methods", come from it.
+
+#[path = "common/truth.rs"]
+mod truth;
 
 use glam::DVec3;
 use solver::scene::{load_scene, Scene};
@@ -237,8 +245,13 @@ fn solvers() {
     println!();
     println!("## Solvers: Cornell box, surface means against the reference");
     let reference = reference_means();
-    println!("| solver | patches | n | seconds | iterations | RMS surface error | mean error |");
-    println!("|---|---|---|---|---|---|---|");
+    let truth = truth::CornellTruth::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join(".."));
+    println!("{}", truth.describe());
+    println!(
+        "| solver | patches | n | seconds | iterations | RMS surface error | mean error | \
+         MARE vs truth | HDR-FLIP vs truth |"
+    );
+    println!("|---|---|---|---|---|---|---|---|---|");
     for (patches, method, samples, r) in [
         (3, FormFactorMethod::Analytic, 16, 2),
         (6, FormFactorMethod::Analytic, 16, 2),
@@ -256,15 +269,18 @@ fn solvers() {
         while solver.step().is_some() {}
         let seconds = t.elapsed().as_secs_f64();
         let (rms, mean) = compare(&surface_means(&scene, &solver, None), &reference);
+        let against_truth = truth.error(&solver.to_solution(false));
         let label = match method {
             FormFactorMethod::Hemicube => format!("progressive, hemicube R = {r}"),
             FormFactorMethod::Wallace => format!("progressive, wallace {samples} rays"),
             FormFactorMethod::Analytic => format!("progressive, analytic {samples} rays"),
         };
         println!(
-            "| {label} | {patches} | {} | {seconds:.2} | {} shots | {rms:.4} | {mean:+.4} |",
+            "| {label} | {patches} | {} | {seconds:.2} | {} shots | {rms:.4} | {mean:+.4} | {:.2}% | {:.3} |",
             solver.mesh().patches.len(),
-            solver.progress().shots
+            solver.progress().shots,
+            100.0 * against_truth.mare,
+            against_truth.flip
         );
     }
     for (patches, r) in [(3, 64), (6, 64), (6, 128), (8, 128), (12, 128)] {
@@ -281,11 +297,14 @@ fn solvers() {
         let solver = Solver::new(&scene, &s).expect("the box solves");
         let means = surface_means(&scene, &solver, Some(&result.patch_radiance));
         let (rms, mean) = compare(&means, &reference);
+        let against_truth = truth.error(&result.solution);
         println!(
-            "| gauss-seidel, R = {r} | {patches} | {} | {seconds:.2} (factors {:.2}) | {} sweeps | {rms:.4} | {mean:+.4} |",
+            "| gauss-seidel, R = {r} | {patches} | {} | {seconds:.2} (factors {:.2}) | {} sweeps | {rms:.4} | {mean:+.4} | {:.2}% | {:.3} |",
             result.patch_radiance.len(),
             result.form_factor_seconds,
-            result.sweeps
+            result.sweeps,
+            100.0 * against_truth.mare,
+            against_truth.flip
         );
     }
 }

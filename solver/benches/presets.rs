@@ -21,10 +21,19 @@
 //! over both images, where R is the reference and I the preset's image. It measures
 //! what a viewer sees — noise in penumbrae, missing interreflection (threshold),
 //! Gouraud interpolation over coarse elements — in one number; a pixel that one
-//! image covers and the other does not counts in full.
+//! image covers and the other does not counts in full. Being against a converged
+//! solution, it measures convergence, not accuracy.
+//!
+//! **Against the truth.** Beside it, each preset's (and the reference's) MARE and
+//! HDR-FLIP against the committed 64 × 64 path-traced truth of the standard camera
+//! (`tests/fixtures/cornell_truth_64.exr`, `common/truth.rs`): bias plus the
+//! truth's 0.5% noise.
 //!
 //! Run: `cargo bench -p solver --bench presets` (env `PRESETS=draft,medium` picks
 //! presets). The figures in docs/benchmarks.md, "Solver presets", come from it.
+
+#[path = "common/truth.rs"]
+mod truth;
 
 use solution::camera::Camera;
 use solution::format::Solution;
@@ -201,6 +210,8 @@ fn main() {
         }
     };
     let reference_images = images(&reference, &views);
+    let truth = truth::CornellTruth::load(&root);
+    let reference_truth = truth.error(&reference);
 
     let wanted = std::env::var("PRESETS").unwrap_or_else(|_| "draft,medium,final".into());
     println!("CPU: {} ({threads} threads)", cpu_model());
@@ -209,12 +220,21 @@ fn main() {
          error = relative RMS radiance difference over 2 views at 256x256",
         ref_preset.name()
     );
+    println!("{}", truth.describe());
+    println!(
+        "the reference itself vs truth: MARE {:.2}%, HDR-FLIP {:.3}",
+        100.0 * reference_truth.mare,
+        reference_truth.flip
+    );
     println!();
     println!(
         "| preset | samples | threshold | elements | vertices | shots | rays | wall s | CPU s | \
-         rays/s per core (wall) | rays per CPU s | unshot | error vs reference |"
+         rays/s per core (wall) | rays per CPU s | unshot | error vs reference | MARE vs truth | \
+         HDR-FLIP vs truth |"
     );
-    println!("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |");
+    println!(
+        "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"
+    );
     for preset in [Preset::Draft, Preset::Medium, Preset::Final] {
         if !wanted.split(',').any(|w| w.trim() == preset.name()) {
             continue;
@@ -222,8 +242,9 @@ fn main() {
         let settings = SolverSettings::resolve(preset, &[&config]).unwrap();
         let run = solve(&scene, &settings);
         let error = relative_rms(&images(&run.solution, &views), &reference_images);
+        let against_truth = truth.error(&run.solution);
         println!(
-            "| {} | {} | {} | {} | {} | {} | {:.3e} | {:.2} | {:.2} | {:.3e} | {:.3e} | {:.2e} | {:.4} |",
+            "| {} | {} | {} | {} | {} | {} | {:.3e} | {:.2} | {:.2} | {:.3e} | {:.3e} | {:.2e} | {:.4} | {:.2}% | {:.3} |",
             preset.name(),
             settings.samples,
             settings.threshold,
@@ -236,7 +257,9 @@ fn main() {
             run.rays as f64 / run.seconds / threads as f64,
             run.rays as f64 / run.cpu_seconds,
             run.unshot_fraction,
-            error
+            error,
+            100.0 * against_truth.mare,
+            against_truth.flip
         );
     }
 }

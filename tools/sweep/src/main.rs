@@ -5,7 +5,9 @@
 //! `solver solve` binary, and measures what the point cost (CPU and wall
 //! seconds, rays, peak resident memory, file size) and what it bought (error
 //! per vertex and in images rendered by `runtime screenshot` from fixed
-//! cameras, both against the reference). It writes `docs/tradeoffs.md` and one
+//! cameras, both against the reference), and beside that the image error against
+//! a path-traced truth per camera (`solver reference`, see [`truth`]). It writes
+//! `docs/tradeoffs.md` and one
 //! SVG plot per scene. Run it from the repository root after
 //! `cargo build --release -p solver -p runtime`:
 //!
@@ -20,6 +22,7 @@
 
 mod points;
 mod report;
+mod truth;
 
 use anyhow::{bail, Context};
 use clap::Parser;
@@ -59,12 +62,43 @@ struct Args {
     /// Only these axes (see the report's tables), e.g. samples,presets.
     #[arg(long, value_delimiter = ',')]
     axes: Option<Vec<String>>,
+    /// Leave out the points whose label starts with one of these, or with the
+    /// part after `SCENE/` in that scene only (e.g. `--skip C7,reference` drops
+    /// the dearest combination and the floor rows, `--skip "glossy/--preset
+    /// medium"` one preset of one scene): for a reduced sweep on a loaded
+    /// machine; the report's command line says which.
+    #[arg(long, value_delimiter = ',', value_name = "LABEL")]
+    skip: Vec<String>,
     /// Re-measure points whose results are cached.
     #[arg(long)]
     fresh: bool,
     /// Notes (markdown) inserted into the report after the generated summary.
     #[arg(long, default_value = "tools/sweep/notes.md")]
     notes: PathBuf,
+    /// Noise of the truths the sweep renders itself: `solver reference
+    /// --target-error E` (mean relative standard error over lit pixels). Each
+    /// halving costs four times the time.
+    #[arg(long, value_name = "E", default_value_t = 0.005)]
+    truth_error: f64,
+    /// Truth size: each camera's screenshot divided by K per side (default per
+    /// camera: 4 or 8, i.e. 64² or 32² for the Cornell box's 256² views). A
+    /// smaller K is a finer truth, K² times dearer.
+    #[arg(long, value_name = "K")]
+    truth_divisor: Option<u32>,
+    /// Use this EXR as the truth of one camera (repeatable), e.g.
+    /// `--truth cornell/corner=corner32.exr`; it must be the camera's screenshot
+    /// size divided by a whole number.
+    #[arg(long, value_name = "SCENE/CAMERA=EXR", value_parser = truth::parse_given)]
+    truth: Vec<(String, PathBuf)>,
+    /// Only these cameras get a truth (e.g. `--truth-cameras cornell/front`,
+    /// whose truth is the committed fixture): the truth columns are then the
+    /// mean over these cameras alone, and a scene with none has no truth
+    /// columns. Default: every camera.
+    #[arg(long, value_delimiter = ',', value_name = "SCENE/CAMERA")]
+    truth_cameras: Option<Vec<String>>,
+    /// Skip the truths: only the error against the converged solution.
+    #[arg(long)]
+    no_truth: bool,
 }
 
 /// Everything measured for one point.
@@ -96,6 +130,10 @@ pub struct PointResult {
     /// The solution's batches, e.g. `SH 0, 18` or `SH 0, cube 384`.
     #[serde(default)]
     pub representation: Option<String>,
+    /// Error against the path-traced truth, mean over the cameras (bias plus
+    /// the truth's noise); filled after the point is measured or loaded.
+    #[serde(default)]
+    pub truth: Option<truth::TruthError>,
 }
 
 /// The distinct representations of a solution's batches, in file order.
@@ -180,7 +218,7 @@ fn main() -> anyhow::Result<()> {
     }
     let load_before = load_average();
     let started = std::time::Instant::now();
-    let mut all: Vec<(SceneSpec, Vec<PointResult>, PointResult)> = Vec::new();
+    let mut all: Vec<report::SceneResults> = Vec::new();
     for scene in points::scenes() {
         if let Some(only) = &args.scenes {
             if !only.iter().any(|s| s == scene.key) {
@@ -189,8 +227,40 @@ fn main() -> anyhow::Result<()> {
         }
         let dir = args.work.join(scene.key);
         std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
+        let truths = if args.no_truth {
+            Vec::new()
+        } else {
+            let options = truth::TruthOptions {
+                solver: &args.solver,
+                target_error: args.truth_error,
+                divisor: args.truth_divisor,
+                given: &args.truth,
+            };
+            let mut truths = Vec::new();
+            let wanted = |camera: &points::Camera| {
+                let name = format!("{}/{}", scene.key, camera.name);
+                args.truth_cameras
+                    .as_ref()
+                    .is_none_or(|only| only.contains(&name))
+            };
+            for camera in scene.cameras.iter().filter(|c| wanted(c)) {
+                let t = truth::truth(&options, &scene, camera, &dir)?;
+                println!(
+                    "   truth {}: {}×{}, noise {}",
+                    camera.name,
+                    t.width,
+                    t.height,
+                    t.noise
+                        .map_or("unknown".into(), |n| format!("{:.2}%", 100.0 * n))
+                );
+                truths.push(t);
+            }
+            truths
+        };
         println!("== {}: reference", scene.title);
-        let reference = reference(&args, &scene, &dir)?;
+        let mut reference = reference(&args, &scene, &dir)?;
+        let point_dir = dir.join(points::reference_point(&scene).id());
+        attach_truth(&args, &mut reference.result, &point_dir, &truths);
         let mut results = Vec::new();
         for point in points::points(&scene, args.quick, has_cube, &help) {
             if let Some(only) = &args.axes {
@@ -198,15 +268,20 @@ fn main() -> anyhow::Result<()> {
                     continue;
                 }
             }
-            let result = measure(&args, &scene, &dir, &point, Some(&reference))?;
+            if skipped(&args.skip, scene.key, &point.label) {
+                continue;
+            }
+            let mut result = measure(&args, &scene, &dir, &point, Some(&reference))?;
+            attach_truth(&args, &mut result, &dir.join(point.id()), &truths);
             println!(
-                "   {:<14} {:<34} cpu {:>7.2} s  wall {:>7.2} s  vertex err {}  image err {}{}",
+                "   {:<14} {:<34} cpu {:>7.2} s  wall {:>7.2} s  vertex err {}  image err {}  truth MARE {}{}",
                 result.axis,
                 result.label,
                 result.cpu_seconds,
                 result.wall_seconds,
                 report::fmt_err(result.vertex_error),
                 report::fmt_err(result.image_error),
+                report::fmt_err(result.truth.as_ref().map(|t| t.mare)),
                 result
                     .note
                     .as_deref()
@@ -215,7 +290,12 @@ fn main() -> anyhow::Result<()> {
             );
             results.push(result);
         }
-        all.push((scene, results, reference.result));
+        all.push(report::SceneResults {
+            scene,
+            results,
+            reference: reference.result,
+            truths,
+        });
     }
     let load_after = load_average();
     let docs = args.docs.clone().unwrap_or_else(|| {
@@ -233,11 +313,45 @@ fn main() -> anyhow::Result<()> {
         load_after,
         sweep_seconds: started.elapsed().as_secs_f64(),
         binaries: format!("{} (git HEAD {})", built.join(", "), git_head()),
-        quick: args.quick,
+        command: std::env::args().skip(1).collect::<Vec<_>>().join(" "),
     };
     report::write(&docs, &all, &machine, &notes)?;
     println!("report written to {}", docs.join("tradeoffs.md").display());
     Ok(())
+}
+
+/// Whether `--skip` leaves out the point `label` of scene `scene`.
+fn skipped(skip: &[String], scene: &str, label: &str) -> bool {
+    skip.iter().any(|s| match s.split_once('/') {
+        Some((only, prefix)) if only == scene => label.starts_with(prefix),
+        Some(_) => false,
+        None => label.starts_with(s.as_str()),
+    })
+}
+
+/// Compares the point's screenshots (in `point_dir`, one per camera) with the
+/// truths; a point without images (a failed solve) gets none, and a failed
+/// comparison is a note on the row, not the end of the sweep.
+fn attach_truth(args: &Args, result: &mut PointResult, point_dir: &Path, truths: &[truth::Truth]) {
+    if truths.is_empty() || result.image_error.is_none() && result.axis != "reference" {
+        return;
+    }
+    let mut errors = Vec::new();
+    for t in truths {
+        let image = point_dir.join(format!("{}.exr", t.camera));
+        match truth::error_against(&args.solver, &image, t) {
+            Ok(e) => errors.push(e),
+            Err(e) => {
+                let note = format!("no truth error: {}", first_line(&e));
+                result.note = Some(match result.note.take() {
+                    Some(n) => format!("{n}; {note}"),
+                    None => note,
+                });
+                return;
+            }
+        }
+    }
+    result.truth = truth::mean_error(&errors);
 }
 
 /// Solves (or loads) the scene's reference and renders its images.
@@ -289,9 +403,12 @@ fn measure(
         return truncated(args, scene, dir, &point_dir, point, order, reference);
     }
     let config = points::scene_config(scene, point)?;
+    // The cameras' views, not their truths: a new truth re-compares a point's
+    // images but does not re-solve it.
+    let views: Vec<String> = scene.cameras.iter().map(|c| c.view_key()).collect();
     let key = format!(
         "{config}\n# flags: {:?}\n# cameras: {:?}\n",
-        point.flags, scene.cameras
+        point.flags, views
     );
     let key_path = point_dir.join("key.txt");
     let result_path = point_dir.join("result.json");
@@ -341,6 +458,7 @@ fn measure(
                 image_rmse: None,
                 note: Some(format!("solve failed: {}", last_line(&e))),
                 representation: None,
+                truth: None,
             };
             return Ok(failed);
         }
@@ -372,6 +490,7 @@ fn measure(
         image_rmse: None,
         note: None,
         representation: None,
+        truth: None,
     };
     let mut notes = Vec::new();
     // Images from the fixed cameras.
@@ -580,4 +699,17 @@ fn cpu_model() -> String {
                 .map(|m| m.trim().to_string())
         })
         .unwrap_or_else(|| "unknown CPU".into())
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn skip_matches_label_prefixes_in_all_or_one_scene() {
+        let skip = ["C7".to_string(), "glossy/--preset medium".to_string()];
+        assert!(super::skipped(&skip, "cornell", "C7: n=16"));
+        assert!(super::skipped(&skip, "glossy", "--preset medium"));
+        assert!(!super::skipped(&skip, "cornell", "--preset medium"));
+        assert!(!super::skipped(&skip, "cornell", "C6: n=16"));
+        assert!(!super::skipped(&[], "cornell", "C7"));
+    }
 }

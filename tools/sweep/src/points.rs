@@ -20,6 +20,25 @@ pub struct Camera {
     pub fov_y_deg: f64,
     pub width: u32,
     pub height: u32,
+    /// The path-traced truth's pixels are `truth_divisor` × `truth_divisor`
+    /// blocks of the screenshot's (`solver compare` box-filters the screenshot
+    /// to them): a truth at the screenshot's own size and 0.5% noise would take
+    /// hours here.
+    pub truth_divisor: u32,
+    /// A committed truth for this camera (relative to the repository root), used
+    /// when its size is the one asked for; otherwise one is rendered.
+    pub truth_fixture: Option<&'static str>,
+}
+
+impl Camera {
+    /// The view alone (what a screenshot depends on), for the points' cache
+    /// key: a new truth re-compares the images but must not re-solve a point.
+    pub fn view_key(&self) -> String {
+        format!(
+            "Camera {{ name: {:?}, eye: {:?}, target: {:?}, up: {:?}, fov_y_deg: {:?}, width: {:?}, height: {:?} }}",
+            self.name, self.eye, self.target, self.up, self.fov_y_deg, self.width, self.height
+        )
+    }
 }
 
 pub struct SceneSpec {
@@ -148,6 +167,10 @@ pub fn scenes() -> Vec<SceneSpec> {
                     fov_y_deg: 39.3077,
                     width: 256,
                     height: 256,
+                    // 64²: the fixture of tests/cornell_truth.rs (the scene's
+                    // own standard camera, noise 0.49%).
+                    truth_divisor: 4,
+                    truth_fixture: Some("tests/fixtures/cornell_truth_64.exr"),
                 },
                 // Inside the box, high in a front corner, looking down at the
                 // blocks' shadows and the colour bleeding onto them.
@@ -159,6 +182,8 @@ pub fn scenes() -> Vec<SceneSpec> {
                     fov_y_deg: 60.0,
                     width: 256,
                     height: 256,
+                    truth_divisor: 8,
+                    truth_fixture: None,
                 },
             ],
             vertex_eye: [278.0, 273.0, -800.0],
@@ -207,6 +232,8 @@ pub fn scenes() -> Vec<SceneSpec> {
                     fov_y_deg: 60.0,
                     width: 320,
                     height: 240,
+                    truth_divisor: 8,
+                    truth_fixture: None,
                 },
                 // From a side, lower: the highlight moves with the eye.
                 Camera {
@@ -217,6 +244,8 @@ pub fn scenes() -> Vec<SceneSpec> {
                     fov_y_deg: 60.0,
                     width: 320,
                     height: 240,
+                    truth_divisor: 8,
+                    truth_fixture: None,
                 },
             ],
             vertex_eye: [0.0, 0.6, 1.8],
