@@ -57,6 +57,7 @@ pub mod gauss_seidel;
 mod output;
 pub(crate) use output::default_camera;
 mod refine;
+mod seams;
 pub mod shoot;
 
 pub use checkpoint::Checkpoint;
