@@ -750,7 +750,7 @@ impl Mesh {
 
 /// A quad is meshed bilinearly only when every corner turns strictly the same
 /// way (a straight corner would give elements with a 180° angle).
-fn strictly_convex(vertices: &[DVec3], normal: DVec3) -> bool {
+pub(crate) fn strictly_convex(vertices: &[DVec3], normal: DVec3) -> bool {
     let n = vertices.len();
     let scale = (0..n)
         .map(|i| (vertices[(i + 1) % n] - vertices[i]).length_squared())
