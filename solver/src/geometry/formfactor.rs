@@ -26,33 +26,6 @@ use std::f64::consts::PI;
 /// from an edge line (d ≥ h once points on the plane are routed to the limit).
 pub const PLANE_TOLERANCE: f64 = 1e-8;
 
-/// The factor that makes a receiver with a shading normal conserve energy.
-///
-/// A receiver on a polygon with normal `geometric` that receives with the
-/// cosine of a tilted `shading` normal (a smooth surface, `scene::smooth`) sees
-/// only the directions above both planes: the polygon itself blocks the lune
-/// above the shading horizon but below the polygon's. Under uniform incident
-/// radiance its irradiance is then π (1 − sin δ / 2) instead of π, δ the angle
-/// between the normals: the lune projects onto the shading normal's unit disc
-/// as half an ellipse of semi-axes 1 and sin δ, of area π sin δ / 2. So a
-/// closed furnace would lose sin δ / 2 at every such vertex. Dividing by
-/// 1 − sin δ / 2 restores the hemispherical total to 1, so a surface of
-/// reflectance ρ reflects ρ of a uniform field whatever its shading normal;
-/// the reference path tracer applies the same factor, so both agree. It is
-/// exactly 1 on a flat facet (equal normals) and tends to 1 as a tessellation
-/// is refined (δ → 0).
-pub fn shading_compensation(shading: DVec3, geometric: DVec3) -> f64 {
-    if shading == geometric {
-        return 1.0;
-    }
-    let cos = shading.dot(geometric).clamp(-1.0, 1.0);
-    if cos <= 0.0 {
-        return 1.0;
-    }
-    let sin = (1.0 - cos * cos).max(0.0).sqrt();
-    1.0 / (1.0 - 0.5 * sin)
-}
-
 /// The exact unoccluded form factor from a differential area at `p` with unit
 /// normal `n` to the polygon `polygon` (counter-clockwise seen from its front,
 /// planar, simple; convex or not), by Lambert's contour formula:
@@ -442,40 +415,6 @@ pub fn wallace(
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn shading_compensation_restores_the_uniform_hemisphere() {
-        // Independent check of 1 − sin δ / 2: integrate max(0, cos to the
-        // shading normal) over the directions above the geometric plane by a
-        // midpoint rule in spherical coordinates about the geometric normal
-        // (400 × 800 cells: error below 1e-5), divide by π.
-        let geometric = DVec3::Z;
-        for degrees in [0.0f64, 5.0, 15.0, 30.0, 60.0] {
-            let d = degrees.to_radians();
-            let shading = DVec3::new(d.sin(), 0.0, d.cos());
-            let (nt, np) = (400, 800);
-            let mut sum = 0.0;
-            for i in 0..nt {
-                let theta = (i as f64 + 0.5) / nt as f64 * PI / 2.0;
-                for j in 0..np {
-                    let phi = (j as f64 + 0.5) / np as f64 * 2.0 * PI;
-                    let w = DVec3::new(
-                        theta.sin() * phi.cos(),
-                        theta.sin() * phi.sin(),
-                        theta.cos(),
-                    );
-                    sum += w.dot(shading).max(0.0) * theta.sin();
-                }
-            }
-            let total = sum * (PI / 2.0 / nt as f64) * (2.0 * PI / np as f64) / PI;
-            let restored = total * shading_compensation(shading, geometric);
-            assert!(
-                (restored - 1.0).abs() < 1e-4,
-                "δ = {degrees}°: {total} × compensation = {restored}"
-            );
-        }
-        assert_eq!(shading_compensation(geometric, geometric), 1.0);
-    }
     use crate::geometry::sampling::{stratified_points, Rng};
 
     /// A rectangle in the plane z = `z` with corners (x0, y0)–(x1, y1), wound so

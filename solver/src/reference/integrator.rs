@@ -10,7 +10,6 @@
 //! from the background.
 
 use super::scene::RenderScene;
-use crate::geometry::formfactor::shading_compensation;
 use crate::geometry::sampling::Rng;
 use glam::DVec3;
 
@@ -153,13 +152,11 @@ impl Integrator<'_> {
             };
             // A direction above the shading horizon but below the polygon
             // enters the surface: the surface itself blocks it, as it blocks
-            // the solver's rays there; `shading_compensation` (the solver's
-            // too) gives that lune's share back to the rest.
+            // the solver's rays there.
             if sample.wi.dot(geometric) <= 0.0 {
                 break;
             }
-            throughput *=
-                sample.f * (sample.wi.dot(n) / sample.pdf) * shading_compensation(n, geometric);
+            throughput *= sample.f * (sample.wi.dot(n) / sample.pdf);
             if depth >= ROULETTE_AFTER {
                 let survive = throughput.max_element().min(1.0);
                 if survive.is_nan() || survive <= 0.0 || rng.next_f64() >= survive {
@@ -213,6 +210,6 @@ impl Integrator<'_> {
         let pdf_l = light.pdf_area * distance_sq / cos_l;
         let weight = power_heuristic(pdf_l, bsdf.pdf(wi, wo, n));
         let le = scene.bsdfs[emitter.material].emission;
-        f * le * (cos_i * weight / pdf_l) * shading_compensation(n, surface.normal)
+        f * le * (cos_i * weight / pdf_l)
     }
 }

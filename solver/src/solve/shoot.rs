@@ -6,7 +6,7 @@
 //! of `samples` visibility rays from a shared origin, with no allocation per ray
 //! (the sample buffer lives in per-worker [`Scratch`]).
 
-use crate::geometry::formfactor::{shading_compensation, wallace, SourcePolygon};
+use crate::geometry::formfactor::{wallace, SourcePolygon};
 use crate::geometry::hemicube::{self, ItemBuffer};
 use crate::geometry::polygon::clip_to_halfspace;
 use crate::geometry::sampling::{stratified_points, stream_id, Rng};
@@ -294,22 +294,7 @@ impl Shot<'_> {
     /// next to the source's edge (a room's corner) runs at a grazing angle to
     /// the source's plane, and the f32 occluder then finds the source itself
     /// a little before the segment's end, blocking half of the rays.
-    ///
-    /// On a smooth surface the factor is divided by 1 − sin δ / 2
-    /// ([`shading_compensation`]), δ between the vertex's shading normal and its
-    /// polygon's, so that the factors of a closed scene still sum to 1.
     pub fn form_factor(
-        &self,
-        mesh: &Mesh,
-        v: u32,
-        pool: &SamplePool,
-        scratch: &mut Scratch,
-    ) -> (f64, u32, u32) {
-        let (factor, visible, rays) = self.uncompensated_form_factor(mesh, v, pool, scratch);
-        (factor * receiver_compensation(mesh, v), visible, rays)
-    }
-
-    fn uncompensated_form_factor(
         &self,
         mesh: &Mesh,
         v: u32,
@@ -544,31 +529,6 @@ pub struct SampleScratch {
 /// transports (SH shooting and the global-cube gather) read their incoming
 /// directions from here.
 pub fn visible_samples(
-    s: &Shot,
-    mesh: &Mesh,
-    v: u32,
-    pool: &SamplePool,
-    scratch: &mut SampleScratch,
-) -> (DVec3, u32, u32) {
-    let answer = uncompensated_visible_samples(s, mesh, v, pool, scratch);
-    let compensation = receiver_compensation(mesh, v);
-    if compensation != 1.0 {
-        scratch
-            .samples
-            .iter_mut()
-            .for_each(|(_, share)| *share *= compensation);
-    }
-    answer
-}
-
-/// [`shading_compensation`] at vertex `v`: its shading normal against its
-/// polygon's (1 on a flat facet).
-pub fn receiver_compensation(mesh: &Mesh, v: u32) -> f64 {
-    let vertex = &mesh.vertices[v as usize];
-    shading_compensation(vertex.normal, mesh.surfaces[vertex.surface as usize].normal)
-}
-
-fn uncompensated_visible_samples(
     s: &Shot,
     mesh: &Mesh,
     v: u32,
