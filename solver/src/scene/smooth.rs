@@ -26,9 +26,10 @@
 //! how a region is cut into polygons: a flat face split into a fan of thin
 //! triangles and one split into two halves give the same normal at a corner,
 //! while area weights would lean toward whichever neighbour happened to be cut
-//! coarser. Only the neighbours whose face normals lie within the crease angle
-//! of the polygon's own enter its mean, so a group that bends further than the
-//! crease angle (a cylinder with a bevelled rim) never averages across it.
+//! coarser. The mean runs over the polygon's *fan* at that position: the
+//! polygons reached from it across smooth edges that end there. All of a fan
+//! share one normal (so the output merges their vertices), and a crease that
+//! runs into a vertex keeps the fans on its two sides apart.
 //!
 //! Shared corners are snapped to one position (the first polygon's), so the
 //! mesher, the output and the path tracer see bit-identical positions on both
@@ -104,6 +105,8 @@ pub fn smooth_scene(scene: &mut Scene, crease_angle: f64) -> SmoothReport {
         .collect();
     let mut groups = UnionFind::new(polygons.len());
     let mut edges: IntMap<(u32, u32), Vec<usize>> = IntMap::default();
+    // Per undirected edge, the polygon pairs joined across it.
+    let mut smooth_edges: IntMap<(u32, u32), Vec<(usize, usize)>> = IntMap::default();
     for (p, ring) in rings.iter().enumerate().filter(|(p, _)| usable[*p]) {
         for k in 0..ring.len() {
             edges
@@ -122,6 +125,10 @@ pub fn smooth_scene(scene: &mut Scene, crease_angle: f64) -> SmoothReport {
                     && !uv_seam(&polygons[p], &polygons[q])
                 {
                     groups.union(p, q);
+                    smooth_edges
+                        .entry((a.min(b), a.max(b)))
+                        .or_default()
+                        .push((p, q));
                 }
             }
         }
@@ -166,10 +173,9 @@ pub fn smooth_scene(scene: &mut Scene, crease_angle: f64) -> SmoothReport {
         } else if grouped {
             let normals = (0..rings[p].len())
                 .map(|k| {
-                    let at = &incident[&rings[p][k]];
-                    corner_normal(polygons, &face_normals, at, p, cos_crease, |q| {
-                        groups.find_const(q) == root
-                    })
+                    let id = rings[p][k];
+                    let fan = fan_of(&rings, &incident[&id], &smooth_edges, id, p);
+                    corner_normal(polygons, &face_normals, &fan, p)
                 })
                 .collect();
             polygons[p].vertex_normals = Some(normals);
@@ -191,21 +197,55 @@ fn uv_seam(_p: &Polygon, _q: &Polygon) -> bool {
     false
 }
 
-/// The angle-weighted mean of the face normals at one position (the corners
-/// `at`), over the polygons of `p`'s group within the crease angle of `p`.
+/// The corners at one position (`at`, all the polygons with a corner at
+/// vertex `id`) that lie in `p`'s fan there: those reached from `p` by crossing
+/// smooth edges that end at `id`. Every polygon of a fan gets the same normal
+/// there, so the output can merge the fan's vertices; two fans at one position
+/// (a cone's tip where a crease runs in, a group that bends further than the
+/// crease angle around a vertex) keep different normals.
+fn fan_of(
+    rings: &[Vec<u32>],
+    at: &[(usize, usize)],
+    smooth_edges: &IntMap<(u32, u32), Vec<(usize, usize)>>,
+    id: u32,
+    p: usize,
+) -> Vec<(usize, usize)> {
+    let index_of = |q: usize| at.iter().position(|&(r, _)| r == q);
+    let mut fan = UnionFind::new(at.len());
+    for &(q, k) in at {
+        let ring = &rings[q];
+        let n = ring.len();
+        for other in [ring[(k + n - 1) % n], ring[(k + 1) % n]] {
+            for &(a, b) in smooth_edges
+                .get(&(id.min(other), id.max(other)))
+                .into_iter()
+                .flatten()
+            {
+                if let (Some(i), Some(j)) = (index_of(a), index_of(b)) {
+                    fan.union(i, j);
+                }
+            }
+        }
+    }
+    let own = index_of(p).map(|i| fan.find_const(i));
+    at.iter()
+        .enumerate()
+        .filter(|(i, _)| Some(fan.find_const(*i)) == own)
+        .map(|(_, c)| *c)
+        .collect()
+}
+
+/// The angle-weighted mean of the face normals of the corners `fan` (`p`'s
+/// fan at one position), or `p`'s own normal if it degenerates.
 fn corner_normal(
     polygons: &[Polygon],
     face_normals: &[DVec3],
-    at: &[(usize, usize)],
+    fan: &[(usize, usize)],
     p: usize,
-    cos_crease: f64,
-    same_group: impl Fn(usize) -> bool,
 ) -> DVec3 {
     let mut sum = DVec3::ZERO;
-    for &(q, c) in at {
-        if same_group(q) && face_normals[q].dot(face_normals[p]) >= cos_crease {
-            sum += corner_angle(&polygons[q].vertices, c) * face_normals[q];
-        }
+    for &(q, c) in fan {
+        sum += corner_angle(&polygons[q].vertices, c) * face_normals[q];
     }
     sum.try_normalize().unwrap_or(face_normals[p])
 }
@@ -278,5 +318,129 @@ impl UnionFind {
             let (lo, hi) = (ra.min(rb), ra.max(rb));
             self.parent[hi] = lo;
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use solution::camera::UpAxis;
+
+    fn polygon(vertices: Vec<DVec3>, normals: Option<Vec<DVec3>>, item: &str) -> Polygon {
+        Polygon {
+            vertices,
+            vertex_normals: normals,
+            material: 0,
+            patches: 1,
+            source: SourceRef {
+                item: item.to_owned(),
+                ..Default::default()
+            },
+        }
+    }
+
+    fn scene(polygons: Vec<Polygon>) -> Scene {
+        Scene {
+            polygons,
+            materials: Vec::new(),
+            units_per_metre: 1.0,
+            up_axis: UpAxis::PosY,
+            camera: None,
+            recentre_offset: DVec3::ZERO,
+            warnings: Vec::new(),
+        }
+    }
+
+    /// Two unit squares sharing the edge x = 0, z ∈ [0, 1], folded by
+    /// `degrees` about it; both face +y (before the fold).
+    fn fold(degrees: f64) -> Vec<Polygon> {
+        let (c, s) = (degrees.to_radians().cos(), degrees.to_radians().sin());
+        let a = vec![
+            DVec3::new(-1.0, 0.0, 0.0),
+            DVec3::new(-1.0, 0.0, 1.0),
+            DVec3::new(0.0, 0.0, 1.0),
+            DVec3::new(0.0, 0.0, 0.0),
+        ];
+        let b = vec![
+            DVec3::new(0.0, 0.0, 0.0),
+            DVec3::new(0.0, 0.0, 1.0),
+            DVec3::new(c, s, 1.0),
+            DVec3::new(c, s, 0.0),
+        ];
+        vec![polygon(a, None, "a"), polygon(b, None, "b")]
+    }
+
+    #[test]
+    fn folds_below_the_crease_angle_are_smooth_and_above_are_sharp() {
+        for (degrees, smooth) in [(10.0, true), (29.0, true), (31.0, false), (90.0, false)] {
+            let mut s = scene(fold(degrees));
+            let report = smooth_scene(&mut s, 30.0);
+            assert_eq!(report.groups, usize::from(smooth), "{degrees}°");
+            assert_eq!(s.polygons[0].vertex_normals.is_some(), smooth);
+            if smooth {
+                // On the shared edge both sides get the bisector (two right
+                // angles, equal weights); at the far edges their own normal.
+                let n = s.polygons[0].vertex_normals.as_ref().unwrap();
+                let m = s.polygons[1].vertex_normals.as_ref().unwrap();
+                let half = (degrees / 2.0f64).to_radians();
+                let bisector = DVec3::new(-half.sin(), half.cos(), 0.0);
+                assert!(n[2].angle_between(bisector) < 1e-12, "{:?}", n[2]);
+                assert!(m[1].angle_between(bisector) < 1e-12, "{:?}", m[1]);
+                assert!(n[0].angle_between(DVec3::Y) < 1e-12);
+            }
+        }
+        // Different materials never join, and crease 0 is flat.
+        let mut s = scene(fold(10.0));
+        s.polygons[1].material = 1;
+        assert_eq!(smooth_scene(&mut s, 30.0).groups, 0);
+        let mut s = scene(fold(10.0));
+        assert_eq!(smooth_scene(&mut s, 0.0).groups, 0);
+        assert!(s.polygons.iter().all(|p| p.vertex_normals.is_none()));
+    }
+
+    #[test]
+    fn inconsistent_input_normals_are_ignored_with_one_warning_per_object() {
+        // Both faces of object "o" carry `vn` 60° off their faces (beyond the
+        // 30° crease): ignored, one warning, computed normals instead. A third
+        // face of object "p" carries consistent ones (10° off): kept.
+        let mut polygons = fold(10.0);
+        let off = DVec3::new(60f64.to_radians().sin(), 60f64.to_radians().cos(), 0.0);
+        for (p, item) in polygons
+            .iter_mut()
+            .zip(["face 1 of object o", "face 2 of object o"])
+        {
+            p.vertex_normals = Some(vec![off; 4]);
+            p.source.item = item.to_owned();
+        }
+        let tilted = DVec3::new(10f64.to_radians().sin(), 10f64.to_radians().cos(), 0.0);
+        let far = vec![
+            DVec3::new(5.0, 0.0, 0.0),
+            DVec3::new(5.0, 0.0, 1.0),
+            DVec3::new(6.0, 0.0, 1.0),
+            DVec3::new(6.0, 0.0, 0.0),
+        ];
+        polygons.push(polygon(far, Some(vec![tilted; 4]), "face 3 of object p"));
+        let mut s = scene(polygons);
+        let report = smooth_scene(&mut s, 30.0);
+        assert_eq!(report.warnings.len(), 1, "{:?}", report.warnings);
+        assert!(report.warnings[0].message.contains("object o"));
+        assert_eq!(report.with_input_normals, 1);
+        assert_eq!(s.polygons[2].vertex_normals, Some(vec![tilted; 4]));
+        let n = s.polygons[0].vertex_normals.as_ref().unwrap();
+        assert!(n[0].angle_between(DVec3::Y) < 1e-12);
+    }
+
+    #[test]
+    fn corners_within_the_tolerance_are_shared_and_snapped() {
+        // The second square's shared corners are 1e-7 off (the tolerance is
+        // 1e-5 of the ≈ 2.3 diagonal): joined, and moved onto the first's.
+        let mut polygons = fold(10.0);
+        for v in polygons[1].vertices.iter_mut().filter(|v| v.x == 0.0) {
+            v.x += 1e-7;
+        }
+        let mut s = scene(polygons);
+        assert_eq!(smooth_scene(&mut s, 30.0).groups, 1);
+        assert_eq!(s.polygons[1].vertices[0], s.polygons[0].vertices[3]);
+        assert_eq!(s.polygons[1].vertices[1], s.polygons[0].vertices[2]);
     }
 }
