@@ -657,4 +657,6 @@ mod directional_tests;
 #[cfg(test)]
 mod physics_tests;
 #[cfg(test)]
+mod smooth_tests;
+#[cfg(test)]
 mod tests;
