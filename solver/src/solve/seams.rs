@@ -70,7 +70,9 @@ struct Grid {
 }
 
 impl Grid {
-    fn block(&self, p: DVec3) -> ([i64; 2], [i64; 2], [i64; 2], (i64, i64, i64)) {
+    /// Per axis, the cell of `p` first and then its nearer neighbour; the
+    /// cell of `p` itself is `(x[0], y[0], z[0])`.
+    fn block(&self, p: DVec3) -> [[i64; 2]; 3] {
         let scaled = p / (2.0 * self.tol);
         let cell = scaled.floor();
         let near = |axis: usize| -> [i64; 2] {
@@ -81,13 +83,12 @@ impl Grid {
                 [c, c + 1]
             }
         };
-        let (x, y, z) = (near(0), near(1), near(2));
-        (x, y, z, (x[0], y[0], z[0]))
+        [near(0), near(1), near(2)]
     }
 
     /// The first output vertex near `p` that `matches`, else `None`.
     fn find(&self, p: DVec3, matches: impl Fn(u32) -> bool) -> Option<u32> {
-        let (xs, ys, zs, _) = self.block(p);
+        let [xs, ys, zs] = self.block(p);
         for x in xs {
             for y in ys {
                 for z in zs {
@@ -103,8 +104,8 @@ impl Grid {
     }
 
     fn insert(&mut self, p: DVec3, id: u32) {
-        let (_, _, _, home) = self.block(p);
-        self.cells.entry(home).or_default().push(id);
+        let [x, y, z] = self.block(p);
+        self.cells.entry((x[0], y[0], z[0])).or_default().push(id);
     }
 }
 
