@@ -68,10 +68,20 @@ impl Solver {
             let s = &self.mesh.surfaces[v.surface as usize];
             let shown = *l + self.kd[v.surface as usize] * ambient;
             let f = |d: DVec3| d.as_vec3().to_array();
+            // A shading normal is not the polygon's: its frame's tangent is
+            // the polygon's made orthogonal to it (the format wants an
+            // orthonormal frame). Flat facets keep theirs bit for bit.
+            let tangent = if v.normal == s.normal {
+                s.tangent
+            } else {
+                (s.tangent - v.normal * v.normal.dot(s.tangent))
+                    .try_normalize()
+                    .unwrap_or_else(|| v.normal.any_orthonormal_vector())
+            };
             vertices.push(Vertex {
                 position: f(v.position),
                 normal: f(v.normal),
-                tangent: f(s.tangent),
+                tangent: f(tangent),
             });
             coefficients.extend((shown * scale).as_vec3().to_array());
             let stored = v.position.as_vec3().as_dvec3();

@@ -149,6 +149,8 @@ fn furnace_of_a_smooth_sphere_in_a_tessellated_box() {
         p.unshot_fraction,
         batch.vertices.len(),
     );
+    // The writer's checks pass (orthonormal frames, bounds, counts).
+    solution::format::check_solution(&solution).unwrap();
     assert!(err < 0.01, "mesh vertices: {err}");
     assert!(err_out < 0.01, "output vertices: {err_out}");
     // One output vertex per position on the sphere, after refinement too (its
