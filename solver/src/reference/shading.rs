@@ -110,3 +110,55 @@ fn inverse_bilinear(q: &[DVec3], p: DVec3) -> (f64, f64) {
     }
     (s, t)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn triangles_interpolate_barycentrically_and_quads_bilinearly() {
+        // The solver's mesh interpolates corner normals by the same weights
+        // as positions (mesh::param::VertexKey::position), so at a point built
+        // from known weights the path tracer must find those weights again.
+        let tri = [DVec3::ZERO, DVec3::X, DVec3::Y];
+        let tn = [
+            DVec3::Z,
+            DVec3::new(0.3, 0.0, 1.0).normalize(),
+            DVec3::new(0.0, 0.4, 1.0).normalize(),
+        ];
+        let c = CornerNormals::new(&tri, DVec3::Z, &tn).unwrap();
+        let w = DVec3::new(0.2, 0.5, 0.3);
+        let p = tri[0] * w.x + tri[1] * w.y + tri[2] * w.z;
+        let expected = (tn[0] * w.x + tn[1] * w.y + tn[2] * w.z).normalize();
+        assert!(c.at(&tri, p, DVec3::Z).distance(expected) < 1e-12);
+        assert!(c.at(&tri, tri[1], DVec3::Z).distance(tn[1]) < 1e-12);
+
+        // A convex quad that is not a parallelogram: the bilinear map is not
+        // affine, so (s, t) must come from its inverse.
+        let quad = [
+            DVec3::ZERO,
+            DVec3::new(4.0, 0.0, 0.0),
+            DVec3::new(3.0, 2.0, 0.0),
+            DVec3::new(0.5, 3.0, 0.0),
+        ];
+        let qn = [
+            DVec3::Z,
+            DVec3::new(0.2, 0.0, 1.0).normalize(),
+            DVec3::new(0.2, 0.2, 1.0).normalize(),
+            DVec3::new(0.0, 0.3, 1.0).normalize(),
+        ];
+        let c = CornerNormals::new(&quad, DVec3::Z, &qn).unwrap();
+        let bilinear = |v: &[DVec3], s: f64, t: f64| {
+            (v[0] * (1.0 - s) + v[1] * s) * (1.0 - t) + (v[3] * (1.0 - s) + v[2] * s) * t
+        };
+        for (s, t) in [(0.3, 0.7), (0.9, 0.1), (0.5, 0.5), (0.0, 1.0)] {
+            let p = bilinear(&quad, s, t);
+            let expected = bilinear(&qn, s, t).normalize();
+            let got = c.at(&quad, p, DVec3::Z);
+            assert!(
+                got.distance(expected) < 1e-12,
+                "({s}, {t}): {got} against {expected}"
+            );
+        }
+    }
+}
