@@ -141,6 +141,15 @@ pub struct SolverSettings {
     pub units_per_metre: f64,
     /// Turn import warnings (Kd + Ks > 1, …) into errors.
     pub strict: bool,
+    /// Smooth surfaces (`scene::smooth`): neighbouring polygons of one material
+    /// whose normals differ by less than this many degrees share vertices and
+    /// interpolated shading normals; 0 keeps every polygon a flat facet.
+    #[serde(default = "default_crease_angle")]
+    pub crease_angle: f64,
+}
+
+fn default_crease_angle() -> f64 {
+    crate::scene::DEFAULT_CREASE_ANGLE
 }
 
 /// A partial set of settings from one source (flags, TOML config, display file, preset).
@@ -171,6 +180,7 @@ pub struct SettingsPatch {
     pub cube_resolution: Option<u32>,
     pub units_per_metre: Option<f64>,
     pub strict: Option<bool>,
+    pub crease_angle: Option<f64>,
 }
 
 /// A setting whose value is out of its range.
@@ -211,6 +221,7 @@ impl SolverSettings {
             cube_resolution: DEFAULT_CUBE_RESOLUTION,
             units_per_metre: 1.0,
             strict: false,
+            crease_angle: default_crease_angle(),
         }
     }
 
@@ -261,7 +272,8 @@ impl SolverSettings {
             directional,
             cube_resolution,
             units_per_metre,
-            strict
+            strict,
+            crease_angle
         );
         if patch.threads.is_some() {
             self.threads = patch.threads;
@@ -318,6 +330,12 @@ impl SolverSettings {
             "threshold",
             self.threshold,
             "0 < threshold < 1",
+        )?;
+        check(
+            (0.0..=90.0).contains(&self.crease_angle),
+            "crease_angle",
+            self.crease_angle,
+            "0 to 90 degrees",
         )?;
         check(
             self.patches >= 1 && self.patches <= 256,

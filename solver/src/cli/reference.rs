@@ -247,6 +247,9 @@ pub fn run(args: ReferenceArgs) -> anyhow::Result<ExitCode> {
         &[&display_patch, &loaded.settings, &flags],
     )
     .context("resolving the mode and normalization")?;
+    // The same smooth surfaces as `solver solve` at the same crease angle, so
+    // truth and solver agree on the shading normals.
+    super::solve::apply_smoothing(&mut scene, settings.crease_angle);
     let physics = Physics {
         mode: settings.mode,
         normalization: settings.brdf_normalization,

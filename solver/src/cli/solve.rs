@@ -83,6 +83,7 @@ pub fn run(args: SolveArgs) -> anyhow::Result<ExitCode> {
         .unwrap_or_default();
     let settings = resolve_settings(&args, &display_patch, &loaded.settings, &args.patch())?;
     scene.fill_default_patches(settings.patches);
+    apply_smoothing(&mut scene, settings.crease_angle);
 
     let threads = settings.threads.unwrap_or_else(|| {
         std::thread::available_parallelism()
@@ -210,6 +211,19 @@ pub(crate) fn plain<E: std::error::Error>(err: E) -> anyhow::Error {
 }
 
 /// Prints each import warning once (`file:line (item): message`).
+/// Finds the scene's smooth surfaces at `crease_angle` degrees
+/// ([`crate::scene::smooth_scene`]) and says what it found.
+pub(crate) fn apply_smoothing(scene: &mut crate::scene::Scene, crease_angle: f64) {
+    let report = crate::scene::smooth_scene(scene, crease_angle);
+    print_warnings(&report.warnings);
+    if report.groups > 0 || report.with_input_normals > 0 {
+        eprintln!(
+            "solver: smooth surfaces (crease angle {crease_angle}°): {} polygons in {} groups, {} with the input's vertex normals",
+            report.polygons, report.groups, report.with_input_normals
+        );
+    }
+}
+
 pub(crate) fn print_warnings(warnings: &[crate::scene::Warning]) {
     let mut seen = std::collections::HashSet::new();
     for warning in warnings {

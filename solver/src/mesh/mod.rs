@@ -52,6 +52,9 @@ pub struct Surface {
     pub patches_per_side: u32,
     /// Parametric denominator `N · 2^SUBDIVISION_BITS`.
     pub denominator: u32,
+    /// Unit shading normals at the polygon's corners on a smooth surface
+    /// (`scene::smooth`); `None` for a flat facet.
+    pub corner_normals: Option<Vec<DVec3>>,
 }
 
 /// A vertex shared by every element of its surface that has it as a corner.
@@ -64,6 +67,13 @@ pub struct MeshVertex {
     /// a small step toward it (design notes, "Form factors").
     pub inward: DVec3,
     pub key: VertexKey,
+    /// Unit shading normal: its surface's corner normals interpolated at its
+    /// parametric position (bilinear on a quad, barycentric on a triangle
+    /// piece, then normalised), or the surface normal on a flat facet. The
+    /// solver receives with it; coincident vertices of a smooth surface get
+    /// the same one from both polygons, since both interpolate the same two
+    /// corner normals along their shared edge.
+    pub normal: DVec3,
 }
 
 /// A node of a patch's quadtree. Corners are counter-clockwise.
@@ -279,6 +289,11 @@ impl Mesh {
                 area,
                 patches_per_side: n,
                 denominator: n << SUBDIVISION_BITS,
+                corner_normals: poly
+                    .vertex_normals
+                    .as_ref()
+                    .filter(|c| c.len() == vertices.len() && c.iter().all(|n| n.is_finite()))
+                    .cloned(),
                 vertices,
             });
             let s = &mesh.surfaces[surface as usize];
@@ -387,11 +402,17 @@ impl Mesh {
                         return Err(MeshError::TooLarge);
                     }
                     let position = key.position(&surface.vertices, denominator);
+                    let normal = surface
+                        .corner_normals
+                        .as_ref()
+                        .and_then(|c| key.position(c, denominator).try_normalize())
+                        .unwrap_or(surface.normal);
                     self.vertices.push(MeshVertex {
                         position,
                         surface: piece.surface,
                         inward: position,
                         key,
+                        normal,
                     });
                     self.table.insert(key, id);
                     (id, true)
@@ -729,7 +750,7 @@ impl Mesh {
 
 /// A quad is meshed bilinearly only when every corner turns strictly the same
 /// way (a straight corner would give elements with a 180° angle).
-fn strictly_convex(vertices: &[DVec3], normal: DVec3) -> bool {
+pub(crate) fn strictly_convex(vertices: &[DVec3], normal: DVec3) -> bool {
     let n = vertices.len();
     let scale = (0..n)
         .map(|i| (vertices[(i + 1) % n] - vertices[i]).length_squared())

@@ -125,12 +125,15 @@ impl Integrator<'_> {
             }
             let surface = &scene.surfaces[hit.polygon];
             let bsdf = &scene.bsdfs[surface.material];
-            let n = surface.normal;
+            // Emission and one-sidedness follow the polygon; reflection its
+            // shading normal (`shading.rs`), as the solver's receivers do.
+            let geometric = surface.normal;
+            let n = surface.shading_normal(hit.point);
             if bsdf.emission.max_element() > 0.0 {
                 let weight = match bsdf_pdf {
                     None => 1.0,
                     Some(pdf_b) => {
-                        let cos_l = -dir.dot(n);
+                        let cos_l = -dir.dot(geometric);
                         let pdf_l =
                             scene.emitters.pdf_area(hit.polygon) * hit.distance * hit.distance
                                 / cos_l;
@@ -147,6 +150,12 @@ impl Integrator<'_> {
             let Some(sample) = bsdf.sample(wo, n, rng) else {
                 break;
             };
+            // A direction above the shading horizon but below the polygon
+            // enters the surface: the surface itself blocks it, as it blocks
+            // the solver's rays there.
+            if sample.wi.dot(geometric) <= 0.0 {
+                break;
+            }
             throughput *= sample.f * (sample.wi.dot(n) / sample.pdf);
             if depth >= ROULETTE_AFTER {
                 let survive = throughput.max_element().min(1.0);
@@ -186,19 +195,20 @@ impl Integrator<'_> {
             return DVec3::ZERO;
         }
         let wi = to_light / distance_sq.sqrt();
-        let cos_i = wi.dot(surface.normal);
+        let n = surface.shading_normal(hit.point);
+        let cos_i = wi.dot(n);
         let cos_l = -wi.dot(emitter.normal);
-        if cos_i <= 0.0 || cos_l <= 0.0 {
+        if cos_i <= 0.0 || cos_l <= 0.0 || wi.dot(surface.normal) <= 0.0 {
             return DVec3::ZERO;
         }
         let bsdf = &scene.bsdfs[surface.material];
-        let f = bsdf.eval(wi, wo, surface.normal);
+        let f = bsdf.eval(wi, wo, n);
         let largest = f.max_element();
         if largest.is_nan() || largest <= 0.0 || !scene.occluder.visible(hit.point, light.point) {
             return DVec3::ZERO;
         }
         let pdf_l = light.pdf_area * distance_sq / cos_l;
-        let weight = power_heuristic(pdf_l, bsdf.pdf(wi, wo, surface.normal));
+        let weight = power_heuristic(pdf_l, bsdf.pdf(wi, wo, n));
         let le = scene.bsdfs[emitter.material].emission;
         f * le * (cos_i * weight / pdf_l)
     }

@@ -27,6 +27,7 @@ pub mod image;
 pub mod integrator;
 pub mod lobe;
 pub mod scene;
+pub mod shading;
 
 #[cfg(test)]
 mod tests;

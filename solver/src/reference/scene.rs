@@ -23,6 +23,20 @@ pub struct Surface {
     pub normal: DVec3,
     pub material: usize,
     pub object: usize,
+    /// Corner shading normals of a smooth surface (`scene::smooth`); `None` for
+    /// a flat facet.
+    pub shading: Option<super::shading::CornerNormals>,
+}
+
+impl Surface {
+    /// The unit shading normal at `point` on this polygon: the interpolated
+    /// corner normals on a smooth surface, else the polygon's normal.
+    pub fn shading_normal(&self, point: DVec3) -> DVec3 {
+        match &self.shading {
+            Some(c) => c.at(&self.vertices, point, self.normal),
+            None => self.normal,
+        }
+    }
 }
 
 /// How the scene's materials are reflected: `solver solve`'s `--mode` and
@@ -106,9 +120,14 @@ impl RenderScene {
                     object_names.push(name);
                     next
                 });
+                let normal = p.normal();
                 Surface {
+                    shading: p
+                        .vertex_normals
+                        .as_ref()
+                        .and_then(|c| super::shading::CornerNormals::new(&p.vertices, normal, c)),
                     vertices: p.vertices.clone(),
-                    normal: p.normal(),
+                    normal,
                     material: p.material,
                     object,
                 }

@@ -21,6 +21,7 @@ mod obj;
 mod planar;
 mod raw;
 mod recentre;
+pub mod smooth;
 mod text;
 mod weld;
 
@@ -34,6 +35,7 @@ pub use clean::{
 pub use display::{load_display_file, DisplayParams};
 pub use error::SceneError;
 pub use mtl::alpha_from_ns;
+pub use smooth::{smooth_scene, SmoothReport, DEFAULT_CREASE_ANGLE, SMOOTH_TOLERANCE};
 pub use weld::WELD_TOLERANCE;
 
 /// Where a piece of input came from, for warnings and errors.

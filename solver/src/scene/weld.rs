@@ -33,7 +33,7 @@ pub const WELD_TOLERANCE: f64 = 1e-5;
 /// SipHash's DoS resistance buys nothing for keys derived from geometry, and it
 /// made vertex sharing the slowest step of importing a large mesh.
 #[derive(Default)]
-struct IntHasher(u64);
+pub(crate) struct IntHasher(u64);
 
 impl Hasher for IntHasher {
     fn write(&mut self, bytes: &[u8]) {
@@ -55,19 +55,27 @@ impl Hasher for IntHasher {
     }
 }
 
-type IntMap<K, V> = HashMap<K, V, BuildHasherDefault<IntHasher>>;
+pub(crate) type IntMap<K, V> = HashMap<K, V, BuildHasherDefault<IntHasher>>;
 
 /// Shared vertex ids: positions within `tol` of one another get one id. Cells
 /// are 2·tol wide, so every position within `tol` of a point lies in the 2 × 2 × 2
 /// block of cells nearest to it.
-struct VertexIds {
+pub(crate) struct VertexIds {
     tol: f64,
-    positions: Vec<DVec3>,
+    pub(crate) positions: Vec<DVec3>,
     grid: IntMap<(i64, i64, i64), Vec<u32>>,
 }
 
 impl VertexIds {
-    fn id(&mut self, p: DVec3) -> u32 {
+    pub(crate) fn new(tol: f64) -> Self {
+        VertexIds {
+            tol,
+            positions: Vec::new(),
+            grid: IntMap::default(),
+        }
+    }
+
+    pub(crate) fn id(&mut self, p: DVec3) -> u32 {
         let scaled = p / (2.0 * self.tol);
         let cell = scaled.floor();
         // Toward the nearer neighbour along each axis.

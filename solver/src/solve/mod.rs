@@ -57,6 +57,7 @@ pub mod gauss_seidel;
 mod output;
 pub(crate) use output::default_camera;
 mod refine;
+mod seams;
 pub mod shoot;
 
 pub use checkpoint::Checkpoint;
@@ -656,5 +657,7 @@ pub(crate) fn human_bytes(bytes: u128) -> String {
 mod directional_tests;
 #[cfg(test)]
 mod physics_tests;
+#[cfg(test)]
+mod smooth_tests;
 #[cfg(test)]
 mod tests;

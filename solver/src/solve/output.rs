@@ -41,7 +41,9 @@ impl Solver {
     }
 
     /// The solution: one batch of order-0 SH (the diffuse mode), one vertex per
-    /// mesh vertex, the display triangles with T-vertices resolved. c₀₀ = L ·
+    /// mesh vertex of a flat facet and one per position of a smooth surface,
+    /// with its shading normal; the display triangles with T-vertices resolved,
+    /// within a polygon and across the polygons of a smooth surface. c₀₀ = L ·
     /// √(4π) per channel, since Y₀₀ = 1/(2√π) and L = c₀₀ · Y₀₀.
     ///
     /// `partial` marks a file written mid-solve; with `settings.ambient` it also
@@ -54,18 +56,32 @@ impl Solver {
             DVec3::ZERO
         };
         let scale = (4.0 * PI).sqrt();
-        let mut vertices = Vec::with_capacity(self.mesh.vertices.len());
-        let mut coefficients = Vec::with_capacity(3 * self.mesh.vertices.len());
+        // One output vertex per position of a smooth surface, and its seams
+        // free of T-junctions (`seams.rs`); flat facets map one to one.
+        let shared = super::seams::share_vertices(&self.mesh, &self.radiance);
+        let mut vertices = Vec::with_capacity(shared.representative.len());
+        let mut coefficients = Vec::with_capacity(3 * shared.representative.len());
         let mut lo = DVec3::splat(f64::INFINITY);
         let mut hi = DVec3::splat(f64::NEG_INFINITY);
-        for (v, l) in self.mesh.vertices.iter().zip(&self.radiance) {
+        for (&r, l) in shared.representative.iter().zip(&shared.radiance) {
+            let v = &self.mesh.vertices[r as usize];
             let s = &self.mesh.surfaces[v.surface as usize];
             let shown = *l + self.kd[v.surface as usize] * ambient;
             let f = |d: DVec3| d.as_vec3().to_array();
+            // A shading normal is not the polygon's: its frame's tangent is
+            // the polygon's made orthogonal to it (the format wants an
+            // orthonormal frame). Flat facets keep theirs bit for bit.
+            let tangent = if v.normal == s.normal {
+                s.tangent
+            } else {
+                (s.tangent - v.normal * v.normal.dot(s.tangent))
+                    .try_normalize()
+                    .unwrap_or_else(|| v.normal.any_orthonormal_vector())
+            };
             vertices.push(Vertex {
                 position: f(v.position),
-                normal: f(s.normal),
-                tangent: f(s.tangent),
+                normal: f(v.normal),
+                tangent: f(tangent),
             });
             coefficients.extend((shown * scale).as_vec3().to_array());
             let stored = v.position.as_vec3().as_dvec3();
@@ -76,7 +92,11 @@ impl Solver {
             lo = DVec3::ZERO;
             hi = DVec3::ZERO;
         }
-        let indices: Vec<u32> = self.mesh.triangles().into_iter().flatten().collect();
+        let indices: Vec<u32> = shared
+            .triangles(&self.mesh.triangles())
+            .into_iter()
+            .flatten()
+            .collect();
         let scene_offset = self.scene_recentre + self.offset;
         let camera = self
             .scene_camera

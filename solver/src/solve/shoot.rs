@@ -257,7 +257,12 @@ impl Shot<'_> {
     }
 
     /// The receiving point of vertex `v` (a small step inside an element it
-    /// belongs to) and its surface normal.
+    /// belongs to) and its shading normal ([`crate::mesh::MeshVertex::normal`]:
+    /// the polygon's normal on a flat facet, the interpolated corner normals on
+    /// a smooth surface). The receiving cosine of every form factor, the
+    /// horizon clip of the source and the ray origin's lift use it; the
+    /// source's own cosine stays its plane's, since emission and shooting are
+    /// one-sided about the polygon that emits.
     pub fn receiving_point(&self, mesh: &Mesh, v: u32) -> (DVec3, DVec3) {
         let vertex = &mesh.vertices[v as usize];
         let to_inside = vertex.inward - vertex.position;
@@ -270,7 +275,7 @@ impl Shot<'_> {
         } else {
             vertex.position
         };
-        (q, mesh.surfaces[vertex.surface as usize].normal)
+        (q, vertex.normal)
     }
 
     /// F(v←s): the form factor from vertex `v`'s receiving point to the source,

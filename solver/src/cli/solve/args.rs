@@ -270,6 +270,21 @@ pub struct SolveArgs {
     )]
     pub no_ambient: bool,
 
+    /// Largest angle (degrees) between neighbouring polygons that still shade as one smooth surface.
+    #[arg(
+        long,
+        value_name = "DEGREES",
+        long_help = "Neighbouring polygons of one material whose normals differ by less \
+            than this angle (default 30) form a smooth surface: they share vertices in \
+            the solution (no cracks) and receive light with a shading normal \
+            interpolated from their corners (the OBJ's `vn` where given and \
+            consistent, else the angle-weighted mean of the face normals). A larger \
+            angle rounds off more edges that were meant to be sharp; a smaller one \
+            shows the facets of coarse tessellations. 0 keeps every polygon a flat \
+            facet (today's behaviour, to measure against)."
+    )]
+    pub crease_angle: Option<f64>,
+
     /// Continue the solve saved in OUT.checkpoint.
     #[arg(
         long,
@@ -337,6 +352,7 @@ impl SolveArgs {
             ambient: self.no_ambient.then_some(false),
             units_per_metre: self.units_per_metre,
             strict: self.strict.then_some(true),
+            crease_angle: self.crease_angle,
             ..SettingsPatch::default()
         }
     }

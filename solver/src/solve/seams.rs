@@ -1,0 +1,327 @@
+//! One output vertex per position on a smooth surface, and seams without
+//! T-junctions across its polygons.
+//!
+//! The mesh keys vertices by (surface, parametric position), so two polygons of
+//! one smooth surface (`scene::smooth`) each have their own vertex where they
+//! meet. For the solution file:
+//!
+//! * **Merging.** Mesh vertices of smooth surfaces that coincide within
+//!   [`crate::scene::SMOOTH_TOLERANCE`] × the mesh's bounding-box diagonal, have
+//!   the same material and the same shading normal (dot ≥ 1 − 1e-9) become one
+//!   output vertex. The shading-normal test is what keeps creases sharp: across
+//!   a crease the two polygons' normals at the shared position differ, inside a
+//!   smooth group both interpolate the same corner normals. Its radiance is the
+//!   area-weighted mean of the merged vertices' (weights: a third or a quarter
+//!   of each leaf element that has the vertex as a corner), which differ only
+//!   by the receiving points' inward steps and sampling noise.
+//! * **T-junctions across polygons.** Adaptive subdivision refines each polygon
+//!   on its own, so a vertex of one polygon can lie inside an edge of its
+//!   neighbour's display triangle. Such a vertex is inserted into the
+//!   neighbour's triangulation: the triangle is fanned from its opposite corner
+//!   to the points on that edge. Both sides of a polygon edge then run through
+//!   the same output vertices, so they interpolate the same piecewise-linear
+//!   radiance and no crack (in position or in value) can open. The inserted
+//!   vertex carries its own solved radiance: the neighbour gains detail rather
+//!   than the vertex losing it (the alternative, overwriting it with the
+//!   neighbour edge's linear interpolation, would erase the shadow edge that made
+//!   it split).
+//!
+//! Flat facets (no corner normals) are left exactly as the mesh has them, so a
+//! scene without smooth surfaces gives the same vertices, in the same order,
+//! and the same triangles as before.
+
+use crate::mesh::Mesh;
+use crate::scene::SMOOTH_TOLERANCE;
+use glam::DVec3;
+use std::collections::HashMap;
+
+/// Two shading normals are the same when their dot product is at least this:
+/// far above the rounding of normalising the same interpolation (1e-15), far
+/// below the smallest crease (a 0.1° difference is 1.5e-6).
+const SAME_NORMAL: f64 = 1.0 - 1e-9;
+
+/// The output vertices: which mesh vertex each comes from, and where each mesh
+/// vertex went.
+pub(crate) struct SharedVertices {
+    /// Per mesh vertex, its output vertex.
+    pub output_of: Vec<u32>,
+    /// Per output vertex, the first mesh vertex merged into it (its position,
+    /// normal and surface frame).
+    pub representative: Vec<u32>,
+    /// Per output vertex, the area-weighted mean radiance.
+    pub radiance: Vec<DVec3>,
+    /// Per output vertex on a smooth polygon's boundary: the polygon edges it
+    /// lies on, as (edge, parameter along it from the edge's first end).
+    on_edges: HashMap<u32, Vec<(EdgeKey, f64)>>,
+    /// Per polygon edge, its points sorted by parameter.
+    edge_points: HashMap<EdgeKey, Vec<(f64, u32)>>,
+}
+
+/// A polygon edge of a smooth surface by its end points' output vertices, the
+/// smaller first.
+type EdgeKey = (u32, u32);
+
+/// A uniform grid of output vertices for coincidence queries: cells 2·tol
+/// wide, so every point within tol of a query lies in the 2 × 2 × 2 block of
+/// cells nearest to it.
+struct Grid {
+    tol: f64,
+    cells: HashMap<(i64, i64, i64), Vec<u32>>,
+}
+
+impl Grid {
+    /// Per axis, the cell of `p` first and then its nearer neighbour; the
+    /// cell of `p` itself is `(x[0], y[0], z[0])`.
+    fn block(&self, p: DVec3) -> [[i64; 2]; 3] {
+        let scaled = p / (2.0 * self.tol);
+        let cell = scaled.floor();
+        let near = |axis: usize| -> [i64; 2] {
+            let c = cell[axis] as i64;
+            if scaled[axis] - cell[axis] < 0.5 {
+                [c, c - 1]
+            } else {
+                [c, c + 1]
+            }
+        };
+        [near(0), near(1), near(2)]
+    }
+
+    /// The first output vertex near `p` that `matches`, else `None`.
+    fn find(&self, p: DVec3, matches: impl Fn(u32) -> bool) -> Option<u32> {
+        let [xs, ys, zs] = self.block(p);
+        for x in xs {
+            for y in ys {
+                for z in zs {
+                    if let Some(ids) = self.cells.get(&(x, y, z)) {
+                        if let Some(&id) = ids.iter().find(|&&id| matches(id)) {
+                            return Some(id);
+                        }
+                    }
+                }
+            }
+        }
+        None
+    }
+
+    fn insert(&mut self, p: DVec3, id: u32) {
+        let [x, y, z] = self.block(p);
+        self.cells.entry((x[0], y[0], z[0])).or_default().push(id);
+    }
+}
+
+/// Merges the coincident vertices of smooth surfaces (see the module comment).
+pub(crate) fn share_vertices(mesh: &Mesh, radiance: &[DVec3]) -> SharedVertices {
+    let n = mesh.vertices.len();
+    let smooth = |v: usize| {
+        mesh.surfaces[mesh.vertices[v].surface as usize]
+            .corner_normals
+            .is_some()
+    };
+    let mut weight = vec![0.0; n];
+    for e in mesh.elements.iter().filter(|e| e.is_leaf()) {
+        for &c in e.corners() {
+            weight[c as usize] += e.area / e.corners().len() as f64;
+        }
+    }
+    let tol = SMOOTH_TOLERANCE * mesh_diagonal(mesh);
+    let mut grid = Grid {
+        tol: tol.max(f64::MIN_POSITIVE),
+        cells: HashMap::new(),
+    };
+    let mut output_of = Vec::with_capacity(n);
+    let mut representative: Vec<u32> = Vec::with_capacity(n);
+    let mut sums: Vec<(DVec3, f64)> = Vec::with_capacity(n);
+    for v in 0..n {
+        let vertex = &mesh.vertices[v];
+        let found = if smooth(v) {
+            let material = mesh.surfaces[vertex.surface as usize].material;
+            grid.find(vertex.position, |o| {
+                let r = &mesh.vertices[representative[o as usize] as usize];
+                mesh.surfaces[r.surface as usize].material == material
+                    && (r.position - vertex.position).length() <= tol
+                    && r.normal.dot(vertex.normal) >= SAME_NORMAL
+            })
+        } else {
+            None
+        };
+        let o = match found {
+            Some(o) => o,
+            None => {
+                let o = representative.len() as u32;
+                representative.push(v as u32);
+                sums.push((DVec3::ZERO, 0.0));
+                if smooth(v) {
+                    grid.insert(vertex.position, o);
+                }
+                o
+            }
+        };
+        output_of.push(o);
+        let (sum, w) = &mut sums[o as usize];
+        // A vertex no leaf has as a corner (none today) still counts, a little.
+        let wv = weight[v].max(f64::MIN_POSITIVE);
+        *sum += radiance[v] * wv;
+        *w += wv;
+    }
+    let radiance = sums.iter().map(|(s, w)| *s / *w).collect();
+    let mut shared = SharedVertices {
+        output_of,
+        representative,
+        radiance,
+        on_edges: HashMap::new(),
+        edge_points: HashMap::new(),
+    };
+    index_polygon_edges(mesh, &grid, tol, &mut shared);
+    shared
+}
+
+/// Records, for every vertex of a smooth polygon that lies on one of its
+/// polygon's edges, that edge and its parameter along it.
+fn index_polygon_edges(mesh: &Mesh, grid: &Grid, tol: f64, shared: &mut SharedVertices) {
+    // The output vertex at each corner of each smooth surface (`None` for a
+    // surface with a corner that is no mesh vertex: its seams are left as
+    // meshed).
+    let corner_ids: Vec<Option<Vec<u32>>> = mesh
+        .surfaces
+        .iter()
+        .map(|s| {
+            let normals = s.corner_normals.as_ref()?;
+            s.vertices
+                .iter()
+                .zip(normals)
+                .map(|(&p, &normal)| {
+                    grid.find(p, |o| {
+                        let r = &mesh.vertices[shared.representative[o as usize] as usize];
+                        mesh.surfaces[r.surface as usize].material == s.material
+                            && (r.position - p).length() <= tol
+                            && r.normal.dot(normal) >= SAME_NORMAL
+                    })
+                })
+                .collect()
+        })
+        .collect();
+    for (v, vertex) in mesh.vertices.iter().enumerate() {
+        let s = &mesh.surfaces[vertex.surface as usize];
+        let Some(corners) = &corner_ids[vertex.surface as usize] else {
+            continue;
+        };
+        let o = shared.output_of[v];
+        let k = s.vertices.len();
+        for i in 0..k {
+            let (a, b) = (s.vertices[i], s.vertices[(i + 1) % k]);
+            let (ia, ib) = (corners[i], corners[(i + 1) % k]);
+            let edge = b - a;
+            let length2 = edge.length_squared();
+            if length2.is_nan() || length2 <= 0.0 {
+                continue;
+            }
+            let t = (vertex.position - a).dot(edge) / length2;
+            if !(-1e-9..=1.0 + 1e-9).contains(&t) {
+                continue;
+            }
+            if (a + edge * t - vertex.position).length() > tol {
+                continue;
+            }
+            let (key, t) = if ia <= ib {
+                ((ia, ib), t)
+            } else {
+                ((ib, ia), 1.0 - t)
+            };
+            let list = shared.on_edges.entry(o).or_default();
+            if !list.iter().any(|(e, _)| *e == key) {
+                list.push((key, t));
+                shared.edge_points.entry(key).or_default().push((t, o));
+            }
+        }
+    }
+    for points in shared.edge_points.values_mut() {
+        points.sort_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
+        points.dedup_by_key(|p| p.1);
+    }
+}
+
+impl SharedVertices {
+    /// The mesh's display triangles in output vertices, with the triangles of
+    /// smooth surfaces fanned to the vertices other polygons put inside their
+    /// edges (see the module comment). Counter-clockwise order is kept.
+    pub(crate) fn triangles(&self, mesh_triangles: &[[u32; 3]]) -> Vec<[u32; 3]> {
+        let mut out = Vec::with_capacity(mesh_triangles.len());
+        let mut stack = Vec::new();
+        for t in mesh_triangles {
+            let mapped = t.map(|v| self.output_of[v as usize]);
+            if self.edge_points.is_empty() {
+                out.push(mapped);
+                continue;
+            }
+            stack.push(mapped);
+            while let Some(tri) = stack.pop() {
+                match self.split_once(tri) {
+                    Some(parts) => stack.extend(parts.into_iter().rev()),
+                    None => out.push(tri),
+                }
+            }
+        }
+        out
+    }
+
+    /// `tri` fanned at the first of its edges that has points of a polygon
+    /// edge strictly inside it, or `None`.
+    fn split_once(&self, tri: [u32; 3]) -> Option<Vec<[u32; 3]>> {
+        for k in 0..3 {
+            let (a, b, c) = (tri[k], tri[(k + 1) % 3], tri[(k + 2) % 3]);
+            let inside = self.points_between(a, b);
+            if inside.is_empty() {
+                continue;
+            }
+            let mut chain = Vec::with_capacity(inside.len() + 2);
+            chain.push(a);
+            chain.extend(inside);
+            chain.push(b);
+            return Some(chain.windows(2).map(|w| [w[0], w[1], c]).collect());
+        }
+        None
+    }
+
+    /// The output vertices strictly between `a` and `b` on a polygon edge both
+    /// lie on, ordered from `a` to `b`.
+    fn points_between(&self, a: u32, b: u32) -> Vec<u32> {
+        let (Some(ea), Some(eb)) = (self.on_edges.get(&a), self.on_edges.get(&b)) else {
+            return Vec::new();
+        };
+        for &(edge, ta) in ea {
+            let Some(&(_, tb)) = eb.iter().find(|(e, _)| *e == edge) else {
+                continue;
+            };
+            let (lo, hi) = (ta.min(tb), ta.max(tb));
+            // Parameters of distinct vertices differ by far more than this
+            // (vertices closer than the merge tolerance are one vertex).
+            let margin = 1e-9;
+            let mut inside: Vec<u32> = self.edge_points[&edge]
+                .iter()
+                .filter(|(t, o)| *t > lo + margin && *t < hi - margin && *o != a && *o != b)
+                .map(|(_, o)| *o)
+                .collect();
+            if ta > tb {
+                inside.reverse();
+            }
+            if !inside.is_empty() {
+                return inside;
+            }
+        }
+        Vec::new()
+    }
+}
+
+fn mesh_diagonal(mesh: &Mesh) -> f64 {
+    let mut lo = DVec3::splat(f64::INFINITY);
+    let mut hi = DVec3::splat(f64::NEG_INFINITY);
+    for v in &mesh.vertices {
+        lo = lo.min(v.position);
+        hi = hi.max(v.position);
+    }
+    if lo.x > hi.x {
+        0.0
+    } else {
+        (hi - lo).length()
+    }
+}
