@@ -141,6 +141,12 @@ pub struct SolverSettings {
     pub units_per_metre: f64,
     /// Turn import warnings (Kd + Ks > 1, …) into errors.
     pub strict: bool,
+    /// Peak memory the progressive solve plans within, bytes (`None`: no
+    /// limit); see `solve::budget`. Not stored in solutions or checkpoints: it
+    /// bounds how a result is reached, and the command line's default follows
+    /// the machine's available memory.
+    #[serde(skip)]
+    pub memory_budget: Option<u64>,
 }
 
 /// A partial set of settings from one source (flags, TOML config, display file, preset).
@@ -171,6 +177,8 @@ pub struct SettingsPatch {
     pub cube_resolution: Option<u32>,
     pub units_per_metre: Option<f64>,
     pub strict: Option<bool>,
+    /// Bytes.
+    pub memory_budget: Option<u64>,
 }
 
 /// A setting whose value is out of its range.
@@ -211,6 +219,7 @@ impl SolverSettings {
             cube_resolution: DEFAULT_CUBE_RESOLUTION,
             units_per_metre: 1.0,
             strict: false,
+            memory_budget: None,
         }
     }
 
@@ -265,6 +274,9 @@ impl SolverSettings {
         );
         if patch.threads.is_some() {
             self.threads = patch.threads;
+        }
+        if patch.memory_budget.is_some() {
+            self.memory_budget = patch.memory_budget;
         }
     }
 
@@ -378,6 +390,12 @@ impl SolverSettings {
             "units_per_metre",
             self.units_per_metre,
             "a finite number > 0",
+        )?;
+        check(
+            self.memory_budget.is_none_or(|b| b >= 1 << 20),
+            "memory_budget",
+            format!("{:?}", self.memory_budget),
+            "at least 1 MiB (1048576 bytes)",
         )?;
         check(
             self.threads.is_none_or(|t| (1..=1024).contains(&t)),

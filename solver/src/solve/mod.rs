@@ -50,6 +50,7 @@
 //! vertex receives from recorded shots (better than the interpolation the
 //! patches' unshot was gathered from) is not re-gathered.
 
+pub mod budget;
 mod checkpoint;
 pub mod cube_gather;
 pub mod directional;
@@ -98,6 +99,21 @@ pub enum SolveError {
     UnsupportedMode(SolveMode),
     #[error("the checkpoint does not belong to this scene and these settings: {0}")]
     CheckpointMismatch(String),
+    #[error(
+        "the estimated peak memory {estimate} exceeds the memory budget {budget} (the solve \
+         plans against {planned:.0}% of it) even with the coarsest mesh ({what}: no subdivision, \
+         every material at SH order 0): {breakdown}. Raise --memory-budget to at least \
+         {needed}, or use fewer patches per polygon (`patches` in the scene config or the \
+         preset), or a smaller scene"
+    )]
+    OverBudget {
+        estimate: String,
+        budget: String,
+        planned: f64,
+        needed: String,
+        what: String,
+        breakdown: String,
+    },
 }
 
 /// What one shot did.
@@ -193,6 +209,12 @@ pub struct Solver {
     directional: Option<Box<Directional>>,
     /// Set-up warnings for the caller to show (see [`Solver::warnings`]).
     warnings: Vec<String>,
+    /// Warnings raised while solving, until taken ([`Solver::take_warnings`]).
+    pending_warnings: Vec<String>,
+    /// The largest peak memory estimated so far ([`budget`]).
+    peak_estimate: u64,
+    /// Whether the memory budget has refused a split (warned once).
+    refinement_capped: bool,
 }
 
 impl Solver {
@@ -216,8 +238,23 @@ impl Solver {
                 });
             }
         }
+        // Refuse before meshing when even the unrefined mesh at SH order 0
+        // cannot fit (its counts are known from the polygons alone).
+        check_coarsest(
+            &budget::counts_before_meshing(scene, settings),
+            settings,
+            "before meshing",
+        )?;
         let offset = scene_centre(scene);
         let mesh = Mesh::new(scene, offset, settings.patches)?;
+        let emitter_patches = budget::emitter_patches(scene, &mesh);
+        // The same with the mesh's exact counts, before the solve's state
+        // (each emitter patch shoots, and is recorded, at least once).
+        check_coarsest(
+            &budget::counts_for_mesh(&mesh, settings, |_| 0, emitter_patches),
+            settings,
+            "the unrefined mesh",
+        )?;
         match mesh.surfaces.len() {
             0 => return Err(SolveError::EmptyScene),
             1 => return Err(SolveError::SinglePolygon),
@@ -300,12 +337,16 @@ impl Solver {
             timings: Timings::default(),
             directional: None,
             warnings: Vec::new(),
+            pending_warnings: Vec::new(),
+            peak_estimate: 0,
+            refinement_capped: false,
         };
         solver.init_directional(scene)?;
         let all: Vec<u32> = (0..solver.mesh.surfaces.len() as u32).collect();
         solver.update_weights(&all);
         solver.unshot_power = solver.total_unshot_power();
         solver.radiance_level = solver.ambient().max_element();
+        solver.peak_estimate = solver.memory_estimate().peak();
         Ok(solver)
     }
 
@@ -377,6 +418,7 @@ impl Solver {
         }
         let shot_done = Instant::now();
         let refined = if self.settings.adaptive {
+            let mut split_budget = self.split_budget(None);
             let replay = RecordedShot::rebuild_all(
                 &self.recorded,
                 &self.mesh,
@@ -384,7 +426,7 @@ impl Solver {
                 &self.occluder,
                 &self.kd,
             );
-            refine::refine(
+            let refined = refine::refine(
                 &mut self.mesh,
                 refine::VertexState {
                     radiance: &mut self.radiance,
@@ -404,7 +446,11 @@ impl Solver {
                 },
                 &shot,
                 &pool,
-            )
+                &mut split_budget,
+            );
+            drop(replay);
+            self.after_refinement(&split_budget, None);
+            refined
         } else {
             refine::Refined::default()
         };
@@ -636,6 +682,36 @@ fn scene_centre(scene: &Scene) -> DVec3 {
     } else {
         DVec3::ZERO
     }
+}
+
+/// Refuses a solve whose coarsest state (`counts`, no subdivision, SH order 0)
+/// does not fit in the planned share of the memory budget; `what` names the
+/// counts' origin for the message.
+fn check_coarsest(
+    counts: &budget::Counts,
+    settings: &SolverSettings,
+    what: &str,
+) -> Result<(), SolveError> {
+    let Some(limit) = settings.memory_budget else {
+        return Ok(());
+    };
+    let estimate = budget::estimate(counts);
+    let peak = estimate.peak();
+    if peak <= budget::plan(limit) {
+        return Ok(());
+    }
+    let needed = (peak as f64 / budget::PLANNING_FRACTION).ceil() as u128;
+    Err(SolveError::OverBudget {
+        estimate: human_bytes(peak as u128),
+        budget: human_bytes(limit as u128),
+        planned: 100.0 * budget::PLANNING_FRACTION,
+        needed: human_bytes(needed),
+        what: format!(
+            "{what}: {} patches, {} vertices",
+            counts.patches, counts.vertices
+        ),
+        breakdown: estimate.breakdown(),
+    })
 }
 
 /// `bytes` as GiB/MiB/KiB with one decimal, for the memory-bound refusals of
