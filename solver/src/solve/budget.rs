@@ -582,7 +582,8 @@ impl Solver {
     /// What refinement may add this shot under the budget (`directional`: the
     /// directional state, taken out of the solver during its shot).
     pub(super) fn split_budget(&self, directional: Option<&Directional>) -> SplitBudget {
-        let now = estimate(&self.memory_counts_with(directional)).peak();
+        let counts = self.memory_counts_with(directional);
+        let now = estimate(&counts).peak();
         let Some(budget) = self.settings.memory_budget else {
             return SplitBudget {
                 peak_before: now,
@@ -595,8 +596,12 @@ impl Solver {
                 split_cost(coefficients(order), directional.is_some())
             })
             .collect();
+        // The vertex table grows by doubling, all at once: plan as if this
+        // refinement's vertices make it double (its new half, on top of the
+        // per-vertex share each split is charged).
+        let doubled = table_bytes(counts.vertices).max(table_bytes(4));
         SplitBudget {
-            left: plan(budget).saturating_sub(now),
+            left: plan(budget).saturating_sub(now + doubled),
             cost,
             refused: 0,
             peak_before: now,
@@ -616,8 +621,34 @@ impl Solver {
             return;
         }
         self.refinement_capped = true;
+        let warning = self.refinement_stop_warning(now);
+        self.pending_warnings.push(warning);
+    }
+
+    /// When recording one more emitter shot (of `source_coefficients` SH
+    /// values) would take the estimate past the plan: the warning that
+    /// refinement stops. Recorded shots only serve refinement (their replay
+    /// to new vertices), so a solve that can no longer refine stops recording
+    /// and its state stops growing. `None` when it fits or has no budget.
+    pub(super) fn recording_overflows(
+        &self,
+        directional: Option<&Directional>,
+        source_coefficients: u64,
+    ) -> Option<String> {
+        let budget = self.settings.memory_budget?;
+        let mut c = self.memory_counts_with(directional);
+        c.recorded_shots += 1;
+        if c.directional {
+            c.recorded_coefficients += source_coefficients;
+        }
+        let peak = estimate(&c).peak();
+        (peak > plan(budget)).then(|| self.refinement_stop_warning(peak))
+    }
+
+    /// The warning that the budget stopped refinement, at estimated peak `now`.
+    fn refinement_stop_warning(&self, now: u64) -> String {
         let limit = self.settings.memory_budget.unwrap_or(0);
-        self.pending_warnings.push(format!(
+        format!(
             "memory budget {}: refinement stopped at {} elements and {} vertices (estimated \
              peak {}, planned against {:.0}% of the budget); further subdivision is refused, so \
              shadows and highlights finer than the current elements stay coarse. Raise \
@@ -627,7 +658,7 @@ impl Solver {
             self.mesh.vertices.len(),
             human_bytes(now as u128),
             100.0 * PLANNING_FRACTION
-        ));
+        )
     }
 
     /// Warnings raised while solving (refinement stopped by the memory

@@ -610,7 +610,14 @@ impl Solver {
         let source_surface = shot.source_surface as usize;
         // Shots from emitters are remembered, as in `Solver::step`: vertices
         // that later splits create receive them exactly (see `refine.rs`).
-        let recorded = self.emission[source_surface] != DVec3::ZERO;
+        let mut recorded = self.emission[source_surface] != DVec3::ZERO && !self.refinement_capped;
+        if recorded {
+            if let Some(warning) = self.recording_overflows(Some(d), unshot.len() as u64) {
+                recorded = false;
+                self.refinement_capped = true;
+                self.pending_warnings.push(warning);
+            }
+        }
         if recorded {
             self.recorded.push(RecordedShot {
                 index: self.shots,
@@ -665,7 +672,8 @@ impl Solver {
             }
         }
         let mut refined = super::refine::Refined::default();
-        if self.settings.adaptive {
+        // A solve the memory budget stopped refining stays unrefined.
+        if self.settings.adaptive && !self.refinement_capped {
             let mut split_budget = self.split_budget(Some(d));
             // The recorded shots, rebuilt (their unshot SH kept in `d`).
             let replay_shots = RecordedShot::rebuild_all(

@@ -386,7 +386,15 @@ impl Solver {
         );
         // Shots from emitters are remembered: vertices that later splits create
         // receive them exactly (see `refine`).
-        let recorded = self.emission[shot.source_surface as usize] != DVec3::ZERO;
+        let mut recorded =
+            self.emission[shot.source_surface as usize] != DVec3::ZERO && !self.refinement_capped;
+        if recorded {
+            if let Some(warning) = self.recording_overflows(None, 0) {
+                recorded = false;
+                self.refinement_capped = true;
+                self.pending_warnings.push(warning);
+            }
+        }
         if recorded {
             self.recorded.push(RecordedShot {
                 index: self.shots,
@@ -417,7 +425,8 @@ impl Solver {
             rays += r.rays as u64;
         }
         let shot_done = Instant::now();
-        let refined = if self.settings.adaptive {
+        // A solve the memory budget stopped refining stays unrefined.
+        let refined = if self.settings.adaptive && !self.refinement_capped {
             let mut split_budget = self.split_budget(None);
             let replay = RecordedShot::rebuild_all(
                 &self.recorded,
