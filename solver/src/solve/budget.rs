@@ -73,11 +73,13 @@ pub const PLANNING_FRACTION: f64 = 0.9;
 /// cannot refine at all shows shadows as coarsely as its patches.
 pub const ORDER_SHARE: f64 = 0.5;
 
-/// The process before any solve state: measured as the peak RSS of
-/// `solver solve` on a one-quad scene with a one-patch light (release build,
-/// 2 worker threads): the executable and its libraries, the allocator's
-/// arenas, the worker threads' stacks and the command line's buffers.
-pub const FIXED_BYTES: u64 = 12 << 20;
+/// The process before any solve state: the executable and its libraries, the
+/// allocator's arenas, the scene as imported and the command line's buffers,
+/// measured as 6.2 MiB peak RSS of a `solver solve` of the Cornell box refused
+/// before meshing (release build, this machine), plus 0.8 MiB for the worker
+/// threads' touched stacks and buffers (the Cornell box's measured peak at
+/// `--preset medium` less its estimated solve state).
+pub const FIXED_BYTES: u64 = 7 << 20;
 
 /// The scene (its polygon and material), the mesh's surface and piece, the
 /// per-surface tables of both modes and the occlusion BVH's share, per
@@ -88,10 +90,14 @@ pub fn surface_bytes() -> u64 {
     (size_of::<Surface>() + 2 * (4 * size_of::<DVec3>() + 24) + 2 * 64 + 128 + 96) as u64
 }
 
-/// About this many bytes per stored value in a checkpoint's JSON: a u64 bit
-/// pattern of a non-zero f64 has 19 decimal digits (2^62 ≈ 4.6 · 10^18), plus
-/// a separator, plus brackets shared by three.
-pub const JSON_BYTES_PER_VALUE: u64 = 21;
+/// About this many bytes per stored value in a checkpoint's JSON. A u64 bit
+/// pattern of a non-zero f64 has 19 decimal digits (2^62 ≈ 4.6 · 10^18) and a
+/// separator, a zero two characters; the recorded-shot part of a shadowed
+/// vertex is zero, as are the coefficients of vertices no shot has reached.
+/// Measured: a 40-shot checkpoint of the mirror-sphere scene (tests/
+/// memory_budget.rs) averages 10.4 bytes per value; a converged one, with every
+/// vertex lit, approaches 20. 16 lies between, erring toward the larger.
+pub const JSON_BYTES_PER_VALUE: u64 = 16;
 
 /// A zero value in JSON (`0,`).
 const JSON_BYTES_PER_ZERO: u64 = 2;
@@ -450,7 +456,10 @@ pub fn order_cap_warning(
         format!("nothing narrower than about {:.0}°", 180.0 / kept as f64)
     };
     format!(
-        "memory budget {}: material `{}` (α = {:.4}) needs SH order L = {} but keeps L = {}          (Hann-windowed): the dropped bands hold {:.1}% of the lobe's energy (Parseval; relative          L2 error {:.3}). Its reflections render blurred, showing {}. Raise --memory-budget to          keep more bands",
+        "memory budget {}: material `{}` (α = {:.4}) needs SH order L = {} but keeps L = {} \
+         (Hann-windowed): the dropped bands hold {:.1}% of the lobe's energy (Parseval; relative \
+         L2 error {:.3}). Its reflections render blurred, showing {}. Raise --memory-budget to \
+         keep more bands",
         human_bytes(budget as u128),
         material,
         alpha,
