@@ -9,6 +9,8 @@
 //! patches per triangle give about 127,000 elements, and the lobe asks for
 //! SH order ≈ 60, 3 · 61² f64 per array per vertex: tens of GB unbudgeted.
 
+// Only the binary helper is used here; the others serve the other tests.
+#[allow(dead_code)]
 mod common;
 
 use std::path::{Path, PathBuf};
