@@ -99,21 +99,10 @@ pub enum SolveError {
     UnsupportedMode(SolveMode),
     #[error("the checkpoint does not belong to this scene and these settings: {0}")]
     CheckpointMismatch(String),
-    #[error(
-        "the estimated peak memory {estimate} exceeds the memory budget {budget} (the solve \
-         plans against {planned:.0}% of it) even with the coarsest mesh ({what}: no subdivision, \
-         every material at SH order 0): {breakdown}. Raise --memory-budget to at least \
-         {needed}, or use fewer patches per polygon (`patches` in the scene config or the \
-         preset), or a smaller scene"
-    )]
-    OverBudget {
-        estimate: String,
-        budget: String,
-        planned: f64,
-        needed: String,
-        what: String,
-        breakdown: String,
-    },
+    /// The memory budget cannot hold even the coarsest solve: the message
+    /// gives the estimate, the budget and what to change (see `check_coarsest`).
+    #[error("{0}")]
+    OverBudget(String),
 }
 
 /// What one shot did.
@@ -710,17 +699,20 @@ fn check_coarsest(
         return Ok(());
     }
     let needed = (peak as f64 / budget::PLANNING_FRACTION).ceil() as u128;
-    Err(SolveError::OverBudget {
-        estimate: human_bytes(peak as u128),
-        budget: human_bytes(limit as u128),
-        planned: 100.0 * budget::PLANNING_FRACTION,
-        needed: human_bytes(needed),
-        what: format!(
-            "{what}: {} patches, {} vertices",
-            counts.patches, counts.vertices
-        ),
-        breakdown: estimate.breakdown(),
-    })
+    Err(SolveError::OverBudget(format!(
+        "the estimated peak memory {} exceeds the memory budget {} (the solve plans against \
+         {:.0}% of it) even with the coarsest mesh ({what}: {} patches, {} vertices: no \
+         subdivision, every material at SH order 0): {}. Raise --memory-budget to at least {}, \
+         or use fewer patches per polygon (`patches` in the scene config or the preset), or a \
+         smaller scene",
+        human_bytes(peak as u128),
+        human_bytes(limit as u128),
+        100.0 * budget::PLANNING_FRACTION,
+        counts.patches,
+        counts.vertices,
+        estimate.breakdown(),
+        human_bytes(needed),
+    )))
 }
 
 /// `bytes` as GiB/MiB/KiB with one decimal, for the memory-bound refusals of
