@@ -146,6 +146,12 @@ pub struct SolverSettings {
     /// interpolated shading normals; 0 keeps every polygon a flat facet.
     #[serde(default = "default_crease_angle")]
     pub crease_angle: f64,
+    /// Peak memory the progressive solve plans within, bytes (`None`: no
+    /// limit); see `solve::budget`. Not stored in solutions or checkpoints: it
+    /// bounds how a result is reached, and the command line's default follows
+    /// the machine's available memory.
+    #[serde(skip)]
+    pub memory_budget: Option<u64>,
 }
 
 fn default_crease_angle() -> f64 {
@@ -181,6 +187,8 @@ pub struct SettingsPatch {
     pub units_per_metre: Option<f64>,
     pub strict: Option<bool>,
     pub crease_angle: Option<f64>,
+    /// Bytes.
+    pub memory_budget: Option<u64>,
 }
 
 /// A setting whose value is out of its range.
@@ -222,6 +230,7 @@ impl SolverSettings {
             units_per_metre: 1.0,
             strict: false,
             crease_angle: default_crease_angle(),
+            memory_budget: None,
         }
     }
 
@@ -277,6 +286,9 @@ impl SolverSettings {
         );
         if patch.threads.is_some() {
             self.threads = patch.threads;
+        }
+        if patch.memory_budget.is_some() {
+            self.memory_budget = patch.memory_budget;
         }
     }
 
@@ -396,6 +408,12 @@ impl SolverSettings {
             "units_per_metre",
             self.units_per_metre,
             "a finite number > 0",
+        )?;
+        check(
+            self.memory_budget.is_none_or(|b| b >= 1 << 20),
+            "memory_budget",
+            format!("{:?}", self.memory_budget),
+            "at least 1 MiB (1048576 bytes)",
         )?;
         check(
             self.threads.is_none_or(|t| (1..=1024).contains(&t)),

@@ -11,6 +11,7 @@ pub(crate) mod args;
 mod checkpoint;
 mod eta;
 pub(crate) mod files;
+mod memory;
 mod preview;
 mod progress;
 mod session;
@@ -81,9 +82,21 @@ pub fn run(args: SolveArgs) -> anyhow::Result<ExitCode> {
         .as_ref()
         .map(|d| d.settings.clone())
         .unwrap_or_default();
-    let settings = resolve_settings(&args, &display_patch, &loaded.settings, &args.patch())?;
+    let mut settings = resolve_settings(&args, &display_patch, &loaded.settings, &args.patch())?;
     scene.fill_default_patches(settings.patches);
     apply_smoothing(&mut scene, settings.crease_angle);
+    let budget_source = match settings.memory_budget {
+        Some(_) => "as set".to_string(),
+        None => {
+            let (bytes, source) = memory::default_budget();
+            settings.memory_budget = Some(bytes);
+            source
+        }
+    };
+    eprintln!(
+        "solver: memory budget {} ({budget_source})",
+        crate::solve::budget::human_bytes(settings.memory_budget.unwrap_or(0) as u128)
+    );
 
     let threads = settings.threads.unwrap_or_else(|| {
         std::thread::available_parallelism()
@@ -210,7 +223,6 @@ pub(crate) fn plain<E: std::error::Error>(err: E) -> anyhow::Error {
     anyhow::anyhow!(message)
 }
 
-/// Prints each import warning once (`file:line (item): message`).
 /// Finds the scene's smooth surfaces at `crease_angle` degrees
 /// ([`crate::scene::smooth_scene`]) and says what it found.
 pub(crate) fn apply_smoothing(scene: &mut crate::scene::Scene, crease_angle: f64) {
@@ -224,6 +236,7 @@ pub(crate) fn apply_smoothing(scene: &mut crate::scene::Scene, crease_angle: f64
     }
 }
 
+/// Prints each import warning once (`file:line (item): message`).
 pub(crate) fn print_warnings(warnings: &[crate::scene::Warning]) {
     let mut seen = std::collections::HashSet::new();
     for warning in warnings {
@@ -283,6 +296,12 @@ fn solve(
             .warnings()
             .iter()
             .for_each(|w| eprintln!("solver: warning: {w}"));
+        let estimate = solver.memory_estimate();
+        eprintln!(
+            "solver: memory: estimated peak {} at the start ({})",
+            crate::solve::budget::human_bytes(estimate.peak() as u128),
+            estimate.breakdown()
+        );
         session.run(solver, 0.0)
     }
 }
@@ -401,7 +420,20 @@ fn cube_solve(
 impl session::Shooter for Solver {
     type State = Checkpoint;
     fn step(&mut self) -> bool {
-        Solver::step(self).is_some()
+        let stepped = Solver::step(self).is_some();
+        for warning in self.take_warnings() {
+            eprintln!("solver: warning: {warning}");
+        }
+        stepped
+    }
+    fn memory_note(&self) -> Option<String> {
+        let peak = self.peak_memory_estimate();
+        let budget = self.settings().memory_budget?;
+        Some(format!(
+            "memory: estimated peak {peak} bytes ({}) within the budget {budget} bytes ({})",
+            crate::solve::budget::human_bytes(peak as u128),
+            crate::solve::budget::human_bytes(budget as u128)
+        ))
     }
     fn is_done(&self) -> bool {
         Solver::is_done(self)

@@ -50,6 +50,7 @@
 //! and solve alike; glossy surfaces split on the Parseval L2 norm of the
 //! coefficient difference across an edge, down to [`min_glossy_edge`].
 
+use super::budget;
 use super::refine::{Criteria, Field};
 use super::shoot::RecordedShot;
 use super::shoot::{visible_samples, SamplePool, SampleScratch, Shot};
@@ -231,6 +232,16 @@ impl Directional {
             }
             material_lobe.push(Some(Arc::new(lobe)));
         }
+        if let Some(limit) = settings.memory_budget {
+            cap_orders(
+                scene,
+                settings,
+                mesh,
+                limit,
+                &mut material_lobe,
+                &mut warnings,
+            )?;
+        }
         let lobes: Vec<Option<Arc<GlossyLobe>>> = mesh
             .surfaces
             .iter()
@@ -316,6 +327,16 @@ impl Directional {
         self.direct.resize(at, 0.0);
     }
 
+    /// Values held per vertex coefficient array, in the patches' unshot and in
+    /// the recorded shots' unshot SH, for the memory estimate.
+    pub(super) fn coefficient_totals(&self) -> (u64, u64, u64) {
+        (
+            self.radiance.len() as u64,
+            self.patch_unshot.len() as u64,
+            self.recorded_unshot.iter().map(|u| u.len() as u64).sum(),
+        )
+    }
+
     /// The SH order of each mesh surface.
     pub fn surface_orders(&self) -> &[u32] {
         &self.surface_order
@@ -344,6 +365,53 @@ impl Directional {
         }
         sum / PI
     }
+}
+
+/// Caps SH orders so that the unrefined mesh fits in [`budget::ORDER_SHARE`]
+/// of the planned budget ([`budget::orders_within`]), before any coefficient
+/// is allocated: each capped material's lobe is rebuilt at the order kept
+/// (Hann-windowed, as any capped lobe) and warned about.
+fn cap_orders(
+    scene: &Scene,
+    settings: &SolverSettings,
+    mesh: &Mesh,
+    limit: u64,
+    material_lobe: &mut [Option<Arc<GlossyLobe>>],
+    warnings: &mut Vec<String>,
+) -> Result<(), SolveError> {
+    let wanted: Vec<u32> = material_lobe
+        .iter()
+        .map(|l| l.as_ref().map_or(0, |l| l.order()))
+        .collect();
+    let target = (budget::plan(limit) as f64 * budget::ORDER_SHARE) as u64;
+    let recorded = budget::emitter_patches(scene, mesh);
+    let kept = budget::orders_within(mesh, settings, &wanted, recorded, target);
+    for (m, (&want, &keep)) in wanted.iter().zip(&kept).enumerate() {
+        if keep == want {
+            continue;
+        }
+        let material = &scene.materials[m];
+        let lobe = GlossyLobe::with_default_window_and(
+            material.alpha,
+            1.0,
+            settings.sh_error_target,
+            keep,
+            settings.brdf_normalization,
+        )
+        .map_err(|e| SolveError::BadMaterial {
+            name: material.name.clone(),
+            problem: e.to_string(),
+        })?;
+        warnings.push(budget::order_cap_warning(
+            &material.name,
+            material.alpha,
+            want,
+            keep,
+            limit,
+        ));
+        material_lobe[m] = Some(Arc::new(lobe));
+    }
+    Ok(())
 }
 
 /// What one receiving vertex gets from one directional shot.
@@ -546,7 +614,14 @@ impl Solver {
         let source_surface = shot.source_surface as usize;
         // Shots from emitters are remembered, as in `Solver::step`: vertices
         // that later splits create receive them exactly (see `refine.rs`).
-        let recorded = self.emission[source_surface] != DVec3::ZERO;
+        let mut recorded = self.emission[source_surface] != DVec3::ZERO && !self.refinement_capped;
+        if recorded {
+            if let Some(warning) = self.recording_overflows(Some(d), unshot.len() as u64) {
+                recorded = false;
+                self.refinement_capped = true;
+                self.pending_warnings.push(warning);
+            }
+        }
         if recorded {
             self.recorded.push(RecordedShot {
                 index: self.shots,
@@ -602,7 +677,9 @@ impl Solver {
             }
         }
         let mut refined = super::refine::Refined::default();
-        if self.settings.adaptive {
+        // A solve the memory budget stopped refining stays unrefined.
+        if self.settings.adaptive && !self.refinement_capped {
+            let mut split_budget = self.split_budget(Some(d));
             // The recorded shots, rebuilt (their unshot SH kept in `d`).
             let replay_shots = RecordedShot::rebuild_all(
                 &self.recorded,
@@ -647,9 +724,11 @@ impl Solver {
                     ambient,
                     ..Criteria::from_settings(&self.settings)
                 },
+                &mut split_budget,
             );
             drop(replay);
             d.recorded_unshot = recorded_unshot;
+            self.after_refinement(&split_budget, Some(d));
             rays += refined.rays;
         }
         let splits = refined.splits;

@@ -50,6 +50,7 @@
 //! vertex receives from recorded shots (better than the interpolation the
 //! patches' unshot was gathered from) is not re-gathered.
 
+pub mod budget;
 mod checkpoint;
 pub mod cube_gather;
 pub mod directional;
@@ -99,6 +100,10 @@ pub enum SolveError {
     UnsupportedMode(SolveMode),
     #[error("the checkpoint does not belong to this scene and these settings: {0}")]
     CheckpointMismatch(String),
+    /// The memory budget cannot hold even the coarsest solve: the message
+    /// gives the estimate, the budget and what to change (see `check_coarsest`).
+    #[error("{0}")]
+    OverBudget(String),
 }
 
 /// What one shot did.
@@ -194,6 +199,12 @@ pub struct Solver {
     directional: Option<Box<Directional>>,
     /// Set-up warnings for the caller to show (see [`Solver::warnings`]).
     warnings: Vec<String>,
+    /// Warnings raised while solving, until taken ([`Solver::take_warnings`]).
+    pending_warnings: Vec<String>,
+    /// The largest peak memory estimated so far ([`budget`]).
+    peak_estimate: u64,
+    /// Whether the memory budget has refused a split (warned once).
+    refinement_capped: bool,
 }
 
 impl Solver {
@@ -217,8 +228,23 @@ impl Solver {
                 });
             }
         }
+        // Refuse before meshing when even the unrefined mesh at SH order 0
+        // cannot fit (its counts are known from the polygons alone).
+        check_coarsest(
+            &budget::counts_before_meshing(scene, settings),
+            settings,
+            "before meshing",
+        )?;
         let offset = scene_centre(scene);
         let mesh = Mesh::new(scene, offset, settings.patches)?;
+        let emitter_patches = budget::emitter_patches(scene, &mesh);
+        // The same with the mesh's exact counts, before the solve's state
+        // (each emitter patch shoots, and is recorded, at least once).
+        check_coarsest(
+            &budget::counts_for_mesh(&mesh, settings, |_| 0, emitter_patches),
+            settings,
+            "the unrefined mesh",
+        )?;
         match mesh.surfaces.len() {
             0 => return Err(SolveError::EmptyScene),
             1 => return Err(SolveError::SinglePolygon),
@@ -301,12 +327,16 @@ impl Solver {
             timings: Timings::default(),
             directional: None,
             warnings: Vec::new(),
+            pending_warnings: Vec::new(),
+            peak_estimate: 0,
+            refinement_capped: false,
         };
         solver.init_directional(scene)?;
         let all: Vec<u32> = (0..solver.mesh.surfaces.len() as u32).collect();
         solver.update_weights(&all);
         solver.unshot_power = solver.total_unshot_power();
         solver.radiance_level = solver.ambient().max_element();
+        solver.peak_estimate = solver.memory_estimate().peak();
         Ok(solver)
     }
 
@@ -346,7 +376,15 @@ impl Solver {
         );
         // Shots from emitters are remembered: vertices that later splits create
         // receive them exactly (see `refine`).
-        let recorded = self.emission[shot.source_surface as usize] != DVec3::ZERO;
+        let mut recorded =
+            self.emission[shot.source_surface as usize] != DVec3::ZERO && !self.refinement_capped;
+        if recorded {
+            if let Some(warning) = self.recording_overflows(None, 0) {
+                recorded = false;
+                self.refinement_capped = true;
+                self.pending_warnings.push(warning);
+            }
+        }
         if recorded {
             self.recorded.push(RecordedShot {
                 index: self.shots,
@@ -378,7 +416,9 @@ impl Solver {
             rays += r.rays as u64;
         }
         let shot_done = Instant::now();
-        let refined = if self.settings.adaptive {
+        // A solve the memory budget stopped refining stays unrefined.
+        let refined = if self.settings.adaptive && !self.refinement_capped {
+            let mut split_budget = self.split_budget(None);
             let replay = RecordedShot::rebuild_all(
                 &self.recorded,
                 &self.mesh,
@@ -386,7 +426,7 @@ impl Solver {
                 &self.occluder,
                 &self.kd,
             );
-            refine::refine(
+            let refined = refine::refine(
                 &mut self.mesh,
                 refine::VertexState {
                     radiance: &mut self.radiance,
@@ -406,7 +446,11 @@ impl Solver {
                 },
                 &shot,
                 &pool,
-            )
+                &mut split_budget,
+            );
+            drop(replay);
+            self.after_refinement(&split_budget, None);
+            refined
         } else {
             refine::Refined::default()
         };
@@ -638,6 +682,39 @@ fn scene_centre(scene: &Scene) -> DVec3 {
     } else {
         DVec3::ZERO
     }
+}
+
+/// Refuses a solve whose coarsest state (`counts`, no subdivision, SH order 0)
+/// does not fit in the planned share of the memory budget; `what` names the
+/// counts' origin for the message.
+fn check_coarsest(
+    counts: &budget::Counts,
+    settings: &SolverSettings,
+    what: &str,
+) -> Result<(), SolveError> {
+    let Some(limit) = settings.memory_budget else {
+        return Ok(());
+    };
+    let estimate = budget::estimate(counts);
+    let peak = estimate.peak();
+    if peak <= budget::plan(limit) {
+        return Ok(());
+    }
+    let needed = (peak as f64 / budget::PLANNING_FRACTION).ceil() as u128;
+    Err(SolveError::OverBudget(format!(
+        "the estimated peak memory {} exceeds the memory budget {} (the solve plans against \
+         {:.0}% of it) even with the coarsest mesh ({what}: {} patches, {} vertices: no \
+         subdivision, every material at SH order 0): {}. Raise --memory-budget to at least {}, \
+         or use fewer patches per polygon (`patches` in the scene config or the preset), or a \
+         smaller scene",
+        human_bytes(peak as u128),
+        human_bytes(limit as u128),
+        100.0 * budget::PLANNING_FRACTION,
+        counts.patches,
+        counts.vertices,
+        estimate.breakdown(),
+        human_bytes(needed),
+    )))
 }
 
 /// `bytes` as GiB/MiB/KiB with one decimal, for the memory-bound refusals of

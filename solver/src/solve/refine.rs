@@ -43,6 +43,7 @@
 //! indirect light casts shadows too, and an edge that already passed is only
 //! tested again when the shot changed one of its ends.
 
+use super::budget::SplitBudget;
 use super::shoot::{Received, SamplePool, Scratch, Shot};
 use crate::mesh::{Mesh, NewVertex};
 use crate::settings::SolverSettings;
@@ -236,7 +237,16 @@ pub trait Field: Sync {
 
 /// Refines after a shot: tests the leaves the shot changed, splits, has the
 /// field interpolate and shoot the new vertices, and repeats on the children.
-pub fn refine_field<F: Field>(mesh: &mut Mesh, field: &mut F, criteria: &Criteria) -> Refined {
+///
+/// Each split first takes its cost from `budget` (see [`SplitBudget`]); the
+/// first that does not fit ends the refinement, and it and the splits still
+/// asked for at that level are counted as refused.
+pub fn refine_field<F: Field>(
+    mesh: &mut Mesh,
+    field: &mut F,
+    criteria: &Criteria,
+    budget: &mut SplitBudget,
+) -> Refined {
     let mut dirty = vec![false; mesh.surfaces.len()];
     let mut out = Refined::default();
     let mut candidates: Vec<u32> = {
@@ -264,7 +274,14 @@ pub fn refine_field<F: Field>(mesh: &mut Mesh, field: &mut F, criteria: &Criteri
         }
         created.clear();
         let mut children = Vec::with_capacity(4 * to_split.len());
-        for &e in &to_split {
+        let mut over_budget = false;
+        for (k, &e) in to_split.iter().enumerate() {
+            let surface = mesh.patches[mesh.elements[e as usize].patch as usize].surface;
+            if !budget.take(surface) {
+                budget.refused += (to_split.len() - k) as u64;
+                over_budget = true;
+                break;
+            }
             // Only an impossible mesh size (2^32 vertices) can fail; stop
             // refining then rather than abort the solve.
             let before = created.len();
@@ -273,7 +290,6 @@ pub fn refine_field<F: Field>(mesh: &mut Mesh, field: &mut F, criteria: &Criteri
             };
             out.splits += 1;
             children.extend(first..first + 4);
-            let surface = mesh.patches[mesh.elements[e as usize].patch as usize].surface;
             dirty[surface as usize] = true;
             let patch = mesh.elements[e as usize].patch;
             out.dirty_patches.push(patch);
@@ -284,6 +300,9 @@ pub fn refine_field<F: Field>(mesh: &mut Mesh, field: &mut F, criteria: &Criteri
         }
         field.interpolate(mesh, &created);
         out.rays += field.receive(mesh, &created);
+        if over_budget {
+            break;
+        }
         candidates = children;
     }
     out.dirty_patches.sort_unstable();
@@ -398,6 +417,7 @@ pub fn refine(
     criteria: &Criteria,
     shot: &Shot,
     pool: &SamplePool,
+    budget: &mut SplitBudget,
 ) -> Refined {
     refine_field(
         mesh,
@@ -408,6 +428,7 @@ pub fn refine(
             pool,
         },
         criteria,
+        budget,
     )
 }
 

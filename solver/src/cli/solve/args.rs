@@ -241,6 +241,25 @@ pub struct SolveArgs {
     )]
     pub units_per_metre: Option<f64>,
 
+    /// Peak memory the solve plans within (e.g. 8GiB, 500MB).
+    #[arg(
+        long,
+        value_name = "SIZE",
+        value_parser = parse_bytes,
+        long_help = "Peak memory the progressive solve plans within: bytes, or a number \
+            with KB/MB/GB/TB (powers of 1000) or KiB/MiB/GiB/TiB (powers of 1024), e.g. \
+            8GiB or 500MB. Default: 80% of the machine's available memory \
+            (/proc/meminfo MemAvailable; 4 GiB when it cannot be read), printed at the \
+            start. The solve estimates its peak (mesh, vertex state, SH coefficients, \
+            recorded shots, checkpoint and output) before allocating and before each \
+            refinement, and plans against 90% of the budget. Near it, a directional solve \
+            caps glossy materials' SH orders (blurrier reflections) and refinement stops \
+            subdividing (coarser shadows), each with a warning; a scene whose unrefined \
+            mesh cannot fit even at SH order 0 is refused with the estimate. A larger \
+            budget trades memory for finer meshes and sharper highlights."
+    )]
+    pub memory_budget: Option<u64>,
+
     /// Make import warnings errors.
     #[arg(
         long,
@@ -353,9 +372,46 @@ impl SolveArgs {
             units_per_metre: self.units_per_metre,
             strict: self.strict.then_some(true),
             crease_angle: self.crease_angle,
+            memory_budget: self.memory_budget,
             ..SettingsPatch::default()
         }
     }
+}
+
+/// A size for `--memory-budget`: a non-negative number of bytes, optionally
+/// with a unit, KB/MB/GB/TB (powers of 1000) or KiB/MiB/GiB/TiB (powers of
+/// 1024), case-insensitive, with or without a space (`8GiB`, `500 MB`,
+/// `1.5GiB`, `1048576`).
+pub fn parse_bytes(text: &str) -> Result<u64, String> {
+    let t = text.trim();
+    let split = t
+        .find(|c: char| !(c.is_ascii_digit() || c == '.'))
+        .unwrap_or(t.len());
+    let (number, unit) = (t[..split].trim(), t[split..].trim());
+    let value: f64 = number
+        .parse()
+        .map_err(|_| format!("`{text}` is not a size: expected a number such as 8GiB or 500MB"))?;
+    let scale: f64 = match unit.to_ascii_lowercase().as_str() {
+        "" | "b" => 1.0,
+        "kb" => 1e3,
+        "mb" => 1e6,
+        "gb" => 1e9,
+        "tb" => 1e12,
+        "kib" => 1024.0,
+        "mib" => 1024.0 * 1024.0,
+        "gib" => 1024.0 * 1024.0 * 1024.0,
+        "tib" => 1024.0 * 1024.0 * 1024.0 * 1024.0,
+        _ => {
+            return Err(format!(
+                "`{text}`: unknown unit `{unit}` (use B, KB, MB, GB, TB, KiB, MiB, GiB or TiB)"
+            ))
+        }
+    };
+    let bytes = value * scale;
+    if !bytes.is_finite() || bytes >= u64::MAX as f64 {
+        return Err(format!("`{text}` is too large"));
+    }
+    Ok(bytes.round() as u64)
 }
 
 /// Which flag sets a setting, for error messages (`samples` → `--samples`).
@@ -418,6 +474,24 @@ mod tests {
         assert_eq!(p.mode, Some(SolveMode::Directional));
         assert_eq!(p.threads, Some(3));
         assert_eq!(p.brdf_normalization, Some(BrdfNormalization::Reciprocal));
+    }
+
+    #[test]
+    fn memory_budget_sizes_parse_with_units() {
+        assert_eq!(parse_bytes("8GiB"), Ok(8 << 30));
+        assert_eq!(parse_bytes("500MB"), Ok(500_000_000));
+        assert_eq!(parse_bytes("1.5 gib"), Ok(3 << 29));
+        assert_eq!(parse_bytes("1048576"), Ok(1 << 20));
+        assert_eq!(parse_bytes("64KiB"), Ok(64 << 10));
+        assert!(parse_bytes("8 parsecs")
+            .unwrap_err()
+            .contains("unknown unit"));
+        assert!(parse_bytes("lots").unwrap_err().contains("not a size"));
+        assert!(parse_bytes("-1GiB").is_err());
+        assert_eq!(
+            parse(&["--memory-budget", "2GiB"]).patch().memory_budget,
+            Some(2 << 30)
+        );
     }
 
     #[test]

@@ -28,6 +28,11 @@ pub trait Shooter {
     fn solution(&self, partial: bool) -> Solution;
     /// Streams the resumable state into a checkpoint (no copy of it is made).
     fn write_state(&self, w: &mut dyn Write) -> std::io::Result<()>;
+    /// The memory figures for the closing summary (the estimated peak and the
+    /// budget), when the solver keeps them.
+    fn memory_note(&self) -> Option<String> {
+        None
+    }
 }
 
 /// Where the loop writes and what it stamps on its checkpoints.
@@ -121,6 +126,9 @@ impl Session<'_> {
         }
         let mut solution = shooter.solution(stopped_by_user);
         solution.header.stats.seconds = seconds;
+        if let Some(note) = shooter.memory_note() {
+            eprintln!("solver: {note}");
+        }
         let stats = RunStats {
             elements: now.elements,
             vertices: now.vertices,

@@ -1,0 +1,63 @@
+//! The default memory budget, from the machine's available memory (the one
+//! place `solver solve` reads /proc; the solver core only sees the bytes).
+
+use crate::solve::budget::human_bytes;
+
+/// The default budget is this fraction of MemAvailable: the rest is left to
+/// the page cache and to whatever else starts while the solve runs.
+pub const AVAILABLE_FRACTION: f64 = 0.8;
+
+/// The budget when /proc/meminfo cannot be read (not Linux, a sandbox).
+pub const FALLBACK_BUDGET: u64 = 4 << 30;
+
+/// `MemAvailable` in bytes from the text of /proc/meminfo (`MemAvailable:
+/// 123456 kB`); `None` when absent or malformed.
+pub fn parse_mem_available(meminfo: &str) -> Option<u64> {
+    let line = meminfo.lines().find(|l| l.starts_with("MemAvailable:"))?;
+    let mut words = line["MemAvailable:".len()..].split_whitespace();
+    let value: u64 = words.next()?.parse().ok()?;
+    match words.next() {
+        Some("kB") => value.checked_mul(1024),
+        None => Some(value),
+        Some(_) => None,
+    }
+}
+
+/// The default budget and how it was found, for the line printed at the start.
+pub fn default_budget() -> (u64, String) {
+    let available = std::fs::read_to_string("/proc/meminfo")
+        .ok()
+        .as_deref()
+        .and_then(parse_mem_available);
+    match available {
+        Some(bytes) => {
+            let budget = (bytes as f64 * AVAILABLE_FRACTION) as u64;
+            (
+                budget,
+                format!(
+                    "{:.0}% of MemAvailable {}",
+                    100.0 * AVAILABLE_FRACTION,
+                    human_bytes(bytes as u128)
+                ),
+            )
+        }
+        None => (
+            FALLBACK_BUDGET,
+            "the fallback: /proc/meminfo MemAvailable could not be read".into(),
+        ),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn mem_available_is_read_in_bytes() {
+        let text = "MemTotal:       24576000 kB\nMemFree:         1000 kB\nMemAvailable:   \
+                    12288000 kB\n";
+        assert_eq!(parse_mem_available(text), Some(12_288_000 * 1024));
+        assert_eq!(parse_mem_available("MemTotal: 5 kB\n"), None);
+        assert_eq!(parse_mem_available("MemAvailable: many kB\n"), None);
+    }
+}

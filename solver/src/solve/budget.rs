@@ -1,0 +1,657 @@
+//! Memory known before it is allocated: the progressive solve's peak memory,
+//! estimated from the sizes of the structures it will hold, and the budget it
+//! is planned against.
+//!
+//! ## The estimate
+//!
+//! [`estimate`] turns [`Counts`] (vertices, elements, patches, SH coefficients,
+//! recorded shots) into bytes, term by term, each from the `size_of` of the
+//! structure that holds it (see the functions below for the exact list):
+//!
+//! * **fixed**: the process before any solve state ([`FIXED_BYTES`], measured:
+//!   the executable, the allocator, the worker threads), plus the scene and its
+//!   occlusion BVH per surface;
+//! * **mesh**: per vertex a [`MeshVertex`] and its slot in the vertex table (a
+//!   hashbrown map: a power-of-two bucket count at most 7/8 full, each bucket
+//!   one `(VertexKey, u32)` and one control byte), per element an [`Element`],
+//!   per split a split-log entry;
+//! * **vertex state**: the solver's per-vertex radiance, ΔL and recorded-shot
+//!   radiance (three `DVec3`) and visibility (`u32`);
+//! * **SH**: directional mode's radiance, ΔL and recorded-shot coefficients,
+//!   `3 (L+1)²` f64 per vertex each at its surface's order L, an offset per
+//!   vertex, and the patches' unshot coefficients;
+//! * **patches**: per patch a [`Patch`], its unshot radiance and its gather
+//!   weights (`(u32, f64)` per vertex of the patch, in a heap block of its own);
+//! * **recorded shots**: what refinement replays, per emitter shot its
+//!   [`RecordedShot`], its replay sample pool (points on and lifted off the
+//!   source) and the rebuilt [`Shot`], and in directional mode its unshot SH.
+//!
+//! and three transient peaks, of which only the largest counts (they never
+//! overlap: each is freed before the next begins):
+//!
+//! * **shot**: one shot's per-vertex results (directional: a heap vector of
+//!   coefficients per vertex) and its sample pool;
+//! * **checkpoint**: the writer's buffer. Checkpoints stream section by
+//!   section from the solver's own arrays through a 1 MiB buffer
+//!   ([`Solver::write_checkpoint`]), so the state is never copied; only the
+//!   directional recorded shots' length table is built (4 bytes a shot);
+//! * **output**: the solution ([`Solver::to_solution`]): per vertex a stored
+//!   vertex and its f32 coefficients, per display triangle its indices, and in
+//!   directional mode the diffuse-style batch that the per-order batches
+//!   replace, alive while they are built.
+//!
+//! Large vectors are counted by length, not capacity: they live in their own
+//! memory mappings, and the unused part of a capacity that doubled is never
+//! touched, so it is not resident.
+//!
+//! ## The budget
+//!
+//! `SolverSettings::memory_budget` (bytes; `None` plans nothing). The solver
+//! plans against [`PLANNING_FRACTION`] of it, the rest being the margin for the
+//! estimate's error. A directional solve first caps SH orders until the
+//! unrefined mesh fits in [`ORDER_SHARE`] of the plan (leaving the rest to
+//! refinement), then refinement splits only what fits
+//! ([`SplitBudget`]); a scene whose unrefined mesh at SH order 0 does not fit
+//! is refused before its state is allocated.
+
+use super::shoot::{Received, RecordedShot, Shot, POOL_POINTS, POOL_SETS, REPLAY_POOL_SETS};
+use super::{Directional, Solver};
+use crate::mesh::{Element, Mesh, MeshVertex, Patch, Surface, VertexKey};
+use crate::scene::Scene;
+use crate::settings::SolverSettings;
+use glam::DVec3;
+use std::mem::size_of;
+
+/// The solver plans against this fraction of the budget; the other 10% is the
+/// margin for the estimate's error (measured within it: docs/benchmarks.md,
+/// "Memory: estimate against measured peak").
+pub const PLANNING_FRACTION: f64 = 0.9;
+
+/// A directional solve caps SH orders until its unrefined state fits in this
+/// share of the plan, so that refinement has the other half: a mesh that
+/// cannot refine at all shows shadows as coarsely as its patches.
+pub const ORDER_SHARE: f64 = 0.5;
+
+/// The process before any solve state: the executable and its libraries, the
+/// allocator's arenas, the scene as imported and the command line's buffers,
+/// measured as 6.2 MiB peak RSS of a `solver solve` of the Cornell box refused
+/// before meshing (release build, this machine), plus 0.8 MiB for the worker
+/// threads' touched stacks and buffers (the Cornell box's measured peak at
+/// `--preset medium` less its estimated solve state).
+pub const FIXED_BYTES: u64 = 7 << 20;
+
+/// The scene (its polygon and material), the mesh's surface and piece, the
+/// per-surface tables of both modes and the occlusion BVH's share, per
+/// surface: a bound from the structures' sizes, rounded up.
+pub fn surface_bytes() -> u64 {
+    // The polygon (4 positions and their Vec), the surface (its Vec of 4), the
+    // BVH's triangles and nodes (two f32 triangles, about one node each).
+    (size_of::<Surface>() + 2 * (4 * size_of::<DVec3>() + 24) + 2 * 64 + 128 + 96) as u64
+}
+
+/// The buffer a checkpoint streams through (`solution::atomic::write_atomically_buffered`).
+const CHECKPOINT_BUFFER_BYTES: u64 = 1 << 20;
+
+/// glibc's per-allocation overhead on a small heap block: an 8-byte header,
+/// rounded up to 16.
+const HEAP_BLOCK_OVERHEAD: u64 = 16;
+
+/// A 1 MiB buffered writer per output file written.
+const WRITER_BUFFER: u64 = 1 << 20;
+
+/// What the estimate needs to know about a solve.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Counts {
+    pub surfaces: u64,
+    pub patches: u64,
+    pub elements: u64,
+    pub vertices: u64,
+    /// Splits done (the split log's length).
+    pub splits: u64,
+    /// Σ over patches of the vertices in its gather weights.
+    pub weight_entries: u64,
+    pub recorded_shots: u64,
+    /// Visibility rays per receiver (the pools' points per set).
+    pub samples: u64,
+    pub directional: bool,
+    /// Σ over vertices of `3 (L+1)²` at its surface's order.
+    pub vertex_coefficients: u64,
+    /// Σ over patches of the same.
+    pub patch_coefficients: u64,
+    /// Σ over recorded shots of their source's `3 (L+1)²`.
+    pub recorded_coefficients: u64,
+}
+
+/// The estimate in bytes, per term (see the module documentation).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct MemoryEstimate {
+    pub fixed: u64,
+    pub mesh: u64,
+    pub vertex_state: u64,
+    pub sh: u64,
+    pub patches: u64,
+    pub recorded: u64,
+    pub shot: u64,
+    pub checkpoint: u64,
+    pub output: u64,
+}
+
+impl MemoryEstimate {
+    /// What the solve holds between shots.
+    pub fn persistent(&self) -> u64 {
+        self.fixed + self.mesh + self.vertex_state + self.sh + self.patches + self.recorded
+    }
+
+    /// The largest of the transient peaks (they do not overlap).
+    pub fn transient(&self) -> u64 {
+        self.shot.max(self.checkpoint).max(self.output)
+    }
+
+    /// The peak: what is held plus the largest transient.
+    pub fn peak(&self) -> u64 {
+        self.persistent() + self.transient()
+    }
+
+    /// The terms, for messages.
+    pub fn breakdown(&self) -> String {
+        let h = |b: u64| human_bytes(b as u128);
+        format!(
+            "fixed {}, mesh {}, vertex state {}, SH coefficients {}, patches {}, recorded shots \
+             {}, and the largest of shot {} / checkpoint {} / output {}",
+            h(self.fixed),
+            h(self.mesh),
+            h(self.vertex_state),
+            h(self.sh),
+            h(self.patches),
+            h(self.recorded),
+            h(self.shot),
+            h(self.checkpoint),
+            h(self.output)
+        )
+    }
+}
+
+/// `bytes` as GiB/MiB/KiB with one decimal.
+pub fn human_bytes(bytes: u128) -> String {
+    super::human_bytes(bytes)
+}
+
+/// Buckets of a hashbrown table holding `n` entries: the next power of two
+/// with `n ≤ 7/8 · buckets` (at least 4 when not empty).
+fn table_buckets(n: u64) -> u64 {
+    if n == 0 {
+        return 0;
+    }
+    if n < 4 {
+        return 4;
+    }
+    (n * 8).div_ceil(7).next_power_of_two()
+}
+
+/// Bytes of the vertex table at `n` entries.
+fn table_bytes(n: u64) -> u64 {
+    let buckets = table_buckets(n);
+    buckets * (size_of::<(VertexKey, u32)>() as u64 + 1)
+}
+
+/// Points of a sample pool of `sets` sets of `samples` (as `SamplePool::with_sets`).
+fn pool_points(samples: u64, sets: u32) -> u64 {
+    let sets = (sets as u64).min((POOL_POINTS as u64 / samples.max(1)).max(8));
+    sets * samples
+}
+
+/// A pool's bytes: points on the source and the same lifted off it.
+fn pool_bytes(samples: u64, sets: u32) -> u64 {
+    2 * pool_points(samples, sets) * size_of::<DVec3>() as u64
+}
+
+/// The estimate for `c` (see the module documentation).
+pub fn estimate(c: &Counts) -> MemoryEstimate {
+    let dvec3 = size_of::<DVec3>() as u64;
+    let f64_ = size_of::<f64>() as u64;
+    let fixed = FIXED_BYTES + c.surfaces * surface_bytes();
+    let mesh = c.vertices * size_of::<MeshVertex>() as u64
+        + table_bytes(c.vertices)
+        + c.elements * size_of::<Element>() as u64
+        + c.splits * size_of::<u32>() as u64;
+    let vertex_state = c.vertices * (3 * dvec3 + size_of::<u32>() as u64);
+    // Radiance, ΔL and recorded-shot radiance per vertex coefficient; an
+    // offset per vertex and per patch; the patches' unshot coefficients.
+    let sh = if c.directional {
+        3 * c.vertex_coefficients * f64_
+            + (c.vertices + c.patches) * size_of::<usize>() as u64
+            + c.patch_coefficients * f64_
+    } else {
+        0
+    };
+    let weight_entry = size_of::<(u32, f64)>() as u64;
+    let patches = c.patches
+        * (size_of::<Patch>() as u64 + dvec3 + size_of::<Vec<(u32, f64)>>() as u64)
+        + c.weight_entries * weight_entry
+        + c.patches * HEAP_BLOCK_OVERHEAD;
+    let recorded = c.recorded_shots
+        * (size_of::<RecordedShot>() as u64
+            + pool_bytes(c.samples, REPLAY_POOL_SETS)
+            + size_of::<Shot>() as u64
+            + if c.directional {
+                size_of::<Vec<f64>>() as u64 + HEAP_BLOCK_OVERHEAD
+            } else {
+                0
+            })
+        + c.recorded_coefficients * f64_;
+    // One shot: its pool and a result per vertex (directional: the result
+    // struct and its heap block of coefficients).
+    let shot = pool_bytes(c.samples, POOL_SETS)
+        + if c.directional {
+            c.vertices * (size_of::<Vec<f64>>() as u64 + 8 + HEAP_BLOCK_OVERHEAD)
+                + c.vertex_coefficients * f64_
+        } else {
+            c.vertices * size_of::<Received>() as u64
+        };
+    let checkpoint = checkpoint_bytes(c);
+    let output = output_bytes(c);
+    MemoryEstimate {
+        fixed,
+        mesh,
+        vertex_state,
+        sh,
+        patches,
+        recorded,
+        shot,
+        checkpoint,
+        output,
+    }
+}
+
+/// The checkpoint's transient: the stream's buffer and the recorded shots'
+/// length table; the state itself is written from where it lives.
+fn checkpoint_bytes(c: &Counts) -> u64 {
+    CHECKPOINT_BUFFER_BYTES + 4 * c.recorded_shots
+}
+
+/// The output's transient: the solution and the writer's buffer.
+fn output_bytes(c: &Counts) -> u64 {
+    // Display triangles: at most two per vertex (a planar triangulation of a
+    // disc has fewer than 2V triangles).
+    let triangles = 2 * c.vertices;
+    let stored_vertex = size_of::<solution::format::Vertex>() as u64;
+    let f32_ = size_of::<f32>() as u64;
+    let index_triple = 3 * size_of::<u32>() as u64;
+    // The diffuse-style batch: vertices, 3 coefficients, indices, and the
+    // triangle list its indices are flattened from.
+    let diffuse = c.vertices * (stored_vertex + 3 * f32_) + triangles * 2 * index_triple;
+    let directional = if c.directional {
+        // The per-order batches, the vertex map and a second triangle list.
+        c.vertices * (stored_vertex + size_of::<u32>() as u64)
+            + c.vertex_coefficients * f32_
+            + triangles * 2 * index_triple
+    } else {
+        0
+    };
+    diffuse + directional + WRITER_BUFFER
+}
+
+/// The counts of a mesh not yet built: `patches` N per polygon gives N² elements
+/// per triangle or quad piece and at most (N+1)² vertices (a polygon of k > 4
+/// vertices is counted as k − 2 triangles), at SH order 0.
+pub fn counts_before_meshing(scene: &Scene, settings: &SolverSettings) -> Counts {
+    let mut c = Counts {
+        samples: settings.samples as u64,
+        directional: settings.mode == solution::format::SolveMode::Directional,
+        ..Counts::default()
+    };
+    for p in &scene.polygons {
+        let n = if p.patches == 0 {
+            settings.patches
+        } else {
+            p.patches
+        } as u64;
+        let pieces = if p.vertices.len() <= 4 {
+            1
+        } else {
+            p.vertices.len() as u64 - 2
+        };
+        c.surfaces += 1;
+        c.patches += pieces * n * n;
+        c.elements += pieces * n * n;
+        c.vertices += pieces * (n + 1) * (n + 1);
+    }
+    c.weight_entries = c.vertices + 3 * c.patches;
+    if c.directional {
+        c.vertex_coefficients = 3 * c.vertices;
+        c.patch_coefficients = 3 * c.patches;
+    }
+    c
+}
+
+/// The counts of a built mesh, its surfaces at SH orders `order_of(surface)`,
+/// with `recorded_shots` (of order-0 sources) and the weights as a fresh
+/// mesh has them (each vertex once per patch it is a corner of, bounded by
+/// vertices + 3 per patch).
+pub fn counts_for_mesh(
+    mesh: &Mesh,
+    settings: &SolverSettings,
+    order_of: impl Fn(usize) -> u32,
+    recorded_shots: u64,
+) -> Counts {
+    let directional = settings.mode == solution::format::SolveMode::Directional;
+    let mut per_surface_vertices = vec![0u64; mesh.surfaces.len()];
+    for v in &mesh.vertices {
+        per_surface_vertices[v.surface as usize] += 1;
+    }
+    let mut per_surface_patches = vec![0u64; mesh.surfaces.len()];
+    for p in &mesh.patches {
+        per_surface_patches[p.surface as usize] += 1;
+    }
+    let mut c = Counts {
+        surfaces: mesh.surfaces.len() as u64,
+        patches: mesh.patches.len() as u64,
+        elements: mesh.elements.len() as u64,
+        vertices: mesh.vertices.len() as u64,
+        splits: mesh.split_log.len() as u64,
+        weight_entries: (mesh.vertices.len() + 3 * mesh.patches.len()) as u64,
+        recorded_shots,
+        samples: settings.samples as u64,
+        directional,
+        ..Counts::default()
+    };
+    if directional {
+        c.recorded_coefficients = 3 * recorded_shots;
+        for s in 0..mesh.surfaces.len() {
+            let k = coefficients(order_of(s));
+            c.vertex_coefficients += per_surface_vertices[s] * k;
+            c.patch_coefficients += per_surface_patches[s] * k;
+        }
+    }
+    c
+}
+
+/// Patches of emitting surfaces: each shoots, and is recorded, at least once.
+pub fn emitter_patches(scene: &Scene, mesh: &Mesh) -> u64 {
+    mesh.patches
+        .iter()
+        .filter(|p| {
+            scene.materials[mesh.surfaces[p.surface as usize].material].emission != DVec3::ZERO
+        })
+        .count() as u64
+}
+
+/// The SH order to keep per material so that the unrefined mesh's estimated
+/// peak fits in `target` bytes: while it does not, the highest order (the
+/// first such material on ties) drops by one, since the coefficients of one
+/// vertex grow as (L+1)² and the highest order costs the most per band. Orders
+/// stop at 0; the caller refuses what still does not fit.
+pub fn orders_within(
+    mesh: &Mesh,
+    settings: &SolverSettings,
+    material_orders: &[u32],
+    recorded_shots: u64,
+    target: u64,
+) -> Vec<u32> {
+    let mut orders = material_orders.to_vec();
+    loop {
+        let counts = counts_for_mesh(
+            mesh,
+            settings,
+            |s| orders[mesh.surfaces[s].material],
+            recorded_shots,
+        );
+        if estimate(&counts).peak() <= target {
+            return orders;
+        }
+        let Some((highest, _)) = orders
+            .iter()
+            .enumerate()
+            .filter(|(_, &o)| o > 0)
+            .max_by_key(|&(i, &o)| (o, std::cmp::Reverse(i)))
+        else {
+            return orders;
+        };
+        orders[highest] -= 1;
+    }
+}
+
+/// The warning for a material whose SH order the budget capped: the order
+/// kept and what it costs. By Parseval the lobe's energy (its squared L2 norm
+/// over μ0 ∈ [−1, 1], Σ a_l² · 2/(2l+1)) splits band by band, so the fraction
+/// in the dropped bands l > L is the squared relative L2 error of the
+/// truncated Legendre series ([`crate::brdf::LegendreFit::error`]).
+pub fn order_cap_warning(
+    material: &str,
+    alpha: f64,
+    wanted: u32,
+    kept: u32,
+    budget: u64,
+) -> String {
+    let fit = crate::brdf::LegendreFit::new(alpha, kept);
+    let error = fit.error(kept, crate::brdf::Window::None);
+    // An order-L expansion resolves angular detail down to about 180°/L.
+    let detail = if kept == 0 {
+        "every direction alike (a diffuse-looking sheen)".to_string()
+    } else {
+        format!("nothing narrower than about {:.0}°", 180.0 / kept as f64)
+    };
+    format!(
+        "memory budget {}: material `{}` (α = {:.4}) needs SH order L = {} but keeps L = {} \
+         (Hann-windowed): the dropped bands hold {:.1}% of the lobe's energy (Parseval; relative \
+         L2 error {:.3}). Its reflections render blurred, showing {}. Raise --memory-budget to \
+         keep more bands",
+        human_bytes(budget as u128),
+        material,
+        alpha,
+        wanted,
+        kept,
+        100.0 * error * error,
+        error,
+        detail
+    )
+}
+
+/// `3 (L+1)²`: the values per vertex at order L.
+pub fn coefficients(order: u32) -> u64 {
+    3 * solution::sh::coefficient_count(order) as u64
+}
+
+/// The bytes one split may add on a surface of `coefficients` values per
+/// vertex: four elements, at most five vertices (four edge midpoints and a
+/// centre) with their gather-weight entries (two each: a vertex on a patch
+/// edge is in both patches) and their SH, charged at their persistent size
+/// plus their share of the largest transient and a doubling vertex table.
+pub fn split_cost(coefficients: u64, directional: bool) -> u64 {
+    let delta = Counts {
+        elements: 4,
+        vertices: 5,
+        splits: 1,
+        weight_entries: 10,
+        directional,
+        vertex_coefficients: if directional { 5 * coefficients } else { 0 },
+        ..Counts::default()
+    };
+    let e = estimate(&delta);
+    // Without the constants that `estimate` adds whatever the counts (the
+    // fixed bytes, the pool, the writer buffer, the table of 5 entries).
+    let persistent = e.persistent() - FIXED_BYTES - table_bytes(5);
+    let transient = (e.shot - pool_bytes(0, POOL_SETS))
+        .max(e.checkpoint)
+        .max(e.output - WRITER_BUFFER);
+    // A doubling table holds up to two buckets per entry (8/7 · 2).
+    let table = 5 * 16 * (size_of::<(VertexKey, u32)>() as u64 + 1) / 7;
+    persistent + transient + table
+}
+
+/// How much refinement may still add this shot: bytes left under the plan and
+/// the cost of a split per surface. [`super::refine::refine_field`] splits
+/// while a split's cost fits and counts what it refused.
+#[derive(Clone, Debug)]
+pub struct SplitBudget {
+    pub left: u64,
+    /// Per surface, [`split_cost`] at its order (empty: splits are free).
+    pub cost: Vec<u64>,
+    /// Splits the test asked for that did not fit.
+    pub refused: u64,
+    /// The estimated peak when the budget was drawn up.
+    pub peak_before: u64,
+}
+
+impl SplitBudget {
+    /// No limit.
+    pub fn unlimited() -> SplitBudget {
+        SplitBudget {
+            left: u64::MAX,
+            cost: Vec::new(),
+            refused: 0,
+            peak_before: 0,
+        }
+    }
+
+    /// Takes the cost of one split on `surface`; `false` when it does not fit.
+    pub fn take(&mut self, surface: u32) -> bool {
+        let cost = self.cost.get(surface as usize).copied().unwrap_or(0);
+        if cost > self.left {
+            return false;
+        }
+        self.left -= cost;
+        true
+    }
+}
+
+/// The bytes a solve plans against: [`PLANNING_FRACTION`] of the budget.
+pub fn plan(budget: u64) -> u64 {
+    (budget as f64 * PLANNING_FRACTION) as u64
+}
+
+impl Solver {
+    /// The counts of the solve as it stands.
+    pub fn memory_counts(&self) -> Counts {
+        self.memory_counts_with(self.directional.as_deref())
+    }
+
+    /// [`Solver::memory_counts`] with the directional state `d` (taken out of
+    /// the solver during a directional shot).
+    fn memory_counts_with(&self, d: Option<&Directional>) -> Counts {
+        let mut c = Counts {
+            surfaces: self.mesh.surfaces.len() as u64,
+            patches: self.mesh.patches.len() as u64,
+            elements: self.mesh.elements.len() as u64,
+            vertices: self.mesh.vertices.len() as u64,
+            splits: self.mesh.split_log.len() as u64,
+            weight_entries: self.patch_weights.iter().map(|w| w.len() as u64).sum(),
+            recorded_shots: self.recorded.len() as u64,
+            samples: self.settings.samples as u64,
+            directional: false,
+            ..Counts::default()
+        };
+        if let Some(d) = d {
+            c.directional = true;
+            (
+                c.vertex_coefficients,
+                c.patch_coefficients,
+                c.recorded_coefficients,
+            ) = d.coefficient_totals();
+        }
+        c
+    }
+
+    /// The estimated peak memory of the solve as it stands (see the module
+    /// documentation).
+    pub fn memory_estimate(&self) -> MemoryEstimate {
+        estimate(&self.memory_counts())
+    }
+
+    /// The largest peak estimated so far (at set-up and before each
+    /// refinement), for the closing summary.
+    pub fn peak_memory_estimate(&self) -> u64 {
+        self.peak_estimate
+    }
+
+    /// What refinement may add this shot under the budget (`directional`: the
+    /// directional state, taken out of the solver during its shot).
+    pub(super) fn split_budget(&self, directional: Option<&Directional>) -> SplitBudget {
+        let counts = self.memory_counts_with(directional);
+        let now = estimate(&counts).peak();
+        let Some(budget) = self.settings.memory_budget else {
+            return SplitBudget {
+                peak_before: now,
+                ..SplitBudget::unlimited()
+            };
+        };
+        let cost = (0..self.mesh.surfaces.len())
+            .map(|s| {
+                let order = directional.map_or(0, |d| d.surface_orders()[s]);
+                split_cost(coefficients(order), directional.is_some())
+            })
+            .collect();
+        // The vertex table grows by doubling, all at once: plan as if this
+        // refinement's vertices make it double (its new half, on top of the
+        // per-vertex share each split is charged).
+        let doubled = table_bytes(counts.vertices).max(table_bytes(4));
+        SplitBudget {
+            left: plan(budget).saturating_sub(now + doubled),
+            cost,
+            refused: 0,
+            peak_before: now,
+        }
+    }
+
+    /// After a refinement under `budget`: the warning, the first time splits
+    /// were refused, and the peak estimate.
+    pub(super) fn after_refinement(
+        &mut self,
+        budget: &SplitBudget,
+        directional: Option<&Directional>,
+    ) {
+        let now = estimate(&self.memory_counts_with(directional)).peak();
+        self.peak_estimate = self.peak_estimate.max(now).max(budget.peak_before);
+        if budget.refused == 0 || self.refinement_capped {
+            return;
+        }
+        self.refinement_capped = true;
+        let warning = self.refinement_stop_warning(now);
+        self.pending_warnings.push(warning);
+    }
+
+    /// When recording one more emitter shot (of `source_coefficients` SH
+    /// values) would take the estimate past the plan: the warning that
+    /// refinement stops. Recorded shots only serve refinement (their replay
+    /// to new vertices), so a solve that can no longer refine stops recording
+    /// and its state stops growing. `None` when it fits or has no budget.
+    pub(super) fn recording_overflows(
+        &self,
+        directional: Option<&Directional>,
+        source_coefficients: u64,
+    ) -> Option<String> {
+        let budget = self.settings.memory_budget?;
+        let mut c = self.memory_counts_with(directional);
+        c.recorded_shots += 1;
+        if c.directional {
+            c.recorded_coefficients += source_coefficients;
+        }
+        let peak = estimate(&c).peak();
+        (peak > plan(budget)).then(|| self.refinement_stop_warning(peak))
+    }
+
+    /// The warning that the budget stopped refinement, at estimated peak `now`.
+    fn refinement_stop_warning(&self, now: u64) -> String {
+        let limit = self.settings.memory_budget.unwrap_or(0);
+        format!(
+            "memory budget {}: refinement stopped at {} elements and {} vertices (estimated \
+             peak {}, planned against {:.0}% of the budget); further subdivision is refused, so \
+             shadows and highlights finer than the current elements stay coarse. Raise \
+             --memory-budget or use a coarser preset to refine further",
+            human_bytes(limit as u128),
+            self.leaf_count,
+            self.mesh.vertices.len(),
+            human_bytes(now as u128),
+            100.0 * PLANNING_FRACTION
+        )
+    }
+
+    /// Warnings raised while solving (refinement stopped by the memory
+    /// budget), each returned once; the command line prints them.
+    pub fn take_warnings(&mut self) -> Vec<String> {
+        std::mem::take(&mut self.pending_warnings)
+    }
+}
+
+#[cfg(test)]
+mod tests;
