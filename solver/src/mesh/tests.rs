@@ -12,6 +12,7 @@ fn scene_of(polygons: Vec<Vec<DVec3>>, patches: u32) -> Scene {
                 vertex_normals: None,
                 material: 0,
                 patches,
+                sizes: Default::default(),
                 source: SourceRef::default(),
             })
             .collect(),

@@ -217,7 +217,8 @@ impl Solver {
             }
         }
         let offset = scene_centre(scene);
-        let mesh = Mesh::new(scene, offset, settings.patches)?;
+        let sizing = crate::mesh::Sizing::from_settings(settings, scene);
+        let mesh = Mesh::with_sizing(scene, offset, &sizing)?;
         match mesh.surfaces.len() {
             0 => return Err(SolveError::EmptyScene),
             1 => return Err(SolveError::SinglePolygon),

@@ -4,7 +4,9 @@
 //! a shadow boundary. A leaf splits when the radiance difference across one of
 //! its edges, less twice its sampling noise, exceeds `threshold × local
 //! radiance` (`shadow_threshold` on shadow boundaries, `edge_threshold`
-//! elsewhere), its area is above `min_element_area × polygon area` and its
+//! elsewhere), it is larger than the smallest element ([`Criteria::at_smallest`]:
+//! its longest edge above the surface's absolute `min_element_size`, or in the
+//! flat rule its area above `min_element_area × polygon area`) and its
 //! depth is below `max_depth` ([`Criteria::should_split_at`]). The local
 //! radiance is the level the vertices are heading for (L + Kd · ambient), never
 //! less than [`DARK_FLOOR`] of the scene's level, so the test is relative
@@ -55,7 +57,8 @@ pub struct Criteria {
     pub edge_threshold: f64,
     pub shadow_threshold: f64,
     pub max_depth: u32,
-    /// Fraction of the polygon's area.
+    /// Fraction of the polygon's area: the flat floor, for surfaces without an
+    /// absolute `min_element_size` ([`crate::mesh::Surface::min_element_size`]).
     pub min_element_area: f64,
     /// Visibility rays per receiver (the n of the noise allowance).
     pub samples: u32,
@@ -90,6 +93,29 @@ impl Criteria {
             samples: if s.shadows { s.samples } else { 0 },
             dark_floor: 0.0,
             ambient: DVec3::ZERO,
+        }
+    }
+
+    /// Whether element `e` is as small as elements may get: its longest edge at
+    /// most its surface's absolute `min_element_size` (size-driven meshing, the
+    /// same floor on a small polygon as on a large one), else its area at most
+    /// `min_element_area` of its polygon's (the flat rule). The longest edge,
+    /// not √area, bounds the distance over which radiance is interpolated
+    /// linearly, which is what meshing bias grows with; a sliver is refined
+    /// until its long side is short.
+    pub fn at_smallest(&self, mesh: &Mesh, e: u32) -> bool {
+        let el = &mesh.elements[e as usize];
+        let surface = &mesh.surfaces[mesh.patches[el.patch as usize].surface as usize];
+        match surface.min_element_size {
+            Some(size) => {
+                let corners = el.corners();
+                let position = |k: usize| mesh.vertices[corners[k] as usize].position;
+                let longest = (0..corners.len())
+                    .map(|k| (position((k + 1) % corners.len()) - position(k)).length())
+                    .fold(0.0, f64::max);
+                longest <= size
+            }
+            None => el.area <= self.min_element_area * surface.area,
         }
     }
 
@@ -130,8 +156,7 @@ impl Criteria {
         if !el.is_leaf() || el.depth as u32 >= self.max_depth {
             return false;
         }
-        let surface = &mesh.surfaces[mesh.patches[el.patch as usize].surface as usize];
-        if el.area <= self.min_element_area * surface.area {
+        if self.at_smallest(mesh, e) {
             return false;
         }
         let corners = el.corners();
@@ -425,6 +450,7 @@ mod tests {
                 vertex_normals: None,
                 material: 0,
                 patches: 1,
+                sizes: Default::default(),
                 source: SourceRef::default(),
             }],
             materials: vec![Material {
