@@ -488,6 +488,90 @@ mod tests {
     }
 
     #[test]
+    fn presets_are_size_driven_and_an_explicit_count_or_fraction_selects_the_flat_rule() {
+        let table: std::collections::BTreeMap<String, SettingsPatch> =
+            toml::from_str(PRESETS_TOML).unwrap();
+        for (name, patch) in &table {
+            // A preset that set the flat knobs would turn size-driven meshing off
+            // for every scene; resolve() only honours them from the other sources.
+            assert!(
+                patch.patches.is_none() && patch.min_element_area.is_none(),
+                "preset {name} sets a flat meshing knob"
+            );
+        }
+        for preset in [Preset::Draft, Preset::Medium, Preset::Final] {
+            let s = SolverSettings::resolve(preset, &[]).unwrap();
+            assert!(s.patch_size.is_some() && s.min_element_size.is_some());
+        }
+        // Finer presets: patches no larger, elements no larger.
+        let size = |p| SolverSettings::preset(p).patch_size.unwrap();
+        let floor = |p| SolverSettings::preset(p).min_element_size.unwrap();
+        assert!(size(Preset::Draft) >= size(Preset::Medium));
+        assert!(size(Preset::Medium) >= size(Preset::Final));
+        assert!(floor(Preset::Draft) >= floor(Preset::Medium));
+        assert!(floor(Preset::Medium) > floor(Preset::Final));
+
+        // An explicit `patches` (here the config's) wins over a `patch_size`
+        // given anywhere, even above it (the flags); likewise the area fraction.
+        let config = SettingsPatch {
+            patches: Some(6),
+            min_element_area: Some(2e-3),
+            ..Default::default()
+        };
+        let flags = SettingsPatch {
+            patch_size: Some(0.05),
+            ..Default::default()
+        };
+        let s = SolverSettings::resolve(Preset::Medium, &[&config, &flags]).unwrap();
+        assert_eq!((s.patches, s.patch_size), (6, None));
+        assert_eq!((s.min_element_area, s.min_element_size), (2e-3, None));
+        // Each half is independent: a flat count keeps the absolute floor.
+        let only_count = SettingsPatch {
+            patches: Some(6),
+            ..Default::default()
+        };
+        let s = SolverSettings::resolve(Preset::Medium, &[&only_count]).unwrap();
+        assert_eq!(s.patch_size, None);
+        assert_eq!(
+            s.min_element_size,
+            SolverSettings::preset(Preset::Medium).min_element_size
+        );
+        // A size from the flags replaces the preset's.
+        let s = SolverSettings::resolve(Preset::Medium, &[&flags]).unwrap();
+        assert_eq!(s.patch_size, Some(0.05));
+    }
+
+    #[test]
+    fn out_of_range_sizes_are_named() {
+        for (name, patch) in [
+            (
+                "patch_size",
+                SettingsPatch {
+                    patch_size: Some(0.0),
+                    ..Default::default()
+                },
+            ),
+            (
+                "patch_size",
+                SettingsPatch {
+                    patch_size: Some(1.5),
+                    ..Default::default()
+                },
+            ),
+            (
+                "min_element_size",
+                SettingsPatch {
+                    min_element_size: Some(f64::NAN),
+                    ..Default::default()
+                },
+            ),
+        ] {
+            let err = SolverSettings::resolve(Preset::Draft, &[&patch]).unwrap_err();
+            assert_eq!(err.name, name);
+        }
+    }
+
+    #[test]
     fn out_of_range_setting_is_named() {
         let flags = SettingsPatch {
             samples: Some(0),

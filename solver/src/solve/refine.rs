@@ -444,7 +444,12 @@ mod tests {
 
     /// One unit square, one patch: element 0 with corners 0..4.
     fn square_mesh() -> Mesh {
-        let scene = Scene {
+        Mesh::new(&square_mesh_scene(), DVec3::ZERO, 1).unwrap()
+    }
+
+    /// The scene of [`square_mesh`].
+    fn square_mesh_scene() -> Scene {
+        Scene {
             polygons: vec![Polygon {
                 vertices: vec![DVec3::ZERO, DVec3::X, DVec3::new(1.0, 1.0, 0.0), DVec3::Y],
                 vertex_normals: None,
@@ -465,8 +470,7 @@ mod tests {
             camera: None,
             recentre_offset: DVec3::ZERO,
             warnings: Vec::new(),
-        };
-        Mesh::new(&scene, DVec3::ZERO, 1).unwrap()
+        }
     }
 
     fn criteria() -> Criteria {
@@ -540,5 +544,79 @@ mod tests {
             16,
             0
         ));
+    }
+
+    /// Splits every leaf that is not yet [`Criteria::at_smallest`] until none
+    /// is left, and returns the longest edge of the smallest leaves of each
+    /// surface.
+    fn smallest_edges(mesh: &mut Mesh, c: &Criteria) -> Vec<f64> {
+        let mut created = Vec::new();
+        loop {
+            let open: Vec<u32> = mesh
+                .leaves()
+                .filter(|&e| {
+                    !c.at_smallest(mesh, e) && (mesh.elements[e as usize].depth as u32) < 16
+                })
+                .collect();
+            if open.is_empty() {
+                break;
+            }
+            for e in open {
+                mesh.split(e, &mut created).unwrap();
+            }
+        }
+        let mut smallest = vec![f64::INFINITY; mesh.surfaces.len()];
+        for e in mesh.leaves() {
+            let el = &mesh.elements[e as usize];
+            let corners = el.corners();
+            let p = |k: usize| mesh.vertices[corners[k] as usize].position;
+            let longest = (0..corners.len())
+                .map(|k| (p((k + 1) % corners.len()) - p(k)).length())
+                .fold(0.0, f64::max);
+            let s = mesh.patches[el.patch as usize].surface as usize;
+            smallest[s] = smallest[s].min(longest);
+        }
+        smallest
+    }
+
+    #[test]
+    fn the_smallest_element_is_absolute_in_size_driven_meshing() {
+        use crate::mesh::Sizing;
+        // Squares of side 1 and 8, one patch each. Halving from 1 reaches
+        // 0.25 after 2 splits, from 8 after 5: with an absolute floor of 0.25
+        // (longest edge), both stop at exactly 0.25 (a leaf of 0.5 is above it,
+        // one of 0.25 is not).
+        let mut scene = square_mesh_scene();
+        let big: Vec<DVec3> = scene.polygons[0]
+            .vertices
+            .iter()
+            .map(|v| *v * 8.0 + DVec3::X * 3.0)
+            .collect();
+        let mut second = scene.polygons[0].clone();
+        second.vertices = big;
+        scene.polygons.push(second);
+        let absolute = Sizing {
+            min_element_size: Some(0.25),
+            ..Sizing::flat(1)
+        };
+        let c = criteria();
+        let mut mesh = Mesh::with_sizing(&scene, DVec3::ZERO, &absolute).unwrap();
+        let edges = smallest_edges(&mut mesh, &c);
+        assert!(
+            (edges[0] - 0.25).abs() < 1e-12 && (edges[1] - 0.25).abs() < 1e-12,
+            "{edges:?}"
+        );
+        // The flat rule's floor is a fraction of each polygon's area: with
+        // 1/64 of it, a leaf stops at side/8 (area side²/64), 0.125 and 1.
+        let flat = Criteria {
+            min_element_area: 1.0 / 64.0,
+            ..c
+        };
+        let mut mesh = Mesh::with_sizing(&scene, DVec3::ZERO, &Sizing::flat(1)).unwrap();
+        let edges = smallest_edges(&mut mesh, &flat);
+        assert!(
+            (edges[0] - 0.125).abs() < 1e-12 && (edges[1] - 1.0).abs() < 1e-12,
+            "{edges:?}"
+        );
     }
 }

@@ -241,7 +241,7 @@ pub struct SolveArgs {
             (0 < F <= 1; presets: draft 0.15, medium 0.075, final 0.075). Each polygon \
             gets N × N patches with N = ceil(longest edge / (F × diagonal)), so a polygon \
             smaller than the target stays one patch as it is, however finely the model \
-            was tessellated (at most 256 per side, with a warning). Smaller F: more \
+            was tessellated (at most 1024 per side, with a warning). Smaller F: more \
             patches to shoot from and receive at, so more time and memory, and less \
             meshing bias in the light the patches shoot. A TOML scene config can set \
             `patch_size` per object or material, in scene units or metres. An explicit \
