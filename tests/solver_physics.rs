@@ -48,6 +48,7 @@ fn meshing_refines_along_shadow_boundaries_and_leaves_smooth_light_coarse() {
     settings.edge_threshold = 0.3;
     settings.shadow_threshold = 0.1;
     settings.min_element_area = 5e-5;
+    settings.min_element_size = None; // the flat area floor these thresholds assume
     settings.max_depth = 6;
     scene.fill_default_patches(settings.patches);
     let mut solver = Solver::new(&scene, &settings).unwrap();

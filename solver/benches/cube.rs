@@ -24,7 +24,11 @@ fn main() {
     settings.apply(&loaded.settings);
     settings.directional = DirectionalRepresentation::Cube;
     let mut scene = loaded.scene;
-    scene.fill_default_patches(settings.patches);
+    // Size-driven unless the settings chose the flat rule (the solver meshes unset
+    // polygons by `crate::mesh::Sizing`, as `solver solve` does).
+    if settings.patch_size.is_none() {
+        scene.fill_default_patches(settings.patches);
+    }
     let eye = DVec3::from_array(scene.camera.expect("the config names a camera").eye);
     let limits = CubeLimits::default();
     let threads = rayon::current_num_threads();

@@ -50,6 +50,7 @@ fn cornell(patches: u32) -> Scene {
 fn settings(patches: u32) -> SolverSettings {
     let mut s = SolverSettings::preset(Preset::Draft);
     s.patches = patches;
+    s.patch_size = None;
     s.adaptive = false;
     s.ambient = false;
     s.threshold = 1e-3;

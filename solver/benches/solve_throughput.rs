@@ -55,7 +55,11 @@ fn main() {
         if let Some(samples) = samples {
             settings.samples = samples;
         }
-        scene.fill_default_patches(settings.patches);
+        // Size-driven unless the settings chose the flat rule (the solver meshes unset
+        // polygons by `crate::mesh::Sizing`, as `solver solve` does).
+        if settings.patch_size.is_none() {
+            scene.fill_default_patches(settings.patches);
+        }
         let cpu_start = process_cpu_seconds();
         let start = Instant::now();
         let solver = pool.install(|| {

@@ -76,6 +76,7 @@ fn scene(polygons: Vec<Vec<DVec3>>, patches: u32) -> Scene {
                 vertex_normals: None,
                 material: 0,
                 patches,
+                sizes: Default::default(),
                 source: SourceRef {
                     item: format!("polygon {i}"),
                     ..Default::default()
@@ -115,6 +116,8 @@ fn facing_pair(outline: &[[f64; 2]]) -> Vec<Vec<DVec3>> {
 fn settings(patches: u32) -> SolverSettings {
     let mut s = SolverSettings::preset(Preset::Draft);
     s.patches = patches;
+    // The flat rule: `patches` per polygon, as the counts below assume.
+    s.patch_size = None;
     s.hemicube_resolution = 16;
     s
 }

@@ -83,7 +83,10 @@ pub fn run(args: SolveArgs) -> anyhow::Result<ExitCode> {
         .map(|d| d.settings.clone())
         .unwrap_or_default();
     let mut settings = resolve_settings(&args, &display_patch, &loaded.settings, &args.patch())?;
-    scene.fill_default_patches(settings.patches);
+    if settings.patch_size.is_none() {
+        scene.fill_default_patches(settings.patches);
+    }
+    warn_clamped_patches(&scene, &settings);
     apply_smoothing(&mut scene, settings.crease_angle);
     let budget_source = match settings.memory_budget {
         Some(_) => "as set".to_string(),
@@ -237,6 +240,22 @@ pub(crate) fn apply_smoothing(scene: &mut crate::scene::Scene, crease_angle: f64
 }
 
 /// Prints each import warning once (`file:line (item): message`).
+/// Warns about polygons whose size-driven patch count was clamped to
+/// [`crate::mesh::MAX_PATCHES_PER_SIDE`]: their patches are larger than the target.
+fn warn_clamped_patches(scene: &crate::scene::Scene, settings: &crate::settings::SolverSettings) {
+    let sizing = crate::mesh::Sizing::from_settings(settings, scene);
+    let clamped = crate::mesh::sizing::clamped_polygons(scene, &sizing);
+    if let Some(&(first, asked)) = clamped.first() {
+        eprintln!(
+            "solver: warning: {}: the patch size asks for {asked} patches per side, clamped to {}; \
+             {} polygon(s) in all have patches larger than the target",
+            scene.polygons[first].source,
+            crate::mesh::MAX_PATCHES_PER_SIDE,
+            clamped.len()
+        );
+    }
+}
+
 pub(crate) fn print_warnings(warnings: &[crate::scene::Warning]) {
     let mut seen = std::collections::HashSet::new();
     for warning in warnings {

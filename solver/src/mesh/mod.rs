@@ -7,8 +7,8 @@
 //! * A convex quad is split into N × N patches bilinearly; a triangle into N²
 //!   triangles by its edge grid; any other polygon is triangulated first
 //!   ([`crate::geometry::polygon::triangulate`], a fan for convex ones) and each
-//!   triangle split like a triangle. N is the polygon's own `patches`, else the
-//!   setting's.
+//!   triangle split like a triangle. N is the polygon's own `patches`, else
+//!   size-driven or the flat setting's ([`sizing`]).
 //! * Every patch is the root of a quadtree: a quad element splits into four by
 //!   its edge midpoints and its centre, a triangle into four by its edge
 //!   midpoints.
@@ -24,12 +24,14 @@
 //! and a log of splits lets a checkpoint rebuild the same mesh exactly.
 
 pub mod param;
+pub mod sizing;
 pub mod triangulate;
 
 use crate::geometry::polygon;
 use crate::scene::{Scene, SourceRef};
 use glam::DVec3;
 pub use param::{Piece, PieceKind, VertexKey, MAX_PATCHES_PER_SIDE, SUBDIVISION_BITS};
+pub use sizing::{PatchRule, Sizing};
 use std::collections::HashMap;
 use std::hash::{BuildHasherDefault, Hasher};
 
@@ -50,6 +52,9 @@ pub struct Surface {
     pub bitangent: DVec3,
     pub area: f64,
     pub patches_per_side: u32,
+    /// The smallest element's longest edge, scene units; `None`: the flat
+    /// `min_element_area` fraction of `area` ([`sizing`]).
+    pub min_element_size: Option<f64>,
     /// Parametric denominator `N · 2^SUBDIVISION_BITS`.
     pub denominator: u32,
     /// Unit shading normals at the polygon's corners on a smooth surface
@@ -225,9 +230,16 @@ pub struct Mesh {
 
 impl Mesh {
     /// Meshes every polygon of `scene` into patches (each a one-element
-    /// quadtree), positions re-centred by subtracting `offset`.
-    /// `default_patches` is used for polygons whose `patches` is 0.
+    /// quadtree), positions re-centred by subtracting `offset`, by the flat
+    /// rule: `default_patches` per side for polygons whose `patches` is 0.
     pub fn new(scene: &Scene, offset: DVec3, default_patches: u32) -> Result<Mesh, MeshError> {
+        Self::with_sizing(scene, offset, &Sizing::flat(default_patches))
+    }
+
+    /// Meshes every polygon of `scene` into patches (each a one-element
+    /// quadtree), positions re-centred by subtracting `offset`, with patch
+    /// counts and smallest elements from `sizing`.
+    pub fn with_sizing(scene: &Scene, offset: DVec3, sizing: &Sizing) -> Result<Mesh, MeshError> {
         let mut mesh = Mesh {
             surfaces: Vec::new(),
             pieces: Vec::new(),
@@ -248,11 +260,7 @@ impl Mesh {
                     count: scene.materials.len(),
                 });
             }
-            let n = if poly.patches > 0 {
-                poly.patches
-            } else {
-                default_patches.max(1)
-            };
+            let n = sizing.patches_per_side(poly);
             if n > MAX_PATCHES_PER_SIDE {
                 return Err(MeshError::TooManyPatches {
                     at: poly.source.clone(),
@@ -288,6 +296,7 @@ impl Mesh {
                 bitangent: normal.cross(tangent),
                 area,
                 patches_per_side: n,
+                min_element_size: sizing.min_element_size(poly),
                 denominator: n << SUBDIVISION_BITS,
                 corner_normals: poly
                     .vertex_normals

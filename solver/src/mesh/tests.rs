@@ -12,6 +12,7 @@ fn scene_of(polygons: Vec<Vec<DVec3>>, patches: u32) -> Scene {
                 vertex_normals: None,
                 material: 0,
                 patches,
+                sizes: Default::default(),
                 source: SourceRef::default(),
             })
             .collect(),
@@ -289,4 +290,143 @@ fn patches_at_finds_every_patch_a_point_touches() {
     out.clear();
     mesh.patches_at(0, [0, step / 2], &mut out);
     assert_eq!(out.len(), mesh.patches.len());
+}
+
+/// A rectangle `w` × `h` in the z = 0 plane, counter-clockwise about +z.
+fn rectangle(w: f64, h: f64) -> Vec<DVec3> {
+    vec![
+        DVec3::new(0.0, 0.0, 0.0),
+        DVec3::new(w, 0.0, 0.0),
+        DVec3::new(w, h, 0.0),
+        DVec3::new(0.0, h, 0.0),
+    ]
+}
+
+fn sized(patch: f64, min_element: Option<f64>) -> Sizing {
+    Sizing {
+        patches: PatchRule::Size(patch),
+        min_element_size: min_element,
+        units_per_metre: 1.0,
+    }
+}
+
+#[test]
+fn a_triangle_smaller_than_the_target_is_one_patch_as_it_is() {
+    // Edges 0.1, 0.1 and 0.14 against a target of 1: N = ⌈0.14 / 1⌉ = 1.
+    let tri = vec![
+        DVec3::new(0.0, 0.0, 0.0),
+        DVec3::new(0.1, 0.0, 0.0),
+        DVec3::new(0.0, 0.1, 0.0),
+    ];
+    let mesh = Mesh::with_sizing(
+        &scene_of(vec![tri.clone()], 0),
+        DVec3::ZERO,
+        &sized(1.0, None),
+    )
+    .unwrap();
+    assert_eq!(mesh.surfaces[0].patches_per_side, 1);
+    assert_eq!(mesh.patches.len(), 1);
+    assert_eq!(mesh.elements.len(), 1);
+    // The patch is the input triangle itself: its corners are the input
+    // vertices exactly (the one-patch grid puts its nodes at the corners).
+    let mut corners: Vec<[f64; 3]> = mesh.patches[0]
+        .polygon()
+        .iter()
+        .map(|p| p.to_array())
+        .collect();
+    let mut input: Vec<[f64; 3]> = tri.iter().map(|p| p.to_array()).collect();
+    corners.sort_by(|a, b| a.partial_cmp(b).unwrap());
+    input.sort_by(|a, b| a.partial_cmp(b).unwrap());
+    assert_eq!(corners, input);
+}
+
+#[test]
+fn a_large_quad_gets_ceil_longest_edge_over_target_per_side() {
+    // 5.5 × 3 against a target of 1: N = ⌈5.5⌉ = 6, 36 patches, each at most
+    // 5.5 / 6 ≈ 0.917 long; an edge that is an exact multiple (4 × 2 against
+    // 1) gets exactly that many, not one more.
+    for (w, h, n) in [(5.5, 3.0, 6u32), (4.0, 2.0, 4), (0.5, 0.5, 1)] {
+        let mesh = Mesh::with_sizing(
+            &scene_of(vec![rectangle(w, h)], 0),
+            DVec3::ZERO,
+            &sized(1.0, None),
+        )
+        .unwrap();
+        assert_eq!(mesh.surfaces[0].patches_per_side, n, "{w} × {h}");
+        assert_eq!(mesh.patches.len(), (n * n) as usize);
+        for p in &mesh.patches {
+            let c = p.polygon();
+            let longest = (0..c.len())
+                .map(|k| (c[(k + 1) % c.len()] - c[k]).length())
+                .fold(0.0, f64::max);
+            // Rounding of the bilinear positions only (1e-12 of a unit).
+            assert!(longest <= 1.0 + 1e-12, "{longest}");
+        }
+    }
+}
+
+#[test]
+fn an_explicit_patch_count_wins_and_an_oversized_request_is_clamped() {
+    let scene = scene_of(vec![rectangle(10.0, 10.0)], 3);
+    let mesh = Mesh::with_sizing(&scene, DVec3::ZERO, &sized(1.0, None)).unwrap();
+    assert_eq!(mesh.surfaces[0].patches_per_side, 3);
+    // 10 / 0.002 = 5000 per side asked: clamped to the most the parametric
+    // keys can hold (1024), and reported for the command line to warn.
+    let scene = scene_of(vec![rectangle(10.0, 10.0), rectangle(1.0, 1.0)], 0);
+    let sizing = sized(0.002, None);
+    assert_eq!(
+        sizing::clamped_polygons(&scene, &sizing),
+        vec![(0usize, 5000u64)]
+    );
+    let polygon = &scene.polygons[0];
+    assert_eq!(sizing.patches_per_side(polygon), MAX_PATCHES_PER_SIDE);
+    assert_eq!(sizing.patches_per_side(&scene.polygons[1]), 500);
+}
+
+#[test]
+fn the_flat_rule_gives_n_squared_patches_whatever_the_size() {
+    // Today's (per-polygon) rule: N × N on a quad, N² triangles on a triangle,
+    // N² per fan triangle of other polygons (a pentagon fans into 3), for a
+    // tiny and a huge polygon alike. `Mesh::new` and an explicit flat sizing agree.
+    for scale in [1e-3, 1.0, 1e3] {
+        let s = |v: Vec<DVec3>| v.into_iter().map(|p| p * scale).collect::<Vec<_>>();
+        let tri = vec![DVec3::ZERO, DVec3::X, DVec3::Y];
+        let scene = scene_of(vec![s(square()), s(tri), s(pentagon())], 0);
+        let a = Mesh::new(&scene, DVec3::ZERO, 3).unwrap();
+        let b = Mesh::with_sizing(&scene, DVec3::ZERO, &Sizing::flat(3)).unwrap();
+        let per_surface = |m: &Mesh| {
+            (0..m.surfaces.len())
+                .map(|s| m.patches.iter().filter(|p| p.surface == s as u32).count())
+                .collect::<Vec<_>>()
+        };
+        assert_eq!(per_surface(&a), vec![9, 9, 27], "scale {scale}");
+        assert_eq!(per_surface(&a), per_surface(&b));
+        assert!(a.surfaces.iter().all(|s| s.min_element_size.is_none()));
+    }
+}
+
+#[test]
+fn per_polygon_sizes_in_metres_and_scene_units_override_the_rule() {
+    use crate::scene::{Length, MeshSizes};
+    // 1000 scene units per metre (millimetres): "0.25 m" is 250 units.
+    let mut scene = scene_of(vec![rectangle(1000.0, 500.0), rectangle(1000.0, 500.0)], 0);
+    scene.units_per_metre = 1000.0;
+    scene.polygons[0].sizes = MeshSizes {
+        patch_size: Some(Length::Metres(0.25)),
+        min_element_size: Some(Length::Metres(0.01)),
+    };
+    scene.polygons[1].sizes = MeshSizes {
+        patch_size: Some(Length::SceneUnits(100.0)),
+        min_element_size: None,
+    };
+    let sizing = Sizing {
+        patches: PatchRule::Size(1000.0),
+        min_element_size: Some(50.0),
+        units_per_metre: scene.units_per_metre,
+    };
+    let mesh = Mesh::with_sizing(&scene, DVec3::ZERO, &sizing).unwrap();
+    assert_eq!(mesh.surfaces[0].patches_per_side, 4); // ⌈1000 / 250⌉
+    assert_eq!(mesh.surfaces[1].patches_per_side, 10); // ⌈1000 / 100⌉
+    assert_eq!(mesh.surfaces[0].min_element_size, Some(10.0));
+    assert_eq!(mesh.surfaces[1].min_element_size, Some(50.0));
 }

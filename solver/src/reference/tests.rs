@@ -34,6 +34,7 @@ fn polygon(vertices: Vec<DVec3>, material: usize) -> Polygon {
         vertex_normals: None,
         material,
         patches: 1,
+        sizes: Default::default(),
         source: SourceRef::default(),
     }
 }

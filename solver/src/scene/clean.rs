@@ -276,6 +276,7 @@ fn clean_polygon(
         return;
     }
     let patches = raw.patches.unwrap_or(default_patches);
+    let sizes = raw.sizes;
     let deviation = max_plane_deviation(&vertices, normal);
     if deviation <= PLANARITY_TOLERANCE * size {
         let vertex_normals = shading_normals(normals, &vertices, normal, &source, warnings);
@@ -284,6 +285,7 @@ fn clean_polygon(
             vertex_normals,
             material: raw.material,
             patches,
+            sizes,
             source,
         });
         return;
@@ -313,6 +315,7 @@ fn clean_polygon(
             vertex_normals,
             material: raw.material,
             patches,
+            sizes,
             source: source.clone(),
         });
     }

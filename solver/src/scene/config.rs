@@ -18,6 +18,11 @@
 //! [objects.light]                     # by OBJ object/group name
 //! patches = 1                         # wins over the material's
 //!
+//! [objects.sphere]
+//! patch_size = "0.25m"                # target patch size: "…m", "…cm", "…mm", or
+//!                                     # a number in scene units
+//! min_element_size = 5                # smallest element's longest edge, same syntax
+//!
 //! [solver]                            # any solver setting (SettingsPatch)
 //! samples = 16
 //!
@@ -32,11 +37,19 @@
 //!
 //! Unknown keys are errors. Every error names this file and the line (from the
 //! TOML parser's byte span, or the span of the offending table).
+//!
+//! Patch sizes (see `crate::mesh::sizing`): a polygon's `patches` count, if an
+//! override or the geometry file gives one, wins over any `patch_size`; an
+//! override's `patch_size` clears the counts that lower levels gave (the
+//! geometry file's, or a material's under an object's), so the most specific
+//! override decides. Objects win over materials, both over the `[solver]`
+//! settings and the preset. Lengths in metres are converted with the scene's
+//! final `units_per_metre` (the command line's, else this file's).
 
 use super::display::{load_display_file, DisplayParams};
 use super::legacy::{parse_legacy, MAX_PATCHES};
 use super::obj::parse_obj;
-use super::raw::RawScene;
+use super::raw::{RawPolygon, RawScene};
 use super::text::{line_of_offset, read_text, rgb};
 use super::{SceneError, SourceRef};
 use crate::settings::SettingsPatch;
@@ -76,12 +89,16 @@ struct MaterialOverride {
     alpha: Option<f64>,
     emission: Option<Rgb>,
     patches: Option<u32>,
+    patch_size: Option<Spanned<RawLength>>,
+    min_element_size: Option<Spanned<RawLength>>,
 }
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct ObjectOverride {
-    patches: u32,
+    patches: Option<u32>,
+    patch_size: Option<Spanned<RawLength>>,
+    min_element_size: Option<Spanned<RawLength>>,
 }
 
 #[derive(Deserialize)]
@@ -93,6 +110,100 @@ struct CameraConfig {
     fov_y_deg: Option<f64>,
     width: Option<u32>,
     height: Option<u32>,
+}
+
+/// A length of a per-object meshing size, as the config wrote it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Length {
+    /// A bare number: scene units.
+    SceneUnits(f64),
+    /// A string with `m`, `cm` or `mm`, converted to metres.
+    Metres(f64),
+}
+
+impl Length {
+    /// The length in scene units, given the scene's scale.
+    pub fn in_scene_units(self, units_per_metre: f64) -> f64 {
+        match self {
+            Length::SceneUnits(v) => v,
+            Length::Metres(m) => m * units_per_metre,
+        }
+    }
+}
+
+/// Per-object (or per-material) meshing sizes from a TOML config; `None` leaves
+/// the solve's settings (see `crate::mesh::sizing`).
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
+pub struct MeshSizes {
+    /// Target patch size: patches per side ⌈longest edge / size⌉.
+    pub patch_size: Option<Length>,
+    /// Smallest element's longest edge for adaptive subdivision.
+    pub min_element_size: Option<Length>,
+}
+
+/// A length value before its check: a number or a string.
+#[derive(Clone, Debug)]
+enum RawLength {
+    Number(f64),
+    Text(String),
+}
+
+impl<'de> Deserialize<'de> for RawLength {
+    fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        struct LengthVisitor;
+        impl<'de> Visitor<'de> for LengthVisitor {
+            type Value = RawLength;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str(
+                    "a length: a number in scene units or a string such as \"0.25m\" (m, cm or mm)",
+                )
+            }
+            fn visit_f64<E: de::Error>(self, v: f64) -> Result<RawLength, E> {
+                Ok(RawLength::Number(v))
+            }
+            fn visit_i64<E: de::Error>(self, v: i64) -> Result<RawLength, E> {
+                Ok(RawLength::Number(v as f64))
+            }
+            fn visit_u64<E: de::Error>(self, v: u64) -> Result<RawLength, E> {
+                Ok(RawLength::Number(v as f64))
+            }
+            fn visit_str<E: de::Error>(self, v: &str) -> Result<RawLength, E> {
+                Ok(RawLength::Text(v.to_owned()))
+            }
+        }
+        deserializer.deserialize_any(LengthVisitor)
+    }
+}
+
+/// Checks a length: finite and > 0; a string is a number followed by `m`,
+/// `cm` or `mm` (spaces allowed between).
+fn parse_length(key: &str, raw: &RawLength) -> Result<Length, String> {
+    let (length, shown) = match raw {
+        RawLength::Number(v) => (Some(Length::SceneUnits(*v)), v.to_string()),
+        RawLength::Text(t) => {
+            let t = t.trim();
+            let (number, scale) = if let Some(n) = t.strip_suffix("mm") {
+                (n, 1e-3)
+            } else if let Some(n) = t.strip_suffix("cm") {
+                (n, 1e-2)
+            } else if let Some(n) = t.strip_suffix('m') {
+                (n, 1.0)
+            } else {
+                ("", f64::NAN)
+            };
+            let metres = number.trim().parse::<f64>().ok().map(|v| v * scale);
+            (metres.map(Length::Metres), format!("{t:?}"))
+        }
+    };
+    match length {
+        Some(l) if matches!(l, Length::SceneUnits(v) | Length::Metres(v) if v.is_finite() && v > 0.0) => {
+            Ok(l)
+        }
+        _ => Err(format!(
+            "{key} = {shown} is not a length > 0: give a number in scene units (e.g. 250) \
+             or a string in metres, centimetres or millimetres (e.g. \"0.25m\", \"25cm\", \"250mm\")"
+        )),
+    }
 }
 
 /// A colour: one grey number or `[r, g, b]`.
@@ -216,8 +327,26 @@ pub(crate) fn load_config(path: &Path) -> Result<ConfigScene, SceneError> {
         raw.append(part);
     }
 
+    // A per-object or per-material size, checked at the value's own line.
+    let sizes_of = |patch_size: &Option<Spanned<RawLength>>,
+                    min_element_size: &Option<Spanned<RawLength>>,
+                    item: &str|
+     -> Result<MeshSizes, SceneError> {
+        let one = |key: &str, value: &Option<Spanned<RawLength>>| {
+            value
+                .as_ref()
+                .map(|v| parse_length(key, v.get_ref()).map_err(|m| err(v.span(), item, m)))
+                .transpose()
+        };
+        Ok(MeshSizes {
+            patch_size: one("patch_size", patch_size)?,
+            min_element_size: one("min_element_size", min_element_size)?,
+        })
+    };
+
     // Material overrides.
     let mut material_patches: Vec<Option<u32>> = vec![None; raw.materials.len()];
+    let mut material_sizes: Vec<MeshSizes> = vec![MeshSizes::default(); raw.materials.len()];
     for (key, spanned) in &config.materials {
         let span = spanned.span();
         let item = format!("materials.{key}");
@@ -260,6 +389,7 @@ pub(crate) fn load_config(path: &Path) -> Result<ConfigScene, SceneError> {
         if let Some(p) = o.patches {
             check_patches(p).map_err(|m| err(span.clone(), &item, m))?;
         }
+        let sizes = sizes_of(&o.patch_size, &o.min_element_size, &item)?;
         let at = SourceRef {
             file: path.to_path_buf(),
             line: line(span.clone()),
@@ -282,26 +412,37 @@ pub(crate) fn load_config(path: &Path) -> Result<ConfigScene, SceneError> {
             m.overridden_at = Some(at.clone());
             m.undefined = None;
             material_patches[i] = o.patches.or(material_patches[i]);
+            let m = &mut material_sizes[i];
+            m.patch_size = sizes.patch_size.or(m.patch_size);
+            m.min_element_size = sizes.min_element_size.or(m.min_element_size);
         }
     }
     for p in &mut raw.polygons {
-        if let Some(n) = material_patches[p.material] {
+        let patches = material_patches[p.material];
+        if let Some(n) = patches {
             p.patches = Some(n);
         }
+        apply_sizes(p, material_sizes[p.material], patches.is_some());
     }
 
     // Object overrides win over material ones.
     for (key, spanned) in &config.objects {
         let item = format!("objects.{key}");
-        let patches = spanned.get_ref().patches;
-        check_patches(patches).map_err(|m| err(spanned.span(), &item, m))?;
+        let o = spanned.get_ref();
+        if let Some(patches) = o.patches {
+            check_patches(patches).map_err(|m| err(spanned.span(), &item, m))?;
+        }
+        let sizes = sizes_of(&o.patch_size, &o.min_element_size, &item)?;
         let mut found = false;
         for p in raw
             .polygons
             .iter_mut()
             .filter(|p| p.object.as_deref() == Some(key.as_str()))
         {
-            p.patches = Some(patches);
+            if let Some(patches) = o.patches {
+                p.patches = Some(patches);
+            }
+            apply_sizes(p, sizes, o.patches.is_some());
             found = true;
         }
         if !found {
@@ -431,6 +572,21 @@ pub(crate) fn load_config(path: &Path) -> Result<ConfigScene, SceneError> {
         units_per_metre,
         up_axis,
     })
+}
+
+/// Gives polygon `p` an override's sizes. A `patch_size` replaces the patch
+/// count that a lower level gave (the geometry file, a material) unless the
+/// same override also sets `patches`, which then wins.
+fn apply_sizes(p: &mut RawPolygon, sizes: MeshSizes, sets_patches: bool) {
+    if sizes.patch_size.is_some() {
+        p.sizes.patch_size = sizes.patch_size;
+        if !sets_patches {
+            p.patches = None;
+        }
+    }
+    if sizes.min_element_size.is_some() {
+        p.sizes.min_element_size = sizes.min_element_size;
+    }
 }
 
 fn check_patches(p: u32) -> Result<(), String> {

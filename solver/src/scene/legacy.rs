@@ -338,6 +338,7 @@ pub(crate) fn parse_legacy_text(path: &Path, text: &str) -> Result<RawScene, Sce
                 normals,
                 material: p.attribute,
                 patches: p.patches,
+                sizes: Default::default(),
                 object: None,
                 source: SourceRef {
                     file: path.to_path_buf(),

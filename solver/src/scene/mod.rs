@@ -32,6 +32,7 @@ pub use clean::{
     COLLINEAR_TOLERANCE, PLANARITY_TOLERANCE, REPEATED_VERTEX_TOLERANCE, SMOOTH_NORMAL_DEGREES,
     ZERO_AREA_TOLERANCE,
 };
+pub use config::{Length, MeshSizes};
 pub use display::{load_display_file, DisplayParams};
 pub use error::SceneError;
 pub use mtl::alpha_from_ns;
@@ -95,6 +96,8 @@ pub struct Polygon {
     pub material: usize,
     /// User-set patch subdivision (Remington 1992, appendix B `patch N`): N × N patches.
     pub patches: u32,
+    /// Per-object target patch size and smallest element (TOML config).
+    pub sizes: MeshSizes,
     pub source: SourceRef,
 }
 

@@ -154,6 +154,7 @@ pub(crate) fn parse_obj(path: &Path) -> Result<RawScene, SceneError> {
                 normals,
                 material,
                 patches: None,
+                sizes: Default::default(),
                 object: face.object.clone(),
                 source,
             });

@@ -63,6 +63,8 @@ pub(crate) struct RawPolygon {
     pub material: usize,
     /// Patch subdivision the input asked for (legacy `patch N`, TOML overrides).
     pub patches: Option<u32>,
+    /// Per-object patch and element sizes (TOML overrides).
+    pub sizes: super::MeshSizes,
     /// OBJ object or group name, for TOML `[objects.NAME]` overrides.
     pub object: Option<String>,
     pub source: SourceRef,

@@ -39,6 +39,7 @@ mod tests {
             normals: None,
             material: 0,
             patches: None,
+            sizes: Default::default(),
             object: None,
             source: SourceRef::default(),
         }

@@ -332,6 +332,7 @@ mod tests {
             vertex_normals: normals,
             material: 0,
             patches: 1,
+            sizes: Default::default(),
             source: SourceRef {
                 item: item.to_owned(),
                 ..Default::default()

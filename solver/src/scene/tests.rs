@@ -698,6 +698,82 @@ fn toml_overrides_change_materials_and_patches() {
 }
 
 #[test]
+fn toml_sizes_per_object_and_material_in_scene_units_and_metres() {
+    use crate::mesh::{Mesh, Sizing};
+    let dir = tempfile::tempdir().unwrap();
+    write(
+        dir.path(),
+        "o.mtl",
+        &format!("newmtl grey\nKd 0.5 0.5 0.5\n{LAMP_MTL}"),
+    );
+    // Scene units are centimetres: a 200 × 100 floor (2 m × 1 m), a 100 × 100
+    // wall, and the unit lamp.
+    write(
+        dir.path(),
+        "o.obj",
+        &format!(
+            "mtllib o.mtl\no floor\nusemtl grey\nv 0 0 0\nv 200 0 0\nv 200 0 -100\nv 0 0 -100\nf 1 2 3 4\n\
+             o wall\nusemtl grey\nv 0 0 -100\nv 100 0 -100\nv 100 100 -100\nv 0 100 -100\nf 5 6 7 8\n\
+             o lamp{LAMP_OBJ}"
+        ),
+    );
+    let config = write(
+        dir.path(),
+        "scene.toml",
+        "geometry = [\"o.obj\"]\nunits_per_metre = 100\n\n\
+         [materials.grey]\npatches = 7\nmin_element_size = 5\n\n\
+         [objects.floor]\npatch_size = \"0.5m\"\nmin_element_size = \"20mm\"\n\n\
+         [objects.lamp]\npatch_size = 0.4\n",
+    );
+    let loaded = load(&config).unwrap();
+    let scene = &loaded.scene;
+    // Polygons in file order: floor, wall, lamp.
+    let (floor, wall, lamp) = (&scene.polygons[0], &scene.polygons[1], &scene.polygons[2]);
+    // The floor's own patch_size clears the material's count; the wall keeps it.
+    assert_eq!(floor.patches, PATCHES_UNSET);
+    assert_eq!(floor.sizes.patch_size, Some(Length::Metres(0.5)));
+    // "20mm" is 20 × 1e-3 m, equal to 0.02 up to one rounding.
+    let Some(Length::Metres(m)) = floor.sizes.min_element_size else {
+        panic!("{:?}", floor.sizes)
+    };
+    assert!((m - 0.02).abs() < 1e-17, "{m}");
+    assert_eq!(wall.patches, 7);
+    assert_eq!(wall.sizes.min_element_size, Some(Length::SceneUnits(5.0)));
+    assert_eq!(lamp.sizes.patch_size, Some(Length::SceneUnits(0.4)));
+
+    let sizing = Sizing {
+        units_per_metre: scene.units_per_metre,
+        ..Sizing::flat(1)
+    };
+    let mesh = Mesh::with_sizing(scene, scene.recentre_offset, &sizing).unwrap();
+    let n: Vec<u32> = mesh.surfaces.iter().map(|s| s.patches_per_side).collect();
+    // Floor ⌈200 / 50⌉ = 4; wall 7 (the material's count); lamp ⌈1 / 0.4⌉ = 3.
+    assert_eq!(n, vec![4, 7, 3]);
+    let floors: Vec<Option<f64>> = mesh.surfaces.iter().map(|s| s.min_element_size).collect();
+    assert!((floors[0].unwrap() - 2.0).abs() < 1e-12, "{floors:?}");
+    assert_eq!(floors[1..], [Some(5.0), None]);
+
+    // Metres follow the final scale: with the command line's 1000 units per
+    // metre "0.5m" is 500 units, so the floor is one patch.
+    let flagged = load_scene(
+        &config,
+        &ImportOptions {
+            units_per_metre: Some(1000.0),
+            ..Default::default()
+        },
+    )
+    .unwrap()
+    .scene;
+    let sizing = Sizing {
+        units_per_metre: flagged.units_per_metre,
+        ..Sizing::flat(1)
+    };
+    let mesh = Mesh::with_sizing(&flagged, flagged.recentre_offset, &sizing).unwrap();
+    assert_eq!(mesh.surfaces[0].patches_per_side, 1);
+    assert!((mesh.surfaces[0].min_element_size.unwrap() - 20.0).abs() < 1e-12);
+}
+
+#[test]
 fn every_malformed_toml_line_names_file_line_and_what() {
     let dir = tempfile::tempdir().unwrap();
     write(dir.path(), "g.mtl", LAMP_MTL);
@@ -770,6 +846,31 @@ fn every_malformed_toml_line_names_file_line_and_what() {
             format!("{ok}\n[objects.lamp]\npatches = 0\n"),
             3,
             "patches = 0 is out of range",
+        ),
+        (
+            format!("{ok}\n[objects.lamp]\npatches = 2\npatch_size = \"0.25ft\"\n"),
+            5,
+            "patch_size = \"0.25ft\" is not a length > 0",
+        ),
+        (
+            format!("{ok}\n[objects.lamp]\nmin_element_size = -3\n"),
+            4,
+            "min_element_size = -3 is not a length > 0",
+        ),
+        (
+            format!("{ok}\n[materials.lamp]\n\npatch_size = \"m\"\n"),
+            5,
+            "patch_size = \"m\" is not a length",
+        ),
+        (
+            format!("{ok}\n[objects.lamp]\npatch_size = true\n"),
+            4,
+            "a length: a number in scene units or a string",
+        ),
+        (
+            format!("{ok}\n[solver]\npatch_size = 2.0\n"),
+            3,
+            "setting `patch_size` = 2 is out of range",
         ),
         (
             format!("{ok}mode = \"diffuse\"\n[solver]\nmode = \"directional\"\n"),

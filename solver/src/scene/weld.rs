@@ -191,6 +191,7 @@ pub(crate) fn weld(polygons: &mut Vec<Polygon>, scene_diagonal: f64) {
 fn compatible(p: &Polygon, q: &Polygon) -> bool {
     p.material == q.material
         && p.patches == q.patches
+        && p.sizes == q.sizes
         && p.vertex_normals.is_none()
         && q.vertex_normals.is_none()
         && newell_normal(&p.vertices).dot(newell_normal(&q.vertices)) > 0.0
@@ -272,6 +273,7 @@ mod tests {
             vertex_normals: None,
             material,
             patches: 4,
+            sizes: Default::default(),
             source: SourceRef {
                 item: "face".to_owned(),
                 ..Default::default()

@@ -291,7 +291,8 @@ fn output_bytes(c: &Counts) -> u64 {
     diffuse + directional + WRITER_BUFFER
 }
 
-/// The counts of a mesh not yet built: `patches` N per polygon gives N² elements
+/// The counts of a mesh not yet built: N patches per side (the solve's
+/// [`crate::mesh::Sizing`] rule for each polygon) gives N² elements
 /// per triangle or quad piece and at most (N+1)² vertices (a polygon of k > 4
 /// vertices is counted as k − 2 triangles), at SH order 0.
 pub fn counts_before_meshing(scene: &Scene, settings: &SolverSettings) -> Counts {
@@ -300,12 +301,9 @@ pub fn counts_before_meshing(scene: &Scene, settings: &SolverSettings) -> Counts
         directional: settings.mode == solution::format::SolveMode::Directional,
         ..Counts::default()
     };
+    let sizing = crate::mesh::Sizing::from_settings(settings, scene);
     for p in &scene.polygons {
-        let n = if p.patches == 0 {
-            settings.patches
-        } else {
-            p.patches
-        } as u64;
+        let n = sizing.patches_per_side(p) as u64;
         let pieces = if p.vertices.len() <= 4 {
             1
         } else {

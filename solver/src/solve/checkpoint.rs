@@ -548,6 +548,12 @@ impl Solver {
         for (i, s) in self.mesh.surfaces.iter().enumerate() {
             eat(s.polygon as u64);
             eat(s.patches_per_side as u64);
+            // The absolute smallest element decides later splits (a per-object
+            // TOML size is not in the settings); nothing in the flat rule, so
+            // its fingerprints are those of checkpoints written before sizes.
+            if let Some(size) = s.min_element_size {
+                eat(size.to_bits());
+            }
             eat(s.vertices.len() as u64);
             for v in &s.vertices {
                 v.to_array().iter().for_each(|c| eat(c.to_bits()));

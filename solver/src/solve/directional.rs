@@ -1072,8 +1072,7 @@ fn should_split_sh(
         return false;
     }
     let surface_index = mesh.patches[el.patch as usize].surface as usize;
-    let surface = &mesh.surfaces[surface_index];
-    if el.area <= criteria.min_element_area * surface.area {
+    if criteria.at_smallest(mesh, e) {
         return false;
     }
     let corners = el.corners();

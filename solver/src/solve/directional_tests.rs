@@ -656,6 +656,7 @@ fn glossy_elements_stop_at_the_alpha_floor() {
     // floor's h_min (0.14 m), so the α floor is what stops the floor.
     settings.max_depth = 5;
     settings.min_element_area = 1e-6;
+    settings.min_element_size = None; // the flat area floor, so the α floor decides
     settings.edge_threshold = 0.05;
     let solver = run(&scene, &settings);
     let mesh = solver.mesh();

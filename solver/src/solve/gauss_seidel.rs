@@ -133,21 +133,18 @@ pub fn check_matrix_size(
     Ok(bytes as u64)
 }
 
-/// A lower bound on the number of patches [`crate::mesh::Mesh::new`] will make,
+/// A lower bound on the number of patches [`crate::mesh::Mesh::with_sizing`] will make,
 /// counted without meshing: N² per polygon of non-zero area (N its own patch
-/// count, else the setting), times its triangle count for polygons other than
+/// count, else the size-driven or flat setting's, [`crate::mesh::sizing`]), times its triangle count for polygons other than
 /// quads (a non-convex quad, meshed as two triangles, is counted once).
 pub fn patch_count_lower_bound(scene: &Scene, settings: &SolverSettings) -> u64 {
+    let sizing = crate::mesh::Sizing::from_settings(settings, scene);
     scene
         .polygons
         .iter()
         .filter(|p| p.vertices.len() >= 3 && p.area().is_finite() && p.area() > 0.0)
         .map(|p| {
-            let n = if p.patches > 0 {
-                p.patches
-            } else {
-                settings.patches.max(1)
-            } as u64;
+            let n = sizing.patches_per_side(p) as u64;
             let pieces = if p.vertices.len() == 4 {
                 1
             } else {

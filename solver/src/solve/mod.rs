@@ -236,7 +236,8 @@ impl Solver {
             "before meshing",
         )?;
         let offset = scene_centre(scene);
-        let mesh = Mesh::new(scene, offset, settings.patches)?;
+        let sizing = crate::mesh::Sizing::from_settings(settings, scene);
+        let mesh = Mesh::with_sizing(scene, offset, &sizing)?;
         let emitter_patches = budget::emitter_patches(scene, &mesh);
         // The same with the mesh's exact counts, before the solve's state
         // (each emitter patch shoots, and is recorded, at least once).

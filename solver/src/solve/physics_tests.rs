@@ -133,6 +133,7 @@ fn cornell_settings() -> SolverSettings {
     s.samples = 4;
     s.max_shots = 40;
     s.patches = 2;
+    s.patch_size = None;
     s
 }
 

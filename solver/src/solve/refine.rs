@@ -4,7 +4,9 @@
 //! a shadow boundary. A leaf splits when the radiance difference across one of
 //! its edges, less twice its sampling noise, exceeds `threshold × local
 //! radiance` (`shadow_threshold` on shadow boundaries, `edge_threshold`
-//! elsewhere), its area is above `min_element_area × polygon area` and its
+//! elsewhere), it is larger than the smallest element ([`Criteria::at_smallest`]:
+//! its longest edge above the surface's absolute `min_element_size`, or in the
+//! flat rule its area above `min_element_area × polygon area`) and its
 //! depth is below `max_depth` ([`Criteria::should_split_at`]). The local
 //! radiance is the level the vertices are heading for (L + Kd · ambient), never
 //! less than [`DARK_FLOOR`] of the scene's level, so the test is relative
@@ -56,7 +58,8 @@ pub struct Criteria {
     pub edge_threshold: f64,
     pub shadow_threshold: f64,
     pub max_depth: u32,
-    /// Fraction of the polygon's area.
+    /// Fraction of the polygon's area: the flat floor, for surfaces without an
+    /// absolute `min_element_size` ([`crate::mesh::Surface::min_element_size`]).
     pub min_element_area: f64,
     /// Visibility rays per receiver (the n of the noise allowance).
     pub samples: u32,
@@ -91,6 +94,29 @@ impl Criteria {
             samples: if s.shadows { s.samples } else { 0 },
             dark_floor: 0.0,
             ambient: DVec3::ZERO,
+        }
+    }
+
+    /// Whether element `e` is as small as elements may get: its longest edge at
+    /// most its surface's absolute `min_element_size` (size-driven meshing, the
+    /// same floor on a small polygon as on a large one), else its area at most
+    /// `min_element_area` of its polygon's (the flat rule). The longest edge,
+    /// not √area, bounds the distance over which radiance is interpolated
+    /// linearly, which is what meshing bias grows with; a sliver is refined
+    /// until its long side is short.
+    pub fn at_smallest(&self, mesh: &Mesh, e: u32) -> bool {
+        let el = &mesh.elements[e as usize];
+        let surface = &mesh.surfaces[mesh.patches[el.patch as usize].surface as usize];
+        match surface.min_element_size {
+            Some(size) => {
+                let corners = el.corners();
+                let position = |k: usize| mesh.vertices[corners[k] as usize].position;
+                let longest = (0..corners.len())
+                    .map(|k| (position((k + 1) % corners.len()) - position(k)).length())
+                    .fold(0.0, f64::max);
+                longest <= size
+            }
+            None => el.area <= self.min_element_area * surface.area,
         }
     }
 
@@ -131,8 +157,7 @@ impl Criteria {
         if !el.is_leaf() || el.depth as u32 >= self.max_depth {
             return false;
         }
-        let surface = &mesh.surfaces[mesh.patches[el.patch as usize].surface as usize];
-        if el.area <= self.min_element_area * surface.area {
+        if self.at_smallest(mesh, e) {
             return false;
         }
         let corners = el.corners();
@@ -440,12 +465,18 @@ mod tests {
 
     /// One unit square, one patch: element 0 with corners 0..4.
     fn square_mesh() -> Mesh {
-        let scene = Scene {
+        Mesh::new(&square_mesh_scene(), DVec3::ZERO, 1).unwrap()
+    }
+
+    /// The scene of [`square_mesh`].
+    fn square_mesh_scene() -> Scene {
+        Scene {
             polygons: vec![Polygon {
                 vertices: vec![DVec3::ZERO, DVec3::X, DVec3::new(1.0, 1.0, 0.0), DVec3::Y],
                 vertex_normals: None,
                 material: 0,
                 patches: 1,
+                sizes: Default::default(),
                 source: SourceRef::default(),
             }],
             materials: vec![Material {
@@ -460,8 +491,7 @@ mod tests {
             camera: None,
             recentre_offset: DVec3::ZERO,
             warnings: Vec::new(),
-        };
-        Mesh::new(&scene, DVec3::ZERO, 1).unwrap()
+        }
     }
 
     fn criteria() -> Criteria {
@@ -535,5 +565,79 @@ mod tests {
             16,
             0
         ));
+    }
+
+    /// Splits every leaf that is not yet [`Criteria::at_smallest`] until none
+    /// is left, and returns the longest edge of the smallest leaves of each
+    /// surface.
+    fn smallest_edges(mesh: &mut Mesh, c: &Criteria) -> Vec<f64> {
+        let mut created = Vec::new();
+        loop {
+            let open: Vec<u32> = mesh
+                .leaves()
+                .filter(|&e| {
+                    !c.at_smallest(mesh, e) && (mesh.elements[e as usize].depth as u32) < 16
+                })
+                .collect();
+            if open.is_empty() {
+                break;
+            }
+            for e in open {
+                mesh.split(e, &mut created).unwrap();
+            }
+        }
+        let mut smallest = vec![f64::INFINITY; mesh.surfaces.len()];
+        for e in mesh.leaves() {
+            let el = &mesh.elements[e as usize];
+            let corners = el.corners();
+            let p = |k: usize| mesh.vertices[corners[k] as usize].position;
+            let longest = (0..corners.len())
+                .map(|k| (p((k + 1) % corners.len()) - p(k)).length())
+                .fold(0.0, f64::max);
+            let s = mesh.patches[el.patch as usize].surface as usize;
+            smallest[s] = smallest[s].min(longest);
+        }
+        smallest
+    }
+
+    #[test]
+    fn the_smallest_element_is_absolute_in_size_driven_meshing() {
+        use crate::mesh::Sizing;
+        // Squares of side 1 and 8, one patch each. Halving from 1 reaches
+        // 0.25 after 2 splits, from 8 after 5: with an absolute floor of 0.25
+        // (longest edge), both stop at exactly 0.25 (a leaf of 0.5 is above it,
+        // one of 0.25 is not).
+        let mut scene = square_mesh_scene();
+        let big: Vec<DVec3> = scene.polygons[0]
+            .vertices
+            .iter()
+            .map(|v| *v * 8.0 + DVec3::X * 3.0)
+            .collect();
+        let mut second = scene.polygons[0].clone();
+        second.vertices = big;
+        scene.polygons.push(second);
+        let absolute = Sizing {
+            min_element_size: Some(0.25),
+            ..Sizing::flat(1)
+        };
+        let c = criteria();
+        let mut mesh = Mesh::with_sizing(&scene, DVec3::ZERO, &absolute).unwrap();
+        let edges = smallest_edges(&mut mesh, &c);
+        assert!(
+            (edges[0] - 0.25).abs() < 1e-12 && (edges[1] - 0.25).abs() < 1e-12,
+            "{edges:?}"
+        );
+        // The flat rule's floor is a fraction of each polygon's area: with
+        // 1/64 of it, a leaf stops at side/8 (area side²/64), 0.125 and 1.
+        let flat = Criteria {
+            min_element_area: 1.0 / 64.0,
+            ..c
+        };
+        let mut mesh = Mesh::with_sizing(&scene, DVec3::ZERO, &Sizing::flat(1)).unwrap();
+        let edges = smallest_edges(&mut mesh, &flat);
+        assert!(
+            (edges[0] - 0.125).abs() < 1e-12 && (edges[1] - 1.0).abs() < 1e-12,
+            "{edges:?}"
+        );
     }
 }

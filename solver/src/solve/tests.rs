@@ -28,6 +28,7 @@ pub(crate) fn scene_of(
                 vertex_normals: None,
                 material,
                 patches,
+                sizes: Default::default(),
                 source: SourceRef {
                     item: format!("polygon {i}"),
                     ..Default::default()

@@ -403,6 +403,7 @@ mod tests {
                 vertex_normals: None,
                 material: 0,
                 patches: 1,
+                sizes: Default::default(),
                 source: Default::default(),
             }],
             materials: vec![crate::scene::Material {

@@ -27,6 +27,7 @@ fn scene(polygons: Vec<(Vec<DVec3>, usize, u32)>, materials: Vec<Material>) -> S
                 vertex_normals: None,
                 material,
                 patches,
+                sizes: Default::default(),
                 source: SourceRef {
                     item: format!("polygon {i}"),
                     ..Default::default()

@@ -30,6 +30,8 @@ fn cube() -> Vec<(Vec<DVec3>, usize)> {
 fn settings(patches: u32, resolution: u32) -> SolverSettings {
     let mut s = SolverSettings::preset(Preset::Draft);
     s.patches = patches;
+    // The flat rule: `patches` per polygon, as these tests were derived for.
+    s.patch_size = None;
     s.hemicube_resolution = resolution;
     s
 }
