@@ -214,7 +214,7 @@ pub fn form_factor_bound(
     let d = box_box_distance(lo, hi, source.lo, source.hi)
         .max(box_point_distance(lo, hi, source.centre) - source.radius)
         .max(least_height);
-    if !(d > 0.0) {
+    if d.is_nan() || d <= 0.0 {
         return 1.0;
     }
     let mut per_area = (1.0 / (d * d)).min(height / (d * d * d));
@@ -522,7 +522,7 @@ mod tests {
             uniform(rng, -2.0, 2.0),
         );
         let (w, h) = (uniform(rng, 0.05, 2.0), uniform(rng, 0.05, 2.0));
-        let corners = if rng.next_u32() % 2 == 0 {
+        let corners = if rng.next_u32().is_multiple_of(2) {
             vec![
                 centre - t * w - b * h,
                 centre + t * w - b * h,

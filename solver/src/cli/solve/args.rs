@@ -147,18 +147,19 @@ pub struct SolveArgs {
     )]
     pub form_factors: Option<FormFactorMethod>,
 
-    /// Receivers a shot visits ray by ray: bounded (default) or flat.
+    /// Receivers a shot visits ray by ray: flat (default) or bounded.
     #[arg(
         long,
         value_enum,
         value_name = "HOW",
         long_help = "Which receivers a shot visits with a form factor and visibility rays. \
-            bounded (default): a surface the shot cannot change by more than \
+            flat (default): every vertex every shot, Remington 1992's progressive \
+            refinement. bounded: a surface the shot cannot change by more than \
             --shooting-tolerance (a conservative bound on the form factor times the \
             source's unshot radiance and the surface's reflectance) is not visited; its \
             vertices all get one estimate, the factor at its centroid, so its energy is \
-            kept. flat: every vertex every shot, Remington 1992's progressive refinement \
-            (kept to measure against). Diffuse mode only."
+            kept; fewer rays on scenes with many weak or distant receivers, a flatter \
+            indirect field on skipped surfaces. Diffuse mode only."
     )]
     pub shooting: Option<Shooting>,
 
@@ -168,7 +169,7 @@ pub struct SolveArgs {
         value_name = "FRACTION",
         long_help = "Bounded shooting skips a surface whose largest possible ΔL from a \
             shot is below this fraction of the scene's radiance level (the ambient \
-            term's brightest channel before any shot; default 0.001, 0 to 1). Larger: \
+            term's brightest channel before any shot; default 0.0001, 0 to 1). Larger: \
             fewer receivers visited per shot (faster on large scenes), and weak \
             indirect light spread flat over skipped surfaces, each shot's error at \
             any vertex below this fraction. 0 visits every receiver, as --shooting flat."
