@@ -48,6 +48,27 @@ pub enum FormFactorMethod {
     Hemicube,
 }
 
+/// Which receivers a shot visits ray by ray (`--shooting`; `solve/cluster.rs`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+#[derive(clap::ValueEnum)]
+pub enum Shooting {
+    /// Every vertex, every shot: Remington's (1992) flat progressive refinement.
+    #[default]
+    Flat,
+    /// Only surfaces the shot can change by more than `shooting_tolerance`; the rest get a bounded estimate, no rays.
+    Bounded,
+}
+
+/// Default of `shooting_tolerance`: the largest that kept the Cornell box's
+/// medium-preset MARE within 0.15 points of flat shooting's (1e-3 cost 2.5
+/// points); `docs/benchmarks.md`, "Bounded shooting".
+pub const DEFAULT_SHOOTING_TOLERANCE: f64 = 1e-4;
+
+fn default_shooting_tolerance() -> f64 {
+    DEFAULT_SHOOTING_TOLERANCE
+}
+
 /// How a glossy lobe is normalized (design notes, "Directional mode"; see
 /// `crate::brdf::Normalization` for the measured difference).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
@@ -148,6 +169,12 @@ pub struct SolverSettings {
     /// Cells per face edge k of the global cube (D = 6k² directions per vertex).
     #[serde(default = "default_cube_resolution")]
     pub cube_resolution: u32,
+    /// Which receivers a shot visits ray by ray: all (flat) or those it can change visibly (bounded).
+    #[serde(default)]
+    pub shooting: Shooting,
+    /// Bounded shooting skips a surface whose bound on a shot's ΔL is below this fraction of the scene's radiance level.
+    #[serde(default = "default_shooting_tolerance")]
+    pub shooting_tolerance: f64,
     /// Scene units per metre (scene config or flag).
     pub units_per_metre: f64,
     /// Turn import warnings (Kd + Ks > 1, …) into errors.
@@ -197,6 +224,8 @@ pub struct SettingsPatch {
     pub brdf_normalization: Option<BrdfNormalization>,
     pub directional: Option<DirectionalRepresentation>,
     pub cube_resolution: Option<u32>,
+    pub shooting: Option<Shooting>,
+    pub shooting_tolerance: Option<f64>,
     pub units_per_metre: Option<f64>,
     pub strict: Option<bool>,
     pub crease_angle: Option<f64>,
@@ -242,6 +271,8 @@ impl SolverSettings {
             brdf_normalization: BrdfNormalization::Thesis,
             directional: DirectionalRepresentation::Sh,
             cube_resolution: DEFAULT_CUBE_RESOLUTION,
+            shooting: Shooting::Flat,
+            shooting_tolerance: DEFAULT_SHOOTING_TOLERANCE,
             units_per_metre: 1.0,
             strict: false,
             crease_angle: default_crease_angle(),
@@ -295,6 +326,8 @@ impl SolverSettings {
             brdf_normalization,
             directional,
             cube_resolution,
+            shooting,
+            shooting_tolerance,
             units_per_metre,
             strict,
             crease_angle
@@ -450,6 +483,14 @@ impl SolverSettings {
             "cube_resolution",
             self.cube_resolution,
             "2 to 256 cells per cube face edge",
+        )?;
+        check(
+            self.shooting_tolerance.is_finite()
+                && self.shooting_tolerance >= 0.0
+                && self.shooting_tolerance <= 1.0,
+            "shooting_tolerance",
+            self.shooting_tolerance,
+            "0 to 1 (a fraction of the scene's radiance level; 0 visits every receiver)",
         )?;
         check(
             self.units_per_metre.is_finite() && self.units_per_metre > 0.0,

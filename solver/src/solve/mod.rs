@@ -52,6 +52,7 @@
 
 pub mod budget;
 mod checkpoint;
+pub mod cluster;
 pub mod cube_gather;
 pub mod directional;
 pub mod gauss_seidel;
@@ -136,6 +137,11 @@ pub struct Timings {
     pub gather: f64,
     /// Rays traced by the shooting part (the rest were traced by refinement).
     pub shoot_rays: u64,
+    /// Receiving vertices visited ray by ray by bounded shooting, summed over
+    /// shots (flat shooting visits every vertex and leaves these 0).
+    pub visited_receivers: u64,
+    /// Vertices that bounded shooting gave a bounded estimate instead.
+    pub bounded_receivers: u64,
 }
 
 /// Where the solve stands.
@@ -205,6 +211,8 @@ pub struct Solver {
     peak_estimate: u64,
     /// Whether the memory budget has refused a split (warned once).
     refinement_capped: bool,
+    /// The surfaces under a bounding-volume hierarchy, for bounded shooting.
+    receivers: cluster::ReceiverTree,
 }
 
 impl Solver {
@@ -298,6 +306,7 @@ impl Solver {
         }
         let vertex_count = mesh.vertices.len();
         let patch_count = mesh.patches.len();
+        let receivers = cluster::ReceiverTree::new(&mesh, &kd);
         let mut solver = Solver {
             settings: settings.clone(),
             leaf_count: mesh.leaf_count(),
@@ -331,6 +340,7 @@ impl Solver {
             pending_warnings: Vec::new(),
             peak_estimate: 0,
             refinement_capped: false,
+            receivers,
         };
         solver.init_directional(scene)?;
         let all: Vec<u32> = (0..solver.mesh.surfaces.len() as u32).collect();
@@ -399,11 +409,16 @@ impl Solver {
                 .push(SamplePool::with_sets(&shot, shoot::REPLAY_POOL_SETS));
         }
         let pool = SamplePool::new(&shot);
+        let plan = self.plan_receivers(&shot, &pool);
         let mesh = &self.mesh;
         let results: Vec<Received> = (0..mesh.vertices.len() as u32)
             .into_par_iter()
             .map_init(Scratch::default, |scratch, v| {
-                shot.receive(mesh, v, &pool, scratch)
+                if cluster::Plan::visits(plan.as_ref(), mesh, v) {
+                    shot.receive(mesh, v, &pool, scratch)
+                } else {
+                    Received::default()
+                }
             })
             .collect();
         let mut rays = 0u64;
@@ -459,6 +474,10 @@ impl Solver {
         rays += refined.rays;
         self.leaf_count += 3 * splits;
         let refine_done = Instant::now();
+        if let Some(plan) = &plan {
+            rays += plan.rays;
+            self.deposit_bounded(plan, recorded);
+        }
         self.update_patch_weights(&refined.dirty_patches);
         self.gather();
         self.timings.shoot += (shot_done - start).as_secs_f64();
@@ -731,6 +750,8 @@ pub(crate) fn human_bytes(bytes: u128) -> String {
     }
 }
 
+#[cfg(test)]
+mod cluster_tests;
 #[cfg(test)]
 mod directional_tests;
 #[cfg(test)]
