@@ -31,13 +31,15 @@ const WALL_CELLS: usize = 4;
 const RINGS: usize = 12;
 const SEGMENTS: usize = 24;
 
+/// A wall: its material, an origin corner and two edge vectors whose cross
+/// product points into the room.
+type Wall = (&'static str, [f64; 3], [f64; 3], [f64; 3]);
+
 /// Writes the room (unit cube, walls facing inward) and the sphere as OBJ + MTL.
 fn write_scene(dir: &Path) -> std::path::PathBuf {
     let mut obj = String::from("mtllib room.mtl\n");
     let mut next = 1usize;
-    // Each wall: an origin corner and two edge vectors whose cross product
-    // points into the room.
-    let walls: [(&str, [f64; 3], [f64; 3], [f64; 3]); 6] = [
+    let walls: [Wall; 6] = [
         ("wall", [0., 0., 0.], [0., 0., 1.], [1., 0., 0.]), // floor, normal +y
         ("light", [0., 1., 0.], [1., 0., 0.], [0., 0., 1.]), // ceiling, normal −y
         ("wall", [0., 0., 0.], [1., 0., 0.], [0., 1., 0.]), // z = 0, normal +z
