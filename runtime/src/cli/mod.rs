@@ -49,7 +49,8 @@ pub enum Command {
 /// How the first view is chosen, for `--help` of `screenshot`, `mirror` and
 /// `xr`. The figures are `solution::view`'s constants (checked by a test).
 pub const DEFAULT_VIEW_HELP: &str = "\
-The view: the solution header's camera, unless --eye/--target/--up/--fov-y are given.
+The view: the solution header's camera (screenshot and mirror: unless --eye, --target,
+--up or --fov-y are given).
 When the scene named no camera, the solver chose that camera when it solved
 (solution::view): 49 candidate eyes (a jittered 4x4x3 grid over the bounds and its
 centre), each stood 1.6 m (x units_per_metre; at most 0.7 of the floor-to-ceiling
