@@ -11,7 +11,9 @@
 //!   f32 twin that `shaders/scene_cube.vert` mirrors;
 //! * [`camera`]: cameras, up axes and per-eye views in the Vulkan convention;
 //! * [`raster`]: tone curves and the small CPU reference rasterizer that the solver's
-//!   `--preview` and the runtime's GPU-versus-CPU tests share.
+//!   `--preview` and the runtime's GPU-versus-CPU tests share;
+//! * [`view`]: the default view of a scene that names no camera (an eye inside
+//!   the enclosed space that sees lit surfaces, standing on the floor).
 //!
 //! **Architecture Invariant:** this crate depends on neither the solver nor the
 //! runtime, nor on `ash`, `openxr` or `winit`; the runtime depends on it and never on
@@ -23,3 +25,4 @@ pub mod cube;
 pub mod format;
 pub mod raster;
 pub mod sh;
+pub mod view;

@@ -32,16 +32,34 @@ pub struct Cli {
 pub enum Command {
     /// Renders one stereo pair (or one mono image) to PNG (exposed, sRGB) and EXR
     /// (linear radiance).
+    #[command(after_help = DEFAULT_VIEW_HELP)]
     Screenshot(ScreenshotArgs),
     /// Renders offscreen stereo frames along a scripted walk and prints timings.
     Bench(BenchArgs),
     /// Walks through the solution in a headset (OpenXR); without a runtime it
     /// says so and suggests `runtime mirror`.
+    #[command(after_help = DEFAULT_VIEW_HELP)]
     Xr(crate::xr::cli::XrArgs),
     /// Shows the solution in a desktop window, both eyes side by side (or one
     /// eye, or anaglyph), with radview's keys (F1 lists them).
+    #[command(after_help = DEFAULT_VIEW_HELP)]
     Mirror(crate::mirror::MirrorArgs),
 }
+
+/// How the first view is chosen, for `--help` of `screenshot`, `mirror` and
+/// `xr`. The figures are `solution::view`'s constants (checked by a test).
+pub const DEFAULT_VIEW_HELP: &str = "\
+The view: the solution header's camera (screenshot and mirror: unless --eye, --target,
+--up or --fov-y are given).
+When the scene named no camera, the solver chose that camera when it solved
+(solution::view): 49 candidate eyes (a jittered 4x4x3 grid over the bounds and its
+centre), each stood 1.6 m (x units_per_metre; at most 0.7 of the floor-to-ceiling
+height) above the floor a downward ray meets; of those whose 128 survey rays meet
+at least 75% front faces, at most 10% back faces and nothing within 0.3 m, the one
+standing upright that sees the most light, looking level toward the brightest,
+farthest-seen heading (60 degree field of view). If none passes, the camera frames
+the bounds from outside. xr: LOCAL space puts the head at that eye; STAGE space
+puts the floor camera_eye_height_m (default 1.6 m) below it, on the floor found.";
 
 /// Runs a parsed command line.
 pub fn run(cli: Cli) -> Result<()> {
@@ -170,6 +188,34 @@ pub fn report_truncation(solution: &solution::format::Solution, cap: Option<u32>
         }
         for line in lines {
             eprintln!("--max-order {cap}: {line}");
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::DEFAULT_VIEW_HELP;
+    use solution::view as v;
+
+    /// The help states the chooser's figures; if a constant changes, so must
+    /// the text.
+    #[test]
+    fn the_default_view_help_states_the_choosers_figures() {
+        let grid = format!("{}x{}x{}", v::GRID[0], v::GRID[1], v::GRID[2]);
+        let candidates = format!("{} candidate", v::GRID.iter().product::<usize>() + 1);
+        let figures = [
+            grid,
+            candidates,
+            format!("{} m (x units_per_metre", v::EYE_HEIGHT_M),
+            format!("at most {} of the floor", v::EYE_HEIGHT_FRACTION),
+            format!("{} survey rays", v::RAYS),
+            format!("{}% front", v::MIN_FRONT_FRACTION * 100.0),
+            format!("{}% back", v::MAX_BACK_FRACTION * 100.0),
+            format!("within {} m", v::MIN_CLEARANCE_M),
+            format!("({} degree", v::FOV_Y_DEG),
+        ];
+        for figure in figures {
+            assert!(DEFAULT_VIEW_HELP.contains(&figure), "{figure}");
         }
     }
 }

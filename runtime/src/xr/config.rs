@@ -37,7 +37,8 @@ pub struct XrConfig {
     /// Deflection ignored around the stick's centre, in [0, 0.9].
     pub thumbstick_deadzone: f64,
     /// STAGE only: height of the stored camera eye above the floor, metres, in
-    /// (0, 3].
+    /// (0, 3]. The default, `solution::view::EYE_HEIGHT_M` (1.6 m), is the
+    /// height at which the solver stands a default view above its floor.
     pub camera_eye_height_m: f64,
     /// IPD override, metres, in [0.04, 0.09] (the adult range is about
     /// 0.054–0.074 m); `None` keeps the headset's eye poses.
@@ -51,7 +52,7 @@ impl Default for XrConfig {
             snap_turn_deg: 30.0,
             walk_speed_m_s: 1.4,
             thumbstick_deadzone: 0.2,
-            camera_eye_height_m: 1.6,
+            camera_eye_height_m: solution::view::EYE_HEIGHT_M,
             ipd_m: None,
         }
     }

@@ -450,4 +450,53 @@ mod tests {
             1e-12
         ));
     }
+
+    /// The XR start pose of a scene without a camera: the solver stores the
+    /// default view of `solution::view` as the header camera, and STAGE space
+    /// with the default eye height puts the user's feet on the floor that a
+    /// downward ray from that eye meets, looking where the view looks.
+    #[test]
+    fn the_default_view_start_pose_stands_on_the_floor_below_its_eye() {
+        use solution::view::{default_camera, fixture, ViewScene, EYE_HEIGHT_M};
+        let solution = fixture::box_room();
+        let header = &solution.header;
+        let camera = default_camera(&solution, solution::camera::Camera::default());
+        // As `XrSession` does: the home eye in file coordinates and its yaw.
+        let offset = DVec3::from(header.recentre_offset);
+        let home_eye = DVec3::from(camera.eye) - offset;
+        let home_yaw = scene_yaw_deg(
+            DVec3::from(camera.target) - DVec3::from(camera.eye),
+            header.up_axis,
+        );
+        let eye_height_m = crate::xr::config::XrConfig::default().camera_eye_height_m;
+        assert_eq!(eye_height_m, EYE_HEIGHT_M);
+        let mut loco = Locomotion::new(header.up_axis, header.units_per_metre);
+        // The user stands 0.2 m off the play area's centre, 1.75 m tall.
+        let head = pose(DVec3::new(0.2, 1.75, -0.1), 25.0);
+        loco.recentre(&head, home_eye, home_yaw, Placement::Floor { eye_height_m });
+        let feet = loco.to_scene(&pose(DVec3::new(0.2, 0.0, -0.1), 25.0));
+        let down = ViewScene::from_solution(&solution)
+            .cast(home_eye, DVec3::NEG_Y)
+            .expect("a floor below the eye");
+        assert!(down.front, "the floor's upper side");
+        let floor = home_eye - DVec3::Y * down.t as f64;
+        // Feet on the floor straight below the eye: f32 positions of a 6 m
+        // room, so within 1e-5 m.
+        assert!(
+            close(feet.position, floor, 1e-5),
+            "{} vs {floor}",
+            feet.position
+        );
+        // The eye stood at 1.6 m, so the user's own 1.75 m eye is 0.15 m above it.
+        let eye = loco.to_scene(&head).position;
+        assert!((eye.y - (home_eye.y + 0.15)).abs() < 1e-9, "{eye}");
+        let yaw = scene_yaw_deg(
+            loco.to_scene(&head).orientation * DVec3::NEG_Z,
+            header.up_axis,
+        );
+        assert!(
+            (wrap_deg(yaw - home_yaw)).abs() < 1e-9,
+            "{yaw} vs {home_yaw}"
+        );
+    }
 }

@@ -397,6 +397,7 @@ fn finish_materials(
         if let Some(w) = &m.undefined {
             warnings.push(w.clone());
         }
+        warnings.extend(m.unmodelled.iter().cloned());
         let (mut kd, mut ks) = (m.kd, m.ks);
         let sum = kd + ks;
         if sum.max_element() > 1.0 {

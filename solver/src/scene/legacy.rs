@@ -307,6 +307,7 @@ pub(crate) fn parse_legacy_text(path: &Path, text: &str) -> Result<RawScene, Sce
             },
             overridden_at: None,
             undefined: None,
+            unmodelled: Vec::new(),
         });
     }
     if let Some((no, tokens)) = content.next() {

@@ -9,10 +9,18 @@
 //! the Phong exponent, converted to the RMS slope of Remington 1992, eq. 4.1 by
 //! α = sqrt(2 / (Ns + 2)). Every other key (textures, `Ka`, `d`, `illum`, PBR
 //! extensions) is read past: radiosity uses none of them.
+//!
+//! Statements that change how an authored surface looks but that the solver does
+//! not model (textures, bump maps, transparency, refraction, mirror and glass
+//! `illum` models) give a warning, once per material and kind of statement, at the
+//! first such line, saying what the solver does instead ([`unmodelled`]). Keys
+//! that change nothing radiosity computes (`Ka`, which the solve replaces;
+//! `illum` 0–2, the diffuse and Phong models the solver follows) stay silent, as
+//! do opaque `d 1` and `Tr 0`, which say what the solver does anyway.
 
 use super::raw::{RawMaterial, DEFAULT_KD};
 use super::text::{numbered_lines, parse_real};
-use super::{SceneError, SourceRef};
+use super::{SceneError, SourceRef, Warning};
 use glam::DVec3;
 use std::path::Path;
 
@@ -26,6 +34,8 @@ pub fn alpha_from_ns(ns: f64) -> f64 {
 /// twice keeps both entries and the later one wins lookups (as in `tobj`).
 pub(crate) fn parse_mtl(path: &Path, text: &str) -> Result<Vec<RawMaterial>, SceneError> {
     let mut materials: Vec<RawMaterial> = Vec::new();
+    // The kinds the current material has already been warned about.
+    let mut warned: Vec<Unmodelled> = Vec::new();
     for (line_no, line) in numbered_lines(text) {
         let content = line.split('#').next().unwrap_or("");
         let tokens: Vec<&str> = content.split_whitespace().collect();
@@ -54,7 +64,9 @@ pub(crate) fn parse_mtl(path: &Path, text: &str) -> Result<Vec<RawMaterial>, Sce
                 },
                 overridden_at: None,
                 undefined: None,
+                unmodelled: Vec::new(),
             });
+            warned.clear();
             continue;
         }
         let is_used_key = matches!(key, "Kd" | "Ks" | "Ke" | "Ns");
@@ -68,6 +80,20 @@ pub(crate) fn parse_mtl(path: &Path, text: &str) -> Result<Vec<RawMaterial>, Sce
             continue;
         };
         let item = format!("material {}", current.name);
+        if let Some((kind, message)) = unmodelled(key, &tokens[1..]) {
+            if !warned.contains(&kind) {
+                warned.push(kind);
+                current.unmodelled.push(Warning {
+                    source: SourceRef {
+                        file: path.to_path_buf(),
+                        line: Some(line_no),
+                        item: item.clone(),
+                    },
+                    message: format!("`{}`: {message}", quoted(&tokens)),
+                });
+            }
+            continue;
+        }
         match key {
             "Kd" | "Ks" | "Ke" => {
                 let what = match key {
@@ -105,6 +131,119 @@ pub(crate) fn parse_mtl(path: &Path, text: &str) -> Result<Vec<RawMaterial>, Sce
         }
     }
     Ok(materials)
+}
+
+/// A kind of MTL statement that the solver reads but does not model. A material
+/// is warned about once per kind: two `map_Kd` lines, or `d` and `map_d`, are one
+/// warning.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Unmodelled {
+    Bump,
+    Transparency,
+    RefractiveIndex,
+    IlluminationModel,
+    DiffuseTexture,
+    EmissionTexture,
+    SpecularTexture,
+    ExponentTexture,
+    ReflectionMap,
+}
+
+/// Whether the statement `key args` is one the solver does not model, and if so
+/// its kind and what the solver does instead. `None` for the keys the solver uses
+/// and for those that change nothing it computes (see the module notes).
+fn unmodelled(key: &str, args: &[&str]) -> Option<(Unmodelled, String)> {
+    use Unmodelled::*;
+    let single = |args: &[&str]| match args {
+        [value] => value.parse::<f64>().ok(),
+        _ => None,
+    };
+    let found = match key {
+        "map_Bump" | "map_bump" | "bump" => (
+            Bump,
+            "bump maps are not modelled; the surface's geometric (or smooth-group) \
+             normal is used"
+                .to_owned(),
+        ),
+        "d" if single(args) == Some(1.0) => return None,
+        "Tr" if single(args) == Some(0.0) => return None,
+        "d" | "Tr" | "map_d" => (
+            Transparency,
+            "transparency is not modelled; the surface is opaque (note that exporters \
+             disagree on `Tr`: most write Tr = 1 − d, some write d)"
+                .to_owned(),
+        ),
+        "Ni" => (
+            RefractiveIndex,
+            "the index of refraction is not modelled (no refraction, no Fresnel term); \
+             reflectance is Kd and Ks at every angle"
+                .to_owned(),
+        ),
+        "illum" => {
+            let model = match args {
+                [value] => value.parse::<u32>().ok(),
+                _ => None,
+            };
+            let what = match model {
+                Some(0..=2) => return None,
+                Some(3) => "illumination model 3 (ray-traced mirror reflection)",
+                Some(4) => "illumination model 4 (glass: ray-traced reflection and transparency)",
+                Some(5) => "illumination model 5 (Fresnel mirror reflection)",
+                Some(6) => "illumination model 6 (refraction)",
+                Some(7) => "illumination model 7 (refraction with Fresnel reflection)",
+                Some(8) => "illumination model 8 (mirror reflection without ray tracing)",
+                Some(9) => "illumination model 9 (glass without ray tracing)",
+                Some(10) => "illumination model 10 (shadows cast onto invisible surfaces)",
+                _ => "an illumination model outside 0–10",
+            };
+            (
+                IlluminationModel,
+                format!(
+                    "{what} is not modelled; the surface is opaque, reflecting Kd diffusely \
+                     and, in directional mode, Ks as the glossy lobe of Ns \
+                     (Remington 1992, eq. 4.1): no mirror images, no transmission"
+                ),
+            )
+        }
+        "map_Kd" => (
+            DiffuseTexture,
+            "diffuse textures are not yet modelled; the flat Kd is used".to_owned(),
+        ),
+        "map_Ke" => (
+            EmissionTexture,
+            "emission textures are not yet modelled; the flat Ke is used, so the surface \
+             emits uniformly"
+                .to_owned(),
+        ),
+        "map_Ks" => (
+            SpecularTexture,
+            "specular textures are not modelled; the flat Ks is used".to_owned(),
+        ),
+        "map_Ns" => (
+            ExponentTexture,
+            "exponent textures are not modelled; the flat Ns is used".to_owned(),
+        ),
+        "refl" => (
+            ReflectionMap,
+            "reflection maps are not modelled; reflections come only from the scene's \
+             own surfaces"
+                .to_owned(),
+        ),
+        _ => return None,
+    };
+    Some(found)
+}
+
+/// The statement as written, shortened to 80 characters so that a hostile line
+/// does not flood the terminal.
+fn quoted(tokens: &[&str]) -> String {
+    const MAX: usize = 80;
+    let text = tokens.join(" ");
+    if text.chars().count() <= MAX {
+        return text;
+    }
+    let short: String = text.chars().take(MAX).collect();
+    format!("{short}…")
 }
 
 /// `r g b` or the one-value grey form `r`. The CIE `xyz` and `spectral` forms
@@ -185,5 +324,125 @@ mod tests {
                 assert!(message.contains("(material a)"), "{message}");
             }
         }
+    }
+
+    /// Every unmodelled statement once, in two materials; the second material
+    /// gives them in another order and on other lines.
+    const EVERY_STATEMENT: &str = "newmtl first\n\
+        Kd 0.5\n\
+        map_Bump -bm 0.5 normal.png\n\
+        d 0.5\n\
+        Ni 1.45\n\
+        illum 4\n\
+        map_Ks spec.png\n\
+        map_Ns rough.png\n\
+        refl -type sphere env.png\n\
+        map_Kd wall.png\n\
+        map_Ke screen.png\n\
+        newmtl second\n\
+        map_Ke screen.png\n\
+        map_Kd wall.png\n\
+        refl -type sphere env.png\n\
+        map_Ns rough.png\n\
+        map_Ks spec.png\n\
+        illum 7\n\
+        Ni 1.5\n\
+        Tr 0.25\n\
+        bump bump.png\n";
+
+    /// (material, kind's key as first written, line, words the message must hold).
+    const EXPECTED: [(usize, &str, usize, &str); 18] = [
+        (0, "map_Bump -bm 0.5 normal.png", 3, "normal is used"),
+        (0, "d 0.5", 4, "opaque"),
+        (0, "Ni 1.45", 5, "refraction"),
+        (0, "illum 4", 6, "glass"),
+        (0, "map_Ks spec.png", 7, "flat Ks"),
+        (0, "map_Ns rough.png", 8, "flat Ns"),
+        (0, "refl -type sphere env.png", 9, "reflection maps"),
+        (0, "map_Kd wall.png", 10, "flat Kd"),
+        (0, "map_Ke screen.png", 11, "flat Ke"),
+        (1, "map_Ke screen.png", 13, "emits uniformly"),
+        (1, "map_Kd wall.png", 14, "not yet modelled"),
+        (1, "refl -type sphere env.png", 15, "own surfaces"),
+        (1, "map_Ns rough.png", 16, "not modelled"),
+        (1, "map_Ks spec.png", 17, "not modelled"),
+        (1, "illum 7", 18, "refraction with Fresnel"),
+        (1, "Ni 1.5", 19, "Fresnel"),
+        (1, "Tr 0.25", 20, "opaque"),
+        (1, "bump bump.png", 21, "bump maps"),
+    ];
+
+    #[test]
+    fn every_unmodelled_statement_warns_once_per_material_naming_file_and_line() {
+        let m = parse(EVERY_STATEMENT).unwrap();
+        assert_eq!(m.len(), 2);
+        // Nine kinds each: bump, transparency, Ni, illum, map_Kd, map_Ke, map_Ks,
+        // map_Ns, refl.
+        assert_eq!(m[0].unmodelled.len(), 9, "{:?}", m[0].unmodelled);
+        assert_eq!(m[1].unmodelled.len(), 9, "{:?}", m[1].unmodelled);
+        for (material, statement, line, words) in EXPECTED {
+            let hits: Vec<&Warning> = m[material]
+                .unmodelled
+                .iter()
+                .filter(|w| w.message.starts_with(&format!("`{statement}`")))
+                .collect();
+            assert_eq!(hits.len(), 1, "{statement}: {:?}", m[material].unmodelled);
+            let w = hits[0];
+            let name = ["first", "second"][material];
+            assert_eq!(
+                w.to_string().split(": ").next().unwrap(),
+                format!("lib.mtl:{line} (material {name})")
+            );
+            assert!(w.message.contains(words), "{w}");
+        }
+        // The flat values the warnings promise are the ones read.
+        assert_eq!(m[0].kd, DVec3::splat(0.5));
+    }
+
+    #[test]
+    fn a_repeated_kind_warns_once_at_its_first_line() {
+        let m = parse(
+            "newmtl wall\nmap_Kd a.png\nKd 0.1\nmap_Kd b.png\nd 0.5\nmap_d alpha.png\nTr 0.5\n\
+             illum 3\nillum 5\nnewmtl other\nmap_Kd a.png\n",
+        )
+        .unwrap();
+        let lines: Vec<(Option<usize>, &str)> = m[0]
+            .unmodelled
+            .iter()
+            .map(|w| (w.source.line, w.message.split('`').nth(1).unwrap()))
+            .collect();
+        // `d`, `map_d` and `Tr` are one kind (transparency), as are the two `illum`s.
+        assert_eq!(
+            lines,
+            [
+                (Some(2), "map_Kd a.png"),
+                (Some(5), "d 0.5"),
+                (Some(8), "illum 3")
+            ]
+        );
+        // A new material starts afresh.
+        assert_eq!(m[1].unmodelled.len(), 1);
+        assert_eq!(m[1].unmodelled[0].source.line, Some(11));
+    }
+
+    #[test]
+    fn modelled_opaque_and_unknown_statements_stay_silent() {
+        let m = parse(
+            "map_Kd before_any_material.png\nnewmtl plain\nKa 1 1 1\nKd 0.5\nKs 0.1\nNs 10\n\
+             illum 0\nillum 1\nillum 2\nd 1\nd 1.000000\nTr 0\nmap_Ka amb.png\nPr 0.5\n\
+             Pm 0\nnorm n.png\ndisp d.png\nsharpness 60\n",
+        )
+        .unwrap();
+        assert_eq!(m.len(), 1);
+        assert!(m[0].unmodelled.is_empty(), "{:?}", m[0].unmodelled);
+    }
+
+    #[test]
+    fn a_long_statement_is_quoted_shortened() {
+        let long = format!("newmtl a\nmap_Kd {}.png\n", "x".repeat(10_000));
+        let m = parse(&long).unwrap();
+        let message = &m[0].unmodelled[0].message;
+        assert!(message.chars().count() < 300, "{}", message.len());
+        assert!(message.starts_with("`map_Kd xxx"), "{message}");
     }
 }

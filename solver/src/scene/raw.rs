@@ -28,6 +28,10 @@ pub(crate) struct RawMaterial {
     /// A warning to give if nothing defines this material (a `usemtl` name missing
     /// from every MTL file, or faces with no `usemtl`); a TOML override clears it.
     pub undefined: Option<Warning>,
+    /// Warnings for statements the input gives but the solver does not model
+    /// (MTL textures, transparency, `illum` 3–9, ...), one per statement kind,
+    /// given by [`super::clean`] only if a polygon uses the material.
+    pub unmodelled: Vec<Warning>,
 }
 
 impl RawMaterial {
@@ -43,6 +47,7 @@ impl RawMaterial {
             source: source.clone(),
             overridden_at: None,
             undefined: Some(Warning { source, message }),
+            unmodelled: Vec::new(),
         }
     }
 

@@ -991,3 +991,51 @@ fn strict_mode_from_the_config_and_files_that_are_not_scenes() {
         .to_string()
         .contains("units_per_metre"));
 }
+
+#[test]
+fn mtl_statements_not_modelled_reach_the_scene_warnings_for_used_materials_only() {
+    let dir = tempfile::tempdir().unwrap();
+    let obj = write(
+        dir.path(),
+        "room.obj",
+        &format!(
+            "mtllib room.mtl\nusemtl wall\nv 0 0 0\nv 1 0 0\nv 1 0 -1\nv 0 0 -1\n\
+             f 1 2 3 4\n{LAMP_OBJ}"
+        ),
+    );
+    write(
+        dir.path(),
+        "room.mtl",
+        &format!(
+            "newmtl wall\nKd 0.1\nmap_Kd wall.png\nmap_Kd wall2.png\nillum 2\n\
+             newmtl unused\nmap_Kd other.png\n{LAMP_MTL}map_Ke screen.png\n"
+        ),
+    );
+    let scene = load(&obj).unwrap().scene;
+    let texts: Vec<String> = scene.warnings.iter().map(|w| w.to_string()).collect();
+    let mtl = dir.path().join("room.mtl");
+    let at = |line: usize, name: &str| format!("{}:{line} (material {name}): `", mtl.display());
+    // The wall's two `map_Kd` lines give one warning (line 3); the lamp's `map_Ke`
+    // (line 12: after the 7 lines above and LAMP_MTL's blank line, newmtl, Kd and
+    // Ke) one; the unused material none.
+    assert_eq!(texts.len(), 2, "{texts:?}");
+    assert!(
+        texts
+            .iter()
+            .any(|t| t.starts_with(&(at(3, "wall") + "map_Kd wall.png`"))),
+        "{texts:?}"
+    );
+    assert!(
+        texts
+            .iter()
+            .any(|t| t.starts_with(&(at(12, "lamp") + "map_Ke screen.png`"))),
+        "{texts:?}"
+    );
+    match load_strict(&obj) {
+        Err(SceneError::Strict { warning, others }) => {
+            assert!(warning.message.contains("not yet modelled"), "{warning}");
+            assert_eq!(others, 1);
+        }
+        other => panic!("{other:?}"),
+    }
+}

@@ -1,7 +1,7 @@
 use super::*;
 use crate::scene::{Material, Polygon, SourceRef};
 use crate::settings::Preset;
-use solution::camera::UpAxis;
+use solution::camera::{Camera, UpAxis};
 use solution::format::Representation;
 
 pub(crate) fn material(name: &str, kd: f64, emission: f64) -> Material {
@@ -381,4 +381,61 @@ fn ambient_term_matches_cohen_et_al_for_uniform_unshot() {
         (ambient - DVec3::ONE).abs().max_element() < 1e-12,
         "{ambient}"
     );
+}
+
+/// A closed 4 × 2.5 × 6 room (walls facing in, Kd 0.5) with a 1 m² ceiling
+/// light facing down, re-centred by (100, 0, 0).
+fn closed_room(camera: Option<Camera>) -> Scene {
+    let face = |c: DVec3, e1: DVec3, e2: DVec3| vec![c, c + e1, c + e1 + e2, c + e2];
+    let lo = DVec3::new(-2.0, 0.0, -3.0);
+    let (x, y, z) = (DVec3::X * 4.0, DVec3::Y * 2.5, DVec3::Z * 6.0);
+    let polygons = vec![
+        (face(lo, z, x), 0),
+        (face(lo + y, x, z), 0),
+        (face(lo, y, z), 0),
+        (face(lo + x, z, y), 0),
+        (face(lo, x, y), 0),
+        (face(lo + z, y, x), 0),
+        (face(DVec3::new(0.5, 2.49, 1.0), DVec3::X, DVec3::Z), 1),
+    ];
+    let mut scene = scene_of(
+        polygons,
+        vec![material("wall", 0.5, 0.0), material("light", 0.5, 10.0)],
+        2,
+    );
+    scene.recentre_offset = DVec3::new(100.0, 0.0, 0.0);
+    scene.camera = camera;
+    scene
+}
+
+#[test]
+fn a_scene_without_a_camera_gets_an_eye_inside_and_an_authored_camera_is_kept() {
+    let mut solver = Solver::new(&closed_room(None), &settings()).unwrap();
+    solver.step().unwrap();
+    let camera = solver.to_solution(false).header.camera;
+    // The framing camera stood at z = 1.25 + 3.9 / sin 22.5° ≈ 11 m, outside the
+    // room; the chosen eye is inside it (original coordinates: x offset by 100),
+    // 1.6 m above the floor (the room is 2.5 m high: 0.7 × 2.5 > 1.6).
+    let eye = DVec3::from_array(camera.eye);
+    let (lo, hi) = (DVec3::new(98.0, 0.0, -3.0), DVec3::new(102.0, 2.5, 3.0));
+    assert!(eye.cmpgt(lo).all() && eye.cmplt(hi).all(), "{camera:?}");
+    assert!(
+        (eye.y - solution::view::EYE_HEIGHT_M).abs() < 1e-5,
+        "{camera:?}"
+    );
+    assert_eq!(camera.fov_y_deg, solution::view::FOV_Y_DEG);
+    // Partial files choose the same way (the light seen differs only by the
+    // ambient term, which adds to every wall alike).
+    assert!(solver.to_solution(true).header.camera.validate().is_ok());
+
+    let authored = Camera {
+        eye: [100.0, 5.0, 20.0],
+        target: [100.0, 1.0, 0.0],
+        fov_y_deg: 30.0,
+        ..Camera::default()
+    };
+    let mut solver = Solver::new(&closed_room(Some(authored)), &settings()).unwrap();
+    solver.step().unwrap();
+    assert_eq!(solver.to_solution(false).header.camera, authored);
+    assert_eq!(solver.to_solution(true).header.camera, authored);
 }
