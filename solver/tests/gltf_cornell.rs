@@ -173,10 +173,10 @@ fn write_glb(
         "accessors": accessors,
     });
     let mut json = serde_json::to_vec(&document).unwrap();
-    while json.len() % 4 != 0 {
+    while !json.len().is_multiple_of(4) {
         json.push(b' ');
     }
-    while bin.len() % 4 != 0 {
+    while !bin.len().is_multiple_of(4) {
         bin.push(0);
     }
     let mut glb = Vec::new();

@@ -507,7 +507,7 @@ fn check_views(ctx: &Context, document: &Document, buffers: &[Vec<u8>]) -> Resul
             ));
         }
         if let Some(stride) = view.stride() {
-            if !(4..=252).contains(&stride) || stride % 4 != 0 {
+            if !(4..=252).contains(&stride) || !stride.is_multiple_of(4) {
                 return Err(ctx.err(
                     format!("bufferView {}", view.index()),
                     format!("byteStride {stride} is not a multiple of 4 in 4..=252"),
@@ -1022,8 +1022,7 @@ fn convert_material(ctx: &Context, material: &gltf::Material) -> (RawMaterial, V
     if transformed {
         warn("KHR_texture_transform ignored: no textures are modelled yet".to_owned());
     }
-    if let Some(normal) = material.normal_texture() {
-        let _ = normal;
+    if material.normal_texture().is_some() {
         warn("normal map ignored: surfaces are shaded with their geometric normals".to_owned());
     }
     match material.alpha_mode() {
