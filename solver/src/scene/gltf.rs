@@ -54,8 +54,8 @@ use gltf::mesh::Mode;
 use gltf::{Document, Gltf, Semantic};
 use solution::camera::{Camera, MAX_IMAGE_SIDE};
 use std::collections::HashMap;
-use std::io::Read;
 use std::path::{Path, PathBuf};
+use std::rc::Rc;
 
 #[cfg(test)]
 #[path = "gltf_tests.rs"]
@@ -352,26 +352,38 @@ fn validate(ctx: &Context, document: Document) -> Result<Document, SceneError> {
     })
 }
 
-/// Each buffer's bytes, exactly `byteLength` of them: the GLB BIN chunk, a
-/// data URI decoded, or a file relative to the glTF file (at most
-/// `byteLength` bytes are read from it).
+/// One buffer: its first `length` bytes of `bytes`, which several buffers
+/// may share (one file named twice is read once).
+struct Buffer {
+    bytes: Rc<[u8]>,
+    length: usize,
+}
+
+impl Buffer {
+    /// The buffer's `byteLength` bytes.
+    fn data(&self) -> &[u8] {
+        &self.bytes[..self.length]
+    }
+}
+
+/// Each buffer's bytes: the GLB BIN chunk, a data URI decoded, or a file
+/// relative to the glTF file, each at least the buffer's `byteLength`. Every
+/// source is held once however many buffers name it, so what is allocated is
+/// at most the files' sizes and the decoded data URIs (which are smaller than
+/// the JSON that holds them).
 fn load_buffers(
     ctx: &Context,
     document: &Document,
     blob: Option<&[u8]>,
-) -> Result<Vec<Vec<u8>>, SceneError> {
+) -> Result<Vec<Buffer>, SceneError> {
     let dir = ctx.path.parent().unwrap_or(Path::new(""));
+    let mut files: HashMap<PathBuf, Rc<[u8]>> = HashMap::new();
+    let mut bin: Option<Rc<[u8]>> = None;
     let mut out = Vec::new();
     for buffer in document.buffers() {
         let item = format!("buffer {}", buffer.index());
-        let length = buffer.length() as u64;
-        let short = |what: String, have: u64| {
-            ctx.err(
-                item.clone(),
-                format!("{what} is {have} bytes, shorter than the buffer's byteLength {length}"),
-            )
-        };
-        let mut bytes = match buffer.source() {
+        let length = buffer.length();
+        let bytes: Rc<[u8]> = match buffer.source() {
             gltf::buffer::Source::Bin => {
                 let Some(blob) = blob else {
                     return Err(ctx.err(
@@ -379,47 +391,45 @@ fn load_buffers(
                         "the buffer refers to the GLB BIN chunk, and the file has none",
                     ));
                 };
-                if (blob.len() as u64) < length {
-                    return Err(short("the GLB BIN chunk".to_owned(), blob.len() as u64));
-                }
-                blob[..length as usize].to_vec()
+                bin.get_or_insert_with(|| Rc::from(blob)).clone()
             }
             gltf::buffer::Source::Uri(uri) if uri.starts_with("data:") => {
-                let decoded = decode_data_uri(uri).map_err(|m| ctx.err(item.clone(), m))?;
-                if (decoded.len() as u64) < length {
-                    return Err(short("the data URI".to_owned(), decoded.len() as u64));
-                }
-                decoded
+                Rc::from(decode_data_uri(uri).map_err(|m| ctx.err(item.clone(), m))?)
             }
             gltf::buffer::Source::Uri(uri) => {
                 let file = relative_file(dir, uri).map_err(|m| ctx.err(item.clone(), m))?;
-                let cannot = |e: std::io::Error| {
-                    ctx.err(
-                        item.clone(),
-                        format!("uri `{uri}`: cannot read {}: {e}", file.display()),
-                    )
-                };
-                let handle = std::fs::File::open(&file).map_err(cannot)?;
-                let size = handle.metadata().map_err(cannot)?.len();
-                if size < length {
-                    return Err(short(format!("`{uri}` ({})", file.display()), size));
+                match files.get(&file) {
+                    Some(bytes) => bytes.clone(),
+                    None => {
+                        let bytes: Rc<[u8]> = Rc::from(std::fs::read(&file).map_err(|e| {
+                            ctx.err(
+                                item.clone(),
+                                format!("uri `{uri}`: cannot read {}: {e}", file.display()),
+                            )
+                        })?);
+                        files.insert(file, bytes.clone());
+                        bytes
+                    }
                 }
-                let mut bytes = Vec::with_capacity(length as usize);
-                handle
-                    .take(length)
-                    .read_to_end(&mut bytes)
-                    .map_err(cannot)?;
-                if (bytes.len() as u64) < length {
-                    return Err(short(
-                        format!("`{uri}` ({})", file.display()),
-                        bytes.len() as u64,
-                    ));
-                }
-                bytes
             }
         };
-        bytes.truncate(length as usize);
-        out.push(bytes);
+        if bytes.len() < length {
+            let what = match buffer.source() {
+                gltf::buffer::Source::Bin => "the GLB BIN chunk".to_owned(),
+                gltf::buffer::Source::Uri(uri) if uri.starts_with("data:") => {
+                    "the data URI".to_owned()
+                }
+                gltf::buffer::Source::Uri(uri) => format!("`{uri}`"),
+            };
+            return Err(ctx.err(
+                item,
+                format!(
+                    "{what} is {} bytes, shorter than the buffer's byteLength {length}",
+                    bytes.len()
+                ),
+            ));
+        }
+        out.push(Buffer { bytes, length });
     }
     Ok(out)
 }
@@ -491,11 +501,11 @@ fn short_text(text: &str) -> String {
 }
 
 /// Every buffer view lies inside its buffer.
-fn check_views(ctx: &Context, document: &Document, buffers: &[Vec<u8>]) -> Result<(), SceneError> {
+fn check_views(ctx: &Context, document: &Document, buffers: &[Buffer]) -> Result<(), SceneError> {
     for view in document.views() {
         let buffer = view.buffer().index();
         let end = view.offset() as u64 + view.length() as u64;
-        let have = buffers[buffer].len() as u64;
+        let have = buffers[buffer].data().len() as u64;
         if end > have {
             return Err(ctx.err(
                 format!("bufferView {}", view.index()),
@@ -557,7 +567,7 @@ fn document_warnings(ctx: &Context, document: &Document, warnings: &mut Vec<Warn
 struct Builder<'a> {
     ctx: &'a Context<'a>,
     document: &'a Document,
-    buffers: &'a [Vec<u8>],
+    buffers: &'a [Buffer],
     raw: RawScene,
     /// glTF material index (`None`: the primitive names none) → raw material.
     materials: HashMap<Option<usize>, usize>,
@@ -1066,7 +1076,7 @@ fn convert_material(ctx: &Context, material: &gltf::Material) -> (RawMaterial, V
 /// here), and its last element must end inside the view.
 fn accessor_span<'b>(
     ctx: &Context,
-    buffers: &'b [Vec<u8>],
+    buffers: &'b [Buffer],
     accessor: &gltf::Accessor,
     element: usize,
     what: &str,
@@ -1109,7 +1119,7 @@ fn accessor_span<'b>(
             ),
         ));
     }
-    let buffer = &buffers[view.buffer().index()];
+    let buffer = buffers[view.buffer().index()].data();
     let start = view.offset() + accessor.offset();
     Ok((&buffer[start..view.offset() + end as usize], stride, count))
 }
@@ -1117,7 +1127,7 @@ fn accessor_span<'b>(
 /// A `VEC3` `FLOAT` accessor (positions, normals) in f64, every value finite.
 fn read_vec3(
     ctx: &Context,
-    buffers: &[Vec<u8>],
+    buffers: &[Buffer],
     accessor: &gltf::Accessor,
     what: &str,
     item: &str,
@@ -1172,7 +1182,7 @@ fn read_vec3(
 /// specification, §3.7.2.1).
 fn read_indices(
     ctx: &Context,
-    buffers: &[Vec<u8>],
+    buffers: &[Buffer],
     accessor: &gltf::Accessor,
     item: &str,
 ) -> Result<Vec<u32>, SceneError> {
