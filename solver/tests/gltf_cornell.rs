@@ -301,3 +301,46 @@ fn gltf_cornell_box_solves_to_the_same_images_as_the_obj() {
         seed_to_seed.mare
     );
 }
+
+/// `solver solve` reads a `.glb` by its extension: the header carries the
+/// glTF's camera and units (metres unless `--units-per-metre` says otherwise).
+#[test]
+fn solver_solve_reads_a_glb_and_stores_its_camera() {
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..");
+    let dir = tempfile::tempdir().unwrap();
+    let glb = dir.path().join("box.glb");
+    write_glb(
+        &read_obj(&root.join("config/cornell_box.obj")),
+        &read_mtl(&root.join("config/cornell_box.mtl")),
+        [278.0, 273.0, -800.0],
+        39.3077,
+        &glb,
+    );
+    for (units, expected) in [(None, 1.0), (Some("1000"), 1000.0)] {
+        let out = dir.path().join(format!("box_{expected}.sol"));
+        let mut cmd = std::process::Command::new(env!("CARGO_BIN_EXE_solver"));
+        cmd.arg("solve")
+            .arg(&glb)
+            .args(["--preset", "draft", "-o"])
+            .arg(&out);
+        if let Some(u) = units {
+            cmd.args(["--units-per-metre", u]);
+        }
+        let result = cmd.output().unwrap();
+        assert!(
+            result.status.success(),
+            "{}",
+            String::from_utf8_lossy(&result.stderr)
+        );
+        let solution = solution::format::read_solution(&out).unwrap();
+        let header = &solution.header;
+        assert_eq!(header.units_per_metre, expected);
+        assert_eq!(header.camera.eye, [278.0, 273.0, -800.0]);
+        let direction = DVec3::from(header.camera.target) - DVec3::from(header.camera.eye);
+        assert!(
+            (direction.normalize() - DVec3::Z).length() < 1e-12,
+            "{direction}"
+        );
+        assert!((header.camera.fov_y_deg - 39.3077).abs() < 1e-5);
+    }
+}
