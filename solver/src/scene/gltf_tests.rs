@@ -568,3 +568,63 @@ fn hostile_documents_are_errors_not_panics() {
         );
     }
 }
+
+#[test]
+fn normals_reach_the_smooth_surfaces_as_obj_vn_do() {
+    // Two triangles of a strip folded by 20° about the x axis (below the 30°
+    // crease angle), with NORMALs bisecting the fold on the shared edge and
+    // the facet normals elsewhere: one smooth group whose corners shade with
+    // the file's normals.
+    let (c, s) = (10f32.to_radians().cos(), 10f32.to_radians().sin());
+    let positions = [
+        [0.0, -c, s],
+        [1.0, -c, s],
+        [0.0, 0.0, 0.0],
+        [1.0, 0.0, 0.0],
+        [0.0, c, s],
+        [1.0, c, s],
+    ];
+    // The strip's facet normals (from its winding, §3.7.2.1): (0, s, c) below
+    // the fold, (0, −s, c) above; the shared edge gets +z, the bisector.
+    let lower = [0.0, s, c];
+    let upper = [0.0, -s, c];
+    let normals = [lower, lower, [0.0, 0.0, 1.0], [0.0, 0.0, 1.0], upper, upper];
+    let mut bin = floats(&positions);
+    let normals_at = bin.len();
+    bin.extend(floats(&normals));
+    let mut f = triangle();
+    f.json["buffers"][0]["byteLength"] = json!(bin.len());
+    f.json["bufferViews"] = json!([
+        {"buffer": 0, "byteOffset": 0, "byteLength": normals_at},
+        {"buffer": 0, "byteOffset": normals_at, "byteLength": normals_at}
+    ]);
+    f.json["accessors"] = json!([
+        {"bufferView": 0, "componentType": 5126, "count": 6, "type": "VEC3",
+         "min": [0.0, -c, 0.0], "max": [1.0, c, s]},
+        {"bufferView": 1, "componentType": 5126, "count": 6, "type": "VEC3"}
+    ]);
+    f.json["meshes"][0]["primitives"][0] =
+        json!({"attributes": {"POSITION": 0, "NORMAL": 1}, "mode": 5, "material": 0});
+    f.json["nodes"][0] = json!({"mesh": 0});
+    f.bin = bin;
+    let dir = tempfile::tempdir().unwrap();
+    let path = write_gltf(dir.path(), "fold", &f);
+    let mut scene = load(&path).scene;
+    let facets: Vec<DVec3> = scene.polygons.iter().map(|p| p.normal()).collect();
+    assert!(
+        facets.iter().all(|n| n.z > 0.9),
+        "front faces toward +z: {facets:?}"
+    );
+    let report = crate::scene::smooth_scene(&mut scene, crate::scene::DEFAULT_CREASE_ANGLE);
+    assert_eq!(report.groups, 1, "{report:?}");
+    assert!(report.with_input_normals > 0, "{report:?}");
+    // On the shared edge (y = 0) every polygon shades with the file's +z.
+    for p in &scene.polygons {
+        let normals = p.vertex_normals.as_ref().expect("smooth corners");
+        for (v, n) in p.vertices.iter().zip(normals) {
+            if (v.y + scene.recentre_offset.y).abs() < 1e-9 {
+                assert!((*n - DVec3::Z).length() < 1e-6, "{v}: {n}");
+            }
+        }
+    }
+}
