@@ -17,8 +17,8 @@
 //!   composed along the scene graph in f64 (glTF 2.0 specification, §3.5.3
 //!   "Transformations"). A node whose world matrix has a negative determinant
 //!   mirrors, so its triangles are turned round to keep their front faces
-//!   (§3.7.2.1). `TRIANGLE_STRIP` and `TRIANGLE_FAN` primitives are converted
-//!   by the specification's formulas (§3.7.2.1); points and lines are skipped
+//!   (§3.7.3). `TRIANGLE_STRIP` and `TRIANGLE_FAN` primitives are converted
+//!   by the specification's formulas (§3.7.3); points and lines are skipped
 //!   with a warning. `NORMAL`s, transformed by the inverse transpose, become
 //!   the polygons' vertex normals, as OBJ `vn` do.
 //! * **Materials** (metallic-roughness, §3.9.2): Kd = baseColor·(1 − metallic),
@@ -72,7 +72,7 @@ pub(crate) const UNITS_PER_METRE: f64 = 1.0;
 pub(crate) const MAX_PLACED_TRIANGLES: usize = 10_000_000;
 
 /// The reflectance of a dielectric at normal incidence that the
-/// metallic-roughness model assumes (glTF 2.0 specification, appendix B.3.2):
+/// metallic-roughness model assumes (glTF 2.0 specification, appendix B):
 /// Ks = lerp(0.04, baseColor, metallic).
 pub(crate) const DIELECTRIC_SPECULAR: f64 = 0.04;
 
@@ -207,7 +207,7 @@ pub(crate) fn parse_gltf(path: &Path) -> Result<GltfScene, SceneError> {
     Ok(GltfScene { raw, camera })
 }
 
-/// Splits a binary glTF file (glTF 2.0 specification, §4.4) into its JSON
+/// Splits a binary glTF file (glTF 2.0 specification, chapter 4) into its JSON
 /// chunk and its optional BIN chunk, checking every length against the bytes
 /// that are there.
 fn split_glb<'a>(
@@ -276,7 +276,7 @@ fn split_glb<'a>(
         return Err(ctx.err("GLB", "the first chunk of a binary glTF must be JSON"));
     }
     let mut bin = None;
-    // Chunks are 4-byte aligned; unknown chunk types are skipped (§4.4.3).
+    // Chunks are 4-byte aligned; the BIN chunk, if any, is the second, and chunks of other types are ignored (chapter 4).
     next = next.div_ceil(4) * 4;
     if next + 8 <= data.len() {
         let (kind, body, _) = chunk(next, "BIN")?;
@@ -854,7 +854,7 @@ struct Triangles {
 }
 
 /// Triangle corners from a primitive's index list (glTF 2.0 specification,
-/// §3.7.2.1): triangles take the indices in threes; strip triangle i is
+/// §3.7.3): triangles take the indices in threes; strip triangle i is
 /// (v_i, v_{i+1+i%2}, v_{i+2−i%2}), keeping every triangle's winding; fan
 /// triangle i is (v_{i+1}, v_{i+2}, v_0). Strip and fan triangles that repeat
 /// an index are the degenerate joins that strips use and are left out.
@@ -927,7 +927,7 @@ fn local_matrix(node: &gltf::Node) -> Result<DMat4, String> {
 
 /// The solver's camera for a glTF camera node with world matrix `world`: the
 /// eye at the node's origin, looking down its −z, its +y up (glTF 2.0
-/// specification, §3.10.1). The target is one scene unit ahead.
+/// specification, §3.10). The target is one scene unit ahead.
 pub(crate) fn camera_from_node(world: DMat4, yfov_rad: f64, aspect: Option<f64>) -> Camera {
     let eye = world.transform_point3(DVec3::ZERO);
     let forward = world.transform_vector3(DVec3::NEG_Z).normalize_or_zero();
@@ -1179,7 +1179,7 @@ fn read_vec3(
 }
 
 /// A `SCALAR` index accessor of unsigned bytes, shorts or ints (glTF 2.0
-/// specification, §3.7.2.1).
+/// specification, §3.7.3).
 fn read_indices(
     ctx: &Context,
     buffers: &[Buffer],

@@ -77,7 +77,7 @@ fn write_data_uri(dir: &Path, name: &str, f: &Fixture) -> PathBuf {
     path
 }
 
-/// The bytes of a binary glTF (glTF 2.0 specification, §4.4): header, JSON
+/// The bytes of a binary glTF (glTF 2.0 specification, chapter 4): header, JSON
 /// chunk padded with spaces, BIN chunk padded with zeros.
 fn glb_bytes(f: &Fixture) -> Vec<u8> {
     let mut json = serde_json::to_vec(&f.json).unwrap();
@@ -419,7 +419,7 @@ fn mirroring_nodes_keep_front_faces_and_normals_follow_the_inverse_transpose() {
 
 #[test]
 fn strips_and_fans_follow_the_specification() {
-    // §3.7.2.1: strip triangle i = (v_i, v_{i+1+i%2}, v_{i+2−i%2}); fan
+    // §3.7.3: strip triangle i = (v_i, v_{i+1+i%2}, v_{i+2−i%2}); fan
     // triangle i = (v_{i+1}, v_{i+2}, v_0). A strip's repeated index (a join) is
     // dropped.
     assert_eq!(
@@ -584,7 +584,7 @@ fn normals_reach_the_smooth_surfaces_as_obj_vn_do() {
         [0.0, c, s],
         [1.0, c, s],
     ];
-    // The strip's facet normals (from its winding, §3.7.2.1): (0, s, c) below
+    // The strip's facet normals (from its winding, §3.7.3): (0, s, c) below
     // the fold, (0, −s, c) above; the shared edge gets +z, the bisector.
     let lower = [0.0, s, c];
     let upper = [0.0, -s, c];
