@@ -276,7 +276,8 @@ fn split_glb<'a>(
         return Err(ctx.err("GLB", "the first chunk of a binary glTF must be JSON"));
     }
     let mut bin = None;
-    // Chunks are 4-byte aligned; the BIN chunk, if any, is the second, and chunks of other types are ignored (chapter 4).
+    // Chunks are 4-byte aligned; the BIN chunk, if any, is the second, and
+    // chunks of other types are ignored (chapter 4).
     next = next.div_ceil(4) * 4;
     if next + 8 <= data.len() {
         let (kind, body, _) = chunk(next, "BIN")?;
