@@ -40,7 +40,7 @@ way. The result depends only on --seed, never on --threads.";
 #[derive(clap::Args, Debug, Clone)]
 #[command(after_long_help = AFTER_LONG_HELP)]
 pub struct ReferenceArgs {
-    /// The scene: `.obj` (+ `.mtl`), `.toml` scene config or a legacy geometry file.
+    /// The scene: `.obj` (+ `.mtl`), `.gltf` / `.glb` (glTF 2.0, metres; docs/gltf.md), `.toml` scene config or a legacy geometry file.
     #[arg(value_name = "SCENE")]
     pub scene: PathBuf,
 

@@ -15,6 +15,7 @@ mod clean;
 mod config;
 mod display;
 mod error;
+mod gltf;
 mod legacy;
 mod mtl;
 mod obj;
@@ -209,7 +210,8 @@ pub struct LoadedScene {
 
 /// Imports a scene, choosing the reader by extension (case-insensitive):
 /// `.obj` (with its MTL libraries), `.toml` (a scene config naming geometry
-/// files), anything else (e.g. `.geom`) the legacy geometry file of Remington 1992
+/// files), `.gltf` / `.glb` (glTF 2.0, in metres, its first perspective camera
+/// the scene's), anything else (e.g. `.geom`) the legacy geometry file of Remington 1992
 /// appendix B. Positions are re-centred in f64, polygons cleaned and welded;
 /// see [`Scene::warnings`] for what was changed.
 pub fn load_scene(path: &Path, options: &ImportOptions) -> Result<LoadedScene, SceneError> {
@@ -244,6 +246,14 @@ pub fn load_scene(path: &Path, options: &ImportOptions) -> Result<LoadedScene, S
             (c.raw, c.settings, c.display)
         }
         Some("obj") => (obj::parse_obj(path)?, SettingsPatch::default(), None),
+        Some("gltf") | Some("glb") => {
+            let g = self::gltf::parse_gltf(path)?;
+            build.units_per_metre = options
+                .units_per_metre
+                .unwrap_or(self::gltf::UNITS_PER_METRE);
+            build.camera = g.camera;
+            (g.raw, SettingsPatch::default(), None)
+        }
         Some("mtl") => {
             return Err(SceneError::at(
                 path,

@@ -55,7 +55,7 @@ Exit codes: 0 done, 1 error, 2 bad command line, 130 interrupted (resumable).";
 #[derive(clap::Args, Debug, Clone)]
 #[command(after_long_help = AFTER_LONG_HELP)]
 pub struct SolveArgs {
-    /// The scene: `.obj` (+ `.mtl`), `.toml` scene config or a legacy geometry file.
+    /// The scene: `.obj` (+ `.mtl`), `.gltf` / `.glb` (glTF 2.0, metres; docs/gltf.md), `.toml` scene config or a legacy geometry file.
     #[arg(value_name = "SCENE")]
     pub scene: PathBuf,
 

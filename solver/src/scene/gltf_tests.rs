@@ -1,0 +1,630 @@
+//! Tests of the glTF importer on files written here: JSON built with
+//! `serde_json`, binary buffers packed by hand, as `.gltf` + `.bin`, `.glb` and
+//! data-URI buffers in a temporary folder.
+
+use super::*;
+use crate::scene::{load_scene, ImportOptions, LoadedScene};
+use serde_json::{json, Value};
+
+/// A glTF document and its one binary buffer, before it is written.
+struct Fixture {
+    json: Value,
+    bin: Vec<u8>,
+}
+
+/// Little-endian bytes of f32 triples.
+fn floats(values: &[[f32; 3]]) -> Vec<u8> {
+    values
+        .iter()
+        .flatten()
+        .flat_map(|v| v.to_le_bytes())
+        .collect()
+}
+
+/// One triangle (0,0,0), (1,0,0), (0,1,0), facing +z, indexed by u16, on a
+/// node with translation (1, 2, 3) and scale (2, 2, 2), with an emissive
+/// metallic-roughness material.
+fn triangle() -> Fixture {
+    let positions = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
+    let mut bin = floats(&positions);
+    for i in [0u16, 1, 2] {
+        bin.extend_from_slice(&i.to_le_bytes());
+    }
+    bin.extend_from_slice(&[0, 0]); // pad to 4 bytes
+    let json = json!({
+        "asset": {"version": "2.0"},
+        "scene": 0,
+        "scenes": [{"nodes": [0]}],
+        "nodes": [{"name": "holder", "mesh": 0, "translation": [1.0, 2.0, 3.0], "scale": [2.0, 2.0, 2.0]}],
+        "meshes": [{"name": "tri", "primitives": [{"attributes": {"POSITION": 0}, "indices": 1, "material": 0}]}],
+        "materials": [{
+            "name": "lamp",
+            "pbrMetallicRoughness": {"baseColorFactor": [0.8, 0.6, 0.4, 1.0], "metallicFactor": 0.25, "roughnessFactor": 0.5},
+            "emissiveFactor": [1.0, 2.0, 3.0],
+            "extensions": {"KHR_materials_emissive_strength": {"emissiveStrength": 5.0}}
+        }],
+        "extensionsUsed": ["KHR_materials_emissive_strength"],
+        "buffers": [{"byteLength": bin.len()}],
+        "bufferViews": [
+            {"buffer": 0, "byteOffset": 0, "byteLength": 36},
+            {"buffer": 0, "byteOffset": 36, "byteLength": 6}
+        ],
+        "accessors": [
+            {"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0.0, 0.0, 0.0], "max": [1.0, 1.0, 0.0]},
+            {"bufferView": 1, "componentType": 5123, "count": 3, "type": "SCALAR"}
+        ]
+    });
+    Fixture { json, bin }
+}
+
+/// Writes `name.gltf` with its buffer in `name.bin`.
+fn write_gltf(dir: &Path, name: &str, f: &Fixture) -> PathBuf {
+    let mut json = f.json.clone();
+    json["buffers"][0]["uri"] = json!(format!("{name}.bin"));
+    std::fs::write(dir.join(format!("{name}.bin")), &f.bin).unwrap();
+    let path = dir.join(format!("{name}.gltf"));
+    std::fs::write(&path, serde_json::to_vec_pretty(&json).unwrap()).unwrap();
+    path
+}
+
+/// Writes `name.gltf` with its buffer as a base64 data URI.
+fn write_data_uri(dir: &Path, name: &str, f: &Fixture) -> PathBuf {
+    let mut json = f.json.clone();
+    let data = base64::engine::general_purpose::STANDARD.encode(&f.bin);
+    json["buffers"][0]["uri"] = json!(format!("data:application/octet-stream;base64,{data}"));
+    let path = dir.join(format!("{name}.gltf"));
+    std::fs::write(&path, serde_json::to_vec(&json).unwrap()).unwrap();
+    path
+}
+
+/// The bytes of a binary glTF (glTF 2.0 specification, chapter 4): header, JSON
+/// chunk padded with spaces, BIN chunk padded with zeros.
+fn glb_bytes(f: &Fixture) -> Vec<u8> {
+    let mut json = serde_json::to_vec(&f.json).unwrap();
+    while !json.len().is_multiple_of(4) {
+        json.push(b' ');
+    }
+    let mut bin = f.bin.clone();
+    while !bin.len().is_multiple_of(4) {
+        bin.push(0);
+    }
+    let total = 12 + 8 + json.len() + 8 + bin.len();
+    let mut out = Vec::new();
+    out.extend_from_slice(b"glTF");
+    out.extend_from_slice(&2u32.to_le_bytes());
+    out.extend_from_slice(&(total as u32).to_le_bytes());
+    out.extend_from_slice(&(json.len() as u32).to_le_bytes());
+    out.extend_from_slice(b"JSON");
+    out.extend_from_slice(&json);
+    out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
+    out.extend_from_slice(b"BIN\0");
+    out.extend_from_slice(&bin);
+    out
+}
+
+fn write_glb(dir: &Path, name: &str, f: &Fixture) -> PathBuf {
+    let path = dir.join(format!("{name}.glb"));
+    std::fs::write(&path, glb_bytes(f)).unwrap();
+    path
+}
+
+fn load(path: &Path) -> LoadedScene {
+    load_scene(path, &ImportOptions::default()).unwrap()
+}
+
+fn error_of(path: &Path) -> String {
+    match parse_gltf(path) {
+        Ok(_) => panic!("{} imported", path.display()),
+        Err(e) => e.to_string(),
+    }
+}
+
+#[test]
+fn node_translation_and_scale_place_the_vertices_exactly() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = write_gltf(dir.path(), "tri", &triangle());
+    let raw = parse_gltf(&path).unwrap().raw;
+    assert_eq!(raw.polygons.len(), 1);
+    // x' = 2x + t: every product and sum is exact in f64, so 1e-12 is rounding
+    // headroom only.
+    let expected = [
+        DVec3::new(1.0, 2.0, 3.0),
+        DVec3::new(3.0, 2.0, 3.0),
+        DVec3::new(1.0, 4.0, 3.0),
+    ];
+    for (v, e) in raw.polygons[0].vertices.iter().zip(expected) {
+        assert!((*v - e).abs().max_element() <= 1e-12, "{v} vs {e}");
+    }
+    // Through the whole import (re-centred by the bounding-box centre in f64):
+    // the same positions back, and metres.
+    let loaded = load(&path);
+    let scene = &loaded.scene;
+    assert_eq!(scene.units_per_metre, 1.0);
+    assert_eq!(scene.up_axis, solution::camera::UpAxis::PosY);
+    for (v, e) in scene.polygons[0].vertices.iter().zip(expected) {
+        assert!((*v + scene.recentre_offset - e).abs().max_element() <= 1e-12);
+    }
+    let scaled = load_scene(
+        &path,
+        &ImportOptions {
+            units_per_metre: Some(1000.0),
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    assert_eq!(
+        scaled.scene.units_per_metre, 1000.0,
+        "the command line wins"
+    );
+}
+
+#[test]
+fn metallic_roughness_maps_to_kd_ks_alpha_and_emission() {
+    // The model on exact numbers: Kd = 0.8·0.75 = 0.6, …; Ks = 0.04 + 0.25·(base
+    // − 0.04); α = 0.5² = 0.25. f64 rounding only: 1e-15.
+    let (kd, ks, alpha, clamped) = metallic_roughness(DVec3::new(0.8, 0.6, 0.4), 0.25, 0.5);
+    assert!((kd - DVec3::new(0.6, 0.45, 0.3)).abs().max_element() < 1e-15);
+    assert!((ks - DVec3::new(0.23, 0.18, 0.13)).abs().max_element() < 1e-15);
+    assert_eq!(alpha, 0.25);
+    assert!(!clamped);
+    // α below the solver's smallest lobe is clamped to it and says so.
+    let (_, _, alpha, clamped) = metallic_roughness(DVec3::ONE, 0.0, 0.01);
+    assert_eq!(alpha, MIN_ALPHA);
+    assert!(clamped);
+    // Fully metallic: no diffuse part, Ks = baseColor.
+    let (kd, ks, _, _) = metallic_roughness(DVec3::new(0.9, 0.5, 0.1), 1.0, 1.0);
+    assert_eq!(kd, DVec3::ZERO);
+    assert!((ks - DVec3::new(0.9, 0.5, 0.1)).abs().max_element() < 1e-15);
+
+    // Through the file: the factors are f32 in glTF (0.8f32 = 0.800000011920929),
+    // so Kd and Ks agree with the decimal values to f32 rounding, ≤ 6e-8
+    // relative; α = 0.25 and Le = (1, 2, 3) × 5 are exact in f32.
+    let dir = tempfile::tempdir().unwrap();
+    let path = write_gltf(dir.path(), "tri", &triangle());
+    let scene = load(&path).scene;
+    let m = &scene.materials[0];
+    assert_eq!(m.name, "lamp");
+    assert!(
+        (m.kd - DVec3::new(0.6, 0.45, 0.3)).abs().max_element() < 1e-7,
+        "{}",
+        m.kd
+    );
+    assert!(
+        (m.ks - DVec3::new(0.23, 0.18, 0.13)).abs().max_element() < 1e-7,
+        "{}",
+        m.ks
+    );
+    assert_eq!(m.alpha, 0.25);
+    assert_eq!(m.emission, DVec3::new(5.0, 10.0, 15.0));
+}
+
+#[test]
+fn glb_and_data_uri_give_the_same_scene_as_gltf_with_bin() {
+    let dir = tempfile::tempdir().unwrap();
+    let f = triangle();
+    let separate = load(&write_gltf(dir.path(), "a", &f)).scene;
+    for path in [
+        write_glb(dir.path(), "b", &f),
+        write_data_uri(dir.path(), "c", &f),
+    ] {
+        let other = load(&path).scene;
+        assert_eq!(other.materials, separate.materials, "{}", path.display());
+        assert_eq!(other.polygons.len(), separate.polygons.len());
+        for (p, q) in other.polygons.iter().zip(&separate.polygons) {
+            assert_eq!(p.vertices, q.vertices, "{}", path.display());
+            assert_eq!(p.material, q.material);
+            assert_eq!(p.source.file, path, "sources name the file read");
+        }
+        assert_eq!(other.recentre_offset, separate.recentre_offset);
+        assert_eq!(other.camera, separate.camera);
+    }
+}
+
+#[test]
+fn out_of_range_index_names_file_mesh_primitive_and_index() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut f = triangle();
+    f.bin[36 + 4..36 + 6].copy_from_slice(&3u16.to_le_bytes());
+    let path = write_gltf(dir.path(), "bad", &f);
+    let message = error_of(&path);
+    for part in [
+        "bad.gltf",
+        "mesh `tri`",
+        "primitive 0",
+        "index 3",
+        "has 3 vertices",
+    ] {
+        assert!(message.contains(part), "{part:?} missing from: {message}");
+    }
+}
+
+#[test]
+fn buffer_shorter_than_its_views_is_an_error() {
+    let dir = tempfile::tempdir().unwrap();
+    // The buffer claims fewer bytes than the index view reaches.
+    let mut f = triangle();
+    f.json["buffers"][0]["byteLength"] = json!(40);
+    let message = error_of(&write_gltf(dir.path(), "short_view", &f));
+    assert!(message.contains("short_view.gltf"), "{message}");
+    assert!(message.contains("bufferView 1"), "{message}");
+    assert!(message.contains("shorter than its views"), "{message}");
+    // The file holds fewer bytes than the buffer's byteLength.
+    let f = triangle();
+    let path = write_gltf(dir.path(), "short_file", &f);
+    std::fs::write(dir.path().join("short_file.bin"), &f.bin[..20]).unwrap();
+    let message = error_of(&path);
+    assert!(
+        message.contains("short_file.gltf") && message.contains("buffer 0"),
+        "{message}"
+    );
+    assert!(
+        message.contains("is 20 bytes, shorter than the buffer's byteLength 44"),
+        "{message}"
+    );
+    // An accessor running past the end of its view.
+    let mut f = triangle();
+    f.json["accessors"][0]["count"] = json!(4);
+    let message = error_of(&write_gltf(dir.path(), "long_accessor", &f));
+    assert!(
+        message.contains("POSITION accessor 0") && message.contains("need 48 bytes"),
+        "{message}"
+    );
+}
+
+#[test]
+fn draco_and_meshopt_as_required_extensions_are_refused_by_name() {
+    let dir = tempfile::tempdir().unwrap();
+    for (extension, phrase) in [
+        ("KHR_draco_mesh_compression", "Draco"),
+        ("EXT_meshopt_compression", "meshopt"),
+        ("KHR_texture_basisu", "textures cannot be read"),
+        ("EXT_texture_webp", "textures cannot be read"),
+        ("EXT_made_up", "does not know"),
+    ] {
+        let mut f = triangle();
+        f.json["extensionsUsed"] = json!([extension]);
+        f.json["extensionsRequired"] = json!([extension]);
+        let message = error_of(&write_gltf(dir.path(), "compressed", &f));
+        assert!(message.contains("compressed.gltf"), "{message}");
+        assert!(
+            message.contains(extension) && message.contains(phrase),
+            "{message}"
+        );
+    }
+    // Tolerated required extensions are read past (and warned about where used).
+    let mut f = triangle();
+    f.json["extensionsRequired"] = json!(["KHR_materials_emissive_strength"]);
+    assert!(parse_gltf(&write_gltf(dir.path(), "tolerated", &f)).is_ok());
+}
+
+#[test]
+fn truncated_glb_is_an_error_at_every_length() {
+    let dir = tempfile::tempdir().unwrap();
+    let bytes = glb_bytes(&triangle());
+    let path = dir.path().join("cut.glb");
+    // Every prefix: the header, the JSON chunk and the BIN chunk each cut.
+    for length in 0..bytes.len() {
+        std::fs::write(&path, &bytes[..length]).unwrap();
+        let message = error_of(&path);
+        assert!(message.contains("cut.glb"), "{length}: {message}");
+    }
+    std::fs::write(&path, &bytes[..bytes.len() - 10]).unwrap();
+    let message = error_of(&path);
+    assert!(message.contains("truncated binary glTF"), "{message}");
+    // A header length that lies about the file is caught before any slice.
+    let mut lying = bytes.clone();
+    lying[8..12].copy_from_slice(&u32::MAX.to_le_bytes());
+    std::fs::write(&path, &lying).unwrap();
+    assert!(error_of(&path).contains("the header says 4294967295 bytes"));
+    let mut tiny = bytes;
+    tiny[8..12].copy_from_slice(&3u32.to_le_bytes());
+    std::fs::write(&path, &tiny).unwrap();
+    error_of(&path);
+}
+
+#[test]
+fn missing_bin_names_the_gltf_and_the_bin() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = write_gltf(dir.path(), "lonely", &triangle());
+    std::fs::remove_file(dir.path().join("lonely.bin")).unwrap();
+    let message = error_of(&path);
+    assert!(
+        message.contains("lonely.gltf") && message.contains("buffer 0"),
+        "{message}"
+    );
+    assert!(
+        message.contains("uri `lonely.bin`: cannot read"),
+        "{message}"
+    );
+}
+
+#[test]
+fn camera_node_gives_the_eye_and_the_view_direction() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut f = triangle();
+    f.json["cameras"] = json!([
+        {"type": "orthographic", "orthographic": {"xmag": 1.0, "ymag": 1.0, "znear": 0.1, "zfar": 10.0}},
+        {"type": "perspective", "perspective": {"yfov": 0.5, "aspectRatio": 2.0, "znear": 0.1}},
+        {"type": "perspective", "perspective": {"yfov": 1.0, "znear": 0.1}}
+    ]);
+    // Scene-graph order: the orthographic camera (ignored), then the first
+    // perspective one at (0, 1, 5), then another that must not win.
+    f.json["nodes"] = json!([
+        {"mesh": 0},
+        {"camera": 0, "translation": [9.0, 9.0, 9.0]},
+        {"camera": 1, "translation": [0.0, 1.0, 5.0]},
+        {"camera": 2, "translation": [0.0, 0.0, -5.0]}
+    ]);
+    f.json["scenes"] = json!([{"nodes": [0, 1, 2, 3]}]);
+    let path = write_gltf(dir.path(), "view", &f);
+    let loaded = load(&path);
+    let camera = loaded.scene.camera.expect("a camera");
+    assert_eq!(camera.eye, [0.0, 1.0, 5.0]);
+    let direction = DVec3::from(camera.target) - DVec3::from(camera.eye);
+    assert!((direction - DVec3::NEG_Z).length() < 1e-15, "{direction}");
+    assert_eq!(camera.up, [0.0, 1.0, 0.0]);
+    // yfov 0.5 rad in f32, in degrees: 28.6479 to f32 rounding.
+    assert!((camera.fov_y_deg - 0.5f64.to_degrees()).abs() < 1e-5);
+    assert_eq!((camera.width, camera.height), (512, 256), "aspect ratio 2");
+    let warned = loaded
+        .scene
+        .warnings
+        .iter()
+        .filter(|w| w.message.contains("orthographic"))
+        .count();
+    assert_eq!(warned, 1);
+
+    // A camera turned half round y looks down +z; a parent's transform applies.
+    let turned = camera_from_node(
+        DMat4::from_translation(DVec3::new(278.0, 273.0, -800.0))
+            * DMat4::from_quat(DQuat::from_xyzw(0.0, 1.0, 0.0, 0.0)),
+        1.0,
+        None,
+    );
+    assert_eq!(turned.eye, [278.0, 273.0, -800.0]);
+    let d = DVec3::from(turned.target) - DVec3::from(turned.eye);
+    assert!((d - DVec3::Z).length() < 1e-15, "{d}");
+}
+
+#[test]
+fn mirroring_nodes_keep_front_faces_and_normals_follow_the_inverse_transpose() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut f = triangle();
+    // NORMAL (0, 0, 1) on every vertex.
+    let normals_at = f.bin.len();
+    f.bin.extend(floats(&[[0.0, 0.0, 1.0]; 3]));
+    f.json["buffers"][0]["byteLength"] = json!(f.bin.len());
+    f.json["bufferViews"]
+        .as_array_mut()
+        .unwrap()
+        .push(json!({"buffer": 0, "byteOffset": normals_at, "byteLength": 36}));
+    f.json["accessors"]
+        .as_array_mut()
+        .unwrap()
+        .push(json!({"bufferView": 2, "componentType": 5126, "count": 3, "type": "VEC3"}));
+    f.json["meshes"][0]["primitives"][0]["attributes"]["NORMAL"] = json!(2);
+    // Mirrored in x and stretched in z: the facet must still face +z.
+    f.json["nodes"][0] = json!({"mesh": 0, "scale": [-1.0, 1.0, 4.0]});
+    let raw = parse_gltf(&write_gltf(dir.path(), "mirror", &f))
+        .unwrap()
+        .raw;
+    let p = &raw.polygons[0];
+    let facet = (p.vertices[1] - p.vertices[0]).cross(p.vertices[2] - p.vertices[0]);
+    assert!(facet.normalize().dot(DVec3::Z) > 1.0 - 1e-15, "{facet}");
+    // (M⁻¹)ᵀ (0, 0, 1) = (0, 0, 1/4), still along +z.
+    for n in p.normals.as_ref().unwrap() {
+        assert!((*n - DVec3::new(0.0, 0.0, 0.25)).length() < 1e-15, "{n}");
+    }
+}
+
+#[test]
+fn strips_and_fans_follow_the_specification() {
+    // §3.7.3: strip triangle i = (v_i, v_{i+1+i%2}, v_{i+2−i%2}); fan
+    // triangle i = (v_{i+1}, v_{i+2}, v_0). A strip's repeated index (a join) is
+    // dropped.
+    assert_eq!(
+        assemble(Mode::TriangleStrip, &[0, 1, 2, 3]),
+        vec![0, 1, 2, 1, 3, 2]
+    );
+    assert_eq!(
+        assemble(Mode::TriangleFan, &[0, 1, 2, 3]),
+        vec![1, 2, 0, 2, 3, 0]
+    );
+    assert_eq!(assemble(Mode::TriangleStrip, &[0, 1, 2, 2, 3]).len(), 3);
+    assert_eq!(assemble(Mode::Triangles, &[0, 1, 2, 3, 4]), vec![0, 1, 2]);
+    assert!(assemble(Mode::TriangleStrip, &[0, 1]).is_empty());
+}
+
+#[test]
+fn unmodelled_features_are_warned_once_each_naming_the_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut f = triangle();
+    f.json["images"] = json!([{"uri": "never_read.png"}]);
+    f.json["textures"] = json!([{"source": 0}]);
+    let material = &mut f.json["materials"][0];
+    material["pbrMetallicRoughness"]["baseColorTexture"] =
+        json!({"index": 0, "extensions": {"KHR_texture_transform": {"scale": [2.0, 2.0]}}});
+    material["emissiveTexture"] = json!({"index": 0});
+    material["normalTexture"] = json!({"index": 0});
+    material["alphaMode"] = json!("BLEND");
+    material["doubleSided"] = json!(true);
+    material["extensions"]["KHR_materials_transmission"] = json!({"transmissionFactor": 1.0});
+    material["extensions"]["KHR_materials_clearcoat"] = json!({"clearcoatFactor": 1.0});
+    f.json["extensions"] = json!({"KHR_lights_punctual": {"lights": [{"type": "point"}]}});
+    // The mesh is used twice, by two nodes: its material is still warned once.
+    f.json["nodes"] = json!([
+        {"mesh": 0},
+        {"mesh": 0, "translation": [5.0, 0.0, 0.0]},
+        {"extensions": {"KHR_lights_punctual": {"light": 0}}},
+        {"mesh": 1}
+    ]);
+    f.json["meshes"].as_array_mut().unwrap().push(json!({
+        "name": "wire",
+        "primitives": [{"attributes": {"POSITION": 0}, "mode": 1}]
+    }));
+    f.json["scenes"] = json!([{"nodes": [0, 1, 2, 3]}]);
+    f.json["skins"] = json!([{"joints": [2]}]);
+    let path = write_gltf(dir.path(), "fancy", &f);
+    let scene = parse_gltf(&path).unwrap();
+    assert_eq!(scene.raw.polygons.len(), 2, "two instances of the triangle");
+    let warnings = &scene.raw.warnings;
+    for phrase in [
+        "textures are not modelled yet: baseColorTexture, emissiveTexture ignored",
+        "KHR_texture_transform ignored",
+        "normal map ignored",
+        "alpha mode BLEND ignored",
+        "doubleSided",
+        "KHR_materials_transmission ignored",
+        "KHR_materials_clearcoat ignored",
+        "1 punctual light(s) ignored",
+        "not turned into emitters",
+        "1 skin(s) ignored",
+        "Lines primitive skipped",
+    ] {
+        let hits: Vec<&Warning> = warnings
+            .iter()
+            .filter(|w| w.message.contains(phrase))
+            .collect();
+        assert_eq!(hits.len(), 1, "{phrase:?} in {warnings:#?}");
+        assert_eq!(hits[0].source.file, path);
+    }
+    // Every warning names the file when printed.
+    assert!(warnings
+        .iter()
+        .all(|w| w.to_string().starts_with(&path.display().to_string())));
+}
+
+/// A change made to the triangle fixture.
+type Edit = Box<dyn Fn(&mut Fixture)>;
+
+#[test]
+fn hostile_documents_are_errors_not_panics() {
+    let dir = tempfile::tempdir().unwrap();
+    let cases: Vec<(&str, Edit, &str)> = vec![
+        (
+            "cycle",
+            Box::new(|f| {
+                f.json["nodes"] = json!([{"mesh": 0, "children": [1]}, {"children": [0]}]);
+            }),
+            "appears twice in the scene graph",
+        ),
+        (
+            "stride",
+            Box::new(|f| f.json["bufferViews"][0]["byteStride"] = json!(4)),
+            "less than its 12-byte elements",
+        ),
+        (
+            "type",
+            Box::new(|f| f.json["accessors"][0]["componentType"] = json!(5123)),
+            "expected VEC3 of FLOAT",
+        ),
+        (
+            "huge_count",
+            Box::new(|f| f.json["accessors"][1]["count"] = json!(u32::MAX)),
+            "need",
+        ),
+        (
+            "no_view",
+            Box::new(|f| {
+                f.json["accessors"][0]
+                    .as_object_mut()
+                    .unwrap()
+                    .remove("bufferView");
+            }),
+            "bufferView",
+        ),
+        (
+            "bad_index",
+            Box::new(|f| f.json["meshes"][0]["primitives"][0]["indices"] = json!(7)),
+            "invalid glTF",
+        ),
+        (
+            "bad_json",
+            Box::new(|f| f.json = json!({"asset": 3})),
+            "not a glTF 2.0 document",
+        ),
+        (
+            "remote",
+            Box::new(|f| f.json["buffers"][0]["uri"] = json!("https://example.invalid/a.bin")),
+            "only relative file names and data URIs",
+        ),
+    ];
+    for (name, edit, phrase) in cases {
+        let mut f = triangle();
+        edit(&mut f);
+        // These two documents are written as they are, with no buffer file.
+        let path = if name == "remote" || name == "bad_json" {
+            let path = dir.path().join(format!("{name}.gltf"));
+            std::fs::write(&path, serde_json::to_vec(&f.json).unwrap()).unwrap();
+            path
+        } else {
+            write_gltf(dir.path(), name, &f)
+        };
+        let message = error_of(&path);
+        assert!(message.contains(&format!("{name}.gltf")), "{message}");
+        assert!(
+            message.contains(phrase),
+            "{name}: {phrase:?} missing from: {message}"
+        );
+    }
+}
+
+#[test]
+fn normals_reach_the_smooth_surfaces_as_obj_vn_do() {
+    // Two triangles of a strip folded by 20° about the x axis (below the 30°
+    // crease angle), with NORMALs bisecting the fold on the shared edge and
+    // the facet normals elsewhere: one smooth group whose corners shade with
+    // the file's normals.
+    let (c, s) = (10f32.to_radians().cos(), 10f32.to_radians().sin());
+    let positions = [
+        [0.0, -c, s],
+        [1.0, -c, s],
+        [0.0, 0.0, 0.0],
+        [1.0, 0.0, 0.0],
+        [0.0, c, s],
+        [1.0, c, s],
+    ];
+    // The strip's facet normals (from its winding, §3.7.3): (0, s, c) below
+    // the fold, (0, −s, c) above; the shared edge gets +z, the bisector.
+    let lower = [0.0, s, c];
+    let upper = [0.0, -s, c];
+    let normals = [lower, lower, [0.0, 0.0, 1.0], [0.0, 0.0, 1.0], upper, upper];
+    let mut bin = floats(&positions);
+    let normals_at = bin.len();
+    bin.extend(floats(&normals));
+    let mut f = triangle();
+    f.json["buffers"][0]["byteLength"] = json!(bin.len());
+    f.json["bufferViews"] = json!([
+        {"buffer": 0, "byteOffset": 0, "byteLength": normals_at},
+        {"buffer": 0, "byteOffset": normals_at, "byteLength": normals_at}
+    ]);
+    f.json["accessors"] = json!([
+        {"bufferView": 0, "componentType": 5126, "count": 6, "type": "VEC3",
+         "min": [0.0, -c, 0.0], "max": [1.0, c, s]},
+        {"bufferView": 1, "componentType": 5126, "count": 6, "type": "VEC3"}
+    ]);
+    f.json["meshes"][0]["primitives"][0] =
+        json!({"attributes": {"POSITION": 0, "NORMAL": 1}, "mode": 5, "material": 0});
+    f.json["nodes"][0] = json!({"mesh": 0});
+    f.bin = bin;
+    let dir = tempfile::tempdir().unwrap();
+    let path = write_gltf(dir.path(), "fold", &f);
+    let mut scene = load(&path).scene;
+    let facets: Vec<DVec3> = scene.polygons.iter().map(|p| p.normal()).collect();
+    assert!(
+        facets.iter().all(|n| n.z > 0.9),
+        "front faces toward +z: {facets:?}"
+    );
+    let report = crate::scene::smooth_scene(&mut scene, crate::scene::DEFAULT_CREASE_ANGLE);
+    assert_eq!(report.groups, 1, "{report:?}");
+    assert!(report.with_input_normals > 0, "{report:?}");
+    // On the shared edge (y = 0) every polygon shades with the file's +z.
+    for p in &scene.polygons {
+        let normals = p.vertex_normals.as_ref().expect("smooth corners");
+        for (v, n) in p.vertices.iter().zip(normals) {
+            if (v.y + scene.recentre_offset.y).abs() < 1e-9 {
+                assert!((*n - DVec3::Z).length() < 1e-6, "{v}: {n}");
+            }
+        }
+    }
+}
