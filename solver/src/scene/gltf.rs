@@ -1068,6 +1068,9 @@ fn convert_material(ctx: &Context, material: &gltf::Material) -> (RawMaterial, V
         source: ctx.source(item),
         overridden_at: None,
         undefined: None,
+        // This importer's warnings about unmodelled features are returned
+        // beside the material (the MTL reader's per-statement list is not used).
+        unmodelled: Vec::new(),
     };
     (raw, warnings)
 }
