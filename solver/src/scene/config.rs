@@ -2,7 +2,7 @@
 //! change about them.
 //!
 //! ```toml
-//! geometry = ["cornell_box.obj"]      # OBJ or legacy files, relative to this file
+//! geometry = ["cornell_box.obj"]      # OBJ, glTF or legacy files, relative to this file
 //! units_per_metre = 1000              # scene units per metre (default 1)
 //! up = "y"                            # viewer's up axis: y, -y, z, -z (Remington 1992, appendix C)
 //! mode = "diffuse"                    # or "directional" (glossy SH)
@@ -299,7 +299,8 @@ pub(crate) fn load_config(path: &Path) -> Result<ConfigScene, SceneError> {
         return Err(err(
             config.geometry.span(),
             "",
-            "`geometry` names no file: give at least one OBJ or legacy geometry file".to_owned(),
+            "`geometry` names no file: give at least one OBJ, glTF or legacy geometry file"
+                .to_owned(),
         ));
     }
     let mut raw = RawScene::default();
@@ -311,6 +312,10 @@ pub(crate) fn load_config(path: &Path) -> Result<ConfigScene, SceneError> {
             .map(str::to_ascii_lowercase);
         let part = match extension.as_deref() {
             Some("obj") => parse_obj(&file),
+            // A glTF's geometry and materials only: in a scene config, the
+            // config's own `units_per_metre` (default 1, which is glTF's metre)
+            // and `camera` apply, not the glTF file's camera.
+            Some("gltf") | Some("glb") => super::gltf::parse_gltf(&file).map(|g| g.raw),
             Some("toml") => {
                 return Err(err(
                     name.span(),

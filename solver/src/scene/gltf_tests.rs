@@ -628,3 +628,31 @@ fn normals_reach_the_smooth_surfaces_as_obj_vn_do() {
         }
     }
 }
+
+#[test]
+fn a_scene_config_can_name_a_gltf_file_as_geometry() {
+    let dir = tempfile::tempdir().unwrap();
+    write_glb(dir.path(), "tri", &triangle());
+    let config = dir.path().join("scene.toml");
+    std::fs::write(
+        &config,
+        "geometry = [\"tri.glb\"]\nunits_per_metre = 1000\n",
+    )
+    .unwrap();
+    let loaded = load(&config);
+    // The same triangle as the glb alone (x' = 2x + t, exact in f64), under the
+    // config's units rather than glTF's metres.
+    let scene = &loaded.scene;
+    assert_eq!(scene.polygons.len(), 1);
+    assert_eq!(scene.units_per_metre, 1000.0);
+    let alone = load(&dir.path().join("tri.glb"));
+    for (a, b) in scene.polygons[0]
+        .vertices
+        .iter()
+        .zip(&alone.scene.polygons[0].vertices)
+    {
+        let (a, b) = (*a + scene.recentre_offset, *b + alone.scene.recentre_offset);
+        assert!((a - b).abs().max_element() <= 1e-12, "{a} vs {b}");
+    }
+    assert_eq!(scene.materials.len(), alone.scene.materials.len());
+}
