@@ -126,6 +126,9 @@ impl Mesh {
         self.push_triangle([a, c, d]);
     }
 
+    /// Adds a triangle to the current object. The generators always call
+    /// `begin_object` first (a programming error otherwise, never input), so
+    /// the expect below cannot be reached from a user's flags.
     pub fn push_triangle(&mut self, corners: [Corner; 3]) {
         self.objects
             .last_mut()

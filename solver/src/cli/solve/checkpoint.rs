@@ -282,6 +282,8 @@ pub fn read<T: Payload>(
     if got < PREFIX {
         return Err(corrupt(format!("{got} bytes, shorter than its header")));
     }
+    // The prefix holds PREFIX bytes (checked above), and every slice below has
+    // the exact length of its array, so these conversions cannot fail.
     let u32_at = |at: usize| u32::from_le_bytes(prefix[at..at + 4].try_into().unwrap());
     let version = u32_at(8);
     if version != VERSION {
