@@ -7,13 +7,10 @@
 //!
 //! Both binaries must be built first (`cargo build -p solver -p runtime`).
 
-use solver::compare::metrics::summarize;
-use solver::compare::read::read_image;
 use std::path::Path;
-use std::process::Command;
 
 mod common;
-use common::{binary, lavapipe, run};
+use common::cornell_against_truth;
 
 /// How much worse than flat shooting's MARE bounded shooting may be, in
 /// absolute MARE. It is set by the seed-to-seed spread of the draft solve's
@@ -28,35 +25,10 @@ use common::{binary, lavapipe, run};
 /// (docs/benchmarks.md, "Bounded shooting").
 const MARE_ALLOWANCE: f64 = 0.004;
 
-fn mare(root: &Path, dir: &Path, shooting: &str) -> f64 {
-    let solution = dir.join(format!("{shooting}.sol"));
-    run(
-        Command::new(binary("solver"))
-            .arg("solve")
-            .arg(root.join("config/cornell_box.toml"))
-            .args(["--preset", "draft", "--shooting", shooting])
-            .args(["--shooting-tolerance", "0.001", "-o"])
-            .arg(&solution),
-        "solver solve",
-    );
-    let prefix = dir.join(shooting);
-    let mut screenshot = Command::new(binary("runtime"));
-    lavapipe(&mut screenshot);
-    run(
-        screenshot
-            .arg("screenshot")
-            .arg(&solution)
-            .args(["--mono", "--size", "512x512", "--out"])
-            .arg(&prefix),
-        "runtime screenshot",
-    );
-    let truth = read_image(&root.join("tests/fixtures/cornell_truth_64.exr")).unwrap();
-    let shown = read_image(&prefix.with_extension("exr")).unwrap();
-    let factor = shown
-        .image
-        .supersampling_factor(truth.image.width, truth.image.height)
-        .expect("the screenshot is 8× the truth's size");
-    let summary = summarize(&shown.image.box_downsample(factor), &truth.image);
+fn mare(dir: &Path, shooting: &str) -> f64 {
+    let args = ["--preset", "draft", "--shooting", shooting];
+    let tolerance = ["--shooting-tolerance", "0.001"];
+    let (summary, _) = cornell_against_truth(dir, shooting, &[&args[..], &tolerance].concat());
     eprintln!(
         "{shooting} draft vs truth: MARE {:.4}, mean signed {:+.4}, relative RMSE {:.4}",
         summary.mare, summary.mean_signed_relative_error, summary.relative_rmse
@@ -66,10 +38,9 @@ fn mare(root: &Path, dir: &Path, shooting: &str) -> f64 {
 
 #[test]
 fn bounded_shooting_is_as_accurate_as_flat_against_the_truth() {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let dir = tempfile::tempdir().unwrap();
-    let flat = mare(root, dir.path(), "flat");
-    let bounded = mare(root, dir.path(), "bounded");
+    let flat = mare(dir.path(), "flat");
+    let bounded = mare(dir.path(), "bounded");
     assert!(
         bounded <= flat + MARE_ALLOWANCE,
         "bounded MARE {bounded:.4} exceeds flat's {flat:.4} + {MARE_ALLOWANCE}"

@@ -15,13 +15,10 @@
 //! `cargo test --workspace` does). The runtime renders on lavapipe unless a Vulkan
 //! driver is chosen.
 
-use solver::compare::metrics::{reference_noise, summarize};
-use solver::compare::read::read_image;
-use std::path::Path;
-use std::process::Command;
+use solver::compare::metrics::reference_noise;
 
 mod common;
-use common::{binary, lavapipe, run};
+use common::cornell_against_truth;
 
 /// Bound on the draft preset's MARE against the truth. Measured at commit time
 /// (docs/accuracy.md): 9.01% with seed 1 and 8.91% with seed 2 (release build;
@@ -39,37 +36,8 @@ const DRAFT_MEAN_BOUND: f64 = 0.04;
 
 #[test]
 fn draft_cornell_box_matches_the_path_traced_truth() {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let dir = tempfile::tempdir().unwrap();
-    let solution = dir.path().join("box.sol");
-    run(
-        Command::new(binary("solver"))
-            .arg("solve")
-            .arg(root.join("config/cornell_box.toml"))
-            .args(["--preset", "draft", "-o"])
-            .arg(&solution),
-        "solver solve",
-    );
-    let prefix = dir.path().join("box");
-    let mut screenshot = Command::new(binary("runtime"));
-    lavapipe(&mut screenshot);
-    run(
-        screenshot
-            .arg("screenshot")
-            .arg(&solution)
-            .args(["--mono", "--size", "512x512", "--out"])
-            .arg(&prefix),
-        "runtime screenshot",
-    );
-
-    let truth = read_image(&root.join("tests/fixtures/cornell_truth_64.exr")).unwrap();
-    let shown = read_image(&prefix.with_extension("exr")).unwrap();
-    let factor = shown
-        .image
-        .supersampling_factor(truth.image.width, truth.image.height)
-        .expect("the screenshot is 8× the truth's size");
-    let test = shown.image.box_downsample(factor);
-    let summary = summarize(&test, &truth.image);
+    let (summary, truth) = cornell_against_truth(dir.path(), "box", &["--preset", "draft"]);
     let noise = reference_noise(&truth.image, truth.standard_error.as_deref().unwrap());
     eprintln!(
         "draft vs truth: MARE {:.4}, mean signed {:+.4}, relative RMSE {:.4}, means {:.5} / {:.5}; \

@@ -54,3 +54,53 @@ pub fn run(cmd: &mut Command, what: &str) {
         String::from_utf8_lossy(&out.stderr)
     );
 }
+
+/// The Cornell box (`config/cornell_box.toml`) solved with `solve_args` into
+/// `dir/name.sol`, shown by `runtime screenshot --mono` at 512², box-filtered
+/// 8 × 8 to the committed 64 × 64 truth's pixel footprints and compared with
+/// it (`tests/cornell_truth.rs` says how the truth was made). Returns the
+/// comparison and the truth image itself (for its own noise).
+#[allow(dead_code)] // Each test crate compiles this module; not all call this.
+pub fn cornell_against_truth(
+    dir: &Path,
+    name: &str,
+    solve_args: &[&str],
+) -> (
+    solver::compare::metrics::Summary,
+    solver::compare::image::LoadedImage,
+) {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let solution = dir.join(format!("{name}.sol"));
+    run(
+        Command::new(binary("solver"))
+            .arg("solve")
+            .arg(root.join("config/cornell_box.toml"))
+            .args(solve_args)
+            .arg("-o")
+            .arg(&solution),
+        "solver solve",
+    );
+    let prefix = dir.join(name);
+    let mut screenshot = Command::new(binary("runtime"));
+    lavapipe(&mut screenshot);
+    run(
+        screenshot
+            .arg("screenshot")
+            .arg(&solution)
+            .args(["--mono", "--size", "512x512", "--out"])
+            .arg(&prefix),
+        "runtime screenshot",
+    );
+    let read = solver::compare::read::read_image;
+    let truth = read(&root.join("tests/fixtures/cornell_truth_64.exr")).unwrap();
+    let shown = read(&prefix.with_extension("exr")).unwrap();
+    let factor = shown
+        .image
+        .supersampling_factor(truth.image.width, truth.image.height)
+        .expect("the screenshot is 8× the truth's size");
+    let test = shown.image.box_downsample(factor);
+    (
+        solver::compare::metrics::summarize(&test, &truth.image),
+        truth,
+    )
+}
