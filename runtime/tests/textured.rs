@@ -225,3 +225,46 @@ fn checkerboard_contrast_in_the_gpu_image_is_at_least_80_percent_of_the_texture(
     );
     common::assert_validation_clean(&gpu);
 }
+
+/// A texture byte corrupted on disk: the mapped open the runtime uses defers
+/// the texture's checksum to the upload, which refuses the file naming it and
+/// the texture (no panic, nothing drawn).
+#[test]
+fn a_corrupted_texture_is_refused_at_upload_naming_file_and_texture() {
+    common::use_lavapipe_unless_chosen();
+    let gpu = common::gpu();
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("textured.sol");
+    solution::format::write_solution(&path, &scene()).unwrap();
+    let at = {
+        let file = solution::format::MappedSolution::open(&path).unwrap();
+        let png = file.texture_bytes(0).to_vec();
+        // A byte in the middle of the PNG stream (its image data).
+        let start = std::fs::read(&path)
+            .unwrap()
+            .windows(png.len())
+            .position(|w| w == png)
+            .unwrap();
+        start + png.len() / 2
+    };
+    let mut bytes = std::fs::read(&path).unwrap();
+    bytes[at] ^= 0x40;
+    std::fs::write(&path, &bytes).unwrap();
+    let file = solution::format::MappedSolution::open_deferring_checksums(&path).unwrap();
+    let view = near().mono_view(DVec3::ZERO);
+    let swapchain = OffscreenSwapchain::new(&gpu, view.width, view.height, 1).unwrap();
+    let desc = RendererDesc {
+        width: view.width,
+        height: view.height,
+        ..RendererDesc::default()
+    };
+    let error = match StereoRenderer::from_mapped(&gpu, &file, desc, &swapchain.desc()) {
+        Ok(_) => panic!("a corrupted texture was uploaded"),
+        Err(e) => e.to_string(),
+    };
+    assert!(error.contains("textured.sol"), "{error}");
+    assert!(
+        error.contains("texture 0") && error.contains("CRC-32"),
+        "{error}"
+    );
+}
