@@ -28,3 +28,4 @@ pub mod reference;
 pub mod scene;
 pub mod settings;
 pub mod solve;
+pub mod texture;
