@@ -8,6 +8,7 @@
 //! * [`geometry`]: form factors, sampling, and the occlusion BVH;
 //! * [`mesh`]: patches, quadtree elements, shared vertices, triangulation;
 //! * [`brdf`]: the thesis's glossy lobe and its normalizations;
+//! * [`texture`]: diffuse textures as linear mip pyramids, integrated over UV triangles;
 //! * [`solve`]: progressive refinement, directional SH shooting, Gauss–Seidel and the
 //!   global-cube gather;
 //! * [`reference`]: the unbiased path tracer of `solver reference`, the ground truth;
