@@ -29,7 +29,7 @@ impl Solver {
         let mut unshot = DVec3::ZERO;
         for (p, u) in self.mesh.patches.iter().zip(&self.patch_unshot) {
             area += p.area;
-            reflect += self.kd[p.surface as usize] * p.area;
+            reflect += self.albedo[p.surface as usize] * p.area;
             unshot += *u * p.area;
         }
         if area.is_nan() || area <= 0.0 {
