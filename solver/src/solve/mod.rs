@@ -57,6 +57,7 @@ pub mod cube_gather;
 pub mod directional;
 pub mod gauss_seidel;
 mod output;
+mod output_textured;
 pub(crate) use output::default_camera;
 mod refine;
 mod seams;

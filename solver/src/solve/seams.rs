@@ -117,19 +117,15 @@ impl Grid {
     }
 }
 
-/// Merges the coincident vertices of smooth surfaces (see the module comment).
-pub(crate) fn share_vertices(mesh: &Mesh, radiance: &[DVec3]) -> SharedVertices {
-    share_vertices_with_uvs(mesh, radiance, &|_, _| None)
-}
-
 /// Two texture coordinates are the same display vertex when they differ by at
 /// most this (1e-7 of a texture repeat: far below a texel of the largest
 /// texture read, 1/16384, far above the rounding of one affine map evaluated
 /// at one position from two polygons' fits).
 const SAME_UV: f64 = 1e-7;
 
-/// [`share_vertices`] for a mesh with texture coordinates `uv(surface,
-/// position)` (solver coordinates): vertices
+/// Merges the coincident vertices of smooth surfaces (see the module
+/// comment), given texture coordinates `uv(surface, position)` (solver
+/// coordinates; `None` where untextured): vertices
 /// that would merge but whose UVs differ (a UV seam) stay separate display
 /// vertices, each with the lighting (the area-weighted mean radiance) of all
 /// the vertices at that position, so a seam splits the texture but not the

@@ -156,3 +156,47 @@ fn a_checkerboard_does_not_refine_where_the_light_is_smooth() {
         "checkerboard {textured} elements, flat {flat}"
     );
 }
+
+#[test]
+fn the_solution_has_a_textured_batch_of_uv_and_e_over_pi_that_round_trips() {
+    // The room with textured walls: the walls' output vertices form one
+    // textured batch (one material) whose E/π are the solver's vertex values
+    // and whose UVs are the walls' maps; the light stays untextured. The file
+    // encodes and decodes to the same solution (the format's validation).
+    let mut wall = material("wall", 0.8, 0.0);
+    wall.diffuse_texture = Some(texture(16, |x, y| ((x * 16 + y) % 256) as u8));
+    let solver = solve(&room(wall), 5);
+    let solution = solver.to_solution(false);
+    assert_eq!(solution.batches.len(), 2, "untextured light + textured walls");
+    assert_eq!(solution.textures.len(), 1);
+    assert_eq!(
+        (solution.textures[0].width, solution.textures[0].rgba.len()),
+        (16, 16 * 16 * 4)
+    );
+    let light = &solution.batches[0];
+    let walls = &solution.batches[1];
+    assert!(light.texturing.is_none());
+    let texturing = walls.texturing.as_ref().unwrap();
+    assert_eq!(texturing.factor, [0.8; 3]);
+    assert_eq!(texturing.vertices.len(), walls.vertices.len());
+    let textured_vertices = solver
+        .mesh
+        .vertices
+        .iter()
+        .filter(|v| solver.texturing.get(v.surface).is_some())
+        .count();
+    // Flat walls: one output vertex per mesh vertex.
+    assert_eq!(walls.vertices.len(), textured_vertices);
+    assert!(walls.coefficients.iter().all(|&c| c == 0.0));
+    let mut e_sum = 0.0;
+    for tv in &texturing.vertices {
+        assert!(tv.uv.iter().all(|u| (-1e-5..=1.0 + 1e-5).contains(u)), "{tv:?}");
+        assert!(tv.irradiance_over_pi.iter().all(|e| e.is_finite() && *e >= 0.0));
+        e_sum += f64::from(tv.irradiance_over_pi[0]);
+    }
+    assert!(e_sum > 0.0, "the walls are lit");
+    let max_index = walls.indices.iter().max().copied().unwrap();
+    assert!((max_index as usize) < walls.vertices.len());
+    let bytes = solution::format::encode(&solution).unwrap();
+    assert_eq!(solution::format::decode(&bytes).unwrap(), solution);
+}
