@@ -167,7 +167,11 @@ fn the_solution_has_a_textured_batch_of_uv_and_e_over_pi_that_round_trips() {
     wall.diffuse_texture = Some(texture(16, |x, y| ((x * 16 + y) % 256) as u8));
     let solver = solve(&room(wall), 5);
     let solution = solver.to_solution(false);
-    assert_eq!(solution.batches.len(), 2, "untextured light + textured walls");
+    assert_eq!(
+        solution.batches.len(),
+        2,
+        "untextured light + textured walls"
+    );
     assert_eq!(solution.textures.len(), 1);
     assert_eq!(
         (solution.textures[0].width, solution.textures[0].rgba.len()),
@@ -190,8 +194,14 @@ fn the_solution_has_a_textured_batch_of_uv_and_e_over_pi_that_round_trips() {
     assert!(walls.coefficients.iter().all(|&c| c == 0.0));
     let mut e_sum = 0.0;
     for tv in &texturing.vertices {
-        assert!(tv.uv.iter().all(|u| (-1e-5..=1.0 + 1e-5).contains(u)), "{tv:?}");
-        assert!(tv.irradiance_over_pi.iter().all(|e| e.is_finite() && *e >= 0.0));
+        assert!(
+            tv.uv.iter().all(|u| (-1e-5..=1.0 + 1e-5).contains(u)),
+            "{tv:?}"
+        );
+        assert!(tv
+            .irradiance_over_pi
+            .iter()
+            .all(|e| e.is_finite() && *e >= 0.0));
         e_sum += f64::from(tv.irradiance_over_pi[0]);
     }
     assert!(e_sum > 0.0, "the walls are lit");
