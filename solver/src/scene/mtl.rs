@@ -279,7 +279,7 @@ fn quoted(tokens: &[&str]) -> String {
 /// `-boost` take one value, `-mm` two, `-o`, `-s`, `-t` one to three numbers),
 /// and the first option that changes the mapping (`-o`, `-s`, `-t`,
 /// `-clamp on`, `-mm`, `-cc on`), which is not modelled.
-fn texture_argument<'a>(args: &[&'a str]) -> Result<(String, Option<String>), String> {
+fn texture_argument(args: &[&str]) -> Result<(String, Option<String>), String> {
     let mut k = 0;
     let mut ignored = None;
     while k < args.len() && args[k].starts_with('-') {

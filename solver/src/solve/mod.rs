@@ -196,7 +196,9 @@ pub struct Solver {
     /// Per patch: unshot radiance, and (vertex, area) weights of the gather.
     patch_unshot: Vec<DVec3>,
     patch_weights: Vec<Vec<(u32, f64)>>,
-    /// Per textured patch, its RGB gather weights (empty for the others).
+    /// Per patch, its RGB gather weights if textured (empty for the others;
+    /// the whole list is empty when no surface is textured, so an untextured
+    /// solve holds nothing more than before).
     patch_rgb_weights: Vec<Vec<(u32, DVec3)>>,
     leaf_count: usize,
     shots: u64,
@@ -342,6 +344,7 @@ impl Solver {
         let vertex_count = mesh.vertices.len();
         let patch_count = mesh.patches.len();
         let receivers = cluster::ReceiverTree::new(&mesh, &kd);
+        let texturing_any = texturing.any();
         let mut solver = Solver {
             settings: settings.clone(),
             leaf_count: mesh.leaf_count(),
@@ -365,7 +368,11 @@ impl Solver {
             recorded_pools: Vec::new(),
             patch_unshot,
             patch_weights: vec![Vec::new(); patch_count],
-            patch_rgb_weights: vec![Vec::new(); patch_count],
+            patch_rgb_weights: if texturing_any {
+                vec![Vec::new(); patch_count]
+            } else {
+                Vec::new()
+            },
             shots: 0,
             rays: 0,
             seconds: 0.0,
@@ -744,14 +751,16 @@ impl Solver {
             .for_each(|(p, (unshot, weights))| {
                 let mut sum = DVec3::ZERO;
                 // A textured patch reflects ∫ ρ ΔE/π dA (`textured.rs`).
-                let rgb = &rgb_weights[p];
-                if rgb.is_empty() {
-                    for &(v, w) in weights {
-                        sum += received[v as usize] * w;
+                match rgb_weights.get(p).filter(|w| !w.is_empty()) {
+                    None => {
+                        for &(v, w) in weights {
+                            sum += received[v as usize] * w;
+                        }
                     }
-                } else {
-                    for &(v, w) in rgb {
-                        sum += received[v as usize] * w;
+                    Some(rgb) => {
+                        for &(v, w) in rgb {
+                            sum += received[v as usize] * w;
+                        }
                     }
                 }
                 *unshot += sum / mesh.patches[p].area;

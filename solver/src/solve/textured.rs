@@ -105,8 +105,8 @@ impl SurfaceTexturing {
             let p = tri.map(|i| mesh.vertices[i as usize].position);
             let area = 0.5 * (p[1] - p[0]).cross(p[2] - p[0]).length();
             let integral = t.texture.texture.integrate(p.map(|q| self.uv(t, q)));
-            for k in 0..3 {
-                entries.push((tri[k], t.kd * integral.corner[k] * area));
+            for (&v, corner) in tri.iter().zip(integral.corner) {
+                entries.push((v, t.kd * corner * area));
             }
         }
         entries.sort_unstable_by_key(|e| e.0);

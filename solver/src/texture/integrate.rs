@@ -42,7 +42,9 @@ pub(super) fn integrate(texture: &Texture, uv: [DVec2; 3]) -> Integral {
     let hi = uv[0].max(uv[1]).max(uv[2]);
     let span = hi - lo;
     let uv_area = 0.5 * (uv[1] - uv[0]).perp_dot(uv[2] - uv[0]).abs();
-    if !(uv_area * w0 * h0 > DEGENERATE_TEXELS) || !span.is_finite() {
+    // NaN areas count as degenerate, hence the comparison's form.
+    let texels = uv_area * w0 * h0;
+    if texels.is_nan() || texels <= DEGENERATE_TEXELS || !span.is_finite() {
         let centroid = (uv[0] + uv[1] + uv[2]) / 3.0;
         if !centroid.is_finite() {
             return Integral::uniform(texture.mean(), texture.levels.len() - 1);
