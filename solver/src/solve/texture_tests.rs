@@ -183,14 +183,21 @@ fn the_solution_has_a_textured_batch_of_uv_and_e_over_pi_that_round_trips() {
     let texturing = walls.texturing.as_ref().unwrap();
     assert_eq!(texturing.factor, [0.8; 3]);
     assert_eq!(texturing.vertices.len(), walls.vertices.len());
-    let textured_vertices = solver
+    let textured_radiance: Vec<DVec3> = solver
         .mesh
         .vertices
         .iter()
-        .filter(|v| solver.texturing.get(v.surface).is_some())
-        .count();
-    // Flat walls: one output vertex per mesh vertex.
-    assert_eq!(walls.vertices.len(), textured_vertices);
+        .zip(solver.vertex_radiance())
+        .filter(|(v, _)| solver.texturing.get(v.surface).is_some())
+        .map(|(_, l)| *l)
+        .collect();
+    // Flat walls: one output vertex per mesh vertex, in mesh order, whose
+    // E/π is the solver's vertex value (a final file has no ambient term)
+    // rounded to f32.
+    assert_eq!(walls.vertices.len(), textured_radiance.len());
+    for (tv, l) in texturing.vertices.iter().zip(&textured_radiance) {
+        assert_eq!(tv.irradiance_over_pi, l.as_vec3().to_array());
+    }
     assert!(walls.coefficients.iter().all(|&c| c == 0.0));
     let mut e_sum = 0.0;
     for tv in &texturing.vertices {
