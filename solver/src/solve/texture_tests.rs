@@ -217,3 +217,29 @@ fn the_solution_has_a_textured_batch_of_uv_and_e_over_pi_that_round_trips() {
     let bytes = solution::format::encode(&solution).unwrap();
     assert_eq!(solution::format::decode(&bytes).unwrap(), solution);
 }
+
+#[test]
+fn textures_are_counted_in_the_memory_budget() {
+    // One 64² texture shared by the walls: RGBA8 (16 KiB) plus the linear
+    // pyramid (12 bytes a texel over 64² + 32² + … + 1², 65 532 bytes),
+    // counted once before meshing; the solver adds its RGB gather weights
+    // (32 bytes an entry) and nothing for an untextured scene.
+    let shared = texture(64, |x, _| x as u8);
+    let expected = 64 * 64 * 4 + 12 * (4096 + 1024 + 256 + 64 + 16 + 4 + 1);
+    assert_eq!(shared.bytes(), expected);
+    let mut wall = material("wall", 1.0, 0.0);
+    wall.diffuse_texture = Some(shared);
+    let scene = room(wall);
+    let before = budget::counts_before_meshing(&scene, &settings());
+    assert_eq!(before.texture_bytes, expected);
+    let solver = Solver::new(&scene, &settings()).unwrap();
+    let entries: u64 = solver
+        .patch_rgb_weights
+        .iter()
+        .map(|w| w.len() as u64)
+        .sum();
+    assert!(entries > 0);
+    assert!(solver.memory_counts().texture_bytes >= expected + 32 * entries);
+    let plain = Solver::new(&room(material("wall", 0.5, 0.0)), &settings()).unwrap();
+    assert_eq!(plain.memory_counts().texture_bytes, 0);
+}
