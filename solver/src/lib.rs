@@ -8,6 +8,7 @@
 //! * [`geometry`]: form factors, sampling, and the occlusion BVH;
 //! * [`mesh`]: patches, quadtree elements, shared vertices, triangulation;
 //! * [`brdf`]: the thesis's glossy lobe and its normalizations;
+//! * [`texture`]: diffuse textures as linear mip pyramids, integrated over UV triangles;
 //! * [`solve`]: progressive refinement, directional SH shooting, Gauss–Seidel and the
 //!   global-cube gather;
 //! * [`reference`]: the unbiased path tracer of `solver reference`, the ground truth;
@@ -28,3 +29,4 @@ pub mod reference;
 pub mod scene;
 pub mod settings;
 pub mod solve;
+pub mod texture;

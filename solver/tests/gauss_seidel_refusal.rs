@@ -74,6 +74,7 @@ fn scene(polygons: Vec<Vec<DVec3>>, patches: u32) -> Scene {
             .map(|(i, vertices)| Polygon {
                 vertices,
                 vertex_normals: None,
+                uv_map: None,
                 material: 0,
                 patches,
                 sizes: Default::default(),
@@ -89,6 +90,7 @@ fn scene(polygons: Vec<Vec<DVec3>>, patches: u32) -> Scene {
             ks: DVec3::ZERO,
             alpha: 1.0,
             emission: DVec3::ONE,
+            diffuse_texture: None,
         }],
         units_per_metre: 1.0,
         up_axis: UpAxis::PosY,

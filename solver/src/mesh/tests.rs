@@ -14,6 +14,7 @@ fn scene_of(polygons: Vec<Vec<DVec3>>, patches: u32) -> Scene {
                 patches,
                 sizes: Default::default(),
                 source: SourceRef::default(),
+                uv_map: None,
             })
             .collect(),
         materials: vec![Material {
@@ -22,6 +23,7 @@ fn scene_of(polygons: Vec<Vec<DVec3>>, patches: u32) -> Scene {
             ks: DVec3::ZERO,
             alpha: 1.0,
             emission: DVec3::ZERO,
+            diffuse_texture: None,
         }],
         units_per_metre: 1.0,
         up_axis: UpAxis::PosY,

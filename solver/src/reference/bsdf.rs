@@ -48,6 +48,12 @@ impl Bsdf {
         }
     }
 
+    /// The same material with diffuse reflectance `kd` (a textured point's
+    /// Kd ⊙ ρ(uv)).
+    pub fn with_kd(&self, kd: DVec3) -> Bsdf {
+        Bsdf::new(kd, self.ks, self.lobe.clone(), self.emission)
+    }
+
     /// Whether the material reflects anything.
     pub fn reflects(&self) -> bool {
         self.kd.max_element() > 0.0 || self.ks.max_element() > 0.0

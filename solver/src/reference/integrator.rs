@@ -124,7 +124,7 @@ impl Integrator<'_> {
                 break;
             }
             let surface = &scene.surfaces[hit.polygon];
-            let bsdf = &scene.bsdfs[surface.material];
+            let bsdf = scene.bsdf_at(hit.polygon, hit.point);
             // Emission and one-sidedness follow the polygon; reflection its
             // shading normal (`shading.rs`), as the solver's receivers do.
             let geometric = surface.normal;
@@ -201,7 +201,7 @@ impl Integrator<'_> {
         if cos_i <= 0.0 || cos_l <= 0.0 || wi.dot(surface.normal) <= 0.0 {
             return DVec3::ZERO;
         }
-        let bsdf = &scene.bsdfs[surface.material];
+        let bsdf = scene.bsdf_at(hit.polygon, hit.point);
         let f = bsdf.eval(wi, wo, n);
         let largest = f.max_element();
         if largest.is_nan() || largest <= 0.0 || !scene.occluder.visible(hit.point, light.point) {

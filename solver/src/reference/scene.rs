@@ -26,6 +26,9 @@ pub struct Surface {
     /// Corner shading normals of a smooth surface (`scene::smooth`); `None` for
     /// a flat facet.
     pub shading: Option<super::shading::CornerNormals>,
+    /// Texture coordinates as a function of position, when the polygon has
+    /// them and its material a diffuse texture.
+    pub uv_map: Option<crate::scene::UvMap>,
 }
 
 impl Surface {
@@ -60,6 +63,8 @@ pub struct RenderScene {
     pub max_albedo: f64,
     /// Glossy lobes built, by α: their tables' sizes and measured errors.
     pub lobes: Vec<Arc<ExactLobe>>,
+    /// Per material, its diffuse texture (the scene's, decoded to linear).
+    pub textures: Vec<Option<Arc<crate::scene::SceneTexture>>>,
 }
 
 /// The object a polygon belongs to: the OBJ object or group its face came from
@@ -130,6 +135,9 @@ impl RenderScene {
                     normal,
                     material: p.material,
                     object,
+                    uv_map: p
+                        .uv_map
+                        .filter(|_| scene.materials[p.material].diffuse_texture.is_some()),
                 }
             })
             .collect();
@@ -153,10 +161,33 @@ impl RenderScene {
             object_names,
             max_albedo,
             lobes: lobes.into_values().collect(),
+            textures: scene
+                .materials
+                .iter()
+                .map(|m| m.diffuse_texture.clone())
+                .collect(),
         }
     }
 
     /// The scene's bounds (re-centred coordinates).
+    /// The BSDF at `point` on surface `polygon`: its material's, with Kd
+    /// times the texture's bilinear sample at the point's UV (level 0, repeat
+    /// wrap: `Texture::bilinear`) where the surface is textured. Bilinear
+    /// rather than the box texels the solve integrates: the two agree in
+    /// every integral over more than a texel, which is all an image pixel or
+    /// a solver element sees.
+    pub fn bsdf_at(&self, polygon: usize, point: DVec3) -> std::borrow::Cow<'_, Bsdf> {
+        let surface = &self.surfaces[polygon];
+        let bsdf = &self.bsdfs[surface.material];
+        match (&surface.uv_map, &self.textures[surface.material]) {
+            (Some(map), Some(texture)) => {
+                let rho = texture.texture.bilinear(map.at(point));
+                std::borrow::Cow::Owned(bsdf.with_kd(bsdf.kd * rho))
+            }
+            _ => std::borrow::Cow::Borrowed(bsdf),
+        }
+    }
+
     pub fn bounds(&self) -> (DVec3, DVec3) {
         let mut lo = DVec3::splat(f64::INFINITY);
         let mut hi = DVec3::splat(f64::NEG_INFINITY);

@@ -25,6 +25,7 @@ fn material(name: &str, kd: f64, ks: f64, alpha: f64, le: DVec3) -> Material {
         ks: DVec3::splat(ks),
         alpha,
         emission: le,
+        diffuse_texture: None,
     }
 }
 
@@ -36,6 +37,7 @@ fn polygon(vertices: Vec<DVec3>, material: usize) -> Polygon {
         patches: 1,
         sizes: Default::default(),
         source: SourceRef::default(),
+        uv_map: None,
     }
 }
 

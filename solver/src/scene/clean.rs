@@ -72,7 +72,16 @@ pub(crate) fn build_scene(mut raw: RawScene, options: &BuildOptions) -> Result<S
     let mut warnings = std::mem::take(&mut raw.warnings);
 
     let mut polygons = Vec::with_capacity(raw.polygons.len());
-    for polygon in std::mem::take(&mut raw.polygons) {
+    // UVs matter only where a material has a texture.
+    let textured: Vec<bool> = raw
+        .materials
+        .iter()
+        .map(|m| m.diffuse_map.is_some())
+        .collect();
+    for mut polygon in std::mem::take(&mut raw.polygons) {
+        if !textured.get(polygon.material).copied().unwrap_or(false) {
+            polygon.uvs = None;
+        }
         clean_polygon(
             polygon,
             diagonal,
@@ -120,6 +129,74 @@ pub(crate) fn build_scene(mut raw: RawScene, options: &BuildOptions) -> Result<S
         recentre_offset,
         warnings,
     })
+}
+
+/// A product Kd ⊙ mean(texture) whose brightest channel is below this is
+/// "very dark" (2% reflectance: darker than charcoal), worth a warning since
+/// a texture over a small Kd is usually an exporter's placeholder Kd.
+pub const DARK_TEXTURE: f64 = 0.02;
+
+/// Reads material `index`'s `map_Kd` (`raw.diffuse_map`) when some polygon
+/// using it has UVs and it emits nothing, with warnings for a texture that is
+/// not used, cannot be read, or makes a very dark product.
+fn diffuse_texture(
+    raw: &RawMaterial,
+    kd: DVec3,
+    index: usize,
+    polygons: &[Polygon],
+    warnings: &mut Vec<Warning>,
+) -> Option<std::sync::Arc<super::SceneTexture>> {
+    let (file, at) = raw.diffuse_map.as_ref()?;
+    let mut users = polygons.iter().filter(|p| p.material == index);
+    let with_uvs = users.clone().filter(|p| p.uv_map.is_some()).count();
+    if with_uvs == 0 {
+        let first = users
+            .next()
+            .map(|p| format!(" (first: {})", p.source))
+            .unwrap_or_default();
+        warn(
+            warnings,
+            at,
+            format!(
+                "map_Kd texture {}: no face using material `{}` has texture coordinates (`vt`){first}; \
+                 the flat Kd is used",
+                file.display(),
+                raw.name
+            ),
+        );
+        return None;
+    }
+    if raw.emission.max_element() > 0.0 {
+        warn(
+            warnings,
+            at,
+            format!(
+                "map_Kd texture {}: material `{}` emits; textured emitters are not modelled, so the \
+                 flat Kd is used",
+                file.display(),
+                raw.name
+            ),
+        );
+        return None;
+    }
+    let texture = super::texture_file::load_texture(file, at, warnings)?;
+    let product = kd * texture.texture.mean();
+    if product.max_element() < DARK_TEXTURE {
+        warn(
+            warnings,
+            at,
+            format!(
+                "map_Kd texture {}: Kd {} times the texture's mean {} is a very dark reflectance ({}); \
+                 the MTL convention (Kd multiplies the texture) is followed, so the surface is dark. \
+                 Set Kd 1 1 1 if the texture alone is meant",
+                file.display(),
+                rgb(kd),
+                rgb(texture.texture.mean()),
+                rgb(product)
+            ),
+        );
+    }
+    Some(texture)
 }
 
 fn describe_files(files: &[std::path::PathBuf]) -> String {
@@ -221,6 +298,9 @@ fn clean_polygon(
 ) {
     let source = raw.source;
     let original_count = raw.vertices.len();
+    // The UVs belong to the vertices as given: the map is fitted to those
+    // (removing repeated or collinear corners leaves an affine map unchanged).
+    let raw_vertices = raw.vertices.clone();
     let mut vertices = raw.vertices;
     let mut normals = raw.normals;
     let eps = REPEATED_VERTEX_TOLERANCE * scene_diagonal;
@@ -277,6 +357,10 @@ fn clean_polygon(
     }
     let patches = raw.patches.unwrap_or(default_patches);
     let sizes = raw.sizes;
+    let uv_map = raw
+        .uvs
+        .as_ref()
+        .and_then(|uvs| fit_uvs(&raw_vertices, uvs, normal, &source, warnings));
     let deviation = max_plane_deviation(&vertices, normal);
     if deviation <= PLANARITY_TOLERANCE * size {
         let vertex_normals = shading_normals(normals, &vertices, normal, &source, warnings);
@@ -284,6 +368,7 @@ fn clean_polygon(
             vertices,
             vertex_normals,
             material: raw.material,
+            uv_map,
             patches,
             sizes,
             source,
@@ -314,10 +399,48 @@ fn clean_polygon(
             vertices: tv,
             vertex_normals,
             material: raw.material,
+            uv_map,
             patches,
             sizes,
             source: source.clone(),
         });
+    }
+}
+
+/// The polygon's affine UV map ([`super::uv`]), with a warning when its UVs
+/// are not an affine image of it (fitted by least squares) or unusable.
+fn fit_uvs(
+    vertices: &[DVec3],
+    uvs: &[glam::DVec2],
+    normal: DVec3,
+    source: &SourceRef,
+    warnings: &mut Vec<Warning>,
+) -> Option<super::UvMap> {
+    match super::UvMap::fit(vertices, uvs, normal) {
+        Some((map, miss)) => {
+            if miss > super::uv::AFFINE_TOLERANCE {
+                warn(
+                    warnings,
+                    source,
+                    format!(
+                        "texture coordinates: not an affine image of the polygon (a corner misses the \
+                         best planar fit by {:.1e} of the UV span); the fit is used, so the texture \
+                         is placed slightly differently than in tools that split the face into triangles",
+                        miss
+                    ),
+                );
+            }
+            Some(map)
+        }
+        None => {
+            warn(
+                warnings,
+                source,
+                "texture coordinates: not finite or degenerate; the polygon is untextured"
+                    .to_owned(),
+            );
+            None
+        }
     }
 }
 
@@ -425,12 +548,14 @@ fn finish_materials(
                 ),
             });
         }
+        let diffuse_texture = diffuse_texture(m, kd, i, polygons, warnings);
         let material = Material {
             name: m.name.clone(),
             kd,
             ks,
             alpha: m.alpha,
             emission: m.emission,
+            diffuse_texture,
         };
         // The same name twice (two files, or an MTL that redefines it): share one
         // entry when identical, else tell them apart by their file.

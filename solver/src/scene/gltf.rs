@@ -732,6 +732,7 @@ impl Builder<'_> {
                     sizes: Default::default(),
                     object: object.clone(),
                     source: self.ctx.source(format!("{source_item}, triangle {t}")),
+                    uvs: None,
                 });
             }
         }
@@ -1071,6 +1072,7 @@ fn convert_material(ctx: &Context, material: &gltf::Material) -> (RawMaterial, V
         // This importer's warnings about unmodelled features are returned
         // beside the material (the MTL reader's per-statement list is not used).
         unmodelled: Vec::new(),
+        diffuse_map: None,
     };
     (raw, warnings)
 }

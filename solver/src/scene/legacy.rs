@@ -308,6 +308,7 @@ pub(crate) fn parse_legacy_text(path: &Path, text: &str) -> Result<RawScene, Sce
             overridden_at: None,
             undefined: None,
             unmodelled: Vec::new(),
+            diffuse_map: None,
         });
     }
     if let Some((no, tokens)) = content.next() {
@@ -346,6 +347,7 @@ pub(crate) fn parse_legacy_text(path: &Path, text: &str) -> Result<RawScene, Sce
                     line: Some(p.line),
                     item: format!("polygon {}", k + 1),
                 },
+                uvs: None,
             }
         })
         .collect();

@@ -24,6 +24,8 @@ mod raw;
 mod recentre;
 pub mod smooth;
 mod text;
+mod texture_file;
+pub mod uv;
 mod weld;
 
 #[cfg(test)]
@@ -38,6 +40,8 @@ pub use display::{load_display_file, DisplayParams};
 pub use error::SceneError;
 pub use mtl::alpha_from_ns;
 pub use smooth::{smooth_scene, SmoothReport, DEFAULT_CREASE_ANGLE, SMOOTH_TOLERANCE};
+pub use texture_file::{MAX_TEXTURE_FILE_BYTES, MAX_TEXTURE_SIZE, MAX_TEXTURE_TEXELS};
+pub use uv::UvMap;
 pub use weld::WELD_TOLERANCE;
 
 /// Where a piece of input came from, for warnings and errors.
@@ -75,6 +79,48 @@ pub struct Material {
     pub alpha: f64,
     /// Emitted radiance, linear RGB, one-sided toward the polygon normal.
     pub emission: DVec3,
+    /// The diffuse texture (MTL `map_Kd`): the reflectance at a point is
+    /// `kd ⊙ texture(uv)` (the MTL convention: Kd multiplies the map) where
+    /// the polygon has UVs, `kd` elsewhere.
+    pub diffuse_texture: Option<std::sync::Arc<SceneTexture>>,
+}
+
+/// A decoded diffuse texture: the 8-bit sRGB texels as read (for the solution
+/// file) and the linear pyramid the solve and the path tracer integrate.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SceneTexture {
+    pub file: PathBuf,
+    pub width: u32,
+    pub height: u32,
+    /// `width × height × 4` bytes, sRGB-encoded RGBA, rows top to bottom.
+    pub rgba: Vec<u8>,
+    pub texture: crate::texture::Texture,
+}
+
+impl SceneTexture {
+    /// A texture from sRGB-encoded RGBA texels (`width × height × 4` bytes,
+    /// rows top to bottom); `None` when the sizes do not match.
+    pub fn from_rgba(
+        file: PathBuf,
+        width: u32,
+        height: u32,
+        rgba: Vec<u8>,
+    ) -> Option<SceneTexture> {
+        let texture =
+            crate::texture::Texture::from_srgb(width as usize, height as usize, &rgba, 4)?;
+        Some(SceneTexture {
+            file,
+            width,
+            height,
+            rgba,
+            texture,
+        })
+    }
+
+    /// Bytes held (the RGBA texels and the linear pyramid).
+    pub fn bytes(&self) -> u64 {
+        self.rgba.len() as u64 + self.texture.bytes()
+    }
 }
 
 impl Material {
@@ -83,6 +129,15 @@ impl Material {
     }
     pub fn is_glossy(&self) -> bool {
         self.ks.max_element() > 0.0
+    }
+    /// The reflectance at texture coordinate `uv` (bilinear texture sample
+    /// times Kd), or the flat Kd when the material has no texture or the
+    /// point no UV.
+    pub fn kd_at(&self, uv: Option<glam::DVec2>) -> DVec3 {
+        match (&self.diffuse_texture, uv) {
+            (Some(t), Some(uv)) => self.kd * t.texture.bilinear(uv),
+            _ => self.kd,
+        }
     }
 }
 
@@ -95,6 +150,9 @@ pub struct Polygon {
     pub vertex_normals: Option<Vec<DVec3>>,
     /// Index into [`Scene::materials`].
     pub material: usize,
+    /// Texture coordinates as an affine map of position ([`uv`]), when the
+    /// input gave UVs.
+    pub uv_map: Option<UvMap>,
     /// User-set patch subdivision (Remington 1992, appendix B `patch N`): N × N patches.
     pub patches: u32,
     /// Per-object target patch size and smallest element (TOML config).

@@ -7,11 +7,15 @@
 //! Meaning of the keys (design notes): `Kd` diffuse reflectance, `Ks` reflectance
 //! of the glossy lobe, `Ke` emitted radiance (W·sr⁻¹·m⁻², one-sided), and `Ns`
 //! the Phong exponent, converted to the RMS slope of Remington 1992, eq. 4.1 by
-//! α = sqrt(2 / (Ns + 2)). Every other key (textures, `Ka`, `d`, `illum`, PBR
-//! extensions) is read past: radiosity uses none of them.
+//! α = sqrt(2 / (Ns + 2)). `map_Kd` names the diffuse texture, which
+//! multiplies Kd (the MTL convention: the reflectance is Kd ⊙ texture, so
+//! `Kd 0.1` with a texture is a dark surface, as the file says); its options
+//! are read past, with a warning for those that change the mapping. Every
+//! other key (other textures, `Ka`, `d`, `illum`, PBR extensions) is read
+//! past: radiosity uses none of them.
 //!
 //! Statements that change how an authored surface looks but that the solver does
-//! not model (textures, bump maps, transparency, refraction, mirror and glass
+//! not model (other textures, bump maps, transparency, refraction, mirror and glass
 //! `illum` models) give a warning, once per material and kind of statement, at the
 //! first such line, saying what the solver does instead ([`unmodelled`]). Keys
 //! that change nothing radiosity computes (`Ka`, which the solve replaces;
@@ -65,6 +69,7 @@ pub(crate) fn parse_mtl(path: &Path, text: &str) -> Result<Vec<RawMaterial>, Sce
                 overridden_at: None,
                 undefined: None,
                 unmodelled: Vec::new(),
+                diffuse_map: None,
             });
             warned.clear();
             continue;
@@ -80,6 +85,34 @@ pub(crate) fn parse_mtl(path: &Path, text: &str) -> Result<Vec<RawMaterial>, Sce
             continue;
         };
         let item = format!("material {}", current.name);
+        if key == "map_Kd" {
+            let source = SourceRef {
+                file: path.to_path_buf(),
+                line: Some(line_no),
+                item: item.clone(),
+            };
+            match texture_argument(&tokens[1..]) {
+                Ok((file, ignored)) => {
+                    if let Some(option) = ignored {
+                        current.unmodelled.push(Warning {
+                            source: source.clone(),
+                            message: format!(
+                                "`{}`: the option `{option}` is not modelled; the texture is \
+                                 used with u and v as given",
+                                quoted(&tokens)
+                            ),
+                        });
+                    }
+                    let dir = path.parent().unwrap_or(Path::new(""));
+                    current.diffuse_map = Some((dir.join(file), source));
+                }
+                Err(why) => current.unmodelled.push(Warning {
+                    source,
+                    message: format!("`{}`: {why}; the flat Kd is used", quoted(&tokens)),
+                }),
+            }
+            continue;
+        }
         if let Some((kind, message)) = unmodelled(key, &tokens[1..]) {
             if !warned.contains(&kind) {
                 warned.push(kind);
@@ -142,7 +175,6 @@ enum Unmodelled {
     Transparency,
     RefractiveIndex,
     IlluminationModel,
-    DiffuseTexture,
     EmissionTexture,
     SpecularTexture,
     ExponentTexture,
@@ -205,10 +237,6 @@ fn unmodelled(key: &str, args: &[&str]) -> Option<(Unmodelled, String)> {
                 ),
             )
         }
-        "map_Kd" => (
-            DiffuseTexture,
-            "diffuse textures are not yet modelled; the flat Kd is used".to_owned(),
-        ),
         "map_Ke" => (
             EmissionTexture,
             "emission textures are not yet modelled; the flat Ke is used, so the surface \
@@ -244,6 +272,52 @@ fn quoted(tokens: &[&str]) -> String {
     }
     let short: String = text.chars().take(MAX).collect();
     format!("{short}…")
+}
+
+/// The file a texture statement names, after its options (Wavefront MTL:
+/// `-blendu`, `-blendv`, `-cc`, `-clamp`, `-imfchan`, `-texres`, `-bm`,
+/// `-boost` take one value, `-mm` two, `-o`, `-s`, `-t` one to three numbers),
+/// and the first option that changes the mapping (`-o`, `-s`, `-t`,
+/// `-clamp on`, `-mm`, `-cc on`), which is not modelled.
+fn texture_argument(args: &[&str]) -> Result<(String, Option<String>), String> {
+    let mut k = 0;
+    let mut ignored = None;
+    while k < args.len() && args[k].starts_with('-') {
+        let option = args[k];
+        let count = match option {
+            "-blendu" | "-blendv" | "-cc" | "-clamp" | "-imfchan" | "-texres" | "-bm"
+            | "-boost" => 1,
+            "-mm" => 2,
+            "-o" | "-s" | "-t" => args[k + 1..]
+                .iter()
+                .take(3)
+                .take_while(|a| a.parse::<f64>().is_ok())
+                .count(),
+            _ => return Err(format!("unknown texture option `{option}`")),
+        };
+        let values = args.get(k + 1..k + 1 + count).unwrap_or(&[]);
+        let changes = match option {
+            "-o" => values.iter().any(|v| v.parse::<f64>() != Ok(0.0)),
+            "-s" => values.iter().any(|v| v.parse::<f64>() != Ok(1.0)),
+            "-t" | "-mm" => true,
+            "-clamp" | "-cc" => values.first() == Some(&"on"),
+            _ => false,
+        };
+        if changes && ignored.is_none() {
+            ignored = Some(
+                std::iter::once(option)
+                    .chain(values.iter().copied())
+                    .collect::<Vec<_>>()
+                    .join(" "),
+            );
+        }
+        k += 1 + count;
+    }
+    let file = args.get(k..).unwrap_or(&[]).join(" ");
+    if file.is_empty() {
+        return Err("no texture file named".to_owned());
+    }
+    Ok((file, ignored))
 }
 
 /// `r g b` or the one-value grey form `r`. The CIE `xyz` and `spectral` forms
@@ -351,7 +425,7 @@ mod tests {
         bump bump.png\n";
 
     /// (material, kind's key as first written, line, words the message must hold).
-    const EXPECTED: [(usize, &str, usize, &str); 18] = [
+    const EXPECTED: [(usize, &str, usize, &str); 16] = [
         (0, "map_Bump -bm 0.5 normal.png", 3, "normal is used"),
         (0, "d 0.5", 4, "opaque"),
         (0, "Ni 1.45", 5, "refraction"),
@@ -359,10 +433,8 @@ mod tests {
         (0, "map_Ks spec.png", 7, "flat Ks"),
         (0, "map_Ns rough.png", 8, "flat Ns"),
         (0, "refl -type sphere env.png", 9, "reflection maps"),
-        (0, "map_Kd wall.png", 10, "flat Kd"),
         (0, "map_Ke screen.png", 11, "flat Ke"),
         (1, "map_Ke screen.png", 13, "emits uniformly"),
-        (1, "map_Kd wall.png", 14, "not yet modelled"),
         (1, "refl -type sphere env.png", 15, "own surfaces"),
         (1, "map_Ns rough.png", 16, "not modelled"),
         (1, "map_Ks spec.png", 17, "not modelled"),
@@ -376,10 +448,15 @@ mod tests {
     fn every_unmodelled_statement_warns_once_per_material_naming_file_and_line() {
         let m = parse(EVERY_STATEMENT).unwrap();
         assert_eq!(m.len(), 2);
-        // Nine kinds each: bump, transparency, Ni, illum, map_Kd, map_Ke, map_Ks,
-        // map_Ns, refl.
-        assert_eq!(m[0].unmodelled.len(), 9, "{:?}", m[0].unmodelled);
-        assert_eq!(m[1].unmodelled.len(), 9, "{:?}", m[1].unmodelled);
+        // Eight kinds each: bump, transparency, Ni, illum, map_Ke, map_Ks,
+        // map_Ns, refl; `map_Kd` is modelled (read as the diffuse texture).
+        assert_eq!(m[0].unmodelled.len(), 8, "{:?}", m[0].unmodelled);
+        assert_eq!(m[1].unmodelled.len(), 8, "{:?}", m[1].unmodelled);
+        for material in &m {
+            let (file, at) = material.diffuse_map.as_ref().unwrap();
+            assert_eq!(file, Path::new("wall.png"));
+            assert!(at.line.is_some());
+        }
         for (material, statement, line, words) in EXPECTED {
             let hits: Vec<&Warning> = m[material]
                 .unmodelled
@@ -412,17 +489,12 @@ mod tests {
             .map(|w| (w.source.line, w.message.split('`').nth(1).unwrap()))
             .collect();
         // `d`, `map_d` and `Tr` are one kind (transparency), as are the two `illum`s.
-        assert_eq!(
-            lines,
-            [
-                (Some(2), "map_Kd a.png"),
-                (Some(5), "d 0.5"),
-                (Some(8), "illum 3")
-            ]
-        );
+        assert_eq!(lines, [(Some(5), "d 0.5"), (Some(8), "illum 3")]);
+        // The later `map_Kd` wins, as later `Kd` lines do.
+        assert_eq!(m[0].diffuse_map.as_ref().unwrap().0, Path::new("b.png"));
         // A new material starts afresh.
-        assert_eq!(m[1].unmodelled.len(), 1);
-        assert_eq!(m[1].unmodelled[0].source.line, Some(11));
+        assert!(m[1].unmodelled.is_empty());
+        assert_eq!(m[1].diffuse_map.as_ref().unwrap().0, Path::new("a.png"));
     }
 
     #[test]
@@ -438,11 +510,34 @@ mod tests {
     }
 
     #[test]
+    fn texture_options_are_read_past_and_mapping_changes_warned() {
+        let m = parse(
+            "newmtl a\nmap_Kd -blendu on -bm 1 my wall.png\nnewmtl b\nmap_Kd -s 2 2 1 -o 0 0 t.jpg\n\
+             newmtl c\nmap_Kd -s 1 1 1 plain.png\nnewmtl d\nmap_Kd -nonsense x.png\n",
+        )
+        .unwrap();
+        assert_eq!(
+            m[0].diffuse_map.as_ref().unwrap().0,
+            Path::new("my wall.png")
+        );
+        assert!(m[0].unmodelled.is_empty(), "{:?}", m[0].unmodelled);
+        assert_eq!(m[1].diffuse_map.as_ref().unwrap().0, Path::new("t.jpg"));
+        assert!(m[1].unmodelled[0]
+            .message
+            .contains("`-s 2 2 1` is not modelled"));
+        assert!(m[2].unmodelled.is_empty());
+        assert!(m[3].diffuse_map.is_none());
+        assert!(m[3].unmodelled[0]
+            .message
+            .contains("unknown texture option"));
+    }
+
+    #[test]
     fn a_long_statement_is_quoted_shortened() {
-        let long = format!("newmtl a\nmap_Kd {}.png\n", "x".repeat(10_000));
+        let long = format!("newmtl a\nmap_Ks {}.png\n", "x".repeat(10_000));
         let m = parse(&long).unwrap();
         let message = &m[0].unmodelled[0].message;
         assert!(message.chars().count() < 300, "{}", message.len());
-        assert!(message.starts_with("`map_Kd xxx"), "{message}");
+        assert!(message.starts_with("`map_Ks xxx"), "{message}");
     }
 }

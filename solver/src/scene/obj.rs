@@ -5,12 +5,15 @@
 //! line-preserving pre-pass checks every line that matters and writes a
 //! normalised copy that `tobj` then reads:
 //!
-//! * `v`, `vn`, `f` are checked (numbers finite, indices in range, relative
-//!   indices resolved against the counts so far) with errors naming file, line
-//!   and face; a face with fewer than 3 vertices is dropped with a warning;
+//! * `v`, `vn`, `vt`, `f` are checked (numbers finite, indices in range,
+//!   relative indices resolved against the counts so far) with errors naming
+//!   file, line and face; a face with fewer than 3 vertices is dropped with a
+//!   warning;
+//! * texture coordinates (`vt u [v [w]]`, v = 0 when absent, w ignored) are
+//!   kept by the pre-pass: a face whose every corner names one gets its UVs;
 //! * `o`/`g`/`usemtl`/`mtllib` are recorded per face by the pre-pass itself
 //!   (object names, material names, libraries relative to the OBJ file), and
-//!   blanked for `tobj`, as are texture coordinates, lines, points and
+//!   blanked for `tobj`, as are `vt` lines, lines, points and
 //!   free-form geometry, which radiosity does not use;
 //! * line numbers are kept one-to-one, so `tobj`'s k-th face is the pre-pass's
 //!   k-th face line.
@@ -23,7 +26,7 @@ use super::mtl::parse_mtl;
 use super::raw::{RawMaterial, RawPolygon, RawScene};
 use super::text::{numbered_lines, parse_real, parse_real_lazy, read_text};
 use super::{SceneError, SourceRef, Warning};
-use glam::DVec3;
+use glam::{DVec2, DVec3};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
@@ -33,6 +36,8 @@ struct FaceLine {
     object: Option<String>,
     material: Option<String>,
     has_normals: bool,
+    /// Texture coordinates (`vt`) of every corner, when every corner has one.
+    uvs: Option<Vec<DVec2>>,
 }
 
 /// The pre-pass's result: the text for `tobj` and the per-face records.
@@ -140,6 +145,7 @@ pub(crate) fn parse_obj(path: &Path) -> Result<RawScene, SceneError> {
                     })
                     .collect::<Vec<_>>()
             });
+            let uvs = face.uvs.clone().filter(|u| u.len() == arity);
             let source = SourceRef {
                 file: path.to_path_buf(),
                 line: Some(face.line),
@@ -152,6 +158,7 @@ pub(crate) fn parse_obj(path: &Path) -> Result<RawScene, SceneError> {
             raw.polygons.push(RawPolygon {
                 vertices,
                 normals,
+                uvs,
                 material,
                 patches: None,
                 sizes: Default::default(),
@@ -234,6 +241,8 @@ fn resolve_index(token: &str, count: usize, what: &str) -> Result<usize, String>
             match (what, count) {
                 ("vertex", 1) => "vertex is",
                 ("vertex", _) => "vertices are",
+                ("texture", 1) => "texture coordinate is",
+                ("texture", _) => "texture coordinates are",
                 (_, 1) => "normal is",
                 _ => "normals are",
             }
@@ -249,6 +258,7 @@ fn prepass(path: &Path, text: &str) -> Result<Prepass, SceneError> {
     let mut libraries = Vec::new();
     let mut warnings = Vec::new();
     let (mut positions, mut normals) = (0usize, 0usize);
+    let mut texcoords: Vec<DVec2> = Vec::new();
     let mut object: Option<String> = None;
     let mut material: Option<String> = None;
     let mut warned_freeform = false;
@@ -346,6 +356,31 @@ fn prepass(path: &Path, text: &str) -> Result<Prepass, SceneError> {
                 keep = tokens.join(" ");
                 normals += 1;
             }
+            Some("vt") => {
+                // `vt u [v [w]]`: v defaults to 0, w (3-D textures) is ignored.
+                let values = &tokens[1..];
+                if values.is_empty() || values.len() > 3 {
+                    return Err(err(
+                        format!("texture coordinate {}", texcoords.len() + 1),
+                        format!(
+                            "`vt` needs u (optionally v, w), found {} values",
+                            values.len()
+                        ),
+                    ));
+                }
+                let mut uv = DVec2::ZERO;
+                for (k, token) in values.iter().take(2).enumerate() {
+                    uv[k] = parse_real_lazy(token, || {
+                        format!(
+                            "texture coordinate {} {}",
+                            texcoords.len() + 1,
+                            ["u", "v"][k]
+                        )
+                    })
+                    .map_err(|m| err(String::new(), m))?;
+                }
+                texcoords.push(uv);
+            }
             Some("f") | Some("fo") => {
                 let face_number = faces.len() + 1;
                 let item = match &object {
@@ -354,6 +389,7 @@ fn prepass(path: &Path, text: &str) -> Result<Prepass, SceneError> {
                 };
                 let mut corners = Vec::new();
                 let mut with_normals = 0usize;
+                let mut uvs = Vec::new();
                 for corner in &tokens[1..] {
                     let parts: Vec<&str> = corner.split('/').collect();
                     if parts.len() > 3 || parts[0].is_empty() {
@@ -365,12 +401,9 @@ fn prepass(path: &Path, text: &str) -> Result<Prepass, SceneError> {
                     let v = resolve_index(parts[0], positions, "vertex")
                         .map_err(|m| err(item.clone(), m))?;
                     if let Some(vt) = parts.get(1).filter(|s| !s.is_empty()) {
-                        vt.parse::<i64>().map_err(|_| {
-                            err(
-                                item.clone(),
-                                format!("texture index `{vt}` is not an integer"),
-                            )
-                        })?;
+                        let t = resolve_index(vt, texcoords.len(), "texture")
+                            .map_err(|m| err(item.clone(), m))?;
+                        uvs.push(texcoords[t]);
                     }
                     let mut corner_text = (v + 1).to_string();
                     if let Some(vn) = parts.get(2).filter(|s| !s.is_empty()) {
@@ -409,6 +442,7 @@ fn prepass(path: &Path, text: &str) -> Result<Prepass, SceneError> {
                         object: object.clone(),
                         material: material.clone(),
                         has_normals,
+                        uvs: (uvs.len() == corners.len()).then_some(uvs),
                     });
                 }
             }

@@ -4,7 +4,7 @@
 //! [`super::Scene`].
 
 use super::{SourceRef, Warning};
-use glam::DVec3;
+use glam::{DVec2, DVec3};
 use std::path::PathBuf;
 
 /// Diffuse reflectance given to a material that the input uses but never defines
@@ -32,6 +32,10 @@ pub(crate) struct RawMaterial {
     /// (MTL textures, transparency, `illum` 3–9, ...), one per statement kind,
     /// given by [`super::clean`] only if a polygon uses the material.
     pub unmodelled: Vec<Warning>,
+    /// The diffuse texture (MTL `map_Kd`), resolved against the MTL file's
+    /// folder, and where it was named. Read by [`super::clean`] only if a
+    /// polygon uses the material.
+    pub diffuse_map: Option<(PathBuf, SourceRef)>,
 }
 
 impl RawMaterial {
@@ -48,6 +52,7 @@ impl RawMaterial {
             overridden_at: None,
             undefined: Some(Warning { source, message }),
             unmodelled: Vec::new(),
+            diffuse_map: None,
         }
     }
 
@@ -64,6 +69,9 @@ pub(crate) struct RawPolygon {
     /// One shading normal per vertex when the input gave them (OBJ `vn`, legacy
     /// `normal`), not yet normalised or compared with the facet.
     pub normals: Option<Vec<DVec3>>,
+    /// One texture coordinate per vertex when the input gave them (OBJ `vt`,
+    /// OBJ orientation: v grows upwards).
+    pub uvs: Option<Vec<DVec2>>,
     /// Index into [`RawScene::materials`].
     pub material: usize,
     /// Patch subdivision the input asked for (legacy `patch N`, TOML overrides).

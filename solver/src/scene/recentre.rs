@@ -42,6 +42,7 @@ mod tests {
             sizes: Default::default(),
             object: None,
             source: SourceRef::default(),
+            uvs: None,
         }
     }
 

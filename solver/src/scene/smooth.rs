@@ -330,6 +330,7 @@ mod tests {
         Polygon {
             vertices,
             vertex_normals: normals,
+            uv_map: None,
             material: 0,
             patches: 1,
             sizes: Default::default(),

@@ -194,6 +194,10 @@ fn compatible(p: &Polygon, q: &Polygon) -> bool {
         && p.sizes == q.sizes
         && p.vertex_normals.is_none()
         && q.vertex_normals.is_none()
+        // Textured polygons keep their own UV maps (two triangles' fitted
+        // maps agree only to rounding, and welding is an optimisation).
+        && p.uv_map.is_none()
+        && q.uv_map.is_none()
         && newell_normal(&p.vertices).dot(newell_normal(&q.vertices)) > 0.0
 }
 
@@ -271,6 +275,7 @@ mod tests {
         Polygon {
             vertices: vertices.iter().map(|&v| DVec3::from(v)).collect(),
             vertex_normals: None,
+            uv_map: None,
             material,
             patches: 4,
             sizes: Default::default(),

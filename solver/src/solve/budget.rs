@@ -120,6 +120,9 @@ pub struct Counts {
     pub patch_coefficients: u64,
     /// Σ over recorded shots of their source's `3 (L+1)²`.
     pub recorded_coefficients: u64,
+    /// Decoded diffuse textures (RGBA texels and linear pyramids) and the
+    /// textured patches' RGB gather weights, in bytes (`textured.rs`).
+    pub texture_bytes: u64,
 }
 
 /// The estimate in bytes, per term (see the module documentation).
@@ -209,7 +212,7 @@ fn pool_bytes(samples: u64, sets: u32) -> u64 {
 pub fn estimate(c: &Counts) -> MemoryEstimate {
     let dvec3 = size_of::<DVec3>() as u64;
     let f64_ = size_of::<f64>() as u64;
-    let fixed = FIXED_BYTES + c.surfaces * surface_bytes();
+    let fixed = FIXED_BYTES + c.surfaces * surface_bytes() + c.texture_bytes;
     let mesh = c.vertices * size_of::<MeshVertex>() as u64
         + table_bytes(c.vertices)
         + c.elements * size_of::<Element>() as u64
@@ -315,6 +318,17 @@ pub fn counts_before_meshing(scene: &Scene, settings: &SolverSettings) -> Counts
         c.vertices += pieces * (n + 1) * (n + 1);
     }
     c.weight_entries = c.vertices + 3 * c.patches;
+    let mut textures: Vec<*const crate::scene::SceneTexture> = Vec::new();
+    for t in scene
+        .materials
+        .iter()
+        .filter_map(|m| m.diffuse_texture.as_ref())
+    {
+        if !textures.contains(&std::sync::Arc::as_ptr(t)) {
+            textures.push(std::sync::Arc::as_ptr(t));
+            c.texture_bytes += t.bytes();
+        }
+    }
     if c.directional {
         c.vertex_coefficients = 3 * c.vertices;
         c.patch_coefficients = 3 * c.patches;
@@ -537,6 +551,7 @@ impl Solver {
             recorded_shots: self.recorded.len() as u64,
             samples: self.settings.samples as u64,
             directional: false,
+            texture_bytes: self.texture_bytes(),
             ..Counts::default()
         };
         if let Some(d) = d {

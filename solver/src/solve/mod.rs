@@ -57,10 +57,12 @@ pub mod cube_gather;
 pub mod directional;
 pub mod gauss_seidel;
 mod output;
+mod output_textured;
 pub(crate) use output::default_camera;
 mod refine;
 mod seams;
 pub mod shoot;
+mod textured;
 
 pub use checkpoint::Checkpoint;
 pub use directional::{Directional, DirectionalCheckpoint, SourceChoice};
@@ -170,8 +172,14 @@ pub struct Solver {
     scene_camera: Option<solution::camera::Camera>,
     scene_units_per_metre: f64,
     up_axis: solution::camera::UpAxis,
-    /// Per surface.
+    /// Per surface: the reflectance receivers apply to a shot (1 on
+    /// textured surfaces, whose vertices hold E/π: `textured.rs`).
     kd: Vec<DVec3>,
+    /// Per surface, its mean reflectance (Kd, or Kd ⊙ the texture's mean),
+    /// for the ambient term.
+    albedo: Vec<DVec3>,
+    /// The textured surfaces (none outside the diffuse progressive solve).
+    texturing: textured::SurfaceTexturing,
     emission: Vec<DVec3>,
     /// Per surface, its patches (contiguous).
     surface_patches: Vec<std::ops::Range<u32>>,
@@ -188,6 +196,10 @@ pub struct Solver {
     /// Per patch: unshot radiance, and (vertex, area) weights of the gather.
     patch_unshot: Vec<DVec3>,
     patch_weights: Vec<Vec<(u32, f64)>>,
+    /// Per patch, its RGB gather weights if textured (empty for the others;
+    /// the whole list is empty when no surface is textured, so an untextured
+    /// solve holds nothing more than before).
+    patch_rgb_weights: Vec<Vec<(u32, DVec3)>>,
     leaf_count: usize,
     shots: u64,
     rays: u64,
@@ -259,10 +271,35 @@ impl Solver {
             1 => return Err(SolveError::SinglePolygon),
             _ => {}
         }
-        let kd: Vec<DVec3> = mesh
+        let texturing = textured::SurfaceTexturing::new(scene, &mesh, offset);
+        let albedo: Vec<DVec3> = mesh
             .surfaces
             .iter()
-            .map(|s| scene.materials[s.material].kd)
+            .zip(&texturing.per_surface)
+            .map(|(s, t)| match t {
+                Some(t) => t.kd * t.texture.texture.mean(),
+                None => scene.materials[s.material].kd,
+            })
+            .collect();
+        let mut set_up_warnings = Vec::new();
+        let diffuse = settings.mode == SolveMode::Diffuse;
+        if !diffuse && texturing.any() {
+            set_up_warnings.push(
+                "diffuse textures are modelled by the diffuse mode only; this directional solve \
+                 uses each textured surface's Kd times its texture's mean"
+                    .to_owned(),
+            );
+        }
+        let texturing = if diffuse {
+            texturing
+        } else {
+            textured::SurfaceTexturing::default()
+        };
+        let kd: Vec<DVec3> = (0..mesh.surfaces.len())
+            .map(|s| match texturing.get(s as u32) {
+                Some(_) => DVec3::ONE,
+                None => albedo[s],
+            })
             .collect();
         let emission: Vec<DVec3> = mesh
             .surfaces
@@ -307,6 +344,7 @@ impl Solver {
         let vertex_count = mesh.vertices.len();
         let patch_count = mesh.patches.len();
         let receivers = cluster::ReceiverTree::new(&mesh, &kd);
+        let texturing_any = texturing.any();
         let mut solver = Solver {
             settings: settings.clone(),
             leaf_count: mesh.leaf_count(),
@@ -318,6 +356,8 @@ impl Solver {
             scene_units_per_metre: scene.units_per_metre,
             up_axis: scene.up_axis,
             kd,
+            albedo,
+            texturing,
             emission,
             surface_patches,
             radiance,
@@ -328,6 +368,11 @@ impl Solver {
             recorded_pools: Vec::new(),
             patch_unshot,
             patch_weights: vec![Vec::new(); patch_count],
+            patch_rgb_weights: if texturing_any {
+                vec![Vec::new(); patch_count]
+            } else {
+                Vec::new()
+            },
             shots: 0,
             rays: 0,
             seconds: 0.0,
@@ -336,7 +381,7 @@ impl Solver {
             radiance_level: 0.0,
             timings: Timings::default(),
             directional: None,
-            warnings: Vec::new(),
+            warnings: set_up_warnings,
             pending_warnings: Vec::new(),
             peak_estimate: 0,
             refinement_capped: false,
@@ -660,6 +705,36 @@ impl Solver {
         for (&p, w) in patches.iter().zip(weights) {
             self.patch_weights[p as usize] = w;
         }
+        if self.texturing.any() {
+            self.update_rgb_weights(patches);
+        }
+    }
+
+    /// Bytes of the textures the solve holds and of the RGB gather weights.
+    fn texture_bytes(&self) -> u64 {
+        let entry = std::mem::size_of::<(u32, DVec3)>() as u64;
+        let entries: u64 = self.patch_rgb_weights.iter().map(|w| w.len() as u64).sum();
+        let headers =
+            (self.patch_rgb_weights.len() * std::mem::size_of::<Vec<(u32, DVec3)>>()) as u64;
+        self.texturing.texture_bytes() + entries * entry + headers
+    }
+
+    /// Recomputes the RGB gather weights of the textured ones of `patches`
+    /// (`textured.rs`).
+    fn update_rgb_weights(&mut self, patches: &[u32]) {
+        let (mesh, texturing) = (&self.mesh, &self.texturing);
+        let weights: Vec<(u32, Vec<(u32, DVec3)>)> = patches
+            .par_iter()
+            .filter_map(|&p| {
+                let t = texturing.get(mesh.patches[p as usize].surface)?;
+                let mut tris = Vec::new();
+                mesh.patch_triangles(p, &mut tris);
+                Some((p, texturing.weights(mesh, t, &tris)))
+            })
+            .collect();
+        for (p, w) in weights {
+            self.patch_rgb_weights[p as usize] = w;
+        }
     }
 
     /// Adds each patch's share of the shot's ΔL to its unshot radiance and
@@ -668,14 +743,25 @@ impl Solver {
     fn gather(&mut self) {
         let received = &self.received;
         let mesh = &self.mesh;
+        let rgb_weights = &self.patch_rgb_weights;
         self.patch_unshot
             .par_iter_mut()
             .zip(&self.patch_weights)
             .enumerate()
             .for_each(|(p, (unshot, weights))| {
                 let mut sum = DVec3::ZERO;
-                for &(v, w) in weights {
-                    sum += received[v as usize] * w;
+                // A textured patch reflects ∫ ρ ΔE/π dA (`textured.rs`).
+                match rgb_weights.get(p).filter(|w| !w.is_empty()) {
+                    None => {
+                        for &(v, w) in weights {
+                            sum += received[v as usize] * w;
+                        }
+                    }
+                    Some(rgb) => {
+                        for &(v, w) in rgb {
+                            sum += received[v as usize] * w;
+                        }
+                    }
                 }
                 *unshot += sum / mesh.patches[p].area;
             });
@@ -760,3 +846,5 @@ mod physics_tests;
 mod smooth_tests;
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod texture_tests;

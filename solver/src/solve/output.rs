@@ -29,7 +29,7 @@ impl Solver {
         let mut unshot = DVec3::ZERO;
         for (p, u) in self.mesh.patches.iter().zip(&self.patch_unshot) {
             area += p.area;
-            reflect += self.kd[p.surface as usize] * p.area;
+            reflect += self.albedo[p.surface as usize] * p.area;
             unshot += *u * p.area;
         }
         if area.is_nan() || area <= 0.0 {
@@ -58,7 +58,11 @@ impl Solver {
         let scale = (4.0 * PI).sqrt();
         // One output vertex per position of a smooth surface, and its seams
         // free of T-junctions (`seams.rs`); flat facets map one to one.
-        let shared = super::seams::share_vertices(&self.mesh, &self.radiance);
+        // Textured smooth surfaces keep their UV seams (`seams.rs`).
+        let texturing = &self.texturing;
+        let shared = super::seams::share_vertices_with_uvs(&self.mesh, &self.radiance, &|s, p| {
+            texturing.get(s).map(|t| texturing.uv(t, p))
+        });
         let mut vertices = Vec::with_capacity(shared.representative.len());
         let mut coefficients = Vec::with_capacity(3 * shared.representative.len());
         let mut lo = DVec3::splat(f64::INFINITY);
@@ -132,6 +136,8 @@ impl Solver {
             }],
             textures: Vec::new(),
         };
+        // Textured surfaces: batches of UV and E/π (`output_textured.rs`).
+        self.split_textured(&shared, &mut solution, ambient);
         // Directional mode: one batch per SH order instead.
         self.directional_batches(&mut solution, ambient);
         if self.scene_camera.is_none() {

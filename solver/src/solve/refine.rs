@@ -478,6 +478,7 @@ mod tests {
                 patches: 1,
                 sizes: Default::default(),
                 source: SourceRef::default(),
+                uv_map: None,
             }],
             materials: vec![Material {
                 name: "grey".into(),
@@ -485,6 +486,7 @@ mod tests {
                 ks: DVec3::ZERO,
                 alpha: 1.0,
                 emission: DVec3::ZERO,
+                diffuse_texture: None,
             }],
             units_per_metre: 1.0,
             up_axis: UpAxis::PosY,

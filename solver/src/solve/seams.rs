@@ -26,6 +26,14 @@
 //!   neighbour edge's linear interpolation, would erase the shadow edge that made
 //!   it split).
 //!
+//! * **UV seams.** On a textured smooth surface, coincident vertices whose
+//!   texture coordinates differ (a seam of the UV layout) stay separate
+//!   output vertices, so each side keeps its own UVs, but they get the same
+//!   radiance (E/π): the mean over every vertex at the position. Limitation:
+//!   T-junctions along a UV seam are not repaired across it (its two sides
+//!   have different output vertices), so an adaptive split on one side only
+//!   can leave a value step there.
+//!
 //! Flat facets (no corner normals) are left exactly as the mesh has them, so a
 //! scene without smooth surfaces gives the same vertices, in the same order,
 //! and the same triangles as before.
@@ -109,8 +117,33 @@ impl Grid {
     }
 }
 
-/// Merges the coincident vertices of smooth surfaces (see the module comment).
-pub(crate) fn share_vertices(mesh: &Mesh, radiance: &[DVec3]) -> SharedVertices {
+/// Two texture coordinates are the same display vertex when they differ by at
+/// most this (1e-7 of a texture repeat: far below a texel of the largest
+/// texture read, 1/16384, far above the rounding of one affine map evaluated
+/// at one position from two polygons' fits).
+const SAME_UV: f64 = 1e-7;
+
+/// Merges the coincident vertices of smooth surfaces (see the module
+/// comment), given texture coordinates `uv(surface, position)` (solver
+/// coordinates; `None` where untextured): vertices
+/// that would merge but whose UVs differ (a UV seam) stay separate display
+/// vertices, each with the lighting (the area-weighted mean radiance) of all
+/// the vertices at that position, so a seam splits the texture but not the
+/// light.
+pub(crate) fn share_vertices_with_uvs(
+    mesh: &Mesh,
+    radiance: &[DVec3],
+    uv: &dyn Fn(u32, DVec3) -> Option<glam::DVec2>,
+) -> SharedVertices {
+    // Whether mesh vertex `r` has the UV that `surface` has at `p`.
+    let same_uv = |r: u32, surface: u32, p: DVec3| {
+        let r = &mesh.vertices[r as usize];
+        match (uv(r.surface, r.position), uv(surface, p)) {
+            (Some(x), Some(y)) => (x - y).abs().max_element() <= SAME_UV,
+            (None, None) => true,
+            _ => false,
+        }
+    };
     let n = mesh.vertices.len();
     let smooth = |v: usize| {
         mesh.surfaces[mesh.vertices[v].surface as usize]
@@ -128,28 +161,51 @@ pub(crate) fn share_vertices(mesh: &Mesh, radiance: &[DVec3]) -> SharedVertices 
         tol: tol.max(f64::MIN_POSITIVE),
         cells: HashMap::new(),
     };
+    // Lighting groups (merged ignoring UVs) and their first vertex.
+    let mut light_grid = Grid {
+        tol: grid.tol,
+        cells: HashMap::new(),
+    };
+    let mut light_first: Vec<u32> = Vec::new();
+    let mut light_of: Vec<u32> = Vec::with_capacity(n);
     let mut output_of = Vec::with_capacity(n);
     let mut representative: Vec<u32> = Vec::with_capacity(n);
     let mut sums: Vec<(DVec3, f64)> = Vec::with_capacity(n);
     for v in 0..n {
         let vertex = &mesh.vertices[v];
-        let found = if smooth(v) {
-            let material = mesh.surfaces[vertex.surface as usize].material;
-            grid.find(vertex.position, |o| {
-                let r = &mesh.vertices[representative[o as usize] as usize];
-                mesh.surfaces[r.surface as usize].material == material
-                    && (r.position - vertex.position).length() <= tol
-                    && r.normal.dot(vertex.normal) >= SAME_NORMAL
-            })
-        } else {
-            None
+        let material = mesh.surfaces[vertex.surface as usize].material;
+        let coincides = |r: &crate::mesh::MeshVertex| {
+            mesh.surfaces[r.surface as usize].material == material
+                && (r.position - vertex.position).length() <= tol
+                && r.normal.dot(vertex.normal) >= SAME_NORMAL
         };
+        let (found, light) = if smooth(v) {
+            let found = grid.find(vertex.position, |o| {
+                let r = representative[o as usize];
+                coincides(&mesh.vertices[r as usize]) && same_uv(r, vertex.surface, vertex.position)
+            });
+            let light = light_grid.find(vertex.position, |g| {
+                coincides(&mesh.vertices[light_first[g as usize] as usize])
+            });
+            (found, light)
+        } else {
+            (None, None)
+        };
+        let light = light.unwrap_or_else(|| {
+            let g = light_first.len() as u32;
+            light_first.push(v as u32);
+            sums.push((DVec3::ZERO, 0.0));
+            if smooth(v) {
+                light_grid.insert(vertex.position, g);
+            }
+            g
+        });
         let o = match found {
             Some(o) => o,
             None => {
                 let o = representative.len() as u32;
                 representative.push(v as u32);
-                sums.push((DVec3::ZERO, 0.0));
+                light_of.push(light);
                 if smooth(v) {
                     grid.insert(vertex.position, o);
                 }
@@ -157,13 +213,16 @@ pub(crate) fn share_vertices(mesh: &Mesh, radiance: &[DVec3]) -> SharedVertices 
             }
         };
         output_of.push(o);
-        let (sum, w) = &mut sums[o as usize];
+        let (sum, w) = &mut sums[light as usize];
         // A vertex no leaf has as a corner (none today) still counts, a little.
         let wv = weight[v].max(f64::MIN_POSITIVE);
         *sum += radiance[v] * wv;
         *w += wv;
     }
-    let radiance = sums.iter().map(|(s, w)| *s / *w).collect();
+    let radiance = light_of
+        .iter()
+        .map(|&g| sums[g as usize].0 / sums[g as usize].1)
+        .collect();
     let mut shared = SharedVertices {
         output_of,
         representative,
@@ -171,30 +230,39 @@ pub(crate) fn share_vertices(mesh: &Mesh, radiance: &[DVec3]) -> SharedVertices 
         on_edges: HashMap::new(),
         edge_points: HashMap::new(),
     };
-    index_polygon_edges(mesh, &grid, tol, &mut shared);
+    index_polygon_edges(mesh, &grid, tol, &same_uv, &mut shared);
     shared
 }
 
 /// Records, for every vertex of a smooth polygon that lies on one of its
 /// polygon's edges, that edge and its parameter along it.
-fn index_polygon_edges(mesh: &Mesh, grid: &Grid, tol: f64, shared: &mut SharedVertices) {
+fn index_polygon_edges(
+    mesh: &Mesh,
+    grid: &Grid,
+    tol: f64,
+    same_uv: &dyn Fn(u32, u32, DVec3) -> bool,
+    shared: &mut SharedVertices,
+) {
     // The output vertex at each corner of each smooth surface (`None` for a
     // surface with a corner that is no mesh vertex: its seams are left as
     // meshed).
     let corner_ids: Vec<Option<Vec<u32>>> = mesh
         .surfaces
         .iter()
-        .map(|s| {
+        .enumerate()
+        .map(|(index, s)| {
             let normals = s.corner_normals.as_ref()?;
             s.vertices
                 .iter()
                 .zip(normals)
                 .map(|(&p, &normal)| {
                     grid.find(p, |o| {
-                        let r = &mesh.vertices[shared.representative[o as usize] as usize];
+                        let id = shared.representative[o as usize];
+                        let r = &mesh.vertices[id as usize];
                         mesh.surfaces[r.surface as usize].material == s.material
                             && (r.position - p).length() <= tol
                             && r.normal.dot(normal) >= SAME_NORMAL
+                            && same_uv(id, index as u32, p)
                     })
                 })
                 .collect()

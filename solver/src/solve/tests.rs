@@ -11,6 +11,7 @@ pub(crate) fn material(name: &str, kd: f64, emission: f64) -> Material {
         ks: DVec3::ZERO,
         alpha: 1.0,
         emission: DVec3::splat(emission),
+        diffuse_texture: None,
     }
 }
 
@@ -26,6 +27,7 @@ pub(crate) fn scene_of(
             .map(|(i, (vertices, material))| Polygon {
                 vertices,
                 vertex_normals: None,
+                uv_map: None,
                 material,
                 patches,
                 sizes: Default::default(),

@@ -13,6 +13,7 @@ fn material(name: &str, kd: f64, ks: f64, alpha: f64, emission: f64) -> Material
         ks: DVec3::splat(ks),
         alpha,
         emission: DVec3::splat(emission),
+        diffuse_texture: None,
     }
 }
 
@@ -25,6 +26,7 @@ fn scene(polygons: Vec<(Vec<DVec3>, usize, u32)>, materials: Vec<Material>) -> S
             .map(|(i, (vertices, material, patches))| Polygon {
                 vertices,
                 vertex_normals: None,
+                uv_map: None,
                 material,
                 patches,
                 sizes: Default::default(),

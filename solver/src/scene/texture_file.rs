@@ -1,0 +1,258 @@
+//! Reading a diffuse texture file (`map_Kd`) through the `image` crate: PNG or
+//! JPEG, sizes checked from the header before anything is decoded.
+//!
+//! A texture that cannot be used is never an error: the material keeps its
+//! flat Kd and a warning names the file and why (missing, unreadable,
+//! truncated or corrupt, an unsupported format, or larger than
+//! [`MAX_TEXTURE_SIZE`] / [`MAX_TEXTURE_TEXELS`]). A tiny PNG can declare
+//! 65535 × 65535 texels (16 GiB of RGBA); the header is read first and such a
+//! file refused before any allocation beyond the file itself, and the decoder
+//! runs under `image::Limits` as a second guard.
+
+use super::{SceneTexture, SourceRef, Warning};
+use std::io::Cursor;
+use std::path::Path;
+use std::sync::Arc;
+
+/// The largest width or height read, in texels (16384 is also the solution
+/// format's limit, and what every GPU guarantees for a 2-D image).
+pub const MAX_TEXTURE_SIZE: u32 = 16384;
+/// The most texels read from one texture: 4096² = 16.8 M, about 64 MiB as
+/// RGBA8 for the solution file and 300 MiB as the solver's linear pyramid
+/// (12 bytes a texel, 1.5 × for the levels). The memory budget counts both.
+pub const MAX_TEXTURE_TEXELS: u64 = 4096 * 4096;
+/// Texture files larger than this are not read (a 4096² PNG of noise is
+/// about 64 MiB; JPEGs are smaller).
+pub const MAX_TEXTURE_FILE_BYTES: u64 = 256 << 20;
+
+/// Loads `path` for the material at `source`; `None` (with a warning in
+/// `warnings`) when it cannot be used.
+pub(crate) fn load_texture(
+    path: &Path,
+    source: &SourceRef,
+    warnings: &mut Vec<Warning>,
+) -> Option<Arc<SceneTexture>> {
+    match read(path) {
+        Ok(t) => Some(Arc::new(t)),
+        Err(why) => {
+            warnings.push(Warning {
+                source: source.clone(),
+                message: format!(
+                    "map_Kd texture {}: {why}; the flat Kd is used",
+                    path.display()
+                ),
+            });
+            None
+        }
+    }
+}
+
+fn read(path: &Path) -> Result<SceneTexture, String> {
+    let length = std::fs::metadata(path)
+        .map_err(|e| format!("cannot be read ({e})"))?
+        .len();
+    if length > MAX_TEXTURE_FILE_BYTES {
+        return Err(format!(
+            "the file has {length} bytes, more than the {MAX_TEXTURE_FILE_BYTES} read"
+        ));
+    }
+    let bytes = std::fs::read(path).map_err(|e| format!("cannot be read ({e})"))?;
+    let reader = |bytes: &[u8]| {
+        image::ImageReader::new(Cursor::new(bytes.to_vec()))
+            .with_guessed_format()
+            .map_err(|e| format!("cannot be read ({e})"))
+    };
+    let header = reader(&bytes)?;
+    if header.format().is_none() {
+        return Err("is neither a PNG nor a JPEG file".to_owned());
+    }
+    let (width, height) = header
+        .into_dimensions()
+        .map_err(|e| format!("its header cannot be read ({e})"))?;
+    check_size(width, height)?;
+    let mut decoder = reader(&bytes)?;
+    let mut limits = image::Limits::default();
+    limits.max_image_width = Some(width);
+    limits.max_image_height = Some(height);
+    // RGBA8 plus the decoder's own buffer of at most the same size.
+    limits.max_alloc = Some(16 * u64::from(width) * u64::from(height) + (1 << 20));
+    decoder.limits(limits);
+    let image = decoder
+        .decode()
+        .map_err(|e| format!("cannot be decoded (truncated or corrupt?): {e}"))?;
+    let rgba = image.to_rgba8();
+    drop(image);
+    let (w, h) = (rgba.width(), rgba.height());
+    SceneTexture::from_rgba(path.to_path_buf(), w, h, rgba.into_raw())
+        .ok_or_else(|| "decoded to an image of zero size".to_owned())
+}
+
+fn check_size(width: u32, height: u32) -> Result<(), String> {
+    if width == 0 || height == 0 {
+        return Err(format!("its header declares {width} × {height} texels"));
+    }
+    if width > MAX_TEXTURE_SIZE || height > MAX_TEXTURE_SIZE {
+        return Err(format!(
+            "its header declares {width} × {height} texels, more than {MAX_TEXTURE_SIZE} on a side; \
+             not decoded"
+        ));
+    }
+    if u64::from(width) * u64::from(height) > MAX_TEXTURE_TEXELS {
+        return Err(format!(
+            "its header declares {width} × {height} texels, more than the {MAX_TEXTURE_TEXELS} \
+             (4096²) read; not decoded (scale it down)"
+        ));
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::{load_scene, ImportOptions};
+    use glam::DVec3;
+
+    /// A PNG of `w` × `h` RGB texels, texel (x, y) = `code(x, y)` grey.
+    pub(crate) fn png(w: u32, h: u32, code: impl Fn(u32, u32) -> u8) -> Vec<u8> {
+        let image = image::RgbImage::from_fn(w, h, |x, y| image::Rgb([code(x, y); 3]));
+        let mut bytes = Vec::new();
+        image
+            .write_to(&mut Cursor::new(&mut bytes), image::ImageFormat::Png)
+            .unwrap();
+        bytes
+    }
+
+    /// A PNG whose IHDR declares `w` × `h` texels, with a one-byte IDAT: 57
+    /// bytes in all.
+    fn lying_png(w: u32, h: u32) -> Vec<u8> {
+        let chunk = |kind: &[u8], data: &[u8]| {
+            let mut out = (data.len() as u32).to_be_bytes().to_vec();
+            out.extend_from_slice(kind);
+            out.extend_from_slice(data);
+            let mut crc = crc32fast::Hasher::new();
+            crc.update(kind);
+            crc.update(data);
+            out.extend(crc.finalize().to_be_bytes());
+            out
+        };
+        let mut ihdr = w.to_be_bytes().to_vec();
+        ihdr.extend(h.to_be_bytes());
+        ihdr.extend([8, 2, 0, 0, 0]); // 8-bit RGB, deflate, no filter, no interlace
+        let mut out = vec![0x89, b'P', b'N', b'G', b'\r', b'\n', 0x1A, b'\n'];
+        out.extend(chunk(b"IHDR", &ihdr));
+        out.extend(chunk(b"IDAT", &[0]));
+        out.extend(chunk(b"IEND", &[]));
+        out
+    }
+
+    fn load(path: &Path) -> (Option<Arc<SceneTexture>>, Vec<Warning>) {
+        let mut warnings = Vec::new();
+        let t = load_texture(path, &SourceRef::default(), &mut warnings);
+        (t, warnings)
+    }
+
+    #[test]
+    fn a_png_and_a_jpeg_decode_to_linear_texels() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("half.png");
+        std::fs::write(&path, png(4, 2, |x, _| if x < 2 { 128 } else { 255 })).unwrap();
+        let (t, warnings) = load(&path);
+        let t = t.unwrap();
+        assert!(warnings.is_empty(), "{warnings:?}");
+        assert_eq!((t.width, t.height, t.rgba.len()), (4, 2, 32));
+        // The mean of the linear values, (0.2159 + 1) / 2, not of the codes.
+        assert!(
+            (t.texture.mean().x - 0.607_93).abs() < 1e-4,
+            "{}",
+            t.texture.mean()
+        );
+        // JPEG is lossy: a uniform grey 128 comes back within a code or two.
+        let jpeg = dir.path().join("grey.jpg");
+        image::RgbImage::from_pixel(16, 16, image::Rgb([128; 3]))
+            .save(&jpeg)
+            .unwrap();
+        let (t, warnings) = load(&jpeg);
+        assert!(warnings.is_empty(), "{warnings:?}");
+        assert!((t.unwrap().texture.mean().x - 0.2159).abs() < 0.01);
+    }
+
+    #[test]
+    fn bad_texture_files_warn_naming_the_file_and_give_no_texture() {
+        let dir = tempfile::tempdir().unwrap();
+        let good = png(64, 64, |x, y| ((x * 7 + y * 13) % 256) as u8);
+        let cases: Vec<(&str, Vec<u8>, &str)> = vec![
+            (
+                "truncated.png",
+                good[..good.len() / 2].to_vec(),
+                "cannot be decoded",
+            ),
+            ("huge.png", lying_png(65535, 65535), "65535 × 65535"),
+            ("wide.png", lying_png(5000, 4000), "4096²"),
+            (
+                "text.png",
+                b"not an image at all".to_vec(),
+                "neither a PNG nor a JPEG",
+            ),
+        ];
+        for (name, bytes, words) in cases {
+            let path = dir.path().join(name);
+            std::fs::write(&path, &bytes).unwrap();
+            let (t, warnings) = load(&path);
+            assert!(t.is_none(), "{name}");
+            assert_eq!(warnings.len(), 1, "{name}: {warnings:?}");
+            let message = &warnings[0].message;
+            assert!(
+                message.contains(name) && message.contains(words),
+                "{message}"
+            );
+            assert!(message.ends_with("the flat Kd is used"), "{message}");
+        }
+        let (t, warnings) = load(&dir.path().join("missing.png"));
+        assert!(t.is_none());
+        assert!(
+            warnings[0].message.contains("missing.png: cannot be read"),
+            "{warnings:?}"
+        );
+    }
+
+    #[test]
+    fn an_obj_with_vt_and_map_kd_imports_textured() {
+        // A floor quad mapped onto a 2 × 2 texture and a light; the OBJ writes
+        // UVs that are an affine image of the quad, so the fit is exact.
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(
+            dir.path().join("t.png"),
+            png(2, 2, |x, _| [60, 250][x as usize]),
+        )
+        .unwrap();
+        std::fs::write(
+            dir.path().join("s.mtl"),
+            "newmtl floor\nKd 0.5 0.5 0.5\nmap_Kd t.png\nnewmtl dark\nKd 0.01\nmap_Kd t.png\n\
+             newmtl gone\nKd 0.7\nmap_Kd absent.png\nnewmtl light\nKe 1 1 1\n",
+        )
+        .unwrap();
+        let obj = "mtllib s.mtl\nv 0 0 0\nv 2 0 0\nv 2 0 -1\nv 0 0 -1\n\
+                   v 0 1 0\nv 1 1 0\nv 1 1 -1\nv 0 1 -1\n\
+                   vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n\
+                   usemtl floor\nf 1/1 2/2 3/3 4/4\nusemtl dark\nf 1/1 2/2 3/3 4/4\n\
+                   usemtl gone\nf 1/1 2/2 3/3 4/4\nusemtl light\nf 5 8 7 6\n";
+        let path = dir.path().join("s.obj");
+        std::fs::write(&path, obj).unwrap();
+        let scene = load_scene(&path, &ImportOptions::default()).unwrap().scene;
+        let floor = &scene.polygons[0];
+        let map = floor.uv_map.unwrap();
+        // Corner 3 (2, 0, −1), re-centred, has UV (1, 1).
+        let corner = DVec3::new(2.0, 0.0, -1.0) - scene.recentre_offset;
+        assert!((map.at(corner) - glam::DVec2::ONE).length() < 1e-12);
+        let material = &scene.materials[floor.material];
+        assert!(material.diffuse_texture.is_some());
+        // Kd ⊙ texture: texel (1, *) (centre u = 0.75) is code 250, 0.956
+        // linear, times 0.5.
+        let kd = material.kd_at(Some(glam::DVec2::new(0.75, 0.5)));
+        assert!((kd.x - 0.5 * 0.9560).abs() < 1e-3, "{kd}");
+        let warned = |words: &str| scene.warnings.iter().any(|w| w.message.contains(words));
+        assert!(warned("very dark reflectance"), "{:?}", scene.warnings);
+        assert!(warned("absent.png: cannot be read"), "{:?}", scene.warnings);
+        assert!(!warned("not yet modelled"), "{:?}", scene.warnings);
+    }
+}

@@ -1,0 +1,107 @@
+//! The textured batches of a diffuse solution (`textured.rs`): the output
+//! vertices of textured surfaces move out of the untextured batch into one
+//! batch per textured material, with per vertex its UV and E/π, the
+//! material's Kd as the texture's factor, and zero SH coefficients (a plain
+//! diffuse textured surface has no untextured term). The textures go to the
+//! solution's texture list once each, as their 8-bit sRGB texels.
+
+use super::seams::SharedVertices;
+use super::Solver;
+use glam::DVec3;
+use solution::format::{Batch, Solution, Texture, TexturedVertex, Texturing};
+use std::sync::Arc;
+
+impl Solver {
+    /// Splits `solution.batches[0]` (every output vertex of `shared`, in
+    /// order) into the untextured batch and the textured ones; `ambient` is
+    /// the ambient term added to E/π, as the untextured vertices add Kd ·
+    /// ambient. Nothing changes when no surface is textured.
+    pub(super) fn split_textured(
+        &self,
+        shared: &SharedVertices,
+        solution: &mut Solution,
+        ambient: DVec3,
+    ) {
+        if !self.texturing.any() || solution.batches.is_empty() {
+            return;
+        }
+        let whole = solution.batches.remove(0);
+        let empty = |texturing: Option<Texturing>| Batch {
+            representation: whole.representation,
+            scalar: whole.scalar,
+            vertices: Vec::new(),
+            coefficients: Vec::new(),
+            indices: Vec::new(),
+            texturing,
+        };
+        let mut batches = vec![empty(None)];
+        // Per textured batch, its material; per texture index, its source.
+        let mut materials: Vec<usize> = Vec::new();
+        let mut sources: Vec<*const crate::scene::SceneTexture> = Vec::new();
+        let mut slot: Vec<(usize, u32)> = Vec::with_capacity(whole.vertices.len());
+        for (o, &r) in shared.representative.iter().enumerate() {
+            let v = &self.mesh.vertices[r as usize];
+            let Some(t) = self.texturing.get(v.surface) else {
+                let b = &mut batches[0];
+                slot.push((0, b.vertices.len() as u32));
+                b.vertices.push(whole.vertices[o]);
+                b.coefficients
+                    .extend_from_slice(&whole.coefficients[3 * o..3 * o + 3]);
+                continue;
+            };
+            let material = self.mesh.surfaces[v.surface as usize].material;
+            let g = match materials.iter().position(|&m| m == material) {
+                Some(k) => k + 1,
+                None => {
+                    let source = Arc::as_ptr(&t.texture);
+                    let texture = match sources.iter().position(|&s| s == source) {
+                        Some(i) => i,
+                        None => {
+                            sources.push(source);
+                            solution.textures.push(Texture {
+                                width: t.texture.width,
+                                height: t.texture.height,
+                                rgba: t.texture.rgba.clone(),
+                            });
+                            sources.len() - 1
+                        }
+                    };
+                    materials.push(material);
+                    batches.push(empty(Some(Texturing {
+                        texture: texture as u32,
+                        factor: t.kd.as_vec3().to_array(),
+                        vertices: Vec::new(),
+                    })));
+                    materials.len()
+                }
+            };
+            let b = &mut batches[g];
+            slot.push((g, b.vertices.len() as u32));
+            b.vertices.push(whole.vertices[o]);
+            b.coefficients.extend([0.0; 3]);
+            let e = shared.radiance[o] + ambient;
+            if let Some(texturing) = &mut b.texturing {
+                texturing.vertices.push(TexturedVertex {
+                    uv: self.texturing.uv(t, v.position).as_vec2().to_array(),
+                    irradiance_over_pi: e.as_vec3().to_array(),
+                });
+            }
+        }
+        for tri in whole.indices.chunks_exact(3) {
+            let (g, _) = slot[tri[0] as usize];
+            // A display triangle lies on one surface, so its corners are in
+            // one batch (the seams keep textured and untextured apart).
+            if tri.iter().any(|&o| slot[o as usize].0 != g) {
+                debug_assert!(false, "a triangle spans two batches: {tri:?}");
+                continue;
+            }
+            batches[g]
+                .indices
+                .extend(tri.iter().map(|&o| slot[o as usize].1));
+        }
+        if batches[0].vertices.is_empty() {
+            batches.remove(0);
+        }
+        solution.batches.splice(0..0, batches);
+    }
+}
