@@ -1,0 +1,458 @@
+//! glTF 2.0 export of a solved scene (`solver export`; the command line is
+//! `cli/export.rs`, the description `docs/gltf.md`, "Export"). Pure: the glTF
+//! JSON and its binary buffer are built in memory from a solution's header and
+//! its batches' bytes; files are the caller's.
+//!
+//! Per exported batch (batches without triangles are skipped), one mesh with
+//! one triangle primitive:
+//!
+//! * `POSITION`: the stored positions with the header's f64
+//!   `recentre_offset` added back, in metres, +y up ([`GltfFrame`]), f32;
+//! * `NORMAL`: the stored normals, rotated to +y up (exactly as stored
+//!   otherwise);
+//! * `_RADIANCE` ([`RADIANCE_ATTRIBUTE`]): linear radiance (W·sr⁻¹·m⁻² per
+//!   RGB channel) per vertex, f32, as the CPU reference renderer's vertex stage
+//!   computes it (`solution::raster::shade_vertices`, negative values clamped
+//!   to 0 as every renderer of the project does). Diffuse (SH L = 0) vertices
+//!   radiate the same in every direction; glossy vertices (SH L ≥ 1, global
+//!   cubes) are evaluated toward one eye, by default the header camera's, so
+//!   that from the exported camera a viewer shows at each vertex what the
+//!   runtime's screenshot shows;
+//! * `COLOR_0`: the tone-mapped radiance, `curve(radiance × 2^exposure)` per
+//!   channel, the runtime's PNG tone map (`solution::raster::tone_map`) before
+//!   its sRGB encoding: glTF's COLOR_0 is linear, so the stored value is the
+//!   linear display value in 0..1 and the viewer's own sRGB output encoding
+//!   does the rest;
+//! * the indices as stored (the change of frame is a proper rotation, so front
+//!   faces stay counter-clockwise);
+//! * one `KHR_materials_unlit` material, white, so that viewers show COLOR_0
+//!   unlit.
+//!
+//! Memory: the binary buffer is the output's size, allocated once after the
+//! total length was checked against glTF's u32 limit; each batch is shaded in
+//! chunks of at most [`CHUNK_SCALARS`] coefficients, so the transient copy is
+//! small whatever the batch's size.
+//!
+//! Base-colour textures are not exported: the solution format has no texture
+//! section yet. A textured batch would add a `TEXCOORD_0` view and a texture
+//! and image to [`document`]'s material, and store E/π in `_RADIANCE`.
+
+mod document;
+mod frame;
+mod glb;
+#[cfg(test)]
+mod tests;
+
+pub use frame::GltfFrame;
+pub use glb::{file_name_uri, glb_length, write_glb};
+
+use document::{CameraJson, Placed};
+use glam::DVec3;
+use solution::format::{Batch, BatchInfo, Header, Representation, ScalarType, Vertex};
+use solution::raster::{default_clip_planes, shade_vertices, tone_map, ToneCurve};
+
+/// The custom vertex attribute (glTF 2.0 §3.7.2.1: application-specific names
+/// start with an underscore) holding linear radiance.
+pub const RADIANCE_ATTRIBUTE: &str = "_RADIANCE";
+
+/// Bytes per exported vertex: POSITION, NORMAL, COLOR_0 and `_RADIANCE`,
+/// each three f32.
+pub const VERTEX_BYTES: u64 = 48;
+
+/// The most bytes an export may have: a `.glb`'s lengths are u32 (glTF 2.0
+/// §4.4.2), and a `.gltf`'s one `.bin` is held to the same limit so both
+/// forms of one scene can be written.
+pub const MAX_GLTF_BYTES: u64 = u32::MAX as u64;
+
+/// JSON bytes reserved per exported batch and for the rest of the document
+/// in the size check made before allocating (a batch's mesh, node, five views
+/// and five accessors take about 1.2 KB).
+const JSON_BYTES_PER_BATCH: u64 = 4096;
+const JSON_BYTES_FIXED: u64 = 16384;
+
+/// Coefficient scalars widened into a temporary `Batch` per shading chunk:
+/// 4 MiB of f32, so shading a batch of any order needs little beside the
+/// output.
+pub const CHUNK_SCALARS: usize = 1 << 20;
+
+/// How COLOR_0 is made and where glossy vertices are seen from.
+#[derive(Clone, Copy, Debug)]
+pub struct ExportOptions {
+    /// Radiance is multiplied by 2^exposure_stops before the tone curve.
+    pub exposure_stops: f32,
+    pub curve: ToneCurve,
+    /// The point (original scene coordinates) toward which glossy vertices
+    /// are evaluated; `None`: the header camera's eye.
+    pub glossy_eye: Option<[f64; 3]>,
+}
+
+impl Default for ExportOptions {
+    /// The runtime's screenshot defaults: exposure 0, the clamp curve.
+    fn default() -> Self {
+        ExportOptions {
+            exposure_stops: 0.0,
+            curve: ToneCurve::Clamp,
+            glossy_eye: None,
+        }
+    }
+}
+
+/// One batch's three sections as stored in a solution file (little-endian).
+#[derive(Clone, Copy, Debug)]
+pub struct BatchBytes<'a> {
+    pub vertices: &'a [u8],
+    pub coefficients: &'a [u8],
+    pub indices: &'a [u8],
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum ExportError {
+    #[error(
+        "the glTF would take at least {bytes} bytes, above glTF's limit of {limit} \
+         (a .glb's lengths are u32, glTF 2.0 §4.4.2; {vertices} vertices × {VERTEX_BYTES} \
+         bytes + {indices} indices × 4 bytes); export a coarser solution"
+    )]
+    TooLarge {
+        bytes: u64,
+        limit: u64,
+        vertices: u64,
+        indices: u64,
+    },
+    #[error("batch {batch}: {problem}")]
+    Batch { batch: usize, problem: String },
+    #[error("exposure {0} stops is not a finite number in -64..=64")]
+    Exposure(f32),
+}
+
+/// A finished export: the JSON document (padded with spaces to a multiple
+/// of 4) and the binary buffer.
+#[derive(Debug)]
+pub struct Exported {
+    pub json: Vec<u8>,
+    pub bin: Vec<u8>,
+    pub vertices: u64,
+    pub triangles: u64,
+}
+
+/// Builds an export batch by batch, so that a caller streaming a mapped file
+/// can check and release each batch's pages once it is added.
+pub struct Exporter<'h> {
+    header: &'h Header,
+    options: ExportOptions,
+    frame: GltfFrame,
+    /// Per batch of the solution: where it goes in `bin` (`None`: skipped).
+    slots: Vec<Option<(u64, u64, u64)>>,
+    placed: Vec<Placed>,
+    bin: Vec<u8>,
+}
+
+impl<'h> Exporter<'h> {
+    /// Plans the buffer for `batches` (the solution's batch table), checks its
+    /// size against [`MAX_GLTF_BYTES`] in u64 and only then allocates it.
+    pub fn new(
+        header: &'h Header,
+        batches: &[BatchInfo],
+        options: ExportOptions,
+    ) -> Result<Self, ExportError> {
+        if !(options.exposure_stops.is_finite() && options.exposure_stops.abs() <= 64.0) {
+            return Err(ExportError::Exposure(options.exposure_stops));
+        }
+        let mut slots = Vec::with_capacity(batches.len());
+        let (mut offset, mut vertices, mut indices, mut exported) = (0u64, 0u64, 0u64, 0u64);
+        for info in batches {
+            let (v, i) = (u64::from(info.vertex_count), u64::from(info.index_count));
+            if v == 0 || i == 0 {
+                slots.push(None);
+                continue;
+            }
+            slots.push(Some((offset, v, i)));
+            // u32 counts: each term is below 2^38, so nothing here can wrap.
+            offset += v * VERTEX_BYTES + i * 4;
+            (vertices, indices, exported) = (vertices + v, indices + i, exported + 1);
+        }
+        let json_bound = JSON_BYTES_FIXED + exported * JSON_BYTES_PER_BATCH;
+        let bytes = glb_length(json_bound, offset);
+        let too_large = ExportError::TooLarge {
+            bytes,
+            limit: MAX_GLTF_BYTES,
+            vertices,
+            indices,
+        };
+        if bytes > MAX_GLTF_BYTES {
+            return Err(too_large);
+        }
+        let len = usize::try_from(offset).map_err(|_| too_large)?;
+        Ok(Exporter {
+            header,
+            options,
+            frame: GltfFrame::new(
+                header.recentre_offset,
+                header.units_per_metre,
+                header.up_axis,
+            ),
+            slots,
+            placed: Vec::new(),
+            bin: vec![0; len],
+        })
+    }
+
+    /// The point glossy vertices are evaluated toward, scene coordinates.
+    pub fn glossy_eye(&self) -> [f64; 3] {
+        self.options.glossy_eye.unwrap_or(self.header.camera.eye)
+    }
+
+    /// Adds batch `index` (its entry `info` and its bytes). Lengths are checked
+    /// against the counts; a skipped batch (no triangles) is accepted and ignored.
+    pub fn add_batch(
+        &mut self,
+        index: usize,
+        info: &BatchInfo,
+        bytes: BatchBytes,
+    ) -> Result<(), ExportError> {
+        let fail = |problem: String| ExportError::Batch {
+            batch: index,
+            problem,
+        };
+        let Some(&slot) = self.slots.get(index) else {
+            return Err(fail(format!(
+                "not in the planned {} batches",
+                self.slots.len()
+            )));
+        };
+        let Some((offset, vertices, indices)) = slot else {
+            return Ok(());
+        };
+        if u64::from(info.vertex_count) != vertices || u64::from(info.index_count) != indices {
+            return Err(fail("counts differ from the planned batch table".into()));
+        }
+        check_lengths(info, &bytes).map_err(fail)?;
+        // In bounds: the plan sized `bin` to hold every slot.
+        let (start, n) = (offset as usize, vertices as usize);
+        let eye = DVec3::from(self.glossy_eye()) - DVec3::from(self.header.recentre_offset);
+        let region = &mut self.bin[start..start + n * 48 + indices as usize * 4];
+        let (positions, rest) = region.split_at_mut(12 * n);
+        let (normals, rest) = rest.split_at_mut(12 * n);
+        let (colors, rest) = rest.split_at_mut(12 * n);
+        let (radiance, index_out) = rest.split_at_mut(12 * n);
+        let (min, max) = write_geometry(&self.frame, bytes.vertices, positions, normals);
+        shade_into(info, &bytes, eye, &self.options, colors, radiance).map_err(fail)?;
+        index_out.copy_from_slice(bytes.indices);
+        self.placed.push(Placed {
+            batch: index,
+            name: batch_name(index, info),
+            offset,
+            vertices,
+            indices,
+            min,
+            max,
+        });
+        Ok(())
+    }
+
+    /// The JSON document and the buffer. `bin_uri`: the URI of the `.bin`
+    /// file for a `.gltf` ([`file_name_uri`]), `None` for a `.glb`. Refuses a
+    /// batch that was planned but never added.
+    pub fn finish(self, bin_uri: Option<&str>) -> Result<Exported, ExportError> {
+        let added: Vec<usize> = self.placed.iter().map(|p| p.batch).collect();
+        if let Some(batch) =
+            (0..self.slots.len()).find(|b| self.slots[*b].is_some() && !added.contains(b))
+        {
+            return Err(ExportError::Batch {
+                batch,
+                problem: "planned but never added".into(),
+            });
+        }
+        let camera = self.camera_json();
+        let doc = document::document(
+            &self.placed,
+            self.bin.len() as u64,
+            bin_uri,
+            &camera,
+            &self.options,
+            self.glossy_eye(),
+        );
+        // Serializing a `Value` of strings and finite numbers cannot fail.
+        let mut json = serde_json::to_vec(&doc).unwrap_or_default();
+        while !json.len().is_multiple_of(4) {
+            json.push(b' ');
+        }
+        let bytes = glb_length(json.len() as u64, self.bin.len() as u64);
+        if bytes > MAX_GLTF_BYTES {
+            return Err(ExportError::TooLarge {
+                bytes,
+                limit: MAX_GLTF_BYTES,
+                vertices: self.placed.iter().map(|p| p.vertices).sum(),
+                indices: self.placed.iter().map(|p| p.indices).sum(),
+            });
+        }
+        Ok(Exported {
+            json,
+            vertices: self.placed.iter().map(|p| p.vertices).sum(),
+            triangles: self.placed.iter().map(|p| p.indices / 3).sum(),
+            bin: self.bin,
+        })
+    }
+
+    /// The header camera in glTF terms: placed in metres, +y up; the clip
+    /// planes the project's renderers use for it (`default_clip_planes`, from
+    /// the eye to the header's bounds), in metres.
+    fn camera_json(&self) -> CameraJson {
+        let camera = &self.header.camera;
+        let (translation, rotation) = self.frame.camera_node(camera);
+        let view = camera.mono_view(DVec3::from(self.header.recentre_offset));
+        let (near, far) = default_clip_planes(self.header, &view);
+        let znear_m = self.frame.length(near);
+        let zfar_m = Some(self.frame.length(far)).filter(|f| f.is_finite() && *f > znear_m);
+        CameraJson {
+            translation,
+            rotation,
+            yfov_rad: camera.fov_y_deg.to_radians(),
+            aspect: f64::from(camera.width) / f64::from(camera.height),
+            // glTF requires znear > 0; the renderers' planes are positive.
+            znear_m: if znear_m > 0.0 { znear_m } else { 1e-3 },
+            zfar_m,
+        }
+    }
+}
+
+/// A mesh name that says what the batch was.
+fn batch_name(index: usize, info: &BatchInfo) -> String {
+    match info.representation {
+        Representation::Sh { order: 0 } => format!("batch {index} (diffuse)"),
+        Representation::Sh { order } => format!("batch {index} (SH order {order})"),
+        Representation::Cube { directions } => {
+            format!("batch {index} (cube, {directions} directions)")
+        }
+    }
+}
+
+/// The sections' lengths against the batch entry's counts.
+fn check_lengths(info: &BatchInfo, bytes: &BatchBytes) -> Result<(), String> {
+    let checks = [
+        ("vertices", bytes.vertices.len() as u64, info.vertex_bytes()),
+        (
+            "coefficients",
+            bytes.coefficients.len() as u64,
+            info.coefficient_bytes(),
+        ),
+        ("indices", bytes.indices.len() as u64, info.index_bytes()),
+    ];
+    for (what, found, expected) in checks {
+        if found != expected {
+            return Err(format!(
+                "{what} section is {found} bytes, the batch entry says {expected}"
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// The stored vertex at `bytes` (36 bytes: position, normal, tangent as
+/// little-endian f32).
+fn vertex_at(bytes: &[u8]) -> Vertex {
+    let f = |k: usize| {
+        f32::from_le_bytes([
+            bytes[4 * k],
+            bytes[4 * k + 1],
+            bytes[4 * k + 2],
+            bytes[4 * k + 3],
+        ])
+    };
+    Vertex {
+        position: [f(0), f(1), f(2)],
+        normal: [f(3), f(4), f(5)],
+        tangent: [f(6), f(7), f(8)],
+    }
+}
+
+fn put_vec3(out: &mut [u8], v: [f32; 3]) {
+    for (slot, value) in out.chunks_exact_mut(4).zip(v) {
+        slot.copy_from_slice(&value.to_le_bytes());
+    }
+}
+
+/// Positions (in metres, +y up) and normals (rotated) into their views;
+/// returns the positions' per-axis minimum and maximum.
+fn write_geometry(
+    frame: &GltfFrame,
+    vertices: &[u8],
+    positions: &mut [u8],
+    normals: &mut [u8],
+) -> ([f32; 3], [f32; 3]) {
+    let (mut min, mut max) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
+    let stored = vertices.chunks_exact(36);
+    for ((v, p_out), n_out) in stored
+        .zip(positions.chunks_exact_mut(12))
+        .zip(normals.chunks_exact_mut(12))
+    {
+        let vertex = vertex_at(v);
+        let p = frame.file_position(vertex.position);
+        for axis in 0..3 {
+            min[axis] = min[axis].min(p[axis]);
+            max[axis] = max[axis].max(p[axis]);
+        }
+        put_vec3(p_out, p);
+        put_vec3(n_out, frame.direction(vertex.normal));
+    }
+    (min, max)
+}
+
+/// COLOR_0 and `_RADIANCE` for a batch, shading at most [`CHUNK_SCALARS`]
+/// coefficients at a time through the CPU reference renderer's vertex stage.
+fn shade_into(
+    info: &BatchInfo,
+    bytes: &BatchBytes,
+    eye_file: DVec3,
+    options: &ExportOptions,
+    colors: &mut [u8],
+    radiance: &mut [u8],
+) -> Result<(), String> {
+    let per_vertex = info.coefficients_per_channel() as usize * 3;
+    let scalar_bytes = match info.scalar {
+        ScalarType::F32 => 4,
+        ScalarType::F16 { .. } => 2,
+    };
+    let chunk = (CHUNK_SCALARS / per_vertex.max(1)).max(1);
+    // The same f32 product as the runtime's PNG path (`tonemap_srgb8`).
+    let exposure = options.exposure_stops.exp2();
+    let vertex_chunks = bytes.vertices.chunks(36 * chunk);
+    let coefficient_chunks = bytes.coefficients.chunks(scalar_bytes * per_vertex * chunk);
+    let out = colors
+        .chunks_mut(12 * chunk)
+        .zip(radiance.chunks_mut(12 * chunk));
+    for ((v, c), (color_out, radiance_out)) in vertex_chunks.zip(coefficient_chunks).zip(out) {
+        let batch = Batch {
+            representation: info.representation,
+            scalar: ScalarType::F32,
+            vertices: v.chunks_exact(36).map(vertex_at).collect(),
+            coefficients: widen(info.scalar, c),
+            indices: Vec::new(),
+        };
+        // u32::MAX: no order cap; negative radiance clamped as renderers do.
+        let shaded = shade_vertices(&batch, u32::MAX, eye_file, true).map_err(|e| e.to_string())?;
+        for ((rgb, c_out), r_out) in shaded
+            .iter()
+            .zip(color_out.chunks_exact_mut(12))
+            .zip(radiance_out.chunks_exact_mut(12))
+        {
+            put_vec3(r_out, *rgb);
+            put_vec3(c_out, rgb.map(|x| tone_map(x * exposure, options.curve)));
+        }
+    }
+    Ok(())
+}
+
+/// Stored coefficients as f32 values, exactly as the format's reader widens
+/// them (`half × scale` for f16).
+fn widen(scalar: ScalarType, bytes: &[u8]) -> Vec<f32> {
+    match scalar {
+        ScalarType::F32 => bytes
+            .chunks_exact(4)
+            .map(|x| f32::from_le_bytes([x[0], x[1], x[2], x[3]]))
+            .collect(),
+        ScalarType::F16 { scale } => bytes
+            .chunks_exact(2)
+            .map(|x| half::f16::from_le_bytes([x[0], x[1]]).to_f32() * scale)
+            .collect(),
+    }
+}
