@@ -71,9 +71,10 @@ const JSON_BYTES_PER_BATCH: u64 = 4096;
 const JSON_BYTES_FIXED: u64 = 16384;
 
 /// Coefficient scalars widened into a temporary `Batch` per shading chunk:
-/// 4 MiB of f32, so shading a batch of any order needs little beside the
-/// output.
-pub const CHUNK_SCALARS: usize = 1 << 20;
+/// 1 MiB of f32 (with the chunk's vertices, 4 MiB for a diffuse batch), so
+/// shading a batch of any order needs little beside the output; still 87,000
+/// diffuse vertices, enough for the vertex stage to spread over threads.
+pub const CHUNK_SCALARS: usize = 1 << 18;
 
 /// How COLOR_0 is made and where glossy vertices are seen from.
 #[derive(Clone, Copy, Debug)]
