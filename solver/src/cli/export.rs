@@ -111,14 +111,11 @@ pub fn run(args: ExportArgs) -> Result<ExitCode> {
             coefficients: file.section_bytes(i, BatchSection::Coefficients),
             indices: file.section_bytes(i, BatchSection::Indices),
         };
+        // Each section's pages go as soon as the exporter has read it for the
+        // last time, so the input and the output are not both resident.
         exporter
-            .add_batch(i, info, bytes)
+            .add_batch(i, info, bytes, |section| file.release_section(i, section))
             .with_context(|| format!("cannot export {}", args.solution.display()))?;
-        // The batch is in the output buffer: its mapped pages can go, so the
-        // input and the output are not both resident.
-        for section in SECTIONS {
-            file.release_section(i, section);
-        }
     }
     let bin_uri = match &container {
         Container::Glb => None,
@@ -158,7 +155,9 @@ const SECTIONS: [BatchSection; 3] = [
 ];
 
 /// The checks `MappedSolution::open` would have made on batch `i`'s sections:
-/// their CRC-32s and the coefficients' finite values.
+/// their CRC-32s and the coefficients' finite values. Each section's pages are
+/// released once checked; the export reads them again from the page cache,
+/// one section after another.
 fn verify_batch(file: &MappedSolution, i: usize) -> Result<()> {
     for section in SECTIONS {
         let bytes = file.section_bytes(i, section);
@@ -166,6 +165,7 @@ fn verify_batch(file: &MappedSolution, i: usize) -> Result<()> {
         if section == BatchSection::Coefficients {
             file.verify_finite_coefficients(i, 0, bytes)?;
         }
+        file.release_section(i, section);
     }
     Ok(())
 }

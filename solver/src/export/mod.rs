@@ -48,7 +48,9 @@ pub use glb::{file_name_uri, glb_length, write_glb};
 
 use document::{CameraJson, Placed};
 use glam::DVec3;
-use solution::format::{Batch, BatchInfo, Header, Representation, ScalarType, Vertex};
+use solution::format::{
+    Batch, BatchInfo, BatchSection, Header, Representation, ScalarType, Vertex,
+};
 use solution::raster::{default_clip_planes, shade_vertices, tone_map, ToneCurve};
 
 /// The custom vertex attribute (glTF 2.0 §3.7.2.1: application-specific names
@@ -204,11 +206,16 @@ impl<'h> Exporter<'h> {
 
     /// Adds batch `index` (its entry `info` and its bytes). Lengths are checked
     /// against the counts; a skipped batch (no triangles) is accepted and ignored.
+    /// `done` is called with each section as soon as it has been read for the
+    /// last time (vertices and coefficients after shading, indices after the
+    /// copy), so that a caller reading a mapped file can release its pages
+    /// and hold little of the input beside the output.
     pub fn add_batch(
         &mut self,
         index: usize,
         info: &BatchInfo,
         bytes: BatchBytes,
+        mut done: impl FnMut(BatchSection),
     ) -> Result<(), ExportError> {
         let fail = |problem: String| ExportError::Batch {
             batch: index,
@@ -237,7 +244,10 @@ impl<'h> Exporter<'h> {
         let (radiance, index_out) = rest.split_at_mut(12 * n);
         let (min, max) = write_geometry(&self.frame, bytes.vertices, positions, normals);
         shade_into(info, &bytes, eye, &self.options, colors, radiance).map_err(fail)?;
+        done(BatchSection::Vertices);
+        done(BatchSection::Coefficients);
         index_out.copy_from_slice(bytes.indices);
+        done(BatchSection::Indices);
         self.placed.push(Placed {
             batch: index,
             name: batch_name(index, info),

@@ -108,7 +108,7 @@ fn export(solution: &Solution, options: ExportOptions, bin_uri: Option<&str>) ->
             coefficients: file.coefficient_bytes(i),
             indices: file.index_bytes(i),
         };
-        exporter.add_batch(i, info, bytes).unwrap();
+        exporter.add_batch(i, info, bytes, |_| {}).unwrap();
     }
     exporter.finish(bin_uri).unwrap()
 }
@@ -383,7 +383,7 @@ fn wrong_section_lengths_and_missing_batches_are_refused() {
         indices: file.index_bytes(0),
     };
     let err = exporter
-        .add_batch(0, &file.batches()[0], short)
+        .add_batch(0, &file.batches()[0], short, |_| {})
         .unwrap_err();
     assert!(
         err.to_string().contains("vertices section is 36 bytes"),
