@@ -171,6 +171,39 @@ fn export_round_trip_of_the_solved_cornell_box() {
     assert!((forward - DVec3::Z).length() < 1e-6, "{forward}");
 
     reimport(&glb, &glb_primitives, dir.path());
+    refusals(&sol, dir.path());
+}
+
+/// Bad input: a clear error naming the file, and no output written.
+fn refusals(sol: &Path, dir: &Path) {
+    let run = |input: &Path, out: &Path| {
+        let output = Command::new(env!("CARGO_BIN_EXE_solver"))
+            .arg("export")
+            .arg(input)
+            .arg("-o")
+            .arg(out)
+            .output()
+            .unwrap();
+        assert!(!output.status.success());
+        assert!(!out.exists(), "{} written", out.display());
+        String::from_utf8_lossy(&output.stderr).into_owned()
+    };
+    let message = run(sol, &dir.join("box.obj"));
+    assert!(
+        message.contains("box.obj") && message.contains(".glb"),
+        "{message}"
+    );
+    // One flipped bit in the last section (the indices): its checksum.
+    let mut bytes = std::fs::read(sol).unwrap();
+    let at = bytes.len() - 100;
+    bytes[at] ^= 1;
+    let bad = dir.join("bad.sol");
+    std::fs::write(&bad, bytes).unwrap();
+    let message = run(&bad, &dir.join("bad.glb"));
+    assert!(
+        message.contains("bad.sol") && message.contains("CRC-32"),
+        "{message}"
+    );
 }
 
 /// The project's own importer reads the export back (a consistency check,
