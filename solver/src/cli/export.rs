@@ -2,7 +2,7 @@
 //! for any glTF viewer or engine (`crate::export` builds it; docs/gltf.md,
 //! "Export").
 
-use crate::export::{file_name_uri, write_glb, BatchBytes, ExportOptions, Exporter};
+use crate::export::{curve_name, file_name_uri, write_glb, BatchBytes, ExportOptions, Exporter};
 use anyhow::{bail, Context, Result};
 use solution::atomic::{write_atomically, write_bytes_atomically};
 use solution::format::{BatchSection, MappedSolution};
@@ -137,12 +137,12 @@ pub fn run(args: ExportArgs) -> Result<ExitCode> {
         }
     }
     eprintln!(
-        "solver: wrote {}: {} vertices, {} triangles, {} bytes of buffer; COLOR_0 = {:?}(radiance × 2^{}) (linear)",
+        "solver: wrote {}: {} vertices, {} triangles, {} bytes of buffer; COLOR_0 = {}(radiance × 2^{}) (linear)",
         args.out.display(),
         exported.vertices,
         exported.triangles,
         exported.bin.len(),
-        options.curve,
+        curve_name(options.curve),
         options.exposure_stops
     );
     Ok(ExitCode::SUCCESS)

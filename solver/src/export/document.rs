@@ -164,7 +164,7 @@ fn asset_extras(options: &ExportOptions, glossy_eye: [f64; 3]) -> Value {
         "COLOR_0": "linear display value y = curve(radiance × 2^exposure_stops) in 0..1: \
                     a viewer that writes y through an sRGB framebuffer without a tone map of \
                     its own shows the runtime's PNG pixel",
-        "tone_curve": format!("{:?}", options.curve),
+        "tone_curve": super::curve_name(options.curve),
         "exposure_stops": options.exposure_stops,
         RADIANCE_ATTRIBUTE: "linear radiance, W·sr⁻¹·m⁻² per RGB channel, negative values clamped to 0",
         "glossy_eye_scene_units": glossy_eye,

@@ -33,9 +33,10 @@
 //! chunks of at most [`CHUNK_SCALARS`] coefficients, so the transient copy is
 //! small whatever the batch's size.
 //!
-//! Base-colour textures are not exported: the solution format has no texture
-//! section yet. A textured batch would add a `TEXCOORD_0` view and a texture
-//! and image to [`document`]'s material, and store E/π in `_RADIANCE`.
+//! Base-colour textures are not exported: the solution format read here (1.0)
+//! has no texture section. docs/gltf.md ("Export") says what a textured batch
+//! will add: its PNG as a buffer image, `TEXCOORD_0`, a material of its own,
+//! E/π in `_RADIANCE`.
 
 mod document;
 mod frame;
@@ -97,6 +98,15 @@ impl Default for ExportOptions {
             curve: ToneCurve::Clamp,
             glossy_eye: None,
         }
+    }
+}
+
+/// The curve's name as `--tonemap` (and `runtime screenshot --tonemap`) spells it.
+pub fn curve_name(curve: ToneCurve) -> &'static str {
+    match curve {
+        ToneCurve::Clamp => "clamp",
+        ToneCurve::Reinhard => "reinhard",
+        ToneCurve::AcesFit => "aces",
     }
 }
 

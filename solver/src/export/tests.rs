@@ -287,6 +287,10 @@ fn round_trip_through_the_gltf_crate() {
         [1.0; 4]
     );
     assert!(file.extensions_used().any(|e| e == "KHR_materials_unlit"));
+    // The tone settings travel with the file, spelled as the flags spell them.
+    let extras: serde_json::Value = serde_json::from_slice(&exported.json).unwrap();
+    assert_eq!(extras["asset"]["extras"]["tone_curve"], "reinhard");
+    assert_eq!(extras["asset"]["extras"]["exposure_stops"], 1.5);
 }
 
 #[test]
