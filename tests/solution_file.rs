@@ -138,6 +138,7 @@ fn grid_solution(n: u32) -> Solution {
                 vertices,
                 coefficients: diffuse_coefficients,
                 indices: indices.clone(),
+                texturing: None,
             },
             Batch {
                 representation: Representation::Sh { order: 3 },
@@ -147,8 +148,10 @@ fn grid_solution(n: u32) -> Solution {
                 vertices: lifted,
                 coefficients: glossy_coefficients,
                 indices,
+                texturing: None,
             },
         ],
+        textures: Vec::new(),
     }
 }
 
@@ -158,7 +161,7 @@ fn written_file_maps_back_to_the_same_solution() {
     let path = scratch("grid.sol");
     write_solution(&path, &original).unwrap();
     let mapped = MappedSolution::open(&path).unwrap();
-    let back = mapped.to_solution();
+    let back = mapped.to_solution().unwrap();
     assert_eq!(back.header, original.header);
     // The f32 batch is bit-exact.
     assert_eq!(back.batches[0], original.batches[0]);

@@ -65,6 +65,7 @@ fn split_into_strips(batch: Batch, n: usize, scalar_bytes: usize, max_bytes: usi
                 .iter()
                 .map(|i| i - v0 as u32)
                 .collect(),
+            texturing: None,
         });
         first = last;
     }

@@ -164,6 +164,7 @@ fn parallax_of_a_known_point_is_ipd_times_focal_over_depth() {
         coefficients: vec![(5.0 / solution::sh::Y00) as f32; vertices.len() * 3],
         vertices,
         indices,
+        texturing: None,
     };
     let camera = Camera {
         eye: [0.0, 1.2, 0.0],
@@ -176,6 +177,7 @@ fn parallax_of_a_known_point_is_ipd_times_focal_over_depth() {
     let solution = Solution {
         header: common::header([-0.15, 1.05, -3.0], [0.15, 1.35, -3.0], camera),
         batches: vec![marker],
+        textures: Vec::new(),
     };
     let ipd = 0.3;
     let views = camera.stereo_views(ipd, DVec3::ZERO);

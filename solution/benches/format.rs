@@ -46,6 +46,7 @@ fn batch(vertex_count: u32, order: u32, f16: bool) -> Batch {
         vertices,
         coefficients,
         indices,
+        texturing: None,
     }
 }
 
@@ -81,6 +82,7 @@ fn main() {
             settings_json: "{}".into(),
         },
         batches: vec![batch(300_000, 0, false), batch(30_000, 6, true)],
+        textures: Vec::new(),
     };
     let bytes = encode(&solution).expect("encode");
     let len = bytes.len() as u64;
@@ -111,7 +113,7 @@ fn main() {
     });
     let mapped = MappedSolution::open(&path).expect("open");
     time("MappedSolution::to_solution", len, 5, || {
-        mapped.to_solution()
+        mapped.to_solution().unwrap()
     });
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -57,6 +57,7 @@ fn wall(origin: DVec3, u: DVec3, v: DVec3, order: u32) -> Batch {
         vertices,
         coefficients,
         indices,
+        texturing: None,
     }
 }
 
@@ -93,6 +94,7 @@ fn room(floor_order: u32) -> Solution {
             settings_json: String::new(),
         },
         batches,
+        textures: Vec::new(),
     }
 }
 

@@ -49,7 +49,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         }
     }
     for file in files {
-        let solution = MappedSolution::open(&file)?.to_solution();
+        let solution = MappedSolution::open(&file)?.to_solution()?;
         measure(&file, &solution);
     }
     Ok(())

@@ -12,6 +12,8 @@
 //! * [`camera`]: cameras, up axes and per-eye views in the Vulkan convention;
 //! * [`raster`]: tone curves and the small CPU reference rasterizer that the solver's
 //!   `--preview` and the runtime's GPU-versus-CPU tests share;
+//! * [`texture`]: mip chains and Vulkan's trilinear filter for textured batches
+//!   (the runtime uploads these levels; the reference renderer samples them);
 //! * [`view`]: the default view of a scene that names no camera (an eye inside
 //!   the enclosed space that sees lit surfaces, standing on the floor).
 //!
@@ -25,4 +27,5 @@ pub mod cube;
 pub mod format;
 pub mod raster;
 pub mod sh;
+pub mod texture;
 pub mod view;

@@ -77,7 +77,9 @@ fn grid(side: u32, order: u32) -> Solution {
             vertices,
             coefficients,
             indices,
+            texturing: None,
         }],
+        textures: Vec::new(),
     }
 }
 

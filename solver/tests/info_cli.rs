@@ -58,6 +58,7 @@ fn solution() -> Solution {
                 vertices: quad.clone(),
                 coefficients: vec![1.0; 4 * 3],
                 indices: vec![0, 2, 1, 0, 3, 2],
+                texturing: None,
             },
             Batch {
                 representation: Representation::Sh { order: 2 },
@@ -65,8 +66,10 @@ fn solution() -> Solution {
                 vertices: quad,
                 coefficients: (0..4 * 9 * 3).map(|k| k as f32 / 8.0).collect(),
                 indices: vec![0, 2, 1],
+                texturing: None,
             },
         ],
+        textures: Vec::new(),
     }
 }
 

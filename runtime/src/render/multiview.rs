@@ -131,6 +131,7 @@ fn probe_scene() -> (solution::format::Solution, solution::camera::Camera) {
         // Radiance 1 in every channel: c00 = 1 / Y00.
         coefficients: vec![(1.0 / solution::sh::Y00) as f32; 12],
         indices: vec![0, 1, 2, 0, 2, 3],
+        texturing: None,
     };
     let camera = solution::camera::Camera {
         eye: [0.0, 0.5, 0.0],
@@ -156,6 +157,7 @@ fn probe_scene() -> (solution::format::Solution, solution::camera::Camera) {
         solution::format::Solution {
             header,
             batches: vec![batch],
+            textures: Vec::new(),
         },
         camera,
     )

@@ -1124,6 +1124,7 @@ mod tests {
             vertices: vec![Vertex::default(); vertices],
             coefficients: coefficients.clone(),
             indices: vec![],
+            texturing: None,
         };
         let f32_bytes: Vec<u8> = coefficients.iter().flat_map(|c| c.to_le_bytes()).collect();
         let scale = solution::format::f16_scale_for(&coefficients);
@@ -1187,6 +1188,7 @@ mod tests {
             vertices: vec![Vertex::default(); 2],
             coefficients,
             indices: vec![],
+            texturing: None,
         };
         let bound = radiance_bound(&batch, 0);
         assert_eq!(bound, f64::from(largest));

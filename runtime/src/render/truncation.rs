@@ -81,6 +81,7 @@ mod tests {
             ],
             coefficients,
             indices: vec![],
+            texturing: None,
         }
     }
 
@@ -108,6 +109,7 @@ mod tests {
             vertices: vec![Vertex::default()],
             coefficients: vec![1.0; 24 * 3],
             indices: vec![],
+            texturing: None,
         };
         assert_eq!(truncation_error(0, &cube, 0), None);
         assert!(truncation_report(&[cube], 0).is_empty());

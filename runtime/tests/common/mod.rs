@@ -185,6 +185,7 @@ pub fn diffuse_room(n: usize) -> Solution {
         vertices: Vec::new(),
         coefficients: Vec::new(),
         indices: Vec::new(),
+        texturing: None,
     };
     for quad in room_quads(n) {
         let (vertices, indices) = quad.vertices_and_indices();
@@ -201,6 +202,7 @@ pub fn diffuse_room(n: usize) -> Solution {
     Solution {
         header: header(ROOM_MIN, ROOM_MAX, room_camera(256, 256)),
         batches: vec![batch],
+        textures: Vec::new(),
     }
 }
 
@@ -218,6 +220,7 @@ pub fn glossy_room(n: usize, order: u32) -> Solution {
         vertices: Vec::new(),
         coefficients: Vec::new(),
         indices: Vec::new(),
+        texturing: None,
     };
     let (vertices, indices) = quads[0].vertices_and_indices();
     let zonal = lobe_zonal(order);
@@ -298,6 +301,7 @@ pub fn cube_room(n: usize, resolution: u32) -> Solution {
         vertices,
         coefficients,
         indices,
+        texturing: None,
     };
     // The walls: the diffuse room without its floor (the first quad).
     let mut walls = diffuse_room(n);
@@ -481,6 +485,7 @@ pub fn city(n: usize, m: usize) -> Solution {
         vertices: Vec::new(),
         coefficients: Vec::new(),
         indices: Vec::new(),
+        texturing: None,
     };
     let (mut diffuse, mut glossy, mut ground) = (batch(0), batch(2), batch(3));
     let zonal = [(2, lobe_zonal(2)), (3, lobe_zonal(3))];
@@ -608,5 +613,9 @@ pub fn city(n: usize, m: usize) -> Solution {
         .into_iter()
         .filter(|b| !b.indices.is_empty())
         .collect();
-    Solution { header, batches }
+    Solution {
+        header,
+        batches,
+        textures: Vec::new(),
+    }
 }

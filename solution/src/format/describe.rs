@@ -2,6 +2,7 @@
 
 use super::layout;
 use super::read::BatchInfo;
+use super::texture::TextureInfo;
 use super::{Header, Representation, ScalarType, SolveMode};
 use serde_json::{json, Value};
 
@@ -98,6 +99,15 @@ pub fn describe_text(header: &Header, batches: &[BatchInfo]) -> String {
             writeln!(out, "  index_bytes: {}", b.index_bytes())?;
             writeln!(out, "  frame: {}", frame_name(b.frame_convention))?;
             writeln!(out, "  basis: {}", basis_name(b.basis_convention))?;
+            if let Some(t) = b.texture {
+                writeln!(out, "  texture: {}", t.texture)?;
+                writeln!(out, "  texture_factor: {}", triple(&t.factor))?;
+                writeln!(
+                    out,
+                    "  textured_vertex_bytes: {}",
+                    b.textured_vertex_bytes()
+                )?;
+            }
         }
         Ok(())
     })();
@@ -126,7 +136,46 @@ pub fn batch_json(b: &BatchInfo) -> Value {
         "index_bytes": b.index_bytes(),
         "frame_convention": frame_name(b.frame_convention),
         "basis_convention": basis_name(b.basis_convention),
+        "texture": b.texture.map(|t| json!({ "index": t.texture, "factor": t.factor })),
+        "textured_vertex_bytes": b.textured_vertex_bytes(),
     })
+}
+
+/// The textures as text, one indented block each (nothing when there are none).
+pub fn describe_textures_text(textures: &[TextureInfo]) -> String {
+    let mut out = String::new();
+    if textures.is_empty() {
+        return out;
+    }
+    out.push_str(&format!("textures: {}\n", textures.len()));
+    for (k, t) in textures.iter().enumerate() {
+        out.push_str(&format!(
+            "texture {k}:\n  size: {}x{}\n  encoding: png-srgb8\n  encoded_bytes: {}\n  decoded_bytes: {}\n",
+            t.width,
+            t.height,
+            t.encoded_bytes,
+            t.decoded_bytes()
+        ));
+    }
+    out
+}
+
+/// The textures as a JSON array.
+pub fn textures_json(textures: &[TextureInfo]) -> Value {
+    Value::Array(
+        textures
+            .iter()
+            .map(|t| {
+                json!({
+                    "width": t.width,
+                    "height": t.height,
+                    "encoding": "png-srgb8",
+                    "encoded_bytes": t.encoded_bytes,
+                    "decoded_bytes": t.decoded_bytes(),
+                })
+            })
+            .collect(),
+    )
 }
 
 /// The header and batches as one JSON object. The settings appear parsed under

@@ -145,6 +145,9 @@ pub enum Problem {
     #[error("{what}: {reason}")]
     Invalid { what: String, reason: String },
 
+    #[error("texture {texture}: {reason}")]
+    Texture { texture: u32, reason: String },
+
     #[error("the per-frame cost is {cost} basis terms per view (Σ vertices × (L + 1)², 4 per global-cube vertex), above the limit of {limit}; pass {flag} {cost} (or more) to draw it anyway")]
     FrameCost {
         cost: u64,

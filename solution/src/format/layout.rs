@@ -18,8 +18,17 @@ use super::{Representation, ScalarType, SolveMode};
 /// `type` on DOS.
 pub const MAGIC: [u8; 8] = [0x89, b'R', b'A', b'D', b'\r', b'\n', 0x1A, b'\n'];
 
-/// Readers refuse any other major version.
-pub const VERSION_MAJOR: u16 = 1;
+/// The newest major version: 2 adds textured batches (a texture index, a factor
+/// and a per-vertex UV + E/π section per batch) and texture sections. Readers
+/// read major versions 1 and 2 and refuse any other. A writer writes version
+/// [`UNTEXTURED_VERSION_MAJOR`].0 when the solution has no textures, so those
+/// files are byte for byte what version-1 writers wrote and version-1 readers
+/// still read them; a file with textures is 2.0, which a version-1 reader
+/// refuses rather than drawing E/π as if it were radiance (the versioning
+/// policy: a field a reader skipped would misdraw, so it is a new major).
+pub const VERSION_MAJOR: u16 = 2;
+/// The major version of files without textures (the version-1 layout).
+pub const UNTEXTURED_VERSION_MAJOR: u16 = 1;
 /// The newest minor version this code writes and fully understands. Files with a
 /// newer minor version are read by skipping fields and sections this code does
 /// not know (see the versioning policy in the specification).
@@ -39,6 +48,23 @@ pub const PREAMBLE_LEN: usize = 64;
 pub const HEADER_LEN: usize = 216;
 /// Size of one batch-table entry in version 1.0.
 pub const BATCH_ENTRY_LEN: usize = 56;
+/// Size of one batch-table entry in version 2.0 (texture fields appended, the
+/// 1.0 reserved word used for the texture index).
+pub const BATCH_ENTRY_LEN_V2: usize = 72;
+/// Size of one stored textured vertex: u, v, E/π RGB as 5 × f32.
+pub const TEXTURED_VERTEX_LEN: usize = 20;
+/// Size of the prefix of a texture section before its encoded image: width,
+/// height, encoding, reserved (4 × u32).
+pub const TEXTURE_PREFIX_LEN: usize = 16;
+
+/// The batch-entry length a major version defines.
+pub fn batch_entry_len(major: u16) -> usize {
+    if major >= 2 {
+        BATCH_ENTRY_LEN_V2
+    } else {
+        BATCH_ENTRY_LEN
+    }
+}
 /// Size of one section-table entry in version 1.0.
 pub const SECTION_ENTRY_LEN: usize = 32;
 /// Size of one stored vertex: position, normal, tangent as 9 × f32.
@@ -100,8 +126,51 @@ pub mod batch {
     pub const VERTICES_SECTION: usize = 40;
     pub const COEFFICIENTS_SECTION: usize = 44;
     pub const INDICES_SECTION: usize = 48;
+    /// Version 1: reserved (0). Version 2: the texture index ([`super::NO_TEXTURE`]
+    /// for an untextured batch).
     pub const RESERVED: usize = 52;
+    /// Version 2: index of the texture (among the file's texture sections, in
+    /// section-table order), or [`super::NO_TEXTURE`].
+    pub const TEXTURE: usize = 52;
+    /// Version 2: section index of the per-vertex UV + E/π section, or
+    /// [`super::NO_TEXTURE`] for an untextured batch.
+    pub const TEXTURED_VERTICES_SECTION: usize = 56;
+    /// Version 2: f32×3, the linear factor of the texture (0 when untextured).
+    pub const TEXTURE_FACTOR: usize = 60;
 }
+
+/// Texture-section prefix field offsets (u32 each), relative to the section's
+/// start; the encoded image follows at [`TEXTURE_PREFIX_LEN`].
+pub mod texture {
+    pub const WIDTH: usize = 0;
+    pub const HEIGHT: usize = 4;
+    pub const ENCODING: usize = 8;
+    pub const RESERVED: usize = 12;
+}
+
+/// The batch fields of an untextured batch in version 2 (texture index and
+/// textured-vertices section).
+pub const NO_TEXTURE: u32 = u32::MAX;
+
+/// Texture encoding code: a PNG image, 8 bits per channel, grey, grey + alpha,
+/// RGB, RGBA or an 8-bit palette, its samples sRGB-encoded.
+pub const ENCODING_PNG_SRGB8: u32 = 1;
+
+/// The largest texture width or height: 16384 is what every Vulkan 1.x desktop
+/// GPU supports (`maxImageDimension2D`) and bounds one decoded texture at
+/// 1 GiB of RGBA8.
+pub const MAX_TEXTURE_SIZE: u32 = 16384;
+
+/// The most decoded texture bytes (RGBA8, before mip levels, summed over a
+/// file's textures) a reader accepts: 2 GiB, two textures of the largest size.
+/// Textures are the one part of a file whose decoded size exceeds its stored
+/// size, so this and [`DEFLATE_MAX_RATIO`] bound what decoding may allocate.
+pub const MAX_DECODED_TEXTURE_BYTES: u64 = 2 << 30;
+
+/// Deflate (RFC 1951) cannot expand a stream by more than 1032:1 (a 258-byte
+/// match coded in 2 bits), so a PNG whose raw scanlines (rows × (1 + row bytes))
+/// exceed 1032 × its whole length cannot be complete: refused before decoding.
+pub const DEFLATE_MAX_RATIO: u64 = 1032;
 
 /// Section-table entry field offsets.
 pub mod section {
@@ -153,6 +222,20 @@ pub const SECTION_SETTINGS: u32 = 1;
 pub const SECTION_VERTICES: u32 = 2;
 pub const SECTION_COEFFICIENTS: u32 = 3;
 pub const SECTION_INDICES: u32 = 4;
+/// Version 2: per-vertex u, v, E/π of a textured batch.
+pub const SECTION_TEXTURED_VERTICES: u32 = 5;
+/// Version 2: one texture, a [`TEXTURE_PREFIX_LEN`]-byte prefix and an encoded
+/// image.
+pub const SECTION_TEXTURE: u32 = 6;
+
+/// The largest section kind a major version defines.
+pub fn last_section_kind(major: u16) -> u32 {
+    if major >= 2 {
+        SECTION_TEXTURE
+    } else {
+        SECTION_INDICES
+    }
+}
 
 /// The largest SH order L anything in the project handles: the solver's settings
 /// (`max_sh_order`), the writer and the reader all refuse more. 64 is the solver's
@@ -189,6 +272,8 @@ pub fn section_kind_name(kind: u32) -> &'static str {
         SECTION_VERTICES => "vertices",
         SECTION_COEFFICIENTS => "coefficients",
         SECTION_INDICES => "indices",
+        SECTION_TEXTURED_VERTICES => "textured vertices",
+        SECTION_TEXTURE => "texture",
         _ => "unknown",
     }
 }
@@ -359,6 +444,13 @@ mod tests {
         assert_eq!(preamble::RESERVED_1 + 8, PREAMBLE_LEN);
         assert_eq!(header::RESERVED + 4, HEADER_LEN);
         assert_eq!(batch::RESERVED + 4, BATCH_ENTRY_LEN);
+        assert_eq!(batch::TEXTURE_FACTOR + 12, BATCH_ENTRY_LEN_V2);
+        assert_eq!(texture::RESERVED + 4, TEXTURE_PREFIX_LEN);
+        assert_eq!(BATCH_ENTRY_LEN_V2 % 8, 0);
+        assert_eq!(
+            std::mem::size_of::<super::super::TexturedVertex>(),
+            TEXTURED_VERTEX_LEN
+        );
         assert_eq!(section::RESERVED + 8, SECTION_ENTRY_LEN);
         for len in [PREAMBLE_LEN, HEADER_LEN, BATCH_ENTRY_LEN, SECTION_ENTRY_LEN] {
             assert_eq!(len % 8, 0);

@@ -14,16 +14,22 @@ mod describe;
 mod error;
 pub mod layout;
 mod read;
+mod texture;
 mod validate;
 mod write;
 
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod texture_tests;
 
-pub use describe::{batch_json, describe_json, describe_text};
+pub use describe::{
+    batch_json, describe_json, describe_text, describe_textures_text, textures_json,
+};
 pub use error::{FormatError, Problem};
 pub use layout::MAX_SH_ORDER;
-pub use read::{decode, read_solution, BatchInfo, BatchSection, MappedSolution};
+pub use read::{decode, read_solution, BatchInfo, BatchSection, BatchTexture, MappedSolution};
+pub use texture::{decode_png, encode_png, TextureInfo};
 pub use validate::{
     check_frame_cost, frame_cost, terms_per_vertex, BOUNDS_RELATIVE_SLACK, DEFAULT_MAX_FRAME_COST,
     F16_MAX, FRAME_TOLERANCE, MAX_FRAME_COST_FLAG,
@@ -131,6 +137,57 @@ pub struct Batch {
     /// Triangle list, indices into this batch's `vertices`, counter-clockwise seen
     /// from the side the normal points to.
     pub indices: Vec<u32>,
+    /// `None`: the coefficients are the vertex's whole outgoing radiance (as in
+    /// version 1). `Some`: the batch is textured, and the radiance toward ω is
+    /// `Σ c·Y(ω) + factor ⊙ ρ(uv) ⊙ E/π`, with ρ the texture decoded to linear
+    /// and the coefficients holding only the untextured part (a glossy term,
+    /// emission; zero for a plain textured diffuse surface).
+    pub texturing: Option<Texturing>,
+}
+
+/// How a textured batch is shaded: one texture, a constant factor (the MTL
+/// convention: `Kd` multiplies `map_Kd`) and per vertex a UV and E/π.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Texturing {
+    /// Index into [`Solution::textures`].
+    pub texture: u32,
+    /// Linear RGB multiplier of the decoded texture (finite, ≥ 0).
+    pub factor: [f32; 3],
+    /// One per vertex of the batch, in the same order as [`Batch::vertices`].
+    pub vertices: Vec<TexturedVertex>,
+}
+
+/// Per-vertex data of a textured batch: 20 bytes, tightly packed.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Default, Serialize, Deserialize)]
+pub struct TexturedVertex {
+    /// Texture coordinates, OBJ convention: u from the image's left edge (0) to
+    /// its right (1), v from its bottom row (0) to its top (1); the texture
+    /// repeats outside [0, 1].
+    pub uv: [f32; 2],
+    /// Incident irradiance over π, E/π, linear RGB (W·m⁻²·sr⁻¹ per channel,
+    /// the radiance a white Lambertian surface would reflect); finite, ≥ 0.
+    pub irradiance_over_pi: [f32; 3],
+}
+
+/// A texture: 8-bit sRGB-encoded RGBA, rows from the image's top to its bottom
+/// (PNG order). The alpha channel is stored but not used by any renderer.
+#[derive(Clone, PartialEq, Eq)]
+pub struct Texture {
+    pub width: u32,
+    pub height: u32,
+    /// `width × height × 4` bytes.
+    pub rgba: Vec<u8>,
+}
+
+impl std::fmt::Debug for Texture {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Texture")
+            .field("width", &self.width)
+            .field("height", &self.height)
+            .field("rgba_bytes", &self.rgba.len())
+            .finish()
+    }
 }
 
 /// A whole solution in memory.
@@ -138,4 +195,8 @@ pub struct Batch {
 pub struct Solution {
     pub header: Header,
     pub batches: Vec<Batch>,
+    /// Textures the batches' [`Texturing::texture`] index. Empty for an
+    /// untextured solution, which is then written as format 1.0, byte for byte
+    /// what version 1 writers wrote.
+    pub textures: Vec<Texture>,
 }

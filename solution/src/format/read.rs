@@ -30,8 +30,12 @@
 
 use super::error::{FormatError, Problem};
 use super::layout::{self, Fields};
+use super::texture::{self, TextureInfo};
 use super::validate;
-use super::{Batch, Header, Representation, ScalarType, Solution, SolveStats, Vertex};
+use super::{
+    Batch, Header, Representation, ScalarType, Solution, SolveStats, Texture, TexturedVertex,
+    Texturing, Vertex,
+};
 use crate::camera::{Camera, UpAxis};
 use std::ops::Range;
 use std::path::{Path, PathBuf};
@@ -48,6 +52,18 @@ pub struct BatchInfo {
     pub frame_convention: u32,
     /// [`layout::BASIS_SH_REAL_ORTHONORMAL`] or [`layout::BASIS_CUBE_CELL_CENTRES`].
     pub basis_convention: u32,
+    /// `Some` for a textured batch (format 2): radiance is the coefficients'
+    /// term plus `factor ⊙ ρ(uv) ⊙ E/π` (see [`super::Texturing`]).
+    pub texture: Option<BatchTexture>,
+}
+
+/// A textured batch's texture index and factor, as the batch table stores them.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BatchTexture {
+    /// Index into [`MappedSolution::textures`].
+    pub texture: u32,
+    /// Linear RGB multiplier of the decoded texture.
+    pub factor: [f32; 3],
 }
 
 impl BatchInfo {
@@ -67,6 +83,14 @@ impl BatchInfo {
     pub fn index_bytes(&self) -> u64 {
         u64::from(self.index_count) * 4
     }
+    /// Bytes of the batch's UV + E/π section (0 when untextured).
+    pub fn textured_vertex_bytes(&self) -> u64 {
+        if self.texture.is_some() {
+            u64::from(self.vertex_count) * layout::TEXTURED_VERTEX_LEN as u64
+        } else {
+            0
+        }
+    }
     pub fn triangle_count(&self) -> u32 {
         self.index_count / 3
     }
@@ -79,8 +103,16 @@ pub(crate) struct Parsed {
     pub file_len: u64,
     pub header: Header,
     pub batches: Vec<BatchInfo>,
-    /// Byte ranges of each batch's vertices, coefficients and indices.
-    pub ranges: Vec<[Range<usize>; 3]>,
+    /// Byte ranges of each batch's vertices, coefficients, indices and textured
+    /// vertices (empty when untextured).
+    pub ranges: Vec<[Range<usize>; 4]>,
+    /// Section index and stored CRC of each of those (`usize::MAX` and 0 for
+    /// a missing textured-vertices section).
+    pub batch_sections: Vec<[(usize, u32); 4]>,
+    pub textures: Vec<TextureInfo>,
+    /// Byte range (the encoded image, after the prefix), section index and
+    /// stored CRC of each texture section.
+    pub texture_sections: Vec<(Range<usize>, usize, u32)>,
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -98,6 +130,8 @@ enum Role {
     Vertices(usize),
     Coefficients(usize),
     Indices(usize),
+    TexturedVertices(usize),
+    Texture(usize),
 }
 
 fn role_name(role: Role) -> String {
@@ -107,6 +141,8 @@ fn role_name(role: Role) -> String {
         Role::Vertices(b) => format!("vertices of batch {b}"),
         Role::Coefficients(b) => format!("coefficients of batch {b}"),
         Role::Indices(b) => format!("indices of batch {b}"),
+        Role::TexturedVertices(b) => format!("textured vertices of batch {b}"),
+        Role::Texture(k) => format!("texture {k}"),
     }
 }
 
@@ -137,6 +173,8 @@ impl Sections {
             Role::Vertices(b) => format!("batch {b}: vertices section"),
             Role::Coefficients(b) => format!("batch {b}: coefficients section"),
             Role::Indices(b) => format!("batch {b}: indices section"),
+            Role::TexturedVertices(b) => format!("batch {b}: textured vertices section"),
+            Role::Texture(k) => format!("texture {k}"),
             Role::Unused => "a section reference".to_string(),
         };
         let i = index as usize;
@@ -167,7 +205,13 @@ impl Sections {
         Ok(())
     }
 
-    /// The byte range of a section whose bounds `parse` has checked.
+    /// The stored CRC of a section (0 for a missing one).
+    fn crc(&self, index: usize) -> u32 {
+        self.entries.get(index).map_or(0, |e| e.crc)
+    }
+
+    /// The byte range of a section whose bounds `parse` has checked (empty for
+    /// a missing one, `usize::MAX`).
     fn range(&self, index: usize) -> Range<usize> {
         self.entries.get(index).map_or(0..0, |e| {
             // Bounds were checked against the in-memory file, so both fit usize.
@@ -230,8 +274,13 @@ fn parse_checking(bytes: &[u8], batch_checksums: bool) -> Result<Parsed, Problem
         read_header(&metadata[blocks.header.clone()], preamble.newer)?;
     let mut sections = read_section_table(&metadata[blocks.sections.clone()], &blocks)?;
     sections.claim(settings_section, Role::Settings, layout::SECTION_SETTINGS)?;
-    let (batches, batch_sections) =
-        read_batch_table(&metadata[blocks.batches.clone()], &blocks, &mut sections)?;
+    let texture_indices = claim_textures(&mut sections, blocks.major)?;
+    let (batches, batch_sections) = read_batch_table(
+        &metadata[blocks.batches.clone()],
+        &blocks,
+        &mut sections,
+        texture_indices.len() as u64,
+    )?;
     if !blocks.newer {
         check_every_section_used(&sections)?;
     }
@@ -239,12 +288,21 @@ fn parse_checking(bytes: &[u8], batch_checksums: bool) -> Result<Parsed, Problem
     check_section_sizes(&batches, &batch_sections, &sections)?;
     check_checksums(bytes, &sections, batch_checksums)?;
     header.settings_json = settings_text(bytes, &sections, settings_section as usize)?;
+    let (textures, texture_sections) = check_textures(
+        bytes,
+        &sections,
+        &texture_indices,
+        blocks.newer,
+        batch_checksums,
+    )?;
     let slack = validate::bounds_slack(&header);
     let mut ranges = Vec::with_capacity(batches.len());
+    let mut refs_and_crcs = Vec::with_capacity(batches.len());
     for (b, (info, refs)) in batches.iter().zip(&batch_sections).enumerate() {
         let range = refs.map(|section| sections.range(section));
         check_content(b, info, bytes, &range, &header, slack, batch_checksums)?;
         ranges.push(range);
+        refs_and_crcs.push(refs.map(|section| (section, sections.crc(section))));
     }
     Ok(Parsed {
         version: (preamble.major, preamble.minor),
@@ -252,12 +310,66 @@ fn parse_checking(bytes: &[u8], batch_checksums: bool) -> Result<Parsed, Problem
         header,
         batches,
         ranges,
+        batch_sections: refs_and_crcs,
+        textures,
+        texture_sections,
     })
+}
+
+/// Stage 3, textures (format 2): every section of the texture kind is a
+/// texture, numbered in section-table order; returns their section indices.
+fn claim_textures(sections: &mut Sections, major: u16) -> Result<Vec<usize>, Problem> {
+    if major < 2 {
+        return Ok(Vec::new());
+    }
+    let indices: Vec<usize> = (0..sections.entries.len())
+        .filter(|&i| sections.entries[i].kind == layout::SECTION_TEXTURE)
+        .collect();
+    for (k, &i) in indices.iter().enumerate() {
+        sections.claim(i as u32, Role::Texture(k), layout::SECTION_TEXTURE)?;
+    }
+    Ok(indices)
+}
+
+/// Stage 5, textures: each section's prefix and PNG header
+/// ([`texture::check_section`]), the decoded total against
+/// [`layout::MAX_DECODED_TEXTURE_BYTES`], and, when `decode` (every check, not the
+/// deferring open), a full decode of each image.
+#[allow(clippy::type_complexity)]
+fn check_textures(
+    bytes: &[u8],
+    sections: &Sections,
+    indices: &[usize],
+    newer: bool,
+    decode: bool,
+) -> Result<(Vec<TextureInfo>, Vec<(Range<usize>, usize, u32)>), Problem> {
+    let mut infos = Vec::with_capacity(indices.len());
+    let mut ranges = Vec::with_capacity(indices.len());
+    let mut decoded = 0u64;
+    for (k, &i) in indices.iter().enumerate() {
+        let range = sections.range(i);
+        let info = texture::check_section(k as u32, &bytes[range.clone()], newer)?;
+        decoded = decoded.saturating_add(info.decoded_bytes());
+        validate::check_decoded_texture_bytes(decoded)?;
+        let png = range.start + layout::TEXTURE_PREFIX_LEN..range.end;
+        if decode {
+            texture::decode_png(&bytes[png.clone()], info.width, info.height).map_err(
+                |reason| Problem::Texture {
+                    texture: k as u32,
+                    reason,
+                },
+            )?;
+        }
+        infos.push(info);
+        ranges.push((png, i, sections.crc(i)));
+    }
+    Ok((infos, ranges))
 }
 
 /// The preamble's fields once stage 1 has accepted them.
 struct Preamble<'a> {
     fields: Fields<'a>,
+    /// 1 or 2.
     major: u16,
     minor: u16,
     /// The file's minor version is newer than this reader's.
@@ -287,7 +399,7 @@ fn read_preamble(bytes: &[u8]) -> Result<Preamble<'_>, Problem> {
     }
     let major = fields.u16(pf::VERSION_MAJOR);
     let minor = fields.u16(pf::VERSION_MINOR);
-    if major != layout::VERSION_MAJOR {
+    if !(layout::UNTEXTURED_VERSION_MAJOR..=layout::VERSION_MAJOR).contains(&major) {
         return Err(Problem::UnsupportedVersion {
             major,
             minor,
@@ -353,6 +465,7 @@ struct Blocks {
     batch_entry_len: usize,
     section_entry_len: usize,
     section_count: u32,
+    major: u16,
     newer: bool,
 }
 
@@ -371,7 +484,7 @@ fn block_layout(preamble: &Preamble<'_>, metadata_len: u64) -> Result<Blocks, Pr
     let batch_entry_len = check_block_len(
         "the batch entry length",
         pre.u32(pf::BATCH_ENTRY_LENGTH),
-        layout::BATCH_ENTRY_LEN,
+        layout::batch_entry_len(preamble.major),
         newer,
     )?;
     let section_entry_len = check_block_len(
@@ -416,6 +529,7 @@ fn block_layout(preamble: &Preamble<'_>, metadata_len: u64) -> Result<Blocks, Pr
         batch_entry_len,
         section_entry_len,
         section_count,
+        major: preamble.major,
         newer,
     })
 }
@@ -494,7 +608,8 @@ fn read_section_table(table: &[u8], blocks: &Blocks) -> Result<Sections, Problem
             reason: "shorter than version 1.0's entry".into(),
         })?;
         let kind = f.u32(sf::KIND);
-        if !(layout::SECTION_SETTINGS..=layout::SECTION_INDICES).contains(&kind) && !blocks.newer {
+        let known = layout::SECTION_SETTINGS..=layout::last_section_kind(blocks.major);
+        if !known.contains(&kind) && !blocks.newer {
             return Err(Problem::UnknownCode {
                 field: format!("section {i}: kind"),
                 code: kind,
@@ -524,7 +639,8 @@ fn read_batch_table(
     table: &[u8],
     blocks: &Blocks,
     sections: &mut Sections,
-) -> Result<(Vec<BatchInfo>, Vec<[usize; 3]>), Problem> {
+    texture_count: u64,
+) -> Result<(Vec<BatchInfo>, Vec<[usize; 4]>), Problem> {
     let count = table.len() / blocks.batch_entry_len.max(1);
     let mut batches = Vec::with_capacity(count);
     let mut batch_sections = Vec::with_capacity(count);
@@ -534,7 +650,7 @@ fn read_batch_table(
             value: blocks.batch_entry_len as u64,
             reason: "shorter than version 1.0's entry".into(),
         })?;
-        let (info, refs) = read_batch_entry(b, &f, blocks.newer, sections)?;
+        let (info, refs) = read_batch_entry(b, &f, blocks, sections, texture_count)?;
         batches.push(info);
         batch_sections.push(refs);
     }
@@ -546,18 +662,24 @@ fn read_batch_table(
 fn read_batch_entry(
     b: usize,
     f: &Fields<'_>,
-    newer: bool,
+    blocks: &Blocks,
     sections: &mut Sections,
-) -> Result<(BatchInfo, [usize; 3]), Problem> {
+    texture_count: u64,
+) -> Result<(BatchInfo, [usize; 4]), Problem> {
     use layout::batch as bf;
     let representation = batch_representation(b, f)?;
     let scalar = batch_scalar(b, f)?;
     let (frame_convention, basis_convention) = batch_conventions(b, f, representation)?;
-    reserved(
-        &format!("batch {b}: reserved field"),
-        f.u32(bf::RESERVED).into(),
-        newer,
-    )?;
+    let (texture, textured_vertices) = if blocks.major >= 2 {
+        batch_texture(b, f, representation, texture_count, sections)?
+    } else {
+        reserved(
+            &format!("batch {b}: reserved field"),
+            f.u32(bf::RESERVED).into(),
+            blocks.newer,
+        )?;
+        (None, usize::MAX)
+    };
     let (vertex_count, index_count) = batch_counts(b, f)?;
     let refs = [
         (
@@ -576,7 +698,7 @@ fn read_batch_entry(
             layout::SECTION_INDICES,
         ),
     ];
-    let mut indices = [0usize; 3];
+    let mut indices = [0, 0, 0, textured_vertices];
     for (k, (at, role, kind)) in refs.into_iter().enumerate() {
         let index = f.u32(at);
         sections.claim(index, role, kind)?;
@@ -589,8 +711,47 @@ fn read_batch_entry(
         index_count,
         frame_convention,
         basis_convention,
+        texture,
     };
     Ok((info, indices))
+}
+
+/// A format-2 batch entry's texture fields: [`layout::NO_TEXTURE`] twice and a
+/// zero factor for an untextured batch; else a texture index below the file's
+/// texture count ([`validate::check_batch_texture`]) and the claimed index of
+/// its textured-vertices section (`usize::MAX` when untextured).
+fn batch_texture(
+    b: usize,
+    f: &Fields<'_>,
+    representation: Representation,
+    texture_count: u64,
+    sections: &mut Sections,
+) -> Result<(Option<BatchTexture>, usize), Problem> {
+    use layout::batch as bf;
+    let texture = f.u32(bf::TEXTURE);
+    let section = f.u32(bf::TEXTURED_VERTICES_SECTION);
+    let factor = f.f32x3(bf::TEXTURE_FACTOR);
+    if texture == layout::NO_TEXTURE {
+        if section != layout::NO_TEXTURE || factor.iter().any(|x| x.to_bits() != 0) {
+            return Err(Problem::Invalid {
+                what: format!(
+                    "batch {b}: untextured, with textured-vertices section {section} and factor {factor:?}"
+                ),
+                reason: format!(
+                    "an untextured batch stores {} and a zero factor",
+                    layout::NO_TEXTURE
+                ),
+            });
+        }
+        return Ok((None, usize::MAX));
+    }
+    validate::check_batch_texture(b, representation, texture, texture_count, factor)?;
+    sections.claim(
+        section,
+        Role::TexturedVertices(b),
+        layout::SECTION_TEXTURED_VERTICES,
+    )?;
+    Ok((Some(BatchTexture { texture, factor }), section as usize))
 }
 
 fn batch_representation(b: usize, f: &Fields<'_>) -> Result<Representation, Problem> {
@@ -740,7 +901,7 @@ fn check_placement(bytes: &[u8], metadata_len: u64, sections: &Sections) -> Resu
 /// lengths of the sections it claims (in u128).
 fn check_section_sizes(
     batches: &[BatchInfo],
-    batch_sections: &[[usize; 3]],
+    batch_sections: &[[usize; 4]],
     sections: &Sections,
 ) -> Result<(), Problem> {
     for (b, (info, refs)) in batches.iter().zip(batch_sections).enumerate() {
@@ -760,8 +921,17 @@ fn check_section_sizes(
                 u128::from(per_channel) * 3 * u128::from(layout::scalar_size(info.scalar)),
             ),
             (refs[2], u64::from(info.index_count), "indices", 4),
+            (
+                refs[3],
+                vertex_count,
+                "textured vertices",
+                layout::TEXTURED_VERTEX_LEN as u128,
+            ),
         ];
         for (section, count, unit, size) in expectations {
+            if section == usize::MAX {
+                continue;
+            }
             let expected = u128::from(count) * size;
             let actual = sections.entries[section].length;
             if expected != u128::from(actual) {
@@ -789,7 +959,11 @@ fn check_checksums(
     for (i, e) in sections.entries.iter().enumerate() {
         let deferred = matches!(
             sections.roles[i],
-            Role::Vertices(_) | Role::Coefficients(_) | Role::Indices(_)
+            Role::Vertices(_)
+                | Role::Coefficients(_)
+                | Role::Indices(_)
+                | Role::TexturedVertices(_)
+                | Role::Texture(_)
         );
         if deferred && !batch_checksums {
             continue;
@@ -841,6 +1015,17 @@ fn vertex_at(chunk: &[u8]) -> Vertex {
     }
 }
 
+fn textured_vertex_at(chunk: &[u8]) -> TexturedVertex {
+    // `chunk` is one of `chunks_exact(TEXTURED_VERTEX_LEN)`.
+    match Fields::new(chunk, layout::TEXTURED_VERTEX_LEN) {
+        Some(f) => TexturedVertex {
+            uv: [f.f32(0), f.f32(4)],
+            irradiance_over_pi: f.f32x3(8),
+        },
+        None => TexturedVertex::default(),
+    }
+}
+
 /// Stage 5, content of one batch: finite values, orthonormal frames, positions
 /// inside the header bounds (within `slack`), indices below the vertex count.
 /// Without `coefficients`, the coefficients' finite check is left to the caller
@@ -849,12 +1034,18 @@ fn check_content(
     b: usize,
     info: &BatchInfo,
     bytes: &[u8],
-    ranges: &[Range<usize>; 3],
+    ranges: &[Range<usize>; 4],
     header: &Header,
     slack: f32,
     coefficients: bool,
 ) -> Result<(), Problem> {
-    let [vertices, coefficients_range, indices] = ranges;
+    let [vertices, coefficients_range, indices, textured] = ranges;
+    for (v, chunk) in bytes[textured.clone()]
+        .chunks_exact(layout::TEXTURED_VERTEX_LEN)
+        .enumerate()
+    {
+        validate::check_textured_vertex(b, v as u64, &textured_vertex_at(chunk))?;
+    }
     for (v, chunk) in bytes[vertices.clone()]
         .chunks_exact(layout::VERTEX_LEN)
         .enumerate()
@@ -913,16 +1104,17 @@ fn check_finite_coefficients(
     }
 }
 
-/// Builds the in-memory solution from validated bytes. Infallible: `parse` checked
-/// every range, and slicing uses `get` so that even bytes changed after validation
-/// (see [`MappedSolution`]) cannot make it panic.
-pub(crate) fn materialize(bytes: &[u8], parsed: &Parsed) -> Solution {
+/// Builds the in-memory solution from validated bytes. Only decoding a texture
+/// can fail (the file was changed after validation, or it was opened without
+/// decoding): `parse` checked every range, and slicing uses `get` so that even
+/// bytes changed after validation (see [`MappedSolution`]) cannot make it panic.
+pub(crate) fn materialize(bytes: &[u8], parsed: &Parsed) -> Result<Solution, Problem> {
     let section = |r: &Range<usize>| bytes.get(r.clone()).unwrap_or(&[]);
     let batches = parsed
         .batches
         .iter()
         .zip(&parsed.ranges)
-        .map(|(info, [v, c, i])| {
+        .map(|(info, [v, c, i, t])| {
             let vertices = section(v)
                 .chunks_exact(layout::VERTEX_LEN)
                 .map(vertex_at)
@@ -941,33 +1133,57 @@ pub(crate) fn materialize(bytes: &[u8], parsed: &Parsed) -> Solution {
                 .chunks_exact(4)
                 .map(|x| u32::from_le_bytes([x[0], x[1], x[2], x[3]]))
                 .collect();
+            let texturing = info.texture.map(|bt| Texturing {
+                texture: bt.texture,
+                factor: bt.factor,
+                vertices: section(t)
+                    .chunks_exact(layout::TEXTURED_VERTEX_LEN)
+                    .map(textured_vertex_at)
+                    .collect(),
+            });
             Batch {
                 representation: info.representation,
                 scalar: info.scalar,
                 vertices,
                 coefficients,
                 indices,
+                texturing,
             }
         })
         .collect();
-    Solution {
+    let textures = parsed
+        .textures
+        .iter()
+        .zip(&parsed.texture_sections)
+        .enumerate()
+        .map(|(k, (info, (range, _, _)))| {
+            texture::decode_png(section(range), info.width, info.height).map_err(|reason| {
+                Problem::Texture {
+                    texture: k as u32,
+                    reason,
+                }
+            })
+        })
+        .collect::<Result<Vec<Texture>, Problem>>()?;
+    Ok(Solution {
         header: parsed.header.clone(),
         batches,
-    }
+        textures,
+    })
 }
 
 /// Decodes and validates the bytes of a solution file. f16 coefficients come back
 /// as `half × scale` in f32.
 pub fn decode(bytes: &[u8]) -> Result<Solution, FormatError> {
     let parsed = parse(bytes)?;
-    Ok(materialize(bytes, &parsed))
+    Ok(materialize(bytes, &parsed)?)
 }
 
 /// Reads and validates a solution file into memory.
 pub fn read_solution(path: &Path) -> Result<Solution, FormatError> {
     let bytes = std::fs::read(path).map_err(|e| FormatError::io("read", path, e))?;
     let parsed = parse(&bytes).map_err(|p| FormatError::in_file(path, p))?;
-    Ok(materialize(&bytes, &parsed))
+    materialize(&bytes, &parsed).map_err(|p| FormatError::in_file(path, p))
 }
 
 /// A validated solution file mapped into memory: the runtime uploads
@@ -1051,9 +1267,71 @@ impl MappedSolution {
     }
 
     /// Copies the file into an in-memory [`Solution`] (f16 coefficients widened to
-    /// f32 and multiplied by their scale).
-    pub fn to_solution(&self) -> Solution {
-        materialize(&self.map, &self.parsed)
+    /// f32 and multiplied by their scale, textures decoded). Fails only if a
+    /// texture does not decode: possible after
+    /// [`open_deferring_checksums`](Self::open_deferring_checksums), which does
+    /// not decode textures, or if the file was changed in place.
+    pub fn to_solution(&self) -> Result<Solution, FormatError> {
+        materialize(&self.map, &self.parsed).map_err(|p| FormatError::in_file(&self.path, p))
+    }
+
+    /// The file's textures (format 2; empty for 1.x), as their sections declare
+    /// them.
+    pub fn textures(&self) -> &[TextureInfo] {
+        &self.parsed.textures
+    }
+
+    /// Texture `k`'s encoded image (the PNG stream, after the section's prefix).
+    ///
+    /// # Panics
+    /// If `k >= self.textures().len()`.
+    pub fn texture_bytes(&self, k: usize) -> &[u8] {
+        let (range, _, _) = &self.parsed.texture_sections[k];
+        self.map.get(range.clone()).unwrap_or(&[])
+    }
+
+    /// Texture `k`, its section's CRC-32 verified (also after
+    /// [`open_deferring_checksums`](Self::open_deferring_checksums), which
+    /// leaves it) and decoded to 8-bit sRGB RGBA. Allocates at most the decoded
+    /// image (width × height × 4, within the caps `open` checked) plus 1 MiB.
+    ///
+    /// # Panics
+    /// If `k >= self.textures().len()`.
+    pub fn decode_texture(&self, k: usize) -> Result<Texture, FormatError> {
+        let (range, index, stored) = &self.parsed.texture_sections[k];
+        let start = range.start - layout::TEXTURE_PREFIX_LEN;
+        let section = self.map.get(start..range.end).unwrap_or(&[]);
+        let computed = crc32fast::hash(section);
+        if computed != *stored {
+            return Err(FormatError::in_file(
+                &self.path,
+                Problem::Checksum {
+                    what: format!("section {index} (texture {k})"),
+                    stored: *stored,
+                    computed,
+                },
+            ));
+        }
+        let info = self.parsed.textures[k];
+        texture::decode_png(self.texture_bytes(k), info.width, info.height).map_err(|reason| {
+            FormatError::in_file(
+                &self.path,
+                Problem::Texture {
+                    texture: k as u32,
+                    reason,
+                },
+            )
+        })
+    }
+
+    /// Batch `batch`'s UV + E/π section: `vertex_count × 20` bytes, each vertex
+    /// 5 little-endian f32 (u, v, E/π RGB), the layout of [`TexturedVertex`];
+    /// empty for an untextured batch.
+    ///
+    /// # Panics
+    /// If `batch >= self.batches().len()`.
+    pub fn textured_vertex_bytes(&self, batch: usize) -> &[u8] {
+        self.section(batch, 3)
     }
 
     /// Maps and validates a solution file like [`open`](Self::open), except
@@ -1108,55 +1386,31 @@ impl MappedSolution {
         })
     }
 
-    /// Index in the section table of batch `batch`'s `section`, read from the
-    /// batch table (whose checksum `open` verified); `None` if out of range.
-    fn section_index(&self, batch: usize, section: BatchSection) -> Option<usize> {
-        use layout::{batch as bf, preamble as pf};
-        let pre = Fields::new(self.map.get(..layout::PREAMBLE_LEN)?, layout::PREAMBLE_LEN)?;
-        let header_len = pre.u32(pf::HEADER_LENGTH) as usize;
-        let entry_len = pre.u32(pf::BATCH_ENTRY_LENGTH) as usize;
-        let start = layout::PREAMBLE_LEN + header_len + batch.checked_mul(entry_len)?;
-        let entry = Fields::new(
-            self.map.get(start..start + entry_len)?,
-            layout::BATCH_ENTRY_LEN,
-        )?;
-        let at = match section {
-            BatchSection::Vertices => bf::VERTICES_SECTION,
-            BatchSection::Coefficients => bf::COEFFICIENTS_SECTION,
-            BatchSection::Indices => bf::INDICES_SECTION,
-        };
-        Some(entry.u32(at) as usize)
+    fn slot(section: BatchSection) -> usize {
+        match section {
+            BatchSection::Vertices => 0,
+            BatchSection::Coefficients => 1,
+            BatchSection::Indices => 2,
+            BatchSection::TexturedVertices => 3,
+        }
+    }
+
+    /// Index in the section table of batch `batch`'s `section`, as the batch
+    /// table (whose checksum `open` verified) gave it; `usize::MAX` for the
+    /// textured vertices of an untextured batch.
+    fn section_index(&self, batch: usize, section: BatchSection) -> usize {
+        self.parsed.batch_sections[batch][Self::slot(section)].0
     }
 
     /// The CRC-32 (IEEE) the file stores for batch `batch`'s `section`: what
     /// `crc32fast::hash` of [`vertex_bytes`](Self::vertex_bytes) (or the
-    /// coefficient or index bytes) must equal.
+    /// coefficient, index or textured-vertex bytes) must equal (0 for the
+    /// textured vertices of an untextured batch, the CRC of no bytes).
     ///
     /// # Panics
     /// If `batch >= self.batches().len()`.
     pub fn section_crc(&self, batch: usize, section: BatchSection) -> u32 {
-        assert!(
-            batch < self.parsed.batches.len(),
-            "batch {batch} out of range"
-        );
-        use layout::{preamble as pf, section as sf};
-        let entry = || {
-            let index = self.section_index(batch, section)?;
-            let pre = Fields::new(self.map.get(..layout::PREAMBLE_LEN)?, layout::PREAMBLE_LEN)?;
-            let metadata = pre.u64(pf::METADATA_LENGTH) as usize;
-            let count = pre.u32(pf::SECTION_COUNT) as usize;
-            let entry_len = pre.u32(pf::SECTION_ENTRY_LENGTH) as usize;
-            let start = metadata.checked_sub(count.checked_mul(entry_len)?)?
-                + index.checked_mul(entry_len)?;
-            let f = Fields::new(
-                self.map.get(start..start + entry_len)?,
-                layout::SECTION_ENTRY_LEN,
-            )?;
-            Some(f.u32(sf::CRC))
-        };
-        // The tables were validated at open, so the lookup succeeds; a file
-        // edited in place since can only make verification fail.
-        entry().unwrap_or(0)
+        self.parsed.batch_sections[batch][Self::slot(section)].1
     }
 
     /// Checks that `bytes`, batch `batch`'s coefficients from coefficient
@@ -1193,11 +1447,12 @@ impl MappedSolution {
         if stored == computed {
             return Ok(());
         }
-        let index = self.section_index(batch, section).unwrap_or(usize::MAX);
+        let index = self.section_index(batch, section);
         let what = match section {
             BatchSection::Vertices => "vertices",
             BatchSection::Coefficients => "coefficients",
             BatchSection::Indices => "indices",
+            BatchSection::TexturedVertices => "textured vertices",
         };
         Err(FormatError::in_file(
             &self.path,
@@ -1218,6 +1473,7 @@ impl MappedSolution {
             BatchSection::Vertices => self.vertex_bytes(batch),
             BatchSection::Coefficients => self.coefficient_bytes(batch),
             BatchSection::Indices => self.index_bytes(batch),
+            BatchSection::TexturedVertices => self.textured_vertex_bytes(batch),
         }
     }
 
@@ -1255,12 +1511,14 @@ impl MappedSolution {
     }
 }
 
-/// One of a batch's three bulk sections.
+/// One of a batch's bulk sections.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum BatchSection {
     Vertices,
     Coefficients,
     Indices,
+    /// Format 2, textured batches: per-vertex u, v, E/π (empty otherwise).
+    TexturedVertices,
 }
 
 #[cfg(test)]

@@ -53,6 +53,7 @@ pub(crate) fn sample_solution() -> Solution {
         ],
         coefficients: (0..12).map(|k| 0.1 * k as f32 + 1e-7).collect(),
         indices: vec![0, 2, 1, 0, 3, 2],
+        texturing: None,
     };
     let glossy = Batch {
         representation: Representation::Sh { order: 2 },
@@ -73,6 +74,7 @@ pub(crate) fn sample_solution() -> Solution {
             })
             .collect(),
         indices: vec![0, 1, 2],
+        texturing: None,
     };
     let cube = Batch {
         representation: Representation::Cube { directions: 6 },
@@ -84,10 +86,12 @@ pub(crate) fn sample_solution() -> Solution {
         ],
         coefficients: (0..3 * 6 * 3).map(|k| k as f32 * 0.5).collect(),
         indices: vec![0, 2, 1],
+        texturing: None,
     };
     Solution {
         header,
         batches: vec![quad, glossy, cube],
+        textures: Vec::new(),
     }
 }
 
@@ -100,7 +104,7 @@ fn f16_tolerance(value: f32, scale: f32) -> f32 {
     2f32.powi(-11) * value.abs() * 1.001 + 2f32.powi(-25) * scale
 }
 
-fn assert_same(decoded: &Solution, original: &Solution) {
+pub(super) fn assert_same(decoded: &Solution, original: &Solution) {
     assert_eq!(decoded.header, original.header);
     assert_eq!(decoded.batches.len(), original.batches.len());
     for (d, o) in decoded.batches.iter().zip(&original.batches) {
@@ -108,6 +112,7 @@ fn assert_same(decoded: &Solution, original: &Solution) {
         assert_eq!(d.scalar, o.scalar);
         assert_eq!(d.vertices, o.vertices);
         assert_eq!(d.indices, o.indices);
+        assert_eq!(d.texturing, o.texturing);
         match o.scalar {
             ScalarType::F32 => assert_eq!(d.coefficients, o.coefficients),
             ScalarType::F16 { scale } => {
@@ -122,25 +127,26 @@ fn assert_same(decoded: &Solution, original: &Solution) {
             }
         }
     }
+    assert_eq!(decoded.textures, original.textures);
 }
 
 /// Rewrites the metadata checksum after a test patched the header or tables, so
 /// that the check under test (not the checksum) is what refuses the file.
-fn fix_metadata_crc(bytes: &mut [u8]) {
+pub(super) fn fix_metadata_crc(bytes: &mut [u8]) {
     let len = u64::from_le_bytes(bytes[pf::METADATA_LENGTH..][..8].try_into().unwrap());
     let len = len.min(bytes.len() as u64) as usize;
     let crc = layout::metadata_crc(&bytes[..len]);
     bytes[pf::METADATA_CRC..][..4].copy_from_slice(&crc.to_le_bytes());
 }
 
-fn patch(bytes: &[u8], at: usize, value: &[u8]) -> Vec<u8> {
+pub(super) fn patch(bytes: &[u8], at: usize, value: &[u8]) -> Vec<u8> {
     let mut out = bytes.to_vec();
     out[at..at + value.len()].copy_from_slice(value);
     fix_metadata_crc(&mut out);
     out
 }
 
-fn problem(bytes: &[u8]) -> Problem {
+pub(super) fn problem(bytes: &[u8]) -> Problem {
     match decode(bytes) {
         Ok(_) => panic!("decode accepted invalid bytes"),
         Err(e) => e.problem().cloned().expect("a data problem, not I/O"),
@@ -361,7 +367,7 @@ fn out_of_bounds_message_names_section_and_sizes() {
 #[test]
 fn unknown_major_version_is_refused() {
     let bytes = encode(&sample_solution()).unwrap();
-    for major in [0u16, 2, u16::MAX] {
+    for major in [0u16, 3, u16::MAX] {
         let bad = patch(&bytes, pf::VERSION_MAJOR, &major.to_le_bytes());
         let p = problem(&bad);
         assert!(
@@ -530,6 +536,7 @@ fn newer_minor_version_is_read_by_skipping_what_it_adds() {
         batch_entry_extra: 8,
         section_entry_extra: 24,
         extra_sections: vec![(77, b"a section a newer writer added".to_vec())],
+        texture_sections: None,
     };
     let bytes = encode_with(&original, &future).unwrap();
     assert_same(&decode(&bytes).unwrap(), &original);
@@ -656,7 +663,7 @@ fn mapped_file_matches_and_is_aligned() {
     let mapped = MappedSolution::open(&path).unwrap();
     assert_eq!(
         mapped.version(),
-        (layout::VERSION_MAJOR, layout::VERSION_MINOR)
+        (layout::UNTEXTURED_VERSION_MAJOR, layout::VERSION_MINOR)
     );
     assert_eq!(mapped.header(), &original.header);
     assert_eq!(mapped.batches().len(), 3);
@@ -669,6 +676,7 @@ fn mapped_file_matches_and_is_aligned() {
             index_count: 3,
             frame_convention: layout::FRAME_POLYGON_NTB,
             basis_convention: layout::BASIS_SH_REAL_ORTHONORMAL,
+            texture: None,
         }
     );
     for b in 0..3 {
@@ -686,7 +694,7 @@ fn mapped_file_matches_and_is_aligned() {
         mapped.index_bytes(0),
         &[0, 0, 0, 0, 2, 0, 0, 0, 1, 0, 0, 0, 0, 0, 0, 0, 3, 0, 0, 0, 2, 0, 0, 0]
     );
-    assert_same(&mapped.to_solution(), &original);
+    assert_same(&mapped.to_solution().unwrap(), &original);
     assert_same(&read_solution(&path).unwrap(), &original);
     assert_eq!(std::fs::read(&path).unwrap(), encode(&original).unwrap());
 }
@@ -704,7 +712,7 @@ fn atomic_write_leaves_no_temporary_and_keeps_old_file_on_error() {
     newer.header.partial = false;
     write_solution(&path, &newer).unwrap();
     assert!(old.header().partial);
-    assert_same(&old.to_solution(), &original);
+    assert_same(&old.to_solution().unwrap(), &original);
     assert!(!read_solution(&path).unwrap().header.partial);
 
     // An invalid solution is refused before anything is written.

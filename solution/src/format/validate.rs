@@ -5,7 +5,7 @@ use super::error::FormatError;
 use super::error::Problem;
 use super::layout::{self, MAX_CUBE_RESOLUTION, MAX_SH_ORDER};
 use super::read::BatchInfo;
-use super::{Header, Representation, ScalarType, Vertex};
+use super::{Header, Representation, ScalarType, TexturedVertex, Vertex};
 use std::path::Path;
 
 /// How far from unit length the stored normal and tangent, and how far from zero
@@ -160,6 +160,72 @@ pub fn check_vertex(batch: usize, index: u64, v: &Vertex) -> Result<(), Problem>
             reason: format!(
                 "normal and tangent must be orthonormal within {FRAME_TOLERANCE}"
             ),
+        });
+    }
+    Ok(())
+}
+
+/// A textured batch's fields: spherical harmonics (version 2 defines no textured
+/// global cube), a texture index below the file's texture count, and a finite,
+/// non-negative factor.
+pub fn check_batch_texture(
+    batch: usize,
+    representation: Representation,
+    texture: u32,
+    texture_count: u64,
+    factor: [f32; 3],
+) -> Result<(), Problem> {
+    if let Representation::Cube { .. } = representation {
+        return Err(Problem::Invalid {
+            what: format!("batch {batch}: a textured global-cube batch"),
+            reason: "only spherical-harmonic batches may be textured".into(),
+        });
+    }
+    if u64::from(texture) >= texture_count {
+        return Err(Problem::Invalid {
+            what: format!("batch {batch}: texture index {texture}"),
+            reason: format!("the file has {texture_count} textures"),
+        });
+    }
+    finite3(&format!("batch {batch}: texture factor"), factor)?;
+    if factor.iter().any(|&x| x < 0.0) {
+        return Err(Problem::Invalid {
+            what: format!("batch {batch}: texture factor {factor:?}"),
+            reason: "it must not be negative".into(),
+        });
+    }
+    Ok(())
+}
+
+/// A textured vertex: finite UV, finite and non-negative E/π (irradiance cannot
+/// be negative; the solver clamps interpolation undershoot before writing).
+pub fn check_textured_vertex(batch: usize, index: u64, v: &TexturedVertex) -> Result<(), Problem> {
+    if !v.uv.iter().all(|x| x.is_finite()) {
+        return Err(Problem::NonFinite {
+            what: format!("batch {batch}: textured vertex {index} uv"),
+            value: format!("{:?}", v.uv),
+        });
+    }
+    let e = v.irradiance_over_pi;
+    finite3(&format!("batch {batch}: textured vertex {index} E/π"), e)?;
+    if e.iter().any(|&x| x < 0.0) {
+        return Err(Problem::Invalid {
+            what: format!("batch {batch}: textured vertex {index} E/π {e:?}"),
+            reason: "irradiance must not be negative".into(),
+        });
+    }
+    Ok(())
+}
+
+/// The running total of decoded texture bytes against
+/// [`layout::MAX_DECODED_TEXTURE_BYTES`].
+pub fn check_decoded_texture_bytes(total: u64) -> Result<(), Problem> {
+    if total > layout::MAX_DECODED_TEXTURE_BYTES {
+        return Err(Problem::TooLarge {
+            what: "the decoded size of the textures (RGBA8, bytes)".into(),
+            value: total,
+            limit: layout::MAX_DECODED_TEXTURE_BYTES,
+            reason: "it bounds what decoding a file's textures may allocate",
         });
     }
     Ok(())
@@ -337,6 +403,7 @@ mod tests {
             index_count: 0,
             frame_convention: super::super::layout::FRAME_POLYGON_NTB,
             basis_convention: super::super::layout::basis_convention(representation),
+            texture: None,
         }
     }
 

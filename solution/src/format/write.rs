@@ -29,6 +29,9 @@ pub(crate) struct EncodeOptions {
     pub batch_entry_extra: usize,
     pub section_entry_extra: usize,
     pub extra_sections: Vec<(u32, Vec<u8>)>,
+    /// Written instead of the encoded textures' sections (prefix and image),
+    /// so a test can store a hostile image under correct checksums.
+    pub texture_sections: Option<Vec<Vec<u8>>>,
 }
 
 impl Default for EncodeOptions {
@@ -39,6 +42,7 @@ impl Default for EncodeOptions {
             batch_entry_extra: 0,
             section_entry_extra: 0,
             extra_sections: Vec::new(),
+            texture_sections: None,
         }
     }
 }
@@ -52,6 +56,13 @@ struct SectionPlan {
 
 #[derive(Debug)]
 struct Plan {
+    /// 1 without textures (the version-1 layout, byte for byte), else 2.
+    major: u16,
+    /// Per batch, the section indices of its vertices, coefficients, indices
+    /// and (textured batches) textured vertices.
+    batch_sections: Vec<[u32; 4]>,
+    /// Each texture's section bytes (prefix and PNG), encoded once.
+    texture_sections: Vec<Vec<u8>>,
     header_len: usize,
     batch_entry_len: usize,
     section_entry_len: usize,
@@ -146,6 +157,44 @@ pub fn check_solution(solution: &Solution) -> Result<(), Problem> {
         for (v, vertex) in batch.vertices.iter().enumerate() {
             validate::check_in_bounds(b, v as u64, vertex.position, header, slack)?;
         }
+        if let Some(t) = &batch.texturing {
+            check_texturing(b, batch, t, solution.textures.len())?;
+        }
+    }
+    let mut decoded = 0u64;
+    for (k, texture) in solution.textures.iter().enumerate() {
+        super::texture::check_texture(k as u32, texture)?;
+        decoded += texture.rgba.len() as u64;
+        validate::check_decoded_texture_bytes(decoded)?;
+    }
+    Ok(())
+}
+
+fn check_texturing(
+    b: usize,
+    batch: &Batch,
+    t: &super::Texturing,
+    texture_count: usize,
+) -> Result<(), Problem> {
+    validate::check_batch_texture(
+        b,
+        batch.representation,
+        t.texture,
+        texture_count as u64,
+        t.factor,
+    )?;
+    if t.vertices.len() != batch.vertices.len() {
+        return Err(Problem::Invalid {
+            what: format!(
+                "batch {b}: {} textured vertices for {} vertices",
+                t.vertices.len(),
+                batch.vertices.len()
+            ),
+            reason: "a textured batch has one UV and E/π per vertex".into(),
+        });
+    }
+    for (v, tv) in t.vertices.iter().enumerate() {
+        validate::check_textured_vertex(b, v as u64, tv)?;
     }
     Ok(())
 }
@@ -220,16 +269,35 @@ fn section_len(what: &str, count: u64, size: u64) -> Result<u64, Problem> {
 }
 
 fn plan(solution: &Solution, options: &EncodeOptions) -> Result<Plan, Problem> {
+    let textured =
+        !solution.textures.is_empty() || solution.batches.iter().any(|b| b.texturing.is_some());
+    let major = if textured {
+        layout::VERSION_MAJOR
+    } else {
+        layout::UNTEXTURED_VERSION_MAJOR
+    };
     let header_len = layout::HEADER_LEN + options.header_extra;
-    let batch_entry_len = layout::BATCH_ENTRY_LEN + options.batch_entry_extra;
+    let batch_entry_len = layout::batch_entry_len(major) + options.batch_entry_extra;
     let section_entry_len = layout::SECTION_ENTRY_LEN + options.section_entry_extra;
     let mut sections = vec![SectionPlan {
         kind: layout::SECTION_SETTINGS,
         offset: 0,
         length: solution.header.settings_json.len() as u64,
     }];
+    let mut batch_sections = Vec::with_capacity(solution.batches.len());
     for (b, batch) in solution.batches.iter().enumerate() {
         let vertex_count = batch.vertices.len() as u64;
+        let first = sections.len() as u32;
+        batch_sections.push([
+            first,
+            first + 1,
+            first + 2,
+            if batch.texturing.is_some() {
+                first + 3
+            } else {
+                layout::NO_TEXTURE
+            },
+        ]);
         sections.push(SectionPlan {
             kind: layout::SECTION_VERTICES,
             offset: 0,
@@ -257,6 +325,37 @@ fn plan(solution: &Solution, options: &EncodeOptions) -> Result<Plan, Problem> {
                 4,
             )?,
         });
+        if batch.texturing.is_some() {
+            sections.push(SectionPlan {
+                kind: layout::SECTION_TEXTURED_VERTICES,
+                offset: 0,
+                length: section_len(
+                    &format!("batch {b}: textured vertices"),
+                    vertex_count,
+                    layout::TEXTURED_VERTEX_LEN as u64,
+                )?,
+            });
+        }
+    }
+    let mut texture_sections = Vec::with_capacity(solution.textures.len());
+    for (k, texture) in solution.textures.iter().enumerate() {
+        let bytes = match options.texture_sections.as_ref().and_then(|t| t.get(k)) {
+            Some(raw) => raw.clone(),
+            None => {
+                let png =
+                    super::texture::encode_png(texture).map_err(|reason| Problem::Texture {
+                        texture: k as u32,
+                        reason: format!("cannot encode it as PNG: {reason}"),
+                    })?;
+                super::texture::section_bytes(texture, &png)
+            }
+        };
+        sections.push(SectionPlan {
+            kind: layout::SECTION_TEXTURE,
+            offset: 0,
+            length: bytes.len() as u64,
+        });
+        texture_sections.push(bytes);
     }
     for (kind, bytes) in &options.extra_sections {
         sections.push(SectionPlan {
@@ -296,6 +395,9 @@ fn plan(solution: &Solution, options: &EncodeOptions) -> Result<Plan, Problem> {
             .ok_or_else(overflow)?;
     }
     Ok(Plan {
+        major,
+        batch_sections,
+        texture_sections,
         header_len,
         batch_entry_len,
         section_entry_len,
@@ -413,6 +515,24 @@ fn write_planned<W: Write + Seek>(
         stream.pad_to(next_offset())?;
         stream.push_each(&batch.indices, u32::to_le_bytes)?;
         crcs.push(stream.finish_section()?);
+
+        if let Some(t) = &batch.texturing {
+            stream.pad_to(next_offset())?;
+            stream.push_each(&t.vertices, |tv| {
+                let mut bytes = [0u8; layout::TEXTURED_VERTEX_LEN];
+                let mut f = FieldsMut::new(&mut bytes);
+                f.f32(0, tv.uv[0]);
+                f.f32(4, tv.uv[1]);
+                f.f32x3(8, tv.irradiance_over_pi);
+                bytes
+            })?;
+            crcs.push(stream.finish_section()?);
+        }
+    }
+    for bytes in &plan.texture_sections {
+        stream.pad_to(next_offset())?;
+        stream.push(bytes)?;
+        crcs.push(stream.finish_section()?);
     }
     for (_, bytes) in &options.extra_sections {
         stream.pad_to(next_offset())?;
@@ -438,7 +558,7 @@ fn metadata_bytes(
 
     let (pre, rest) = metadata.split_at_mut(layout::PREAMBLE_LEN);
     let mut p = FieldsMut::new(pre);
-    p.u16(pf::VERSION_MAJOR, layout::VERSION_MAJOR);
+    p.u16(pf::VERSION_MAJOR, plan.major);
     p.u16(pf::VERSION_MINOR, options.minor);
     p.u64(pf::FILE_LENGTH, plan.file_len);
     p.u64(pf::METADATA_LENGTH, plan.metadata_len as u64);
@@ -475,15 +595,14 @@ fn metadata_bytes(
 
     let (batch_table, section_table) =
         rest.split_at_mut(plan.batch_entry_len * solution.batches.len());
-    for (b, (batch, entry)) in solution
+    for ((batch, entry), refs) in solution
         .batches
         .iter()
         .zip(batch_table.chunks_exact_mut(plan.batch_entry_len))
-        .enumerate()
+        .zip(&plan.batch_sections)
     {
         let (repr, parameter) = layout::representation_code(batch.representation);
         let (scalar, scale) = layout::scalar_code(batch.scalar);
-        let first_section = 1 + 3 * b as u32;
         let mut f = FieldsMut::new(entry);
         f.u32(bf::REPRESENTATION, repr);
         f.u32(bf::REPRESENTATION_PARAMETER, parameter);
@@ -496,9 +615,18 @@ fn metadata_bytes(
         );
         f.u64(bf::VERTEX_COUNT, batch.vertices.len() as u64);
         f.u64(bf::INDEX_COUNT, batch.indices.len() as u64);
-        f.u32(bf::VERTICES_SECTION, first_section);
-        f.u32(bf::COEFFICIENTS_SECTION, first_section + 1);
-        f.u32(bf::INDICES_SECTION, first_section + 2);
+        f.u32(bf::VERTICES_SECTION, refs[0]);
+        f.u32(bf::COEFFICIENTS_SECTION, refs[1]);
+        f.u32(bf::INDICES_SECTION, refs[2]);
+        if plan.major >= 2 {
+            let texture = batch.texturing.as_ref();
+            f.u32(
+                bf::TEXTURE,
+                texture.map_or(layout::NO_TEXTURE, |t| t.texture),
+            );
+            f.u32(bf::TEXTURED_VERTICES_SECTION, refs[3]);
+            f.f32x3(bf::TEXTURE_FACTOR, texture.map_or([0.0; 3], |t| t.factor));
+        }
     }
     for ((section, crc), entry) in plan
         .sections

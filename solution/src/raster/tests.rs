@@ -29,6 +29,7 @@ fn solution(batches: Vec<Batch>) -> Solution {
     Solution {
         header: header(),
         batches,
+        textures: Vec::new(),
     }
 }
 
@@ -104,6 +105,7 @@ fn batch(tris: &[Tri]) -> Batch {
         vertices: Vec::new(),
         coefficients: Vec::new(),
         indices: Vec::new(),
+        texturing: None,
     };
     for t in tris {
         let n = t.normal().normalize();
@@ -535,6 +537,7 @@ fn glossy_vertex_radiance_follows_sh_toward_each_eye() {
             ]
             .concat(),
             indices: vec![0, 1, 2],
+            texturing: None,
         };
         if (q1 - p).cross(q2 - p).dot(normal) < 0.0 {
             batch.indices = vec![0, 2, 1];
@@ -828,6 +831,7 @@ fn cube_vertex(k: u32, values: Vec<f32>) -> Batch {
         }],
         coefficients: values,
         indices: vec![],
+        texturing: None,
     }
 }
 

@@ -65,6 +65,7 @@ pub fn empty_batch() -> Batch {
         vertices: Vec::new(),
         coefficients: Vec::new(),
         indices: Vec::new(),
+        texturing: None,
     }
 }
 
@@ -91,6 +92,7 @@ pub fn solution_of(batch: Batch, up: UpAxis, units_per_metre: f64, offset: [f64;
             settings_json: String::new(),
         },
         batches: vec![batch],
+        textures: Vec::new(),
     }
 }
 

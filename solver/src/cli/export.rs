@@ -29,8 +29,9 @@ Each batch becomes a mesh with, per vertex:
 and the header camera as a perspective camera. Diffuse vertices look the same from
 everywhere; glossy vertices (SH order >= 1, global cubes) are evaluated toward one eye
 (--eye, by default the header camera's), so from the exported camera a viewer matches
-the runtime at the vertices. Textures are not exported (the solution format has none
-yet). The file is refused before anything is allocated if it would exceed glTF's
+the runtime at the vertices. A textured batch (format 2) gets TEXCOORD_0 = (u, 1 - v),
+its PNG as a baseColorTexture times its factor, and E/pi (the incident light over pi)
+in _RADIANCE and, tone-mapped, in COLOR_0. The file is refused before anything is allocated if it would exceed glTF's
 4 GiB limit.";
 
 #[derive(clap::Args, Debug)]
@@ -102,7 +103,7 @@ pub fn run(args: ExportArgs) -> Result<ExitCode> {
     // Every check but the bulk sections' checksums and the coefficients' finite
     // check, which are made batch by batch below as each batch is read.
     let file = MappedSolution::open_deferring_checksums(&args.solution)?;
-    let mut exporter = Exporter::new(file.header(), file.batches(), options)
+    let mut exporter = Exporter::new(file.header(), file.batches(), file.textures(), options)
         .with_context(|| format!("cannot export {}", args.solution.display()))?;
     for (i, info) in file.batches().iter().enumerate() {
         verify_batch(&file, i)?;
@@ -110,11 +111,28 @@ pub fn run(args: ExportArgs) -> Result<ExitCode> {
             vertices: file.section_bytes(i, BatchSection::Vertices),
             coefficients: file.section_bytes(i, BatchSection::Coefficients),
             indices: file.section_bytes(i, BatchSection::Indices),
+            textured_vertices: file.section_bytes(i, BatchSection::TexturedVertices),
         };
         // Each section's pages go as soon as the exporter has read it for the
         // last time, so the input and the output are not both resident.
-        exporter
+        let dropped = exporter
             .add_batch(i, info, bytes, |section| file.release_section(i, section))
+            .with_context(|| format!("cannot export {}", args.solution.display()))?;
+        if dropped {
+            eprintln!(
+                "solver: warning: {}: batch {i} is textured and also has an untextured term \
+                 (a glossy lobe or emission), which the glTF leaves out",
+                args.solution.display()
+            );
+        }
+    }
+    for k in 0..file.textures().len() {
+        // Decoding verifies the section's CRC-32 and that the PNG decodes (the
+        // decoded image, within the reader's caps, is dropped at once); the
+        // glTF gets the PNG as stored.
+        drop(file.decode_texture(k)?);
+        exporter
+            .add_texture(k, file.texture_bytes(k))
             .with_context(|| format!("cannot export {}", args.solution.display()))?;
     }
     let bin_uri = match &container {
@@ -148,10 +166,11 @@ pub fn run(args: ExportArgs) -> Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
-const SECTIONS: [BatchSection; 3] = [
+const SECTIONS: [BatchSection; 4] = [
     BatchSection::Vertices,
     BatchSection::Coefficients,
     BatchSection::Indices,
+    BatchSection::TexturedVertices,
 ];
 
 /// The checks `MappedSolution::open` would have made on batch `i`'s sections:
@@ -159,7 +178,11 @@ const SECTIONS: [BatchSection; 3] = [
 /// released once checked; the export reads them again from the page cache,
 /// one section after another.
 fn verify_batch(file: &MappedSolution, i: usize) -> Result<()> {
+    let textured = file.batches()[i].texture.is_some();
     for section in SECTIONS {
+        if section == BatchSection::TexturedVertices && !textured {
+            continue;
+        }
         let bytes = file.section_bytes(i, section);
         file.verify_section(i, section, crc32fast::hash(bytes))?;
         if section == BatchSection::Coefficients {

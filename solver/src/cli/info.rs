@@ -1,7 +1,9 @@
 //! `solver info FILE [--json]`: validates a solution file (all checksums) and
 //! prints its header and batches.
 
-use solution::format::{describe_json, describe_text, MappedSolution};
+use solution::format::{
+    describe_json, describe_text, describe_textures_text, textures_json, MappedSolution,
+};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -24,6 +26,7 @@ pub fn run(args: InfoArgs) -> anyhow::Result<ExitCode> {
             object.insert("file".into(), args.file.display().to_string().into());
             object.insert("format_version".into(), format!("{major}.{minor}").into());
             object.insert("file_bytes".into(), solution.file_len().into());
+            object.insert("textures".into(), textures_json(solution.textures()));
         }
         println!("{}", serde_json::to_string_pretty(&value)?);
     } else {
@@ -31,6 +34,7 @@ pub fn run(args: InfoArgs) -> anyhow::Result<ExitCode> {
         println!("format_version: {major}.{minor}");
         println!("file_bytes: {}", solution.file_len());
         print!("{}", describe_text(solution.header(), solution.batches()));
+        print!("{}", describe_textures_text(solution.textures()));
     }
     Ok(ExitCode::SUCCESS)
 }

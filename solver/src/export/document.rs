@@ -13,6 +13,10 @@ const FLOAT: u32 = 5126;
 const UNSIGNED_INT: u32 = 5125;
 /// `primitive.mode`: triangles.
 const TRIANGLES: u32 = 4;
+/// Sampler values (§5.26).
+const LINEAR: u32 = 9729;
+const LINEAR_MIPMAP_LINEAR: u32 = 9987;
+const REPEAT: u32 = 10497;
 
 /// Where one exported batch lies in the binary buffer: its attributes one
 /// after the other (positions, normals, COLOR_0, the radiance attribute, each
@@ -24,6 +28,9 @@ pub(crate) struct Placed {
     pub offset: u64,
     pub vertices: u64,
     pub indices: u64,
+    /// A textured batch's texture index and linear factor: `TEXCOORD_0`
+    /// follows the four attributes, and the batch has its own material.
+    pub texture: Option<(u32, [f32; 3])>,
     /// The smallest and largest exported position per axis (the spec requires
     /// them on `POSITION`, §3.7.2.1).
     pub min: [f32; 3],
@@ -50,6 +57,7 @@ pub(crate) const MATERIAL_NAME: &str = "solution radiance (unlit)";
 /// `None` for a `.glb` (the buffer is the BIN chunk, §4.4.3.3).
 pub(crate) fn document(
     placed: &[Placed],
+    images: &[(u64, u64)],
     bin_length: u64,
     bin_uri: Option<&str>,
     camera: &CameraJson,
@@ -60,6 +68,7 @@ pub(crate) fn document(
     let mut accessors = Vec::new();
     let mut meshes = Vec::new();
     let mut nodes = Vec::new();
+    let mut materials = vec![unlit_material(MATERIAL_NAME, [1.0; 3], None)];
     for p in placed {
         let base = accessors.len();
         for k in 0..4u64 {
@@ -81,12 +90,40 @@ pub(crate) fn document(
             }));
             accessors.push(accessor);
         }
+        let mut attributes = json!({
+            "POSITION": base,
+            "NORMAL": base + 1,
+            "COLOR_0": base + 2,
+            RADIANCE_ATTRIBUTE: base + 3,
+        });
+        let mut end = p.offset + 48 * p.vertices;
+        let mut material = 0;
+        if let Some((texture, factor)) = p.texture {
+            attributes["TEXCOORD_0"] = json!(accessors.len());
+            views.push(json!({
+                "buffer": 0,
+                "byteOffset": end,
+                "byteLength": 8 * p.vertices,
+                "target": ARRAY_BUFFER,
+            }));
+            accessors.push(json!({
+                "bufferView": views.len() - 1,
+                "componentType": FLOAT,
+                "count": p.vertices,
+                "type": "VEC2",
+            }));
+            end += 8 * p.vertices;
+            material = materials.len();
+            let name = format!("{} (textured)", p.name);
+            materials.push(unlit_material(&name, factor, Some(texture)));
+        }
         views.push(json!({
             "buffer": 0,
-            "byteOffset": p.offset + 48 * p.vertices,
+            "byteOffset": end,
             "byteLength": 4 * p.indices,
             "target": ELEMENT_ARRAY_BUFFER,
         }));
+        let indices = accessors.len();
         accessors.push(json!({
             "bufferView": views.len() - 1,
             "componentType": UNSIGNED_INT,
@@ -97,14 +134,9 @@ pub(crate) fn document(
         meshes.push(json!({
             "name": p.name,
             "primitives": [{
-                "attributes": {
-                    "POSITION": base,
-                    "NORMAL": base + 1,
-                    "COLOR_0": base + 2,
-                    RADIANCE_ATTRIBUTE: base + 3,
-                },
-                "indices": base + 4,
-                "material": 0,
+                "attributes": attributes,
+                "indices": indices,
+                "material": material,
                 "mode": TRIANGLES,
                 "extras": {"solution_batch": p.batch},
             }],
@@ -138,24 +170,54 @@ pub(crate) fn document(
         "scene": 0,
         "scenes": [{"name": "solution", "nodes": (0..nodes.len()).collect::<Vec<_>>()}],
         "nodes": nodes,
-        "materials": [{
-            "name": MATERIAL_NAME,
-            "pbrMetallicRoughness": {
-                "baseColorFactor": [1.0, 1.0, 1.0, 1.0],
-                "metallicFactor": 0.0,
-                "roughnessFactor": 1.0,
-            },
-            "extensions": {"KHR_materials_unlit": {}},
-        }],
+        "materials": materials,
         "cameras": [{"name": "solution header", "type": "perspective", "perspective": perspective}],
     });
-    if !placed.is_empty() {
+    if !images.is_empty() {
+        let mut image_list = Vec::new();
+        for &(offset, length) in images {
+            image_list.push(json!({"bufferView": views.len(), "mimeType": "image/png"}));
+            views.push(json!({"buffer": 0, "byteOffset": offset, "byteLength": length}));
+        }
+        doc["images"] = json!(image_list);
+        doc["textures"] = json!((0..images.len())
+            .map(|k| json!({"sampler": 0, "source": k}))
+            .collect::<Vec<_>>());
+        // Trilinear and repeating, as the runtime samples (docs/solution-format.md).
+        doc["samplers"] = json!([{
+            "magFilter": LINEAR,
+            "minFilter": LINEAR_MIPMAP_LINEAR,
+            "wrapS": REPEAT,
+            "wrapT": REPEAT,
+        }]);
+    }
+    if !meshes.is_empty() {
         doc["meshes"] = json!(meshes);
         doc["accessors"] = json!(accessors);
+    }
+    if !views.is_empty() {
         doc["bufferViews"] = json!(views);
         doc["buffers"] = json!([buffer]);
     }
     doc
+}
+
+/// An unlit material: `factor` (linear) as the base colour, times the
+/// sRGB-encoded `texture` if any (glTF 2.0 §3.9.2, `KHR_materials_unlit`).
+fn unlit_material(name: &str, factor: [f32; 3], texture: Option<u32>) -> Value {
+    let mut pbr = json!({
+        "baseColorFactor": [factor[0], factor[1], factor[2], 1.0],
+        "metallicFactor": 0.0,
+        "roughnessFactor": 1.0,
+    });
+    if let Some(index) = texture {
+        pbr["baseColorTexture"] = json!({"index": index});
+    }
+    json!({
+        "name": name,
+        "pbrMetallicRoughness": pbr,
+        "extensions": {"KHR_materials_unlit": {}},
+    })
 }
 
 /// What the attributes hold, in the file itself, for whoever reads it back.

@@ -50,7 +50,8 @@ pub use glb::{file_name_uri, glb_length, write_glb};
 use document::{CameraJson, Placed};
 use glam::DVec3;
 use solution::format::{
-    Batch, BatchInfo, BatchSection, Header, Representation, ScalarType, Vertex,
+    Batch, BatchInfo, BatchSection, BatchTexture, Header, Representation, ScalarType, TextureInfo,
+    Vertex,
 };
 use solution::raster::{default_clip_planes, shade_vertices, tone_map, ToneCurve};
 
@@ -110,12 +111,27 @@ pub fn curve_name(curve: ToneCurve) -> &'static str {
     }
 }
 
-/// One batch's three sections as stored in a solution file (little-endian).
+/// One batch's sections as stored in a solution file (little-endian);
+/// `textured_vertices` is empty for an untextured batch.
 #[derive(Clone, Copy, Debug)]
 pub struct BatchBytes<'a> {
     pub vertices: &'a [u8],
     pub coefficients: &'a [u8],
     pub indices: &'a [u8],
+    pub textured_vertices: &'a [u8],
+}
+
+/// Bytes per textured vertex in the buffer beside [`VERTEX_BYTES`]:
+/// `TEXCOORD_0`, two f32.
+pub const TEXCOORD_BYTES: u64 = 8;
+
+/// Where one batch goes in the buffer.
+#[derive(Clone, Copy, Debug)]
+struct Slot {
+    offset: u64,
+    vertices: u64,
+    indices: u64,
+    texture: Option<BatchTexture>,
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -133,6 +149,8 @@ pub enum ExportError {
     },
     #[error("batch {batch}: {problem}")]
     Batch { batch: usize, problem: String },
+    #[error("texture {texture}: {problem}")]
+    Texture { texture: usize, problem: String },
     #[error("exposure {0} stops is not a finite number in -64..=64")]
     Exposure(f32),
 }
@@ -154,17 +172,22 @@ pub struct Exporter<'h> {
     options: ExportOptions,
     frame: GltfFrame,
     /// Per batch of the solution: where it goes in `bin` (`None`: skipped).
-    slots: Vec<Option<(u64, u64, u64)>>,
+    slots: Vec<Option<Slot>>,
+    /// Per texture: its PNG's offset and length in `bin`, and whether added.
+    images: Vec<(u64, u64, bool)>,
     placed: Vec<Placed>,
     bin: Vec<u8>,
 }
 
 impl<'h> Exporter<'h> {
-    /// Plans the buffer for `batches` (the solution's batch table), checks its
-    /// size against [`MAX_GLTF_BYTES`] in u64 and only then allocates it.
+    /// Plans the buffer for `batches` (the solution's batch table) and
+    /// `textures` (its texture table; their PNGs go into the buffer as they
+    /// are), checks its size against [`MAX_GLTF_BYTES`] in u64 and only then
+    /// allocates it.
     pub fn new(
         header: &'h Header,
         batches: &[BatchInfo],
+        textures: &[TextureInfo],
         options: ExportOptions,
     ) -> Result<Self, ExportError> {
         if !(options.exposure_stops.is_finite() && options.exposure_stops.abs() <= 64.0) {
@@ -178,10 +201,27 @@ impl<'h> Exporter<'h> {
                 slots.push(None);
                 continue;
             }
-            slots.push(Some((offset, v, i)));
+            slots.push(Some(Slot {
+                offset,
+                vertices: v,
+                indices: i,
+                texture: info.texture,
+            }));
+            let texcoords = if info.texture.is_some() {
+                v * TEXCOORD_BYTES
+            } else {
+                0
+            };
             // u32 counts: each term is below 2^38, so nothing here can wrap.
-            offset += v * VERTEX_BYTES + i * 4;
+            offset += v * VERTEX_BYTES + texcoords + i * 4;
             (vertices, indices, exported) = (vertices + v, indices + i, exported + 1);
+        }
+        let mut images = Vec::with_capacity(textures.len());
+        for texture in textures {
+            // Encoded lengths are bounded by the file's length.
+            images.push((offset, texture.encoded_bytes, false));
+            offset = offset.saturating_add(texture.encoded_bytes.div_ceil(4) * 4);
+            exported += 1;
         }
         let json_bound = JSON_BYTES_FIXED + exported * JSON_BYTES_PER_BATCH;
         let bytes = glb_length(json_bound, offset);
@@ -204,6 +244,7 @@ impl<'h> Exporter<'h> {
                 header.up_axis,
             ),
             slots,
+            images,
             placed: Vec::new(),
             bin: vec![0; len],
         })
@@ -216,6 +257,9 @@ impl<'h> Exporter<'h> {
 
     /// Adds batch `index` (its entry `info` and its bytes). Lengths are checked
     /// against the counts; a skipped batch (no triangles) is accepted and ignored.
+    /// Returns true for a textured batch whose untextured term (the
+    /// coefficients: a glossy lobe or emission) is not zero, which the export
+    /// leaves out (docs/gltf.md, "Export").
     /// `done` is called with each section as soon as it has been read for the
     /// last time (vertices and coefficients after shading, indices after the
     /// copy), so that a caller reading a mapped file can release its pages
@@ -226,7 +270,7 @@ impl<'h> Exporter<'h> {
         info: &BatchInfo,
         bytes: BatchBytes,
         mut done: impl FnMut(BatchSection),
-    ) -> Result<(), ExportError> {
+    ) -> Result<bool, ExportError> {
         let fail = |problem: String| ExportError::Batch {
             batch: index,
             problem,
@@ -237,23 +281,41 @@ impl<'h> Exporter<'h> {
                 self.slots.len()
             )));
         };
-        let Some((offset, vertices, indices)) = slot else {
-            return Ok(());
+        let Some(slot) = slot else {
+            return Ok(false);
         };
-        if u64::from(info.vertex_count) != vertices || u64::from(info.index_count) != indices {
-            return Err(fail("counts differ from the planned batch table".into()));
+        let counts = (u64::from(info.vertex_count), u64::from(info.index_count));
+        if counts != (slot.vertices, slot.indices) || info.texture != slot.texture {
+            return Err(fail("differs from the planned batch table".into()));
         }
         check_lengths(info, &bytes).map_err(fail)?;
-        // In bounds: the plan sized `bin` to hold every slot.
-        let (start, n) = (offset as usize, vertices as usize);
         let eye = DVec3::from(self.glossy_eye()) - DVec3::from(self.header.recentre_offset);
-        let region = &mut self.bin[start..start + n * 48 + indices as usize * 4];
+        let (n, textured) = (slot.vertices as usize, slot.texture.is_some());
+        let texcoord_len = if textured { 8 * n } else { 0 };
+        // In bounds: the plan sized `bin` to hold every slot.
+        let start = slot.offset as usize;
+        let end = start + n * 48 + texcoord_len + slot.indices as usize * 4;
+        let region = &mut self.bin[start..end];
         let (positions, rest) = region.split_at_mut(12 * n);
         let (normals, rest) = rest.split_at_mut(12 * n);
         let (colors, rest) = rest.split_at_mut(12 * n);
-        let (radiance, index_out) = rest.split_at_mut(12 * n);
+        let (radiance, rest) = rest.split_at_mut(12 * n);
+        let (texcoords, index_out) = rest.split_at_mut(texcoord_len);
         let (min, max) = write_geometry(&self.frame, bytes.vertices, positions, normals);
-        shade_into(info, &bytes, eye, &self.options, colors, radiance).map_err(fail)?;
+        let dropped = if textured {
+            textured_into(
+                bytes.textured_vertices,
+                &self.options,
+                colors,
+                radiance,
+                texcoords,
+            );
+            done(BatchSection::TexturedVertices);
+            has_nonzero(info.scalar, bytes.coefficients)
+        } else {
+            shade_into(info, &bytes, eye, &self.options, colors, radiance).map_err(fail)?;
+            false
+        };
         done(BatchSection::Vertices);
         done(BatchSection::Coefficients);
         index_out.copy_from_slice(bytes.indices);
@@ -261,12 +323,31 @@ impl<'h> Exporter<'h> {
         self.placed.push(Placed {
             batch: index,
             name: batch_name(index, info),
-            offset,
-            vertices,
-            indices,
+            offset: slot.offset,
+            vertices: slot.vertices,
+            indices: slot.indices,
+            texture: slot.texture.map(|t| (t.texture, t.factor)),
             min,
             max,
         });
+        Ok(dropped)
+    }
+
+    /// Adds texture `k`'s encoded image (PNG, as the solution stores it).
+    pub fn add_texture(&mut self, k: usize, png: &[u8]) -> Result<(), ExportError> {
+        let fail = |problem: String| ExportError::Texture {
+            texture: k,
+            problem,
+        };
+        let Some((offset, len, added)) = self.images.get_mut(k) else {
+            return Err(fail("not in the texture table".into()));
+        };
+        if png.len() as u64 != *len {
+            return Err(fail(format!("{} bytes, the table says {len}", png.len())));
+        }
+        let start = *offset as usize;
+        self.bin[start..start + png.len()].copy_from_slice(png);
+        *added = true;
         Ok(())
     }
 
@@ -274,6 +355,13 @@ impl<'h> Exporter<'h> {
     /// file for a `.gltf` ([`file_name_uri`]), `None` for a `.glb`. Refuses a
     /// batch that was planned but never added.
     pub fn finish(self, bin_uri: Option<&str>) -> Result<Exported, ExportError> {
+        if let Some(texture) = self.images.iter().position(|(_, _, added)| !added) {
+            return Err(ExportError::Texture {
+                texture,
+                problem: "planned but never added".into(),
+            });
+        }
+        let images: Vec<(u64, u64)> = self.images.iter().map(|&(o, l, _)| (o, l)).collect();
         let added: Vec<usize> = self.placed.iter().map(|p| p.batch).collect();
         if let Some(batch) =
             (0..self.slots.len()).find(|b| self.slots[*b].is_some() && !added.contains(b))
@@ -286,6 +374,7 @@ impl<'h> Exporter<'h> {
         let camera = self.camera_json();
         let doc = document::document(
             &self.placed,
+            &images,
             self.bin.len() as u64,
             bin_uri,
             &camera,
@@ -351,6 +440,11 @@ fn batch_name(index: usize, info: &BatchInfo) -> String {
 fn check_lengths(info: &BatchInfo, bytes: &BatchBytes) -> Result<(), String> {
     let checks = [
         ("vertices", bytes.vertices.len() as u64, info.vertex_bytes()),
+        (
+            "textured vertices",
+            bytes.textured_vertices.len() as u64,
+            info.textured_vertex_bytes(),
+        ),
         (
             "coefficients",
             bytes.coefficients.len() as u64,
@@ -448,6 +542,7 @@ fn shade_into(
             vertices: v.chunks_exact(36).map(vertex_at).collect(),
             coefficients: widen(info.scalar, c),
             indices: Vec::new(),
+            texturing: None,
         };
         // u32::MAX: no order cap; negative radiance clamped as renderers do.
         let shaded = shade_vertices(&batch, u32::MAX, eye_file, true).map_err(|e| e.to_string())?;
@@ -475,5 +570,43 @@ fn widen(scalar: ScalarType, bytes: &[u8]) -> Vec<f32> {
             .chunks_exact(2)
             .map(|x| half::f16::from_le_bytes([x[0], x[1]]).to_f32() * scale)
             .collect(),
+    }
+}
+
+/// A textured batch's attributes from its textured-vertex section (per vertex
+/// u, v, E/π RGB as little-endian f32): `_RADIANCE` = E/π, COLOR_0 its tone
+/// map, `TEXCOORD_0` = (u, 1 − v), since glTF's v runs down from the image's
+/// top row (glTF 2.0 §3.8.4.4) and the format's (OBJ's) up from its bottom.
+fn textured_into(
+    textured: &[u8],
+    options: &ExportOptions,
+    colors: &mut [u8],
+    radiance: &mut [u8],
+    texcoords: &mut [u8],
+) {
+    let exposure = options.exposure_stops.exp2();
+    let out = colors
+        .chunks_exact_mut(12)
+        .zip(radiance.chunks_exact_mut(12))
+        .zip(texcoords.chunks_exact_mut(8));
+    for (t, ((c_out, r_out), uv_out)) in textured.chunks_exact(20).zip(out) {
+        let f = |k: usize| f32::from_le_bytes([t[4 * k], t[4 * k + 1], t[4 * k + 2], t[4 * k + 3]]);
+        let e = [f(2), f(3), f(4)];
+        put_vec3(r_out, e);
+        put_vec3(c_out, e.map(|x| tone_map(x * exposure, options.curve)));
+        uv_out[..4].copy_from_slice(&f(0).to_le_bytes());
+        uv_out[4..].copy_from_slice(&(1.0 - f(1)).to_le_bytes());
+    }
+}
+
+/// Whether stored coefficients hold any non-zero value.
+fn has_nonzero(scalar: ScalarType, bytes: &[u8]) -> bool {
+    match scalar {
+        ScalarType::F32 => bytes
+            .chunks_exact(4)
+            .any(|x| f32::from_le_bytes([x[0], x[1], x[2], x[3]]) != 0.0),
+        ScalarType::F16 { .. } => bytes
+            .chunks_exact(2)
+            .any(|x| half::f16::from_le_bytes([x[0], x[1]]).to_f32() != 0.0),
     }
 }

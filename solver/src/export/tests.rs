@@ -60,6 +60,7 @@ fn solution(up_axis: UpAxis) -> Solution {
             1.0, 2.0, 3.0, 0.5, 0.25, 0.125, 10.0, 0.0, -1.0, 3.5, 3.5, 3.5,
         ],
         indices: vec![0, 1, 2, 0, 2, 3],
+        texturing: None,
     };
     let mut sh1 = vec![0.0f32; 3 * 4 * 3];
     for v in 0..3 {
@@ -74,6 +75,7 @@ fn solution(up_axis: UpAxis) -> Solution {
         vertices: floor[..3].to_vec(),
         coefficients: sh1,
         indices: vec![0, 1, 2],
+        texturing: None,
     };
     let cube = Batch {
         representation: Representation::Cube { directions: 6 },
@@ -81,6 +83,7 @@ fn solution(up_axis: UpAxis) -> Solution {
         vertices: floor[1..].to_vec(),
         coefficients: (0..3 * 6 * 3).map(|k| 0.1 * k as f32).collect(),
         indices: vec![0, 1, 2],
+        texturing: None,
     };
     let empty = Batch {
         representation: Representation::Sh { order: 0 },
@@ -88,10 +91,12 @@ fn solution(up_axis: UpAxis) -> Solution {
         vertices: Vec::new(),
         coefficients: Vec::new(),
         indices: Vec::new(),
+        texturing: None,
     };
     Solution {
         header: header(up_axis),
         batches: vec![diffuse, empty, glossy, cube],
+        textures: Vec::new(),
     }
 }
 
@@ -101,12 +106,14 @@ fn export(solution: &Solution, options: ExportOptions, bin_uri: Option<&str>) ->
     let path = dir.path().join("s.sol");
     write_solution(&path, solution).unwrap();
     let file = MappedSolution::open(&path).unwrap();
-    let mut exporter = Exporter::new(file.header(), file.batches(), options).unwrap();
+    let mut exporter =
+        Exporter::new(file.header(), file.batches(), file.textures(), options).unwrap();
     for (i, info) in file.batches().iter().enumerate() {
         let bytes = BatchBytes {
             vertices: file.vertex_bytes(i),
             coefficients: file.coefficient_bytes(i),
             indices: file.index_bytes(i),
+            textured_vertices: file.textured_vertex_bytes(i),
         };
         exporter.add_batch(i, info, bytes, |_| {}).unwrap();
     }
@@ -357,17 +364,23 @@ fn sizes_beyond_the_u32_limit_are_refused_before_allocating() {
         index_count,
         frame_convention: 1,
         basis_convention: 1,
+        texture: None,
     };
     // 90 million vertices × 48 bytes is 4.3 GB: refused, nothing allocated
     // (the planned buffer would be that size).
-    let err = Exporter::new(&header, &[info(90_000_000, 3)], ExportOptions::default())
-        .err()
-        .expect("refused");
+    let err = Exporter::new(
+        &header,
+        &[info(90_000_000, 3)],
+        &[],
+        ExportOptions::default(),
+    )
+    .err()
+    .expect("refused");
     let message = err.to_string();
     assert!(message.contains("4294967295"), "{message}");
     // Two batches each under the limit, together over it.
     let half = info(45_000_000, 3);
-    assert!(Exporter::new(&header, &[half, half], ExportOptions::default()).is_err());
+    assert!(Exporter::new(&header, &[half, half], &[], ExportOptions::default()).is_err());
     // Just under: 80 million vertices (3.84 GB) pass the check.
     assert!(glb_length(JSON_BYTES_FIXED, 80_000_000 * VERTEX_BYTES) < MAX_GLTF_BYTES);
 }
@@ -380,11 +393,12 @@ fn wrong_section_lengths_and_missing_batches_are_refused() {
     write_solution(&path, &solution).unwrap();
     let file = MappedSolution::open(&path).unwrap();
     let mut exporter =
-        Exporter::new(file.header(), file.batches(), ExportOptions::default()).unwrap();
+        Exporter::new(file.header(), file.batches(), &[], ExportOptions::default()).unwrap();
     let short = BatchBytes {
         vertices: &file.vertex_bytes(0)[..36],
         coefficients: file.coefficient_bytes(0),
         indices: file.index_bytes(0),
+        textured_vertices: &[],
     };
     let err = exporter
         .add_batch(0, &file.batches()[0], short, |_| {})
@@ -402,7 +416,7 @@ fn wrong_section_lengths_and_missing_batches_are_refused() {
         exposure_stops: f32::NAN,
         ..Default::default()
     };
-    assert!(Exporter::new(file.header(), file.batches(), bad).is_err());
+    assert!(Exporter::new(file.header(), file.batches(), &[], bad).is_err());
 }
 
 #[test]
@@ -417,4 +431,92 @@ fn glb_container_lengths_and_padding() {
     assert_eq!(&out[28..32], b"BIN\0");
     assert_eq!(&out[32..40], &[1, 2, 3, 4, 5, 0, 0, 0]);
     assert_eq!(glb_length(2, 0), 24);
+}
+
+/// A textured batch (format 2): TEXCOORD_0 = (u, 1 − v), `_RADIANCE` = E/π,
+/// COLOR_0 its tone map, the PNG as stored in a material of its own with the
+/// batch's factor; a textured batch with an untextured term is reported.
+#[test]
+fn textured_batches_carry_their_png_uvs_and_e_over_pi() {
+    use solution::format::{Texture, TexturedVertex, Texturing};
+    let mut solution = solution(UpAxis::PosY);
+    solution.batches.truncate(1);
+    let texturing = Texturing {
+        texture: 0,
+        factor: [0.5, 1.0, 0.25],
+        vertices: (0..4)
+            .map(|k| TexturedVertex {
+                uv: [0.25 * k as f32, 0.125 + 0.25 * k as f32],
+                irradiance_over_pi: [0.5 * k as f32, 1.0, 2.0],
+            })
+            .collect(),
+    };
+    let mut glossy = solution.batches[0].clone();
+    glossy.texturing = Some(texturing.clone());
+    solution.batches[0].coefficients.fill(0.0);
+    solution.batches[0].texturing = Some(texturing.clone());
+    solution.batches.push(glossy);
+    let rgba: Vec<u8> = (0..2 * 2 * 4).map(|k| (k * 16) as u8).collect();
+    solution.textures = vec![Texture {
+        width: 2,
+        height: 2,
+        rgba: rgba.clone(),
+    }];
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("t.sol");
+    write_solution(&path, &solution).unwrap();
+    let file = MappedSolution::open(&path).unwrap();
+    let options = ExportOptions {
+        exposure_stops: -1.0,
+        ..Default::default()
+    };
+    let mut exporter =
+        Exporter::new(file.header(), file.batches(), file.textures(), options).unwrap();
+    let mut dropped = Vec::new();
+    for (i, info) in file.batches().iter().enumerate() {
+        let bytes = BatchBytes {
+            vertices: file.vertex_bytes(i),
+            coefficients: file.coefficient_bytes(i),
+            indices: file.index_bytes(i),
+            textured_vertices: file.textured_vertex_bytes(i),
+        };
+        dropped.push(exporter.add_batch(i, info, bytes, |_| {}).unwrap());
+    }
+    // The second batch keeps non-zero coefficients: its untextured term.
+    assert_eq!(dropped, [false, true]);
+    exporter.add_texture(0, file.texture_bytes(0)).unwrap();
+    let exported = exporter.finish(None).unwrap();
+    let bytes = glb(&exported);
+    let (document, read) = read_back(&bytes);
+    let blob = document.blob.clone().unwrap();
+    for (primitive, r) in document.meshes().flat_map(|m| m.primitives()).zip(&read) {
+        let reader = primitive.reader(|_| Some(&blob));
+        let uv: Vec<[f32; 2]> = reader
+            .read_tex_coords(0)
+            .expect("TEXCOORD_0")
+            .into_f32()
+            .collect();
+        for (k, t) in texturing.vertices.iter().enumerate() {
+            assert_eq!(uv[k], [t.uv[0], 1.0 - t.uv[1]]);
+            assert_eq!(r.radiance[k], t.irradiance_over_pi);
+            let y = t
+                .irradiance_over_pi
+                .map(|x| tone_map(x * 0.5, ToneCurve::Clamp));
+            assert_eq!(r.colors[k], y);
+        }
+        let material = primitive.material();
+        assert!(material.extension_value("KHR_materials_unlit").is_some());
+        let pbr = material.pbr_metallic_roughness();
+        assert_eq!(pbr.base_color_factor(), [0.5, 1.0, 0.25, 1.0]);
+        let info = pbr.base_color_texture().expect("a base colour texture");
+        assert_eq!(info.tex_coord(), 0);
+        let gltf::image::Source::View { view, mime_type } = info.texture().source().source() else {
+            panic!("the image is not in the buffer");
+        };
+        assert_eq!(mime_type, "image/png");
+        let png = &blob[view.offset()..view.offset() + view.length()];
+        assert_eq!(png, file.texture_bytes(0));
+        let decoded = solution::format::decode_png(png, 2, 2).unwrap();
+        assert_eq!(decoded.rgba, rgba);
+    }
 }

@@ -883,6 +883,7 @@ impl Solver {
                 vertices: Vec::new(),
                 coefficients: Vec::new(),
                 indices: Vec::new(),
+                texturing: None,
             });
             local[v] = batch.vertices.len() as u32;
             let f = |x: DVec3| x.as_vec3().to_array();

@@ -128,7 +128,9 @@ impl Solver {
                 vertices,
                 coefficients,
                 indices,
+                texturing: None,
             }],
+            textures: Vec::new(),
         };
         // Directional mode: one batch per SH order instead.
         self.directional_batches(&mut solution, ambient);

@@ -294,7 +294,9 @@ mod tests {
                 vertices,
                 coefficients,
                 indices,
+                texturing: None,
             }],
+            textures: Vec::new(),
         }
     }
 

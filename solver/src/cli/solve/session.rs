@@ -230,7 +230,9 @@ mod tests {
                     vertices: vec![vertex(0.0, 0.0), vertex(1.0, 0.0), vertex(0.0, 1.0)],
                     coefficients: vec![self.state.shots as f32; 9],
                     indices: vec![0, 1, 2],
+                    texturing: None,
                 }],
+                textures: Vec::new(),
             }
         }
         fn write_state(&self, w: &mut dyn Write) -> std::io::Result<()> {

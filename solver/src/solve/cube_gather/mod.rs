@@ -1021,6 +1021,7 @@ fn fill_batches(
         vertices: Vec::new(),
         coefficients: Vec::new(),
         indices: Vec::new(),
+        texturing: None,
     };
     let mut glossy = Batch {
         representation: Representation::Cube {
