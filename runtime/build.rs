@@ -20,7 +20,18 @@ const SHADERS: &[(&str, &str, &[&str])] = &[
         "scene_cube_f16.vert.spv",
         &["-DCOEFF_F16"],
     ),
+    (
+        "scene_sh.vert",
+        "scene_textured_f32.vert.spv",
+        &["-DTEXTURED"],
+    ),
+    (
+        "scene_sh.vert",
+        "scene_textured_f16.vert.spv",
+        &["-DTEXTURED", "-DCOEFF_F16"],
+    ),
     ("scene.frag", "scene.frag.spv", &[]),
+    ("scene_textured.frag", "scene_textured.frag.spv", &[]),
     ("tonemap.vert", "tonemap.vert.spv", &[]),
     ("tonemap.frag", "tonemap.frag.spv", &[]),
     ("inspect.vert", "inspect.vert.spv", &[]),

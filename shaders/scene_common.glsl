@@ -38,6 +38,13 @@ layout(push_constant) uniform Batch {
     // Multiplies every coefficient: the f16 storage scale times the renderer's
     // radiance scale (which keeps half-float colour targets in range).
     float scale;
+#ifdef TEXTURED
+    // Textured batches (32 bytes): the texture factor (MTL Kd) times the
+    // renderer's radiance scale, multiplying the stored E/pi.
+    float texture_scale_r;
+    float texture_scale_g;
+    float texture_scale_b;
+#endif
 } batch;
 
 layout(location = 0) in vec3 in_position;
@@ -45,3 +52,22 @@ layout(location = 1) in vec3 in_normal;
 layout(location = 2) in vec3 in_tangent;
 
 layout(location = 0) out vec3 out_radiance;
+
+#ifdef TEXTURED
+// Per vertex of a textured batch: u, v, E/pi RGB (solution::format::TexturedVertex),
+// indexed like the coefficients, from the batch's first vertex.
+layout(std430, set = 1, binding = 0) readonly buffer Textured { float values[]; } textured;
+// Image coordinates (s, t) = (u, 1 - v): the file's v runs up from the
+// image's bottom row, Vulkan's t down from its first row.
+layout(location = 1) out vec2 out_st;
+// E/pi times the factor and the radiance scale.
+layout(location = 2) out vec3 out_irradiance;
+
+void write_textured() {
+    uint at = (uint(gl_VertexIndex) - batch.vertex_base) * 5u;
+    out_st = vec2(textured.values[at], 1.0 - textured.values[at + 1u]);
+    out_irradiance = vec3(textured.values[at + 2u], textured.values[at + 3u],
+                          textured.values[at + 4u])
+        * vec3(batch.texture_scale_r, batch.texture_scale_g, batch.texture_scale_b);
+}
+#endif

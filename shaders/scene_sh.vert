@@ -1,7 +1,9 @@
 #version 450
 #extension GL_EXT_multiview : require
 #extension GL_GOOGLE_include_directive : require
-// Glossy batches: evaluate the vertex's SH toward this view's eye.
+// Glossy batches: evaluate the vertex's SH toward this view's eye. Compiled
+// with -DTEXTURED for textured batches of any order (their coefficients hold
+// the untextured part; the textured part is passed on to scene_textured.frag).
 //
 // The direction from the vertex to the eye is taken into the vertex frame
 // (x = tangent t, y = n × t, z = normal n; design notes, "Local frames and SH")
@@ -80,5 +82,8 @@ void main() {
     // Negative radiance (ringing of a truncated lobe) carries no light: clamp per
     // vertex before interpolation, as solver::raster does.
     out_radiance = max(radiance * batch.scale, vec3(0.0));
+#ifdef TEXTURED
+    write_textured();
+#endif
     gl_Position = frame.view_projection[gl_ViewIndex] * vec4(in_position, 1.0);
 }

@@ -147,8 +147,8 @@ fn downsample(level: &Level) -> Option<Level> {
             for dy in 0..sy {
                 for dx in 0..sx {
                     let at = ((j * sy + dy) * w + i * sx + dx) * 4;
-                    for c in 0..3 {
-                        sum[c] += f64::from(srgb8_to_linear(level.rgba[at + c]));
+                    for (c, total) in sum.iter_mut().take(3).enumerate() {
+                        *total += f64::from(srgb8_to_linear(level.rgba[at + c]));
                     }
                     // Alpha is linear coverage, not sRGB.
                     sum[3] += f64::from(level.rgba[at + 3]);
@@ -177,7 +177,7 @@ mod tests {
     fn checker(n: u32) -> Texture {
         let rgba = (0..n * n)
             .flat_map(|k| {
-                let on = ((k % n) + (k / n)) % 2 == 0;
+                let on = ((k % n) + (k / n)).is_multiple_of(2);
                 let b = if on { 255 } else { 0 };
                 [b, b, b, 255]
             })

@@ -14,6 +14,10 @@ pub const SCENE_L0_F16_VERT: &[u8] = spirv!("scene_l0_f16.vert.spv");
 pub const SCENE_SH_F32_VERT: &[u8] = spirv!("scene_sh_f32.vert.spv");
 pub const SCENE_SH_F16_VERT: &[u8] = spirv!("scene_sh_f16.vert.spv");
 pub const SCENE_FRAG: &[u8] = spirv!("scene.frag.spv");
+/// Textured batches (solution format 2): `scene_sh.vert` with `-DTEXTURED`.
+pub const SCENE_TEXTURED_F32_VERT: &[u8] = spirv!("scene_textured_f32.vert.spv");
+pub const SCENE_TEXTURED_F16_VERT: &[u8] = spirv!("scene_textured_f16.vert.spv");
+pub const SCENE_TEXTURED_FRAG: &[u8] = spirv!("scene_textured.frag.spv");
 pub const TONEMAP_VERT: &[u8] = spirv!("tonemap.vert.spv");
 pub const TONEMAP_FRAG: &[u8] = spirv!("tonemap.frag.spv");
 pub const INSPECT_VERT: &[u8] = spirv!("inspect.vert.spv");

@@ -23,6 +23,7 @@ pub mod inspect;
 pub mod multiview;
 mod passes;
 pub mod scene;
+pub mod textures;
 pub mod tonemap;
 pub mod truncation;
 
@@ -133,6 +134,8 @@ pub struct StereoRenderer {
     targets: Vec<Target>,
     tonemap_set: vk::DescriptorSet,
     batch_sets: Vec<vk::DescriptorSet>,
+    /// Per draw, the textured batches' second set (UV + E/π, texture).
+    texture_sets: Vec<Option<vk::DescriptorSet>>,
     descriptor_pool: vk::DescriptorPool,
     command_buffer: vk::CommandBuffer,
     fence: Fence,
@@ -326,6 +329,7 @@ impl StereoRenderer {
                 depth_format,
                 output_format: swapchain.format,
                 storage: scene.storage,
+                textured: scene.is_textured(),
             },
         )?;
         let (depth, linear, msaa) =
@@ -354,6 +358,7 @@ impl StereoRenderer {
             targets: Vec::new(),
             tonemap_set: vk::DescriptorSet::null(),
             batch_sets: Vec::new(),
+            texture_sets: Vec::new(),
             descriptor_pool: vk::DescriptorPool::null(),
             command_buffer,
             fence,
@@ -454,17 +459,24 @@ impl StereoRenderer {
         )?;
         let upload_time = upload_start.elapsed();
         let bounds = header_bounds(file.header());
-        // A file of the other storage type needs the other shaders.
+        // A file of the other storage type needs the other shaders, and a
+        // textured one the textured pipeline.
         let new_passes = match self.pass_sets.first() {
-            Some(first) if first.desc.storage != scene.storage => Some(pass_sets(
-                gpu,
-                &self.layouts,
-                self.path,
-                PassDesc {
-                    storage: scene.storage,
-                    ..first.desc
-                },
-            )?),
+            Some(first)
+                if first.desc.storage != scene.storage
+                    || first.desc.textured != scene.is_textured() =>
+            {
+                Some(pass_sets(
+                    gpu,
+                    &self.layouts,
+                    self.path,
+                    PassDesc {
+                        storage: scene.storage,
+                        textured: scene.is_textured(),
+                        ..first.desc
+                    },
+                )?)
+            }
             _ => None,
         };
         let inspect_gpu = if self.inspect.draws_lines() {
@@ -501,6 +513,7 @@ impl StereoRenderer {
         };
         self.descriptor_pool = vk::DescriptorPool::null();
         self.batch_sets.clear();
+        self.texture_sets.clear();
         self.scene = scene;
         self.bounds = bounds;
         self.inspect_gpu = inspect_gpu;
@@ -521,33 +534,54 @@ impl StereoRenderer {
     fn create_descriptors(&mut self) -> Result<(), GpuError> {
         let device = &self.gpu_shared.device;
         let batches = self.scene.draws.len() as u32;
+        // Textured batches have a second set: a storage buffer and a sampler.
+        let textured = self
+            .scene
+            .draws
+            .iter()
+            .filter(|d| d.texture.is_some())
+            .count() as u32;
         let sizes = [
             vk::DescriptorPoolSize::default()
                 .ty(vk::DescriptorType::UNIFORM_BUFFER)
                 .descriptor_count(batches.max(1)),
             vk::DescriptorPoolSize::default()
                 .ty(vk::DescriptorType::STORAGE_BUFFER)
-                .descriptor_count(batches.max(1)),
+                .descriptor_count((batches + textured).max(1)),
+            vk::DescriptorPoolSize::default()
+                .ty(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
+                .descriptor_count(textured.max(1)),
             vk::DescriptorPoolSize::default()
                 .ty(vk::DescriptorType::INPUT_ATTACHMENT)
                 .descriptor_count(1),
         ];
         let info = vk::DescriptorPoolCreateInfo::default()
-            .max_sets(batches + 1)
+            .max_sets(batches + 1 + textured)
             .pool_sizes(&sizes);
         // SAFETY: valid device and create info; destroyed in Drop.
         self.descriptor_pool =
             unsafe { device.create_descriptor_pool(&info, None) }.ctx("vkCreateDescriptorPool")?;
         let mut layouts = vec![self.layouts.scene_set; batches as usize];
         layouts.push(self.layouts.tonemap_set);
+        layouts.extend(std::iter::repeat_n(
+            self.layouts.textured_set,
+            textured as usize,
+        ));
         let alloc = vk::DescriptorSetAllocateInfo::default()
             .descriptor_pool(self.descriptor_pool)
             .set_layouts(&layouts);
         // SAFETY: the pool was sized for exactly these sets.
         let mut sets =
             unsafe { device.allocate_descriptor_sets(&alloc) }.ctx("vkAllocateDescriptorSets")?;
+        let mut textured_sets = sets.split_off(batches as usize + 1).into_iter();
         self.tonemap_set = sets.pop().unwrap_or_default();
         self.batch_sets = sets;
+        self.texture_sets = self
+            .scene
+            .draws
+            .iter()
+            .map(|d| d.texture.and_then(|_| textured_sets.next()))
+            .collect();
         let uniform_info = [vk::DescriptorBufferInfo::default()
             .buffer(self.uniforms.raw)
             .range(UNIFORM_SIZE)];
@@ -565,7 +599,47 @@ impl StereoRenderer {
         let image_info = [vk::DescriptorImageInfo::default()
             .image_view(self.linear.view)
             .image_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)];
+        // Textured batches: their UV + E/π range and their texture.
+        let textured_infos: Vec<
+            Option<([vk::DescriptorBufferInfo; 1], [vk::DescriptorImageInfo; 1])>,
+        > = self
+            .scene
+            .draws
+            .iter()
+            .map(|d| {
+                let t = d.texture.as_ref()?;
+                let view = self.scene.textures.view(t.texture)?;
+                Some((
+                    [vk::DescriptorBufferInfo::default()
+                        .buffer(self.scene.textured.raw)
+                        .offset(t.offset)
+                        .range(t.bytes)],
+                    [vk::DescriptorImageInfo::default()
+                        .sampler(self.scene.textures.sampler)
+                        .image_view(view)
+                        .image_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)],
+                ))
+            })
+            .collect();
         let mut writes = Vec::new();
+        for (set, textured) in self.texture_sets.iter().zip(&textured_infos) {
+            if let (Some(set), Some((buffer, image))) = (set, textured) {
+                writes.push(
+                    vk::WriteDescriptorSet::default()
+                        .dst_set(*set)
+                        .dst_binding(0)
+                        .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
+                        .buffer_info(buffer),
+                );
+                writes.push(
+                    vk::WriteDescriptorSet::default()
+                        .dst_set(*set)
+                        .dst_binding(1)
+                        .descriptor_type(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
+                        .image_info(image),
+                );
+            }
+        }
         for (set, storage) in self.batch_sets.iter().zip(&storage_infos) {
             writes.push(
                 vk::WriteDescriptorSet::default()
@@ -1026,12 +1100,13 @@ impl StereoRenderer {
             return;
         };
         let mut bound = None;
-        for ((draw, &ds), drawn) in self
+        for (((draw, &ds), drawn), texture_set) in self
             .scene
             .draws
             .iter()
             .zip(&self.batch_sets)
             .zip(&pass.per_draw)
+            .zip(&self.texture_sets)
             .take(shaded)
         {
             let ranges = &pass.ranges[drawn.clone()];
@@ -1039,6 +1114,7 @@ impl StereoRenderer {
                 continue;
             }
             let pipeline = match draw.kind {
+                _ if draw.texture.is_some() => set.scene_textured,
                 DrawKind::Sh if draw.order == 0 => set.scene_l0,
                 DrawKind::Sh => set.scene_sh,
                 DrawKind::Cube { .. } => set.scene_cube,
@@ -1055,27 +1131,38 @@ impl StereoRenderer {
                 coeff_base: 0,
                 stride: draw.stride,
                 scale: draw.storage_scale * self.scene.radiance_scale,
+                texture_scale: draw.texture.as_ref().map_or([0.0; 3], |t| {
+                    t.factor.map(|f| f * self.scene.radiance_scale)
+                }),
+            };
+            // Textured batches bind their second set and push 32 bytes with
+            // the textured layout; the others exactly what they did before.
+            let bytes = constants.bytes();
+            let all_sets = [ds, texture_set.unwrap_or_default()];
+            let (layout, sets, push) = match texture_set {
+                Some(_) => (self.layouts.textured_pipeline, &all_sets[..], &bytes[..]),
+                None => (
+                    self.layouts.scene_pipeline,
+                    &all_sets[..1],
+                    &bytes[..BatchConstants::SIZE as usize],
+                ),
             };
             // SAFETY: the caller guarantees the subpass and the bound buffers;
-            // the batch's descriptor set is live; each draw stays within the
-            // buffers (indices were checked against their batch's vertex count
-            // at upload, and the chunks cover the batch's triangles).
+            // the batch's descriptor sets are live (a textured batch's second
+            // set holds its UV + E/π range and its texture, both alive with the
+            // scene); each draw stays within the buffers (indices were checked
+            // against their batch's vertex count at upload, and the chunks
+            // cover the batch's triangles).
             unsafe {
                 device.cmd_bind_descriptor_sets(
                     cmd,
                     vk::PipelineBindPoint::GRAPHICS,
-                    self.layouts.scene_pipeline,
+                    layout,
                     0,
-                    &[ds],
+                    sets,
                     &[],
                 );
-                device.cmd_push_constants(
-                    cmd,
-                    self.layouts.scene_pipeline,
-                    vk::ShaderStageFlags::VERTEX,
-                    0,
-                    &constants.bytes(),
-                );
+                device.cmd_push_constants(cmd, layout, vk::ShaderStageFlags::VERTEX, 0, push);
                 for &(first_triangle, triangles) in ranges {
                     device.cmd_draw_indexed(
                         cmd,

@@ -44,18 +44,27 @@ pub struct BatchConstants {
     pub coeff_base: u32,
     pub stride: u32,
     pub scale: f32,
+    /// Textured batches: the texture factor times the radiance scale (the
+    /// shader's `texture_scale_*`; unused by the untextured shaders).
+    pub texture_scale: [f32; 3],
 }
 
 impl BatchConstants {
+    /// The push-constant range of the untextured pipelines.
     pub const SIZE: u32 = 20;
+    /// The push-constant range of the textured pipeline (`texture_scale` too).
+    pub const TEXTURED_SIZE: u32 = 32;
 
-    pub fn bytes(&self) -> [u8; 20] {
-        let mut out = [0u8; 20];
+    pub fn bytes(&self) -> [u8; 32] {
+        let mut out = [0u8; 32];
         out[0..4].copy_from_slice(&self.order.to_le_bytes());
         out[4..8].copy_from_slice(&self.vertex_base.to_le_bytes());
         out[8..12].copy_from_slice(&self.coeff_base.to_le_bytes());
         out[12..16].copy_from_slice(&self.stride.to_le_bytes());
         out[16..20].copy_from_slice(&self.scale.to_le_bytes());
+        for (c, v) in self.texture_scale.iter().enumerate() {
+            out[20 + 4 * c..24 + 4 * c].copy_from_slice(&v.to_le_bytes());
+        }
         out
     }
 }
@@ -63,6 +72,9 @@ impl BatchConstants {
 /// Layouts shared by every pass set.
 pub struct Layouts {
     // Newest first.
+    /// Sets 0 (`scene_set`) and 1 (`textured_set`), 32 bytes of constants.
+    pub textured_pipeline: vk::PipelineLayout,
+    pub textured_set: vk::DescriptorSetLayout,
     pub tonemap_pipeline: vk::PipelineLayout,
     pub scene_pipeline: vk::PipelineLayout,
     pub tonemap_set: vk::DescriptorSetLayout,
@@ -85,12 +97,27 @@ impl Layouts {
                 .descriptor_count(1)
                 .stage_flags(vk::ShaderStageFlags::VERTEX),
         ];
+        // Textured batches' second set: their UV + E/π and their texture.
+        let textured_bindings = [
+            vk::DescriptorSetLayoutBinding::default()
+                .binding(0)
+                .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
+                .descriptor_count(1)
+                .stage_flags(vk::ShaderStageFlags::VERTEX),
+            vk::DescriptorSetLayoutBinding::default()
+                .binding(1)
+                .descriptor_type(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
+                .descriptor_count(1)
+                .stage_flags(vk::ShaderStageFlags::FRAGMENT),
+        ];
         let tonemap_bindings = [vk::DescriptorSetLayoutBinding::default()
             .binding(0)
             .descriptor_type(vk::DescriptorType::INPUT_ATTACHMENT)
             .descriptor_count(1)
             .stage_flags(vk::ShaderStageFlags::FRAGMENT)];
         let mut layouts = Layouts {
+            textured_pipeline: vk::PipelineLayout::null(),
+            textured_set: vk::DescriptorSetLayout::null(),
             tonemap_pipeline: vk::PipelineLayout::null(),
             scene_pipeline: vk::PipelineLayout::null(),
             tonemap_set: vk::DescriptorSetLayout::null(),
@@ -129,6 +156,22 @@ impl Layouts {
         // SAFETY: as above.
         layouts.tonemap_pipeline = unsafe { device.create_pipeline_layout(&tonemap_info, None) }
             .ctx("vkCreatePipelineLayout")?;
+        let textured_set_info =
+            vk::DescriptorSetLayoutCreateInfo::default().bindings(&textured_bindings);
+        // SAFETY: as above.
+        layouts.textured_set =
+            unsafe { device.create_descriptor_set_layout(&textured_set_info, None) }
+                .ctx("vkCreateDescriptorSetLayout")?;
+        let textured_push = [vk::PushConstantRange::default()
+            .stage_flags(vk::ShaderStageFlags::VERTEX)
+            .size(BatchConstants::TEXTURED_SIZE)];
+        let sets = [layouts.scene_set, layouts.textured_set];
+        let textured_info = vk::PipelineLayoutCreateInfo::default()
+            .set_layouts(&sets)
+            .push_constant_ranges(&textured_push);
+        // SAFETY: as above.
+        layouts.textured_pipeline = unsafe { device.create_pipeline_layout(&textured_info, None) }
+            .ctx("vkCreatePipelineLayout")?;
         Ok(layouts)
     }
 }
@@ -139,6 +182,8 @@ impl Drop for Layouts {
         // ignored by the destroy calls.
         unsafe {
             let d = &self.device.device;
+            d.destroy_pipeline_layout(self.textured_pipeline, None);
+            d.destroy_descriptor_set_layout(self.textured_set, None);
             d.destroy_pipeline_layout(self.tonemap_pipeline, None);
             d.destroy_pipeline_layout(self.scene_pipeline, None);
             d.destroy_descriptor_set_layout(self.tonemap_set, None);
@@ -155,11 +200,15 @@ pub struct PassDesc {
     pub depth_format: vk::Format,
     pub output_format: vk::Format,
     pub storage: CoefficientStorage,
+    /// The scene has textured batches: make the textured pipeline too (an
+    /// untextured scene costs nothing more than before textures existed).
+    pub textured: bool,
 }
 
 /// A render pass for one view mask with its four pipelines.
 pub struct PassSet {
     // Newest first.
+    pub scene_textured: vk::Pipeline,
     pub scene_cube: vk::Pipeline,
     pub tonemap: vk::Pipeline,
     pub scene_sh: vk::Pipeline,
@@ -175,6 +224,7 @@ impl Drop for PassSet {
         // ignored.
         unsafe {
             let d = &self.device.device;
+            d.destroy_pipeline(self.scene_textured, None);
             d.destroy_pipeline(self.scene_cube, None);
             d.destroy_pipeline(self.tonemap, None);
             d.destroy_pipeline(self.scene_sh, None);
@@ -210,6 +260,7 @@ impl Drop for Modules<'_> {
 impl PassSet {
     pub fn new(gpu: &Gpu, layouts: &Layouts, desc: PassDesc) -> Result<PassSet, GpuError> {
         let mut set = PassSet {
+            scene_textured: vk::Pipeline::null(),
             scene_cube: vk::Pipeline::null(),
             tonemap: vk::Pipeline::null(),
             scene_sh: vk::Pipeline::null(),
@@ -223,16 +274,18 @@ impl PassSet {
             device: gpu.device(),
             handles: Vec::new(),
         };
-        let (l0_spv, sh_spv, cube_spv) = match desc.storage {
+        let (l0_spv, sh_spv, cube_spv, textured_spv) = match desc.storage {
             CoefficientStorage::F32 => (
                 shaders::SCENE_L0_F32_VERT,
                 shaders::SCENE_SH_F32_VERT,
                 SCENE_CUBE_F32_VERT,
+                shaders::SCENE_TEXTURED_F32_VERT,
             ),
             CoefficientStorage::F16 => (
                 shaders::SCENE_L0_F16_VERT,
                 shaders::SCENE_SH_F16_VERT,
                 SCENE_CUBE_F16_VERT,
+                shaders::SCENE_TEXTURED_F16_VERT,
             ),
         };
         let l0 = modules.load(gpu, l0_spv)?;
@@ -241,10 +294,21 @@ impl PassSet {
         let frag = modules.load(gpu, shaders::SCENE_FRAG)?;
         let tm_vert = modules.load(gpu, shaders::TONEMAP_VERT)?;
         let tm_frag = modules.load(gpu, shaders::TONEMAP_FRAG)?;
-        set.scene_l0 = scene_pipeline(gpu, layouts, &set, l0, frag)?;
-        set.scene_sh = scene_pipeline(gpu, layouts, &set, sh, frag)?;
+        set.scene_l0 = scene_pipeline(gpu, layouts.scene_pipeline, &set, l0, frag)?;
+        set.scene_sh = scene_pipeline(gpu, layouts.scene_pipeline, &set, sh, frag)?;
         set.tonemap = tonemap_pipeline(gpu, layouts, &set, tm_vert, tm_frag)?;
-        set.scene_cube = scene_pipeline(gpu, layouts, &set, cube, frag)?;
+        set.scene_cube = scene_pipeline(gpu, layouts.scene_pipeline, &set, cube, frag)?;
+        if desc.textured {
+            let textured = modules.load(gpu, textured_spv)?;
+            let textured_frag = modules.load(gpu, shaders::SCENE_TEXTURED_FRAG)?;
+            set.scene_textured = scene_pipeline(
+                gpu,
+                layouts.textured_pipeline,
+                &set,
+                textured,
+                textured_frag,
+            )?;
+        }
         Ok(set)
     }
 }
@@ -394,7 +458,7 @@ fn create_render_pass(gpu: &Gpu, desc: &PassDesc) -> Result<vk::RenderPass, GpuE
 
 fn scene_pipeline(
     gpu: &Gpu,
-    layouts: &Layouts,
+    layout: vk::PipelineLayout,
     set: &PassSet,
     vert: vk::ShaderModule,
     frag: vk::ShaderModule,
@@ -450,7 +514,7 @@ fn scene_pipeline(
         gpu,
         set.render_pass,
         0,
-        layouts.scene_pipeline,
+        layout,
         &stages,
         &vertex_input,
         &assembly,

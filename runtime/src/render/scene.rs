@@ -3,12 +3,13 @@
 //! then 001's global-cube batches by resolution, drawn by `scene_cube.vert`).
 
 use super::cull::{partition, Chunk, DEFAULT_CHUNK_TRIANGLES};
+use super::textures::SceneTextures;
 use crate::gpu::{Buffer, BufferDesc, Fence, Gpu, GpuError, MemoryLocation, VkContext};
 use ash::vk;
 use glam::DVec3;
 use solution::format::{
-    layout, Batch, BatchSection, FormatError, MappedSolution, Representation, ScalarType, Solution,
-    Vertex,
+    layout, Batch, BatchSection, BatchTexture, FormatError, MappedSolution, Representation,
+    ScalarType, Solution, Vertex,
 };
 
 /// How a scene's coefficients are stored in the GPU's storage buffer: as the
@@ -114,6 +115,21 @@ pub struct DrawBatch {
     /// the order of the uploaded (reordered) index buffer; triangle numbers
     /// count from `first_index / 3`.
     pub chunks: Vec<Chunk>,
+    /// A textured batch's texture, factor and UV + E/π range.
+    pub texture: Option<TexturedDraw>,
+}
+
+/// How a textured batch (solution format 2) is drawn: `scene_textured.frag`
+/// adds `factor ⊙ ρ(uv) ⊙ E/π` to the SH term.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TexturedDraw {
+    /// Index into the scene's textures.
+    pub texture: u32,
+    /// Linear RGB multiplier of the texture (MTL's Kd).
+    pub factor: [f32; 3],
+    /// Byte offset and size of the batch's UV + E/π in [`GpuScene::textured`].
+    pub offset: u64,
+    pub bytes: u64,
 }
 
 impl DrawBatch {
@@ -144,6 +160,34 @@ pub struct GpuScene {
     pub storage: CoefficientStorage,
     pub vertex_count: u64,
     pub triangle_count: u64,
+    /// Per vertex of the textured batches, u, v and E/π (20 bytes, as stored).
+    pub textured: Buffer,
+    /// Their textures, decoded and with their mip chains.
+    pub textures: SceneTextures,
+}
+
+impl GpuScene {
+    /// Whether any batch is drawn textured (the renderer then makes the
+    /// textured pipeline).
+    pub fn is_textured(&self) -> bool {
+        self.draws.iter().any(|d| d.texture.is_some())
+    }
+}
+
+/// The largest of `factor_c · E_c / π` over a textured batch's stored vertices
+/// (20-byte u, v, E/π records): with ρ ≤ 1 the most its textured term can add
+/// to a pixel.
+fn textured_bound(bytes: &[u8], factor: [f32; 3]) -> f64 {
+    bytes
+        .chunks_exact(layout::TEXTURED_VERTEX_LEN)
+        .flat_map(|v| {
+            (0..3).map(move |c| {
+                let at = 8 + 4 * c;
+                f64::from(f32::from_le_bytes([v[at], v[at + 1], v[at + 2], v[at + 3]]))
+                    * f64::from(factor[c])
+            })
+        })
+        .fold(0.0f64, f64::max)
 }
 
 /// `|Y_lm| ≤ envelope(l) = √((2l+1)/(4π))` (Unsöld) for the first `count`
@@ -360,6 +404,7 @@ struct BatchShape {
     scalar: ScalarType,
     vertex_count: u64,
     index_count: u64,
+    texture: Option<BatchTexture>,
 }
 
 impl BatchShape {
@@ -381,6 +426,8 @@ struct Plan {
     vertex_total: u64,
     index_total: u64,
     coefficient_total: u64,
+    /// Bytes of the textured-vertex buffer.
+    textured_total: u64,
 }
 
 impl Plan {
@@ -406,14 +453,16 @@ impl Plan {
                     }
                 }
             };
-            order_of.push((kind, order, i));
+            order_of.push((kind, shape.texture.is_some(), order, i));
         }
-        // Diffuse first, then SH by order, then cubes by resolution: one switch
-        // per pipeline, and draws of one loop bound together.
+        // Diffuse first, then SH by order, then textured SH, then cubes by
+        // resolution: one switch per pipeline, and draws of one loop bound
+        // together.
         order_of.sort();
         let mut batches = Vec::with_capacity(shapes.len());
         let (mut vertex_base, mut first_index, mut coefficient_end) = (0u64, 0u64, 0u64);
-        for (kind, file_order, i) in order_of {
+        let mut textured_end = 0u64;
+        for (kind, _, file_order, i) in order_of {
             let shape = &shapes[i];
             let offset = align(coefficient_end, limits.min_storage_buffer_offset_alignment);
             let bytes = shape.coefficient_bytes();
@@ -450,6 +499,17 @@ impl Plan {
                     ScalarType::F16 { scale } => scale,
                 },
                 chunks: Vec::new(),
+                texture: shape.texture.map(|t| {
+                    let offset = align(textured_end, limits.min_storage_buffer_offset_alignment);
+                    let bytes = shape.vertex_count * layout::TEXTURED_VERTEX_LEN as u64;
+                    textured_end = offset + bytes;
+                    TexturedDraw {
+                        texture: t.texture,
+                        factor: t.factor,
+                        offset,
+                        bytes: bytes.max(4),
+                    }
+                }),
             };
             coefficient_end = offset + bytes;
             vertex_base += shape.vertex_count;
@@ -462,6 +522,7 @@ impl Plan {
             vertex_total: vertex_base,
             index_total: first_index,
             coefficient_total: align(coefficient_end, 4),
+            textured_total: align(textured_end, 4),
         })
     }
 
@@ -770,16 +831,36 @@ impl GpuScene {
                 scalar: batch.scalar,
                 vertex_count: batch.vertices.len() as u64,
                 index_count: batch.indices.len() as u64,
+                texture: batch.texturing.as_ref().map(|t| BatchTexture {
+                    texture: t.texture,
+                    factor: t.factor,
+                }),
             });
+        }
+        for (i, batch) in solution.batches.iter().enumerate() {
+            if let Some(t) = &batch.texturing {
+                check_texturing(i, batch, t, solution.textures.len())?;
+            }
         }
         let mut plan = Plan::new(&shapes, max_order, &gpu.info.limits)?;
         let mut vertex_data = Vec::new();
         let mut index_data = Vec::new();
         let mut coeff_data: Vec<u8> = Vec::new();
+        let mut textured_data: Vec<u8> = Vec::new();
         let mut bound = 0.0f64;
         for (i, draw) in &mut plan.batches {
             let batch = &solution.batches[*i];
-            bound = bound.max(radiance_bound(batch, draw.order));
+            let mut batch_bound = radiance_bound(batch, draw.order);
+            if let (Some(t), Some(texturing)) = (&draw.texture, &batch.texturing) {
+                textured_data.resize(t.offset as usize, 0);
+                for v in &texturing.vertices {
+                    for x in v.uv.iter().chain(&v.irradiance_over_pi) {
+                        textured_data.extend_from_slice(&x.to_le_bytes());
+                    }
+                }
+                batch_bound += textured_bound(&textured_data[t.offset as usize..], t.factor);
+            }
+            bound = bound.max(batch_bound);
             coeff_data.resize(draw.coeff_offset as usize, 0);
             match batch.scalar {
                 ScalarType::F32 => {
@@ -812,6 +893,12 @@ impl GpuScene {
         let indices = Buffer::with_data(gpu, vk::BufferUsageFlags::INDEX_BUFFER, &index_data)?;
         let coefficients =
             Buffer::with_data(gpu, vk::BufferUsageFlags::STORAGE_BUFFER, &coeff_data)?;
+        textured_data.resize(plan.textured_total.max(4) as usize, 0);
+        let textured =
+            Buffer::with_data(gpu, vk::BufferUsageFlags::STORAGE_BUFFER, &textured_data)?;
+        let textures = SceneTextures::new(gpu, solution.textures.len(), |k| {
+            Ok::<_, SceneError>(solution.textures[k].clone())
+        })?;
         Ok(GpuScene {
             coefficients,
             indices,
@@ -821,6 +908,8 @@ impl GpuScene {
             storage: plan.storage,
             vertex_count: plan.vertex_total,
             triangle_count: plan.index_total / 3,
+            textured,
+            textures,
         })
     }
 
@@ -874,6 +963,7 @@ impl GpuScene {
                 scalar: info.scalar,
                 vertex_count: u64::from(info.vertex_count),
                 index_count: u64::from(info.index_count),
+                texture: info.texture,
             })
             .collect();
         let mut plan = Plan::new(&shapes, max_order, &gpu.info.limits)?;
@@ -925,6 +1015,8 @@ impl GpuScene {
             CoefficientStorage::F32 => Vec::new(),
         };
         let mut bound = 0.0f64;
+        let mut textured_data: Vec<u8> = Vec::new();
+        let mut textured_bounds = vec![0.0f64; shapes.len()];
         let mut stats = UploadStats {
             bytes: total,
             ..UploadStats::default()
@@ -1039,8 +1131,27 @@ impl GpuScene {
                 // need not stay resident beside the device copy.
                 file.release_section(b, section);
             }
+            if let Some(t) = &draw.texture {
+                // Textured vertices (20 bytes each, a small part of the file)
+                // are gathered in memory and copied in one go below.
+                let bytes = file.section_bytes(b, BatchSection::TexturedVertices);
+                file.verify_section(b, BatchSection::TexturedVertices, crc32fast::hash(bytes))?;
+                textured_data.resize(t.offset as usize, 0);
+                textured_data.extend_from_slice(bytes);
+                textured_bounds[b] = textured_bound(bytes, t.factor);
+            }
         }
         (stats.submits, stats.transfer) = uploader.finish()?;
+        // SH and textured terms add in a pixel: bound each batch by the sum of
+        // its two bounds (the SH bound was folded per chunk into `bound`, so
+        // add the largest textured bound to it: still an upper bound).
+        bound += textured_bounds.iter().copied().fold(0.0f64, f64::max);
+        textured_data.resize(plan.textured_total.max(4) as usize, 0);
+        let textured =
+            Buffer::with_data(gpu, vk::BufferUsageFlags::STORAGE_BUFFER, &textured_data)?;
+        let textures = SceneTextures::new(gpu, file.textures().len(), |k| {
+            file.decode_texture(k).map_err(SceneError::from)
+        })?;
         Ok((
             GpuScene {
                 coefficients,
@@ -1051,10 +1162,37 @@ impl GpuScene {
                 storage: plan.storage,
                 vertex_count: plan.vertex_total,
                 triangle_count: plan.index_total / 3,
+                textured,
+                textures,
             },
             stats,
         ))
     }
+}
+
+/// What `MappedSolution` checks of a textured batch at open, for a solution
+/// built in memory: a texture that exists, one UV + E/π per vertex, and an SH
+/// representation (the textured pipeline evaluates SH).
+fn check_texturing(
+    i: usize,
+    batch: &Batch,
+    t: &solution::format::Texturing,
+    textures: usize,
+) -> Result<(), SceneError> {
+    let what = if t.texture as usize >= textures {
+        format!("texture {} but the solution has {textures}", t.texture)
+    } else if t.vertices.len() != batch.vertices.len() {
+        format!(
+            "{} textured vertices for {} vertices",
+            t.vertices.len(),
+            batch.vertices.len()
+        )
+    } else if !matches!(batch.representation, Representation::Sh { .. }) {
+        "a textured batch must store spherical harmonics".to_string()
+    } else {
+        return Ok(());
+    };
+    Err(SceneError::Inconsistent { batch: i, what })
 }
 
 /// The checks `MappedSolution` makes at open, for a solution built in memory:

@@ -37,6 +37,13 @@
 //! 5. **Interpolation**: radiance is interpolated perspective-correctly (Vulkan's
 //!    default `smooth` qualifier: `Σ λ_i r_i / w_i / Σ λ_i / w_i` with screen
 //!    barycentrics λ), depth `z/w` linearly in screen space, as Vulkan does.
+//!    **Textured batches** (solution format 2) add, per fragment, the texture's
+//!    linear RGB ρ(u, v) times the interpolated `factor · E/π` (both
+//!    interpolated perspective-correctly like the radiance), ρ filtered as a
+//!    Vulkan sampler with `LINEAR` min/mag/mipmap filters and `REPEAT` does
+//!    ([`crate::texture::MipChain::sample_trilinear`], over the same mip levels
+//!    the runtime uploads) at the level of detail of the exact derivatives of
+//!    (u, v) at the pixel centre (a GPU differences them across a 2 × 2 quad).
 //! 6. **Depth test** LESS against a 32-bit float buffer cleared to 1.0, in draw order
 //!    (batches in file order, triangles in index order). The background is black.
 //!
@@ -61,6 +68,8 @@ pub mod tonemap;
 
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod texture_tests;
 
 pub use compare::{compare, compare_with, difference_image, ImageDiff, DEFAULT_DIFF_THRESHOLD};
 pub use pipeline::SUBPIXEL_BITS;
@@ -72,6 +81,7 @@ pub use tonemap::{
 use crate::camera::{clip_planes_for, EyeView, MAX_IMAGE_SIDE};
 use crate::format::{Batch, Header, Representation, Solution};
 use crate::sh;
+use crate::texture::MipChain;
 use glam::{DVec3, DVec4};
 use pipeline::{ClipVertex, Rasterizer};
 
@@ -201,6 +211,18 @@ pub enum RenderError {
     ClipPlanes { near: f64, far: f64 },
     #[error("eye view is not finite or its basis is not orthonormal: {0}")]
     View(String),
+    #[error("batch {batch}: {found} textured vertices (UV + E/π) for {vertices} vertices")]
+    TexturedVertexCount {
+        batch: usize,
+        vertices: usize,
+        found: usize,
+    },
+    #[error("batch {batch}: texture {texture} but the solution has {count} textures")]
+    TextureIndex {
+        batch: usize,
+        texture: u32,
+        count: usize,
+    },
     #[error("images differ in size: {0}x{1} versus {2}x{3}")]
     SizeMismatch(u32, u32, u32, u32),
 }
@@ -223,14 +245,48 @@ pub fn render(
     // Check every batch before drawing, so a bad one is reported without a
     // half-drawn image.
     for (index, batch) in solution.batches.iter().enumerate() {
-        check_batch(index, batch)?;
+        check_batch(index, batch, solution.textures.len())?;
     }
     let view_projection = view.view_projection(near, far);
+    // Each texture's mip chain, built once (only those a batch uses).
+    let chains: Vec<Option<MipChain>> = solution
+        .textures
+        .iter()
+        .enumerate()
+        .map(|(k, texture)| {
+            let used = solution.batches.iter().any(|b| {
+                b.texturing
+                    .as_ref()
+                    .is_some_and(|t| t.texture as usize == k)
+            });
+            used.then(|| MipChain::new(texture))
+        })
+        .collect();
     let mut image = Image::new(view.width, view.height);
     let mut rasterizer = Rasterizer::new(&mut image, options.cull_back_faces);
     for batch in &solution.batches {
         let order = options.max_order.unwrap_or(u32::MAX);
         let radiance = shade_vertices(batch, order, view.position, options.clamp_negative)?;
+        let texturing = batch.texturing.as_ref();
+        rasterizer.set_texture(
+            texturing.and_then(|t| chains.get(t.texture as usize).and_then(Option::as_ref)),
+        );
+        // u, v and factor · E/π per vertex (zero when untextured).
+        let textured = |v: usize| -> [f64; 5] {
+            match texturing.and_then(|t| t.vertices.get(v).map(|tv| (t.factor, tv))) {
+                Some((factor, tv)) => {
+                    let e = tv.irradiance_over_pi;
+                    [
+                        f64::from(tv.uv[0]),
+                        f64::from(tv.uv[1]),
+                        f64::from(factor[0] * e[0]),
+                        f64::from(factor[1] * e[1]),
+                        f64::from(factor[2] * e[2]),
+                    ]
+                }
+                None => [0.0; 5],
+            }
+        };
         let clip: Vec<DVec4> = batch
             .vertices
             .iter()
@@ -242,6 +298,7 @@ pub fn render(
                 ClipVertex {
                     position: clip[v],
                     radiance: radiance[v].map(f64::from),
+                    textured: textured(v),
                 }
             };
             rasterizer.draw_triangle([corner(0), corner(1), corner(2)]);
@@ -290,9 +347,25 @@ fn check_view(view: &EyeView) -> Result<(), RenderError> {
     Ok(())
 }
 
-fn check_batch(index: usize, batch: &Batch) -> Result<(), RenderError> {
+fn check_batch(index: usize, batch: &Batch, textures: usize) -> Result<(), RenderError> {
     check_coefficients(index, batch)?;
     let vertices = batch.vertices.len();
+    if let Some(t) = &batch.texturing {
+        if t.texture as usize >= textures {
+            return Err(RenderError::TextureIndex {
+                batch: index,
+                texture: t.texture,
+                count: textures,
+            });
+        }
+        if t.vertices.len() != vertices {
+            return Err(RenderError::TexturedVertexCount {
+                batch: index,
+                vertices,
+                found: t.vertices.len(),
+            });
+        }
+    }
     if !batch.indices.len().is_multiple_of(3) {
         return Err(RenderError::IndexCount {
             batch: index,

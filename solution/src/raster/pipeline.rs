@@ -2,6 +2,7 @@
 //! function part of the pipeline (module documentation of [`super`], steps 2–6).
 
 use super::Image;
+use crate::texture::MipChain;
 use glam::DVec4;
 
 /// Sub-pixel precision of snapped vertex positions, bits (1/256 pixel), as
@@ -21,6 +22,9 @@ const GUARD: f64 = 4.0;
 pub struct ClipVertex {
     pub position: DVec4,
     pub radiance: [f64; 3],
+    /// Textured batches: u, v and the factor times E/π (zero otherwise),
+    /// interpolated like the radiance.
+    pub textured: [f64; 5],
 }
 
 impl ClipVertex {
@@ -29,6 +33,8 @@ impl ClipVertex {
             position: self.position + (other.position - self.position) * t,
             radiance: [0, 1, 2]
                 .map(|c| self.radiance[c] + (other.radiance[c] - self.radiance[c]) * t),
+            textured: [0, 1, 2, 3, 4]
+                .map(|c| self.textured[c] + (other.textured[c] - self.textured[c]) * t),
         }
     }
 }
@@ -42,6 +48,7 @@ struct ScreenVertex {
     depth: f64,
     inv_w: f64,
     radiance_over_w: [f64; 3],
+    textured_over_w: [f64; 5],
 }
 
 /// A convex polygon of at most 3 + 6 vertices (a triangle clipped by six planes).
@@ -162,6 +169,8 @@ impl Edge {
 pub struct Rasterizer<'a> {
     image: &'a mut Image,
     cull_back_faces: bool,
+    /// The texture of the triangles drawn next (`None`: untextured).
+    texture: Option<&'a MipChain>,
 }
 
 impl<'a> Rasterizer<'a> {
@@ -169,7 +178,16 @@ impl<'a> Rasterizer<'a> {
         Rasterizer {
             image,
             cull_back_faces,
+            texture: None,
         }
+    }
+
+    /// Draws the next triangles with `texture`: each fragment adds
+    /// `ρ(u, v) · (factor · E/π)` from the vertices' `textured` values, ρ
+    /// filtered trilinearly at the level of detail of the exact screen-space
+    /// derivatives of (u, v) at the pixel centre.
+    pub fn set_texture(&mut self, texture: Option<&'a MipChain>) {
+        self.texture = texture;
     }
 
     /// Clips, culls and rasterizes one triangle given in index order.
@@ -210,6 +228,7 @@ impl<'a> Rasterizer<'a> {
             depth: 0.0,
             inv_w: 0.0,
             radiance_over_w: [0.0; 3],
+            textured_over_w: [0.0; 5],
         }; 9];
         for (s, v) in screen.iter_mut().zip(&polygon.vertices[..polygon.len]) {
             // Clipping guarantees w ≥ near > 0 (z ≥ 0 and z = a·w − b with a, b > 0).
@@ -224,6 +243,7 @@ impl<'a> Rasterizer<'a> {
                 depth: ndc.z,
                 inv_w,
                 radiance_over_w: v.radiance.map(|r| r * inv_w),
+                textured_over_w: v.textured.map(|t| t * inv_w),
             };
         }
         let screen = &screen[..polygon.len];
@@ -279,6 +299,12 @@ impl<'a> Rasterizer<'a> {
         let area = edge_function(a.x, a.y, b.x, b.y, c.x, c.y) as f64;
         let vertices = [a, b, c];
         let step_x = edges.each_ref().map(|e| -e.dy * SUBPIXEL);
+        // Screen-space derivatives of the barycentrics, per pixel (for the
+        // texture's level of detail).
+        let gradient = Gradient {
+            x: step_x.map(|s| s as f64 / area),
+            y: edges.each_ref().map(|e| (e.dx * SUBPIXEL) as f64 / area),
+        };
         let x0 = SUBPIXEL * i0 + HALF_PIXEL;
         for j in j0..=j1 {
             let py = SUBPIXEL * j + HALF_PIXEL;
@@ -293,6 +319,7 @@ impl<'a> Rasterizer<'a> {
                         row + i as usize,
                         &vertices,
                         [e[0] as f64 / area, e[1] as f64 / area, e[2] as f64 / area],
+                        &gradient,
                     );
                 }
                 for k in 0..3 {
@@ -304,7 +331,13 @@ impl<'a> Rasterizer<'a> {
 
     /// Depth test and write of one covered pixel with screen barycentrics `lambda`.
     #[inline]
-    fn shade_fragment(&mut self, index: usize, v: &[&ScreenVertex; 3], lambda: [f64; 3]) {
+    fn shade_fragment(
+        &mut self,
+        index: usize,
+        v: &[&ScreenVertex; 3],
+        lambda: [f64; 3],
+        gradient: &Gradient,
+    ) {
         // Depth is affine in screen space (Vulkan interpolates z/w linearly); the
         // viewport's depth range 0..1 clamps it.
         let depth = (lambda[0] * v[0].depth + lambda[1] * v[1].depth + lambda[2] * v[2].depth)
@@ -321,8 +354,54 @@ impl<'a> Rasterizer<'a> {
                 / inv_w) as f32
         });
         self.image.depth[index] = depth;
-        self.image.pixels[index] = radiance;
+        self.image.pixels[index] = match self.texture {
+            Some(texture) => {
+                let textured = textured_term(texture, v, lambda, inv_w, gradient);
+                [0, 1, 2].map(|c| (f64::from(radiance[c]) + textured[c]) as f32)
+            }
+            None => radiance,
+        };
     }
+}
+
+/// Per-pixel derivatives of the three screen barycentrics along x and y.
+struct Gradient {
+    x: [f64; 3],
+    y: [f64; 3],
+}
+
+/// `ρ(u, v) · (factor · E/π)` at a fragment: the perspective-correct
+/// attributes `a = (Σ λ a/w) / (Σ λ/w)`, their exact derivatives
+/// `∂a = (∂(Σ λ a/w) − a · ∂(Σ λ/w)) / Σ λ/w` for the level of detail (Vulkan
+/// takes them from differences across a 2 × 2 quad: equal for an affine
+/// mapping, within the curvature of the perspective over one pixel otherwise),
+/// and the trilinear sample there.
+fn textured_term(
+    texture: &MipChain,
+    v: &[&ScreenVertex; 3],
+    lambda: [f64; 3],
+    inv_w: f64,
+    gradient: &Gradient,
+) -> [f64; 3] {
+    let sum = |weights: [f64; 3], attribute: usize| -> f64 {
+        (0..3)
+            .map(|k| weights[k] * v[k].textured_over_w[attribute])
+            .sum()
+    };
+    let sum_inv_w = |weights: [f64; 3]| -> f64 { (0..3).map(|k| weights[k] * v[k].inv_w).sum() };
+    let value = |attribute: usize| sum(lambda, attribute) / inv_w;
+    let derivative = |attribute: usize, weights: [f64; 3]| {
+        (sum(weights, attribute) - value(attribute) * sum_inv_w(weights)) / inv_w
+    };
+    let (u, t) = (value(0), value(1));
+    let lod = texture.lod(
+        derivative(0, gradient.x),
+        derivative(1, gradient.x),
+        derivative(0, gradient.y),
+        derivative(1, gradient.y),
+    );
+    let rho = texture.sample_trilinear(u, t, lod);
+    [0, 1, 2].map(|c| rho[c] * value(2 + c))
 }
 
 #[cfg(test)]
@@ -333,6 +412,7 @@ mod tests {
         ClipVertex {
             position: DVec4::new(x, y, z, w),
             radiance: [1.0, 0.0, 0.0],
+            textured: [0.0; 5],
         }
     }
 
