@@ -33,10 +33,10 @@
 //! chunks of at most [`CHUNK_SCALARS`] coefficients, so the transient copy is
 //! small whatever the batch's size.
 //!
-//! Base-colour textures are not exported: the solution format read here (1.0)
-//! has no texture section. docs/gltf.md ("Export") says what a textured batch
-//! will add: its PNG as a buffer image, `TEXCOORD_0`, a material of its own,
-//! E/π in `_RADIANCE`.
+//! A textured batch (format 2) gets `TEXCOORD_0` = (u, 1 − v), a material of
+//! its own with the stored PNG as `baseColorTexture` times the batch's
+//! factor, and E/π in `_RADIANCE` (tone-mapped in COLOR_0); its untextured SH
+//! part is left out, which [`Exporter::add_batch`] reports.
 
 mod document;
 mod frame;
