@@ -250,3 +250,118 @@ fn reimport(glb: &Path, primitives: &[Primitive], dir: &Path) {
     // welding: a few f32 ulps of relative difference at most.
     assert!(relative < 1e-6, "{relative:e}");
 }
+
+/// A textured solution (format 2) through `solver export`: the texture
+/// section's PNG lands in the `.glb` as it is, with the UVs flipped to glTF's
+/// convention; a textured batch with an untextured term is warned about.
+#[test]
+fn textured_solution_through_the_cli() {
+    use solution::camera::{Camera, UpAxis};
+    use solution::format::{
+        write_solution, Batch, Header, MappedSolution, Representation, ScalarType, SolveMode,
+        SolveStats, Texture, TexturedVertex, Texturing, Vertex,
+    };
+    let vertex = |x: f32, z: f32| Vertex {
+        position: [x, 0.0, z],
+        normal: [0.0, 1.0, 0.0],
+        tangent: [1.0, 0.0, 0.0],
+    };
+    let texturing = Texturing {
+        texture: 0,
+        factor: [1.0, 0.5, 0.25],
+        vertices: (0..4)
+            .map(|k| TexturedVertex {
+                uv: [(k % 2) as f32, (k / 2) as f32 * 0.75],
+                irradiance_over_pi: [0.25, 0.5, k as f32],
+            })
+            .collect(),
+    };
+    let mut solution = Solution {
+        header: Header {
+            units_per_metre: 1.0,
+            up_axis: UpAxis::PosY,
+            recentre_offset: [0.0; 3],
+            camera: Camera {
+                eye: [0.0, 2.0, 2.0],
+                target: [0.0; 3],
+                ..Camera::default()
+            },
+            bounds_min: [-1.0, 0.0, -1.0],
+            bounds_max: [1.0, 0.0, 1.0],
+            partial: false,
+            mode: SolveMode::Diffuse,
+            stats: SolveStats::default(),
+            settings_json: "{}".into(),
+        },
+        batches: vec![Batch {
+            representation: Representation::Sh { order: 0 },
+            scalar: ScalarType::F32,
+            vertices: vec![
+                vertex(-1.0, 1.0),
+                vertex(1.0, 1.0),
+                vertex(-1.0, -1.0),
+                vertex(1.0, -1.0),
+            ],
+            coefficients: vec![0.0; 12],
+            indices: vec![0, 1, 3, 0, 3, 2],
+            texturing: Some(texturing.clone()),
+        }],
+        textures: vec![Texture {
+            width: 4,
+            height: 2,
+            rgba: (0..32).map(|k| (k * 8) as u8).collect(),
+        }],
+    };
+    let dir = tempfile::tempdir().unwrap();
+    for (name, coefficient) in [("plain", 0.0), ("lobe", 0.5)] {
+        solution.batches[0].coefficients[0] = coefficient;
+        let sol = dir.path().join(format!("{name}.sol"));
+        write_solution(&sol, &solution).unwrap();
+        let glb = dir.path().join(format!("{name}.glb"));
+        let output = Command::new(env!("CARGO_BIN_EXE_solver"))
+            .arg("export")
+            .arg(&sol)
+            .arg("-o")
+            .arg(&glb)
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert!(output.status.success(), "{stderr}");
+        assert_eq!(
+            stderr.contains("untextured term"),
+            coefficient != 0.0,
+            "{stderr}"
+        );
+        let bytes = std::fs::read(&glb).unwrap();
+        let document = gltf::Gltf::from_slice(&bytes).expect("a valid .glb");
+        let blob = document.blob.clone().unwrap();
+        let primitive = document
+            .meshes()
+            .next()
+            .unwrap()
+            .primitives()
+            .next()
+            .unwrap();
+        let reader = primitive.reader(|_| Some(&blob));
+        let uv: Vec<[f32; 2]> = reader.read_tex_coords(0).unwrap().into_f32().collect();
+        let expected: Vec<[f32; 2]> = texturing
+            .vertices
+            .iter()
+            .map(|t| [t.uv[0], 1.0 - t.uv[1]])
+            .collect();
+        assert_eq!(uv, expected);
+        let texture = primitive
+            .material()
+            .pbr_metallic_roughness()
+            .base_color_texture()
+            .unwrap();
+        let gltf::image::Source::View { view, .. } = texture.texture().source().source() else {
+            panic!("the image is not in the buffer");
+        };
+        let stored = MappedSolution::open(&sol).unwrap();
+        assert_eq!(
+            &blob[view.offset()..view.offset() + view.length()],
+            stored.texture_bytes(0)
+        );
+    }
+}
