@@ -6,6 +6,8 @@ use super::*;
 use glam::{DMat3, DVec3};
 use solution::camera::{Camera, UpAxis};
 use solution::format::{write_solution, Header, MappedSolution, Solution, SolveMode, SolveStats};
+use solution::format::{Batch, ScalarType, Vertex};
+use solution::raster::{shade_vertices, tone_map};
 use solution::sh;
 
 fn vertex(position: [f32; 3], normal: [f32; 3], tangent: [f32; 3]) -> Vertex {
