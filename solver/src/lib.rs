@@ -12,6 +12,7 @@
 //! * [`solve`]: progressive refinement, directional SH shooting, Gauss–Seidel and the
 //!   global-cube gather;
 //! * [`reference`]: the unbiased path tracer of `solver reference`, the ground truth;
+//! * [`export`]: glTF 2.0 export of a solution (`solver export`);
 //! * [`compare`]: `solver compare`'s image metrics (relative RMSE, MARE, HDR-FLIP);
 //! * [`settings`] and the command line in [`cli`].
 //!
@@ -23,6 +24,7 @@
 pub mod brdf;
 pub mod cli;
 pub mod compare;
+pub mod export;
 pub mod geometry;
 pub mod mesh;
 pub mod reference;

@@ -5,6 +5,7 @@ use clap::{Parser, Subcommand};
 use std::process::ExitCode;
 
 pub mod compare;
+pub mod export;
 pub mod info;
 pub mod reference;
 pub mod solve;
@@ -31,6 +32,10 @@ pub enum Command {
     Compare(compare::CompareArgs),
     /// Path-trace an unbiased reference image (EXR with standard errors) of a scene.
     Reference(reference::ReferenceArgs),
+    /// Export a solution file as glTF 2.0 (.glb, or .gltf + .bin): tone-mapped
+    /// COLOR_0 (unlit) for viewing, linear radiance as _RADIANCE for round trips.
+    #[command(long_about = export::LONG_ABOUT)]
+    Export(export::ExportArgs),
 }
 
 /// Runs the command line; errors are printed with their context chain.
@@ -41,6 +46,7 @@ pub fn main() -> ExitCode {
         Command::Info(args) => info::run(args),
         Command::Compare(args) => compare::run(args),
         Command::Reference(args) => reference::run(args),
+        Command::Export(args) => export::run(args),
     };
     match result {
         Ok(code) => code,
