@@ -232,8 +232,11 @@ pub fn scenes() -> Vec<SceneSpec> {
                     fov_y_deg: 60.0,
                     width: 320,
                     height: 240,
+                    // 40×30 at 0.5% noise: about 70,000 samples per pixel,
+                    // 160 CPU s, so committed (the command and its figures
+                    // are in tools/sweep/fixtures/README.md).
                     truth_divisor: 8,
-                    truth_fixture: None,
+                    truth_fixture: Some("tools/sweep/fixtures/glossy_front_40x30.exr"),
                 },
                 // From a side, lower: the highlight moves with the eye.
                 Camera {
@@ -245,7 +248,7 @@ pub fn scenes() -> Vec<SceneSpec> {
                     width: 320,
                     height: 240,
                     truth_divisor: 8,
-                    truth_fixture: None,
+                    truth_fixture: Some("tools/sweep/fixtures/glossy_side_40x30.exr"),
                 },
             ],
             vertex_eye: [0.0, 0.6, 1.8],
@@ -598,4 +601,38 @@ pub fn scene_config(scene: &SceneSpec, point: &Point) -> anyhow::Result<String> 
         table.insert("solver".into(), Value::Table(solver));
     }
     toml::to_string(&table).context("writing the scene config")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::scenes;
+    use std::path::Path;
+
+    /// A camera's committed truth is used only when its size is the camera's
+    /// screenshot divided by its divisor; a missing or mis-sized fixture would
+    /// silently cost a render of many minutes in every fresh work folder, so
+    /// each one named must exist at exactly that size.
+    #[test]
+    fn committed_truths_exist_at_the_cameras_truth_size() {
+        let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+        let mut checked = 0;
+        for scene in scenes() {
+            for camera in scene.cameras.iter() {
+                let Some(fixture) = camera.truth_fixture else {
+                    continue;
+                };
+                let image = sweep::image::read_exr(&root.join(fixture))
+                    .unwrap_or_else(|e| panic!("{}/{}: {e:#}", scene.key, camera.name));
+                let k = camera.truth_divisor;
+                assert_eq!(
+                    (image.width as u32 * k, image.height as u32 * k),
+                    (camera.width, camera.height),
+                    "{fixture}"
+                );
+                checked += 1;
+            }
+        }
+        // The Cornell front camera's and both glossy cameras' truths.
+        assert_eq!(checked, 3);
+    }
 }

@@ -108,7 +108,8 @@ fn truth_paragraph(md: &mut String, truths: &[Truth], reference: &PointResult) {
     if truths.is_empty() {
         let _ = writeln!(
             md,
-            "No path-traced truth in this run (`--no-truth`): the truth columns are empty.\n"
+            "No path-traced truth for this scene in this run (`--no-truth`, or none of its \
+             cameras in `--truth-cameras`): the truth columns are empty.\n"
         );
         return;
     }
