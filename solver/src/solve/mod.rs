@@ -56,6 +56,7 @@ pub mod cluster;
 pub mod cube_gather;
 pub mod directional;
 pub mod gauss_seidel;
+pub mod hidden;
 mod output;
 pub(crate) use output::default_camera;
 mod refine;
@@ -188,6 +189,12 @@ pub struct Solver {
     /// Per patch: unshot radiance, and (vertex, area) weights of the gather.
     patch_unshot: Vec<DVec3>,
     patch_weights: Vec<Vec<(u32, f64)>>,
+    /// Per vertex: whether its receiving point is enclosed by an object's
+    /// inside ([`hidden`]); classified as vertices appear.
+    hidden: Vec<bool>,
+    /// Per patch: the area its unshot radiance stands for, the gather weights
+    /// of its vertices that are not hidden (its area when none is).
+    patch_shoot_area: Vec<f64>,
     leaf_count: usize,
     shots: u64,
     rays: u64,
@@ -328,6 +335,8 @@ impl Solver {
             recorded_pools: Vec::new(),
             patch_unshot,
             patch_weights: vec![Vec::new(); patch_count],
+            hidden: Vec::new(),
+            patch_shoot_area: vec![0.0; patch_count],
             shots: 0,
             rays: 0,
             seconds: 0.0,
@@ -603,7 +612,8 @@ impl Solver {
             .patches
             .iter()
             .zip(&self.patch_unshot)
-            .map(|(p, u)| PI * p.area * u.element_sum())
+            .zip(&self.patch_shoot_area)
+            .map(|((_, u), a)| PI * a * u.element_sum())
             .sum()
     }
 
@@ -611,8 +621,13 @@ impl Solver {
     /// lowest index.
     fn choose_source(&self) -> u32 {
         let mut best = (0u32, f64::NEG_INFINITY);
-        for (i, (p, u)) in self.mesh.patches.iter().zip(&self.patch_unshot).enumerate() {
-            let power = p.area * u.element_sum();
+        for (i, (a, u)) in self
+            .patch_shoot_area
+            .iter()
+            .zip(&self.patch_unshot)
+            .enumerate()
+        {
+            let power = a * u.element_sum();
             if power > best.1 {
                 best = (i as u32, power);
             }
@@ -633,6 +648,7 @@ impl Solver {
     /// Recomputes the gather weights of `patches` from their display
     /// triangulation.
     fn update_patch_weights(&mut self, patches: &[u32]) {
+        self.classify_new_vertices();
         let mesh = &self.mesh;
         let weights: Vec<Vec<(u32, f64)>> = patches
             .par_iter()
@@ -658,26 +674,73 @@ impl Solver {
             })
             .collect();
         for (&p, w) in patches.iter().zip(weights) {
+            let area = self.mesh.patches[p as usize].area;
+            let hidden: f64 = w
+                .iter()
+                .filter(|(v, _)| self.hidden[*v as usize])
+                .map(|(_, a)| a)
+                .sum();
+            self.patch_shoot_area[p as usize] = if hidden > 0.0 {
+                w.iter()
+                    .filter(|(v, _)| !self.hidden[*v as usize])
+                    .map(|(_, a)| a)
+                    .sum()
+            } else {
+                area
+            };
             self.patch_weights[p as usize] = w;
         }
     }
 
+    /// Classifies the vertices created since the last call as hidden or not
+    /// ([`hidden::is_hidden`] at their receiving points).
+    fn classify_new_vertices(&mut self) {
+        let start = self.hidden.len() as u32;
+        let end = self.mesh.vertices.len() as u32;
+        if start >= end {
+            return;
+        }
+        let mesh = &self.mesh;
+        let occluder = &self.occluder;
+        let epsilon = occluder.scene_epsilon();
+        let new: Vec<bool> = (start..end)
+            .into_par_iter()
+            .map(|v| {
+                let (q, n) = shoot::receiving_point(mesh, v, epsilon);
+                hidden::is_hidden(occluder, q, n)
+            })
+            .collect();
+        self.hidden.extend(new);
+    }
+
+    /// Per vertex, whether it is hidden ([`hidden`]).
+    pub fn hidden_vertices(&self) -> &[bool] {
+        &self.hidden
+    }
+
     /// Adds each patch's share of the shot's ΔL to its unshot radiance and
     /// clears the vertices' ΔL: U_p += Σ_v w_vp ΔL_v / A_p, so π U_p A_p grows
-    /// by exactly the received power the display shows on the patch.
+    /// by exactly the received power the display shows on the patch. Hidden
+    /// vertices are left out and A_p is then the visible part's area
+    /// (`patch_shoot_area`): U_p is the visible part's mean, and the shot's
+    /// visibility rays, blocked toward the hidden part, deliver its power.
     fn gather(&mut self) {
         let received = &self.received;
-        let mesh = &self.mesh;
+        let hidden = &self.hidden;
         self.patch_unshot
             .par_iter_mut()
             .zip(&self.patch_weights)
-            .enumerate()
-            .for_each(|(p, (unshot, weights))| {
+            .zip(&self.patch_shoot_area)
+            .for_each(|((unshot, weights), &area)| {
                 let mut sum = DVec3::ZERO;
                 for &(v, w) in weights {
-                    sum += received[v as usize] * w;
+                    if !hidden[v as usize] {
+                        sum += received[v as usize] * w;
+                    }
                 }
-                *unshot += sum / mesh.patches[p].area;
+                if area > 0.0 {
+                    *unshot += sum / area;
+                }
             });
         self.received.fill(DVec3::ZERO);
     }
@@ -754,6 +817,8 @@ pub(crate) fn human_bytes(bytes: u128) -> String {
 mod cluster_tests;
 #[cfg(test)]
 mod directional_tests;
+#[cfg(test)]
+mod hidden_tests;
 #[cfg(test)]
 mod physics_tests;
 #[cfg(test)]
