@@ -20,19 +20,25 @@ use solver::compare::metrics::reference_noise;
 mod common;
 use common::cornell_against_truth;
 
-/// Bound on the draft preset's MARE against the truth. Measured at commit time
-/// (docs/accuracy.md): 9.01% with seed 1 and 8.91% with seed 2 (release build;
-/// the debug build and lavapipe differ from it by rounding only). The margin of
-/// 1.5 points covers the truth's noise (0.5% per pixel) and other lavapipe
-/// versions' rasterization; a change that makes draft visibly less accurate
-/// fails, and one that makes it more accurate should tighten this bound.
-const DRAFT_MARE_BOUND: f64 = 0.105;
+/// Bound on the draft preset's MARE against the truth. Measured (docs/accuracy.md,
+/// release build): 9.01% (seed 1) and 8.91% (seed 2) before hidden receivers
+/// were treated as hidden (`solver/src/solve/hidden.rs`), 8.49% and 8.01% since.
+/// Tightened from 10.5% to 10%: the same margin of 1.5 points over the worse
+/// seed covers the truth's noise (0.5% per pixel) and other lavapipe versions'
+/// rasterization (the debug build differs from the release one by rounding
+/// only); a change that makes draft visibly less accurate fails, and one that
+/// makes it more accurate should tighten this bound.
+const DRAFT_MARE_BOUND: f64 = 0.10;
 
 /// Bound on the draft image mean's relative bias: measured −2.46% (seed 1) and
-/// −2.47% (seed 2), mostly the ambient term and the dark ceiling and tall block
-/// that docs/accuracy.md's tables show. The mean is energy, independent of where
-/// the light lands, so it guards the transport rather than the meshing.
-const DRAFT_MEAN_BOUND: f64 = 0.04;
+/// −2.47% (seed 2) before hidden receivers, −1.68% and −1.72% since (the floor
+/// patches next to the blocks and the ceiling patches round the light no
+/// longer shoot a mean diluted by their hidden vertices). What remains is
+/// mostly the light draft's 2% stop threshold leaves unshot (−0.73% with
+/// `--threshold 0.002`). Tightened from 4% to 3%, a margin of 1.3 points. The
+/// mean is energy, independent of where the light lands, so it guards the
+/// transport rather than the meshing.
+const DRAFT_MEAN_BOUND: f64 = 0.03;
 
 #[test]
 fn draft_cornell_box_matches_the_path_traced_truth() {

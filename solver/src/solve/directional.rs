@@ -737,16 +737,22 @@ impl Solver {
         // Gather (see `Solver::gather`): U_p += Σ_v w_vp ΔL_v / A_p per coefficient.
         for p in 0..self.mesh.patches.len() {
             let range = d.patch_range(&self.mesh, p);
-            let area = self.mesh.patches[p].area;
+            // Hidden vertices are left out, as in `Solver::gather`.
+            let area = self.patch_shoot_area[p];
             let mut sum = vec![0.0; range.len()];
             for &(v, w) in &self.patch_weights[p] {
+                if self.hidden[v as usize] {
+                    continue;
+                }
                 let o = d.vertex_offset[v as usize];
                 for (s, r) in sum.iter_mut().zip(&d.received[o..o + range.len()]) {
                     *s += r * w;
                 }
             }
             for (u, s) in d.patch_unshot[range.clone()].iter_mut().zip(&sum) {
-                *u += s / area;
+                if area > 0.0 {
+                    *u += s / area;
+                }
             }
             let order = d.surface_order[self.mesh.patches[p].surface as usize];
             self.patch_unshot[p] = d.hemisphere_equivalent(order, &d.patch_unshot[range]);

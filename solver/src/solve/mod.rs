@@ -56,6 +56,7 @@ pub mod cluster;
 pub mod cube_gather;
 pub mod directional;
 pub mod gauss_seidel;
+pub mod hidden;
 mod output;
 mod output_textured;
 pub(crate) use output::default_camera;
@@ -200,6 +201,12 @@ pub struct Solver {
     /// the whole list is empty when no surface is textured, so an untextured
     /// solve holds nothing more than before).
     patch_rgb_weights: Vec<Vec<(u32, DVec3)>>,
+    /// Per vertex: whether its receiving point is enclosed by an object's
+    /// inside ([`hidden`]); classified as vertices appear.
+    hidden: Vec<bool>,
+    /// Per patch: the area its unshot radiance stands for, the gather weights
+    /// of its vertices that are not hidden (its area when none is).
+    patch_shoot_area: Vec<f64>,
     leaf_count: usize,
     shots: u64,
     rays: u64,
@@ -373,6 +380,8 @@ impl Solver {
             } else {
                 Vec::new()
             },
+            hidden: Vec::new(),
+            patch_shoot_area: vec![0.0; patch_count],
             shots: 0,
             rays: 0,
             seconds: 0.0,
@@ -648,7 +657,8 @@ impl Solver {
             .patches
             .iter()
             .zip(&self.patch_unshot)
-            .map(|(p, u)| PI * p.area * u.element_sum())
+            .zip(&self.patch_shoot_area)
+            .map(|((_, u), a)| PI * a * u.element_sum())
             .sum()
     }
 
@@ -656,8 +666,13 @@ impl Solver {
     /// lowest index.
     fn choose_source(&self) -> u32 {
         let mut best = (0u32, f64::NEG_INFINITY);
-        for (i, (p, u)) in self.mesh.patches.iter().zip(&self.patch_unshot).enumerate() {
-            let power = p.area * u.element_sum();
+        for (i, (a, u)) in self
+            .patch_shoot_area
+            .iter()
+            .zip(&self.patch_unshot)
+            .enumerate()
+        {
+            let power = a * u.element_sum();
             if power > best.1 {
                 best = (i as u32, power);
             }
@@ -678,6 +693,7 @@ impl Solver {
     /// Recomputes the gather weights of `patches` from their display
     /// triangulation.
     fn update_patch_weights(&mut self, patches: &[u32]) {
+        self.classify_new_vertices();
         let mesh = &self.mesh;
         let weights: Vec<Vec<(u32, f64)>> = patches
             .par_iter()
@@ -703,6 +719,20 @@ impl Solver {
             })
             .collect();
         for (&p, w) in patches.iter().zip(weights) {
+            let area = self.mesh.patches[p as usize].area;
+            let hidden: f64 = w
+                .iter()
+                .filter(|(v, _)| self.hidden[*v as usize])
+                .map(|(_, a)| a)
+                .sum();
+            self.patch_shoot_area[p as usize] = if hidden > 0.0 {
+                w.iter()
+                    .filter(|(v, _)| !self.hidden[*v as usize])
+                    .map(|(_, a)| a)
+                    .sum()
+            } else {
+                area
+            };
             self.patch_weights[p as usize] = w;
         }
         if self.texturing.any() {
@@ -737,33 +767,65 @@ impl Solver {
         }
     }
 
+    /// Classifies the vertices created since the last call as hidden or not
+    /// ([`hidden::is_hidden`] at their receiving points).
+    fn classify_new_vertices(&mut self) {
+        let start = self.hidden.len() as u32;
+        let end = self.mesh.vertices.len() as u32;
+        if start >= end {
+            return;
+        }
+        let mesh = &self.mesh;
+        let occluder = &self.occluder;
+        let epsilon = occluder.scene_epsilon();
+        let new: Vec<bool> = (start..end)
+            .into_par_iter()
+            .map(|v| {
+                let (q, n) = shoot::receiving_point(mesh, v, epsilon);
+                hidden::is_hidden(occluder, q, n)
+            })
+            .collect();
+        self.hidden.extend(new);
+    }
+
+    /// Per vertex, whether it is hidden ([`hidden`]).
+    pub fn hidden_vertices(&self) -> &[bool] {
+        &self.hidden
+    }
+
     /// Adds each patch's share of the shot's ΔL to its unshot radiance and
     /// clears the vertices' ΔL: U_p += Σ_v w_vp ΔL_v / A_p, so π U_p A_p grows
-    /// by exactly the received power the display shows on the patch.
+    /// by exactly the received power the display shows on the patch. Hidden
+    /// vertices are left out and A_p is then the visible part's area
+    /// (`patch_shoot_area`): U_p is the visible part's mean, and the shot's
+    /// visibility rays, blocked toward the hidden part, deliver its power.
     fn gather(&mut self) {
         let received = &self.received;
-        let mesh = &self.mesh;
+        let hidden = &self.hidden;
         let rgb_weights = &self.patch_rgb_weights;
         self.patch_unshot
             .par_iter_mut()
             .zip(&self.patch_weights)
+            .zip(&self.patch_shoot_area)
             .enumerate()
-            .for_each(|(p, (unshot, weights))| {
-                let mut sum = DVec3::ZERO;
+            .for_each(|(p, ((unshot, weights), &area))| {
+                let visible = |v: u32| !hidden[v as usize];
                 // A textured patch reflects ∫ ρ ΔE/π dA (`textured.rs`).
-                match rgb_weights.get(p).filter(|w| !w.is_empty()) {
-                    None => {
-                        for &(v, w) in weights {
-                            sum += received[v as usize] * w;
-                        }
-                    }
-                    Some(rgb) => {
-                        for &(v, w) in rgb {
-                            sum += received[v as usize] * w;
-                        }
-                    }
+                let sum: DVec3 = match rgb_weights.get(p).filter(|w| !w.is_empty()) {
+                    None => weights
+                        .iter()
+                        .filter(|(v, _)| visible(*v))
+                        .map(|&(v, w)| received[v as usize] * w)
+                        .sum(),
+                    Some(rgb) => rgb
+                        .iter()
+                        .filter(|(v, _)| visible(*v))
+                        .map(|&(v, w)| received[v as usize] * w)
+                        .sum(),
+                };
+                if area > 0.0 {
+                    *unshot += sum / area;
                 }
-                *unshot += sum / mesh.patches[p].area;
             });
         self.received.fill(DVec3::ZERO);
     }
@@ -840,6 +902,8 @@ pub(crate) fn human_bytes(bytes: u128) -> String {
 mod cluster_tests;
 #[cfg(test)]
 mod directional_tests;
+#[cfg(test)]
+mod hidden_tests;
 #[cfg(test)]
 mod physics_tests;
 #[cfg(test)]

@@ -27,10 +27,16 @@ impl Solver {
         let mut area = 0.0;
         let mut reflect = DVec3::ZERO;
         let mut unshot = DVec3::ZERO;
-        for (p, u) in self.mesh.patches.iter().zip(&self.patch_unshot) {
+        for ((p, u), a) in self
+            .mesh
+            .patches
+            .iter()
+            .zip(&self.patch_unshot)
+            .zip(&self.patch_shoot_area)
+        {
             area += p.area;
             reflect += self.albedo[p.surface as usize] * p.area;
-            unshot += *u * p.area;
+            unshot += *u * *a;
         }
         if area.is_nan() || area <= 0.0 {
             return DVec3::ZERO;
@@ -58,9 +64,13 @@ impl Solver {
         let scale = (4.0 * PI).sqrt();
         // One output vertex per position of a smooth surface, and its seams
         // free of T-junctions (`seams.rs`); flat facets map one to one.
+        // Hidden vertices show their visible neighbours' radiance, so no
+        // visible element interpolates toward the dark inside of an object.
+        let triangles = self.mesh.triangles();
+        let radiance = super::hidden::fill_hidden(&triangles, &self.hidden, &self.radiance);
         // Textured smooth surfaces keep their UV seams (`seams.rs`).
         let texturing = &self.texturing;
-        let shared = super::seams::share_vertices_with_uvs(&self.mesh, &self.radiance, &|s, p| {
+        let shared = super::seams::share_vertices_with_uvs(&self.mesh, &radiance, &|s, p| {
             texturing.get(s).map(|t| texturing.uv(t, p))
         });
         let mut vertices = Vec::with_capacity(shared.representative.len());
@@ -96,11 +106,7 @@ impl Solver {
             lo = DVec3::ZERO;
             hi = DVec3::ZERO;
         }
-        let indices: Vec<u32> = shared
-            .triangles(&self.mesh.triangles())
-            .into_iter()
-            .flatten()
-            .collect();
+        let indices: Vec<u32> = shared.triangles(&triangles).into_iter().flatten().collect();
         let scene_offset = self.scene_recentre + self.offset;
         let camera = self
             .scene_camera

@@ -264,18 +264,7 @@ impl Shot<'_> {
     /// source's own cosine stays its plane's, since emission and shooting are
     /// one-sided about the polygon that emits.
     pub fn receiving_point(&self, mesh: &Mesh, v: u32) -> (DVec3, DVec3) {
-        let vertex = &mesh.vertices[v as usize];
-        let to_inside = vertex.inward - vertex.position;
-        let distance = to_inside.length();
-        let q = if distance > 0.0 {
-            let step = (INWARD_STEP * distance)
-                .max(2.0 * self.occluder.scene_epsilon())
-                .min(0.5 * distance);
-            vertex.position + to_inside * (step / distance)
-        } else {
-            vertex.position
-        };
-        (q, vertex.normal)
+        receiving_point(mesh, v, self.occluder.scene_epsilon())
     }
 
     /// F(v←s): the form factor from vertex `v`'s receiving point to the source,
@@ -512,6 +501,23 @@ impl Shot<'_> {
             rays,
         }
     }
+}
+
+/// The receiving point of vertex `v` and its shading normal (see
+/// [`Shot::receiving_point`]), for an occluder of scene epsilon `epsilon`.
+pub fn receiving_point(mesh: &Mesh, v: u32, epsilon: f64) -> (DVec3, DVec3) {
+    let vertex = &mesh.vertices[v as usize];
+    let to_inside = vertex.inward - vertex.position;
+    let distance = to_inside.length();
+    let q = if distance > 0.0 {
+        let step = (INWARD_STEP * distance)
+            .max(2.0 * epsilon)
+            .min(0.5 * distance);
+        vertex.position + to_inside * (step / distance)
+    } else {
+        vertex.position
+    };
+    (q, vertex.normal)
 }
 
 /// Per-worker buffers of [`visible_samples`]; `samples` holds its answer.

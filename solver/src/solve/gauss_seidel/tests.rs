@@ -209,6 +209,17 @@ fn cornell_surface_means(patches: u32) -> (Vec<DVec3>, Vec<DVec3>) {
         {
             continue;
         }
+        // Patches holding a hidden vertex (the floor under the blocks, the
+        // ceiling above the light) are left out: the progressive solve treats
+        // those vertices as hidden (`solve/hidden.rs`), Gauss–Seidel's patch
+        // gather does not, so the two discretisations differ there by design.
+        if progressive
+            .patch_weights(i as u32)
+            .iter()
+            .any(|&(v, _)| progressive.hidden_vertices()[v as usize])
+        {
+            continue;
+        }
         // The progressive patch mean: its displayed (Gouraud) field integrated
         // over the patch, Σ_v w_vp L_v.
         let integral: DVec3 = progressive
