@@ -844,11 +844,11 @@ impl Solver {
                     .into_iter()
                     .map(|u| u.into_iter().map(f64::from_bits).collect())
                     .collect();
+                // The radiance and the unshot arrive masked (see
+                // `checkpoint.rs`), so they are checked once unmasked, by `resume`.
                 if !d
-                    .radiance
+                    .direct
                     .iter()
-                    .chain(&d.patch_unshot)
-                    .chain(&d.direct)
                     .chain(d.recorded_unshot.iter().flatten())
                     .all(|x| x.is_finite())
                 {
