@@ -452,12 +452,29 @@ impl GlossyLobe {
         out: &mut [f64],
         scratch: &mut [f64],
     ) {
-        let mu_i = omega_i.z;
+        self.add_lobe_sh_about(omega_i.z, mirror(omega_i), irradiance, out, scratch);
+    }
+
+    /// [`GlossyLobe::add_lobe_sh`] in any frame: `mu_i` is the cosine of
+    /// incidence to the reflecting (shading) normal and `mirror_dir` the mirror
+    /// direction about that normal, given in the frame the coefficients are
+    /// in. The lobe is zonal about the mirror direction, so its truncation to
+    /// order L is one function whatever frame expresses it (each band of the
+    /// SH is closed under rotation): a vertex whose shading normal is not its
+    /// SH frame's axis gets exactly the coefficients of its lobe in that frame.
+    pub fn add_lobe_sh_about(
+        &self,
+        mu_i: f64,
+        mirror_dir: DVec3,
+        irradiance: f64,
+        out: &mut [f64],
+        scratch: &mut [f64],
+    ) {
         if mu_i <= 0.0 {
             return;
         }
         let order = self.order();
-        sh::eval_basis(order, mirror(omega_i), scratch);
+        sh::eval_basis(order, mirror_dir, scratch);
         let scale = irradiance * self.c_r(mu_i);
         for l in 0..=order as usize {
             let s = scale * self.sh_scale[l];

@@ -31,10 +31,12 @@
 //!
 //! * **shot**: one shot's per-vertex results (directional: a heap vector of
 //!   coefficients per vertex) and its sample pool;
-//! * **checkpoint**: the writer's buffer. Checkpoints stream section by
+//! * **checkpoint**: the writer's buffers. Checkpoints stream section by
 //!   section from the solver's own arrays through a 1 MiB buffer
-//!   ([`Solver::write_checkpoint`]), so the state is never copied; only the
-//!   directional recorded shots' length table is built (4 bytes a shot);
+//!   ([`Solver::write_checkpoint`]), their f64 arrays packed a 256 KiB chunk
+//!   at a time, so the state is never copied; only the directional recorded
+//!   shots' length table (4 bytes a shot) and per-patch mask flags (4 bytes a
+//!   patch) are built;
 //! * **output**: the solution ([`Solver::to_solution`]): per vertex a stored
 //!   vertex and its f32 coefficients, per display triangle its indices, and in
 //!   directional mode the diffuse-style batch that the per-order batches
@@ -91,6 +93,11 @@ pub fn surface_bytes() -> u64 {
 
 /// The buffer a checkpoint streams through (`solution::atomic::write_atomically_buffered`).
 const CHECKPOINT_BUFFER_BYTES: u64 = 1 << 20;
+
+/// miniz_oxide's deflate state: its 32 KiB window, two tables of 32 Ki u16
+/// (hash heads and chains), the 64 KiB LZ code buffer and the Huffman tables,
+/// about 240 KiB; rounded up.
+const PACKER_STATE_BYTES: u64 = 320 << 10;
 
 /// glibc's per-allocation overhead on a small heap block: an 8-byte header,
 /// rounded up to 16.
@@ -266,10 +273,18 @@ pub fn estimate(c: &Counts) -> MemoryEstimate {
     }
 }
 
-/// The checkpoint's transient: the stream's buffer and the recorded shots'
-/// length table; the state itself is written from where it lives.
+/// The checkpoint's transient: the stream's buffer, the packer's (a chunk's
+/// byte planes and its deflated bytes, 256 KiB each, and the deflate state,
+/// [`PACKER_STATE_BYTES`]), the per-patch mask flags (4 bytes a patch) and
+/// the recorded shots' length table; the state itself is written from where
+/// it lives.
 fn checkpoint_bytes(c: &Counts) -> u64 {
-    CHECKPOINT_BUFFER_BYTES + 4 * c.recorded_shots
+    let chunk = (8 * super::checkpoint::CHUNK_VALUES) as u64;
+    CHECKPOINT_BUFFER_BYTES
+        + 2 * chunk
+        + PACKER_STATE_BYTES
+        + if c.directional { 4 * c.patches } else { 0 }
+        + 4 * c.recorded_shots
 }
 
 /// The output's transient: the solution and the writer's buffer.

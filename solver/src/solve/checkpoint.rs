@@ -24,14 +24,21 @@
 //!
 //! Format: a sequence of sections, each a 4-byte tag, a u64 element count and the
 //! elements, little-endian; every f64 as its IEEE bits, so values round-trip bit
-//! for bit. In order: `HEAD` (one record: fingerprint, shots, rays, seconds,
+//! for bit. The bulk arrays of f64 are *packed* (byte planes and deflate, chunk
+//! by chunk: [`packed`]), lossless and still streaming; their count is of f64
+//! values. In order: `HEAD` (one record: fingerprint, shots, rays, seconds,
 //! mode), `SPLT` (u32 per split), `RECS` (40 bytes per recorded shot: index u64,
-//! patch u32, receivers u32, unshot 3 × f64), `RADI` (3 × f64 per vertex),
-//! `UNSH` (3 × f64 per patch), `DIRC` (3 × f64 per vertex; these three are
+//! patch u32, receivers u32, unshot 3 × f64), `RADI` (packed, 3 per vertex),
+//! `UNSH` (packed, 3 per patch), `DIRC` (packed, 3 per vertex; these three are
 //! empty in directional mode); in
 //! directional mode then `SHOR` (u32 order per surface), `BRDF` (one u32),
-//! `SHRA` (f64 per radiance coefficient), `SHUN` (f64 per patch coefficient),
-//! `SHRL` (u32 coefficient count per recorded shot) and `SHRU` (their f64s).
+//! `SHRA` (packed, one per radiance coefficient, its bits XOR those of the
+//! coefficient's recorded-shot part), `SHUN` (packed, one per patch
+//! coefficient; a patch's bits XOR those of a prediction where `SHUM` flags
+//! it), `SHUM` (u32 per patch: 1 where masked), `SHRL` (u32 coefficient count
+//! per recorded shot) and `SHRU` (their f64s). The masks turn bits that agree
+//! into zero bytes for deflate; a resume recomputes what masked them, exactly,
+//! and unmasks (`directional/state.rs`).
 //! The file envelope around it (magic, settings, checksum) is the command line's
 //! (`cli/solve/checkpoint.rs`).
 
@@ -41,8 +48,11 @@ use crate::settings::{BrdfNormalization, SolverSettings};
 use glam::DVec3;
 use std::io::{self, Read, Write};
 
-/// Bump when the meaning of the fields changes.
-pub const CHECKPOINT_VERSION: u32 = 2;
+mod packed;
+pub(super) use packed::CHUNK_VALUES;
+
+/// Bump when the meaning of the fields changes (3: the f64 arrays packed).
+pub const CHECKPOINT_VERSION: u32 = 3;
 
 /// Everything [`Solver::resume`] needs, as read back from a checkpoint. See the
 /// module documentation. (Writing streams from the solver itself:
@@ -67,8 +77,12 @@ pub struct Checkpoint {
     pub direct: Vec<DVec3>,
     /// The recorded (emitter) shots, in order.
     pub recorded: Vec<super::shoot::RecordedShot>,
-    /// Directional mode's SH coefficients; absent for a diffuse solve.
+    /// Directional mode's SH coefficients; absent for a diffuse solve. Its
+    /// radiance and unshot coefficients are masked (see `write_checkpoint`):
+    /// [`Solver::resume`] unmasks them.
     pub directional: Option<super::DirectionalCheckpoint>,
+    /// Directional mode: per patch, 1 where its unshot SH is masked.
+    pub unshot_masked: Vec<u32>,
 }
 
 /// A checkpoint's solver state cannot be read: `field` names the section.
@@ -85,46 +99,66 @@ pub enum StateError {
 }
 
 /// Writes sections of little-endian elements.
-struct SectionWriter<'w, W: Write>(&'w mut W);
+struct SectionWriter<'w, W: Write> {
+    w: &'w mut W,
+    packer: packed::Packer,
+}
 
-impl<W: Write> SectionWriter<'_, W> {
+impl<'w, W: Write> SectionWriter<'w, W> {
+    fn new(w: &'w mut W) -> Self {
+        SectionWriter {
+            w,
+            packer: packed::Packer::default(),
+        }
+    }
     fn start(&mut self, tag: &[u8; 4], count: usize) -> io::Result<()> {
-        self.0.write_all(tag)?;
-        self.0.write_all(&(count as u64).to_le_bytes())
+        self.w.write_all(tag)?;
+        self.w.write_all(&(count as u64).to_le_bytes())
     }
     fn u32(&mut self, v: u32) -> io::Result<()> {
-        self.0.write_all(&v.to_le_bytes())
+        self.w.write_all(&v.to_le_bytes())
     }
     fn u64(&mut self, v: u64) -> io::Result<()> {
-        self.0.write_all(&v.to_le_bytes())
+        self.w.write_all(&v.to_le_bytes())
     }
     fn f64(&mut self, v: f64) -> io::Result<()> {
         self.u64(v.to_bits())
-    }
-    fn dvec3(&mut self, v: DVec3) -> io::Result<()> {
-        self.f64(v.x)?;
-        self.f64(v.y)?;
-        self.f64(v.z)
     }
     fn u32s(&mut self, tag: &[u8; 4], values: &[u32]) -> io::Result<()> {
         self.start(tag, values.len())?;
         values.iter().try_for_each(|&v| self.u32(v))
     }
-    fn f64s(&mut self, tag: &[u8; 4], values: &[f64]) -> io::Result<()> {
-        self.start(tag, values.len())?;
-        values.iter().try_for_each(|&v| self.f64(v))
+    /// A packed section (see [`packed`]) of `count` values.
+    fn packed(
+        &mut self,
+        tag: &[u8; 4],
+        count: usize,
+        values: impl Iterator<Item = f64>,
+    ) -> io::Result<()> {
+        self.start(tag, count)?;
+        self.packer.write(self.w, count, values)
     }
-    fn dvec3s(&mut self, tag: &[u8; 4], values: &[DVec3]) -> io::Result<()> {
-        self.start(tag, values.len())?;
-        values.iter().try_for_each(|&v| self.dvec3(v))
+    #[cfg(test)]
+    fn packed_f64s(&mut self, tag: &[u8; 4], values: &[f64]) -> io::Result<()> {
+        self.packed(tag, values.len(), values.iter().copied())
+    }
+    /// Packed as 3 n values, RGB interleaved.
+    fn packed_dvec3s(&mut self, tag: &[u8; 4], values: &[DVec3]) -> io::Result<()> {
+        self.packed(
+            tag,
+            3 * values.len(),
+            values.iter().flat_map(|v| v.to_array()),
+        )
     }
 }
 
-/// Reads sections, never allocating more than the bytes still unread can fill.
+/// Reads sections, never allocating more than the bytes still unread can fill
+/// (packed sections: can inflate to, see [`packed::MAX_RATIO`]).
 struct SectionReader<'r, R: Read> {
     reader: &'r mut R,
     /// Bytes of the state not read yet.
     remaining: u64,
+    unpacker: packed::Unpacker,
 }
 
 impl<R: Read> SectionReader<'_, R> {
@@ -151,12 +185,22 @@ impl<R: Read> SectionReader<'_, R> {
     fn f64(&mut self, field: &'static str) -> Result<f64, StateError> {
         Ok(f64::from_bits(self.u64(field)?))
     }
-    fn dvec3(&mut self, field: &'static str) -> Result<DVec3, StateError> {
-        Ok(DVec3::new(
-            self.f64(field)?,
-            self.f64(field)?,
-            self.f64(field)?,
-        ))
+    /// Fills the unpacker's buffer with the next `len` bytes.
+    fn chunk_bytes(&mut self, field: &'static str, len: usize) -> Result<(), StateError> {
+        if self.remaining < len as u64 {
+            return Err(StateError::Bad {
+                field,
+                detail: format!(
+                    "a chunk of {len} bytes, only {} bytes remain (truncated or corrupted)",
+                    self.remaining
+                ),
+            });
+        }
+        self.reader
+            .read_exact(self.unpacker.compressed_buffer(len))
+            .map_err(|source| StateError::Io { field, source })?;
+        self.remaining -= len as u64;
+        Ok(())
     }
 
     /// Reads the tag and count of the next section, which must be `field`, and
@@ -206,8 +250,64 @@ impl<R: Read> SectionReader<'_, R> {
     fn f64s(&mut self, field: &'static str) -> Result<Vec<f64>, StateError> {
         self.section(field, 8, |r| r.f64(field))
     }
-    fn dvec3s(&mut self, field: &'static str) -> Result<Vec<DVec3>, StateError> {
-        self.section(field, 24, |r| r.dvec3(field))
+
+    /// A packed section (see [`packed`]). Its count is checked against what
+    /// the bytes left could inflate to at deflate's largest ratio, and memory
+    /// grows only as chunks really inflate (one chunk's buffers, then the
+    /// values), so a lying count is refused before anything is allocated.
+    fn packed(&mut self, field: &'static str) -> Result<Vec<f64>, StateError> {
+        let tag = self.bytes::<4>(field)?;
+        if tag != *field.as_bytes() {
+            return Err(StateError::Bad {
+                field,
+                detail: format!(
+                    "expected this section, found tag {:?}",
+                    String::from_utf8_lossy(&tag)
+                ),
+            });
+        }
+        let count = self.u64(field)?;
+        let possible = self.remaining.saturating_mul(packed::MAX_RATIO) / 8;
+        if count > possible {
+            return Err(StateError::Bad {
+                field,
+                detail: format!(
+                    "announces {count} values, only {} bytes remain (at most {possible} \
+                     values; truncated or corrupted)",
+                    self.remaining
+                ),
+            });
+        }
+        let mut out = Vec::new();
+        let mut left = count as usize;
+        while left > 0 {
+            let n = left.min(packed::CHUNK_VALUES);
+            let len = self.u32(field)? as usize;
+            if len > packed::max_chunk_bytes(n) {
+                return Err(StateError::Bad {
+                    field,
+                    detail: format!("a chunk of {n} values announces {len} bytes"),
+                });
+            }
+            self.chunk_bytes(field, len)?;
+            out.reserve(n);
+            self.unpacker
+                .inflate(n, &mut out)
+                .map_err(|detail| StateError::Bad { field, detail })?;
+            left -= n;
+        }
+        Ok(out)
+    }
+    /// A packed section of 3 n values, as n RGB triples.
+    fn packed_dvec3s(&mut self, field: &'static str) -> Result<Vec<DVec3>, StateError> {
+        let values = self.packed(field)?;
+        if values.len() % 3 != 0 {
+            return Err(StateError::Bad {
+                field,
+                detail: format!("{} values, not RGB triples", values.len()),
+            });
+        }
+        Ok(values.chunks_exact(3).map(DVec3::from_slice).collect())
     }
 }
 
@@ -223,6 +323,7 @@ impl Checkpoint {
         let mut r = SectionReader {
             reader,
             remaining: length,
+            unpacker: packed::Unpacker::default(),
         };
         r.start("HEAD", 48).and_then(|n| match n {
             1 => Ok(()),
@@ -255,12 +356,15 @@ impl Checkpoint {
                 unshot: [r.u64("RECS")?, r.u64("RECS")?, r.u64("RECS")?],
             })
         })?;
-        let radiance = r.dvec3s("RADI")?;
-        let patch_unshot = r.dvec3s("UNSH")?;
-        let direct = r.dvec3s("DIRC")?;
-        let directional = match mode {
-            MODE_DIFFUSE => None,
-            MODE_DIRECTIONAL => Some(read_directional(&mut r)?),
+        let radiance = r.packed_dvec3s("RADI")?;
+        let patch_unshot = r.packed_dvec3s("UNSH")?;
+        let direct = r.packed_dvec3s("DIRC")?;
+        let (directional, unshot_masked) = match mode {
+            MODE_DIFFUSE => (None, Vec::new()),
+            MODE_DIRECTIONAL => {
+                let (d, masked) = read_directional(&mut r)?;
+                (Some(d), masked)
+            }
             other => {
                 return Err(StateError::Bad {
                     field: "HEAD",
@@ -286,13 +390,15 @@ impl Checkpoint {
             direct,
             recorded,
             directional,
+            unshot_masked,
         })
     }
 }
 
+/// The directional sections, and the per-patch flags of masked unshot SH.
 fn read_directional<R: Read>(
     r: &mut SectionReader<'_, R>,
-) -> Result<super::DirectionalCheckpoint, StateError> {
+) -> Result<(super::DirectionalCheckpoint, Vec<u32>), StateError> {
     let surface_order = r.u32s("SHOR")?;
     let brdf = r.u32s("BRDF")?;
     let brdf_normalization = match brdf.as_slice() {
@@ -305,8 +411,9 @@ fn read_directional<R: Read>(
             })
         }
     };
-    let radiance = r.f64s("SHRA")?.into_iter().map(f64::to_bits).collect();
-    let patch_unshot = r.f64s("SHUN")?.into_iter().map(f64::to_bits).collect();
+    let radiance = r.packed("SHRA")?.into_iter().map(f64::to_bits).collect();
+    let patch_unshot = r.packed("SHUN")?.into_iter().map(f64::to_bits).collect();
+    let unshot_masked = r.u32s("SHUM")?;
     let lengths = r.u32s("SHRL")?;
     let flat = r.f64s("SHRU")?;
     let total: u64 = lengths.iter().map(|&n| n as u64).sum();
@@ -331,21 +438,24 @@ fn read_directional<R: Read>(
             part
         })
         .collect();
-    Ok(super::DirectionalCheckpoint {
-        surface_order,
-        radiance,
-        patch_unshot,
-        direct: Vec::new(),
-        recorded_unshot,
-        brdf_normalization,
-    })
+    Ok((
+        super::DirectionalCheckpoint {
+            surface_order,
+            radiance,
+            patch_unshot,
+            direct: Vec::new(),
+            recorded_unshot,
+            brdf_normalization,
+        },
+        unshot_masked,
+    ))
 }
 
 impl Solver {
     /// Writes the state between shots to `w`, section by section straight from
     /// the solver's own arrays (no copy of the state is made; buffer `w`).
     pub fn write_checkpoint(&self, w: &mut impl Write) -> io::Result<()> {
-        let mut s = SectionWriter(w);
+        let mut s = SectionWriter::new(w);
         s.start(b"HEAD", 1)?;
         s.u32(CHECKPOINT_VERSION)?;
         s.u32(if self.directional.is_some() {
@@ -372,9 +482,9 @@ impl Solver {
         // coefficient, recomputed too.
         let diffuse = self.directional.is_none();
         let keeps_direct = diffuse && self.direct.len() == self.radiance.len();
-        s.dvec3s(b"RADI", if diffuse { &self.radiance } else { &[] })?;
-        s.dvec3s(b"UNSH", if diffuse { &self.patch_unshot } else { &[] })?;
-        s.dvec3s(b"DIRC", if keeps_direct { &self.direct } else { &[] })?;
+        s.packed_dvec3s(b"RADI", if diffuse { &self.radiance } else { &[] })?;
+        s.packed_dvec3s(b"UNSH", if diffuse { &self.patch_unshot } else { &[] })?;
+        s.packed_dvec3s(b"DIRC", if keeps_direct { &self.direct } else { &[] })?;
         if let Some(d) = self.directional.as_deref() {
             let sections = d.checkpoint_sections();
             s.u32s(b"SHOR", sections.surface_order)?;
@@ -385,8 +495,30 @@ impl Solver {
                     BrdfNormalization::Reciprocal => 1,
                 }],
             )?;
-            s.f64s(b"SHRA", sections.radiance)?;
-            s.f64s(b"SHUN", sections.patch_unshot)?;
+            // Masked: each coefficient's bits XOR those of its recorded-shot
+            // part (recomputed exactly on resume before unmasking). Where the
+            // light's direct reflection dominates, as in most high-order
+            // coefficients, the two share sign, exponent and leading mantissa
+            // bits, which the mask turns into zero bytes for deflate.
+            s.packed(
+                b"SHRA",
+                sections.radiance.len(),
+                sections
+                    .radiance
+                    .iter()
+                    .zip(sections.direct)
+                    .map(|(r, m)| f64::from_bits(r.to_bits() ^ m.to_bits())),
+            )?;
+            // Masked where a prediction from the radiance is close (patches
+            // that have not shot), with one flag per patch after it.
+            let mut masked = Vec::with_capacity(self.mesh.patches.len());
+            let (mut prediction, mut buffer) = (Vec::new(), Vec::new());
+            let values = (0..self.mesh.patches.len()).flat_map(|p| {
+                masked.push(self.masked_unshot(p, &mut prediction, &mut buffer) as u32);
+                buffer.clone()
+            });
+            s.packed(b"SHUN", sections.patch_unshot.len(), values)?;
+            s.u32s(b"SHUM", &masked)?;
             let lengths: Vec<u32> = sections
                 .recorded_unshot
                 .iter()
@@ -528,8 +660,12 @@ impl Solver {
             .restore_directional(checkpoint.directional)
             .map_err(SolveError::CheckpointMismatch)?;
         if directional {
-            solver.restore_diffuse_proxies();
             solver.recompute_directional_direct();
+            solver
+                .unmask_directional_radiance()
+                .and_then(|()| solver.unmask_unshot(&checkpoint.unshot_masked))
+                .map_err(SolveError::CheckpointMismatch)?;
+            solver.restore_diffuse_proxies();
         }
         solver.unshot_power = solver.total_unshot_power();
         Ok(solver)
@@ -603,13 +739,14 @@ mod tests {
                 unshot: [1, 2, 3],
             }],
             directional: None,
+            unshot_masked: Vec::new(),
         }
     }
 
     /// The sample's sections, as [`Solver::write_checkpoint`] lays them out.
     fn encode(c: &Checkpoint) -> Vec<u8> {
         let mut out = Vec::new();
-        let mut s = SectionWriter(&mut out);
+        let mut s = SectionWriter::new(&mut out);
         s.start(b"HEAD", 1).unwrap();
         s.u32(c.version).unwrap();
         s.u32(MODE_DIFFUSE).unwrap();
@@ -626,9 +763,9 @@ mod tests {
             s.u32(r.receivers).unwrap();
             r.unshot.iter().for_each(|&b| s.u64(b).unwrap());
         }
-        s.dvec3s(b"RADI", &c.radiance).unwrap();
-        s.dvec3s(b"UNSH", &c.patch_unshot).unwrap();
-        s.dvec3s(b"DIRC", &c.direct).unwrap();
+        s.packed_dvec3s(b"RADI", &c.radiance).unwrap();
+        s.packed_dvec3s(b"UNSH", &c.patch_unshot).unwrap();
+        s.packed_dvec3s(b"DIRC", &c.direct).unwrap();
         out
     }
 
@@ -650,6 +787,93 @@ mod tests {
             let err = Checkpoint::read_from(&mut &bytes[..cut], cut as u64).unwrap_err();
             let message = err.to_string();
             assert!(message.starts_with("section "), "cut at {cut}: {message}");
+        }
+    }
+
+    /// A packed section of `values` alone, as the writer lays it out.
+    fn packed_section(values: &[f64]) -> Vec<u8> {
+        let mut out = Vec::new();
+        SectionWriter::new(&mut out)
+            .packed_f64s(b"SHRA", values)
+            .unwrap();
+        out
+    }
+
+    fn read_packed(bytes: &[u8]) -> Result<Vec<f64>, StateError> {
+        let mut reader = bytes;
+        let mut r = SectionReader {
+            reader: &mut reader,
+            remaining: bytes.len() as u64,
+            unpacker: packed::Unpacker::default(),
+        };
+        r.packed("SHRA")
+    }
+
+    #[test]
+    fn packed_sections_round_trip_bit_for_bit_across_chunks() {
+        // More than one chunk; signed zeros, subnormals, NaN payloads and
+        // infinities, which any lossy or float-parsing path would change.
+        let mut values: Vec<f64> = (0..CHUNK_VALUES + 7)
+            .map(|i| ((i % 977) as f64).sqrt() * 1e-3 - 0.01)
+            .collect();
+        values[3] = -0.0;
+        values[4] = f64::from_bits(1);
+        values[5] = f64::from_bits(0x7ff8_0000_dead_beef);
+        values[CHUNK_VALUES] = f64::NEG_INFINITY;
+        let bytes = packed_section(&values);
+        let back = read_packed(&bytes).unwrap();
+        assert_eq!(back.len(), values.len());
+        assert!(values
+            .iter()
+            .zip(&back)
+            .all(|(a, b)| a.to_bits() == b.to_bits()));
+        // Compact: these values repeat (period 977), so deflate must find
+        // them; stored bytes would be 8 per value.
+        assert!(bytes.len() < 4 * values.len(), "{} bytes", bytes.len());
+        // An empty section is its tag and count alone.
+        assert_eq!(packed_section(&[]).len(), 12);
+        assert!(read_packed(&packed_section(&[])).unwrap().is_empty());
+    }
+
+    #[test]
+    fn damaged_packed_sections_are_errors_not_panics() {
+        let values: Vec<f64> = (0..1000).map(|i| (i as f64).ln_1p()).collect();
+        let good = packed_section(&values);
+        // Every truncation.
+        for cut in 0..good.len() {
+            let err = read_packed(&good[..cut]).unwrap_err();
+            assert!(err.to_string().starts_with("section SHRA"), "{cut}: {err}");
+        }
+        // A count of 10¹² values from a few kilobytes: refused by the deflate
+        // ratio bound before any chunk is read.
+        let mut bytes = good.clone();
+        bytes[4..12].copy_from_slice(&1_000_000_000_000u64.to_le_bytes());
+        let err = read_packed(&bytes).unwrap_err().to_string();
+        assert!(err.contains("announces") && err.contains("only"), "{err}");
+        // One value more than the chunk holds, and one fewer.
+        for count in [1001u64, 999] {
+            let mut bytes = good.clone();
+            bytes[4..12].copy_from_slice(&count.to_le_bytes());
+            let err = read_packed(&bytes).unwrap_err().to_string();
+            assert!(err.contains("chunk"), "{count}: {err}");
+        }
+        // A chunk length beyond what a chunk may have.
+        let mut bytes = good.clone();
+        bytes[12..16].copy_from_slice(&u32::MAX.to_le_bytes());
+        let err = read_packed(&bytes).unwrap_err().to_string();
+        assert!(err.contains("announces 4294967295 bytes"), "{err}");
+        // Flipped bits inside the deflate stream: an error, or values that
+        // differ (the envelope's checksum refuses those).
+        // (Not the last byte: its high bits may be padding after the stream.)
+        for at in [16, 40, good.len() / 2] {
+            let mut bytes = good.clone();
+            bytes[at] ^= 0x5a;
+            if let Ok(back) = read_packed(&bytes) {
+                assert!(back
+                    .iter()
+                    .zip(&values)
+                    .any(|(a, b)| a.to_bits() != b.to_bits()));
+            }
         }
     }
 

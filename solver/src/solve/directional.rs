@@ -11,6 +11,28 @@
 //!   frame (n, t), so a patch's coefficients are the area-weighted average of
 //!   its vertices' and evaluating them toward a receiver is meaningful (a
 //!   source never mixes frames: patches do not cross surfaces).
+//!
+//! ## Frames on smooth surfaces
+//!
+//! The SH frame of every vertex is its polygon's (n = the polygon's normal,
+//! t = its first edge), on a smooth surface too; the shading normal enters
+//! only the physics: the receiving cosine and horizon (the diffuse path's
+//! samples), and the glossy lobe's incidence cosine μ_i and mirror direction,
+//! taken about the vertex's shading normal and then written in the polygon's
+//! frame ([`GlossyLobe::add_lobe_sh_about`]: each SH band is closed under
+//! rotation, so that is the same function exactly, not an approximation). So
+//! the rule for a patch whose vertices have different shading normals is: its
+//! unshot SH is the area-weighted average of its vertices' ΔL, all written in
+//! the one frame of its polygon, which is the average of their radiance
+//! functions; no coefficients of two different frames are ever added, averaged
+//! or compared (gathering, refinement's interpolation and split test, and the
+//! output all stay within a polygon). Two polygons meeting at a smooth seam
+//! each keep a vertex there, with the same position and shading normal, so
+//! they receive the same radiance function, each in its own polygon's frame,
+//! and the runtime (which evaluates every vertex's SH in the frame written
+//! with it) shows the same radiance from both sides. No tangent field has to
+//! be continuous across polygons: none could be on a closed surface (the
+//! hairy-ball theorem; see docs/smooth-surfaces.md).
 //! * Per vertex: radiance coefficients (emission included) and the ΔL of the
 //!   shot in progress, `(L+1)² × 3` f64 each, in flat vectors with an offset
 //!   per vertex, laid out coefficient-major then RGB as in the solution file.
@@ -473,6 +495,7 @@ impl DirShot<'_> {
         let (q, visible, rays) =
             visible_samples(self.shot, mesh, v, self.pool, &mut scratch.sampling);
         let s = &mesh.surfaces[surface];
+        let shading = mesh.vertices[v as usize].normal;
         let source_count = coefficient_count(self.source_order);
         scratch.basis.resize(source_count, 0.0);
         scratch.unit.resize(count, 0.0);
@@ -503,9 +526,24 @@ impl DirShot<'_> {
             out[1] += diffuse.y;
             out[2] += diffuse.z;
             if let Some(lobe) = lobe {
-                let omega_i = sh::to_local(toward_source, s.normal, s.tangent);
                 scratch.unit.fill(0.0);
-                lobe.add_lobe_sh(omega_i, 1.0, &mut scratch.unit, &mut scratch.lobe_scratch);
+                if shading == s.normal {
+                    let omega_i = sh::to_local(toward_source, s.normal, s.tangent);
+                    lobe.add_lobe_sh(omega_i, 1.0, &mut scratch.unit, &mut scratch.lobe_scratch);
+                } else {
+                    // A smooth surface reflects about its shading normal; the
+                    // lobe is expressed in the polygon's frame, like every
+                    // coefficient of this surface (module documentation, "Frames").
+                    let mu_i = shading.dot(toward_source);
+                    let mirror = 2.0 * mu_i * shading - toward_source;
+                    lobe.add_lobe_sh_about(
+                        mu_i,
+                        sh::to_local(mirror, s.normal, s.tangent),
+                        1.0,
+                        &mut scratch.unit,
+                        &mut scratch.lobe_scratch,
+                    );
+                }
                 let e = irradiance * ks;
                 for (o, u) in out.chunks_exact_mut(3).zip(&scratch.unit) {
                     o[0] += u * e.x;
@@ -850,11 +888,11 @@ impl Solver {
                     .into_iter()
                     .map(|u| u.into_iter().map(f64::from_bits).collect())
                     .collect();
+                // The radiance and the unshot arrive masked (see
+                // `checkpoint.rs`), so they are checked once unmasked, by `resume`.
                 if !d
-                    .radiance
+                    .direct
                     .iter()
-                    .chain(&d.patch_unshot)
-                    .chain(&d.direct)
                     .chain(d.recorded_unshot.iter().flatten())
                     .all(|x| x.is_finite())
                 {

@@ -443,18 +443,18 @@ impl std::io::Write for Counting {
 fn directional_checkpoint_is_at_most_twice_the_solution_plus_the_patches() {
     // The bound's reason: each vertex SH coefficient is stored once in each
     // file, as an f64 in the checkpoint (exact resume needs its bits) and as an
-    // f32 in the solution, so those are exactly 2×. What else the checkpoint
-    // stores per vertex (~1 B of split log; the diffuse proxies and the
-    // recorded-shot part are recomputed on resume) is less than twice what the
-    // solution adds per vertex (36 B of position, normal, tangent; 12 B per
-    // triangle). The one part without a counterpart in the solution is each
-    // patch's unshot SH, 8 B per patch coefficient: so checkpoint ≤ 2 × solution
-    // + 8 × patch coefficients + the header sections (< 1 kB). Below 2× overall
-    // therefore needs the patch coefficients to be few beside the vertex ones, as
-    // here (one glossy surface, refined); the glossy Cornell box at medium, every
-    // white surface glossy at L = 15 and 4.7 vertices per patch, is 2.38×
-    // (docs/benchmarks.md, "Checkpoints at scale"). Storing the recorded-shot
-    // part (as large as the radiance) made it about 4×.
+    // f32 in the solution, so those are at most 2× (the checkpoint packs them
+    // losslessly, byte planes and deflate, which only shrinks them; a chunk
+    // that does not compress is stored with 5 bytes per 64 kB of framing, and
+    // its length, 4 bytes a MiB). What else the checkpoint stores per vertex
+    // (~1 B of split log; the diffuse proxies and the recorded-shot part are
+    // recomputed on resume) is less than twice what the solution adds per
+    // vertex (36 B of position, normal, tangent; 12 B per triangle). The one
+    // part without a counterpart in the solution is each patch's unshot SH,
+    // at most 8 B per patch coefficient: so checkpoint ≤ 2 × solution + 8 ×
+    // patch coefficients + the header sections and framing (< 1 kB here).
+    // Packed, this scene is well below 2× (docs/benchmarks.md, "Checkpoints
+    // at scale", has the glossy Cornell box too).
     let (scene, mut settings) = glossy_floor();
     settings.max_shots = 6;
     settings.adaptive = true;

@@ -20,10 +20,12 @@ use glam::DVec3;
 use rayon::prelude::*;
 use solution::sh::Y00;
 
-/// The directional arrays a checkpoint stores, borrowed.
+/// The directional arrays a checkpoint stores, borrowed (`direct` is not
+/// stored: it masks `radiance`, see `checkpoint.rs`).
 pub(in crate::solve) struct CheckpointSections<'a> {
     pub surface_order: &'a [u32],
     pub radiance: &'a [f64],
+    pub direct: &'a [f64],
     pub patch_unshot: &'a [f64],
     pub recorded_unshot: &'a [Vec<f64>],
 }
@@ -33,6 +35,7 @@ impl Directional {
         CheckpointSections {
             surface_order: &self.surface_order,
             radiance: &self.radiance,
+            direct: &self.direct,
             patch_unshot: &self.patch_unshot,
             recorded_unshot: &self.recorded_unshot,
         }
@@ -148,6 +151,121 @@ impl Solver {
         drop((direct, replay));
         d.recorded_unshot = recorded_unshot;
         self.directional = Some(d);
+    }
+}
+
+impl Solver {
+    /// Unmasks the radiance coefficients read from a checkpoint (stored as
+    /// their bits XOR the recorded-shot part's, see `checkpoint.rs`), once
+    /// `direct` has been recomputed; then every one must be finite.
+    pub(in crate::solve) fn unmask_directional_radiance(&mut self) -> Result<(), String> {
+        let Some(d) = self.directional.as_deref_mut() else {
+            return Ok(());
+        };
+        for (r, m) in d.radiance.iter_mut().zip(&d.direct) {
+            *r = f64::from_bits(r.to_bits() ^ m.to_bits());
+        }
+        if d.radiance.iter().all(|x| x.is_finite()) {
+            Ok(())
+        } else {
+            Err("it holds non-finite radiance coefficients".into())
+        }
+    }
+}
+
+/// A patch's unshot SH is masked by its prediction when the prediction's
+/// red c₀₀ is within this fraction of the unshot's: then they share sign,
+/// exponent and leading mantissa bits in most coefficients. (A patch that has
+/// shot holds only what arrived since, far below its vertices' radiance: its
+/// prediction would only add noise, so it is stored as it is.)
+const MASK_WITHIN: f64 = 0.25;
+
+impl Solver {
+    /// The prediction of patch `p`'s unshot SH from state a resume has before
+    /// it: the gather-weighted mean of its vertices' radiance coefficients.
+    /// A patch that never shot holds, up to the weights' changes as the mesh
+    /// refined, exactly that (every shot's ΔL was gathered into it with these
+    /// weights); the light of an emitter's own surface is not in it, but an
+    /// emitter shoots first.
+    fn unshot_prediction(&self, d: &Directional, p: usize, out: &mut Vec<f64>) {
+        out.clear();
+        out.resize(d.patch_range(&self.mesh, p).len(), 0.0);
+        let weights = &self.patch_weights[p];
+        let total: f64 = weights.iter().map(|w| w.1).sum();
+        if total <= 0.0 {
+            return;
+        }
+        for &(v, w) in weights {
+            let share = w / total;
+            for (o, c) in out
+                .iter_mut()
+                .zip(&d.radiance[d.vertex_range(&self.mesh, v as usize)])
+            {
+                *o += share * c;
+            }
+        }
+    }
+
+    /// Patch `p`'s unshot SH as a checkpoint stores it, into `out`: masked
+    /// (bits XOR those of [`Solver::unshot_prediction`]) when that is worth it;
+    /// returns whether it was masked.
+    pub(in crate::solve) fn masked_unshot(
+        &self,
+        p: usize,
+        prediction: &mut Vec<f64>,
+        out: &mut Vec<f64>,
+    ) -> bool {
+        let Some(d) = self.directional.as_deref() else {
+            return false;
+        };
+        let unshot = &d.patch_unshot[d.patch_range(&self.mesh, p)];
+        self.unshot_prediction(d, p, prediction);
+        let (u, q) = (unshot[0], prediction[0]);
+        let mask = u != 0.0 && (q - u).abs() <= MASK_WITHIN * u.abs();
+        out.clear();
+        out.extend(unshot.iter().zip(prediction.iter()).map(|(x, q)| {
+            if mask {
+                f64::from_bits(x.to_bits() ^ q.to_bits())
+            } else {
+                *x
+            }
+        }));
+        mask
+    }
+
+    /// Unmasks the patches' unshot SH read from a checkpoint (`masked`: one
+    /// flag per patch, as [`Solver::masked_unshot`] returned them), once the
+    /// radiance is unmasked and the weights rebuilt; then every coefficient
+    /// must be finite.
+    pub(in crate::solve) fn unmask_unshot(&mut self, masked: &[u32]) -> Result<(), String> {
+        let Some(mut d) = self.directional.take() else {
+            return Ok(());
+        };
+        let result = if masked.len() != self.mesh.patches.len() {
+            Err(format!(
+                "it has {} unshot flags for {} patches",
+                masked.len(),
+                self.mesh.patches.len()
+            ))
+        } else {
+            let mut prediction = Vec::new();
+            for (p, &flag) in masked.iter().enumerate() {
+                if flag != 0 {
+                    self.unshot_prediction(&d, p, &mut prediction);
+                    let range = d.patch_range(&self.mesh, p);
+                    for (x, q) in d.patch_unshot[range].iter_mut().zip(&prediction) {
+                        *x = f64::from_bits(x.to_bits() ^ q.to_bits());
+                    }
+                }
+            }
+            if d.patch_unshot.iter().all(|x| x.is_finite()) {
+                Ok(())
+            } else {
+                Err("it holds non-finite unshot coefficients".into())
+            }
+        };
+        self.directional = Some(d);
+        result
     }
 }
 
