@@ -703,8 +703,44 @@ impl Solver {
             }
         }
         eat(self.mesh.patches.len() as u64);
+        // A textured surface holds E/π and shoots through its texture, so a
+        // changed texture, Kd or UV map must refuse the resume. Untextured
+        // scenes add nothing here (their fingerprints are unchanged).
+        let mut digests: Vec<(*const crate::scene::SceneTexture, u64)> = Vec::new();
+        for (i, t) in self.texturing.per_surface.iter().enumerate() {
+            let Some(t) = t else { continue };
+            eat(i as u64);
+            let source = std::sync::Arc::as_ptr(&t.texture);
+            let digest = match digests.iter().find(|(s, _)| *s == source) {
+                Some(&(_, d)) => d,
+                None => {
+                    let d = texture_digest(&t.texture);
+                    digests.push((source, d));
+                    d
+                }
+            };
+            eat(digest);
+            let m = &t.map;
+            [t.kd, m.origin, m.du, m.dv]
+                .iter()
+                .flat_map(|v| v.to_array())
+                .chain(m.base.to_array())
+                .for_each(|c| eat(c.to_bits()));
+        }
         h
     }
+}
+
+/// FNV-1a over a texture's size and 8-bit texels, computed once per texture
+/// per fingerprint (surfaces that share a texture share its digest).
+fn texture_digest(texture: &crate::scene::SceneTexture) -> u64 {
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    let sizes = [texture.width.to_le_bytes(), texture.height.to_le_bytes()];
+    for b in sizes.iter().flatten().chain(&texture.rgba) {
+        h ^= *b as u64;
+        h = h.wrapping_mul(0x0000_0100_0000_01b3);
+    }
+    h
 }
 
 #[cfg(test)]

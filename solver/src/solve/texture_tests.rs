@@ -243,3 +243,32 @@ fn textures_are_counted_in_the_memory_budget() {
     let plain = Solver::new(&room(material("wall", 0.5, 0.0)), &settings()).unwrap();
     assert_eq!(plain.memory_counts().texture_bytes, 0);
 }
+
+#[test]
+fn a_checkpoint_refuses_a_changed_texture_and_resumes_the_same_one() {
+    // Textured vertices hold E/π and their patches shoot through the
+    // texture, so the unshot light of a checkpoint belongs to one texture: a
+    // resume on another (one texel changed) must be refused, and one on the
+    // same texels (a new, equal decode) accepted.
+    let wall = |t: Arc<SceneTexture>| {
+        let mut m = material("wall", 1.0, 0.0);
+        m.diffuse_texture = Some(t);
+        m
+    };
+    let checker = |x: u32, y: u32| if (x + y) % 2 == 0 { 200 } else { 60 };
+    let solver = solve(&room(wall(texture(8, checker))), 5);
+    let checkpoint = checkpoint::Checkpoint::round_trip(&solver);
+    let same = room(wall(texture(8, checker)));
+    assert!(Solver::resume(&same, &settings(), checkpoint.clone()).is_ok());
+    let changed = room(wall(texture(8, |x, y| {
+        if (x, y) == (3, 5) {
+            61
+        } else {
+            checker(x, y)
+        }
+    })));
+    let err = Solver::resume(&changed, &settings(), checkpoint)
+        .err()
+        .unwrap();
+    assert!(err.to_string().contains("fingerprint"), "{err}");
+}
