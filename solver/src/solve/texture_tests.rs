@@ -255,7 +255,7 @@ fn a_checkpoint_refuses_a_changed_texture_and_resumes_the_same_one() {
         m.diffuse_texture = Some(t);
         m
     };
-    let checker = |x: u32, y: u32| if (x + y) % 2 == 0 { 200 } else { 60 };
+    let checker = |x: u32, y: u32| if (x + y).is_multiple_of(2) { 200 } else { 60 };
     let solver = solve(&room(wall(texture(8, checker))), 5);
     let checkpoint = checkpoint::Checkpoint::round_trip(&solver);
     let same = room(wall(texture(8, checker)));
