@@ -38,9 +38,10 @@
 //!
 //! Everything else is either refused (compressed meshes and textures that a
 //! file requires, since then the mesh cannot be read) or warned about once
-//! per material or feature: textures (flat factors are used), alpha modes,
+//! per material or feature: textures other than the base colour's, or on
+//! another set than `TEXCOORD_0` (flat factors are used), alpha modes,
 //! transmission, clearcoat and the other material extensions, normal maps,
-//! texture transforms, double-sided materials, punctual lights (not turned
+//! double-sided materials, punctual lights (not turned
 //! into emitters: radiosity needs area emitters), skins, morph targets and
 //! animations.
 
