@@ -26,57 +26,14 @@ use std::path::{Path, PathBuf};
 
 /// Pixels per side of the compared images.
 const SIZE: u32 = 32;
-/// The checkerboard's two sRGB codes and its size.
-const LIGHT: u8 = 255;
-const DARK: u8 = 50;
-const TEXELS: u32 = 64;
-const SQUARES: u32 = 8;
 
-/// Writes the textured box into `dir` (see the module comment); returns the
-/// OBJ's path. `textured` false writes the plain box (white back wall) for
-/// the baseline.
+#[path = "../../tests/support/textured_cornell_scene.rs"]
+mod textured_cornell_scene;
+
+/// Writes the box (see `tests/support/textured_cornell_scene.rs`) into `dir`.
 fn write_scene(dir: &Path, textured: bool) -> PathBuf {
-    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..");
-    let obj = std::fs::read_to_string(root.join("config/cornell_box.obj")).unwrap();
-    let mut mtl = std::fs::read_to_string(root.join("config/cornell_box.mtl")).unwrap();
-    let mut out = String::new();
-    let mut in_back_wall = false;
-    for line in obj.lines() {
-        if line == "o back_wall" && textured {
-            // u runs right as the camera sees it (−x), v up: the wall's
-            // corners (549.6, 0), (0, 0), (0, 548.8), (556, 548.8) in (x, y)
-            // get u = (556 − x) / 556, v = y / 548.8, an affine image of the
-            // (planar) wall, so the importer's fit is exact.
-            out.push_str("vt 0.011510791 0\nvt 1 0\nvt 1 1\nvt 0 1\n");
-            in_back_wall = true;
-        } else if line.starts_with("o ") {
-            in_back_wall = false;
-        }
-        if in_back_wall && line.starts_with("usemtl") {
-            out.push_str("usemtl checker\n");
-        } else if in_back_wall && line.starts_with("f ") {
-            out.push_str("f 9/1/3 10/2/3 11/3/3 12/4/3\n");
-        } else {
-            out.push_str(line);
-            out.push('\n');
-        }
-    }
-    mtl.push_str("\nnewmtl checker\nKd 1 1 1\nmap_Kd checker.png\n");
-    let image = image::RgbImage::from_fn(TEXELS, TEXELS, |x, y| {
-        let per = TEXELS / SQUARES;
-        image::Rgb(
-            [if (x / per + y / per).is_multiple_of(2) {
-                LIGHT
-            } else {
-                DARK
-            }; 3],
-        )
-    });
-    image.save(dir.join("checker.png")).unwrap();
-    std::fs::write(dir.join("cornell_box.mtl"), mtl).unwrap();
-    let path = dir.join("cornell_box.obj");
-    std::fs::write(&path, out).unwrap();
-    path
+    let repo = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..");
+    textured_cornell_scene::write_scene(&repo, dir, textured)
 }
 
 fn scene(path: &Path, settings: &SolverSettings) -> Scene {

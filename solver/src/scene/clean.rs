@@ -179,7 +179,8 @@ fn diffuse_texture(
         );
         return None;
     }
-    let texture = super::texture_file::load_texture(file, at, warnings)?;
+    let texture =
+        super::texture_file::load_texture(file, raw.diffuse_bytes.as_deref(), at, warnings)?;
     let product = kd * texture.texture.mean();
     if product.max_element() < DARK_TEXTURE {
         warn(

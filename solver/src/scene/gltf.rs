@@ -38,9 +38,10 @@
 //!
 //! Everything else is either refused (compressed meshes and textures that a
 //! file requires, since then the mesh cannot be read) or warned about once
-//! per material or feature: textures (flat factors are used), alpha modes,
+//! per material or feature: textures other than the base colour's, or on
+//! another set than `TEXCOORD_0` (flat factors are used), alpha modes,
 //! transmission, clearcoat and the other material extensions, normal maps,
-//! texture transforms, double-sided materials, punctual lights (not turned
+//! double-sided materials, punctual lights (not turned
 //! into emitters: radiosity needs area emitters), skins, morph targets and
 //! animations.
 
@@ -48,7 +49,7 @@ use super::raw::{RawMaterial, RawPolygon, RawScene, DEFAULT_KD};
 use super::{SceneError, SourceRef, Warning};
 use crate::brdf::MIN_ALPHA;
 use base64::Engine as _;
-use glam::{DMat3, DMat4, DQuat, DVec3};
+use glam::{DAffine2, DMat3, DMat4, DQuat, DVec2, DVec3};
 use gltf::accessor::{DataType, Dimensions};
 use gltf::mesh::Mode;
 use gltf::{Document, Gltf, Semantic};
@@ -197,6 +198,7 @@ pub(crate) fn parse_gltf(path: &Path) -> Result<GltfScene, SceneError> {
         camera: None,
         warned_orthographic: false,
         warned_meshes: Vec::new(),
+        uv_maps: HashMap::new(),
     };
     builder.walk_scene()?;
     let Builder {
@@ -307,8 +309,8 @@ fn check_required_extensions(ctx: &Context, document: &Document) -> Result<(), S
                  positions and normals only: export again without quantization"
             }
             "KHR_texture_basisu" | "EXT_texture_webp" | "EXT_texture_avif" => {
-                "its textures cannot be read in that format (and textures are not yet modelled): \
-                 export again with PNG or JPEG textures"
+                "its textures cannot be read in that format (base-colour textures are read as \
+                 PNG or JPEG only): export again with PNG or JPEG textures"
             }
             known if TOLERATED_REQUIRED.contains(&known) => continue,
             _ => "this importer does not know that extension",
@@ -577,6 +579,9 @@ struct Builder<'a> {
     warned_orthographic: bool,
     /// Meshes already warned about (morph targets, points and lines).
     warned_meshes: Vec<usize>,
+    /// For each raw material with a base-colour texture, the map from the
+    /// primitive's `TEXCOORD_0` to the solver's UVs ([`uv_map`]).
+    uv_maps: HashMap<usize, DAffine2>,
 }
 
 impl Builder<'_> {
@@ -707,6 +712,12 @@ impl Builder<'_> {
                 ));
             }
             let material = self.material_for(&primitive);
+            let uvs = match self.uv_maps.get(&material) {
+                Some(&map) => {
+                    self.primitive_uvs(&primitive, &item, triangles.positions.len(), map)?
+                }
+                None => None,
+            };
             let source_item = match node.name() {
                 Some(name) => format!("node `{name}`, {item}"),
                 None => format!("node {}, {item}", node.index()),
@@ -732,7 +743,9 @@ impl Builder<'_> {
                     sizes: Default::default(),
                     object: object.clone(),
                     source: self.ctx.source(format!("{source_item}, triangle {t}")),
-                    uvs: None,
+                    uvs: uvs
+                        .as_ref()
+                        .map(|uv| order.iter().map(|&i| uv[i as usize]).collect()),
                 });
             }
         }
@@ -812,6 +825,35 @@ impl Builder<'_> {
         })
     }
 
+    /// A primitive's `TEXCOORD_0` through `map` (the texture transform and
+    /// glTF's downward v turned into the solver's upward v), one per
+    /// position; `None` when the primitive has none (the material's texture
+    /// is then unused there, which the cleaning step warns about).
+    fn primitive_uvs(
+        &self,
+        primitive: &gltf::Primitive,
+        item: &str,
+        positions: usize,
+        map: DAffine2,
+    ) -> Result<Option<Vec<DVec2>>, SceneError> {
+        let Some(accessor) = primitive.get(&Semantic::TexCoords(0)) else {
+            return Ok(None);
+        };
+        let uvs = read_vec2(self.ctx, self.buffers, &accessor, "TEXCOORD_0", item)?;
+        if uvs.len() != positions {
+            return Err(self.ctx.err(
+                item,
+                format!(
+                    "TEXCOORD_0 has {} elements for {positions} positions",
+                    uvs.len()
+                ),
+            ));
+        }
+        Ok(Some(
+            uvs.into_iter().map(|uv| map.transform_point2(uv)).collect(),
+        ))
+    }
+
     /// The raw material of a primitive, made (with its warnings) on first use.
     fn material_for(&mut self, primitive: &gltf::Primitive) -> usize {
         let material = primitive.material();
@@ -819,7 +861,13 @@ impl Builder<'_> {
             return i;
         }
         let (raw, warnings) = match material.index() {
-            Some(_) => convert_material(self.ctx, &material),
+            Some(_) => {
+                let (raw, warnings, uv_map) = convert_material(self.ctx, self.buffers, &material);
+                if let Some(map) = uv_map {
+                    self.uv_maps.insert(self.raw.materials.len(), map);
+                }
+                (raw, warnings)
+            }
             None => (
                 RawMaterial {
                     undefined: None,
@@ -969,7 +1017,13 @@ pub(crate) fn metallic_roughness(
 
 /// A glTF material as the solver's, with a warning for each feature of it
 /// that is not modelled.
-fn convert_material(ctx: &Context, material: &gltf::Material) -> (RawMaterial, Vec<Warning>) {
+/// The third value, for a material with a usable base-colour texture, maps
+/// its `TEXCOORD_0` to the solver's UVs.
+fn convert_material(
+    ctx: &Context,
+    buffers: &[Buffer],
+    material: &gltf::Material,
+) -> (RawMaterial, Vec<Warning>, Option<DAffine2>) {
     let index = material.index().unwrap_or(0);
     let name = material
         .name()
@@ -1007,32 +1061,26 @@ fn convert_material(ctx: &Context, material: &gltf::Material) -> (RawMaterial, V
     let strength = f64::from(material.emissive_strength().unwrap_or(1.0));
     let emission = DVec3::from_array(material.emissive_factor().map(f64::from)) * strength;
 
-    let mut textures = Vec::new();
-    let mut transformed = false;
-    let mut note = |what: &str, info: Option<gltf::texture::Info>| {
-        if let Some(info) = info {
-            textures.push(what.to_owned());
-            transformed |= info.extension_value("KHR_texture_transform").is_some();
-        }
+    let base_colour = match pbr.base_color_texture() {
+        Some(info) => base_colour_texture(ctx, buffers, &info, &mut warn),
+        None => None,
     };
-    note("baseColorTexture", pbr.base_color_texture());
-    note("metallicRoughnessTexture", pbr.metallic_roughness_texture());
-    note("emissiveTexture", material.emissive_texture());
+    let mut textures = Vec::new();
+    if pbr.metallic_roughness_texture().is_some() {
+        textures.push("metallicRoughnessTexture");
+    }
+    if material.emissive_texture().is_some() {
+        textures.push("emissiveTexture");
+    }
     if !textures.is_empty() {
         warn(format!(
-            "textures are not modelled yet: {} ignored, the flat factors used (base colour \
-             ({}, {}, {}), metallic {metallic}, roughness {roughness}, emissive ({}, {}, {}))",
+            "{} ignored, the flat factors used (metallic {metallic}, roughness {roughness}, \
+             emissive ({}, {}, {})): only base-colour textures are modelled",
             textures.join(", "),
-            r,
-            g,
-            b,
             emission.x,
             emission.y,
             emission.z
         ));
-    }
-    if transformed {
-        warn("KHR_texture_transform ignored: no textures are modelled yet".to_owned());
     }
     if material.normal_texture().is_some() {
         warn("normal map ignored: surfaces are shaded with their geometric normals".to_owned());
@@ -1066,15 +1114,133 @@ fn convert_material(ctx: &Context, material: &gltf::Material) -> (RawMaterial, V
         ks,
         alpha,
         emission,
-        source: ctx.source(item),
+        source: ctx.source(item.clone()),
         overridden_at: None,
         undefined: None,
         // This importer's warnings about unmodelled features are returned
         // beside the material (the MTL reader's per-statement list is not used).
         unmodelled: Vec::new(),
-        diffuse_map: None,
+        diffuse_map: base_colour
+            .as_ref()
+            .map(|t| (t.name.clone(), ctx.source(item.clone()))),
+        diffuse_bytes: base_colour.as_ref().and_then(|t| t.bytes.clone()),
     };
-    (raw, warnings)
+    (raw, warnings, base_colour.map(|t| t.uv_map))
+}
+
+/// A base-colour texture as the importer hands it on: decoded later by
+/// `texture_file` (like an MTL `map_Kd`) only if a polygon uses it.
+struct BaseColour {
+    /// The image file, or the glTF file and image index naming embedded bytes.
+    name: PathBuf,
+    /// The encoded image when it is not a file of its own.
+    bytes: Option<std::sync::Arc<[u8]>>,
+    uv_map: DAffine2,
+}
+
+/// The base-colour texture of a material (glTF 2.0 specification, §3.9.2:
+/// sRGB, multiplied by `baseColorFactor`, which is the MTL convention the
+/// solver follows: the factor · (1 − metallic) is Kd). `None`, with a
+/// warning, when it uses another set of texture coordinates than
+/// `TEXCOORD_0` or its image cannot be located.
+fn base_colour_texture(
+    ctx: &Context,
+    buffers: &[Buffer],
+    info: &gltf::texture::Info,
+    warn: &mut impl FnMut(String),
+) -> Option<BaseColour> {
+    let transform = info.extension_value("KHR_texture_transform");
+    let set = transform
+        .and_then(|t| t.get("texCoord"))
+        .and_then(|t| t.as_u64())
+        .unwrap_or(u64::from(info.tex_coord()));
+    if set != 0 {
+        warn(format!(
+            "baseColorTexture uses TEXCOORD_{set}; only TEXCOORD_0 is read, so the flat base \
+             colour is used"
+        ));
+        return None;
+    }
+    let image = info.texture().source();
+    let label = |how: &str| {
+        PathBuf::from(format!(
+            "{} images[{}] ({how})",
+            ctx.path.display(),
+            image.index()
+        ))
+    };
+    let (name, bytes) = match image.source() {
+        gltf::image::Source::View { view, .. } => {
+            // `check_views` has checked every view against its buffer.
+            let data = buffers[view.buffer().index()].data();
+            let bytes = data.get(view.offset()..view.offset() + view.length())?;
+            (
+                label(&format!("bufferView {}", view.index())),
+                Some(bytes.into()),
+            )
+        }
+        gltf::image::Source::Uri { uri, .. } if uri.starts_with("data:") => {
+            match decode_data_uri(uri) {
+                Ok(bytes) => (label("data URI"), Some(bytes.into())),
+                Err(why) => {
+                    warn(format!(
+                        "baseColorTexture: {why}; the flat base colour is used"
+                    ));
+                    return None;
+                }
+            }
+        }
+        gltf::image::Source::Uri { uri, .. } => {
+            let dir = ctx.path.parent().unwrap_or(Path::new(""));
+            match relative_file(dir, uri) {
+                Ok(file) => (file, None),
+                Err(why) => {
+                    warn(format!(
+                        "baseColorTexture: {why}; the flat base colour is used"
+                    ));
+                    return None;
+                }
+            }
+        }
+    };
+    Some(BaseColour {
+        name,
+        bytes,
+        uv_map: uv_map(transform),
+    })
+}
+
+/// glTF UVs to the solver's: `KHR_texture_transform` first (its README's
+/// matrix T(offset) · R(rotation) · S(scale), R = [[cos, −sin], [sin, cos]]
+/// in row form, applied to glTF's (u, v)), then glTF's v, which runs down
+/// from the image's top row, turned into the OBJ convention the solver and
+/// the solution file use (v up from the bottom row): v ↦ 1 − v.
+fn uv_map(transform: Option<&serde_json::Value>) -> DAffine2 {
+    let pair = |key: &str, default: f64| {
+        let value = transform.and_then(|t| t.get(key));
+        let at = |k: usize| {
+            value
+                .and_then(|v| v.get(k))
+                .and_then(|x| x.as_f64())
+                .filter(|x| x.is_finite())
+                .unwrap_or(default)
+        };
+        DVec2::new(at(0), at(1))
+    };
+    let rotation = transform
+        .and_then(|t| t.get("rotation"))
+        .and_then(|x| x.as_f64())
+        .filter(|x| x.is_finite())
+        .unwrap_or(0.0);
+    let (sin, cos) = rotation.sin_cos();
+    let gltf = DAffine2::from_translation(pair("offset", 0.0))
+        * DAffine2::from_mat2(glam::DMat2::from_cols(
+            DVec2::new(cos, sin),
+            DVec2::new(-sin, cos),
+        ))
+        * DAffine2::from_scale(pair("scale", 1.0));
+    let flip = DAffine2::from_cols(DVec2::X, DVec2::NEG_Y, DVec2::Y);
+    flip * gltf
 }
 
 /// The bytes an accessor's elements occupy, with their stride: the accessor
@@ -1170,6 +1336,66 @@ fn read_vec3(
             ]))
         };
         let v = DVec3::new(c(0), c(1), c(2));
+        if !v.is_finite() {
+            return Err(ctx.err(
+                item,
+                format!(
+                    "{what} accessor {}: element {k} is not finite",
+                    accessor.index()
+                ),
+            ));
+        }
+        out.push(v);
+    }
+    Ok(out)
+}
+
+/// A `VEC2` texture-coordinate accessor in f64: `FLOAT`, or normalized
+/// `UNSIGNED_BYTE` or `UNSIGNED_SHORT` (glTF 2.0 specification, §3.7.2.1),
+/// every value finite.
+fn read_vec2(
+    ctx: &Context,
+    buffers: &[Buffer],
+    accessor: &gltf::Accessor,
+    what: &str,
+    item: &str,
+) -> Result<Vec<DVec2>, SceneError> {
+    let size = match (accessor.data_type(), accessor.normalized()) {
+        (DataType::F32, false) => 4,
+        (DataType::U16, true) => 2,
+        (DataType::U8, true) => 1,
+        _ => 0,
+    };
+    if size == 0 || accessor.dimensions() != Dimensions::Vec2 {
+        return Err(ctx.err(
+            item,
+            format!(
+                "{what} accessor {} is {:?} {:?}{}; expected VEC2 of FLOAT, or of normalized \
+                 UNSIGNED_BYTE or UNSIGNED_SHORT",
+                accessor.index(),
+                accessor.dimensions(),
+                accessor.data_type(),
+                if accessor.normalized() {
+                    " normalized"
+                } else {
+                    ""
+                }
+            ),
+        ));
+    }
+    let (bytes, stride, count) = accessor_span(ctx, buffers, accessor, 2 * size, what, item)?;
+    let mut out = Vec::with_capacity(count);
+    for k in 0..count {
+        let e = &bytes[k * stride..k * stride + 2 * size];
+        let c = |j: usize| -> f64 {
+            let b = &e[j * size..(j + 1) * size];
+            match size {
+                4 => f64::from(f32::from_le_bytes([b[0], b[1], b[2], b[3]])),
+                2 => f64::from(u16::from_le_bytes([b[0], b[1]])) / 65535.0,
+                _ => f64::from(b[0]) / 255.0,
+            }
+        };
+        let v = DVec2::new(c(0), c(1));
         if !v.is_finite() {
             return Err(ctx.err(
                 item,

@@ -469,8 +469,7 @@ fn unmodelled_features_are_warned_once_each_naming_the_file() {
     assert_eq!(scene.raw.polygons.len(), 2, "two instances of the triangle");
     let warnings = &scene.raw.warnings;
     for phrase in [
-        "textures are not modelled yet: baseColorTexture, emissiveTexture ignored",
-        "KHR_texture_transform ignored",
+        "emissiveTexture ignored, the flat factors used",
         "normal map ignored",
         "alpha mode BLEND ignored",
         "doubleSided",
@@ -655,4 +654,194 @@ fn a_scene_config_can_name_a_gltf_file_as_geometry() {
         assert!((a - b).abs().max_element() <= 1e-12, "{a} vs {b}");
     }
     assert_eq!(scene.materials.len(), alone.scene.materials.len());
+}
+
+/// sRGB codes of the 2 × 2 texture of [`textured_quad`], rows from the
+/// image's top: distinct, so that a flipped or rotated lookup is caught.
+const QUAD_TEXELS: [[u8; 2]; 2] = [[255, 128], [64, 0]];
+
+/// The unit square in z = 0 facing +z (two triangles), `TEXCOORD_0` = (x, y)
+/// in glTF's convention (v down from the image's top row), with a white
+/// dielectric material whose base colour is the 2 × 2 PNG [`QUAD_TEXELS`],
+/// stored in a buffer view (with `mimeType`) after the geometry; and the same
+/// square, untextured and emitting, at z = 2 (the importer refuses a scene
+/// without light).
+fn textured_quad() -> Fixture {
+    let positions = [
+        [0.0, 0.0, 0.0],
+        [1.0, 0.0, 0.0],
+        [1.0, 1.0, 0.0],
+        [0.0, 1.0, 0.0],
+    ];
+    let mut bin = floats(&positions);
+    for uv in [[0f32, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]] {
+        bin.extend(uv.iter().flat_map(|v| v.to_le_bytes()));
+    }
+    for i in [0u16, 1, 2, 0, 2, 3] {
+        bin.extend_from_slice(&i.to_le_bytes());
+    }
+    let png =
+        crate::scene::texture_file::tests::png(2, 2, |x, y| QUAD_TEXELS[y as usize][x as usize]);
+    let png_at = bin.len();
+    bin.extend_from_slice(&png);
+    let json = json!({
+        "asset": {"version": "2.0"},
+        "scenes": [{"nodes": [0, 1]}],
+        "nodes": [{"mesh": 0}, {"mesh": 1, "translation": [0.0, 0.0, 2.0]}],
+        "meshes": [
+            {"primitives": [{"attributes": {"POSITION": 0, "TEXCOORD_0": 1}, "indices": 2, "material": 0}]},
+            {"primitives": [{"attributes": {"POSITION": 0}, "indices": 2, "material": 1}]}
+        ],
+        "materials": [{
+            "name": "checker",
+            "pbrMetallicRoughness": {"baseColorTexture": {"index": 0}, "baseColorFactor": [0.96, 0.96, 0.96, 1.0], "metallicFactor": 0.0}
+        }, {
+            "name": "lamp",
+            "emissiveFactor": [1.0, 1.0, 1.0]
+        }],
+        "textures": [{"source": 0}],
+        "images": [{"bufferView": 3, "mimeType": "image/png"}],
+        "buffers": [{"byteLength": bin.len()}],
+        "bufferViews": [
+            {"buffer": 0, "byteOffset": 0, "byteLength": 48},
+            {"buffer": 0, "byteOffset": 48, "byteLength": 32},
+            {"buffer": 0, "byteOffset": 80, "byteLength": 12},
+            {"buffer": 0, "byteOffset": png_at, "byteLength": png.len()}
+        ],
+        "accessors": [
+            {"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3", "min": [0.0, 0.0, 0.0], "max": [1.0, 1.0, 0.0]},
+            {"bufferView": 1, "componentType": 5126, "count": 4, "type": "VEC2"},
+            {"bufferView": 2, "componentType": 5123, "count": 6, "type": "SCALAR"}
+        ]
+    });
+    Fixture { json, bin }
+}
+
+/// The reflectance the imported scene gives the quad's point (x, y, 0), from
+/// each of its textured polygons' UV maps (all must agree: the UVs are affine
+/// in position).
+fn albedo_at(scene: &crate::scene::Scene, x: f64, y: f64) -> f64 {
+    let p = DVec3::new(x, y, 0.0) - scene.recentre_offset;
+    let values: Vec<f64> = scene
+        .polygons
+        .iter()
+        .filter(|p| scene.materials[p.material].name == "checker")
+        .map(|polygon| {
+            let uv = polygon
+                .uv_map
+                .expect("a textured polygon has a UV map")
+                .at(p);
+            let material = &scene.materials[polygon.material];
+            assert!(material.diffuse_texture.is_some(), "{:?}", scene.warnings);
+            material.kd_at(Some(uv)).x
+        })
+        .collect();
+    assert!(
+        values.len() == 2 && (values[0] - values[1]).abs() < 1e-9,
+        "{values:?}"
+    );
+    values[0]
+}
+
+/// The albedo of texel (column, row from the top) of [`QUAD_TEXELS`]: its
+/// linear value times Kd = baseColorFactor · (1 − metallic) = 0.96 (0.96, so
+/// that Kd + Ks, Ks = 0.04 for a dielectric, is 1 and nothing is rescaled).
+fn texel(column: usize, row: usize) -> f64 {
+    0.96 * f64::from(crate::texture::srgb_to_linear(QUAD_TEXELS[row][column]))
+}
+
+// At a texel's centre the bilinear lookup is that texel's linear value alone,
+// so the only error is f32 rounding of the UVs and the pyramid (1e-6).
+const TEXEL_TOLERANCE: f64 = 1e-6;
+
+#[test]
+fn base_colour_texture_gives_each_texel_centre_its_linear_albedo() {
+    let dir = tempfile::tempdir().unwrap();
+    let f = textured_quad();
+    // The image in a buffer view (GLB and .gltf + .bin) and as a data URI.
+    let mut uri = f.json.clone();
+    let png =
+        &f.bin[f.bin.len() - (f.json["bufferViews"][3]["byteLength"].as_u64().unwrap() as usize)..];
+    let data = base64::engine::general_purpose::STANDARD.encode(png);
+    uri["images"] = json!([{"uri": format!("data:image/png;base64,{data}")}]);
+    let paths = [
+        write_glb(dir.path(), "quad", &f),
+        write_gltf(dir.path(), "quad", &f),
+        write_gltf(
+            dir.path(),
+            "quad_uri",
+            &Fixture {
+                json: uri,
+                bin: f.bin.clone(),
+            },
+        ),
+    ];
+    for path in paths {
+        let scene = load(&path).scene;
+        // glTF's (u, v) = (x, y) with v down from the image's top: texel
+        // (column i, row j) is centred at x = (i + ½)/2, y = (j + ½)/2.
+        for (column, row) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
+            let (x, y) = (0.25 + 0.5 * column as f64, 0.25 + 0.5 * row as f64);
+            let got = albedo_at(&scene, x, y);
+            assert!(
+                (got - texel(column, row)).abs() <= TEXEL_TOLERANCE,
+                "{}: at ({x}, {y}) albedo {got}, texel ({column}, {row}) is {}",
+                path.display(),
+                texel(column, row)
+            );
+        }
+    }
+}
+
+#[test]
+fn texture_transform_offsets_scales_and_rotates_the_uvs() {
+    let dir = tempfile::tempdir().unwrap();
+    // Rotation π with offset (1, 1): (u, v) ↦ (1 − u, 1 − v) whichever way
+    // the rotation turns, so each texel centre shows the opposite texel.
+    let mut f = textured_quad();
+    f.json["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"]["extensions"] =
+        json!({"KHR_texture_transform": {"offset": [1.0, 1.0], "rotation": std::f64::consts::PI}});
+    let scene = load(&write_gltf(dir.path(), "turned", &f)).scene;
+    for (column, row) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
+        let (x, y) = (0.25 + 0.5 * column as f64, 0.25 + 0.5 * row as f64);
+        let got = albedo_at(&scene, x, y);
+        let want = texel(1 - column, 1 - row);
+        assert!(
+            (got - want).abs() <= TEXEL_TOLERANCE,
+            "at ({x}, {y}): {got} vs {want}"
+        );
+    }
+    // Offset (0.5, 0), scale (0.5, 1): u' = 0.5 + 0.5 u, so the quad's middle
+    // column x = 0.5 shows the right texels' centres (u' = 0.75), where the
+    // untransformed quad would blend both columns half and half.
+    f.json["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"]["extensions"] =
+        json!({"KHR_texture_transform": {"offset": [0.5, 0.0], "scale": [0.5, 1.0]}});
+    let scene = load(&write_gltf(dir.path(), "scaled", &f)).scene;
+    for row in [0, 1] {
+        let y = 0.25 + 0.5 * row as f64;
+        let got = albedo_at(&scene, 0.5, y);
+        assert!(
+            (got - texel(1, row)).abs() <= TEXEL_TOLERANCE,
+            "at (0.5, {y}): {got}"
+        );
+    }
+}
+
+#[test]
+fn base_colour_texture_on_another_uv_set_is_warned_and_flat() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut f = textured_quad();
+    f.json["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"]["texCoord"] = json!(1);
+    let loaded = load(&write_gltf(dir.path(), "set1", &f));
+    let checker = loaded.scene.materials.iter().find(|m| m.name == "checker");
+    assert!(checker.unwrap().diffuse_texture.is_none());
+    assert!(
+        loaded
+            .scene
+            .warnings
+            .iter()
+            .any(|w| w.message.contains("uses TEXCOORD_1")),
+        "{:?}",
+        loaded.scene.warnings
+    );
 }

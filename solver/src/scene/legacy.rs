@@ -309,6 +309,7 @@ pub(crate) fn parse_legacy_text(path: &Path, text: &str) -> Result<RawScene, Sce
             undefined: None,
             unmodelled: Vec::new(),
             diffuse_map: None,
+            diffuse_bytes: None,
         });
     }
     if let Some((no, tokens)) = content.next() {

@@ -70,6 +70,7 @@ pub(crate) fn parse_mtl(path: &Path, text: &str) -> Result<Vec<RawMaterial>, Sce
                 undefined: None,
                 unmodelled: Vec::new(),
                 diffuse_map: None,
+                diffuse_bytes: None,
             });
             warned.clear();
             continue;

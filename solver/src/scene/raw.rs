@@ -36,6 +36,10 @@ pub(crate) struct RawMaterial {
     /// folder, and where it was named. Read by [`super::clean`] only if a
     /// polygon uses the material.
     pub diffuse_map: Option<(PathBuf, SourceRef)>,
+    /// The diffuse texture's encoded bytes when they are not a file of their
+    /// own (a glTF image in a buffer view or a data URI); `diffuse_map`'s
+    /// path then only names them in messages.
+    pub diffuse_bytes: Option<std::sync::Arc<[u8]>>,
 }
 
 impl RawMaterial {
@@ -53,6 +57,7 @@ impl RawMaterial {
             undefined: Some(Warning { source, message }),
             unmodelled: Vec::new(),
             diffuse_map: None,
+            diffuse_bytes: None,
         }
     }
 

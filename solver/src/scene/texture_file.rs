@@ -25,14 +25,21 @@ pub const MAX_TEXTURE_TEXELS: u64 = 4096 * 4096;
 /// about 64 MiB; JPEGs are smaller).
 pub const MAX_TEXTURE_FILE_BYTES: u64 = 256 << 20;
 
-/// Loads `path` for the material at `source`; `None` (with a warning in
-/// `warnings`) when it cannot be used.
+/// Loads `path` for the material at `source`, or decodes `bytes` when the
+/// texture is not a file of its own (a glTF image in a buffer or a data URI;
+/// `path` then names it); `None` (with a warning in `warnings`) when it
+/// cannot be used.
 pub(crate) fn load_texture(
     path: &Path,
+    bytes: Option<&[u8]>,
     source: &SourceRef,
     warnings: &mut Vec<Warning>,
 ) -> Option<Arc<SceneTexture>> {
-    match read(path) {
+    let texture = match bytes {
+        Some(bytes) => decode(path, bytes),
+        None => read(path),
+    };
+    match texture {
         Ok(t) => Some(Arc::new(t)),
         Err(why) => {
             warnings.push(Warning {
@@ -57,12 +64,24 @@ fn read(path: &Path) -> Result<SceneTexture, String> {
         ));
     }
     let bytes = std::fs::read(path).map_err(|e| format!("cannot be read ({e})"))?;
+    decode(path, &bytes)
+}
+
+/// Decodes an encoded PNG or JPEG (`path` names it), its size checked from
+/// its header before anything is decoded.
+fn decode(path: &Path, bytes: &[u8]) -> Result<SceneTexture, String> {
+    if bytes.len() as u64 > MAX_TEXTURE_FILE_BYTES {
+        return Err(format!(
+            "the image has {} bytes, more than the {MAX_TEXTURE_FILE_BYTES} read",
+            bytes.len()
+        ));
+    }
     let reader = |bytes: &[u8]| {
         image::ImageReader::new(Cursor::new(bytes.to_vec()))
             .with_guessed_format()
             .map_err(|e| format!("cannot be read ({e})"))
     };
-    let header = reader(&bytes)?;
+    let header = reader(bytes)?;
     if header.format().is_none() {
         return Err("is neither a PNG nor a JPEG file".to_owned());
     }
@@ -70,7 +89,7 @@ fn read(path: &Path) -> Result<SceneTexture, String> {
         .into_dimensions()
         .map_err(|e| format!("its header cannot be read ({e})"))?;
     check_size(width, height)?;
-    let mut decoder = reader(&bytes)?;
+    let mut decoder = reader(bytes)?;
     let mut limits = image::Limits::default();
     limits.max_image_width = Some(width);
     limits.max_image_height = Some(height);
@@ -107,7 +126,7 @@ fn check_size(width: u32, height: u32) -> Result<(), String> {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::scene::{load_scene, ImportOptions};
     use glam::DVec3;
@@ -147,7 +166,7 @@ mod tests {
 
     fn load(path: &Path) -> (Option<Arc<SceneTexture>>, Vec<Warning>) {
         let mut warnings = Vec::new();
-        let t = load_texture(path, &SourceRef::default(), &mut warnings);
+        let t = load_texture(path, None, &SourceRef::default(), &mut warnings);
         (t, warnings)
     }
 
