@@ -190,6 +190,12 @@ pub struct SolverSettings {
     /// the machine's available memory.
     #[serde(skip)]
     pub memory_budget: Option<u64>,
+    /// Shoot every patch's mean unshot radiance uniformly, as Remington 1992
+    /// does, instead of from the quadrants of an unevenly lit patch
+    /// (`solve::regions`). Off by default; the directional transports always
+    /// shoot uniformly, so tests comparing them with the diffuse solve set it.
+    #[serde(default)]
+    pub uniform_shooters: bool,
 }
 
 fn default_crease_angle() -> f64 {
@@ -277,6 +283,7 @@ impl SolverSettings {
             strict: false,
             crease_angle: default_crease_angle(),
             memory_budget: None,
+            uniform_shooters: false,
         }
     }
 

@@ -128,6 +128,9 @@ fn with_ks_zero_directional_mode_equals_the_diffuse_solver() {
         diffuse.samples = 4;
         diffuse.max_shots = 12;
         diffuse.adaptive = adaptive;
+        // Directional mode shoots each patch's mean uniformly: the diffuse
+        // solve must too for the two to solve the same system.
+        diffuse.uniform_shooters = true;
         let mut directional = diffuse.clone();
         directional.mode = SolveMode::Directional;
         let mut a = Solver::new(&scene, &diffuse).unwrap();

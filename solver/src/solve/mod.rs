@@ -28,8 +28,9 @@
 //! * Power = π · U · A per channel for a diffuse emitter; totals sum the three
 //!   channels. The source each step is the patch with the most unshot power
 //!   (Remington 1992 shoots patches, not elements: the source count stays fixed as
-//!   elements refine, and the user-set patch grid is what bounds the error of
-//!   treating a source as uniform).
+//!   elements refine). An unevenly lit quad patch shoots from its four
+//!   quadrants, each with its own unshot radiance ([`regions`]), so the patch
+//!   grid no longer bounds the error of treating a source as uniform alone.
 //!
 //! ## Determinism
 //!
@@ -61,6 +62,7 @@ mod output;
 mod output_textured;
 pub(crate) use output::default_camera;
 mod refine;
+pub mod regions;
 mod seams;
 pub mod shoot;
 mod textured;
@@ -430,7 +432,7 @@ impl Solver {
         // local radiance level.
         let ambient = self.ambient();
         let unshot = std::mem::replace(&mut self.patch_unshot[source as usize], DVec3::ZERO);
-        let shot = Shot::for_patch(
+        let mut shot = Shot::for_patch(
             &self.mesh,
             source,
             self.shots,
@@ -461,6 +463,12 @@ impl Solver {
         if recorded {
             self.recorded_pools
                 .push(SamplePool::with_sets(&shot, shoot::REPLAY_POOL_SETS));
+        }
+        // Recorded (emitter) shots stay uniform: their replay to new vertices
+        // rebuilds them from the patch and its mean unshot alone. So do all
+        // shots when the settings ask for uniform shooters.
+        if !recorded && !self.settings.uniform_shooters {
+            shot.regions = self.source_regions(source, unshot).map(Box::new);
         }
         let pool = SamplePool::new(&shot);
         let plan = self.plan_receivers(&shot, &pool);
@@ -786,6 +794,27 @@ impl Solver {
             })
             .collect();
         self.hidden.extend(new);
+    }
+
+    /// The quadrants of quad patch `source` with unshot `unshot`, shaped by its
+    /// visible vertices' received radiance ([`regions`]); `None` for a
+    /// triangle or a patch lit evenly.
+    fn source_regions(&self, source: u32, unshot: DVec3) -> Option<regions::Regions> {
+        let patch = &self.mesh.patches[source as usize];
+        if patch.corner_count != 4 || unshot == DVec3::ZERO {
+            return None;
+        }
+        let emission = self.emission[patch.surface as usize];
+        let normal = self.mesh.surfaces[patch.surface as usize].normal;
+        let samples = self.patch_weights[source as usize]
+            .iter()
+            .filter(|(v, _)| !self.hidden[*v as usize])
+            .map(|&(v, w)| {
+                let position = self.mesh.vertices[v as usize].position;
+                let received = (self.radiance[v as usize] - emission).max(DVec3::ZERO);
+                (position, w, received)
+            });
+        regions::regions(&patch.corners, normal, unshot, samples)
     }
 
     /// Per vertex, whether it is hidden ([`hidden`]).

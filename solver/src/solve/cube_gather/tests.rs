@@ -412,6 +412,9 @@ fn with_ks_zero_the_cube_gather_equals_the_converged_progressive_solve() {
     diffuse.samples = 4;
     diffuse.threshold = 1e-7;
     diffuse.max_shots = 100_000;
+    // The cube gathers uniform patches: the progressive solve's quadrant
+    // shooters (`solve/regions.rs`) would solve a finer system.
+    diffuse.uniform_shooters = true;
     let mut progressive = Solver::new(&scene, &diffuse).unwrap();
     while progressive.step().is_some() {}
     let mut settings = cube_settings(2);
