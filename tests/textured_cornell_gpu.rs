@@ -36,14 +36,7 @@ const SIZE: u32 = 256;
 const WALL_DEPTH: f64 = 1359.2;
 
 fn camera() -> Camera {
-    Camera {
-        eye: [278.0, 273.0, -800.0],
-        target: [278.0, 273.0, 0.0],
-        up: [0.0, 1.0, 0.0],
-        fov_y_deg: 39.3077,
-        width: SIZE,
-        height: SIZE,
-    }
+    textured_cornell_scene::standard_camera(SIZE)
 }
 
 /// Writes the scene and a copy of `config/cornell_box.toml` (units,

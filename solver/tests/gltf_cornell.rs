@@ -22,6 +22,8 @@
 //! `--units-per-metre` flag); the glTF's default, metres, is tested in the
 //! importer's unit tests.
 
+mod common;
+
 use glam::DVec3;
 use serde_json::json;
 use solution::camera::Camera;
@@ -29,7 +31,7 @@ use solution::format::Solution;
 use solution::raster::{self, RenderOptions};
 use solver::compare::image::Image;
 use solver::compare::metrics::summarize;
-use solver::scene::{load_scene, smooth_scene, ImportOptions, Scene};
+use solver::scene::Scene;
 use solver::settings::{Preset, SolverSettings};
 use solver::solve::Solver;
 use std::collections::BTreeMap;
@@ -192,19 +194,8 @@ fn write_glb(
     std::fs::write(path, glb).unwrap();
 }
 
-/// The scene as `solver solve` prepares it: millimetres, default patches
-/// unless the preset sizes them, smooth groups.
 fn scene(path: &Path, settings: &SolverSettings) -> Scene {
-    let options = ImportOptions {
-        units_per_metre: Some(1000.0),
-        ..Default::default()
-    };
-    let mut scene = load_scene(path, &options).unwrap().scene;
-    if settings.patch_size.is_none() {
-        scene.fill_default_patches(settings.patches);
-    }
-    smooth_scene(&mut scene, settings.crease_angle);
-    scene
+    common::cornell_scene(path, settings)
 }
 
 /// Solves at the draft preset with `seed`: the solution and the emitted power.

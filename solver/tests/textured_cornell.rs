@@ -12,6 +12,8 @@
 //! at 32 × 32 pixels (2048 samples per pixel) from the standard camera, and
 //! compares image MARE with the same comparison for the untextured box.
 
+mod common;
+
 use glam::DVec3;
 use solution::camera::Camera;
 use solution::format::Solution;
@@ -19,7 +21,7 @@ use solution::raster::{self, RenderOptions};
 use solver::compare::image::Image;
 use solver::compare::metrics::summarize;
 use solver::reference::{Accumulator, Integrator, Physics, RenderScene};
-use solver::scene::{load_scene, smooth_scene, ImportOptions, Scene};
+use solver::scene::Scene;
 use solver::settings::{Preset, SolverSettings};
 use solver::solve::Solver;
 use std::path::{Path, PathBuf};
@@ -37,27 +39,11 @@ fn write_scene(dir: &Path, textured: bool) -> PathBuf {
 }
 
 fn scene(path: &Path, settings: &SolverSettings) -> Scene {
-    let options = ImportOptions {
-        units_per_metre: Some(1000.0),
-        ..Default::default()
-    };
-    let mut scene = load_scene(path, &options).unwrap().scene;
-    if settings.patch_size.is_none() {
-        scene.fill_default_patches(settings.patches);
-    }
-    smooth_scene(&mut scene, settings.crease_angle);
-    scene
+    common::cornell_scene(path, settings)
 }
 
 fn camera() -> Camera {
-    Camera {
-        eye: [278.0, 273.0, -800.0],
-        target: [278.0, 273.0, 0.0],
-        up: [0.0, 1.0, 0.0],
-        fov_y_deg: 39.3077,
-        width: SIZE,
-        height: SIZE,
-    }
+    textured_cornell_scene::standard_camera(SIZE)
 }
 
 /// The solution rendered by the CPU rasterizer at 4× the size, box-filtered

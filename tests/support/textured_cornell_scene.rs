@@ -10,6 +10,19 @@
 
 use std::path::{Path, PathBuf};
 
+/// The box's standard camera (the `config/cornell_box.toml` view), square
+/// images of `size` pixels.
+pub fn standard_camera(size: u32) -> solution::camera::Camera {
+    solution::camera::Camera {
+        eye: [278.0, 273.0, -800.0],
+        target: [278.0, 273.0, 0.0],
+        up: [0.0, 1.0, 0.0],
+        fov_y_deg: 39.3077,
+        width: size,
+        height: size,
+    }
+}
+
 /// The checkerboard's two sRGB codes and its size.
 pub const LIGHT: u8 = 255;
 pub const DARK: u8 = 50;
