@@ -183,27 +183,39 @@ fn a_textured_emitter_matches_the_path_tracer_reading_the_same_texture() {
     let ours = render_solution(&solution);
     let truth = path_trace(&textured, spp);
     let summary = summarize(&ours, &truth);
-    // The control: the flat-Ke solution (texture ignored) against the
+    // The baseline: the flat-Ke box, solved and path-traced alike.
+    let flat_solution = render_solution(&solve(&flat, &settings).0);
+    let baseline = summarize(&flat_solution, &path_trace(&flat, spp));
+    // The control: the flat-Ke solution (the texture ignored) against the
     // textured truth.
-    let ignored = summarize(&render_solution(&solve(&flat, &settings).0), &truth);
+    let ignored = summarize(&flat_solution, &truth);
     eprintln!(
         "textured emitter vs path tracer ({SIZE}², {spp} spp): MARE {:.4}, mean signed {:+.4}; \
-         texture ignored: MARE {:.4}, mean signed {:+.4}",
+         flat emitter: MARE {:.4}, mean signed {:+.4}; texture ignored: MARE {:.4}",
         summary.mare,
         summary.mean_signed_relative_error,
-        ignored.mare,
-        ignored.mean_signed_relative_error
+        baseline.mare,
+        baseline.mean_signed_relative_error,
+        ignored.mare
     );
-    // The bound: 0.15. The draft preset scores about 0.10 MARE on the
-    // (untextured) Cornell box against the same path tracer
-    // (`textured_cornell.rs`); here 512 spp add noise, and the pixels that
-    // straddle the screen's texture edge differ by the reconstruction
-    // (trilinear box texels in the rasterizer, bilinear in the path tracer).
-    // Ignoring the texture doubles the screen's power and shows its dark half
-    // 31× too bright: that scores far above the bound, asserted below.
-    assert!(summary.mare <= 0.15, "MARE {:.4}", summary.mare);
+    // The bound: the flat emitter's MARE under the same solve, renderer and
+    // path-tracer noise, plus 0.03, as for the textured Cornell box
+    // (`textured_cornell.rs`). What the texture adds: each patch shoots its
+    // mean Le uniformly (docs/textures.md, "Accuracy and patch size"), and
+    // the pixels that straddle the screen's texture edge differ by the
+    // reconstruction (trilinear box texels in the rasterizer, bilinear in the
+    // path tracer). Measured at commit time: textured 0.0840, flat 0.0758
+    // (both about −7% mean signed: the draft preset's bias). Ignoring the
+    // texture doubles the screen's power and shows its dark half 31× too
+    // bright: it scores 1.56, asserted to fail.
     assert!(
-        ignored.mare > 2.0 * 0.15,
+        summary.mare <= baseline.mare + 0.03,
+        "textured MARE {:.4} vs flat {:.4}",
+        summary.mare,
+        baseline.mare
+    );
+    assert!(
+        ignored.mare > 3.0 * (baseline.mare + 0.03),
         "the comparison must see the texture: ignoring it scores {:.4}",
         ignored.mare
     );
