@@ -3,13 +3,13 @@
 //! through the library, rendered by the CPU reference rasterizer
 //! (`solution::raster`, which shows Le(uv) from the textured batch) and
 //! compared with the path tracer (`solver::reference`, which reads Le(uv) at
-//! every hit and light sample). The files are written by the test: an OBJ
-//! with `vt`, an MTL with `Ke 4 4 4` and `map_Ke screen.png`, and a 16 × 16
-//! PNG whose left half is white (sRGB 255, linear 1) and right half dark
-//! (sRGB 50, linear 0.0319).
+//! every hit and light sample). The files are written by the test
+//! (`tests/support/emissive_box_scene.rs`, shared with the GPU test
+//! `tests/emissive_gpu.rs`): an OBJ with `vt`, an MTL with `Ke 4 4 4` and
+//! `map_Ke screen.png`, and a 16 × 16 PNG whose left half is white (sRGB 255,
+//! linear 1) and right half dark (sRGB 50, linear 0.0319).
 
 use glam::DVec3;
-use solution::camera::Camera;
 use solution::format::Solution;
 use solution::raster::{self, RenderOptions};
 use solver::compare::image::Image;
@@ -18,75 +18,14 @@ use solver::reference::{Accumulator, Integrator, Physics, RenderScene};
 use solver::scene::{load_scene, ImportOptions, Scene};
 use solver::settings::{Preset, SolverSettings};
 use solver::solve::Solver;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// Pixels per side of the compared images.
 const SIZE: u32 = 24;
-const TEXELS: u32 = 16;
-const WHITE: u8 = 255;
-const DARK: u8 = 50;
 
-/// The box: a unit cube open toward −z (floor, ceiling, left, right and back
-/// walls facing in, Kd 0.6) and a 0.5 × 0.5 screen 1 cm in front of the back
-/// wall facing the opening, Kd 0.2, mapped once onto the texture (u along
-/// +x, v along +y). `textured` false writes the same screen with the flat
-/// `Ke` alone (what a solver ignoring `map_Ke` would use).
-fn write_scene(dir: &Path, textured: bool) -> PathBuf {
-    // (corner, e1, e2) with e1 × e2 the inward normal.
-    let faces: [([f64; 3], [f64; 3], [f64; 3], &str); 6] = [
-        ([0.0, 0.0, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0], "wall"),
-        ([0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0], "wall"),
-        ([0.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0], "wall"),
-        ([1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, 1.0, 0.0], "wall"),
-        ([0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0], "wall"),
-        ([0.25, 0.3, 0.99], [0.0, 0.5, 0.0], [0.5, 0.0, 0.0], "screen"),
-    ];
-    let mut obj = String::from("mtllib box.mtl\nvt 0 0\nvt 0 1\nvt 1 1\nvt 1 0\n");
-    for (k, (c, e1, e2, material)) in faces.iter().enumerate() {
-        let (c, e1, e2) = (DVec3::from(*c), DVec3::from(*e1), DVec3::from(*e2));
-        for p in [c, c + e1, c + e1 + e2, c + e2] {
-            obj.push_str(&format!("v {} {} {}\n", p.x, p.y, p.z));
-        }
-        let v = 4 * k + 1;
-        obj.push_str(&format!("o face{k}\nusemtl {material}\n"));
-        if *material == "screen" {
-            obj.push_str(&format!(
-                "f {}/1 {}/2 {}/3 {}/4\n",
-                v,
-                v + 1,
-                v + 2,
-                v + 3
-            ));
-        } else {
-            obj.push_str(&format!("f {} {} {} {}\n", v, v + 1, v + 2, v + 3));
-        }
-    }
-    let map = if textured { "map_Ke screen.png\n" } else { "" };
-    std::fs::write(
-        dir.join("box.mtl"),
-        format!("newmtl wall\nKd 0.6 0.6 0.6\nnewmtl screen\nKd 0.2 0.2 0.2\nKe 4 4 4\n{map}"),
-    )
-    .unwrap();
-    image::RgbImage::from_fn(TEXELS, TEXELS, |x, _| {
-        image::Rgb([if x < TEXELS / 2 { WHITE } else { DARK }; 3])
-    })
-    .save(dir.join("screen.png"))
-    .unwrap();
-    let path = dir.join("box.obj");
-    std::fs::write(&path, obj).unwrap();
-    path
-}
-
-fn camera(size: u32) -> Camera {
-    Camera {
-        eye: [0.5, 0.5, -1.2],
-        target: [0.5, 0.5, 0.5],
-        up: [0.0, 1.0, 0.0],
-        fov_y_deg: 45.0,
-        width: size,
-        height: size,
-    }
-}
+#[path = "../../tests/support/emissive_box_scene.rs"]
+mod emissive_box_scene;
+use emissive_box_scene::{camera, write_scene, DARK};
 
 fn scene(path: &Path, settings: &SolverSettings) -> Scene {
     let options = ImportOptions {

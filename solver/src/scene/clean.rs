@@ -237,13 +237,7 @@ fn emission_texture(
         );
         return None;
     }
-    super::texture_file::load_texture(
-        file,
-        raw.emission_bytes.as_deref(),
-        at,
-        "map_Ke",
-        warnings,
-    )
+    super::texture_file::load_texture(file, raw.emission_bytes.as_deref(), at, "map_Ke", warnings)
 }
 
 fn describe_files(files: &[std::path::PathBuf]) -> String {

@@ -892,14 +892,21 @@ fn emissive_texture_multiplies_factor_and_strength_and_follows_its_transform() {
         for polygon in &screens {
             let got = m.emission_at(Some(polygon.uv_map.unwrap().at(p))).x;
             // f32 UVs and pyramid, times Le's scale 6.
-            assert!((got - want).abs() <= 6.0 * TEXEL_TOLERANCE, "({x}, {y}): {got} vs {want}");
+            assert!(
+                (got - want).abs() <= 6.0 * TEXEL_TOLERANCE,
+                "({x}, {y}): {got} vs {want}"
+            );
         }
     }
     // A zero factor emits nothing, whatever the texture: warned.
     f.json["materials"][0]["emissiveFactor"] = json!([0.0, 0.0, 0.0]);
     let loaded = load(&write_gltf(dir.path(), "dark", &f));
     assert!(
-        loaded.scene.warnings.iter().any(|w| w.message.contains("does not emit")),
+        loaded
+            .scene
+            .warnings
+            .iter()
+            .any(|w| w.message.contains("does not emit")),
         "{:?}",
         loaded.scene.warnings
     );

@@ -572,9 +572,15 @@ mod tests {
         assert!(w.message.contains("does not emit"), "{w}");
         assert_eq!(m[2].emission, DVec3::ONE);
         let w = &m[2].unmodelled[0];
-        assert_eq!(w.to_string().split(": ").next().unwrap(), "lib.mtl:9 (material bare)");
+        assert_eq!(
+            w.to_string().split(": ").next().unwrap(),
+            "lib.mtl:9 (material bare)"
+        );
         assert!(w.message.contains("Ke 1 1 1 is assumed"), "{w}");
-        assert_eq!(m[2].emission_map.as_ref().unwrap().0, Path::new("dir/s.png"));
+        assert_eq!(
+            m[2].emission_map.as_ref().unwrap().0,
+            Path::new("dir/s.png")
+        );
     }
 
     #[test]

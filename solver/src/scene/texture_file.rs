@@ -322,12 +322,22 @@ pub(crate) mod tests {
                 .any(|w| words.iter().all(|k| w.to_string().contains(k)))
         };
         assert!(
-            warned(&["s.mtl:6", "map_Ke texture", "nowhere.png: cannot be read", "flat Ke"]),
+            warned(&[
+                "s.mtl:6",
+                "map_Ke texture",
+                "nowhere.png: cannot be read",
+                "flat Ke"
+            ]),
             "{:?}",
             scene.warnings
         );
         assert!(
-            warned(&["s.mtl:9", "map_Ke texture", "texture coordinates", "flat Ke"]),
+            warned(&[
+                "s.mtl:9",
+                "map_Ke texture",
+                "texture coordinates",
+                "flat Ke"
+            ]),
             "{:?}",
             scene.warnings
         );

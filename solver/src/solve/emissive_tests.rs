@@ -35,12 +35,7 @@ fn halves(left: u8, right: u8) -> Arc<SceneTexture> {
 fn screen_over_floor(screen: Material, d: f64, n: u32) -> Scene {
     let c = DVec3::new(-0.5, d, -0.5);
     // Counter-clockwise seen from below: X × Z = −Y.
-    let emitter = vec![
-        c,
-        c + DVec3::X,
-        c + DVec3::X + DVec3::Z,
-        c + DVec3::Z,
-    ];
+    let emitter = vec![c, c + DVec3::X, c + DVec3::X + DVec3::Z, c + DVec3::Z];
     let f = DVec3::new(-1.5, 0.0, -1.5);
     // Counter-clockwise seen from above: Z × X = +Y.
     let floor = vec![
@@ -105,13 +100,21 @@ fn a_half_grey_half_white_emitter_emits_pi_times_the_integral_of_its_radiance() 
         let column = ((centre.x + 0.5) * 3.0).floor() as usize;
         let mean = [g, (g + 1.0) / 2.0, 1.0][column];
         let u = solver.patch_unshot()[p];
-        assert!((u - DVec3::splat(3.0 * mean)).abs().max_element() < 1e-12, "{u}");
+        assert!(
+            (u - DVec3::splat(3.0 * mean)).abs().max_element() < 1e-12,
+            "{u}"
+        );
         columns[column] += 1;
     }
     assert_eq!(columns, [3, 3, 3]);
     // The surface's vertices start at its mean Le (the display adds the
     // texture back: `output_textured.rs`).
-    assert!((solver.emission[0] - DVec3::splat(1.5 * (g + 1.0))).abs().max_element() < 1e-12);
+    assert!(
+        (solver.emission[0] - DVec3::splat(1.5 * (g + 1.0)))
+            .abs()
+            .max_element()
+            < 1e-12
+    );
 }
 
 #[test]
@@ -184,7 +187,12 @@ fn the_uniform_patch_error_shrinks_as_patch_size_squared_and_stays_within_its_bo
     let regions = |d: f64| {
         let half = |x0: f64| {
             let c = DVec3::new(x0, d, -0.5);
-            vec![c, c + DVec3::X * 0.5, c + DVec3::new(0.5, 0.0, 1.0), c + DVec3::Z]
+            vec![
+                c,
+                c + DVec3::X * 0.5,
+                c + DVec3::new(0.5, 0.0, 1.0),
+                c + DVec3::Z,
+            ]
         };
         vec![(half(-0.5), 1.0), (half(0.0), 0.0)]
     };
@@ -204,8 +212,8 @@ fn the_uniform_patch_error_shrinks_as_patch_size_squared_and_stays_within_its_bo
                 }
                 let polygon: Vec<DVec3> = patch.polygon().iter().map(|&q| q + offset).collect();
                 let le = solver.patch_unshot()[p].x;
-                let straddles = polygon.iter().any(|q| q.x < -1e-12)
-                    && polygon.iter().any(|q| q.x > 1e-12);
+                let straddles =
+                    polygon.iter().any(|q| q.x < -1e-12) && polygon.iter().any(|q| q.x > 1e-12);
                 if straddles {
                     let diam = (polygon[2] - polygon[0]).length();
                     bound_sum += 0.5 * patch.area * 1.0 * 0.5 * diam * gradient / d.powi(3);
@@ -229,7 +237,10 @@ fn the_uniform_patch_error_shrinks_as_patch_size_squared_and_stays_within_its_bo
             if n % 2 == 0 {
                 assert!(worst < 1e-9, "d {d}, {n}²: {worst}");
             } else {
-                assert!(worst <= bound_sum, "d {d}, {n}²: {worst} > bound {bound_sum}");
+                assert!(
+                    worst <= bound_sum,
+                    "d {d}, {n}²: {worst} > bound {bound_sum}"
+                );
             }
         }
     }
@@ -246,6 +257,9 @@ fn the_uniform_patch_error_shrinks_as_patch_size_squared_and_stays_within_its_bo
     for d in [0.25, 1.0] {
         let at = |n: u32| table.iter().find(|t| t.0 == d && t.1 == n).unwrap().2;
         let ratio = at(17) / at(9);
-        assert!(ratio <= 1.5 * (9.0f64 / 17.0).powi(2), "d {d}: ratio {ratio}");
+        assert!(
+            ratio <= 1.5 * (9.0f64 / 17.0).powi(2),
+            "d {d}: ratio {ratio}"
+        );
     }
 }

@@ -943,6 +943,8 @@ mod cluster_tests;
 #[cfg(test)]
 mod directional_tests;
 #[cfg(test)]
+mod emissive_tests;
+#[cfg(test)]
 mod hidden_tests;
 #[cfg(test)]
 mod physics_tests;
@@ -952,5 +954,3 @@ mod smooth_tests;
 mod tests;
 #[cfg(test)]
 mod texture_tests;
-#[cfg(test)]
-mod emissive_tests;
