@@ -10,14 +10,16 @@ pub const TEXELS: u32 = 16;
 pub const WHITE: u8 = 255;
 pub const DARK: u8 = 50;
 
+/// A face: (corner, e1, e2, material), e1 × e2 its inward normal.
+type Face = ([f64; 3], [f64; 3], [f64; 3], &'static str);
+
 /// The box: a unit cube open toward −z (floor, ceiling, left, right and back
 /// walls facing in, Kd 0.6) and a 0.5 × 0.5 screen 1 cm in front of the back
 /// wall facing the opening, Kd 0.2, mapped once onto the texture (u along
 /// +x, v along +y). `textured` false writes the same screen with the flat
 /// `Ke` alone (what a solver ignoring `map_Ke` would use).
 pub fn write_scene(dir: &Path, textured: bool) -> PathBuf {
-    // (corner, e1, e2) with e1 × e2 the inward normal.
-    let faces: [([f64; 3], [f64; 3], [f64; 3], &str); 6] = [
+    let faces: [Face; 6] = [
         ([0.0, 0.0, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0], "wall"),
         ([0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0], "wall"),
         ([0.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0], "wall"),
