@@ -50,9 +50,11 @@ use std::io::{self, Read, Write};
 
 mod packed;
 pub(super) use packed::CHUNK_VALUES;
+pub(super) mod precision;
 
-/// Bump when the meaning of the fields changes (3: the f64 arrays packed).
-pub const CHECKPOINT_VERSION: u32 = 3;
+/// Bump when the meaning of the fields changes (3: the f64 arrays packed;
+/// 4: directional masks use only the kept bits, [`precision`]).
+pub const CHECKPOINT_VERSION: u32 = 4;
 
 /// Everything [`Solver::resume`] needs, as read back from a checkpoint. See the
 /// module documentation. (Writing streams from the solver itself:
@@ -507,7 +509,7 @@ impl Solver {
                     .radiance
                     .iter()
                     .zip(sections.direct)
-                    .map(|(r, m)| f64::from_bits(r.to_bits() ^ m.to_bits())),
+                    .map(|(r, m)| f64::from_bits(r.to_bits() ^ precision::kept_bits(*m))),
             )?;
             // Masked where a prediction from the radiance is close (patches
             // that have not shot), with one flag per patch after it.

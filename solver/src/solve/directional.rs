@@ -73,6 +73,7 @@
 //! coefficient difference across an edge, down to [`min_glossy_edge`].
 
 use super::budget;
+use super::checkpoint::precision::round_to_kept;
 use super::refine::{Criteria, Field};
 use super::shoot::RecordedShot;
 use super::shoot::{visible_samples, SamplePool, SampleScratch, Shot};
@@ -791,12 +792,17 @@ impl Solver {
                 if area > 0.0 {
                     *u += s / area;
                 }
+                // The state keeps 40 mantissa bits (`checkpoint/precision.rs`).
+                *u = round_to_kept(*u);
             }
             let order = d.surface_order[self.mesh.patches[p].surface as usize];
             self.patch_unshot[p] = d.hemisphere_equivalent(order, &d.patch_unshot[range]);
         }
         d.received.fill(0.0);
         self.received.fill(DVec3::ZERO);
+        // Every coefficient, refinement's new vertices included, before the
+        // proxies are taken from them (`checkpoint/precision.rs`).
+        d.radiance.par_iter_mut().for_each(|x| *x = round_to_kept(*x));
         for v in 0..self.mesh.vertices.len() {
             let o = d.vertex_offset[v];
             self.radiance[v] = DVec3::from_slice(&d.radiance[o..o + 3]) * Y00;

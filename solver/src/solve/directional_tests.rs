@@ -384,6 +384,13 @@ fn resumed_directional_solve_equals_an_uninterrupted_one() {
     for _ in 0..3 {
         first.step().unwrap();
     }
+    // The state keeps 40 mantissa bits (`checkpoint/precision.rs`): the
+    // dropped ones are zero in every radiance and unshot coefficient, so the
+    // checkpoint stores no noise there.
+    let sections = first.directional().unwrap().checkpoint_sections();
+    let low = (1u64 << crate::solve::checkpoint::precision::DROPPED_BITS) - 1;
+    assert!(sections.radiance.iter().all(|x| x.to_bits() & low == 0));
+    assert!(sections.patch_unshot.iter().all(|x| x.to_bits() & low == 0));
     let state = Checkpoint::round_trip(&first);
     assert!(state.directional.is_some());
     let mut resumed = Solver::resume(&scene, &settings, state.clone()).unwrap();
