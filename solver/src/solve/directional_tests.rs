@@ -176,6 +176,10 @@ fn with_ks_zero_directional_mode_equals_the_diffuse_solver() {
         // directional mode does not yet, so those are not compared.
         let shared =
             super::seams::share_vertices_with_uvs(a.mesh(), a.vertex_radiance(), &|_, _| None);
+        let peak_coefficient = sa.batches[0]
+            .coefficients
+            .iter()
+            .fold(0.0f64, |m, x| m.max(x.abs() as f64));
         for (i, (x, y)) in sa.batches[0]
             .coefficients
             .iter()
@@ -185,7 +189,14 @@ fn with_ks_zero_directional_mode_equals_the_diffuse_solver() {
             if a.hidden_vertices()[shared.representative[i / 3] as usize] {
                 continue;
             }
-            assert!((x - y).abs() <= 1e-6 * x.abs().max(1e-30), "{x} {y}");
+            // Plus an absolute floor: directional mode keeps its state at 40
+            // mantissa bits (`checkpoint/precision.rs`) and its recorded-shot
+            // part at 53, so where the direct light is all a vertex has, the
+            // two no longer cancel exactly and refinement interpolates their
+            // difference, at most 2⁻⁴¹ of the radiance per shot: 12 shots ×
+            // 2⁻⁴¹ × the peak coefficient.
+            let floor = (12.0 * (2.0f64).powi(-41) * peak_coefficient) as f32;
+            assert!((x - y).abs() <= 1e-6 * x.abs() + floor, "{x} {y}");
         }
         assert_eq!(sa.batches[0].indices, sb.batches[0].indices);
     }
