@@ -32,13 +32,15 @@
 //! `UNSH` (packed, 3 per patch), `DIRC` (packed, 3 per vertex; these three are
 //! empty in directional mode); in
 //! directional mode then `SHOR` (u32 order per surface), `BRDF` (one u32),
-//! `SHRA` (packed, one per radiance coefficient, its bits XOR those of the
-//! coefficient's recorded-shot part), `SHUN` (packed, one per patch
-//! coefficient; a patch's bits XOR those of a prediction where `SHUM` flags
-//! it), `SHUM` (u32 per patch: 1 where masked), `SHRL` (u32 coefficient count
+//! `SHRA` (packed, one per radiance coefficient, its bits XOR the kept bits
+//! of the coefficient's recorded-shot part), `SHUN` (packed, one per patch
+//! coefficient; a patch's bits XOR the kept bits of a prediction where `SHUM`
+//! flags it), `SHUM` (u32 per patch: 1 where masked), `SHRL` (u32 coefficient count
 //! per recorded shot) and `SHRU` (their f64s). The masks turn bits that agree
 //! into zero bytes for deflate; a resume recomputes what masked them, exactly,
-//! and unmasks (`directional/state.rs`).
+//! and unmasks (`directional/state.rs`). Directional mode keeps its radiance
+//! and unshot coefficients at 40 mantissa bits ([`precision`]), so their 12
+//! low bits are zero, and the masks leave them so.
 //! The file envelope around it (magic, settings, checksum) is the command line's
 //! (`cli/solve/checkpoint.rs`).
 

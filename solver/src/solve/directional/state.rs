@@ -14,8 +14,8 @@
 //! the same additions in the same order gives the same bits.
 
 use super::{DirScratch, DirShot, Directional, Tables};
-use crate::solve::shoot::{RecordedShot, SamplePool, Shot};
 use crate::solve::checkpoint::precision::kept_bits;
+use crate::solve::shoot::{RecordedShot, SamplePool, Shot};
 use crate::solve::Solver;
 use glam::DVec3;
 use rayon::prelude::*;
