@@ -9,9 +9,11 @@
 //! in any way that matters physically (the output is f32, 2⁻²⁴; the solve's
 //! own error is ~1e-2), but the solve does read every bit it keeps, so a
 //! checkpoint that dropped them would not resume bit for bit. Instead the
-//! solve itself keeps [`KEPT_MANTISSA_BITS`]: at the end of every directional
-//! step each radiance and unshot coefficient is rounded to nearest
-//! ([`round_to_kept`]), and a checkpoint stores that state exactly. Its
+//! solve itself keeps [`KEPT_MANTISSA_BITS`]: each radiance coefficient is
+//! rounded to nearest ([`round_to_kept`]) as a shot adds to it (a vertex that
+//! refinement creates, at the end of that step), each patch's unshot as it is
+//! gathered, and the initial emission too; a checkpoint stores that state
+//! exactly. Its
 //! [`DROPPED_BITS`] low bits are then zero, which the byte planes of
 //! [`super::packed`] turn into runs that deflate to almost nothing, and a
 //! resume reads back the very state the uninterrupted solve continues from.
