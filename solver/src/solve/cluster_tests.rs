@@ -237,6 +237,7 @@ fn sparse_passes_match_whole_scene() {
         let solve = |whole_scene: bool| {
             let mut solver = Solver::new(&scene, &s).unwrap();
             solver.footprint.whole_scene = whole_scene;
+            solver.footprint.always_sparse = !whole_scene;
             while solver.step().is_some() {}
             solver
         };

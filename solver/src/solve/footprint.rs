@@ -11,15 +11,16 @@
 //! A surface none of whose vertices received anything therefore has no leaf
 //! with a changed corner and no patch whose unshot radiance changes: skipping
 //! it changes no bit of the solve. The passes below visit the surfaces
-//! *touched* by the shot (a vertex of them received a non-zero ΔL), in
-//! increasing order of patch and element, and add exactly what the
-//! whole-scene passes added, in the same order, so flat shooting, and bounded
-//! shooting at tolerance 0, are bit-identical to the whole-scene passes
-//! (tests `zero_tolerance_is_flat_to_the_bit`, `sparse_passes_match_whole_scene`).
-//!
-//! Flat shooting (Remington 1992) still visits every vertex: that is its
-//! definition. Bounded shooting (`cluster.rs`) visits only the vertices of its
-//! `Visit` surfaces, through a per-surface vertex index kept here.
+//! *touched* by the shot (bounded shooting's visited surfaces, and its
+//! bounded surfaces once their deposit is made), in increasing order of patch
+//! and element, and add exactly what the whole-scene passes added, in the
+//! same order. Flat shooting (Remington 1992) still visits every vertex (that
+//! is its definition), and its touched surfaces are those where a vertex
+//! received something: the passes after it shrink too where walls keep a
+//! shot in one room. When a shot touched more than half of the patches, one
+//! pass in order over everything is cheaper than the per-surface lists and
+//! is taken instead. Either way the bits are the same (tests
+//! `zero_tolerance_is_flat_to_the_bit`, `sparse_passes_match_whole_scene`).
 //!
 //! The index costs 4 bytes per vertex (one `u32` in its surface's list) plus a
 //! list header per surface.
@@ -75,6 +76,10 @@ pub(super) struct Footprint {
     /// footprint, to check that the sparse passes change nothing.
     #[cfg(test)]
     pub whole_scene: bool,
+    /// Tests only: never fall back to whole-scene passes, however much the
+    /// shot touched, so that a small scene exercises the sparse ones.
+    #[cfg(test)]
+    pub always_sparse: bool,
 }
 
 impl Footprint {
@@ -85,12 +90,21 @@ impl Footprint {
         false
     }
 
+    fn always_sparse(&self) -> bool {
+        #[cfg(test)]
+        return self.always_sparse;
+        #[cfg(not(test))]
+        false
+    }
+
     fn begin_shot(&mut self, surfaces: usize) {
         self.marked.clear();
         self.marked.resize(surfaces, false);
         self.touched.clear();
     }
 
+    /// Marks surface `s` as touched. Marking a surface whose vertices all
+    /// received exactly 0 costs a pass over it and changes nothing.
     fn mark(&mut self, s: u32) {
         if !self.marked[s as usize] {
             self.marked[s as usize] = true;
@@ -121,8 +135,21 @@ pub(super) fn shoot_receivers(
             .into_par_iter()
             .map_init(Scratch::default, receive)
             .collect();
-        return add_received(mesh, footprint, &mut state, 0.., &results, recorded);
+        // Flat shooting visits every vertex; the surfaces it touched are
+        // those where one received something (read in vertex order, so the
+        // surface ids stream from memory).
+        for (vertex, r) in mesh.vertices.iter().zip(&results) {
+            if r.radiance != DVec3::ZERO {
+                footprint.mark(vertex.surface);
+            }
+        }
+        return add_received(&mut state, 0.., &results, recorded);
     };
+    for (s, receipt) in plan.receipts.iter().enumerate() {
+        if *receipt == Receipt::Visit {
+            footprint.mark(s as u32);
+        }
+    }
     for v in std::mem::take(&mut footprint.last_visited) {
         state.visible[v as usize] = 0;
     }
@@ -149,23 +176,13 @@ pub(super) fn shoot_receivers(
             }
         })
         .collect();
-    let rays = add_received(
-        mesh,
-        footprint,
-        &mut state,
-        visit.iter().copied(),
-        &results,
-        recorded,
-    );
+    let rays = add_received(&mut state, visit.iter().copied(), &results, recorded);
     footprint.last_visited = visit;
     rays
 }
 
-/// Adds the shot's `results` at `vertices` (same order) and marks the
-/// surfaces of those that received something; returns the rays.
+/// Adds the shot's `results` at `vertices` (same order); returns the rays.
 fn add_received(
-    mesh: &Mesh,
-    footprint: &mut Footprint,
     state: &mut VertexState<'_>,
     vertices: impl Iterator<Item = u32>,
     results: &[Received],
@@ -181,27 +198,38 @@ fn add_received(
             state.direct[v] += r.radiance;
         }
         rays += r.rays as u64;
-        if r.radiance != DVec3::ZERO {
-            footprint.mark(mesh.vertices[v].surface);
-        }
     }
     rays
 }
 
 impl Solver {
     /// The patches of the surfaces this shot touched so far, in increasing
-    /// order: refinement's candidates lie on them (see the module
-    /// documentation).
-    pub(super) fn touched_patches(&self) -> Vec<u32> {
+    /// order: refinement's candidates lie on them, and only their unshot
+    /// radiance can change (see the module documentation). `None`: every
+    /// patch, when the shot may have touched every surface or touched more
+    /// than half of the patches, where one pass over the whole scene in
+    /// order is cheaper than the lists (and gives the same bits).
+    pub(super) fn touched_patches(&self) -> Option<Vec<u32>> {
         if self.footprint.whole_scene() {
-            return (0..self.mesh.patches.len() as u32).collect();
+            return None;
+        }
+        let count: usize = self
+            .footprint
+            .touched
+            .iter()
+            .map(|&s| self.surface_patches[s as usize].len())
+            .sum();
+        if 2 * count > self.mesh.patches.len() && !self.footprint.always_sparse() {
+            return None;
         }
         let mut surfaces = self.footprint.touched.clone();
         surfaces.sort_unstable();
-        surfaces
-            .iter()
-            .flat_map(|&s| self.surface_patches[s as usize].clone())
-            .collect()
+        Some(
+            surfaces
+                .iter()
+                .flat_map(|&s| self.surface_patches[s as usize].clone())
+                .collect(),
+        )
     }
 
     /// Gives every vertex of each bounded surface its surface's ΔL, as
@@ -247,7 +275,11 @@ impl Solver {
     /// documentation).
     pub(super) fn gather(&mut self) {
         self.footprint.surface_vertices.catch_up(&self.mesh);
-        let patches = self.touched_patches();
+        let touched = self.touched_patches();
+        let patches: Vec<u32> = match &touched {
+            Some(patches) => patches.clone(),
+            None => (0..self.mesh.patches.len() as u32).collect(),
+        };
         let (received, hidden) = (&self.received, &self.hidden);
         let (weights, rgb_weights) = (&self.patch_weights, &self.patch_rgb_weights);
         let sums: Vec<DVec3> = patches
@@ -277,7 +309,7 @@ impl Solver {
             }
         }
         self.unshot_changed(&patches);
-        if self.footprint.whole_scene() {
+        if touched.is_none() {
             self.received.fill(DVec3::ZERO);
             return;
         }

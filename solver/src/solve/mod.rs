@@ -526,7 +526,7 @@ impl Solver {
                     replay: &replay,
                     shot: &shot,
                     pool: &pool,
-                    scan: Some(&scan),
+                    scan: scan.as_deref(),
                 },
                 &refine::Criteria {
                     dark_floor: refine::DARK_FLOOR * self.radiance_level,
