@@ -11,8 +11,9 @@
 //! A surface none of whose vertices received anything therefore has no leaf
 //! with a changed corner and no patch whose unshot radiance changes: skipping
 //! it changes no bit of the solve. The passes below visit the surfaces
-//! *touched* by the shot (bounded shooting's visited surfaces, and its
-//! bounded surfaces once their deposit is made), in increasing order of patch
+//! *touched* by the shot (where a vertex received something: among bounded
+//! shooting's visited surfaces, and its bounded surfaces once their deposit
+//! is made), in increasing order of patch
 //! and element, and add exactly what the whole-scene passes added, in the
 //! same order. Flat shooting (Remington 1992) still visits every vertex (that
 //! is its definition), and its touched surfaces are those where a vertex
@@ -145,23 +146,23 @@ pub(super) fn shoot_receivers(
         }
         return add_received(&mut state, 0.., &results, recorded);
     };
-    for (s, receipt) in plan.receipts.iter().enumerate() {
-        if *receipt == Receipt::Visit {
-            footprint.mark(s as u32);
-        }
-    }
     for v in std::mem::take(&mut footprint.last_visited) {
         state.visible[v as usize] = 0;
     }
     let index = &footprint.surface_vertices;
+    let visited: Vec<u32> = plan
+        .receipts
+        .iter()
+        .enumerate()
+        .filter(|(_, r)| **r == Receipt::Visit)
+        .map(|(s, _)| s as u32)
+        .collect();
     let visit: Vec<u32> = if footprint.whole_scene() {
         (0..mesh.vertices.len() as u32).collect()
     } else {
-        plan.receipts
+        visited
             .iter()
-            .enumerate()
-            .filter(|(_, r)| **r == Receipt::Visit)
-            .flat_map(|(s, _)| index.of(s as u32).iter().copied())
+            .flat_map(|&s| index.of(s).iter().copied())
             .collect()
     };
     let visits =
@@ -176,6 +177,27 @@ pub(super) fn shoot_receivers(
             }
         })
         .collect();
+    // The touched surfaces: those where a visited vertex received something.
+    // A visited surface can get nothing (the bound knows no occluders: the
+    // rooms behind a wall are visited and receive 0), and leaving it out
+    // keeps the passes after the shot to where the light went.
+    let nothing = |r: &Received| r.radiance == DVec3::ZERO;
+    if footprint.whole_scene() {
+        for (v, r) in visit.iter().zip(&results) {
+            if !nothing(r) {
+                footprint.mark(mesh.vertices[*v as usize].surface);
+            }
+        }
+    } else {
+        let mut start = 0;
+        for &s in &visited {
+            let end = start + footprint.surface_vertices.of(s).len();
+            if !results[start..end].iter().all(nothing) {
+                footprint.mark(s);
+            }
+            start = end;
+        }
+    }
     let rays = add_received(&mut state, visit.iter().copied(), &results, recorded);
     footprint.last_visited = visit;
     rays
