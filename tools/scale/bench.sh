@@ -8,7 +8,11 @@
 #
 # Arguments are passed to scale-bench (see `scale-bench --help`): --families,
 # --sizes, --presets, --limit-s, --grace-s, --threads, --seed, --out (default
-# target/scale), --work, --keep. Results: OUT/scale.csv, OUT/scale.md,
+# target/scale), --work, --keep, --solver-arg (repeatable: one more argument
+# for every solve, e.g. --solver-arg=--shooting --solver-arg=bounded, or
+# --solver-arg=--max-shots --solver-arg=100 for the cost of the first shots of
+# scenes too large to solve in full; the table does not show them, so record
+# them with the figures). Results: OUT/scale.csv, OUT/scale.md,
 # OUT/scale-cpu.svg, OUT/scale-rss.svg. Record figures in docs/scale.md with
 # the commit, the machine and its load.
 set -euo pipefail

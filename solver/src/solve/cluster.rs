@@ -29,12 +29,14 @@
 //! [0, ΔL_max] would keep each vertex within τ of its flat value for this
 //! shot; the centroid's visible factor is the one-point estimate of the
 //! surface's mean. Deferring the deposit at tree nodes (option (b)) would make
-//! the shot O(visited nodes), but the step already does O(vertices) work per
-//! shot that is not the shooter's (the gather into patches, the ambient term,
-//! refinement's candidate scan), so a per-vertex add of a known ΔL (a few
-//! nanoseconds) is not what limits the slope, while the form factor and rays
-//! per vertex (microseconds) are; docs/benchmarks.md, "Bounded shooting", has
-//! the measured split.
+//! the shot O(visited nodes); it is not done because a per-vertex add of a
+//! known ΔL (a few nanoseconds, and only over the bounded surfaces' own
+//! vertices, `footprint.rs`) is not what limits the slope, while the form
+//! factor and rays per visited vertex (microseconds) are. The step's other
+//! passes (the gather into patches, the ambient term, the source choice,
+//! refinement's candidate scan) visit only the surfaces the shot touched or
+//! the patches it changed (`footprint.rs`, `unshot_tree.rs`);
+//! docs/benchmarks.md, "Bounded shooting", has the measured split.
 //!
 //! The deposit goes in after refinement has run on the visited surfaces, so a
 //! bounded surface is not scanned for splits by a shot that changed it by a
@@ -419,16 +421,6 @@ impl ReceiverTree {
     }
 }
 
-impl Plan {
-    /// Whether vertex `v` of `mesh` is visited ray by ray; every vertex is
-    /// when there is no plan (flat shooting).
-    pub fn visits(plan: Option<&Plan>, mesh: &Mesh, v: u32) -> bool {
-        plan.is_none_or(|p| {
-            p.receipts[mesh.vertices[v as usize].surface as usize] == Receipt::Visit
-        })
-    }
-}
-
 impl super::Solver {
     /// This shot's plan under bounded shooting (`None` when flat): the
     /// tolerance is `shooting_tolerance` × the scene's radiance level (the
@@ -440,30 +432,6 @@ impl super::Solver {
         }
         let tolerance = self.settings.shooting_tolerance * self.radiance_level;
         Some(self.receivers.plan(shot, pool, tolerance))
-    }
-
-    /// Gives every vertex of a bounded surface its surface's ΔL, as received
-    /// by this shot (so the gather puts it into the patches), and counts the
-    /// vertices visited and bounded. Run after refinement, before the gather.
-    pub(super) fn deposit_bounded(&mut self, plan: &Plan, recorded: bool) {
-        let mut bounded = 0u64;
-        let mut visited = 0u64;
-        for (v, vertex) in self.mesh.vertices.iter().enumerate() {
-            match plan.receipts[vertex.surface as usize] {
-                Receipt::Uniform(delta) => {
-                    self.radiance[v] += delta;
-                    self.received[v] = delta;
-                    if recorded {
-                        self.direct[v] += delta;
-                    }
-                    bounded += 1;
-                }
-                Receipt::Visit => visited += 1,
-                Receipt::Nothing => {}
-            }
-        }
-        self.timings.bounded_receivers += bounded;
-        self.timings.visited_receivers += visited;
     }
 }
 

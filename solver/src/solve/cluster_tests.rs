@@ -219,3 +219,43 @@ fn bounded_furnace_converges_to_le_over_one_minus_rho() {
         }
     }
 }
+
+/// The sparse passes (`footprint.rs`: shooting only the visited surfaces'
+/// vertices, refinement scanning only the touched surfaces' patches, the
+/// gather and the reset of ΔL over the touched surfaces only) against the same
+/// passes over the whole scene, as the step ran them before: a consistency
+/// check (the same solver twice), asserting bit-identical radiance, unshot
+/// radiance, splits and counts, with refinement on and a tolerance that
+/// bounds many receivers, for bounded and flat shooting. It holds exactly
+/// because an untouched surface has no changed leaf and adds exactly 0 to its
+/// patches (see `footprint.rs`).
+#[test]
+fn sparse_passes_match_whole_scene() {
+    let scene = cornell();
+    for (shooting, tolerance) in [(Shooting::Bounded, 0.02), (Shooting::Flat, 0.0)] {
+        let s = settings(shooting, tolerance, true);
+        let solve = |whole_scene: bool| {
+            let mut solver = Solver::new(&scene, &s).unwrap();
+            solver.footprint.whole_scene = whole_scene;
+            solver.footprint.always_sparse = !whole_scene;
+            while solver.step().is_some() {}
+            solver
+        };
+        let (sparse, whole) = (solve(false), solve(true));
+        if shooting == Shooting::Bounded {
+            assert!(sparse.timings().bounded_receivers > 0);
+        }
+        assert!(
+            sparse.mesh().split_log.len() > 10,
+            "refinement should split"
+        );
+        assert_eq!(sparse.mesh().split_log, whole.mesh().split_log);
+        assert_eq!(
+            bits(sparse.vertex_radiance()),
+            bits(whole.vertex_radiance())
+        );
+        assert_eq!(bits(&sparse.direct), bits(&whole.direct));
+        assert_eq!(bits(sparse.patch_unshot()), bits(whole.patch_unshot()));
+        assert_eq!(sparse.progress(), whole.progress());
+    }
+}

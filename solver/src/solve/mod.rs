@@ -61,11 +61,13 @@ pub mod hidden;
 mod output;
 mod output_textured;
 pub(crate) use output::default_camera;
+mod footprint;
 mod refine;
 pub mod regions;
 mod seams;
 pub mod shoot;
 mod textured;
+mod unshot_tree;
 
 pub use checkpoint::Checkpoint;
 pub use directional::{Directional, DirectionalCheckpoint, SourceChoice};
@@ -76,7 +78,7 @@ use crate::scene::Scene;
 use crate::settings::{SettingsError, SolverSettings};
 use glam::DVec3;
 use rayon::prelude::*;
-use shoot::{Received, RecordedShot, SamplePool, Scratch, Shot};
+use shoot::{RecordedShot, SamplePool, Scratch, Shot};
 use solution::format::SolveMode;
 use std::f64::consts::PI;
 use std::time::Instant;
@@ -234,6 +236,11 @@ pub struct Solver {
     refinement_capped: bool,
     /// The surfaces under a bounding-volume hierarchy, for bounded shooting.
     receivers: cluster::ReceiverTree,
+    /// What each shot touched, for the sparse passes ([`footprint`]).
+    footprint: footprint::Footprint,
+    /// The patches' unshot power under a tree of sums and maxima, built on the
+    /// first diffuse step ([`unshot_tree`]).
+    unshot_index: Option<unshot_tree::UnshotIndex>,
 }
 
 impl Solver {
@@ -408,6 +415,8 @@ impl Solver {
             peak_estimate: 0,
             refinement_capped: false,
             receivers,
+            footprint: footprint::Footprint::default(),
+            unshot_index: None,
         };
         solver.init_directional(scene)?;
         let all: Vec<u32> = (0..solver.mesh.surfaces.len() as u32).collect();
@@ -438,11 +447,12 @@ impl Solver {
             return self.step_directional();
         }
         let start = Instant::now();
-        let source = self.choose_source();
+        let source = self.brightest_patch();
         // The light not yet shot, this shot's included, for the meshing's
         // local radiance level.
-        let ambient = self.ambient();
+        let ambient = self.ambient_from_index();
         let unshot = std::mem::replace(&mut self.patch_unshot[source as usize], DVec3::ZERO);
+        self.unshot_changed(&[source]);
         let mut shot = Shot::for_patch(
             &self.mesh,
             source,
@@ -483,61 +493,60 @@ impl Solver {
         }
         let pool = SamplePool::new(&shot);
         let plan = self.plan_receivers(&shot, &pool);
-        let mesh = &self.mesh;
-        let results: Vec<Received> = (0..mesh.vertices.len() as u32)
-            .into_par_iter()
-            .map_init(Scratch::default, |scratch, v| {
-                if cluster::Plan::visits(plan.as_ref(), mesh, v) {
-                    shot.receive(mesh, v, &pool, scratch)
-                } else {
-                    Received::default()
-                }
-            })
-            .collect();
-        let mut rays = 0u64;
-        for (v, r) in results.iter().enumerate() {
-            self.radiance[v] += r.radiance;
-            self.received[v] = r.radiance;
-            self.visible[v] = r.visible;
-            if recorded {
-                self.direct[v] += r.radiance;
-            }
-            rays += r.rays as u64;
-        }
+        let mut rays = footprint::shoot_receivers(
+            &self.mesh,
+            &mut self.footprint,
+            refine::VertexState {
+                radiance: &mut self.radiance,
+                received: &mut self.received,
+                visible: &mut self.visible,
+                direct: &mut self.direct,
+            },
+            &shot,
+            &pool,
+            plan.as_ref(),
+            recorded,
+        );
         let shot_done = Instant::now();
         // A solve the memory budget stopped refining stays unrefined.
         let refined = if self.settings.adaptive && !self.refinement_capped {
             let mut split_budget = self.split_budget(None);
-            let replay = RecordedShot::rebuild_all(
+            let replay_shots = RecordedShot::rebuild_all(
                 &self.recorded,
                 &self.mesh,
                 &self.settings,
                 &self.occluder,
                 &self.kd,
             );
-            let refined = refine::refine(
+            // Only the touched surfaces' leaves can have a changed corner.
+            let scan = self.touched_patches();
+            let replay = refine::Replay {
+                recorded: &replay_shots,
+                pools: &self.recorded_pools,
+                current_recorded: recorded,
+            };
+            let refined = refine::refine_field(
                 &mut self.mesh,
-                refine::VertexState {
-                    radiance: &mut self.radiance,
-                    received: &mut self.received,
-                    visible: &mut self.visible,
-                    direct: &mut self.direct,
-                },
-                &refine::Replay {
-                    recorded: &replay,
-                    pools: &self.recorded_pools,
-                    current_recorded: recorded,
+                &mut refine::DiffuseField {
+                    state: refine::VertexState {
+                        radiance: &mut self.radiance,
+                        received: &mut self.received,
+                        visible: &mut self.visible,
+                        direct: &mut self.direct,
+                    },
+                    replay: &replay,
+                    shot: &shot,
+                    pool: &pool,
+                    scan: scan.as_deref(),
                 },
                 &refine::Criteria {
                     dark_floor: refine::DARK_FLOOR * self.radiance_level,
                     ambient,
                     ..refine::Criteria::from_settings(&self.settings)
                 },
-                &shot,
-                &pool,
                 &mut split_budget,
             );
-            drop(replay);
+            drop(replay_shots);
             self.after_refinement(&split_budget, None);
             refined
         } else {
@@ -552,6 +561,7 @@ impl Solver {
             self.deposit_bounded(plan, recorded);
         }
         self.update_patch_weights(&refined.dirty_patches);
+        self.unshot_changed(&refined.dirty_patches);
         self.gather();
         self.timings.shoot += (shot_done - start).as_secs_f64();
         self.timings.shoot_rays += rays - refined.rays;
@@ -559,7 +569,7 @@ impl Solver {
         self.timings.gather += refine_done.elapsed().as_secs_f64();
         self.shots += 1;
         self.rays += rays;
-        self.unshot_power = self.total_unshot_power();
+        self.unshot_power = self.unshot_power_from_index();
         self.seconds += start.elapsed().as_secs_f64();
         Some(ShotReport {
             shot: self.shots,
@@ -672,17 +682,15 @@ impl Solver {
     }
 
     fn total_unshot_power(&self) -> f64 {
-        self.mesh
-            .patches
-            .iter()
-            .zip(&self.patch_unshot)
-            .zip(&self.patch_shoot_area)
-            .map(|((_, u), a)| PI * a * u.element_sum())
-            .sum()
+        // Summed pairwise, as the diffuse step's tree sums it
+        // (`unshot_tree.rs`), so a resumed solve reports the same bits.
+        PI * unshot_tree::pairwise_unshot_area_sum(&self.patch_unshot, &self.patch_shoot_area)
+            .element_sum()
     }
 
     /// The patch with the most unshot power (Remington 1992 step 5a); ties go to the
-    /// lowest index.
+    /// lowest index. The diffuse step takes the same patch from its tree
+    /// (`unshot_tree.rs`); directional mode scans.
     fn choose_source(&self) -> u32 {
         let mut best = (0u32, f64::NEG_INFINITY);
         for (i, (a, u)) in self
@@ -831,43 +839,6 @@ impl Solver {
     /// Per vertex, whether it is hidden ([`hidden`]).
     pub fn hidden_vertices(&self) -> &[bool] {
         &self.hidden
-    }
-
-    /// Adds each patch's share of the shot's ΔL to its unshot radiance and
-    /// clears the vertices' ΔL: U_p += Σ_v w_vp ΔL_v / A_p, so π U_p A_p grows
-    /// by exactly the received power the display shows on the patch. Hidden
-    /// vertices are left out and A_p is then the visible part's area
-    /// (`patch_shoot_area`): U_p is the visible part's mean, and the shot's
-    /// visibility rays, blocked toward the hidden part, deliver its power.
-    fn gather(&mut self) {
-        let received = &self.received;
-        let hidden = &self.hidden;
-        let rgb_weights = &self.patch_rgb_weights;
-        self.patch_unshot
-            .par_iter_mut()
-            .zip(&self.patch_weights)
-            .zip(&self.patch_shoot_area)
-            .enumerate()
-            .for_each(|(p, ((unshot, weights), &area))| {
-                let visible = |v: u32| !hidden[v as usize];
-                // A textured patch reflects ∫ ρ ΔE/π dA (`textured.rs`).
-                let sum: DVec3 = match rgb_weights.get(p).filter(|w| !w.is_empty()) {
-                    None => weights
-                        .iter()
-                        .filter(|(v, _)| visible(*v))
-                        .map(|&(v, w)| received[v as usize] * w)
-                        .sum(),
-                    Some(rgb) => rgb
-                        .iter()
-                        .filter(|(v, _)| visible(*v))
-                        .map(|&(v, w)| received[v as usize] * w)
-                        .sum(),
-                };
-                if area > 0.0 {
-                    *unshot += sum / area;
-                }
-            });
-        self.received.fill(DVec3::ZERO);
     }
 }
 

@@ -258,6 +258,40 @@ pub trait Field: Sync {
     /// recorded) to the vertices `created` and adds the light; returns the
     /// rays traced.
     fn receive(&mut self, mesh: &Mesh, created: &[NewVertex]) -> u64;
+    /// The patches whose leaves may have a changed corner (the surfaces the
+    /// shot touched, `super::footprint`), sorted; `None`: every leaf is a
+    /// candidate, found by a scan of the whole mesh.
+    fn scan(&self) -> Option<&[u32]> {
+        None
+    }
+}
+
+/// The leaves with a changed corner, in increasing order: those of the
+/// patches `field.scan()` names, or of the whole mesh.
+fn changed_leaves<F: Field>(mesh: &Mesh, field: &F) -> Vec<u32> {
+    let changed = |e: u32| {
+        let el = &mesh.elements[e as usize];
+        el.is_leaf() && el.corners().iter().any(|&c| field.changed(c))
+    };
+    let Some(patches) = field.scan() else {
+        return (0..mesh.elements.len() as u32)
+            .into_par_iter()
+            .filter(|&e| changed(e))
+            .collect();
+    };
+    let mut leaves: Vec<u32> = patches
+        .par_iter()
+        .flat_map_iter(|&p| {
+            let mut leaves = Vec::new();
+            mesh.patch_leaves(p, &mut leaves);
+            leaves.retain(|&e| changed(e));
+            leaves
+        })
+        .collect();
+    // The whole-mesh scan's order, so the splits (and the new vertices' ids)
+    // come out the same.
+    leaves.sort_unstable();
+    leaves
 }
 
 /// Refines after a shot: tests the leaves the shot changed, splits, has the
@@ -274,16 +308,7 @@ pub fn refine_field<F: Field>(
 ) -> Refined {
     let mut dirty = vec![false; mesh.surfaces.len()];
     let mut out = Refined::default();
-    let mut candidates: Vec<u32> = {
-        let (mesh, field) = (&*mesh, &*field);
-        (0..mesh.elements.len() as u32)
-            .into_par_iter()
-            .filter(|&e| {
-                let el = &mesh.elements[e as usize];
-                el.is_leaf() && el.corners().iter().any(|&c| field.changed(c))
-            })
-            .collect()
-    };
+    let mut candidates: Vec<u32> = changed_leaves(mesh, field);
     let mut created = Vec::new();
     loop {
         let to_split: Vec<u32> = {
@@ -344,11 +369,17 @@ pub struct DiffuseField<'s, 'a, 'b> {
     pub replay: &'s Replay<'a, 'b>,
     pub shot: &'s Shot<'s>,
     pub pool: &'s SamplePool,
+    /// The patches to scan for candidates ([`Field::scan`]).
+    pub scan: Option<&'s [u32]>,
 }
 
 impl Field for DiffuseField<'_, '_, '_> {
     fn changed(&self, v: u32) -> bool {
         self.state.received[v as usize] != DVec3::ZERO
+    }
+
+    fn scan(&self) -> Option<&[u32]> {
+        self.scan
     }
 
     fn should_split(&self, mesh: &Mesh, criteria: &Criteria, e: u32) -> bool {
@@ -431,30 +462,6 @@ impl Field for DiffuseField<'_, '_, '_> {
         }
         total
     }
-}
-
-/// Refines after `shot` in diffuse mode ([`refine_field`] with a
-/// [`DiffuseField`]).
-pub fn refine(
-    mesh: &mut Mesh,
-    state: VertexState<'_>,
-    replay: &Replay<'_, '_>,
-    criteria: &Criteria,
-    shot: &Shot,
-    pool: &SamplePool,
-    budget: &mut SplitBudget,
-) -> Refined {
-    refine_field(
-        mesh,
-        &mut DiffuseField {
-            state,
-            replay,
-            shot,
-            pool,
-        },
-        criteria,
-        budget,
-    )
 }
 
 #[cfg(test)]

@@ -38,6 +38,9 @@ pub struct Config {
     pub work_dir: PathBuf,
     /// Keep each run's folder (scene, solution, log) instead of deleting it.
     pub keep: bool,
+    /// More arguments for every `solver solve` (after the preset, so they
+    /// override it): `--shooting bounded`, `--max-shots 200`.
+    pub solver_args: Vec<String>,
 }
 
 /// Runs every point, rewriting the reports after each so that a long
@@ -91,6 +94,7 @@ fn run_point(config: &Config, family: Family, size: usize, preset: &str) -> anyh
     if let Some(t) = config.threads {
         command.args(["--threads", &t.to_string()]);
     }
+    command.args(&config.solver_args);
     let measured = run_limited(&mut command, &log, config.limit, config.grace, &checkpoint)?;
     let log_text = std::fs::read_to_string(&log).unwrap_or_default();
     let status = match (measured.ending, measured.hit_limit) {

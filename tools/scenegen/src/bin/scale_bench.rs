@@ -55,6 +55,14 @@ struct Args {
     /// Keep each run's scene, solution and solver log.
     #[arg(long)]
     keep: bool,
+    /// One more argument for every `solver solve`, repeatable and passed in
+    /// order after the preset: `--solver-arg=--shooting --solver-arg=bounded`
+    /// compares the shooting methods, `--solver-arg=--max-shots
+    /// --solver-arg=200` measures the cost per shot of scenes too large to
+    /// solve in full. Record them with the figures: the table does not show
+    /// them.
+    #[arg(long = "solver-arg", allow_hyphen_values = true)]
+    solver_args: Vec<String>,
     /// Run nothing: merge these scale.csv files (comma-separated, in order)
     /// into one set of reports in --out.
     #[arg(long, value_delimiter = ',')]
@@ -102,6 +110,7 @@ fn main() -> anyhow::Result<()> {
         out_dir: args.out.clone(),
         work_dir: work_dir.clone(),
         keep: args.keep,
+        solver_args: args.solver_args,
     };
     let rows = run(&config).context("running the scale benchmark")?;
     if !args.keep {

@@ -1,0 +1,344 @@
+//! A shot's footprint: the surfaces it changed, so that the passes of a
+//! diffuse step after the shooting (refinement's candidate scan, the bounded
+//! surfaces' deposits, the gather into patches and the reset of the vertices'
+//! ΔL) visit those surfaces only, not the whole scene (issue 13: a shot whose
+//! cost does not grow with the whole scene).
+//!
+//! Every per-vertex quantity a shot changes lives on one surface: a vertex
+//! belongs to one surface (`MeshVertex::surface`), an element's corners and
+//! the T-vertices on its sides are its own surface's (the mesh's vertex keys
+//! name the surface), and so are the vertices a patch's gather weights name.
+//! A surface none of whose vertices received anything therefore has no leaf
+//! with a changed corner and no patch whose unshot radiance changes: skipping
+//! it changes no bit of the solve. The passes below visit the surfaces
+//! *touched* by the shot (where a vertex received something: among bounded
+//! shooting's visited surfaces, and its bounded surfaces once their deposit
+//! is made), in increasing order of patch
+//! and element, and add exactly what the whole-scene passes added, in the
+//! same order. Flat shooting (Remington 1992) still visits every vertex (that
+//! is its definition), and its touched surfaces are those where a vertex
+//! received something: the passes after it shrink too where walls keep a
+//! shot in one room. When a shot touched more than half of the patches, one
+//! pass in order over everything is cheaper than the per-surface lists and
+//! is taken instead. Either way the bits are the same (tests
+//! `zero_tolerance_is_flat_to_the_bit`, `sparse_passes_match_whole_scene`).
+//!
+//! The index costs 4 bytes per vertex (one `u32` in its surface's list) plus a
+//! list header per surface.
+
+use super::cluster::{Plan, Receipt};
+use super::refine::VertexState;
+use super::shoot::{Received, SamplePool, Scratch, Shot};
+use super::Solver;
+use crate::mesh::Mesh;
+use glam::DVec3;
+use rayon::prelude::*;
+
+/// Per surface, its vertex ids in increasing order. Vertices are only ever
+/// appended to the mesh (splits, a resume's replay of them), so the index
+/// catches up from the last vertex it saw.
+#[derive(Default)]
+pub(super) struct SurfaceVertices {
+    lists: Vec<Vec<u32>>,
+    indexed: usize,
+}
+
+impl SurfaceVertices {
+    /// Indexes the vertices added to `mesh` since the last call.
+    pub fn catch_up(&mut self, mesh: &Mesh) {
+        if self.lists.len() < mesh.surfaces.len() {
+            self.lists.resize_with(mesh.surfaces.len(), Vec::new);
+        }
+        for v in self.indexed..mesh.vertices.len() {
+            self.lists[mesh.vertices[v].surface as usize].push(v as u32);
+        }
+        self.indexed = mesh.vertices.len();
+    }
+
+    /// The vertices of surface `s`.
+    pub fn of(&self, s: u32) -> &[u32] {
+        self.lists.get(s as usize).map_or(&[], |l| l.as_slice())
+    }
+}
+
+/// The per-shot sets, reused from shot to shot.
+#[derive(Default)]
+pub(super) struct Footprint {
+    pub surface_vertices: SurfaceVertices,
+    /// Per surface: whether this shot touched it.
+    marked: Vec<bool>,
+    /// The touched surfaces, in the order they were marked.
+    touched: Vec<u32>,
+    /// The vertices the last bounded shot visited: their `visible` is reset
+    /// before the next shot, so that, as with flat shooting, `visible` holds
+    /// the current shot's counts and 0 elsewhere.
+    last_visited: Vec<u32>,
+    /// Tests only: run every pass over the whole scene, as before the
+    /// footprint, to check that the sparse passes change nothing.
+    #[cfg(test)]
+    pub whole_scene: bool,
+    /// Tests only: never fall back to whole-scene passes, however much the
+    /// shot touched, so that a small scene exercises the sparse ones.
+    #[cfg(test)]
+    pub always_sparse: bool,
+}
+
+impl Footprint {
+    fn whole_scene(&self) -> bool {
+        #[cfg(test)]
+        return self.whole_scene;
+        #[cfg(not(test))]
+        false
+    }
+
+    fn always_sparse(&self) -> bool {
+        #[cfg(test)]
+        return self.always_sparse;
+        #[cfg(not(test))]
+        false
+    }
+
+    fn begin_shot(&mut self, surfaces: usize) {
+        self.marked.clear();
+        self.marked.resize(surfaces, false);
+        self.touched.clear();
+    }
+
+    /// Marks surface `s` as touched. Marking a surface whose vertices all
+    /// received exactly 0 costs a pass over it and changes nothing.
+    fn mark(&mut self, s: u32) {
+        if !self.marked[s as usize] {
+            self.marked[s as usize] = true;
+            self.touched.push(s);
+        }
+    }
+}
+
+/// Shoots `shot` to its receivers and adds each one's ΔL to its radiance
+/// (and to its recorded-shot part when `recorded`): flat shooting (`plan`
+/// `None`) to every vertex, bounded shooting to the vertices of the surfaces
+/// its plan visits. Marks the surfaces touched; returns the rays. (A free
+/// function: the shot borrows the solver's occluder and reflectances.)
+pub(super) fn shoot_receivers(
+    mesh: &Mesh,
+    footprint: &mut Footprint,
+    mut state: VertexState<'_>,
+    shot: &Shot,
+    pool: &SamplePool,
+    plan: Option<&Plan>,
+    recorded: bool,
+) -> u64 {
+    footprint.surface_vertices.catch_up(mesh);
+    footprint.begin_shot(mesh.surfaces.len());
+    let receive = |scratch: &mut Scratch, v: u32| shot.receive(mesh, v, pool, scratch);
+    let Some(plan) = plan else {
+        let results: Vec<Received> = (0..mesh.vertices.len() as u32)
+            .into_par_iter()
+            .map_init(Scratch::default, receive)
+            .collect();
+        // Flat shooting visits every vertex; the surfaces it touched are
+        // those where one received something (read in vertex order, so the
+        // surface ids stream from memory).
+        for (vertex, r) in mesh.vertices.iter().zip(&results) {
+            if r.radiance != DVec3::ZERO {
+                footprint.mark(vertex.surface);
+            }
+        }
+        return add_received(&mut state, 0.., &results, recorded);
+    };
+    for v in std::mem::take(&mut footprint.last_visited) {
+        state.visible[v as usize] = 0;
+    }
+    let index = &footprint.surface_vertices;
+    let visited: Vec<u32> = plan
+        .receipts
+        .iter()
+        .enumerate()
+        .filter(|(_, r)| **r == Receipt::Visit)
+        .map(|(s, _)| s as u32)
+        .collect();
+    let visit: Vec<u32> = if footprint.whole_scene() {
+        (0..mesh.vertices.len() as u32).collect()
+    } else {
+        visited
+            .iter()
+            .flat_map(|&s| index.of(s).iter().copied())
+            .collect()
+    };
+    let visits =
+        |v: u32| plan.receipts[mesh.vertices[v as usize].surface as usize] == Receipt::Visit;
+    let results: Vec<Received> = visit
+        .par_iter()
+        .map_init(Scratch::default, |scratch, &v| {
+            if visits(v) {
+                receive(scratch, v)
+            } else {
+                Received::default()
+            }
+        })
+        .collect();
+    // The touched surfaces: those where a visited vertex received something.
+    // A visited surface can get nothing (the bound knows no occluders: the
+    // rooms behind a wall are visited and receive 0), and leaving it out
+    // keeps the passes after the shot to where the light went.
+    let nothing = |r: &Received| r.radiance == DVec3::ZERO;
+    if footprint.whole_scene() {
+        for (v, r) in visit.iter().zip(&results) {
+            if !nothing(r) {
+                footprint.mark(mesh.vertices[*v as usize].surface);
+            }
+        }
+    } else {
+        let mut start = 0;
+        for &s in &visited {
+            let end = start + footprint.surface_vertices.of(s).len();
+            if !results[start..end].iter().all(nothing) {
+                footprint.mark(s);
+            }
+            start = end;
+        }
+    }
+    let rays = add_received(&mut state, visit.iter().copied(), &results, recorded);
+    footprint.last_visited = visit;
+    rays
+}
+
+/// Adds the shot's `results` at `vertices` (same order); returns the rays.
+fn add_received(
+    state: &mut VertexState<'_>,
+    vertices: impl Iterator<Item = u32>,
+    results: &[Received],
+    recorded: bool,
+) -> u64 {
+    let mut rays = 0u64;
+    for (v, r) in vertices.zip(results) {
+        let v = v as usize;
+        state.radiance[v] += r.radiance;
+        state.received[v] = r.radiance;
+        state.visible[v] = r.visible;
+        if recorded {
+            state.direct[v] += r.radiance;
+        }
+        rays += r.rays as u64;
+    }
+    rays
+}
+
+impl Solver {
+    /// The patches of the surfaces this shot touched so far, in increasing
+    /// order: refinement's candidates lie on them, and only their unshot
+    /// radiance can change (see the module documentation). `None`: every
+    /// patch, when the shot may have touched every surface or touched more
+    /// than half of the patches, where one pass over the whole scene in
+    /// order is cheaper than the lists (and gives the same bits).
+    pub(super) fn touched_patches(&self) -> Option<Vec<u32>> {
+        if self.footprint.whole_scene() {
+            return None;
+        }
+        let count: usize = self
+            .footprint
+            .touched
+            .iter()
+            .map(|&s| self.surface_patches[s as usize].len())
+            .sum();
+        if 2 * count > self.mesh.patches.len() && !self.footprint.always_sparse() {
+            return None;
+        }
+        let mut surfaces = self.footprint.touched.clone();
+        surfaces.sort_unstable();
+        Some(
+            surfaces
+                .iter()
+                .flat_map(|&s| self.surface_patches[s as usize].clone())
+                .collect(),
+        )
+    }
+
+    /// Gives every vertex of each bounded surface its surface's ΔL, as
+    /// received by this shot (so the gather puts it into the patches), marks
+    /// those surfaces, and counts the vertices visited and bounded. Run after
+    /// refinement, before the gather.
+    pub(super) fn deposit_bounded(&mut self, plan: &Plan, recorded: bool) {
+        self.footprint.surface_vertices.catch_up(&self.mesh);
+        let mut bounded = 0u64;
+        let mut visited = 0u64;
+        for (s, receipt) in plan.receipts.iter().enumerate() {
+            let count = self.footprint.surface_vertices.of(s as u32).len() as u64;
+            match *receipt {
+                Receipt::Uniform(delta) => {
+                    for &v in self.footprint.surface_vertices.of(s as u32) {
+                        let v = v as usize;
+                        self.radiance[v] += delta;
+                        self.received[v] = delta;
+                        if recorded {
+                            self.direct[v] += delta;
+                        }
+                    }
+                    if delta != DVec3::ZERO && count > 0 {
+                        self.footprint.mark(s as u32);
+                    }
+                    bounded += count;
+                }
+                Receipt::Visit => visited += count,
+                Receipt::Nothing => {}
+            }
+        }
+        self.timings.bounded_receivers += bounded;
+        self.timings.visited_receivers += visited;
+    }
+
+    /// Adds each touched patch's share of the shot's ΔL to its unshot
+    /// radiance and clears the touched vertices' ΔL: U_p += Σ_v w_vp ΔL_v / A_p,
+    /// so π U_p A_p grows by exactly the received power the display shows on
+    /// the patch. Hidden vertices are left out and A_p is then the visible
+    /// part's area (`patch_shoot_area`): U_p is the visible part's mean, and
+    /// the shot's visibility rays, blocked toward the hidden part, deliver its
+    /// power. Untouched patches would add exactly 0 (see the module
+    /// documentation).
+    pub(super) fn gather(&mut self) {
+        self.footprint.surface_vertices.catch_up(&self.mesh);
+        let touched = self.touched_patches();
+        let patches: Vec<u32> = match &touched {
+            Some(patches) => patches.clone(),
+            None => (0..self.mesh.patches.len() as u32).collect(),
+        };
+        let (received, hidden) = (&self.received, &self.hidden);
+        let (weights, rgb_weights) = (&self.patch_weights, &self.patch_rgb_weights);
+        let sums: Vec<DVec3> = patches
+            .par_iter()
+            .map(|&p| {
+                let p = p as usize;
+                let visible = |v: u32| !hidden[v as usize];
+                // A textured patch reflects ∫ ρ ΔE/π dA (`textured.rs`).
+                match rgb_weights.get(p).filter(|w| !w.is_empty()) {
+                    None => weights[p]
+                        .iter()
+                        .filter(|(v, _)| visible(*v))
+                        .map(|&(v, w)| received[v as usize] * w)
+                        .sum(),
+                    Some(rgb) => rgb
+                        .iter()
+                        .filter(|(v, _)| visible(*v))
+                        .map(|&(v, w)| received[v as usize] * w)
+                        .sum(),
+                }
+            })
+            .collect();
+        for (&p, sum) in patches.iter().zip(sums) {
+            let area = self.patch_shoot_area[p as usize];
+            if area > 0.0 {
+                self.patch_unshot[p as usize] += sum / area;
+            }
+        }
+        self.unshot_changed(&patches);
+        if touched.is_none() {
+            self.received.fill(DVec3::ZERO);
+            return;
+        }
+        for &s in &self.footprint.touched {
+            for &v in self.footprint.surface_vertices.of(s) {
+                self.received[v as usize] = DVec3::ZERO;
+            }
+        }
+    }
+}
