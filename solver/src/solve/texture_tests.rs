@@ -300,13 +300,7 @@ fn glossy_wall(kd: f64) -> Material {
 
 /// E/π of a textured vertex in directional mode, and its coefficients.
 fn directional_vertex(solver: &Solver, v: usize) -> (DVec3, Vec<f64>) {
-    let d = solver.directional().unwrap();
-    let slot = &d.radiance[d.vertex_slot(&solver.mesh, v)];
-    let sh = &d.radiance[d.vertex_range(&solver.mesh, v)];
-    (
-        d.diffuse_proxy(solver.mesh.vertices[v].surface as usize, slot),
-        sh.to_vec(),
-    )
+    solver.directional_vertex(v)
 }
 
 #[test]
@@ -325,15 +319,17 @@ fn directional_a_uniform_texture_solves_as_its_flat_reflectance() {
     let s = directional_settings();
     let textured = solve_with(&room(textured_wall), &s, 20);
     let flat = solve_with(&room(glossy_wall(rho)), &s, 20);
-    let (dt, df) = (textured.directional().unwrap(), flat.directional().unwrap());
-    assert!(dt.textured.iter().any(|&t| t));
-    assert!(dt.surface_order.iter().any(|&o| o > 0), "the walls are glossy");
-    let peak = df.radiance.iter().fold(0.0f64, |m, c| m.max(c.abs()));
+    assert!(textured.directional_textured(0));
+    let orders = flat.directional().unwrap().surface_orders();
+    assert!(orders.iter().any(|&o| o > 0), "the walls are glossy");
+    let peak = (0..flat.mesh.vertices.len())
+        .flat_map(|v| flat.vertex_sh(v as u32).unwrap().1.to_vec())
+        .fold(0.0f64, |m, c| m.max(c.abs()));
     let scale = (4.0 * PI).sqrt();
     for v in 0..flat.mesh.vertices.len() {
-        let expected = &df.radiance[df.vertex_range(&flat.mesh, v)];
+        let expected = flat.vertex_sh(v as u32).unwrap().1;
         let (e, mut sh) = directional_vertex(&textured, v);
-        if dt.textured[textured.mesh.vertices[v].surface as usize] {
+        if textured.directional_textured(textured.mesh.vertices[v].surface as usize) {
             for c in 0..3 {
                 sh[c] += rho * e[c] * scale;
             }
@@ -428,7 +424,7 @@ fn directional_textured_sh_batches_round_trip_and_render_the_checkerboard() {
     let solver = solve_with(&room(wall), &directional_settings(), 12);
     let solution = solver.to_solution(false);
     let d = solver.directional().unwrap();
-    let wall_order = d.surface_order[0];
+    let wall_order = d.surface_orders()[0];
     assert!(wall_order > 0);
     let textured: Vec<_> = solution.batches.iter().filter(|b| b.texturing.is_some()).collect();
     assert_eq!(textured.len(), 1, "one textured material");
@@ -442,7 +438,7 @@ fn directional_textured_sh_batches_round_trip_and_render_the_checkerboard() {
     assert_eq!(texturing.factor, [0.9; 3]);
     // Flat walls: one output vertex per mesh vertex, in mesh order.
     let wall_vertices: Vec<usize> = (0..solver.mesh.vertices.len())
-        .filter(|&v| d.textured[solver.mesh.vertices[v].surface as usize])
+        .filter(|&v| solver.directional_textured(solver.mesh.vertices[v].surface as usize))
         .collect();
     assert_eq!(walls.vertices.len(), wall_vertices.len());
     let count = 3 * solution::sh::coefficient_count(wall_order);
@@ -501,7 +497,7 @@ fn cube_mode_shows_a_uniform_texture_as_its_flat_reflectance() {
     // per vertex, within f32 rounding (1e-6 relative). The untextured light
     // stays in an order-0 batch, and the two files have the same vertices.
     let rho = f64::from(crate::texture::srgb_to_linear(180));
-    let mut s = directional_settings();
+    let s = directional_settings();
     let limits = cube_gather::CubeLimits::default();
     let mut wall = material("wall", 0.8, 0.0);
     wall.diffuse_texture = Some(texture(8, |_, _| 180));

@@ -207,3 +207,23 @@ impl Solver {
         solution.batches.extend(batches);
     }
 }
+
+#[cfg(test)]
+impl Solver {
+    /// Vertex `v`'s diffuse proxy (E/π on a textured surface) and its SH
+    /// coefficients, in directional mode (for the texture tests).
+    pub(in crate::solve) fn directional_vertex(&self, v: usize) -> (DVec3, Vec<f64>) {
+        let Some(d) = self.directional.as_deref() else {
+            return (DVec3::ZERO, Vec::new());
+        };
+        let surface = self.mesh.vertices[v].surface as usize;
+        let slot = &d.radiance[d.vertex_slot(&self.mesh, v)];
+        let sh = &d.radiance[d.vertex_range(&self.mesh, v)];
+        (d.diffuse_proxy(surface, slot), sh.to_vec())
+    }
+
+    /// Whether directional mode models mesh surface `s` as textured.
+    pub(in crate::solve) fn directional_textured(&self, s: usize) -> bool {
+        self.directional.as_deref().is_some_and(|d| d.textured[s])
+    }
+}

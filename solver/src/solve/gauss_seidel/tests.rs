@@ -529,13 +529,16 @@ fn textured_cornell_means(patches: u32) -> (Vec<DVec3>, Vec<DVec3>, usize) {
         .unwrap()
         .scene;
     scene.fill_default_patches(patches);
-    // The back wall: the polygon facing +z (the camera looks down −z).
-    let back_polygon = scene
-        .polygons
-        .iter()
-        .position(|p| {
-            let n = crate::geometry::polygon::newell_normal(&p.vertices).normalize();
-            n.z > 0.99 && p.vertices.len() == 4
+    // The back wall: the farthest quad facing −z (the scene is re-centred).
+    let back_polygon = (0..scene.polygons.len())
+        .filter(|&i| {
+            let p = &scene.polygons[i];
+            p.normal().z < -0.99 && p.vertices.len() == 4
+        })
+        .max_by(|&a, &b| {
+            scene.polygons[a].vertices[0]
+                .z
+                .total_cmp(&scene.polygons[b].vertices[0].z)
         })
         .unwrap();
     let mut back = scene.materials[scene.polygons[back_polygon].material].clone();
