@@ -92,8 +92,7 @@ fn texture_diffuse_batch(
     // The cube solve's mesh, rebuilt: the same scene geometry, offset and
     // sizing give the same mesh (meshing is deterministic).
     let offset = super::scene_centre(scene);
-    let Ok(mesh) = Mesh::with_sizing(scene, offset, &Sizing::from_settings(settings, scene))
-    else {
+    let Ok(mesh) = Mesh::with_sizing(scene, offset, &Sizing::from_settings(settings, scene)) else {
         return;
     };
     if mesh.vertices.len() != result.vertex_count() {
@@ -106,7 +105,9 @@ fn texture_diffuse_batch(
         .vertices
         .iter()
         .enumerate()
-        .map(|(v, mv)| (!result.is_glossy(v as u32)).then(|| result.radiance_toward(v as u32, mv.normal)))
+        .map(|(v, mv)| {
+            (!result.is_glossy(v as u32)).then(|| result.radiance_toward(v as u32, mv.normal))
+        })
         .collect();
     let solution = &mut result.solution;
     // The order-0 batch holds the vertices with one RGB value, in mesh order.
@@ -148,11 +149,8 @@ fn texture_diffuse_batch(
         let g = match materials.iter().position(|&m| m == material) {
             Some(k) => k + 1,
             None => {
-                let texture = super::output_textured::texture_index(
-                    &mut sources,
-                    &mut solution.textures,
-                    t,
-                );
+                let texture =
+                    super::output_textured::texture_index(&mut sources, &mut solution.textures, t);
                 materials.push(material);
                 batches.push(empty(Some(Texturing {
                     texture,

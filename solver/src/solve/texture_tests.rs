@@ -336,7 +336,10 @@ fn directional_a_uniform_texture_solves_as_its_flat_reflectance() {
         }
         assert_eq!(sh.len(), expected.len());
         for (k, (a, b)) in sh.iter().zip(expected).enumerate() {
-            assert!((a - b).abs() <= 1e-9 * peak, "vertex {v} coefficient {k}: {a} vs {b}");
+            assert!(
+                (a - b).abs() <= 1e-9 * peak,
+                "vertex {v} coefficient {k}: {a} vs {b}"
+            );
         }
     }
     let (a, b) = (textured.progress(), flat.progress());
@@ -426,7 +429,11 @@ fn directional_textured_sh_batches_round_trip_and_render_the_checkerboard() {
     let d = solver.directional().unwrap();
     let wall_order = d.surface_orders()[0];
     assert!(wall_order > 0);
-    let textured: Vec<_> = solution.batches.iter().filter(|b| b.texturing.is_some()).collect();
+    let textured: Vec<_> = solution
+        .batches
+        .iter()
+        .filter(|b| b.texturing.is_some())
+        .collect();
     assert_eq!(textured.len(), 1, "one textured material");
     let walls = textured[0];
     assert_eq!(
@@ -444,11 +451,17 @@ fn directional_textured_sh_batches_round_trip_and_render_the_checkerboard() {
     let count = 3 * solution::sh::coefficient_count(wall_order);
     for (k, &v) in wall_vertices.iter().enumerate() {
         let (e, sh) = directional_vertex(&solver, v);
-        assert_eq!(texturing.vertices[k].irradiance_over_pi, e.as_vec3().to_array());
+        assert_eq!(
+            texturing.vertices[k].irradiance_over_pi,
+            e.as_vec3().to_array()
+        );
         let stored = &walls.coefficients[k * count..(k + 1) * count];
         assert!(stored.iter().zip(&sh).all(|(a, b)| *a == *b as f32));
     }
-    assert!(walls.coefficients.iter().any(|&c| c != 0.0), "a glossy term");
+    assert!(
+        walls.coefficients.iter().any(|&c| c != 0.0),
+        "a glossy term"
+    );
     let bytes = solution::format::encode(&solution).unwrap();
     assert_eq!(solution::format::decode(&bytes).unwrap(), solution);
 
@@ -461,14 +474,22 @@ fn directional_textured_sh_batches_round_trip_and_render_the_checkerboard() {
         solution::raster::render(&s, &view, &Default::default()).unwrap()
     };
     let (t, w, b) = (
-        solution::raster::render(&solution, &far_wall_view(&solution, 48), &Default::default())
-            .unwrap(),
+        solution::raster::render(
+            &solution,
+            &far_wall_view(&solution, 48),
+            &Default::default(),
+        )
+        .unwrap(),
         render(255),
         render(0),
     );
     let mut ratios: Vec<f64> = Vec::new();
     for k in 0..t.pixels.len() {
-        let (tp, wp, bp) = (t.pixels[k][1] as f64, w.pixels[k][1] as f64, b.pixels[k][1] as f64);
+        let (tp, wp, bp) = (
+            t.pixels[k][1] as f64,
+            w.pixels[k][1] as f64,
+            b.pixels[k][1] as f64,
+        );
         if wp - bp > 1e-6 {
             ratios.push((tp - bp) / (wp - bp));
         }
@@ -503,7 +524,10 @@ fn cube_mode_shows_a_uniform_texture_as_its_flat_reflectance() {
     wall.diffuse_texture = Some(texture(8, |_, _| 180));
     let (textured, warnings) =
         cube_textured::solve_cube_textured(&room(wall), &s, &limits).unwrap();
-    assert!(!warnings.is_empty(), "the mean-reflectance transport is said");
+    assert!(
+        !warnings.is_empty(),
+        "the mean-reflectance transport is said"
+    );
     let (flat, none) =
         cube_textured::solve_cube_textured(&room(material("wall", 0.8 * rho, 0.0)), &s, &limits)
             .unwrap();
@@ -570,8 +594,18 @@ fn directional_textured_resume_continues_bit_for_bit() {
     assert!(!straight.mesh.split_log.is_empty(), "the walls refined");
     assert_eq!(straight.mesh.split_log, resumed.mesh.split_log);
     for v in 0..straight.mesh.vertices.len() {
-        let (a, b) = (straight.directional_vertex(v), resumed.directional_vertex(v));
-        assert_eq!(a.0.to_array().map(f64::to_bits), b.0.to_array().map(f64::to_bits));
-        assert!(a.1.iter().zip(&b.1).all(|(x, y)| x.to_bits() == y.to_bits()));
+        let (a, b) = (
+            straight.directional_vertex(v),
+            resumed.directional_vertex(v),
+        );
+        assert_eq!(
+            a.0.to_array().map(f64::to_bits),
+            b.0.to_array().map(f64::to_bits)
+        );
+        assert!(a
+            .1
+            .iter()
+            .zip(&b.1)
+            .all(|(x, y)| x.to_bits() == y.to_bits()));
     }
 }

@@ -145,7 +145,11 @@ impl Solver {
         let mut local = vec![(usize::MAX, 0u32); mesh.vertices.len()];
         for (v, mv) in mesh.vertices.iter().enumerate() {
             let surface = mv.surface as usize;
-            let Some(t) = self.texturing.get(mv.surface).filter(|_| d.textured[surface]) else {
+            let Some(t) = self
+                .texturing
+                .get(mv.surface)
+                .filter(|_| d.textured[surface])
+            else {
                 continue;
             };
             let s = &mesh.surfaces[surface];

@@ -417,7 +417,11 @@ fn checkerboard(size: u32, square: u32) -> std::sync::Arc<crate::scene::SceneTex
     let mut rgba = Vec::new();
     for y in 0..size {
         for x in 0..size {
-            let c = if (x / square + y / square) % 2 == 0 { 255 } else { 50 };
+            let c = if (x / square + y / square) % 2 == 0 {
+                255
+            } else {
+                50
+            };
             rgba.extend([c, c, c, 255]);
         }
     }
@@ -516,7 +520,10 @@ fn textured_gauss_seidel_agrees_with_the_progressive_solve() {
                 g6[k][c], p6[k][c]
             );
             assert!(p6[k][c] > 0.0);
-            assert!(difference <= bound, "surface {k} channel {c}: {difference} > {bound}");
+            assert!(
+                difference <= bound,
+                "surface {k} channel {c}: {difference} > {bound}"
+            );
         }
     }
 }
