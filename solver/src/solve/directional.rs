@@ -1042,9 +1042,11 @@ impl Field for DirField<'_, '_> {
                 e,
             )
         } else {
-            // A textured glossy surface also splits where E/π changes.
+            // A textured glossy surface also splits where E/π changes,
+            // above the same α floor.
             should_split_sh(mesh, self.d, self.visible, criteria, e)
                 || (self.d.textured[surface as usize]
+                    && self.d.above_glossy_floor(mesh, e)
                     && criteria.should_split_at(
                         mesh,
                         Some(self.kd),

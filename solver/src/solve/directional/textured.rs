@@ -81,6 +81,23 @@ impl Directional {
         }
     }
 
+    /// Whether splitting leaf `e` of a glossy surface keeps its children's
+    /// edges at or above the surface's [`super::min_glossy_edge`] (the floor
+    /// the SH split test applies; the E/π test of a textured glossy surface
+    /// applies it too, since each new vertex carries the full SH order).
+    pub(super) fn above_glossy_floor(&self, mesh: &Mesh, e: u32) -> bool {
+        let el = &mesh.elements[e as usize];
+        let surface = mesh.patches[el.patch as usize].surface as usize;
+        let corners = el.corners();
+        let shortest = (0..corners.len())
+            .map(|k| {
+                let (a, b) = (corners[k], corners[(k + 1) % corners.len()]);
+                (mesh.vertices[a as usize].position - mesh.vertices[b as usize].position).length()
+            })
+            .fold(f64::INFINITY, f64::min);
+        0.5 * shortest >= self.min_edge[surface]
+    }
+
     /// E/π of vertex `v` of a textured surface, from `values` (the radiance or
     /// ΔL array).
     fn irradiance_over_pi(&self, mesh: &Mesh, values: &[f64], v: usize) -> DVec3 {
