@@ -554,12 +554,11 @@ fn cube_mode_shows_a_uniform_texture_as_its_flat_reflectance() {
             .iter()
             .position(|w| w.position == v.position && w.normal == v.normal)
             .unwrap();
-        for c in 0..3 {
+        for (c, &e) in shown[k].iter().enumerate() {
             let l = flat_batch.coefficients[3 * j + c] / scale;
             assert!(
-                (shown[k][c] - l).abs() <= 1e-6 * l.abs().max(1e-3),
-                "vertex {k}: {} vs {l}",
-                shown[k][c]
+                (e - l).abs() <= 1e-6 * l.abs().max(1e-3),
+                "vertex {k}: {e} vs {l}"
             );
         }
         matched += 1;

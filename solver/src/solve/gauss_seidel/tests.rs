@@ -417,7 +417,7 @@ fn checkerboard(size: u32, square: u32) -> std::sync::Arc<crate::scene::SceneTex
     let mut rgba = Vec::new();
     for y in 0..size {
         for x in 0..size {
-            let c = if (x / square + y / square) % 2 == 0 {
+            let c = if (x / square + y / square).is_multiple_of(2) {
                 255
             } else {
                 50
