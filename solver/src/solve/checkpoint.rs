@@ -707,7 +707,10 @@ impl Solver {
         // changed texture, Kd or UV map must refuse the resume. Untextured
         // scenes add nothing here (their fingerprints are unchanged).
         let mut digests: Vec<(*const crate::scene::SceneTexture, u64)> = Vec::new();
-        for (i, t) in self.texturing.per_surface.iter().enumerate() {
+        // Emission textures follow the diffuse ones (indices past the surface
+        // count), so a changed `map_Ke`, Ke or UV map refuses it too.
+        let textures = self.texturing.per_surface.iter();
+        for (i, t) in textures.chain(&self.texturing.emissive).enumerate() {
             let Some(t) = t else { continue };
             eat(i as u64);
             let source = std::sync::Arc::as_ptr(&t.texture);

@@ -39,7 +39,9 @@
 //! integral of the texture over the patch), so L_i = Le_i + ρ̄_i ⊙ G_i; its
 //! vertices get the area-weighted average of their patches' G, and the
 //! solution shows ρ(uv) ⊙ E/π through textured batches, written by
-//! [`Solver::to_solution`] as for the progressive solve.
+//! [`Solver::to_solution`] as for the progressive solve. A patch of an
+//! emission-textured surface emits its texels' mean Le, as in the progressive
+//! solve (its initial unshot radiance), and is shown with the texture.
 //!
 //! ## Convergence
 //!
@@ -256,11 +258,10 @@ pub fn solve_gauss_seidel(
 
     let start = Instant::now();
     let kd = patch_reflectance(&solver, scene);
-    let emission: Vec<DVec3> = mesh
-        .patches
-        .iter()
-        .map(|p| scene.materials[mesh.surfaces[p.surface as usize].material].emission)
-        .collect();
+    // Each patch's emitted radiance as the progressive solve starts it: Ke,
+    // or on an emission-textured surface the texels' mean over the patch
+    // (`textured.rs`); before any shot that is its unshot radiance.
+    let emission: Vec<DVec3> = solver.patch_unshot().to_vec();
     let order = propagation_order(&factors, &emission, n);
     let mut radiance = emission.clone();
     let mut gathered_light = vec![DVec3::ZERO; n];
@@ -312,14 +313,28 @@ pub fn solve_gauss_seidel(
     // The file through the progressive solver's output (smooth surfaces'
     // shared vertices, hidden vertices, textured batches): its vertices hold
     // radiance, or on a textured surface E/π plus its emission.
+    // An emission-textured vertex holds its surface's mean Le plus the light
+    // it reflects, which the output splits into the texture and the SH.
+    let reflected: Vec<DVec3> = radiance
+        .iter()
+        .zip(&emission)
+        .map(|(l, e)| *l - *e)
+        .collect();
+    let vertex_reflected = vertex_average(&solver, &reflected);
     solver.radiance = solver
         .mesh
         .vertices
         .iter()
         .enumerate()
-        .map(|(v, mv)| match solver.texturing.get(mv.surface) {
-            Some(_) => solver.emission[mv.surface as usize] + vertex_irradiance_over_pi[v],
-            None => vertex_radiance[v],
+        .map(|(v, mv)| {
+            let own = solver.emission[mv.surface as usize];
+            if solver.texturing.get(mv.surface).is_some() {
+                own + vertex_irradiance_over_pi[v]
+            } else if solver.texturing.emissive(mv.surface).is_some() {
+                own + vertex_reflected[v]
+            } else {
+                vertex_radiance[v]
+            }
         })
         .collect();
     let mut solution = solver.to_solution(false);

@@ -291,20 +291,36 @@ impl Solver {
                 None => scene.materials[s.material].kd,
             })
             .collect();
-        // Both modes model textures: diffuse in `textured.rs`, directional
-        // in `directional/textured.rs`.
-        let set_up_warnings = Vec::new();
+        // Diffuse textures are modelled in both modes (diffuse:
+        // `textured.rs`; directional: `directional/textured.rs`); emission
+        // textures in the diffuse mode only.
+        let mut set_up_warnings = Vec::new();
+        let diffuse = settings.mode == SolveMode::Diffuse;
+        if !diffuse && !texturing.emissive.is_empty() {
+            set_up_warnings.push(
+                "emission textures are modelled by the diffuse mode only; this directional solve \
+                 uses each textured emitter's flat emission (Ke)"
+                    .to_owned(),
+            );
+        }
+        let mut texturing = texturing;
+        if !diffuse {
+            texturing.emissive = Vec::new();
+        }
         let kd: Vec<DVec3> = (0..mesh.surfaces.len())
             .map(|s| match texturing.get(s as u32) {
                 Some(_) => DVec3::ONE,
                 None => albedo[s],
             })
             .collect();
-        let emission: Vec<DVec3> = mesh
+        let mut emission: Vec<DVec3> = mesh
             .surfaces
             .iter()
             .map(|s| scene.materials[s.material].emission)
             .collect();
+        // Each patch of an emission-textured surface shoots its mean Le
+        // (`textured.rs`); the surface's vertices start at its mean Le.
+        let patch_emission = textured::patch_emission(&texturing, &mesh, &mut emission);
         let occluder = Occluder::new(
             &mesh
                 .surfaces
@@ -329,7 +345,8 @@ impl Solver {
         let patch_unshot: Vec<DVec3> = mesh
             .patches
             .iter()
-            .map(|p| emission[p.surface as usize])
+            .zip(patch_emission)
+            .map(|(p, textured)| textured.unwrap_or(emission[p.surface as usize]))
             .collect();
         let emitted_power: f64 = mesh
             .patches
@@ -921,6 +938,8 @@ pub(crate) fn human_bytes(bytes: u128) -> String {
 mod cluster_tests;
 #[cfg(test)]
 mod directional_tests;
+#[cfg(test)]
+mod emissive_tests;
 #[cfg(test)]
 mod hidden_tests;
 #[cfg(test)]

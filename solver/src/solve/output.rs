@@ -71,7 +71,7 @@ impl Solver {
         // Textured smooth surfaces keep their UV seams (`seams.rs`).
         let texturing = &self.texturing;
         let shared = super::seams::share_vertices_with_uvs(&self.mesh, &radiance, &|s, p| {
-            texturing.get(s).map(|t| texturing.uv(t, p))
+            texturing.shown(s).map(|t| texturing.uv(t, p))
         });
         let mut vertices = Vec::with_capacity(shared.representative.len());
         let mut coefficients = Vec::with_capacity(3 * shared.representative.len());

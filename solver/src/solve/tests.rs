@@ -12,6 +12,7 @@ pub(crate) fn material(name: &str, kd: f64, emission: f64) -> Material {
         alpha: 1.0,
         emission: DVec3::splat(emission),
         diffuse_texture: None,
+        emission_texture: None,
     }
 }
 

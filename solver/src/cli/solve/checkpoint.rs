@@ -416,6 +416,7 @@ mod tests {
                 alpha: 0.3,
                 emission: DVec3::ZERO,
                 diffuse_texture: None,
+                emission_texture: None,
             }],
             units_per_metre: 1.0,
             up_axis: Default::default(),

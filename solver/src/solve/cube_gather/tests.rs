@@ -14,6 +14,7 @@ fn material(name: &str, kd: f64, ks: f64, alpha: f64, emission: f64) -> Material
         alpha,
         emission: DVec3::splat(emission),
         diffuse_texture: None,
+        emission_texture: None,
     }
 }
 
