@@ -92,6 +92,7 @@ use std::f64::consts::PI;
 use std::sync::Arc;
 use std::time::Instant;
 
+mod hidden_fill;
 mod state;
 mod textured;
 
@@ -946,6 +947,8 @@ impl Solver {
         };
         solution.header.mode = solution::format::SolveMode::Directional;
         let scale = (4.0 * PI).sqrt();
+        let triangles = self.mesh.triangles();
+        let radiance = self.displayed_coefficients(d, &triangles);
         // Per order: the batch and the map from mesh vertex to batch vertex.
         let mut batches: BTreeMap<u32, Batch> = BTreeMap::new();
         let mut local = vec![u32::MAX; self.mesh.vertices.len()];
@@ -973,15 +976,15 @@ impl Solver {
             });
             let start = batch.coefficients.len();
             batch.coefficients.extend(
-                d.radiance[d.vertex_range(&self.mesh, v)]
+                radiance[d.vertex_range(&self.mesh, v)]
                     .iter()
                     .map(|&c| c as f32),
             );
-            let c00 = DVec3::from_slice(&d.radiance[d.vertex_offset[v]..d.vertex_offset[v] + 3])
+            let c00 = DVec3::from_slice(&radiance[d.vertex_offset[v]..d.vertex_offset[v] + 3])
                 + self.kd[mv.surface as usize] * ambient * scale;
             batch.coefficients[start..start + 3].copy_from_slice(&c00.as_vec3().to_array());
         }
-        for t in self.mesh.triangles() {
+        for t in triangles {
             let surface = self.mesh.vertices[t[0] as usize].surface as usize;
             if d.textured[surface] {
                 continue;
@@ -993,6 +996,20 @@ impl Solver {
         }
         solution.batches = batches.into_values().collect();
         self.textured_directional_batches(d, solution, ambient);
+    }
+
+    /// The radiance coefficients to display: the solver's, with each hidden
+    /// vertex (`solve/hidden.rs`) shown as its visible neighbours' functions
+    /// extended ring by ring along the display `triangles`
+    /// ([`hidden_fill::fill_hidden_coefficients`]), as the diffuse output does.
+    fn displayed_coefficients(&self, d: &Directional, triangles: &[[u32; 3]]) -> Vec<f64> {
+        hidden_fill::fill_hidden_coefficients(
+            triangles,
+            &self.hidden,
+            self.mesh.vertices.len(),
+            |v| d.vertex_range(&self.mesh, v),
+            &d.radiance,
+        )
     }
 }
 

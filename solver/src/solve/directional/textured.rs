@@ -155,6 +155,8 @@ impl Solver {
             })
             .collect();
         let irradiance = crate::solve::hidden::fill_hidden(&triangles, &self.hidden, &irradiance);
+        // The SH likewise (`directional/hidden_fill.rs`).
+        let coefficients = self.displayed_coefficients(d, &triangles);
         let mut sources = Vec::new();
         // Per textured batch, its material; per mesh vertex, (batch, index).
         let mut materials: Vec<usize> = Vec::new();
@@ -205,7 +207,7 @@ impl Solver {
                 tangent: f(s.tangent),
             });
             batch.coefficients.extend(
-                d.radiance[d.vertex_range(mesh, v)]
+                coefficients[d.vertex_range(mesh, v)]
                     .iter()
                     .map(|&c| c as f32),
             );
