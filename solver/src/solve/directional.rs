@@ -95,6 +95,7 @@ use std::time::Instant;
 
 mod hidden_fill;
 mod state;
+mod textured;
 
 /// How the next source patch is chosen.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
@@ -133,6 +134,10 @@ pub struct Directional {
     /// Per surface: the smallest element edge glossy refinement may create
     /// (see [`min_glossy_edge`]); 0 for L = 0 surfaces.
     min_edge: Vec<f64>,
+    /// Per surface: whether it is textured. A textured surface's vertex
+    /// slot holds its SH coefficients (glossy lobe and emission only) and
+    /// then E/π, three more values (`directional/textured.rs`).
+    textured: Vec<bool>,
 }
 
 /// The smallest element edge refinement may create on a glossy surface of
@@ -298,6 +303,7 @@ impl Directional {
             direct: Vec::new(),
             recorded_unshot: Vec::new(),
             min_edge: Vec::new(),
+            textured: textured::textured_surfaces(scene, mesh),
         };
         let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
         for v in &mesh.vertices {
@@ -346,7 +352,7 @@ impl Directional {
         let mut at = self.radiance.len();
         for v in &mesh.vertices[self.vertex_offset.len()..] {
             self.vertex_offset.push(at);
-            at += 3 * coefficient_count(self.surface_order[v.surface as usize]);
+            at += self.vertex_width(v.surface as usize);
         }
         self.radiance.resize(at, 0.0);
         self.received.resize(at, 0.0);
@@ -477,6 +483,20 @@ struct Tables {
     lobes: Vec<Option<Arc<GlossyLobe>>>,
     /// Per surface: the tangent of its SH frame.
     tangent: Vec<DVec3>,
+    /// Per surface: whether it is textured (its diffuse part goes to E/π).
+    textured: Vec<bool>,
+}
+
+impl Tables {
+    fn new(d: &Directional, mesh: &Mesh) -> Tables {
+        Tables {
+            surface_order: d.surface_order.clone(),
+            ks: d.ks.clone(),
+            lobes: d.lobes.clone(),
+            tangent: mesh.surfaces.iter().map(|s| s.tangent).collect(),
+            textured: d.textured.clone(),
+        }
+    }
 }
 
 impl DirShot<'_> {
@@ -485,7 +505,9 @@ impl DirShot<'_> {
         let surface = mesh.vertices[v as usize].surface as usize;
         let order = self.tables.surface_order[surface];
         let count = coefficient_count(order);
-        let mut out = vec![0.0; 3 * count];
+        // A textured surface keeps E/π after its coefficients.
+        let textured = self.tables.textured[surface];
+        let mut out = vec![0.0; 3 * count + if textured { 3 } else { 0 }];
         let kd = kd[surface];
         let ks = self.tables.ks[surface];
         let lobe = self.tables.lobes[surface].as_deref();
@@ -524,11 +546,21 @@ impl DirShot<'_> {
             };
             // Ringing of a truncated lobe below zero is not light to shoot.
             let irradiance = unshot.max(DVec3::ZERO) * PI * share;
-            // Diffuse part: radiance Kd·ΔE/π as c₀₀.
-            let diffuse = kd * irradiance / PI * sqrt_4pi;
-            out[0] += diffuse.x;
-            out[1] += diffuse.y;
-            out[2] += diffuse.z;
+            if textured {
+                // Textured: ΔE/π, which the texture multiplies at display
+                // and in the gather (`directional/textured.rs`; kd is 1).
+                let e = kd * irradiance / PI;
+                let at = 3 * count;
+                out[at] += e.x;
+                out[at + 1] += e.y;
+                out[at + 2] += e.z;
+            } else {
+                // Diffuse part: radiance Kd·ΔE/π as c₀₀.
+                let diffuse = kd * irradiance / PI * sqrt_4pi;
+                out[0] += diffuse.x;
+                out[1] += diffuse.y;
+                out[2] += diffuse.z;
+            }
             if let Some(lobe) = lobe {
                 scratch.unit.fill(0.0);
                 if shading == s.normal {
@@ -677,12 +709,7 @@ impl Solver {
         }
         let pool = SamplePool::new(&shot);
         let source_order = d.surface_order[source_surface];
-        let tables = Tables {
-            surface_order: d.surface_order.clone(),
-            ks: d.ks.clone(),
-            lobes: d.lobes.clone(),
-            tangent: self.mesh.surfaces.iter().map(|s| s.tangent).collect(),
-        };
+        let tables = Tables::new(d, &self.mesh);
         let mut rays = 0u64;
         let dir_shot = DirShot {
             shot: &shot,
@@ -713,10 +740,11 @@ impl Solver {
                 }
                 self.visible[v] = r.visible;
                 rays += r.rays as u64;
-                // The diffuse proxies (mean radiance c₀₀ Y₀₀) the L = 0
-                // refinement test reads.
-                self.radiance[v] = DVec3::from_slice(&d.radiance[o..o + 3]) * Y00;
-                self.received[v] = DVec3::from_slice(&r.coefficients[..3]) * Y00;
+                // The diffuse proxies (mean radiance c₀₀ Y₀₀, or E/π on a
+                // textured surface) the L = 0 refinement test reads.
+                let surface = mesh.vertices[v].surface as usize;
+                self.radiance[v] = d.diffuse_proxy(surface, &d.radiance[o..]);
+                self.received[v] = d.diffuse_proxy(surface, &r.coefficients);
             }
         }
         // Coefficients of vertices refinement creates start here; they are
@@ -795,6 +823,8 @@ impl Solver {
                     *s += r * w;
                 }
             }
+            // A textured patch reflects ∫ ρ ΔE/π dA (`directional/textured.rs`).
+            self.add_textured_gather(d, p, &mut sum);
             for (u, s) in d.patch_unshot[range.clone()].iter_mut().zip(&sum) {
                 if area > 0.0 {
                     *u += s / area;
@@ -815,7 +845,8 @@ impl Solver {
             .for_each(|x| *x = round_to_kept(*x));
         for v in 0..self.mesh.vertices.len() {
             let o = d.vertex_offset[v];
-            self.radiance[v] = DVec3::from_slice(&d.radiance[o..o + 3]) * Y00;
+            let surface = self.mesh.vertices[v].surface as usize;
+            self.radiance[v] = d.diffuse_proxy(surface, &d.radiance[o..]);
         }
         self.shots += 1;
         self.rays += rays;
@@ -937,6 +968,10 @@ impl Solver {
         let mut batches: BTreeMap<u32, Batch> = BTreeMap::new();
         let mut local = vec![u32::MAX; self.mesh.vertices.len()];
         for (v, mv) in self.mesh.vertices.iter().enumerate() {
+            // Textured surfaces have batches of their own (below).
+            if d.textured[mv.surface as usize] {
+                continue;
+            }
             let order = d.surface_order[mv.surface as usize];
             let s = &self.mesh.surfaces[mv.surface as usize];
             let batch = batches.entry(order).or_insert_with(|| Batch {
@@ -965,12 +1000,17 @@ impl Solver {
             batch.coefficients[start..start + 3].copy_from_slice(&c00.as_vec3().to_array());
         }
         for t in triangles {
-            let order = d.surface_order[self.mesh.vertices[t[0] as usize].surface as usize];
+            let surface = self.mesh.vertices[t[0] as usize].surface as usize;
+            if d.textured[surface] {
+                continue;
+            }
+            let order = d.surface_order[surface];
             if let Some(batch) = batches.get_mut(&order) {
                 batch.indices.extend(t.iter().map(|&v| local[v as usize]));
             }
         }
         solution.batches = batches.into_values().collect();
+        self.textured_directional_batches(d, solution, ambient);
     }
 
     /// The radiance coefficients to display: the solver's, with each hidden
@@ -1034,7 +1074,19 @@ impl Field for DirField<'_, '_> {
                 e,
             )
         } else {
+            // A textured glossy surface also splits where E/π changes,
+            // above the same α floor.
             should_split_sh(mesh, self.d, self.visible, criteria, e)
+                || (self.d.textured[surface as usize]
+                    && self.d.above_glossy_floor(mesh, e)
+                    && criteria.should_split_at(
+                        mesh,
+                        Some(self.kd),
+                        self.radiance,
+                        self.received,
+                        self.visible,
+                        e,
+                    ))
         }
     }
 
@@ -1044,7 +1096,8 @@ impl Field for DirField<'_, '_> {
         for nv in created {
             // As the diffuse field: the parents' radiance less the recorded
             // shots and this shot's ΔL (both recomputed exactly), averaged.
-            let range = d.vertex_range(mesh, nv.id as usize);
+            // The whole slot: the coefficients and a textured surface's E/π.
+            let range = d.vertex_slot(mesh, nv.id as usize);
             let mut earlier = vec![0.0; range.len()];
             for &p in nv.parents() {
                 let o = d.vertex_offset[p as usize];
@@ -1060,8 +1113,9 @@ impl Field for DirField<'_, '_> {
             for (k, e) in earlier.iter().enumerate() {
                 d.radiance[range.start + k] = e / nv.parent_count as f64;
             }
+            let surface = mesh.vertices[nv.id as usize].surface as usize;
             self.radiance
-                .push(DVec3::from_slice(&d.radiance[range.start..range.start + 3]) * Y00);
+                .push(d.diffuse_proxy(surface, &d.radiance[range.start..]));
             self.received.push(DVec3::ZERO);
             self.visible.push(0);
             self.direct.push(DVec3::ZERO);
@@ -1118,11 +1172,12 @@ impl Field for DirField<'_, '_> {
                 }
                 d.received[o + k] = *c;
             }
-            self.radiance[v] = DVec3::from_slice(&d.radiance[o..o + 3]) * Y00;
+            let surface = mesh.vertices[v].surface as usize;
+            self.radiance[v] = d.diffuse_proxy(surface, &d.radiance[o..]);
             self.received[v] = if current.coefficients.is_empty() {
                 DVec3::ZERO
             } else {
-                DVec3::from_slice(&current.coefficients[..3]) * Y00
+                d.diffuse_proxy(surface, &current.coefficients)
             };
             self.visible[v] = current.visible;
             total += rays;

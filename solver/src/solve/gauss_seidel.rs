@@ -29,6 +29,20 @@
 //!    the radiosity values at the corners of each patch"; the weights are the
 //!    progressive solver's gather weights, [`Solver::patch_weights`]).
 //!
+//! ## Textured surfaces
+//!
+//! As in the progressive solve (`solve/textured.rs`), a textured surface
+//! stores the incident light E/π, not its radiance: a textured patch's
+//! gathered G_i = Σ_j F_ij L_j is its E/π (constant over the patch, the
+//! centre-point approximation above), it reflects ∫ ρ E/π dA / A_i = ρ̄_i ⊙
+//! G_i with ρ̄_i = Σ_v w_v / A_i from its RGB gather weights (Kd ⊙ the exact
+//! integral of the texture over the patch), so L_i = Le_i + ρ̄_i ⊙ G_i; its
+//! vertices get the area-weighted average of their patches' G, and the
+//! solution shows ρ(uv) ⊙ E/π through textured batches, written by
+//! [`Solver::to_solution`] as for the progressive solve. A patch of an
+//! emission-textured surface emits its texels' mean Le, as in the progressive
+//! solve (its initial unshot radiance), and is shown with the texture.
+//!
 //! ## Convergence
 //!
 //! Every row sums to at most 1 (a hemicube's delta factors sum to 1) and
@@ -168,6 +182,11 @@ pub struct GaussSeidelResult {
     pub patch_radiance: Vec<DVec3>,
     /// Per mesh vertex: the area-weighted average of its patches' radiance.
     pub vertex_radiance: Vec<DVec3>,
+    /// Per patch: the gathered Σ_j F_ij L_j, its incident E/π.
+    pub patch_irradiance_over_pi: Vec<DVec3>,
+    /// Per mesh vertex: the area-weighted average of its patches' E/π (what
+    /// a textured vertex stores and the file shows times ρ(uv)).
+    pub vertex_irradiance_over_pi: Vec<DVec3>,
     /// Per patch: Σ_j F_ij, summed in f64 before storage as f32 (1 in a
     /// closed scene, within 1e-10).
     pub row_sums: Vec<f64>,
@@ -206,7 +225,7 @@ pub fn solve_gauss_seidel(
     // O(n²), and this bound never exceeds the mesh's patch count.
     check_matrix_size(patch_count_lower_bound(scene, settings), limits)?;
     let hemicube = Hemicube::new(settings.hemicube_resolution)?;
-    let solver = Solver::new(scene, settings)?;
+    let mut solver = Solver::new(scene, settings)?;
     let mesh = solver.mesh();
     let n = mesh.patches.len();
     let bytes = check_matrix_size(n as u64, limits)?;
@@ -238,18 +257,14 @@ pub fn solve_gauss_seidel(
     let form_factor_seconds = start.elapsed().as_secs_f64();
 
     let start = Instant::now();
-    let kd: Vec<DVec3> = mesh
-        .patches
-        .iter()
-        .map(|p| scene.materials[mesh.surfaces[p.surface as usize].material].kd)
-        .collect();
-    let emission: Vec<DVec3> = mesh
-        .patches
-        .iter()
-        .map(|p| scene.materials[mesh.surfaces[p.surface as usize].material].emission)
-        .collect();
+    let kd = patch_reflectance(&solver, scene);
+    // Each patch's emitted radiance as the progressive solve starts it: Ke,
+    // or on an emission-textured surface the texels' mean over the patch
+    // (`textured.rs`); before any shot that is its unshot radiance.
+    let emission: Vec<DVec3> = solver.patch_unshot().to_vec();
     let order = propagation_order(&factors, &emission, n);
     let mut radiance = emission.clone();
+    let mut gathered_light = vec![DVec3::ZERO; n];
     let gamma = kd.iter().map(|k| k.max_element()).fold(0.0, f64::max);
     let mut sweeps = 0;
     let mut change = f64::INFINITY;
@@ -266,6 +281,7 @@ pub fn solve_gauss_seidel(
             }
             // The radiosity lecture notes: B_i = E_i + ρ_i Σ_j F_ij B_j, in radiance.
             let updated = emission[i] + kd[i] * gathered;
+            gathered_light[i] = gathered;
             let delta = (updated - radiance[i]).abs();
             largest_change = largest_change.max(delta.max_element());
             added_power += std::f64::consts::PI * mesh.patches[i].area * delta.element_sum();
@@ -289,30 +305,39 @@ pub fn solve_gauss_seidel(
     };
 
     // The radiosity lecture notes step 4: vertex radiance from the adjacent patches, area-weighted.
-    let mut sums = vec![DVec3::ZERO; mesh.vertices.len()];
-    let mut weights = vec![0.0; mesh.vertices.len()];
-    for (p, l) in radiance.iter().enumerate() {
-        for &(v, w) in solver.patch_weights(p as u32) {
-            sums[v as usize] += *l * w;
-            weights[v as usize] += w;
-        }
-    }
-    let vertex_radiance: Vec<DVec3> = sums
-        .iter()
-        .zip(&weights)
-        .map(|(s, &w)| if w > 0.0 { *s / w } else { DVec3::ZERO })
-        .collect();
+    let vertex_radiance = vertex_average(&solver, &radiance);
+    let vertex_irradiance_over_pi = vertex_average(&solver, &gathered_light);
     let solve_seconds = start.elapsed().as_secs_f64();
 
     let emitted = solver.progress().emitted_power;
+    // The file through the progressive solver's output (smooth surfaces'
+    // shared vertices, hidden vertices, textured batches): its vertices hold
+    // radiance, or on a textured surface E/π plus its emission.
+    // An emission-textured vertex holds its surface's mean Le plus the light
+    // it reflects, which the output splits into the texture and the SH.
+    let reflected: Vec<DVec3> = radiance
+        .iter()
+        .zip(&emission)
+        .map(|(l, e)| *l - *e)
+        .collect();
+    let vertex_reflected = vertex_average(&solver, &reflected);
+    solver.radiance = solver
+        .mesh
+        .vertices
+        .iter()
+        .enumerate()
+        .map(|(v, mv)| {
+            let own = solver.emission[mv.surface as usize];
+            if solver.texturing.get(mv.surface).is_some() {
+                own + vertex_irradiance_over_pi[v]
+            } else if solver.texturing.emissive(mv.surface).is_some() {
+                own + vertex_reflected[v]
+            } else {
+                vertex_radiance[v]
+            }
+        })
+        .collect();
     let mut solution = solver.to_solution(false);
-    let scale = (4.0 * std::f64::consts::PI).sqrt();
-    if let Some(batch) = solution.batches.first_mut() {
-        batch.coefficients = vertex_radiance
-            .iter()
-            .flat_map(|l| (*l * scale).as_vec3().to_array())
-            .collect();
-    }
     let header = &mut solution.header;
     header.partial = !converged;
     header.stats.shots = sweeps as u64;
@@ -345,6 +370,8 @@ pub fn solve_gauss_seidel(
         solution,
         patch_radiance: radiance,
         vertex_radiance,
+        patch_irradiance_over_pi: gathered_light,
+        vertex_irradiance_over_pi,
         row_sums,
         sweeps,
         change,
@@ -354,6 +381,41 @@ pub fn solve_gauss_seidel(
         solve_seconds,
         matrix_bytes: bytes,
     })
+}
+
+/// Per patch its reflectance: the material's Kd, or on a textured surface
+/// the mean of ρ = Kd ⊙ texture over the patch, Σ_v w_v / A from its RGB
+/// gather weights (exact integrals of the texture, `solve/textured.rs`).
+fn patch_reflectance(solver: &Solver, scene: &Scene) -> Vec<DVec3> {
+    let mesh = solver.mesh();
+    mesh.patches
+        .iter()
+        .enumerate()
+        .map(|(p, patch)| match solver.patch_rgb_weights.get(p) {
+            Some(w) if !w.is_empty() && patch.area > 0.0 => {
+                w.iter().map(|e| e.1).sum::<DVec3>() / patch.area
+            }
+            _ => scene.materials[mesh.surfaces[patch.surface as usize].material].kd,
+        })
+        .collect()
+}
+
+/// Per mesh vertex, the average of `per_patch` over its patches weighted by
+/// the area of each the vertex represents (its gather weights).
+fn vertex_average(solver: &Solver, per_patch: &[DVec3]) -> Vec<DVec3> {
+    let vertices = solver.mesh().vertices.len();
+    let mut sums = vec![DVec3::ZERO; vertices];
+    let mut weights = vec![0.0; vertices];
+    for (p, l) in per_patch.iter().enumerate() {
+        for &(v, w) in solver.patch_weights(p as u32) {
+            sums[v as usize] += *l * w;
+            weights[v as usize] += w;
+        }
+    }
+    sums.iter()
+        .zip(&weights)
+        .map(|(s, &w)| if w > 0.0 { *s / w } else { DVec3::ZERO })
+        .collect()
 }
 
 /// Row i of the matrix: the hemicube on patch i's centre over every patch.

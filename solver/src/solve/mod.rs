@@ -55,6 +55,7 @@ pub mod budget;
 mod checkpoint;
 pub mod cluster;
 pub mod cube_gather;
+pub mod cube_textured;
 pub mod directional;
 pub mod gauss_seidel;
 pub mod hidden;
@@ -183,7 +184,7 @@ pub struct Solver {
     /// Per surface, its mean reflectance (Kd, or Kd ⊙ the texture's mean),
     /// for the ambient term.
     albedo: Vec<DVec3>,
-    /// The textured surfaces (none outside the diffuse progressive solve).
+    /// The textured surfaces.
     texturing: textured::SurfaceTexturing,
     emission: Vec<DVec3>,
     /// Per surface, its patches (contiguous).
@@ -297,15 +298,11 @@ impl Solver {
                 None => scene.materials[s.material].kd,
             })
             .collect();
+        // Diffuse textures are modelled in both modes (diffuse:
+        // `textured.rs`; directional: `directional/textured.rs`); emission
+        // textures in the diffuse mode only.
         let mut set_up_warnings = Vec::new();
         let diffuse = settings.mode == SolveMode::Diffuse;
-        if !diffuse && texturing.any() {
-            set_up_warnings.push(
-                "diffuse textures are modelled by the diffuse mode only; this directional solve \
-                 uses each textured surface's Kd times its texture's mean"
-                    .to_owned(),
-            );
-        }
         if !diffuse && !texturing.emissive.is_empty() {
             set_up_warnings.push(
                 "emission textures are modelled by the diffuse mode only; this directional solve \
@@ -313,11 +310,10 @@ impl Solver {
                     .to_owned(),
             );
         }
-        let texturing = if diffuse {
-            texturing
-        } else {
-            textured::SurfaceTexturing::default()
-        };
+        let mut texturing = texturing;
+        if !diffuse {
+            texturing.emissive = Vec::new();
+        }
         let kd: Vec<DVec3> = (0..mesh.surfaces.len())
             .map(|s| match texturing.get(s as u32) {
                 Some(_) => DVec3::ONE,
@@ -845,7 +841,7 @@ impl Solver {
 /// The centre of the scene's bounding box: the solver works relative to it so a
 /// scene far from the origin loses no precision in the f32 occluder or the
 /// solution file (design notes, "Units and conventions").
-fn scene_centre(scene: &Scene) -> DVec3 {
+pub(crate) fn scene_centre(scene: &Scene) -> DVec3 {
     let mut lo = DVec3::splat(f64::INFINITY);
     let mut hi = DVec3::splat(f64::NEG_INFINITY);
     for p in &scene.polygons {

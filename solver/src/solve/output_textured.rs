@@ -1,8 +1,8 @@
 //! The textured batches of a diffuse solution (`textured.rs`): the output
 //! vertices of textured surfaces move out of the untextured batch into one
 //! batch per textured material, with per vertex its UV and E/π, the
-//! material's Kd as the texture's factor, and zero SH coefficients (a plain
-//! diffuse textured surface has no untextured term). The textures go to the
+//! material's Kd as the texture's factor, and SH coefficients holding the
+//! untextured term: its emission, zero for a plain diffuse textured surface. The textures go to the
 //! solution's texture list once each, as their 8-bit sRGB texels.
 //!
 //! An emission-textured surface (`textured.rs`) fits the same batch with no
@@ -13,7 +13,9 @@
 //! emission).
 
 use super::seams::SharedVertices;
+use super::textured::Textured;
 use super::Solver;
+use crate::scene::SceneTexture;
 use glam::DVec3;
 use solution::format::{Batch, Solution, Texture, TexturedVertex, Texturing};
 use std::sync::Arc;
@@ -29,7 +31,12 @@ impl Solver {
         solution: &mut Solution,
         ambient: DVec3,
     ) {
-        if !self.texturing.any_display() || solution.batches.is_empty() {
+        // Directional mode writes its textured batches itself
+        // (`directional/textured.rs`).
+        if !self.texturing.any_display()
+            || solution.batches.is_empty()
+            || self.directional.is_some()
+        {
             return;
         }
         let whole = solution.batches.remove(0);
@@ -44,7 +51,7 @@ impl Solver {
         let mut batches = vec![empty(None)];
         // Per textured batch, its material; per texture index, its source.
         let mut materials: Vec<usize> = Vec::new();
-        let mut sources: Vec<*const crate::scene::SceneTexture> = Vec::new();
+        let mut sources = Vec::new();
         let mut slot: Vec<(usize, u32)> = Vec::with_capacity(whole.vertices.len());
         for (o, &r) in shared.representative.iter().enumerate() {
             let v = &self.mesh.vertices[r as usize];
@@ -60,22 +67,10 @@ impl Solver {
             let g = match materials.iter().position(|&m| m == material) {
                 Some(k) => k + 1,
                 None => {
-                    let source = Arc::as_ptr(&t.texture);
-                    let texture = match sources.iter().position(|&s| s == source) {
-                        Some(i) => i,
-                        None => {
-                            sources.push(source);
-                            solution.textures.push(Texture {
-                                width: t.texture.width,
-                                height: t.texture.height,
-                                rgba: t.texture.rgba.clone(),
-                            });
-                            sources.len() - 1
-                        }
-                    };
+                    let texture = texture_index(&mut sources, &mut solution.textures, t);
                     materials.push(material);
                     batches.push(empty(Some(Texturing {
-                        texture: texture as u32,
+                        texture,
                         factor: t.kd.as_vec3().to_array(),
                         vertices: Vec::new(),
                     })));
@@ -88,8 +83,14 @@ impl Solver {
             // E/π for a diffuse-textured vertex; for an emitter's, 1, with
             // its reflected light in the coefficients.
             let e = if self.texturing.get(v.surface).is_some() {
-                b.coefficients.extend([0.0; 3]);
-                shared.radiance[o] + ambient
+                // The vertex holds E/π plus its surface's flat emission
+                // (from the start of the solve): the emission is the
+                // untextured term (zero for the diffuse-textured surfaces
+                // the importers make, which refuse them on emitters).
+                let emission = self.emission[v.surface as usize];
+                let c00 = emission * (4.0 * std::f64::consts::PI).sqrt();
+                b.coefficients.extend(c00.as_vec3().to_array());
+                shared.radiance[o] - emission + ambient
             } else {
                 // As `to_solution` computes the coefficients, less Le.
                 let s = v.surface as usize;
@@ -123,4 +124,27 @@ impl Solver {
         }
         solution.batches.splice(0..0, batches);
     }
+}
+
+/// The index in `textures` of `t`'s texture, added (its 8-bit sRGB texels)
+/// the first time; `sources` records which scene texture each index holds.
+pub(super) fn texture_index(
+    sources: &mut Vec<*const SceneTexture>,
+    textures: &mut Vec<Texture>,
+    t: &Textured,
+) -> u32 {
+    let source = Arc::as_ptr(&t.texture);
+    let index = match sources.iter().position(|&s| s == source) {
+        Some(i) => i,
+        None => {
+            sources.push(source);
+            textures.push(Texture {
+                width: t.texture.width,
+                height: t.texture.height,
+                rgba: t.texture.rgba.clone(),
+            });
+            sources.len() - 1
+        }
+    };
+    index as u32
 }

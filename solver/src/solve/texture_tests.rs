@@ -275,3 +275,347 @@ fn a_checkpoint_refuses_a_changed_texture_and_resumes_the_same_one() {
         .unwrap();
     assert!(err.to_string().contains("fingerprint"), "{err}");
 }
+
+// Directional mode (`directional/textured.rs`).
+
+/// The room's settings in directional mode.
+fn directional_settings() -> SolverSettings {
+    let mut s = settings();
+    s.mode = SolveMode::Directional;
+    s
+}
+
+fn solve_with(scene: &Scene, settings: &SolverSettings, shots: usize) -> Solver {
+    let mut solver = Solver::new(scene, settings).unwrap();
+    for _ in 0..shots {
+        solver.step();
+    }
+    solver
+}
+
+/// A glossy wall: Kd `kd`, Ks 0.3 grey, α 0.25 (an SH order above 0).
+fn glossy_wall(kd: f64) -> Material {
+    let mut m = material("wall", kd, 0.0);
+    m.ks = DVec3::splat(0.3);
+    m.alpha = 0.25;
+    m
+}
+
+/// E/π of a textured vertex in directional mode, and its coefficients.
+fn directional_vertex(solver: &Solver, v: usize) -> (DVec3, Vec<f64>) {
+    solver.directional_vertex(v)
+}
+
+#[test]
+fn directional_a_uniform_texture_solves_as_its_flat_reflectance() {
+    // Glossy walls (Ks 0.3, α 0.25) with Kd 1 × a uniform texture of sRGB
+    // 180 (linear 0.4564) against the same walls with a flat Kd 0.4564: the
+    // textured vertex's ρ · E/π · √(4π) added to its c₀₀, and its glossy
+    // coefficients, must equal the flat vertex's coefficients shot for shot
+    // (the same sources: the patches' hemisphere power is the same). The two
+    // differ only in where ρ is applied (before or after the gather
+    // weights), 1e-12 relative per shot; 1e-9 of the peak coefficient is
+    // asserted after 20 shots.
+    let rho = f64::from(crate::texture::srgb_to_linear(180));
+    let mut textured_wall = glossy_wall(1.0);
+    textured_wall.diffuse_texture = Some(texture(8, |_, _| 180));
+    let s = directional_settings();
+    let textured = solve_with(&room(textured_wall), &s, 20);
+    let flat = solve_with(&room(glossy_wall(rho)), &s, 20);
+    assert!(textured.directional_textured(0));
+    let orders = flat.directional().unwrap().surface_orders();
+    assert!(orders.iter().any(|&o| o > 0), "the walls are glossy");
+    let peak = (0..flat.mesh.vertices.len())
+        .flat_map(|v| flat.vertex_sh(v as u32).unwrap().1.to_vec())
+        .fold(0.0f64, |m, c| m.max(c.abs()));
+    let scale = (4.0 * PI).sqrt();
+    for v in 0..flat.mesh.vertices.len() {
+        let expected = flat.vertex_sh(v as u32).unwrap().1;
+        let (e, mut sh) = directional_vertex(&textured, v);
+        if textured.directional_textured(textured.mesh.vertices[v].surface as usize) {
+            for c in 0..3 {
+                sh[c] += rho * e[c] * scale;
+            }
+        }
+        assert_eq!(sh.len(), expected.len());
+        for (k, (a, b)) in sh.iter().zip(expected).enumerate() {
+            assert!(
+                (a - b).abs() <= 1e-9 * peak,
+                "vertex {v} coefficient {k}: {a} vs {b}"
+            );
+        }
+    }
+    let (a, b) = (textured.progress(), flat.progress());
+    assert!((a.unshot_fraction - b.unshot_fraction).abs() < 1e-9);
+}
+
+#[test]
+fn directional_with_ks_zero_a_checkerboard_solves_as_in_diffuse_mode() {
+    // A consistency check of two implementations of one model (the diffuse
+    // solve's `textured.rs` and directional mode's `directional/textured.rs`):
+    // with Ks = 0 the directional solve of a checkerboard room (8 × 8 squares
+    // per wall, codes 255 and 30, Kd 0.9) must shoot the same sources,
+    // split the same elements (refinement on E/π in both) and give every
+    // vertex the same E/π. Directional mode shoots each patch's mean
+    // uniformly and visits every receiver, so the diffuse solve is set to do
+    // the same. They differ in rounding only (c₀₀ = L √(4π) and back), so
+    // 1e-9 of the peak E/π is asserted, with adaptive meshing off and on.
+    let squares = texture(64, |x, y| if (x / 8 + y / 8) % 2 == 0 { 255 } else { 30 });
+    let mut wall = material("wall", 0.9, 0.0);
+    wall.diffuse_texture = Some(squares);
+    let scene = room(wall);
+    for adaptive in [false, true] {
+        let mut diffuse = settings();
+        diffuse.adaptive = adaptive;
+        diffuse.uniform_shooters = true;
+        diffuse.shooting = crate::settings::Shooting::Flat;
+        let mut directional = diffuse.clone();
+        directional.mode = SolveMode::Directional;
+        let mut a = Solver::new(&scene, &diffuse).unwrap();
+        let mut b = Solver::new(&scene, &directional).unwrap();
+        for _ in 0..12 {
+            let (ra, rb) = (a.step().unwrap(), b.step().unwrap());
+            assert_eq!((ra.source, ra.splits), (rb.source, rb.splits));
+        }
+        assert_eq!(a.mesh.split_log, b.mesh.split_log);
+        assert_eq!(a.mesh.split_log.is_empty(), !adaptive);
+        let peak = a
+            .vertex_radiance()
+            .iter()
+            .fold(0.0f64, |m, l| m.max(l.max_element()));
+        for v in 0..a.mesh.vertices.len() {
+            let (e, sh) = directional_vertex(&b, v);
+            let diffuse_value = a.vertex_radiance()[v];
+            if b.texturing.get(a.mesh.vertices[v].surface).is_some() {
+                // Textured: E/π in both, and no untextured term.
+                assert!(sh.iter().all(|&c| c == 0.0), "vertex {v}: {sh:?}");
+            }
+            assert!(
+                (e - diffuse_value).abs().max_element() <= 1e-9 * peak,
+                "vertex {v}: {e} vs {diffuse_value}"
+            );
+        }
+    }
+}
+
+/// The room's far wall (z = +3) seen from inside, `size`² pixels.
+fn far_wall_view(solution: &solution::format::Solution, size: u32) -> solution::camera::EyeView {
+    let camera = solution::camera::Camera {
+        eye: [0.0, 1.25, -2.0],
+        target: [0.0, 1.25, 3.0],
+        up: [0.0, 1.0, 0.0],
+        fov_y_deg: 20.0,
+        width: size,
+        height: size,
+    };
+    camera.mono_view(DVec3::from_array(solution.header.recentre_offset))
+}
+
+#[test]
+fn directional_textured_sh_batches_round_trip_and_render_the_checkerboard() {
+    // Glossy checkerboard walls (Ks 0.3, α 0.25; Kd 0.9 × squares of codes
+    // 255 and 30, linear 1 and 0.0130). The directional file holds the walls
+    // as a textured SH batch of their order: coefficients = the solver's
+    // glossy SH, E/π = its vertex values, factor Kd; it encodes and decodes
+    // to the same solution. The CPU reference renderer shows the squares:
+    // with the same solution rendered once more with the texture white (ρ =
+    // 1) and once black (ρ = 0, the SH term alone), (T − B)/(W − B) at each
+    // pixel of the far wall is the texture's ρ there; the squares' mean
+    // ratio of light to dark pixels (the half above and below the median)
+    // must be at least 80% of the texture's 1/0.0130 contrast, in Michelson
+    // terms (an untextured display would give 0).
+    let squares = texture(64, |x, y| if (x / 8 + y / 8) % 2 == 0 { 255 } else { 30 });
+    let mut wall = glossy_wall(0.9);
+    wall.diffuse_texture = Some(squares);
+    let solver = solve_with(&room(wall), &directional_settings(), 12);
+    let solution = solver.to_solution(false);
+    let d = solver.directional().unwrap();
+    let wall_order = d.surface_orders()[0];
+    assert!(wall_order > 0);
+    let textured: Vec<_> = solution
+        .batches
+        .iter()
+        .filter(|b| b.texturing.is_some())
+        .collect();
+    assert_eq!(textured.len(), 1, "one textured material");
+    let walls = textured[0];
+    assert_eq!(
+        walls.representation,
+        solution::format::Representation::Sh { order: wall_order }
+    );
+    assert_eq!(solution.textures.len(), 1);
+    let texturing = walls.texturing.as_ref().unwrap();
+    assert_eq!(texturing.factor, [0.9; 3]);
+    // Flat walls: one output vertex per mesh vertex, in mesh order; E/π is
+    // the solver's plus the ambient term.
+    let wall_vertices: Vec<usize> = (0..solver.mesh.vertices.len())
+        .filter(|&v| solver.directional_textured(solver.mesh.vertices[v].surface as usize))
+        .collect();
+    assert_eq!(walls.vertices.len(), wall_vertices.len());
+    let count = 3 * solution::sh::coefficient_count(wall_order);
+    for (k, &v) in wall_vertices.iter().enumerate() {
+        // Hidden vertices (the ceiling above the light) show their visible
+        // neighbours' light (`solve/hidden.rs`).
+        if solver.hidden_vertices()[v] {
+            continue;
+        }
+        let (e, sh) = directional_vertex(&solver, v);
+        // Plus the ambient term the file shows (`Solver::display_ambient`).
+        let shown = e + solver.display_ambient(false);
+        assert_eq!(
+            texturing.vertices[k].irradiance_over_pi,
+            shown.as_vec3().to_array()
+        );
+        let stored = &walls.coefficients[k * count..(k + 1) * count];
+        assert!(stored.iter().zip(&sh).all(|(a, b)| *a == *b as f32));
+    }
+    assert!(
+        walls.coefficients.iter().any(|&c| c != 0.0),
+        "a glossy term"
+    );
+    let bytes = solution::format::encode(&solution).unwrap();
+    assert_eq!(solution::format::decode(&bytes).unwrap(), solution);
+
+    let render = |code: u8| {
+        let mut s = solution.clone();
+        for texel in s.textures[0].rgba.chunks_exact_mut(4) {
+            texel[..3].fill(code);
+        }
+        let view = far_wall_view(&s, 48);
+        solution::raster::render(&s, &view, &Default::default()).unwrap()
+    };
+    let (t, w, b) = (
+        solution::raster::render(
+            &solution,
+            &far_wall_view(&solution, 48),
+            &Default::default(),
+        )
+        .unwrap(),
+        render(255),
+        render(0),
+    );
+    let mut ratios: Vec<f64> = Vec::new();
+    for k in 0..t.pixels.len() {
+        let (tp, wp, bp) = (
+            t.pixels[k][1] as f64,
+            w.pixels[k][1] as f64,
+            b.pixels[k][1] as f64,
+        );
+        if wp - bp > 1e-6 {
+            ratios.push((tp - bp) / (wp - bp));
+        }
+    }
+    assert!(ratios.len() > 48 * 48 / 2, "the wall fills the view");
+    ratios.sort_by(f64::total_cmp);
+    let half = ratios.len() / 2;
+    let dark = ratios[..half].iter().sum::<f64>() / half as f64;
+    let light = ratios[half..].iter().sum::<f64>() / (ratios.len() - half) as f64;
+    let shown = (light - dark) / (light + dark);
+    let (hi, lo) = (1.0, f64::from(crate::texture::srgb_to_linear(30)));
+    let ideal = (hi - lo) / (hi + lo);
+    eprintln!("checkerboard contrast shown {shown:.4}, texture {ideal:.4}");
+    assert!(shown >= 0.8 * ideal, "contrast {shown} vs {ideal}");
+}
+
+// Global cubes (`cube_textured.rs`).
+
+#[test]
+fn cube_mode_shows_a_uniform_texture_as_its_flat_reflectance() {
+    // In cube mode a textured surface reflects with Kd ⊙ the texture's mean,
+    // and its display is ρ(uv) ⊙ E/π with E/π = (L − Le)/(Kd ⊙ mean). For a
+    // uniform texture (sRGB 180, linear 0.4564, Kd 0.8) the mean is the
+    // texture, so the file's textured batch must show exactly what the
+    // untextured solve with Kd = 0.8 · 0.4564 shows: factor · ρ · E/π = L
+    // per vertex, within f32 rounding (1e-6 relative). The untextured light
+    // stays in an order-0 batch, and the two files have the same vertices.
+    let rho = f64::from(crate::texture::srgb_to_linear(180));
+    let s = directional_settings();
+    let limits = cube_gather::CubeLimits::default();
+    let mut wall = material("wall", 0.8, 0.0);
+    wall.diffuse_texture = Some(texture(8, |_, _| 180));
+    let (textured, warnings) =
+        cube_textured::solve_cube_textured(&room(wall), &s, &limits).unwrap();
+    assert!(
+        !warnings.is_empty(),
+        "the mean-reflectance transport is said"
+    );
+    let (flat, none) =
+        cube_textured::solve_cube_textured(&room(material("wall", 0.8 * rho, 0.0)), &s, &limits)
+            .unwrap();
+    assert!(none.is_empty());
+    let (a, b) = (&textured.solution, &flat.solution);
+    assert_eq!(a.textures.len(), 1);
+    let walls = a.batches.iter().find(|b| b.texturing.is_some()).unwrap();
+    let texturing = walls.texturing.as_ref().unwrap();
+    assert_eq!(texturing.factor, [0.8; 3]);
+    let shown: Vec<[f32; 3]> = texturing
+        .vertices
+        .iter()
+        .map(|tv| tv.irradiance_over_pi.map(|e| e * 0.8 * rho as f32))
+        .collect();
+    // The flat file's order-0 batch, in mesh order, holds the light's
+    // vertices and the walls'; the walls' are those at the textured batch's
+    // positions.
+    let flat_batch = &b.batches[0];
+    let scale = (4.0 * PI).sqrt() as f32;
+    let mut matched = 0;
+    for (k, v) in walls.vertices.iter().enumerate() {
+        let j = flat_batch
+            .vertices
+            .iter()
+            .position(|w| w.position == v.position && w.normal == v.normal)
+            .unwrap();
+        for (c, &e) in shown[k].iter().enumerate() {
+            let l = flat_batch.coefficients[3 * j + c] / scale;
+            assert!(
+                (e - l).abs() <= 1e-6 * l.abs().max(1e-3),
+                "vertex {k}: {e} vs {l}"
+            );
+        }
+        matched += 1;
+    }
+    let total: usize = a.batches.iter().map(|b| b.vertices.len()).sum();
+    assert_eq!(total, flat_batch.vertices.len());
+    assert!(matched > 0);
+    let bytes = solution::format::encode(a).unwrap();
+    assert_eq!(&solution::format::decode(&bytes).unwrap(), a);
+}
+
+#[test]
+fn directional_textured_resume_continues_bit_for_bit() {
+    // A textured vertex's E/π lives in the coefficient arrays (three values
+    // after its SH), so a checkpoint stores it, the recorded shots' part is
+    // recomputed into it, and refinement replays into it: a solve of glossy
+    // checkerboard walls with adaptive meshing, checkpointed after 5 shots
+    // and resumed, must give the same bits after 10 as one never stopped.
+    let squares = texture(64, |x, y| if (x / 8 + y / 8) % 2 == 0 { 255 } else { 30 });
+    let mut wall = glossy_wall(0.9);
+    wall.diffuse_texture = Some(squares);
+    let scene = room(wall);
+    let mut s = directional_settings();
+    s.adaptive = true;
+    let straight = solve_with(&scene, &s, 10);
+    let first = solve_with(&scene, &s, 5);
+    let mut resumed =
+        Solver::resume(&scene, &s, checkpoint::Checkpoint::round_trip(&first)).unwrap();
+    for _ in 0..5 {
+        resumed.step();
+    }
+    assert!(!straight.mesh.split_log.is_empty(), "the walls refined");
+    assert_eq!(straight.mesh.split_log, resumed.mesh.split_log);
+    for v in 0..straight.mesh.vertices.len() {
+        let (a, b) = (
+            straight.directional_vertex(v),
+            resumed.directional_vertex(v),
+        );
+        assert_eq!(
+            a.0.to_array().map(f64::to_bits),
+            b.0.to_array().map(f64::to_bits)
+        );
+        assert!(a
+            .1
+            .iter()
+            .zip(&b.1)
+            .all(|(x, y)| x.to_bits() == y.to_bits()));
+    }
+}

@@ -26,11 +26,13 @@
 //! integration divided by its area ([`SurfaceTexturing::emitted_radiance`]),
 //! uniformly, so the total emitted power is π ∫ Le dA exactly. The surface
 //! reflects with its flat Kd, untextured; its output vertices carry the
-//! texture for display (`output_textured.rs`).
+//! texture for display (`output_textured.rs`). Diffuse mode only.
 //!
-//! Only the diffuse mode's progressive solve models textures; directional
-//! mode (and the Gauss–Seidel and global-cube methods, which read the scene's
-//! flat Kd) see a textured surface as Kd ⊙ the texture's mean.
+//! Directional mode keeps the same E/π beside its SH
+//! (`directional/textured.rs`), the Gauss–Seidel method gathers it per patch
+//! (`gauss_seidel.rs`), and the global-cube method reflects the texture's
+//! mean and shows the texture (`cube_textured.rs`); docs/textures.md, "Modes
+//! and methods".
 
 use crate::mesh::Mesh;
 use crate::scene::{Scene, SceneTexture, UvMap};

@@ -245,7 +245,10 @@ pub struct SolveArgs {
             per glossy vertex (k = --cube-resolution), gathered by Gauss-Seidel sweeps in \
             light-propagation order on the fixed patch mesh (no adaptive meshing, \
             checkpoints or --resume); the BRDF is evaluated exactly at each direction, \
-            with no Legendre truncation or ringing. Only meaningful with --mode \
+            with no Legendre truncation or ringing. Diffuse textures (map_Kd): sh \
+            integrates them per patch; cube reflects light with Kd times each \
+            texture's mean (warned) and shows diffuse textured surfaces textured, \
+            glossy ones at that mean (docs/textures.md). Only meaningful with --mode \
             directional."
     )]
     pub directional: Option<DirectionalRepresentation>,

@@ -17,9 +17,7 @@ use super::{DirScratch, DirShot, Directional, Tables};
 use crate::solve::checkpoint::precision::kept_bits;
 use crate::solve::shoot::{RecordedShot, SamplePool, Shot};
 use crate::solve::Solver;
-use glam::DVec3;
 use rayon::prelude::*;
-use solution::sh::Y00;
 
 /// The directional arrays a checkpoint stores, borrowed (`direct` is not
 /// stored: it masks `radiance`, see `checkpoint.rs`).
@@ -74,7 +72,8 @@ impl Solver {
         }
         for v in 0..self.mesh.vertices.len() {
             let o = d.vertex_offset[v];
-            self.radiance[v] = DVec3::from_slice(&d.radiance[o..o + 3]) * Y00;
+            let surface = self.mesh.vertices[v].surface as usize;
+            self.radiance[v] = d.diffuse_proxy(surface, &d.radiance[o..]);
         }
         for p in 0..self.mesh.patches.len() {
             let order = d.surface_order[self.mesh.patches[p].surface as usize];
@@ -95,12 +94,7 @@ impl Solver {
         let Some(mut d) = self.directional.take() else {
             return;
         };
-        let tables = Tables {
-            surface_order: d.surface_order.clone(),
-            ks: d.ks.clone(),
-            lobes: d.lobes.clone(),
-            tangent: self.mesh.surfaces.iter().map(|s| s.tangent).collect(),
-        };
+        let tables = Tables::new(&d, &self.mesh);
         let shots = RecordedShot::rebuild_all(
             &self.recorded,
             &self.mesh,
@@ -129,7 +123,7 @@ impl Solver {
             (start as u32..end as u32)
                 .into_par_iter()
                 .map_init(DirScratch::default, |scratch, v| {
-                    let mut sum = vec![0.0; d.vertex_range(mesh, v as usize).len()];
+                    let mut sum = vec![0.0; d.vertex_slot(mesh, v as usize).len()];
                     for (i, r) in recorded.iter().enumerate() {
                         let shot = if v >= r.receivers {
                             &replay[i]

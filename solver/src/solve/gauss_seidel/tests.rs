@@ -408,3 +408,223 @@ fn hemicube_shooting_casts_the_shadow_seen_from_the_source_centre() {
     println!("{inside} vertices in the shadow, {outside} lit, checked");
     assert!(inside >= 9 && outside >= 100, "{inside} {outside}");
 }
+
+// Textured surfaces (`solve/textured.rs`; the module notes, "Textured surfaces").
+
+/// A `size` × `size` checkerboard of `square`-texel squares, sRGB codes 255
+/// and 50.
+fn checkerboard(size: u32, square: u32) -> std::sync::Arc<crate::scene::SceneTexture> {
+    let mut rgba = Vec::new();
+    for y in 0..size {
+        for x in 0..size {
+            let c = if (x / square + y / square).is_multiple_of(2) {
+                255
+            } else {
+                50
+            };
+            rgba.extend([c, c, c, 255]);
+        }
+    }
+    std::sync::Arc::new(
+        crate::scene::SceneTexture::from_rgba("checker.png".into(), size, size, rgba).unwrap(),
+    )
+}
+
+/// Maps each polygon of `scene` (a quad) once onto the texture, u along its
+/// first edge and v along its last, shifted by `shift` in both.
+fn map_once(scene: &mut Scene, shift: f64) {
+    for p in &mut scene.polygons {
+        let o = p.vertices[0];
+        let (a, b) = (p.vertices[1] - o, p.vertices[3] - o);
+        p.uv_map = Some(crate::scene::UvMap {
+            origin: o,
+            du: a / a.length_squared(),
+            dv: b / b.length_squared(),
+            base: glam::DVec2::splat(shift),
+        });
+    }
+}
+
+#[test]
+fn textured_furnace_gives_le_over_one_minus_the_textures_mean() {
+    // The closed cube, every face emitting Le = 1 with Kd 1 × a checkerboard
+    // (8 × 8 texels, squares of 2, codes 255 and 50: linear 1 and 0.0319,
+    // mean m = 0.516). Each face is mapped once, shifted by half a square,
+    // so that each of its 2 × 2 patches covers exactly 2 × 2 squares, ∫ρ/A =
+    // m, while its centre lies inside one square (ρ 1 or 0.0319): a patch
+    // reflecting ρ at its centre would fail. Then L = Le + m E/π with E/π =
+    // L everywhere: L = Le/(1 − m) and E/π the same, per patch and vertex,
+    // and the file's textured batch holds E/π with Le as its SH term. The
+    // tolerance of the untextured furnace (1e-5 relative: the iteration and
+    // f32 factors) holds here too.
+    let mut furnace = material("furnace", 1.0, 1.0);
+    let texture = checkerboard(8, 2);
+    let m = texture.texture.mean().x;
+    furnace.diffuse_texture = Some(texture);
+    let mut scene = scene_of(cube(), vec![furnace], 2);
+    map_once(&mut scene, 1.0 / 8.0);
+    let limits = GaussSeidelLimits {
+        tolerance: 1e-9,
+        max_sweeps: 20_000,
+        ..Default::default()
+    };
+    let result = solve_gauss_seidel(&scene, &settings(2, 16), &limits).unwrap();
+    assert!(result.converged);
+    let exact = 1.0 / (1.0 - m);
+    let worst = |values: &[DVec3]| {
+        values
+            .iter()
+            .map(|l| ((*l - DVec3::splat(exact)) / exact).abs().max_element())
+            .fold(0.0, f64::max)
+    };
+    for (what, values) in [
+        ("patch radiance", &result.patch_radiance),
+        ("patch E/π", &result.patch_irradiance_over_pi),
+        ("vertex E/π", &result.vertex_irradiance_over_pi),
+    ] {
+        let err = worst(values);
+        println!("textured furnace m = {m:.4}: worst {what} error {err:.1e}");
+        assert!(err < 1e-5, "{what}: {err}");
+    }
+    let batch = &result.solution.batches[0];
+    let texturing = batch.texturing.as_ref().expect("a textured batch");
+    let scale = (4.0 * std::f64::consts::PI).sqrt();
+    for (k, tv) in texturing.vertices.iter().enumerate() {
+        let e = f64::from(tv.irradiance_over_pi[0]);
+        assert!((e - exact).abs() < 1e-5 * exact, "vertex {k}: E/π {e}");
+        let c00 = f64::from(batch.coefficients[3 * k]);
+        assert!((c00 - scale).abs() < 1e-6, "vertex {k}: Le · √(4π) {c00}");
+    }
+}
+
+#[test]
+fn textured_gauss_seidel_agrees_with_the_progressive_solve() {
+    // A consistency check between two solvers of one model (`textured.rs`'s
+    // E/π representation and ∫ρE reflection, gathered by Gauss–Seidel and
+    // shot progressively): the Cornell box with its back wall Kd 1 × the
+    // checkerboard (64², squares of 8, codes 255 and 50), mapped once. Both
+    // discretise differently (see the untextured test above), so the bound
+    // is that test's: per surface and channel, |GS − PR| ≤ |GS₆ − GS₃| +
+    // |PR₆ − PR₃| + 0.5%, here on the displayed light ∫ρ E/π dA / A (the
+    // progressive side through the RGB weights), for the back wall and the
+    // mean over all surfaces.
+    let (g3, p3, back) = textured_cornell_means(3);
+    let (g6, p6, _) = textured_cornell_means(6);
+    let all = g6.len() - 1;
+    for k in [back, all] {
+        for c in 0..3 {
+            let difference = (g6[k][c] - p6[k][c]).abs();
+            let bound = (g6[k][c] - g3[k][c]).abs() + (p6[k][c] - p3[k][c]).abs() + 5e-3 * p6[k][c];
+            println!(
+                "textured surface {k} channel {c}: GS {:.4}, PR {:.4}, |difference| {difference:.4}, bound {bound:.4}",
+                g6[k][c], p6[k][c]
+            );
+            assert!(p6[k][c] > 0.0);
+            assert!(
+                difference <= bound,
+                "surface {k} channel {c}: {difference} > {bound}"
+            );
+        }
+    }
+}
+
+/// As [`cornell_surface_means`] with the back wall textured (see the test);
+/// also returns the back wall's surface index.
+fn textured_cornell_means(patches: u32) -> (Vec<DVec3>, Vec<DVec3>, usize) {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../config/cornell_box.obj");
+    let mut scene = crate::scene::load_scene(&path, &Default::default())
+        .unwrap()
+        .scene;
+    scene.fill_default_patches(patches);
+    // The back wall: the farthest quad facing −z (the scene is re-centred).
+    let back_polygon = (0..scene.polygons.len())
+        .filter(|&i| {
+            let p = &scene.polygons[i];
+            p.normal().z < -0.99 && p.vertices.len() == 4
+        })
+        .max_by(|&a, &b| {
+            scene.polygons[a].vertices[0]
+                .z
+                .total_cmp(&scene.polygons[b].vertices[0].z)
+        })
+        .unwrap();
+    let mut back = scene.materials[scene.polygons[back_polygon].material].clone();
+    back.name = "checker".into();
+    back.kd = DVec3::ONE;
+    back.diffuse_texture = Some(checkerboard(64, 8));
+    scene.materials.push(back);
+    scene.polygons[back_polygon].material = scene.materials.len() - 1;
+    let mut one = Scene {
+        polygons: vec![scene.polygons[back_polygon].clone()],
+        ..scene.clone()
+    };
+    map_once(&mut one, 0.0);
+    scene.polygons[back_polygon].uv_map = one.polygons[0].uv_map;
+    let mut s = settings(patches, 64);
+    s.adaptive = false;
+    s.samples = 8;
+    s.threshold = 2e-3;
+    s.max_shots = 100_000;
+    s.ambient = false;
+    let limits = GaussSeidelLimits {
+        tolerance: 1e-6,
+        ..Default::default()
+    };
+    let gs = solve_gauss_seidel(&scene, &s, &limits).unwrap();
+    assert!(gs.converged);
+    let mut progressive = Solver::new(&scene, &s).unwrap();
+    assert!(progressive.texturing.any());
+    while progressive.step().is_some() {}
+    let mesh = progressive.mesh();
+    let count = mesh.surfaces.len() + 1;
+    let back_surface = mesh
+        .surfaces
+        .iter()
+        .position(|s| s.polygon == back_polygon)
+        .unwrap();
+    let (mut g, mut p, mut area) = (
+        vec![DVec3::ZERO; count],
+        vec![DVec3::ZERO; count],
+        vec![0.0; count],
+    );
+    for (i, patch) in mesh.patches.iter().enumerate() {
+        let k = patch.surface as usize;
+        let material = &scene.materials[mesh.surfaces[k].material];
+        // Emitters and patches with hidden vertices are left out, as above.
+        if material.emission.max_element() > 0.0
+            || progressive
+                .patch_weights(i as u32)
+                .iter()
+                .any(|&(v, _)| progressive.hidden_vertices()[v as usize])
+        {
+            continue;
+        }
+        // The progressive patch's displayed light: through the RGB weights
+        // (∫ ρ E/π) on the textured wall, the area weights elsewhere.
+        let radiance = progressive.vertex_radiance();
+        let integral: DVec3 = if progressive.patch_rgb_weights[i].is_empty() {
+            progressive
+                .patch_weights(i as u32)
+                .iter()
+                .map(|&(v, w)| radiance[v as usize] * w)
+                .sum()
+        } else {
+            progressive.patch_rgb_weights[i]
+                .iter()
+                .map(|&(v, w)| radiance[v as usize] * w)
+                .sum()
+        };
+        for slot in [k, count - 1] {
+            g[slot] += gs.patch_radiance[i] * patch.area;
+            p[slot] += integral;
+            area[slot] += patch.area;
+        }
+    }
+    let mean = |sums: Vec<DVec3>| -> Vec<DVec3> {
+        sums.iter()
+            .zip(&area)
+            .map(|(s, &a)| if a > 0.0 { *s / a } else { DVec3::ZERO })
+            .collect()
+    };
+    (mean(g), mean(p), back_surface)
+}

@@ -1,0 +1,252 @@
+//! Textured surfaces in directional mode: the diffuse solve's model
+//! (`solve/textured.rs`) beside the SH of a glossy lobe.
+//!
+//! A textured surface (a diffuse texture and UVs) shows
+//!
+//!   L(x, ω) = ρ(uv) ⊙ E(x)/π + Σ c_lm Y_lm(ω),
+//!
+//! with ρ = Kd ⊙ texture(uv) and the SH holding only the untextured part: the
+//! glossy lobe of its (untextured) Ks, and emission. So each of its vertices
+//! keeps, after its `(L+1)² × 3` coefficients, three more values: E/π, the
+//! incident irradiance over π, which does not depend on the texture (the
+//! shot's transport gives it with reflectance 1: the solver's `kd` is 1
+//! there). Those three values travel with the coefficients through every
+//! per-vertex array (radiance, this shot's ΔL, the recorded shots' part),
+//! so refinement's interpolation, the exact replay of recorded shots to new
+//! vertices and the checkpoint treat them as three more coefficients.
+//!
+//! * **Shooting.** A textured patch's unshot SH gathers its vertices' glossy
+//!   ΔL with the scalar area weights, as every patch does, plus its diffuse
+//!   outgoing radiance as c₀₀: √(4π) · Σ_v w_v ⊙ ΔE_v/π / A_p with the RGB
+//!   weights w_v = Kd ⊙ ∫ ρ λ_v of `solve/textured.rs`, which is exactly
+//!   ∫ ρ ΔE/π dA / A_p for E/π interpolated linearly as displayed: the patch
+//!   shoots the integral of what it shows, glossy part included.
+//! * **Refinement** sees E/π (the diffuse proxy of a textured vertex, which
+//!   the diffuse split test reads with reflectance 1), so a checkerboard does
+//!   not force subdivision along its squares; a glossy textured surface also
+//!   splits where its SH differ, as any glossy surface.
+//! * **Output.** One textured SH batch per textured material, of its order:
+//!   the coefficients (glossy part, emission), the texture's factor Kd, and
+//!   per vertex its UV and E/π (plus the ambient term, as in diffuse mode).
+//!   Solution format 2 defines this: L = Σ c Y + factor ⊙ ρ(uv) ⊙ E/π.
+
+use super::Directional;
+use crate::mesh::Mesh;
+use crate::scene::Scene;
+use crate::solve::textured::SurfaceTexturing;
+use crate::solve::Solver;
+use glam::DVec3;
+use solution::format::{Batch, Representation, ScalarType, Solution, TexturedVertex, Texturing};
+use solution::sh::{coefficient_count, Y00};
+use std::f64::consts::PI;
+
+/// Per mesh surface, whether the solve models it as textured (the same rule
+/// as [`SurfaceTexturing::new`]).
+pub(super) fn textured_surfaces(scene: &Scene, mesh: &Mesh) -> Vec<bool> {
+    SurfaceTexturing::new(scene, mesh, DVec3::ZERO)
+        .per_surface
+        .iter()
+        .map(Option::is_some)
+        .collect()
+}
+
+impl Directional {
+    /// Values per vertex of `surface`: its coefficients, and E/π when textured.
+    pub(super) fn vertex_width(&self, surface: usize) -> usize {
+        let sh = 3 * coefficient_count(self.surface_order[surface]);
+        if self.textured[surface] {
+            sh + 3
+        } else {
+            sh
+        }
+    }
+
+    /// Vertex `v`'s whole slot in the per-vertex arrays (coefficients, then
+    /// E/π on a textured surface); [`Directional::vertex_range`] is the
+    /// coefficients alone.
+    pub(super) fn vertex_slot(&self, mesh: &Mesh, v: usize) -> std::ops::Range<usize> {
+        let o = self.vertex_offset[v];
+        o..o + self.vertex_width(mesh.vertices[v].surface as usize)
+    }
+
+    /// The diffuse proxy of a vertex of `surface` whose slot starts `slot`:
+    /// E/π on a textured surface, else the mean radiance c₀₀ · Y₀₀ (the value
+    /// the diffuse split test and the diffuse fields read).
+    pub(super) fn diffuse_proxy(&self, surface: usize, slot: &[f64]) -> DVec3 {
+        if self.textured[surface] {
+            let at = 3 * coefficient_count(self.surface_order[surface]);
+            DVec3::from_slice(&slot[at..at + 3])
+        } else {
+            DVec3::from_slice(&slot[..3]) * Y00
+        }
+    }
+
+    /// Whether splitting leaf `e` of a glossy surface keeps its children's
+    /// edges at or above the surface's [`super::min_glossy_edge`] (the floor
+    /// the SH split test applies; the E/π test of a textured glossy surface
+    /// applies it too, since each new vertex carries the full SH order).
+    pub(super) fn above_glossy_floor(&self, mesh: &Mesh, e: u32) -> bool {
+        let el = &mesh.elements[e as usize];
+        let surface = mesh.patches[el.patch as usize].surface as usize;
+        let corners = el.corners();
+        let shortest = (0..corners.len())
+            .map(|k| {
+                let (a, b) = (corners[k], corners[(k + 1) % corners.len()]);
+                (mesh.vertices[a as usize].position - mesh.vertices[b as usize].position).length()
+            })
+            .fold(f64::INFINITY, f64::min);
+        0.5 * shortest >= self.min_edge[surface]
+    }
+
+    /// E/π of vertex `v` of a textured surface, from `values` (the radiance or
+    /// ΔL array).
+    fn irradiance_over_pi(&self, mesh: &Mesh, values: &[f64], v: usize) -> DVec3 {
+        let surface = mesh.vertices[v].surface as usize;
+        let at = self.vertex_offset[v] + 3 * coefficient_count(self.surface_order[surface]);
+        DVec3::from_slice(&values[at..at + 3])
+    }
+}
+
+impl Solver {
+    /// Adds to `sum` (patch `p`'s gathered coefficients, before the division
+    /// by its area) the diffuse outgoing radiance of a textured patch as c₀₀:
+    /// √(4π) · Σ_v w_v ⊙ ΔE_v/π over its visible vertices (see the module
+    /// notes). Nothing for an untextured patch.
+    pub(super) fn add_textured_gather(&self, d: &Directional, p: usize, sum: &mut [f64]) {
+        let Some(rgb) = self.patch_rgb_weights.get(p).filter(|w| !w.is_empty()) else {
+            return;
+        };
+        let mut reflected = DVec3::ZERO;
+        for &(v, w) in rgb {
+            if !self.hidden[v as usize] {
+                reflected += w * d.irradiance_over_pi(&self.mesh, &d.received, v as usize);
+            }
+        }
+        let c00 = reflected * (4.0 * PI).sqrt();
+        sum[0] += c00.x;
+        sum[1] += c00.y;
+        sum[2] += c00.z;
+    }
+
+    /// Appends one textured SH batch per textured material (see the module
+    /// notes) to a directional solution whose untextured batches are written,
+    /// and the textures they use to its texture list. `ambient` is added to
+    /// E/π, as the untextured vertices add Kd · ambient to c₀₀.
+    pub(super) fn textured_directional_batches(
+        &self,
+        d: &Directional,
+        solution: &mut Solution,
+        ambient: DVec3,
+    ) {
+        if !d.textured.iter().any(|&t| t) {
+            return;
+        }
+        let mesh = &self.mesh;
+        let triangles = mesh.triangles();
+        // E/π per vertex (zero off textured surfaces); hidden vertices show
+        // their visible neighbours' light, as in diffuse mode.
+        let irradiance: Vec<DVec3> = (0..mesh.vertices.len())
+            .map(|v| {
+                if d.textured[mesh.vertices[v].surface as usize] {
+                    d.irradiance_over_pi(mesh, &d.radiance, v)
+                } else {
+                    DVec3::ZERO
+                }
+            })
+            .collect();
+        let irradiance = crate::solve::hidden::fill_hidden(&triangles, &self.hidden, &irradiance);
+        // The SH likewise (`directional/hidden_fill.rs`).
+        let coefficients = self.displayed_coefficients(d, &triangles);
+        let mut sources = Vec::new();
+        // Per textured batch, its material; per mesh vertex, (batch, index).
+        let mut materials: Vec<usize> = Vec::new();
+        let mut batches: Vec<Batch> = Vec::new();
+        let mut local = vec![(usize::MAX, 0u32); mesh.vertices.len()];
+        for (v, mv) in mesh.vertices.iter().enumerate() {
+            let surface = mv.surface as usize;
+            let Some(t) = self
+                .texturing
+                .get(mv.surface)
+                .filter(|_| d.textured[surface])
+            else {
+                continue;
+            };
+            let s = &mesh.surfaces[surface];
+            let g = match materials.iter().position(|&m| m == s.material) {
+                Some(g) => g,
+                None => {
+                    let texture = super::super::output_textured::texture_index(
+                        &mut sources,
+                        &mut solution.textures,
+                        t,
+                    );
+                    materials.push(s.material);
+                    batches.push(Batch {
+                        representation: Representation::Sh {
+                            order: d.surface_order[surface],
+                        },
+                        scalar: ScalarType::F32,
+                        vertices: Vec::new(),
+                        coefficients: Vec::new(),
+                        indices: Vec::new(),
+                        texturing: Some(Texturing {
+                            texture,
+                            factor: t.kd.as_vec3().to_array(),
+                            vertices: Vec::new(),
+                        }),
+                    });
+                    batches.len() - 1
+                }
+            };
+            let batch = &mut batches[g];
+            local[v] = (g, batch.vertices.len() as u32);
+            let f = |x: DVec3| x.as_vec3().to_array();
+            batch.vertices.push(solution::format::Vertex {
+                position: f(mv.position),
+                normal: f(s.normal),
+                tangent: f(s.tangent),
+            });
+            batch.coefficients.extend(
+                coefficients[d.vertex_range(mesh, v)]
+                    .iter()
+                    .map(|&c| c as f32),
+            );
+            if let Some(texturing) = &mut batch.texturing {
+                texturing.vertices.push(TexturedVertex {
+                    uv: self.texturing.uv(t, mv.position).as_vec2().to_array(),
+                    irradiance_over_pi: f(irradiance[v] + ambient),
+                });
+            }
+        }
+        for tri in &triangles {
+            let (g, _) = local[tri[0] as usize];
+            if g == usize::MAX {
+                continue;
+            }
+            batches[g]
+                .indices
+                .extend(tri.iter().map(|&v| local[v as usize].1));
+        }
+        solution.batches.extend(batches);
+    }
+}
+
+#[cfg(test)]
+impl Solver {
+    /// Vertex `v`'s diffuse proxy (E/π on a textured surface) and its SH
+    /// coefficients, in directional mode (for the texture tests).
+    pub(in crate::solve) fn directional_vertex(&self, v: usize) -> (DVec3, Vec<f64>) {
+        let Some(d) = self.directional.as_deref() else {
+            return (DVec3::ZERO, Vec::new());
+        };
+        let surface = self.mesh.vertices[v].surface as usize;
+        let slot = &d.radiance[d.vertex_slot(&self.mesh, v)];
+        let sh = &d.radiance[d.vertex_range(&self.mesh, v)];
+        (d.diffuse_proxy(surface, slot), sh.to_vec())
+    }
+
+    /// Whether directional mode models mesh surface `s` as textured.
+    pub(in crate::solve) fn directional_textured(&self, s: usize) -> bool {
+        self.directional.as_deref().is_some_and(|d| d.textured[s])
+    }
+}
