@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The main job (README, "Two commands"): install the missing system packages, build
-# in release, solve the bundled Cornell box with the draft preset, then show it —
+# in release, solve the bundled Cornell box with the medium preset, then show it —
 # in the desktop stereo mirror window when there is a display and the runtime has
 # one, else as an offscreen stereo screenshot pair whose paths are printed.
 #
@@ -17,13 +17,13 @@ cargo build --release --locked -p solver --bin solver
 scene=config/cornell_box.toml
 sol=out/cornell_box.sol
 mkdir -p out
-solve_args=(solve "$scene" -o "$sol" --preset draft)
+solve_args=(solve "$scene" -o "$sol" --preset medium)
 if [ -e "$sol.checkpoint" ]; then
   # An earlier main job was interrupted: continue it instead of starting over.
   echo "main-job: found $sol.checkpoint from an interrupted solve; resuming it"
   solve_args+=(--resume)
 fi
-echo "main-job: solving $scene (preset draft)"
+echo "main-job: solving $scene (preset medium)"
 ./target/release/solver "${solve_args[@]}"
 echo "main-job: solution written to $sol"
 

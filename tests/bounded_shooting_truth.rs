@@ -22,11 +22,30 @@ use common::cornell_against_truth;
 /// 10× the default tolerance (1e-3), where it skips ~250 receivers a shot
 /// (at the default, 1e-4, draft bounds almost none and the test would compare
 /// flat with itself). Measured: flat 9.01%, bounded 9.11%
-/// (docs/benchmarks.md, "Bounded shooting").
+/// (docs/benchmarks.md, "Bounded shooting"); with the non-uniform shooters,
+/// at the settings below, flat 7.04%, bounded 7.30%.
 const MARE_ALLOWANCE: f64 = 0.004;
 
 fn mare(dir: &Path, shooting: &str) -> f64 {
-    let args = ["--preset", "draft", "--shooting", shooting];
+    // The draft mesh at the old draft preset's rays and threshold (2 rays, 2%),
+    // where the allowance below was measured: the truth-chosen draft (8 rays,
+    // 0.5%) shoots ~400 times instead of ~260, and at 10× the default
+    // tolerance bounded shooting then measured 6.22% against flat's 5.57%
+    // (docs/accuracy.md, "Presets against the truth"), more than this
+    // allowance, which was set for the shot count below. Without the ambient
+    // term, which files now carry at convergence: it is a display estimate of
+    // the light neither method has shot, not part of the transport compared.
+    let args = [
+        "--preset",
+        "draft",
+        "--samples",
+        "2",
+        "--threshold",
+        "0.02",
+        "--no-ambient",
+        "--shooting",
+        shooting,
+    ];
     let tolerance = ["--shooting-tolerance", "0.001"];
     let (summary, _) = cornell_against_truth(dir, shooting, &[&args[..], &tolerance].concat());
     eprintln!(

@@ -209,7 +209,7 @@ impl Integrator<'_> {
         }
         let pdf_l = light.pdf_area * distance_sq / cos_l;
         let weight = power_heuristic(pdf_l, bsdf.pdf(wi, wo, n));
-        let le = scene.bsdfs[emitter.material].emission;
+        let le = scene.emission_at(light.polygon, light.point);
         f * le * (cos_i * weight / pdf_l)
     }
 }

@@ -27,7 +27,7 @@ pub struct Surface {
     /// a flat facet.
     pub shading: Option<super::shading::CornerNormals>,
     /// Texture coordinates as a function of position, when the polygon has
-    /// them and its material a diffuse texture.
+    /// them and its material a diffuse or an emission texture.
     pub uv_map: Option<crate::scene::UvMap>,
 }
 
@@ -65,6 +65,8 @@ pub struct RenderScene {
     pub lobes: Vec<Arc<ExactLobe>>,
     /// Per material, its diffuse texture (the scene's, decoded to linear).
     pub textures: Vec<Option<Arc<crate::scene::SceneTexture>>>,
+    /// Per material, its emission texture (`map_Ke`), read the same way.
+    pub emission_textures: Vec<Option<Arc<crate::scene::SceneTexture>>>,
 }
 
 /// The object a polygon belongs to: the OBJ object or group its face came from
@@ -135,17 +137,27 @@ impl RenderScene {
                     normal,
                     material: p.material,
                     object,
-                    uv_map: p
-                        .uv_map
-                        .filter(|_| scene.materials[p.material].diffuse_texture.is_some()),
+                    uv_map: p.uv_map.filter(|_| {
+                        let m = &scene.materials[p.material];
+                        m.diffuse_texture.is_some() || m.emission_texture.is_some()
+                    }),
                 }
             })
             .collect();
         let occluder = Occluder::from_polygons(&scene.polygons);
         let list: Vec<&[DVec3]> = surfaces.iter().map(|s| s.vertices.as_slice()).collect();
+        // Emitters are picked by power: an emission-textured one's is its Ke
+        // times the texture's mean (a proposal only: the estimate reads
+        // Le(uv) at the sampled point, `emission_at`).
         let emission: Vec<DVec3> = surfaces
             .iter()
-            .map(|s| bsdfs[s.material].emission)
+            .map(|s| {
+                let m = &scene.materials[s.material];
+                match (&s.uv_map, &m.emission_texture) {
+                    (Some(_), Some(t)) => m.emission * t.texture.mean(),
+                    _ => bsdfs[s.material].emission,
+                }
+            })
             .collect();
         let emitters = Emitters::new(&list, &emission);
         let max_albedo = surfaces
@@ -166,25 +178,45 @@ impl RenderScene {
                 .iter()
                 .map(|m| m.diffuse_texture.clone())
                 .collect(),
+            emission_textures: scene
+                .materials
+                .iter()
+                .map(|m| m.emission_texture.clone())
+                .collect(),
         }
     }
 
     /// The scene's bounds (re-centred coordinates).
     /// The BSDF at `point` on surface `polygon`: its material's, with Kd
     /// times the texture's bilinear sample at the point's UV (level 0, repeat
-    /// wrap: `Texture::bilinear`) where the surface is textured. Bilinear
-    /// rather than the box texels the solve integrates: the two agree in
-    /// every integral over more than a texel, which is all an image pixel or
-    /// a solver element sees.
+    /// wrap: `Texture::bilinear`) where the surface is textured, and its
+    /// emission [`RenderScene::emission_at`] the point. Bilinear rather than
+    /// the box texels the solve integrates: the two agree in every integral
+    /// over more than a texel, which is all an image pixel or a solver
+    /// element sees.
     pub fn bsdf_at(&self, polygon: usize, point: DVec3) -> std::borrow::Cow<'_, Bsdf> {
         let surface = &self.surfaces[polygon];
         let bsdf = &self.bsdfs[surface.material];
-        match (&surface.uv_map, &self.textures[surface.material]) {
-            (Some(map), Some(texture)) => {
-                let rho = texture.texture.bilinear(map.at(point));
-                std::borrow::Cow::Owned(bsdf.with_kd(bsdf.kd * rho))
-            }
-            _ => std::borrow::Cow::Borrowed(bsdf),
+        let Some(map) = &surface.uv_map else {
+            return std::borrow::Cow::Borrowed(bsdf);
+        };
+        let kd = match &self.textures[surface.material] {
+            Some(texture) => bsdf.kd * texture.texture.bilinear(map.at(point)),
+            None => bsdf.kd,
+        };
+        let emission = self.emission_at(polygon, point);
+        std::borrow::Cow::Owned(Bsdf::new(kd, bsdf.ks, bsdf.lobe.clone(), emission))
+    }
+
+    /// The radiance emitted at `point` on surface `polygon`: Ke ⊙ the
+    /// emission texture's bilinear sample at its UV where it has one (as
+    /// [`RenderScene::bsdf_at`] reads Kd), else the flat Ke.
+    pub fn emission_at(&self, polygon: usize, point: DVec3) -> DVec3 {
+        let surface = &self.surfaces[polygon];
+        let le = self.bsdfs[surface.material].emission;
+        match (&surface.uv_map, &self.emission_textures[surface.material]) {
+            (Some(map), Some(texture)) => le * texture.texture.bilinear(map.at(point)),
+            _ => le,
         }
     }
 

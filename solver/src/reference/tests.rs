@@ -26,6 +26,7 @@ fn material(name: &str, kd: f64, ks: f64, alpha: f64, le: DVec3) -> Material {
         alpha,
         emission: le,
         diffuse_texture: None,
+        emission_texture: None,
     }
 }
 

@@ -76,7 +76,7 @@ pub(crate) fn build_scene(mut raw: RawScene, options: &BuildOptions) -> Result<S
     let textured: Vec<bool> = raw
         .materials
         .iter()
-        .map(|m| m.diffuse_map.is_some())
+        .map(|m| m.diffuse_map.is_some() || m.emission_map.is_some())
         .collect();
     for mut polygon in std::mem::take(&mut raw.polygons) {
         if !textured.get(polygon.material).copied().unwrap_or(false) {
@@ -179,8 +179,13 @@ fn diffuse_texture(
         );
         return None;
     }
-    let texture =
-        super::texture_file::load_texture(file, raw.diffuse_bytes.as_deref(), at, warnings)?;
+    let texture = super::texture_file::load_texture(
+        file,
+        raw.diffuse_bytes.as_deref(),
+        at,
+        "map_Kd",
+        warnings,
+    )?;
     let product = kd * texture.texture.mean();
     if product.max_element() < DARK_TEXTURE {
         warn(
@@ -198,6 +203,41 @@ fn diffuse_texture(
         );
     }
     Some(texture)
+}
+
+/// Reads material `index`'s `map_Ke` (`raw.emission_map`) when it emits and
+/// some polygon using it has UVs, with warnings for a texture that is not
+/// used or cannot be read (the flat Ke is then used).
+fn emission_texture(
+    raw: &RawMaterial,
+    index: usize,
+    polygons: &[Polygon],
+    warnings: &mut Vec<Warning>,
+) -> Option<std::sync::Arc<super::SceneTexture>> {
+    let (file, at) = raw.emission_map.as_ref()?;
+    if raw.emission == DVec3::ZERO {
+        // Ke 0 0 0 times any texture emits nothing (warned by the parser).
+        return None;
+    }
+    let mut users = polygons.iter().filter(|p| p.material == index);
+    if !users.clone().any(|p| p.uv_map.is_some()) {
+        let first = users
+            .next()
+            .map(|p| format!(" (first: {})", p.source))
+            .unwrap_or_default();
+        warn(
+            warnings,
+            at,
+            format!(
+                "map_Ke texture {}: no face using material `{}` has texture coordinates (`vt`){first}; \
+                 the flat Ke is used",
+                file.display(),
+                raw.name
+            ),
+        );
+        return None;
+    }
+    super::texture_file::load_texture(file, raw.emission_bytes.as_deref(), at, "map_Ke", warnings)
 }
 
 fn describe_files(files: &[std::path::PathBuf]) -> String {
@@ -550,6 +590,7 @@ fn finish_materials(
             });
         }
         let diffuse_texture = diffuse_texture(m, kd, i, polygons, warnings);
+        let emission_texture = emission_texture(m, i, polygons, warnings);
         let material = Material {
             name: m.name.clone(),
             kd,
@@ -557,6 +598,7 @@ fn finish_materials(
             alpha: m.alpha,
             emission: m.emission,
             diffuse_texture,
+            emission_texture,
         };
         // The same name twice (two files, or an MTL that redefines it): share one
         // entry when identical, else tell them apart by their file.

@@ -25,7 +25,8 @@
 //!   Ks = lerp(0.04, baseColor, metallic) (used only in directional mode, as an
 //!   MTL `Ks` is), α = roughness² (glTF roughness is perceptual; α is clamped
 //!   to [`crate::brdf::MIN_ALPHA`]), and emitted radiance
-//!   Le = emissiveFactor × `KHR_materials_emissive_strength`. glTF gives
+//!   Le = emissiveFactor × `KHR_materials_emissive_strength` (× the
+//!   `emissiveTexture`, decoded from sRGB, where there is one). glTF gives
 //!   emission no absolute unit; it is taken as W·sr⁻¹·m⁻², one-sided toward
 //!   the front face, as an MTL `Ke` is.
 //! * **Units**: metres, +y up, right-handed (§3.4): the scene's
@@ -1062,24 +1063,27 @@ fn convert_material(
     let emission = DVec3::from_array(material.emissive_factor().map(f64::from)) * strength;
 
     let base_colour = match pbr.base_color_texture() {
-        Some(info) => base_colour_texture(ctx, buffers, &info, &mut warn),
+        Some(info) => material_texture(ctx, buffers, &info, BASE_COLOUR, &mut warn),
         None => None,
     };
-    let mut textures = Vec::new();
+    // Le = emissiveFactor × strength × emissiveTexture (§3.9.3, sRGB like the
+    // base colour), honouring its texCoord and `KHR_texture_transform`.
+    let emissive = match material.emissive_texture() {
+        Some(_) if emission == DVec3::ZERO => {
+            warn(
+                "emissiveTexture with emissiveFactor (0, 0, 0): the factor multiplies the \
+                 texture, so the surface does not emit"
+                    .to_owned(),
+            );
+            None
+        }
+        Some(info) => material_texture(ctx, buffers, &info, EMISSIVE, &mut warn),
+        None => None,
+    };
     if pbr.metallic_roughness_texture().is_some() {
-        textures.push("metallicRoughnessTexture");
-    }
-    if material.emissive_texture().is_some() {
-        textures.push("emissiveTexture");
-    }
-    if !textures.is_empty() {
         warn(format!(
-            "{} ignored, the flat factors used (metallic {metallic}, roughness {roughness}, \
-             emissive ({}, {}, {})): only base-colour textures are modelled",
-            textures.join(", "),
-            emission.x,
-            emission.y,
-            emission.z
+            "metallicRoughnessTexture ignored, the flat factors used (metallic {metallic}, \
+             roughness {roughness}): only base-colour and emissive textures are modelled"
         ));
     }
     if material.normal_texture().is_some() {
@@ -1124,13 +1128,37 @@ fn convert_material(
             .as_ref()
             .map(|t| (t.name.clone(), ctx.source(item.clone()))),
         diffuse_bytes: base_colour.as_ref().and_then(|t| t.bytes.clone()),
+        emission_map: emissive
+            .as_ref()
+            .map(|t| (t.name.clone(), ctx.source(item.clone()))),
+        emission_bytes: emissive.as_ref().and_then(|t| t.bytes.clone()),
     };
-    (raw, warnings, base_colour.map(|t| t.uv_map))
+    // A polygon has one UV set. An emitter's base-colour texture is not
+    // modelled (its flat Kd is used, as for MTL), so an emissive texture's
+    // mapping wins.
+    let uv_map = emissive.or(base_colour).map(|t| t.uv_map);
+    (raw, warnings, uv_map)
 }
 
-/// A base-colour texture as the importer hands it on: decoded later by
-/// `texture_file` (like an MTL `map_Kd`) only if a polygon uses it.
-struct BaseColour {
+/// Which texture of a material [`material_texture`] reads, for its messages.
+struct Slot {
+    name: &'static str,
+    flat: &'static str,
+}
+
+const BASE_COLOUR: Slot = Slot {
+    name: "baseColorTexture",
+    flat: "the flat base colour",
+};
+const EMISSIVE: Slot = Slot {
+    name: "emissiveTexture",
+    flat: "the flat emissive factor",
+};
+
+/// A base-colour or emissive texture as the importer hands it on: decoded
+/// later by `texture_file` (like an MTL `map_Kd` or `map_Ke`) only if a
+/// polygon uses it.
+struct MaterialTexture {
     /// The image file, or the glTF file and image index naming embedded bytes.
     name: PathBuf,
     /// The encoded image when it is not a file of its own.
@@ -1138,17 +1166,19 @@ struct BaseColour {
     uv_map: DAffine2,
 }
 
-/// The base-colour texture of a material (glTF 2.0 specification, §3.9.2:
-/// sRGB, multiplied by `baseColorFactor`, which is the MTL convention the
-/// solver follows: the factor · (1 − metallic) is Kd). `None`, with a
-/// warning, when it uses another set of texture coordinates than
-/// `TEXCOORD_0` or its image cannot be located.
-fn base_colour_texture(
+/// The base-colour or emissive texture of a material (glTF 2.0
+/// specification, §3.9.2 and §3.9.3: sRGB, multiplied by `baseColorFactor`
+/// or `emissiveFactor`, which is the MTL convention the solver follows: the
+/// base factor · (1 − metallic) is Kd, the emissive factor × strength is Ke).
+/// `None`, with a warning, when it uses another set of texture coordinates
+/// than `TEXCOORD_0` or its image cannot be located.
+fn material_texture(
     ctx: &Context,
     buffers: &[Buffer],
     info: &gltf::texture::Info,
+    slot: Slot,
     warn: &mut impl FnMut(String),
-) -> Option<BaseColour> {
+) -> Option<MaterialTexture> {
     let transform = info.extension_value("KHR_texture_transform");
     let set = transform
         .and_then(|t| t.get("texCoord"))
@@ -1156,8 +1186,8 @@ fn base_colour_texture(
         .unwrap_or(u64::from(info.tex_coord()));
     if set != 0 {
         warn(format!(
-            "baseColorTexture uses TEXCOORD_{set}; only TEXCOORD_0 is read, so the flat base \
-             colour is used"
+            "{} uses TEXCOORD_{set}; only TEXCOORD_0 is read, so {} is used",
+            slot.name, slot.flat
         ));
         return None;
     }
@@ -1183,9 +1213,7 @@ fn base_colour_texture(
             match decode_data_uri(uri) {
                 Ok(bytes) => (label("data URI"), Some(bytes.into())),
                 Err(why) => {
-                    warn(format!(
-                        "baseColorTexture: {why}; the flat base colour is used"
-                    ));
+                    warn(format!("{}: {why}; {} is used", slot.name, slot.flat));
                     return None;
                 }
             }
@@ -1195,15 +1223,13 @@ fn base_colour_texture(
             match relative_file(dir, uri) {
                 Ok(file) => (file, None),
                 Err(why) => {
-                    warn(format!(
-                        "baseColorTexture: {why}; the flat base colour is used"
-                    ));
+                    warn(format!("{}: {why}; {} is used", slot.name, slot.flat));
                     return None;
                 }
             }
         }
     };
-    Some(BaseColour {
+    Some(MaterialTexture {
         name,
         bytes,
         uv_map: uv_map(transform),
@@ -1211,8 +1237,7 @@ fn base_colour_texture(
 }
 
 /// glTF UVs to the solver's: `KHR_texture_transform` first (its README's
-/// matrix T(offset) · R(rotation) · S(scale), R = [[cos, −sin], [sin, cos]]
-/// in row form, applied to glTF's (u, v)), then glTF's v, which runs down
+/// T(offset) · R(rotation) · S(scale), applied to glTF's (u, v)), then glTF's v, which runs down
 /// from the image's top row, turned into the OBJ convention the solver and
 /// the solution file use (v up from the bottom row): v ↦ 1 − v.
 fn uv_map(transform: Option<&serde_json::Value>) -> DAffine2 {
@@ -1232,11 +1257,19 @@ fn uv_map(transform: Option<&serde_json::Value>) -> DAffine2 {
         .and_then(|x| x.as_f64())
         .filter(|x| x.is_finite())
         .unwrap_or(0.0);
+    // R = [[cos, sin], [−sin, cos]] in row form: u' = cos·u + sin·v,
+    // v' = −sin·u + cos·v, counter-clockwise in glTF's v-down UV space. The
+    // README's GLSL listing, read as GLSL (column-major), gives the transpose;
+    // KhronosGroup/glTF issue #1563 records that the listing is wrong and that
+    // Blender, Babylon.js, three.js and the TextureTransformTest sample model
+    // all turn this way, as does the README's own example (rotation π/2,
+    // offset (0, 1), scale ½ selects the image's lower-left quadrant), which
+    // `texture_transform_rotation_turns_as_the_extensions_example_says` checks.
     let (sin, cos) = rotation.sin_cos();
     let gltf = DAffine2::from_translation(pair("offset", 0.0))
         * DAffine2::from_mat2(glam::DMat2::from_cols(
-            DVec2::new(cos, sin),
-            DVec2::new(-sin, cos),
+            DVec2::new(cos, -sin),
+            DVec2::new(sin, cos),
         ))
         * DAffine2::from_scale(pair("scale", 1.0));
     let flip = DAffine2::from_cols(DVec2::X, DVec2::NEG_Y, DVec2::Y);

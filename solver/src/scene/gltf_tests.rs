@@ -444,7 +444,8 @@ fn unmodelled_features_are_warned_once_each_naming_the_file() {
     let material = &mut f.json["materials"][0];
     material["pbrMetallicRoughness"]["baseColorTexture"] =
         json!({"index": 0, "extensions": {"KHR_texture_transform": {"scale": [2.0, 2.0]}}});
-    material["emissiveTexture"] = json!({"index": 0});
+    material["emissiveTexture"] = json!({"index": 0, "texCoord": 1});
+    material["pbrMetallicRoughness"]["metallicRoughnessTexture"] = json!({"index": 0});
     material["normalTexture"] = json!({"index": 0});
     material["alphaMode"] = json!("BLEND");
     material["doubleSided"] = json!(true);
@@ -469,7 +470,8 @@ fn unmodelled_features_are_warned_once_each_naming_the_file() {
     assert_eq!(scene.raw.polygons.len(), 2, "two instances of the triangle");
     let warnings = &scene.raw.warnings;
     for phrase in [
-        "emissiveTexture ignored, the flat factors used",
+        "metallicRoughnessTexture ignored, the flat factors used",
+        "emissiveTexture uses TEXCOORD_1; only TEXCOORD_0 is read, so the flat emissive factor",
         "normal map ignored",
         "alpha mode BLEND ignored",
         "doubleSided",
@@ -825,6 +827,89 @@ fn texture_transform_offsets_scales_and_rotates_the_uvs() {
             "at (0.5, {y}): {got}"
         );
     }
+}
+
+/// Rotation π/2 alone: glTF (u, v) ↦ (v, −u) (`uv_map`'s matrix), so the
+/// texel centred at (column, row) shows texel (row, 1 − column) (wrapping);
+/// the README's GLSL listing taken literally, (−v, u), would show texel
+/// (1 − row, column), a different value for every centre of
+/// [`QUAD_TEXELS`]. And the README's example (offset (0, 1), rotation π/2,
+/// scale ½: "only the lower left quadrant of the source image, rotated
+/// clockwise 90°") maps the quad's centre to the centre of the lower-left
+/// texel (column 0, row 1), where the listing would give (1, 0).
+#[test]
+fn texture_transform_rotation_turns_as_the_extensions_example_says() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut f = textured_quad();
+    let turn = std::f64::consts::FRAC_PI_2;
+    f.json["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"]["extensions"] =
+        json!({"KHR_texture_transform": {"rotation": turn}});
+    let scene = load(&write_gltf(dir.path(), "quarter", &f)).scene;
+    for (column, row) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
+        let (x, y) = (0.25 + 0.5 * column as f64, 0.25 + 0.5 * row as f64);
+        let got = albedo_at(&scene, x, y);
+        let want = texel(row, 1 - column);
+        assert!(
+            (got - want).abs() <= TEXEL_TOLERANCE,
+            "at ({x}, {y}): {got} vs texel ({row}, {}) = {want}",
+            1 - column
+        );
+    }
+    f.json["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"]["extensions"] = json!(
+        {"KHR_texture_transform": {"offset": [0.0, 1.0], "rotation": turn, "scale": [0.5, 0.5]}}
+    );
+    let scene = load(&write_gltf(dir.path(), "example", &f)).scene;
+    let got = albedo_at(&scene, 0.5, 0.5);
+    assert!((got - texel(0, 1)).abs() <= TEXEL_TOLERANCE, "{got}");
+}
+
+/// An emissive texture: Le = emissiveFactor × strength × texture(uv), decoded
+/// from sRGB, through its own `KHR_texture_transform` (rotation π/2, as in
+/// the test above); the emitter's base-colour texture is not modelled.
+#[test]
+fn emissive_texture_multiplies_factor_and_strength_and_follows_its_transform() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut f = textured_quad();
+    let material = &mut f.json["materials"][0];
+    material["emissiveFactor"] = json!([2.0, 2.0, 2.0]);
+    material["extensions"] = json!({"KHR_materials_emissive_strength": {"emissiveStrength": 3.0}});
+    material["emissiveTexture"] = json!({"index": 0, "extensions":
+        {"KHR_texture_transform": {"rotation": std::f64::consts::FRAC_PI_2}}});
+    let scene = load(&write_gltf(dir.path(), "screen", &f)).scene;
+    let screens: Vec<&crate::scene::Polygon> = scene
+        .polygons
+        .iter()
+        .filter(|p| scene.materials[p.material].name == "checker")
+        .collect();
+    assert_eq!(screens.len(), 2);
+    let m = &scene.materials[screens[0].material];
+    assert!(m.emission_texture.is_some(), "{:?}", scene.warnings);
+    assert!(m.diffuse_texture.is_none());
+    for (column, row) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
+        let (x, y) = (0.25 + 0.5 * column as f64, 0.25 + 0.5 * row as f64);
+        let p = DVec3::new(x, y, 0.0) - scene.recentre_offset;
+        let want = 6.0 * f64::from(crate::texture::srgb_to_linear(QUAD_TEXELS[1 - column][row]));
+        for polygon in &screens {
+            let got = m.emission_at(Some(polygon.uv_map.unwrap().at(p))).x;
+            // f32 UVs and pyramid, times Le's scale 6.
+            assert!(
+                (got - want).abs() <= 6.0 * TEXEL_TOLERANCE,
+                "({x}, {y}): {got} vs {want}"
+            );
+        }
+    }
+    // A zero factor emits nothing, whatever the texture: warned.
+    f.json["materials"][0]["emissiveFactor"] = json!([0.0, 0.0, 0.0]);
+    let loaded = load(&write_gltf(dir.path(), "dark", &f));
+    assert!(
+        loaded
+            .scene
+            .warnings
+            .iter()
+            .any(|w| w.message.contains("does not emit")),
+        "{:?}",
+        loaded.scene.warnings
+    );
 }
 
 #[test]

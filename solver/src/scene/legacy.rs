@@ -310,6 +310,8 @@ pub(crate) fn parse_legacy_text(path: &Path, text: &str) -> Result<RawScene, Sce
             unmodelled: Vec::new(),
             diffuse_map: None,
             diffuse_bytes: None,
+            emission_map: None,
+            emission_bytes: None,
         });
     }
     if let Some((no, tokens)) = content.next() {

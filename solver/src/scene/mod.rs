@@ -83,6 +83,10 @@ pub struct Material {
     /// `kd ⊙ texture(uv)` (the MTL convention: Kd multiplies the map) where
     /// the polygon has UVs, `kd` elsewhere.
     pub diffuse_texture: Option<std::sync::Arc<SceneTexture>>,
+    /// The emission texture (MTL `map_Ke`, glTF `emissiveTexture`): the
+    /// emitted radiance at a point is `emission ⊙ texture(uv)` (docs/textures.md,
+    /// "Emissive textures") where the polygon has UVs, `emission` elsewhere.
+    pub emission_texture: Option<std::sync::Arc<SceneTexture>>,
 }
 
 /// A decoded diffuse texture: the 8-bit sRGB texels as read (for the solution
@@ -137,6 +141,15 @@ impl Material {
         match (&self.diffuse_texture, uv) {
             (Some(t), Some(uv)) => self.kd * t.texture.bilinear(uv),
             _ => self.kd,
+        }
+    }
+    /// The emitted radiance at texture coordinate `uv` (bilinear texture
+    /// sample times the emission), or the flat emission when the material has
+    /// no emission texture or the point no UV.
+    pub fn emission_at(&self, uv: Option<glam::DVec2>) -> DVec3 {
+        match (&self.emission_texture, uv) {
+            (Some(t), Some(uv)) => self.emission * t.texture.bilinear(uv),
+            _ => self.emission,
         }
     }
 }

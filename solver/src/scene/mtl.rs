@@ -40,6 +40,9 @@ pub(crate) fn parse_mtl(path: &Path, text: &str) -> Result<Vec<RawMaterial>, Sce
     let mut materials: Vec<RawMaterial> = Vec::new();
     // The kinds the current material has already been warned about.
     let mut warned: Vec<Unmodelled> = Vec::new();
+    // Per material, whether a `Ke` line gave its emission (see
+    // [`emission_map_convention`]).
+    let mut ke_given: Vec<bool> = Vec::new();
     for (line_no, line) in numbered_lines(text) {
         let content = line.split('#').next().unwrap_or("");
         let tokens: Vec<&str> = content.split_whitespace().collect();
@@ -71,7 +74,10 @@ pub(crate) fn parse_mtl(path: &Path, text: &str) -> Result<Vec<RawMaterial>, Sce
                 unmodelled: Vec::new(),
                 diffuse_map: None,
                 diffuse_bytes: None,
+                emission_map: None,
+                emission_bytes: None,
             });
+            ke_given.push(false);
             warned.clear();
             continue;
         }
@@ -86,7 +92,7 @@ pub(crate) fn parse_mtl(path: &Path, text: &str) -> Result<Vec<RawMaterial>, Sce
             continue;
         };
         let item = format!("material {}", current.name);
-        if key == "map_Kd" {
+        if key == "map_Kd" || key == "map_Ke" {
             let source = SourceRef {
                 file: path.to_path_buf(),
                 line: Some(line_no),
@@ -94,6 +100,13 @@ pub(crate) fn parse_mtl(path: &Path, text: &str) -> Result<Vec<RawMaterial>, Sce
             };
             match texture_argument(&tokens[1..]) {
                 Ok((file, ignored)) => {
+                    let dir = path.parent().unwrap_or(Path::new(""));
+                    let map = Some((dir.join(file), source.clone()));
+                    if key == "map_Kd" {
+                        current.diffuse_map = map;
+                    } else {
+                        current.emission_map = map;
+                    }
                     if let Some(option) = ignored {
                         current.unmodelled.push(Warning {
                             source: source.clone(),
@@ -104,12 +117,14 @@ pub(crate) fn parse_mtl(path: &Path, text: &str) -> Result<Vec<RawMaterial>, Sce
                             ),
                         });
                     }
-                    let dir = path.parent().unwrap_or(Path::new(""));
-                    current.diffuse_map = Some((dir.join(file), source));
                 }
                 Err(why) => current.unmodelled.push(Warning {
                     source,
-                    message: format!("`{}`: {why}; the flat Kd is used", quoted(&tokens)),
+                    message: format!(
+                        "`{}`: {why}; the flat {} is used",
+                        quoted(&tokens),
+                        &key[4..]
+                    ),
                 }),
             }
             continue;
@@ -145,7 +160,12 @@ pub(crate) fn parse_mtl(path: &Path, text: &str) -> Result<Vec<RawMaterial>, Sce
                 match key {
                     "Kd" => current.kd = value,
                     "Ks" => current.ks = value,
-                    _ => current.emission = value,
+                    _ => {
+                        current.emission = value;
+                        if let Some(given) = ke_given.last_mut() {
+                            *given = true;
+                        }
+                    }
                 }
             }
             "Ns" => {
@@ -164,7 +184,42 @@ pub(crate) fn parse_mtl(path: &Path, text: &str) -> Result<Vec<RawMaterial>, Sce
             _ => {}
         }
     }
+    for (material, &given) in materials.iter_mut().zip(&ke_given) {
+        emission_map_convention(material, given);
+    }
     Ok(materials)
+}
+
+/// The emission a `map_Ke` multiplies (docs/textures.md, "Emissive
+/// textures"). Le = Ke ⊙ texture, as `Kd` multiplies `map_Kd`; Blender
+/// writes `Ke 1 1 1` beside `map_Ke`. A `map_Ke` without any `Ke` line
+/// means the texture alone (Ke 1 1 1), and `Ke 0 0 0` with `map_Ke` is taken
+/// at its word (the surface does not emit); both are warned, naming the
+/// `map_Ke` line, since either could be an exporter's slip.
+fn emission_map_convention(material: &mut RawMaterial, ke_given: bool) {
+    let Some((file, at)) = &material.emission_map else {
+        return;
+    };
+    let message = if !ke_given {
+        material.emission = DVec3::ONE;
+        format!(
+            "map_Ke {} without a `Ke` line: Ke 1 1 1 is assumed, so the surface emits the \
+             texture's radiance (W·sr⁻¹·m⁻², the texture decoded from sRGB)",
+            file.display()
+        )
+    } else if material.emission == DVec3::ZERO {
+        format!(
+            "map_Ke {} with Ke 0 0 0: Ke multiplies the texture, so the surface does not emit; \
+             set Ke 1 1 1 if the texture alone is meant",
+            file.display()
+        )
+    } else {
+        return;
+    };
+    material.unmodelled.push(Warning {
+        source: at.clone(),
+        message,
+    });
 }
 
 /// A kind of MTL statement that the solver reads but does not model. A material
@@ -176,7 +231,6 @@ enum Unmodelled {
     Transparency,
     RefractiveIndex,
     IlluminationModel,
-    EmissionTexture,
     SpecularTexture,
     ExponentTexture,
     ReflectionMap,
@@ -238,12 +292,6 @@ fn unmodelled(key: &str, args: &[&str]) -> Option<(Unmodelled, String)> {
                 ),
             )
         }
-        "map_Ke" => (
-            EmissionTexture,
-            "emission textures are not yet modelled; the flat Ke is used, so the surface \
-             emits uniformly"
-                .to_owned(),
-        ),
         "map_Ks" => (
             SpecularTexture,
             "specular textures are not modelled; the flat Ks is used".to_owned(),
@@ -426,7 +474,7 @@ mod tests {
         bump bump.png\n";
 
     /// (material, kind's key as first written, line, words the message must hold).
-    const EXPECTED: [(usize, &str, usize, &str); 16] = [
+    const EXPECTED: [(usize, &str, usize, &str); 14] = [
         (0, "map_Bump -bm 0.5 normal.png", 3, "normal is used"),
         (0, "d 0.5", 4, "opaque"),
         (0, "Ni 1.45", 5, "refraction"),
@@ -434,8 +482,6 @@ mod tests {
         (0, "map_Ks spec.png", 7, "flat Ks"),
         (0, "map_Ns rough.png", 8, "flat Ns"),
         (0, "refl -type sphere env.png", 9, "reflection maps"),
-        (0, "map_Ke screen.png", 11, "flat Ke"),
-        (1, "map_Ke screen.png", 13, "emits uniformly"),
         (1, "refl -type sphere env.png", 15, "own surfaces"),
         (1, "map_Ns rough.png", 16, "not modelled"),
         (1, "map_Ks spec.png", 17, "not modelled"),
@@ -449,14 +495,22 @@ mod tests {
     fn every_unmodelled_statement_warns_once_per_material_naming_file_and_line() {
         let m = parse(EVERY_STATEMENT).unwrap();
         assert_eq!(m.len(), 2);
-        // Eight kinds each: bump, transparency, Ni, illum, map_Ke, map_Ks,
-        // map_Ns, refl; `map_Kd` is modelled (read as the diffuse texture).
+        // Seven kinds each: bump, transparency, Ni, illum, map_Ks, map_Ns,
+        // refl; `map_Kd` and `map_Ke` are modelled (read as the diffuse and
+        // emission textures), and the eighth warning is `map_Ke` without `Ke`.
         assert_eq!(m[0].unmodelled.len(), 8, "{:?}", m[0].unmodelled);
         assert_eq!(m[1].unmodelled.len(), 8, "{:?}", m[1].unmodelled);
-        for material in &m {
+        for (material, ke_line) in m.iter().zip([11, 13]) {
             let (file, at) = material.diffuse_map.as_ref().unwrap();
             assert_eq!(file, Path::new("wall.png"));
             assert!(at.line.is_some());
+            let (file, at) = material.emission_map.as_ref().unwrap();
+            assert_eq!(file, Path::new("screen.png"));
+            assert_eq!(at.line, Some(ke_line));
+            assert_eq!(material.emission, DVec3::ONE);
+            let w = material.unmodelled.last().unwrap();
+            assert_eq!(w.source.line, Some(ke_line));
+            assert!(w.message.contains("without a `Ke` line"), "{w}");
         }
         for (material, statement, line, words) in EXPECTED {
             let hits: Vec<&Warning> = m[material]
@@ -496,6 +550,37 @@ mod tests {
         // A new material starts afresh.
         assert!(m[1].unmodelled.is_empty());
         assert_eq!(m[1].diffuse_map.as_ref().unwrap().0, Path::new("a.png"));
+    }
+
+    /// `map_Ke` multiplies Ke: a stated Ke is kept silently, `Ke 0 0 0` is
+    /// kept (no emission) with a warning, a missing Ke becomes 1 1 1 with a
+    /// warning; both warnings name the `map_Ke` line.
+    #[test]
+    fn map_ke_multiplies_ke_and_a_missing_or_zero_ke_is_warned() {
+        let m = parse(
+            "newmtl screen\nKe 2 2 2\nmap_Ke -o 0 0 s.png\n\
+             newmtl off\nmap_Ke s.png\nKe 0 0 0\n\
+             newmtl bare\nKd 0.5\nmap_Ke dir/s.png\n",
+        )
+        .unwrap();
+        assert_eq!(m[0].emission, DVec3::splat(2.0));
+        assert!(m[0].unmodelled.is_empty(), "{:?}", m[0].unmodelled);
+        assert_eq!(m[0].emission_map.as_ref().unwrap().0, Path::new("s.png"));
+        assert_eq!(m[1].emission, DVec3::ZERO);
+        let w = &m[1].unmodelled[0];
+        assert_eq!(w.source.line, Some(5));
+        assert!(w.message.contains("does not emit"), "{w}");
+        assert_eq!(m[2].emission, DVec3::ONE);
+        let w = &m[2].unmodelled[0];
+        assert_eq!(
+            w.to_string().split(": ").next().unwrap(),
+            "lib.mtl:9 (material bare)"
+        );
+        assert!(w.message.contains("Ke 1 1 1 is assumed"), "{w}");
+        assert_eq!(
+            m[2].emission_map.as_ref().unwrap().0,
+            Path::new("dir/s.png")
+        );
     }
 
     #[test]

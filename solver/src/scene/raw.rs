@@ -40,6 +40,11 @@ pub(crate) struct RawMaterial {
     /// own (a glTF image in a buffer view or a data URI); `diffuse_map`'s
     /// path then only names them in messages.
     pub diffuse_bytes: Option<std::sync::Arc<[u8]>>,
+    /// The emission texture (MTL `map_Ke`, glTF `emissiveTexture`), as
+    /// `diffuse_map`; it multiplies `emission`.
+    pub emission_map: Option<(PathBuf, SourceRef)>,
+    /// Its encoded bytes when they are not a file of their own.
+    pub emission_bytes: Option<std::sync::Arc<[u8]>>,
 }
 
 impl RawMaterial {
@@ -58,6 +63,8 @@ impl RawMaterial {
             unmodelled: Vec::new(),
             diffuse_map: None,
             diffuse_bytes: None,
+            emission_map: None,
+            emission_bytes: None,
         }
     }
 

@@ -28,11 +28,13 @@ pub const MAX_TEXTURE_FILE_BYTES: u64 = 256 << 20;
 /// Loads `path` for the material at `source`, or decodes `bytes` when the
 /// texture is not a file of its own (a glTF image in a buffer or a data URI;
 /// `path` then names it); `None` (with a warning in `warnings`) when it
-/// cannot be used.
+/// cannot be used. `statement` is `map_Kd` or `map_Ke`: the warning names
+/// it and the flat value (Kd or Ke) used instead.
 pub(crate) fn load_texture(
     path: &Path,
     bytes: Option<&[u8]>,
     source: &SourceRef,
+    statement: &str,
     warnings: &mut Vec<Warning>,
 ) -> Option<Arc<SceneTexture>> {
     let texture = match bytes {
@@ -45,8 +47,9 @@ pub(crate) fn load_texture(
             warnings.push(Warning {
                 source: source.clone(),
                 message: format!(
-                    "map_Kd texture {}: {why}; the flat Kd is used",
-                    path.display()
+                    "{statement} texture {}: {why}; the flat {} is used",
+                    path.display(),
+                    statement.strip_prefix("map_").unwrap_or(statement)
                 ),
             });
             None
@@ -166,7 +169,7 @@ pub(crate) mod tests {
 
     fn load(path: &Path) -> (Option<Arc<SceneTexture>>, Vec<Warning>) {
         let mut warnings = Vec::new();
-        let t = load_texture(path, None, &SourceRef::default(), &mut warnings);
+        let t = load_texture(path, None, &SourceRef::default(), "map_Kd", &mut warnings);
         (t, warnings)
     }
 
@@ -273,5 +276,70 @@ pub(crate) mod tests {
         assert!(warned("very dark reflectance"), "{:?}", scene.warnings);
         assert!(warned("absent.png: cannot be read"), "{:?}", scene.warnings);
         assert!(!warned("not yet modelled"), "{:?}", scene.warnings);
+    }
+
+    /// `map_Ke` through the same reader: Le = Ke ⊙ texture(uv), decoded from
+    /// sRGB; a missing file or a material without `vt` warns (naming the
+    /// file) and keeps the flat Ke.
+    #[test]
+    fn an_obj_with_map_ke_imports_an_emission_texture_or_warns_and_keeps_flat_ke() {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(
+            dir.path().join("e.png"),
+            png(2, 1, |x, _| [128, 255][x as usize]),
+        )
+        .unwrap();
+        std::fs::write(
+            dir.path().join("s.mtl"),
+            "newmtl screen\nKe 2 2 2\nmap_Ke e.png\nnewmtl lost\nKe 3 3 3\nmap_Ke nowhere.png\n\
+             newmtl bare\nKe 4 4 4\nmap_Ke e.png\nnewmtl floor\nKd 0.5\n",
+        )
+        .unwrap();
+        let obj = "mtllib s.mtl\nv 0 0 0\nv 2 0 0\nv 2 0 -1\nv 0 0 -1\n\
+                   vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n\
+                   usemtl screen\nf 1/1 2/2 3/3 4/4\nusemtl lost\nf 1/1 2/2 3/3 4/4\n\
+                   usemtl bare\nf 1 2 3 4\nusemtl floor\nf 4 3 2 1\n";
+        let path = dir.path().join("s.obj");
+        std::fs::write(&path, obj).unwrap();
+        let scene = load_scene(&path, &ImportOptions::default()).unwrap().scene;
+        let material = |name: &str| scene.materials.iter().find(|m| m.name == name).unwrap();
+        let screen = material("screen");
+        assert!(screen.emission_texture.is_some());
+        // Texel 0 (u = 0.25) is code 128: 2 × 0.2159 (IEC 61966-2-1), not 2 × 0.502.
+        let le = screen.emission_at(Some(glam::DVec2::new(0.25, 0.5)));
+        assert!((le.x - 2.0 * 0.215_86).abs() < 1e-4, "{le}");
+        let le = screen.emission_at(Some(glam::DVec2::new(0.75, 0.5)));
+        assert!((le.x - 2.0).abs() < 1e-12, "{le}");
+        for (name, flat) in [("lost", 3.0), ("bare", 4.0)] {
+            let m = material(name);
+            assert!(m.emission_texture.is_none(), "{name}");
+            assert_eq!(m.emission_at(Some(glam::DVec2::ZERO)), DVec3::splat(flat));
+        }
+        let warned = |words: &[&str]| {
+            scene
+                .warnings
+                .iter()
+                .any(|w| words.iter().all(|k| w.to_string().contains(k)))
+        };
+        assert!(
+            warned(&[
+                "s.mtl:6",
+                "map_Ke texture",
+                "nowhere.png: cannot be read",
+                "flat Ke"
+            ]),
+            "{:?}",
+            scene.warnings
+        );
+        assert!(
+            warned(&[
+                "s.mtl:9",
+                "map_Ke texture",
+                "texture coordinates",
+                "flat Ke"
+            ]),
+            "{:?}",
+            scene.warnings
+        );
     }
 }

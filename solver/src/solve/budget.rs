@@ -350,7 +350,7 @@ pub fn counts_before_meshing(scene: &Scene, settings: &SolverSettings) -> Counts
     for t in scene
         .materials
         .iter()
-        .filter_map(|m| m.diffuse_texture.as_ref())
+        .flat_map(|m| m.diffuse_texture.iter().chain(&m.emission_texture))
     {
         if !textures.contains(&std::sync::Arc::as_ptr(t)) {
             textures.push(std::sync::Arc::as_ptr(t));

@@ -32,13 +32,15 @@
 //! `UNSH` (packed, 3 per patch), `DIRC` (packed, 3 per vertex; these three are
 //! empty in directional mode); in
 //! directional mode then `SHOR` (u32 order per surface), `BRDF` (one u32),
-//! `SHRA` (packed, one per radiance coefficient, its bits XOR those of the
-//! coefficient's recorded-shot part), `SHUN` (packed, one per patch
-//! coefficient; a patch's bits XOR those of a prediction where `SHUM` flags
-//! it), `SHUM` (u32 per patch: 1 where masked), `SHRL` (u32 coefficient count
+//! `SHRA` (packed, one per radiance coefficient, its bits XOR the kept bits
+//! of the coefficient's recorded-shot part), `SHUN` (packed, one per patch
+//! coefficient; a patch's bits XOR the kept bits of a prediction where `SHUM`
+//! flags it), `SHUM` (u32 per patch: 1 where masked), `SHRL` (u32 coefficient count
 //! per recorded shot) and `SHRU` (their f64s). The masks turn bits that agree
 //! into zero bytes for deflate; a resume recomputes what masked them, exactly,
-//! and unmasks (`directional/state.rs`).
+//! and unmasks (`directional/state.rs`). Directional mode keeps its radiance
+//! and unshot coefficients at 40 mantissa bits ([`precision`]), so their 12
+//! low bits are zero, and the masks leave them so.
 //! The file envelope around it (magic, settings, checksum) is the command line's
 //! (`cli/solve/checkpoint.rs`).
 
@@ -50,9 +52,11 @@ use std::io::{self, Read, Write};
 
 mod packed;
 pub(super) use packed::CHUNK_VALUES;
+pub(super) mod precision;
 
-/// Bump when the meaning of the fields changes (3: the f64 arrays packed).
-pub const CHECKPOINT_VERSION: u32 = 3;
+/// Bump when the meaning of the fields changes (3: the f64 arrays packed;
+/// 4: directional masks use only the kept bits, [`precision`]).
+pub const CHECKPOINT_VERSION: u32 = 4;
 
 /// Everything [`Solver::resume`] needs, as read back from a checkpoint. See the
 /// module documentation. (Writing streams from the solver itself:
@@ -507,7 +511,7 @@ impl Solver {
                     .radiance
                     .iter()
                     .zip(sections.direct)
-                    .map(|(r, m)| f64::from_bits(r.to_bits() ^ m.to_bits())),
+                    .map(|(r, m)| f64::from_bits(r.to_bits() ^ precision::kept_bits(*m))),
             )?;
             // Masked where a prediction from the radiance is close (patches
             // that have not shot), with one flag per patch after it.
@@ -707,7 +711,10 @@ impl Solver {
         // changed texture, Kd or UV map must refuse the resume. Untextured
         // scenes add nothing here (their fingerprints are unchanged).
         let mut digests: Vec<(*const crate::scene::SceneTexture, u64)> = Vec::new();
-        for (i, t) in self.texturing.per_surface.iter().enumerate() {
+        // Emission textures follow the diffuse ones (indices past the surface
+        // count), so a changed `map_Ke`, Ke or UV map refuses it too.
+        let textures = self.texturing.per_surface.iter();
+        for (i, t) in textures.chain(&self.texturing.emissive).enumerate() {
             let Some(t) = t else { continue };
             eat(i as u64);
             let source = std::sync::Arc::as_ptr(&t.texture);

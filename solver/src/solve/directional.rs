@@ -73,6 +73,7 @@
 //! coefficient difference across an edge, down to [`min_glossy_edge`].
 
 use super::budget;
+use super::checkpoint::precision::round_to_kept;
 use super::refine::{Criteria, Field};
 use super::shoot::RecordedShot;
 use super::shoot::{visible_samples, SamplePool, SampleScratch, Shot};
@@ -92,6 +93,7 @@ use std::f64::consts::PI;
 use std::sync::Arc;
 use std::time::Instant;
 
+mod hidden_fill;
 mod state;
 
 /// How the next source patch is chosen.
@@ -326,12 +328,14 @@ impl Directional {
         for (v, mv) in mesh.vertices.iter().enumerate() {
             let e = scene.materials[mesh.surfaces[mv.surface as usize].material].emission;
             let o = d.vertex_offset[v];
-            d.radiance[o..o + 3].copy_from_slice(&(e * scale).to_array());
+            // The state keeps 40 mantissa bits from the start
+            // (`checkpoint/precision.rs`).
+            d.radiance[o..o + 3].copy_from_slice(&(e * scale).to_array().map(round_to_kept));
         }
         for (p, mp) in mesh.patches.iter().enumerate() {
             let e = scene.materials[mesh.surfaces[mp.surface as usize].material].emission;
             let o = d.patch_offset[p];
-            d.patch_unshot[o..o + 3].copy_from_slice(&(e * scale).to_array());
+            d.patch_unshot[o..o + 3].copy_from_slice(&(e * scale).to_array().map(round_to_kept));
         }
         Ok((d, warnings))
     }
@@ -700,7 +704,8 @@ impl Solver {
             for (v, r) in results.into_iter().enumerate() {
                 let o = d.vertex_offset[v];
                 for (k, c) in r.coefficients.iter().enumerate() {
-                    d.radiance[o + k] += c;
+                    // The state keeps 40 mantissa bits (`checkpoint/precision.rs`).
+                    d.radiance[o + k] = round_to_kept(d.radiance[o + k] + c);
                     d.received[o + k] = *c;
                     if recorded {
                         d.direct[o + k] += c;
@@ -714,6 +719,9 @@ impl Solver {
                 self.received[v] = DVec3::from_slice(&r.coefficients[..3]) * Y00;
             }
         }
+        // Coefficients of vertices refinement creates start here; they are
+        // rounded to the kept bits at the end of the step.
+        let created_from = d.radiance.len();
         let mut refined = super::refine::Refined::default();
         // A solve the memory budget stopped refining stays unrefined.
         if self.settings.adaptive && !self.refinement_capped {
@@ -791,12 +799,20 @@ impl Solver {
                 if area > 0.0 {
                     *u += s / area;
                 }
+                // The state keeps 40 mantissa bits (`checkpoint/precision.rs`).
+                *u = round_to_kept(*u);
             }
             let order = d.surface_order[self.mesh.patches[p].surface as usize];
             self.patch_unshot[p] = d.hemisphere_equivalent(order, &d.patch_unshot[range]);
         }
         d.received.fill(0.0);
         self.received.fill(DVec3::ZERO);
+        // The new vertices' coefficients, before the proxies are taken from
+        // them (`checkpoint/precision.rs`; the others were rounded as they
+        // received).
+        d.radiance[created_from..]
+            .iter_mut()
+            .for_each(|x| *x = round_to_kept(*x));
         for v in 0..self.mesh.vertices.len() {
             let o = d.vertex_offset[v];
             self.radiance[v] = DVec3::from_slice(&d.radiance[o..o + 3]) * Y00;
@@ -915,6 +931,8 @@ impl Solver {
         };
         solution.header.mode = solution::format::SolveMode::Directional;
         let scale = (4.0 * PI).sqrt();
+        let triangles = self.mesh.triangles();
+        let radiance = self.displayed_coefficients(d, &triangles);
         // Per order: the batch and the map from mesh vertex to batch vertex.
         let mut batches: BTreeMap<u32, Batch> = BTreeMap::new();
         let mut local = vec![u32::MAX; self.mesh.vertices.len()];
@@ -938,21 +956,35 @@ impl Solver {
             });
             let start = batch.coefficients.len();
             batch.coefficients.extend(
-                d.radiance[d.vertex_range(&self.mesh, v)]
+                radiance[d.vertex_range(&self.mesh, v)]
                     .iter()
                     .map(|&c| c as f32),
             );
-            let c00 = DVec3::from_slice(&d.radiance[d.vertex_offset[v]..d.vertex_offset[v] + 3])
+            let c00 = DVec3::from_slice(&radiance[d.vertex_offset[v]..d.vertex_offset[v] + 3])
                 + self.kd[mv.surface as usize] * ambient * scale;
             batch.coefficients[start..start + 3].copy_from_slice(&c00.as_vec3().to_array());
         }
-        for t in self.mesh.triangles() {
+        for t in triangles {
             let order = d.surface_order[self.mesh.vertices[t[0] as usize].surface as usize];
             if let Some(batch) = batches.get_mut(&order) {
                 batch.indices.extend(t.iter().map(|&v| local[v as usize]));
             }
         }
         solution.batches = batches.into_values().collect();
+    }
+
+    /// The radiance coefficients to display: the solver's, with each hidden
+    /// vertex (`solve/hidden.rs`) shown as its visible neighbours' functions
+    /// extended ring by ring along the display `triangles`
+    /// ([`hidden_fill::fill_hidden_coefficients`]), as the diffuse output does.
+    fn displayed_coefficients(&self, d: &Directional, triangles: &[[u32; 3]]) -> Vec<f64> {
+        hidden_fill::fill_hidden_coefficients(
+            triangles,
+            &self.hidden,
+            self.mesh.vertices.len(),
+            |v| d.vertex_range(&self.mesh, v),
+            &d.radiance,
+        )
     }
 }
 

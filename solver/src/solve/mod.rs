@@ -303,6 +303,13 @@ impl Solver {
                     .to_owned(),
             );
         }
+        if !diffuse && !texturing.emissive.is_empty() {
+            set_up_warnings.push(
+                "emission textures are modelled by the diffuse mode only; this directional solve \
+                 uses each textured emitter's flat emission (Ke)"
+                    .to_owned(),
+            );
+        }
         let texturing = if diffuse {
             texturing
         } else {
@@ -314,11 +321,14 @@ impl Solver {
                 None => albedo[s],
             })
             .collect();
-        let emission: Vec<DVec3> = mesh
+        let mut emission: Vec<DVec3> = mesh
             .surfaces
             .iter()
             .map(|s| scene.materials[s.material].emission)
             .collect();
+        // Each patch of an emission-textured surface shoots its mean Le
+        // (`textured.rs`); the surface's vertices start at its mean Le.
+        let patch_emission = textured::patch_emission(&texturing, &mesh, &mut emission);
         let occluder = Occluder::new(
             &mesh
                 .surfaces
@@ -343,7 +353,8 @@ impl Solver {
         let patch_unshot: Vec<DVec3> = mesh
             .patches
             .iter()
-            .map(|p| emission[p.surface as usize])
+            .zip(patch_emission)
+            .map(|(p, textured)| textured.unwrap_or(emission[p.surface as usize]))
             .collect();
         let emitted_power: f64 = mesh
             .patches
@@ -935,6 +946,8 @@ pub(crate) fn human_bytes(bytes: u128) -> String {
 mod cluster_tests;
 #[cfg(test)]
 mod directional_tests;
+#[cfg(test)]
+mod emissive_tests;
 #[cfg(test)]
 mod hidden_tests;
 #[cfg(test)]

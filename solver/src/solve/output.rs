@@ -1,5 +1,5 @@
 //! The solution the solver hands to the file writer (Remington 1992, Fig. 3.6 steps 5d and
-//! 6), and the ambient term for partial solutions.
+//! 6), and the ambient term of the light not yet shot.
 
 use super::Solver;
 use glam::DVec3;
@@ -46,21 +46,35 @@ impl Solver {
         r * unshot / area
     }
 
+    /// The ambient term a written file displays: Cohen et al.'s (1988)
+    /// estimate of the light still unshot, in partial files and also in a
+    /// file that stopped at its threshold. A converged progressive solve still
+    /// has `threshold` of its emitted power unshot, and without the term that
+    /// light is simply missing: measured against the path-traced truth the
+    /// Cornell box's ceiling, lit only by interreflection, was too dark by
+    /// about the unshot share (docs/accuracy.md, "The ambient term at
+    /// convergence"). A solver that has not shot (the Gauss–Seidel and cube
+    /// gathers use it for their mesh and write their own radiance) has all of
+    /// its emission unshot, so its final file gets none.
+    pub fn display_ambient(&self, partial: bool) -> DVec3 {
+        if self.settings.ambient && (partial || self.shots > 0) {
+            self.ambient()
+        } else {
+            DVec3::ZERO
+        }
+    }
+
     /// The solution: one batch of order-0 SH (the diffuse mode), one vertex per
     /// mesh vertex of a flat facet and one per position of a smooth surface,
     /// with its shading normal; the display triangles with T-vertices resolved,
     /// within a polygon and across the polygons of a smooth surface. c₀₀ = L ·
     /// √(4π) per channel, since Y₀₀ = 1/(2√π) and L = c₀₀ · Y₀₀.
     ///
-    /// `partial` marks a file written mid-solve; with `settings.ambient` it also
-    /// adds the ambient term ρ · ambient to the displayed radiance (never to the
-    /// solver's own radiance).
+    /// `partial` marks a file written mid-solve. With `settings.ambient` the
+    /// displayed radiance carries the ambient term ρ · ambient (never the
+    /// solver's own radiance), see [`Solver::display_ambient`].
     pub fn to_solution(&self, partial: bool) -> Solution {
-        let ambient = if partial && self.settings.ambient {
-            self.ambient()
-        } else {
-            DVec3::ZERO
-        };
+        let ambient = self.display_ambient(partial);
         let scale = (4.0 * PI).sqrt();
         // One output vertex per position of a smooth surface, and its seams
         // free of T-junctions (`seams.rs`); flat facets map one to one.
@@ -71,7 +85,7 @@ impl Solver {
         // Textured smooth surfaces keep their UV seams (`seams.rs`).
         let texturing = &self.texturing;
         let shared = super::seams::share_vertices_with_uvs(&self.mesh, &radiance, &|s, p| {
-            texturing.get(s).map(|t| texturing.uv(t, p))
+            texturing.shown(s).map(|t| texturing.uv(t, p))
         });
         let mut vertices = Vec::with_capacity(shared.representative.len());
         let mut coefficients = Vec::with_capacity(3 * shared.representative.len());

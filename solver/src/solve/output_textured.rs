@@ -4,6 +4,13 @@
 //! material's Kd as the texture's factor, and zero SH coefficients (a plain
 //! diffuse textured surface has no untextured term). The textures go to the
 //! solution's texture list once each, as their 8-bit sRGB texels.
+//!
+//! An emission-textured surface (`textured.rs`) fits the same batch with no
+//! change to the format (docs/solution-format.md, "Emission textures"): its
+//! texture is the emission texture, the factor Ke, the per-vertex "E/π" 1,
+//! so the textured term is Le(uv) = Ke ⊙ texture(uv); its SH coefficients
+//! hold the light it reflects with its flat Kd (its radiance less its mean
+//! emission).
 
 use super::seams::SharedVertices;
 use super::Solver;
@@ -22,7 +29,7 @@ impl Solver {
         solution: &mut Solution,
         ambient: DVec3,
     ) {
-        if !self.texturing.any() || solution.batches.is_empty() {
+        if !self.texturing.any_display() || solution.batches.is_empty() {
             return;
         }
         let whole = solution.batches.remove(0);
@@ -41,7 +48,7 @@ impl Solver {
         let mut slot: Vec<(usize, u32)> = Vec::with_capacity(whole.vertices.len());
         for (o, &r) in shared.representative.iter().enumerate() {
             let v = &self.mesh.vertices[r as usize];
-            let Some(t) = self.texturing.get(v.surface) else {
+            let Some(t) = self.texturing.shown(v.surface) else {
                 let b = &mut batches[0];
                 slot.push((0, b.vertices.len() as u32));
                 b.vertices.push(whole.vertices[o]);
@@ -78,8 +85,20 @@ impl Solver {
             let b = &mut batches[g];
             slot.push((g, b.vertices.len() as u32));
             b.vertices.push(whole.vertices[o]);
-            b.coefficients.extend([0.0; 3]);
-            let e = shared.radiance[o] + ambient;
+            // E/π for a diffuse-textured vertex; for an emitter's, 1, with
+            // its reflected light in the coefficients.
+            let e = if self.texturing.get(v.surface).is_some() {
+                b.coefficients.extend([0.0; 3]);
+                shared.radiance[o] + ambient
+            } else {
+                // As `to_solution` computes the coefficients, less Le.
+                let s = v.surface as usize;
+                let reflected = shared.radiance[o] - self.emission[s] + self.kd[s] * ambient;
+                let scale = (4.0 * std::f64::consts::PI).sqrt();
+                let c = reflected.max(DVec3::ZERO) * scale;
+                b.coefficients.extend(c.as_vec3().to_array());
+                DVec3::ONE
+            };
             if let Some(texturing) = &mut b.texturing {
                 texturing.vertices.push(TexturedVertex {
                     uv: self.texturing.uv(t, v.position).as_vec2().to_array(),

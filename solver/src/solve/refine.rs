@@ -487,6 +487,7 @@ mod tests {
                 alpha: 1.0,
                 emission: DVec3::ZERO,
                 diffuse_texture: None,
+                emission_texture: None,
             }],
             units_per_metre: 1.0,
             up_axis: UpAxis::PosY,

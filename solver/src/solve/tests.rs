@@ -12,6 +12,7 @@ pub(crate) fn material(name: &str, kd: f64, emission: f64) -> Material {
         alpha: 1.0,
         emission: DVec3::splat(emission),
         diffuse_texture: None,
+        emission_texture: None,
     }
 }
 
@@ -320,12 +321,19 @@ fn bad_scenes_are_refused_with_clear_errors() {
 }
 
 #[test]
-fn solution_holds_sh_order_0_and_the_ambient_term_only_when_partial() {
+fn solution_holds_sh_order_0_and_the_ambient_term_while_light_is_unshot() {
     let mut solver = pair(facing_square(), 2);
+    // A solver that has not shot (as the Gauss–Seidel and cube gathers use it)
+    // writes no ambient term in a final file, though all its emission is unshot.
+    assert_eq!(solver.to_solution(false).header.stats.ambient, [0.0; 3]);
     solver.step().unwrap();
     let radiance = solver.vertex_radiance().to_vec();
+    let with_ambient = solver.settings().clone();
+    let mut off = with_ambient.clone();
+    off.ambient = false;
+    solver.settings = off;
     let full = solver.to_solution(false);
-    let partial = solver.to_solution(true);
+    solver.settings = with_ambient;
     let batch = &full.batches[0];
     assert_eq!(batch.representation, Representation::Sh { order: 0 });
     assert_eq!(batch.vertices.len(), solver.mesh().vertices.len());
@@ -339,7 +347,8 @@ fn solution_holds_sh_order_0_and_the_ambient_term_only_when_partial() {
         3 * 2 * 2 * 4,
         "two 2×2 quads, two triangles per patch"
     );
-    // c00 = L · √(4π): evaluating Y00 = 1/(2√π) gives L back (f32 rounding).
+    // Without the ambient term, c00 = L · √(4π): evaluating Y00 = 1/(2√π)
+    // gives L back (f32 rounding).
     for (v, l) in radiance.iter().enumerate() {
         for c in 0..3 {
             let back = batch.coefficients[3 * v + c] as f64 / (2.0 * PI.sqrt());
@@ -350,22 +359,23 @@ fn solution_holds_sh_order_0_and_the_ambient_term_only_when_partial() {
             );
         }
     }
-    assert!(!full.header.partial && partial.header.partial);
     assert_eq!(full.header.stats.ambient, [0.0; 3]);
     let ambient = solver.ambient();
     assert!(
         ambient.min_element() > 0.0,
         "light is left unshot after one shot"
     );
-    assert_eq!(partial.header.stats.ambient, ambient.as_vec3().to_array());
-    // Displayed = L + Kd · ambient, and the solver's own radiance is unchanged.
-    let shown = partial.batches[0].coefficients[0] as f64 / (2.0 * PI.sqrt());
-    assert!((shown - (radiance[0].x + 0.5 * ambient.x)).abs() < 1e-6 * shown);
+    // With it (the default), partial and final files alike carry the estimate
+    // of the light still unshot: displayed = L + Kd · ambient, and the
+    // solver's own radiance is unchanged.
+    for partial in [true, false] {
+        let file = solver.to_solution(partial);
+        assert_eq!(file.header.partial, partial);
+        assert_eq!(file.header.stats.ambient, ambient.as_vec3().to_array());
+        let shown = file.batches[0].coefficients[0] as f64 / (2.0 * PI.sqrt());
+        assert!((shown - (radiance[0].x + 0.5 * ambient.x)).abs() < 1e-6 * shown);
+    }
     assert_eq!(solver.vertex_radiance(), &radiance[..]);
-    let mut off = solver.settings().clone();
-    off.ambient = false;
-    solver.settings = off;
-    assert_eq!(solver.to_solution(true).header.stats.ambient, [0.0; 3]);
     // Header: the settings travel as JSON, and the re-centring offset is the
     // bounding-box centre the solver subtracted.
     assert!(full.header.settings_json.contains("\"samples\":4"));

@@ -20,6 +20,14 @@
 //! edges: light variation does. Untextured surfaces keep scalar weights and
 //! their radiance representation unchanged.
 //!
+//! Emission textures (`map_Ke`, glTF `emissiveTexture`; docs/textures.md,
+//! "Emissive textures"): Le(uv) = Ke ⊙ texture(uv). A patch of an emitter
+//! shoots its mean Le, the integral of Le over the patch by the same texel
+//! integration divided by its area ([`SurfaceTexturing::emitted_radiance`]),
+//! uniformly, so the total emitted power is π ∫ Le dA exactly. The surface
+//! reflects with its flat Kd, untextured; its output vertices carry the
+//! texture for display (`output_textured.rs`).
+//!
 //! Only the diffuse mode's progressive solve models textures; directional
 //! mode (and the Gauss–Seidel and global-cube methods, which read the scene's
 //! flat Kd) see a textured surface as Kd ⊙ the texture's mean.
@@ -29,7 +37,42 @@ use crate::scene::{Scene, SceneTexture, UvMap};
 use glam::{DVec2, DVec3};
 use std::sync::Arc;
 
-/// One textured surface's texture, Kd and UV map.
+/// Per patch, its mean emitted radiance when its surface has an emission
+/// texture ([`SurfaceTexturing::emitted_radiance`]); and each such surface's
+/// entry of `emission` set to its mean Le, area-weighted over its patches,
+/// which its vertices start with (reflected light is added to it, and the
+/// display subtracts it again: `output_textured.rs`).
+pub(crate) fn patch_emission(
+    texturing: &SurfaceTexturing,
+    mesh: &Mesh,
+    emission: &mut [DVec3],
+) -> Vec<Option<DVec3>> {
+    if texturing.emissive.is_empty() {
+        return vec![None; mesh.patches.len()];
+    }
+    let per_patch: Vec<Option<DVec3>> = mesh
+        .patches
+        .iter()
+        .map(|p| texturing.emitted_radiance(p))
+        .collect();
+    let mut sums = vec![(DVec3::ZERO, 0.0); emission.len()];
+    for (p, le) in mesh.patches.iter().zip(&per_patch) {
+        if let Some(le) = le {
+            let sum = &mut sums[p.surface as usize];
+            sum.0 += *le * p.area;
+            sum.1 += p.area;
+        }
+    }
+    for (e, (sum, area)) in emission.iter_mut().zip(sums) {
+        if area > 0.0 {
+            *e = sum / area;
+        }
+    }
+    per_patch
+}
+
+/// One textured surface's texture, Kd and UV map. For an emission texture
+/// (`SurfaceTexturing::emissive`), `kd` holds the texture's factor Ke.
 #[derive(Clone, Debug)]
 pub(crate) struct Textured {
     pub texture: Arc<SceneTexture>,
@@ -41,6 +84,9 @@ pub(crate) struct Textured {
 #[derive(Clone, Debug, Default)]
 pub(crate) struct SurfaceTexturing {
     pub per_surface: Vec<Option<Textured>>,
+    /// Per mesh surface, its emission texture (`kd` = Ke); empty when no
+    /// surface has one.
+    pub emissive: Vec<Option<Textured>>,
     /// Solver coordinates plus this are the scene's (re-centred) ones, in
     /// which the UV maps are written.
     offset: DVec3,
@@ -64,18 +110,78 @@ impl SurfaceTexturing {
                 })
             })
             .collect();
+        let mut emissive: Vec<Option<Textured>> = mesh
+            .surfaces
+            .iter()
+            .map(|s| {
+                let material = &scene.materials[s.material];
+                let texture = material.emission_texture.clone()?;
+                let map = scene.polygons.get(s.polygon)?.uv_map?;
+                Some(Textured {
+                    texture,
+                    kd: material.emission,
+                    map,
+                })
+            })
+            .collect();
+        if emissive.iter().all(Option::is_none) {
+            emissive = Vec::new();
+        }
         SurfaceTexturing {
             per_surface,
+            emissive,
             offset,
         }
     }
 
+    /// Whether any surface has a diffuse texture.
     pub fn any(&self) -> bool {
         self.per_surface.iter().any(Option::is_some)
     }
 
+    /// Whether any surface has a diffuse or an emission texture.
+    pub fn any_display(&self) -> bool {
+        self.any() || !self.emissive.is_empty()
+    }
+
     pub fn get(&self, surface: u32) -> Option<&Textured> {
         self.per_surface.get(surface as usize)?.as_ref()
+    }
+
+    /// The emission texture of `surface`, if any.
+    pub fn emissive(&self, surface: u32) -> Option<&Textured> {
+        self.emissive.get(surface as usize)?.as_ref()
+    }
+
+    /// The texture `surface` shows (diffuse or emission), if any.
+    pub fn shown(&self, surface: u32) -> Option<&Textured> {
+        self.get(surface).or_else(|| self.emissive(surface))
+    }
+
+    /// The mean emitted radiance of `patch` of an emission-textured surface,
+    /// Ke ⊙ ∫ texture dA / A over the patch (triangles fanned from its
+    /// first corner, each integrated exactly by
+    /// [`crate::texture::Texture::integrate`]); `None` for other surfaces.
+    /// Times π and the patch's area, summed over the patches that tile a
+    /// surface, it is the surface's π ∫ Le dA.
+    pub fn emitted_radiance(&self, patch: &crate::mesh::Patch) -> Option<DVec3> {
+        let t = self.emissive(patch.surface)?;
+        let corners = patch.polygon();
+        let mut integral = DVec3::ZERO;
+        let mut area = 0.0;
+        for k in 1..corners.len().saturating_sub(1) {
+            let p = [corners[0], corners[k], corners[k + 1]];
+            let a = 0.5 * (p[1] - p[0]).cross(p[2] - p[0]).length();
+            if a > 0.0 {
+                integral += a * t.texture.texture.integrate(p.map(|q| self.uv(t, q))).mean;
+                area += a;
+            }
+        }
+        if area > 0.0 {
+            Some(t.kd * integral / area)
+        } else {
+            Some(t.kd * t.texture.texture.mean())
+        }
     }
 
     /// The UV of a point (solver coordinates) on a textured surface.
@@ -87,7 +193,7 @@ impl SurfaceTexturing {
     pub fn texture_bytes(&self) -> u64 {
         let mut seen: Vec<*const SceneTexture> = Vec::new();
         let mut bytes = 0;
-        for t in self.per_surface.iter().flatten() {
+        for t in self.per_surface.iter().chain(&self.emissive).flatten() {
             let p = Arc::as_ptr(&t.texture);
             if !seen.contains(&p) {
                 seen.push(p);

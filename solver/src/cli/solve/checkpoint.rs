@@ -29,7 +29,7 @@ use std::path::Path;
 
 const MAGIC: &[u8; 8] = b"RADCKPT\0";
 /// Bump when the envelope or the meaning of the payload changes.
-pub const VERSION: u32 = 3;
+pub const VERSION: u32 = 4;
 const PREFIX: usize = 8 + 4 + 4 + 8 + 4;
 /// The most bytes a meta block may have (it is a few kilobytes of JSON: the
 /// fingerprint, the scene's path and the settings).
@@ -416,6 +416,7 @@ mod tests {
                 alpha: 0.3,
                 emission: DVec3::ZERO,
                 diffuse_texture: None,
+                emission_texture: None,
             }],
             units_per_metre: 1.0,
             up_axis: Default::default(),

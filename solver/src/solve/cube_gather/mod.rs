@@ -17,7 +17,8 @@
 //!   area-weighted average of its vertices' radiance (the progressive solver's
 //!   gather weights, [`Solver::patch_weights`]), each glossy vertex looked up
 //!   bilinearly in its cube toward the direction from the patch's centre to the
-//!   receiver (all vertices of a surface share one frame).
+//!   receiver (in the polygon's frame, or in the vertex's own frame on a
+//!   smooth surface: below).
 //! * Transport ([`transport`]): for receiver v and source s, the factor
 //!   F(v←s) of the progressive solver (exact point-to-polygon factor × visible
 //!   fraction of `samples` rays); a glossy receiver splats each visible
@@ -31,6 +32,26 @@
 //!   for every upper cell o, the lobe g evaluated exactly at the cell
 //!   directions ([`lobe`]; no Legendre truncation). A diffuse receiver gets
 //!   L_v = Le_v + Kd · Σ_s F(v←s) L_s, the diffuse solvers' equation.
+//!
+//! ## Smooth surfaces: cubes about the shading normal
+//!
+//! On a smooth surface (`crease_angle`, docs/smooth-surfaces.md) a glossy
+//! vertex reflects about its shading normal n_s, as the SH mode's lobes do. Its
+//! cube is written in a frame of its own, z = n_s ([`vertex_frame`]), and the
+//! solution file carries that frame per vertex, which the runtime already reads
+//! per vertex. In that frame the material is the same as on a flat facet, so
+//! the same cell BRDF applies unchanged (its normalization, reciprocity and
+//! power bound included): incoming light is binned into the cells of this
+//! frame, reflected by the material's matrix, and a patch looks each such
+//! vertex up in its own frame toward the receiver (computed per sweep, not
+//! stored in the pair). Flat facets, and vertices of coplanar smooth groups,
+//! keep the polygon's frame, so they solve bit for bit as before.
+//!
+//! The cube holds the hemisphere above n_s. Directions above the facet's plane
+//! but below the shading horizon (within the facet-to-shading angle, a few
+//! degrees at a silhouette) get nothing from that vertex, not even its diffuse
+//! part, where the SH mode still evaluates its series: a thin darker band at
+//! grazing views, and a slight loss toward such receivers.
 //!
 //! ## Solution: Gauss–Seidel in light-propagation order
 //!
@@ -356,8 +377,11 @@ pub fn solve_cube(
     let start = Instant::now();
     let occluder = mesh_occluder(mesh);
     let kd: Vec<DVec3> = surfaces.iter().map(|s| s.kd).collect();
-    let receivers = transport_pairs(mesh, settings, &surfaces, &cells, &occluder, &kd);
+    let frames = vertex_frames(mesh);
+    let transport = transport_pairs(mesh, settings, &surfaces, &cells, &occluder, &kd, &frames);
+    let receivers = transport.receivers;
     let form_factor_seconds = start.elapsed().as_secs_f64();
+    let receiving_points = receiving_points(mesh, settings, &occluder, &kd);
 
     let start = Instant::now();
     let state = State {
@@ -367,16 +391,19 @@ pub fn solve_cube(
         solver: &solver,
         cells: &cells,
         weights: normalized_patch_weights(&solver),
+        own_frames: (0..mesh.vertices.len())
+            .map(|v| shading_frame(mesh, v))
+            .collect(),
+        receiving: &receiving_points,
+        sources: &transport.sources,
     };
     let sweep = run_sweeps(&state, mesh, limits);
     let bounds = Bounds::new(&state, &sweep);
     let solve_seconds = start.elapsed().as_secs_f64();
     let rays: u64 = receivers.iter().map(|r| r.rays).sum();
 
-    let frames = vertex_frames(mesh);
-    let receiving_points = receiving_points(mesh, settings, &occluder, &kd);
     let mut solution = solver.to_solution(false);
-    fill_batches(&solver, &sweep.values, &cells, k, &mut solution);
+    fill_batches(&solver, &sweep.values, &frames, &cells, k, &mut solution);
     let report = CubeReport {
         settings,
         limits,
@@ -424,15 +451,43 @@ fn mesh_occluder(mesh: &Mesh) -> Occluder {
     )
 }
 
-/// Each vertex's (normal, tangent) frame.
+/// Each vertex's cube frame (n, t): [`vertex_frame`].
 fn vertex_frames(mesh: &Mesh) -> Vec<(DVec3, DVec3)> {
-    mesh.vertices
-        .iter()
-        .map(|v| {
-            let s = &mesh.surfaces[v.surface as usize];
-            (s.normal, s.tangent)
-        })
+    (0..mesh.vertices.len())
+        .map(|v| vertex_frame(mesh, v))
         .collect()
+}
+
+/// The frame vertex `v`'s cube is written in (module documentation, "Smooth
+/// surfaces"): its own [`shading_frame`] on a smooth surface, else its
+/// polygon's (n, t).
+pub(super) fn vertex_frame(mesh: &Mesh, v: usize) -> (DVec3, DVec3) {
+    shading_frame(mesh, v).unwrap_or_else(|| {
+        let s = &mesh.surfaces[mesh.vertices[v].surface as usize];
+        (s.normal, s.tangent)
+    })
+}
+
+/// Vertex `v`'s frame about its shading normal, when that differs from its
+/// polygon's normal by more than rounding (1 − n_s · n > 1e-12, an angle
+/// above 1.4e-6 rad: a coplanar smooth group's normals, interpolated and
+/// renormalised, differ from the polygon's only in their last bits, and such
+/// a vertex keeps the polygon's frame, so a flat scene solves bit for bit as
+/// before). The tangent is a function of n_s alone (Duff et al. 2017,
+/// "Building an orthonormal basis, revisited", glam's `any_orthonormal_pair`),
+/// so the vertices of two polygons that meet at a smooth seam, with one
+/// position and one shading normal, get the same frame and the same cube.
+/// Its discontinuities do not matter: no cube value is ever combined with
+/// another vertex's cell by cell, only radiance looked up in each vertex's
+/// own frame.
+fn shading_frame(mesh: &Mesh, v: usize) -> Option<(DVec3, DVec3)> {
+    let mv = &mesh.vertices[v];
+    let n = mesh.surfaces[mv.surface as usize].normal;
+    if 1.0 - mv.normal.dot(n) <= 1e-12 {
+        return None;
+    }
+    let (t, _) = mv.normal.any_orthonormal_pair();
+    Some((mv.normal, t))
 }
 
 /// Each vertex's receiving point, which depends only on the vertex and the
@@ -575,8 +630,16 @@ fn cell_brdfs(
     Ok(brdfs)
 }
 
+/// What the transport leaves: every receiver's pairs, and each source patch's
+/// (centre, normal) as its shot saw them.
+struct Transport {
+    receivers: Vec<Receiver>,
+    sources: Vec<(DVec3, DVec3)>,
+}
+
 /// Transport, source by source (one sample pool alive at a time), each source's
-/// receivers in parallel; pairs are appended in source order.
+/// receivers in parallel; pairs are appended in source order. `frames` are
+/// the receivers' cube frames ([`vertex_frame`]).
 fn transport_pairs(
     mesh: &Mesh,
     settings: &SolverSettings,
@@ -584,9 +647,11 @@ fn transport_pairs(
     cells: &UpperCells,
     occluder: &Occluder,
     kd: &[DVec3],
-) -> Vec<Receiver> {
+    frames: &[(DVec3, DVec3)],
+) -> Transport {
     let n = mesh.vertices.len();
     let mut receivers: Vec<Receiver> = vec![Receiver::default(); n];
+    let mut sources = Vec::with_capacity(mesh.patches.len());
     for source in 0..mesh.patches.len() as u32 {
         let shot = Shot::for_patch(
             mesh,
@@ -598,6 +663,7 @@ fn transport_pairs(
             kd,
         );
         let pool = SamplePool::new(&shot);
+        sources.push((shot.centre, shot.normal));
         let source_glossy = surfaces[shot.source_surface as usize].brdf.is_some();
         let results: Vec<_> = (0..n as u32)
             .into_par_iter()
@@ -607,6 +673,7 @@ fn transport_pairs(
                     shot: &shot,
                     pool: &pool,
                     receiver_cells: is_glossy(mesh, surfaces, v as usize).then_some(cells),
+                    receiver_frame: frames[v as usize],
                     source_cells: source_glossy.then_some(cells),
                 }
                 .pair(v, source, scratch)
@@ -621,7 +688,7 @@ fn transport_pairs(
             }
         }
     }
-    receivers
+    Transport { receivers, sources }
 }
 
 /// Each patch's gather weights, normalized to sum to 1 (empty for a patch with
@@ -851,6 +918,12 @@ struct State<'a> {
     cells: &'a UpperCells,
     /// Per patch: (vertex, weight) with weights summing to 1.
     weights: Vec<Vec<(u32, f64)>>,
+    /// Per vertex: its [`shading_frame`], where its cube has one of its own.
+    own_frames: Vec<Option<(DVec3, DVec3)>>,
+    /// Per vertex: its receiving point (where its pairs' factors were taken).
+    receiving: &'a [DVec3],
+    /// Per patch: (centre, normal), as its shot saw them.
+    sources: &'a [(DVec3, DVec3)],
 }
 
 impl State<'_> {
@@ -858,15 +931,26 @@ impl State<'_> {
         &self.surfaces[self.solver.mesh().vertices[v as usize].surface as usize]
     }
 
-    /// Radiance of source patch `p` toward the receiver of `pair`: the
+    /// Radiance of source patch `p` toward receiver `v` of `pair`: the
     /// weighted average of its vertices', each glossy one looked up at the
-    /// pair's taps.
-    fn source_radiance(&self, values: &[Vec<f64>], pair: &transport::Pair) -> DVec3 {
+    /// pair's taps, or in its own frame toward `v` (a smooth surface's vertex;
+    /// nothing when `v` is below its shading horizon).
+    fn source_radiance(&self, values: &[Vec<f64>], pair: &transport::Pair, v: u32) -> DVec3 {
         let mut sum = DVec3::ZERO;
         for &(u, w) in &self.weights[pair.source as usize] {
             let x = &values[u as usize];
             if x.len() == 3 {
                 sum += DVec3::from_slice(x) * w;
+            } else if let Some((n, t)) = self.own_frames[u as usize] {
+                let (centre, normal) = self.sources[pair.source as usize];
+                let toward = transport::toward_receiver(centre, normal, self.receiving[v as usize]);
+                let local = solution::sh::to_local(toward, n, t);
+                for (slot, t) in self.cells.taps(local).into_iter().flatten() {
+                    if t > 0.0 {
+                        let o = 3 * slot as usize;
+                        sum += DVec3::from_slice(&x[o..o + 3]) * (w * t);
+                    }
+                }
             } else {
                 for &(slot, t) in &pair.taps {
                     if t > 0.0 {
@@ -887,7 +971,7 @@ impl State<'_> {
             // Diffuse: L = Le + Kd Σ_s F(v←s) L_s (the diffuse solvers' equation).
             let mut gathered = DVec3::ZERO;
             for pair in &receiver.pairs {
-                gathered += self.source_radiance(values, pair) * pair.factor;
+                gathered += self.source_radiance(values, pair, v) * pair.factor;
             }
             return (s.emission + s.kd * gathered).to_array().to_vec();
         };
@@ -897,7 +981,7 @@ impl State<'_> {
         let mut irradiance = DVec3::ZERO;
         let mut start = 0;
         for pair in &receiver.pairs {
-            let e = self.source_radiance(values, pair) * PI;
+            let e = self.source_radiance(values, pair, v) * PI;
             irradiance += e * pair.factor;
             for &(slot, w) in &receiver.entries[start..pair.entries_end as usize] {
                 let o = 3 * slot as usize;
@@ -1008,6 +1092,7 @@ impl State<'_> {
 fn fill_batches(
     solver: &Solver,
     values: &[Vec<f64>],
+    frames: &[(DVec3, DVec3)],
     cells: &UpperCells,
     k: u32,
     solution: &mut Solution,
@@ -1031,14 +1116,20 @@ fn fill_batches(
     };
     let mut local = vec![(false, 0u32); mesh.vertices.len()];
     for (v, mv) in mesh.vertices.iter().enumerate() {
-        let s = &mesh.surfaces[mv.surface as usize];
+        let x = &values[v];
+        // A cube is read in its own frame; a diffuse vertex keeps its polygon's.
+        let (normal, tangent) = if x.len() == 3 {
+            let s = &mesh.surfaces[mv.surface as usize];
+            (s.normal, s.tangent)
+        } else {
+            frames[v]
+        };
         let f = |x: DVec3| x.as_vec3().to_array();
         let vertex = Vertex {
             position: f(mv.position),
-            normal: f(s.normal),
-            tangent: f(s.tangent),
+            normal: f(normal),
+            tangent: f(tangent),
         };
-        let x = &values[v];
         if x.len() == 3 {
             local[v] = (false, diffuse.vertices.len() as u32);
             diffuse.vertices.push(vertex);
@@ -1070,3 +1161,6 @@ fn fill_batches(
 
 #[cfg(test)]
 mod tests;
+
+#[cfg(test)]
+mod smooth_tests;

@@ -6,7 +6,7 @@ use crate::settings::{BrdfNormalization, DirectionalRepresentation, Preset};
 use solution::camera::UpAxis;
 use solution::sh;
 
-fn material(name: &str, kd: f64, ks: f64, alpha: f64, emission: f64) -> Material {
+pub(super) fn material(name: &str, kd: f64, ks: f64, alpha: f64, emission: f64) -> Material {
     Material {
         name: name.into(),
         kd: DVec3::splat(kd),
@@ -14,11 +14,12 @@ fn material(name: &str, kd: f64, ks: f64, alpha: f64, emission: f64) -> Material
         alpha,
         emission: DVec3::splat(emission),
         diffuse_texture: None,
+        emission_texture: None,
     }
 }
 
 /// A scene of (polygon, material, patches per side).
-fn scene(polygons: Vec<(Vec<DVec3>, usize, u32)>, materials: Vec<Material>) -> Scene {
+pub(super) fn scene(polygons: Vec<(Vec<DVec3>, usize, u32)>, materials: Vec<Material>) -> Scene {
     Scene {
         polygons: polygons
             .into_iter()
@@ -72,7 +73,7 @@ fn room(m: [usize; 6], patches: u32) -> Vec<(Vec<DVec3>, usize, u32)> {
         .collect()
 }
 
-fn cube_settings(k: u32) -> SolverSettings {
+pub(super) fn cube_settings(k: u32) -> SolverSettings {
     let mut s = SolverSettings::preset(Preset::Draft);
     s.mode = SolveMode::Directional;
     s.directional = DirectionalRepresentation::Cube;
@@ -82,7 +83,7 @@ fn cube_settings(k: u32) -> SolverSettings {
     s
 }
 
-fn tight() -> CubeLimits {
+pub(super) fn tight() -> CubeLimits {
     CubeLimits {
         tolerance: 1e-10,
         ..CubeLimits::default()

@@ -20,6 +20,7 @@
 use super::UpperCells;
 use crate::mesh::Mesh;
 use crate::solve::shoot::{visible_samples, SamplePool, SampleScratch, Shot};
+use glam::DVec3;
 use solution::sh;
 
 /// Transport from one source patch into one receiver.
@@ -33,7 +34,10 @@ pub(super) struct Pair {
     pub entries_end: u32,
     /// Where a glossy source is looked up: the upper cells of the source's
     /// cube nearest the direction from its centre toward the receiver, with
-    /// bilinear weights summing to 1 (unused for diffuse sources).
+    /// bilinear weights summing to 1 (unused for diffuse sources), in the
+    /// source polygon's frame. A source vertex with a frame of its own (a
+    /// smooth surface's shading normal) is looked up in that frame instead
+    /// ([`super::State::source_radiance`]).
     pub taps: [(u32, f32); 4],
 }
 
@@ -66,6 +70,9 @@ pub(super) struct PairInput<'a> {
     pub pool: &'a SamplePool,
     /// The receiver's cube cells (None: a diffuse receiver).
     pub receiver_cells: Option<&'a UpperCells>,
+    /// The frame (n, t) the receiver's cube is written in
+    /// ([`super::vertex_frame`]: its shading normal on a smooth surface).
+    pub receiver_frame: (DVec3, DVec3),
     /// The source's cube cells (None: a diffuse source).
     pub source_cells: Option<&'a UpperCells>,
 }
@@ -83,7 +90,7 @@ impl PairInput<'_> {
         if !(factor > 0.0 && factor.is_finite()) {
             return None;
         }
-        let receiving = &mesh.surfaces[surface as usize];
+        let (normal, tangent) = self.receiver_frame;
         let mut entries = Vec::new();
         if let Some(cells) = self.receiver_cells {
             scratch.cells.clear();
@@ -91,7 +98,7 @@ impl PairInput<'_> {
                 let Some(dir) = (p - q).try_normalize() else {
                     continue;
                 };
-                let local = sh::to_local(dir, receiving.normal, receiving.tangent);
+                let local = sh::to_local(dir, normal, tangent);
                 if let Some(taps) = cells.taps(local) {
                     for (slot, w) in taps {
                         if w > 0.0 {
@@ -115,7 +122,7 @@ impl PairInput<'_> {
         let mut taps = [(0u32, 0f32); 4];
         if let Some(cells) = self.source_cells {
             let source_surface = &mesh.surfaces[shot.source_surface as usize];
-            let toward = (q - shot.centre).try_normalize().unwrap_or(shot.normal);
+            let toward = toward_receiver(shot.centre, shot.normal, q);
             let local = sh::to_local(toward, source_surface.normal, source_surface.tangent);
             match cells.taps(local) {
                 Some(t) => {
@@ -138,4 +145,10 @@ impl PairInput<'_> {
             rays,
         ))
     }
+}
+
+/// The direction a source patch (centre, normal) is looked up in toward a
+/// receiving point `q`: from its centre to `q`, or its normal when they meet.
+pub(super) fn toward_receiver(centre: DVec3, normal: DVec3, q: DVec3) -> DVec3 {
+    (q - centre).try_normalize().unwrap_or(normal)
 }

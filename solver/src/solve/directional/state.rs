@@ -14,6 +14,7 @@
 //! the same additions in the same order gives the same bits.
 
 use super::{DirScratch, DirShot, Directional, Tables};
+use crate::solve::checkpoint::precision::kept_bits;
 use crate::solve::shoot::{RecordedShot, SamplePool, Shot};
 use crate::solve::Solver;
 use glam::DVec3;
@@ -163,7 +164,7 @@ impl Solver {
             return Ok(());
         };
         for (r, m) in d.radiance.iter_mut().zip(&d.direct) {
-            *r = f64::from_bits(r.to_bits() ^ m.to_bits());
+            *r = f64::from_bits(r.to_bits() ^ kept_bits(*m));
         }
         if d.radiance.iter().all(|x| x.is_finite()) {
             Ok(())
@@ -225,7 +226,7 @@ impl Solver {
         out.clear();
         out.extend(unshot.iter().zip(prediction.iter()).map(|(x, q)| {
             if mask {
-                f64::from_bits(x.to_bits() ^ q.to_bits())
+                f64::from_bits(x.to_bits() ^ kept_bits(*q))
             } else {
                 *x
             }
@@ -254,7 +255,7 @@ impl Solver {
                     self.unshot_prediction(&d, p, &mut prediction);
                     let range = d.patch_range(&self.mesh, p);
                     for (x, q) in d.patch_unshot[range].iter_mut().zip(&prediction) {
-                        *x = f64::from_bits(x.to_bits() ^ q.to_bits());
+                        *x = f64::from_bits(x.to_bits() ^ kept_bits(*q));
                     }
                 }
             }
