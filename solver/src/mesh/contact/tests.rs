@@ -32,6 +32,7 @@ fn scene_of(polygons: Vec<Vec<DVec3>>) -> Scene {
             alpha: 0.0,
             emission: DVec3::ZERO,
             diffuse_texture: None,
+            emission_texture: None,
         }],
         units_per_metre: 1.0,
         up_axis: solution::camera::UpAxis::PosY,
