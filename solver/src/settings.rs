@@ -196,6 +196,11 @@ pub struct SolverSettings {
     /// shoot uniformly, so tests comparing them with the diffuse solve set it.
     #[serde(default)]
     pub uniform_shooters: bool,
+    /// Mesh every receiver whole instead of cutting it along the lines where
+    /// other objects touch or cover it (`mesh::contact`). Off by default; for
+    /// measuring what the cut changes.
+    #[serde(default)]
+    pub whole_receivers: bool,
 }
 
 fn default_crease_angle() -> f64 {
@@ -286,6 +291,7 @@ impl SolverSettings {
             crease_angle: default_crease_angle(),
             memory_budget: None,
             uniform_shooters: false,
+            whole_receivers: false,
         }
     }
 

@@ -23,6 +23,7 @@
 //! handed out here, which are assigned in a deterministic order (creation order),
 //! and a log of splits lets a checkpoint rebuild the same mesh exactly.
 
+pub mod contact;
 pub mod param;
 pub mod sizing;
 pub mod triangulate;
@@ -210,6 +211,19 @@ type ParentSlot = (u32, [u32; 4], u8);
 /// A child to create: its parametric corners and its [`ParentSlot`]s.
 type ChildSpec = ([[u32; 2]; 4], Vec<ParentSlot>);
 
+/// What [`Mesh::add_surface`] needs to know of a surface.
+struct SurfaceSpec {
+    polygon: usize,
+    material: usize,
+    /// Re-centred, counter-clockwise about `normal`.
+    vertices: Vec<DVec3>,
+    normal: DVec3,
+    tangent: DVec3,
+    patches_per_side: u32,
+    min_element_size: Option<f64>,
+    corner_normals: Option<Vec<DVec3>>,
+}
+
 /// Patches, elements and vertices of every surface.
 #[derive(Clone, Debug)]
 pub struct Mesh {
@@ -240,6 +254,17 @@ impl Mesh {
     /// quadtree), positions re-centred by subtracting `offset`, with patch
     /// counts and smallest elements from `sizing`.
     pub fn with_sizing(scene: &Scene, offset: DVec3, sizing: &Sizing) -> Result<Mesh, MeshError> {
+        Self::with_contacts(scene, offset, sizing, true)
+    }
+
+    /// [`Self::with_sizing`], with receivers cut along contact lines
+    /// ([`contact`]) when `conform` is set, or left whole.
+    pub fn with_contacts(
+        scene: &Scene,
+        offset: DVec3,
+        sizing: &Sizing,
+        conform: bool,
+    ) -> Result<Mesh, MeshError> {
         let mut mesh = Mesh {
             surfaces: Vec::new(),
             pieces: Vec::new(),
@@ -251,7 +276,11 @@ impl Mesh {
             piece_patches: Vec::new(),
             table: VertexTable::default(),
         };
-        let mut fan = Vec::new();
+        let parts = if conform {
+            contact::conform(scene)
+        } else {
+            vec![None; scene.polygons.len()]
+        };
         for (index, poly) in scene.polygons.iter().enumerate() {
             if poly.material >= scene.materials.len() {
                 return Err(MeshError::BadMaterial {
@@ -287,42 +316,32 @@ impl Mesh {
                 })
                 .find(|t| *t != DVec3::ZERO)
                 .unwrap_or_else(|| normal.any_orthonormal_vector());
-            let surface = mesh.surfaces.len() as u32;
-            mesh.surfaces.push(Surface {
+            let corner_normals = poly
+                .vertex_normals
+                .as_ref()
+                .filter(|c| c.len() == vertices.len() && c.iter().all(|n| n.is_finite()))
+                .cloned();
+            let spec = |vertices: Vec<DVec3>, patches_per_side, corner_normals| SurfaceSpec {
                 polygon: index,
                 material: poly.material,
+                vertices,
                 normal,
                 tangent,
-                bitangent: normal.cross(tangent),
-                area,
-                patches_per_side: n,
+                patches_per_side,
                 min_element_size: sizing.min_element_size(poly),
-                denominator: n << SUBDIVISION_BITS,
-                corner_normals: poly
-                    .vertex_normals
-                    .as_ref()
-                    .filter(|c| c.len() == vertices.len() && c.iter().all(|n| n.is_finite()))
-                    .cloned(),
-                vertices,
-            });
-            let s = &mesh.surfaces[surface as usize];
-            if s.vertices.len() == 4 && strictly_convex(&s.vertices, normal) {
-                mesh.pieces.push(Piece {
-                    surface,
-                    kind: PieceKind::Quad,
-                });
-            } else {
-                fan.clear();
-                polygon::triangulate(&s.vertices, &mut fan);
-                for t in &fan {
-                    let tri = [s.vertices[t[0]], s.vertices[t[1]], s.vertices[t[2]]];
-                    // Zero-area pieces (collinear input vertices) would only
-                    // create degenerate patches.
-                    if polygon::area(&tri) > 1e-14 * area {
-                        mesh.pieces.push(Piece {
-                            surface,
-                            kind: PieceKind::Triangle([t[0] as u32, t[1] as u32, t[2] as u32]),
-                        });
+                corner_normals,
+            };
+            match &parts[index] {
+                None => mesh.add_surface(spec(vertices, n, corner_normals)),
+                Some(parts) => {
+                    for part in parts {
+                        let vertices: Vec<DVec3> =
+                            part.vertices.iter().map(|&v| v - offset).collect();
+                        let n = sizing.patches_per_side_of_part(poly, &part.vertices);
+                        // The visible parts share their seams as one smooth
+                        // surface would (`contact`, "Seams").
+                        let corners = (!part.covered).then(|| vec![normal; vertices.len()]);
+                        mesh.add_surface(spec(vertices, n, corners));
                     }
                 }
             }
@@ -331,6 +350,51 @@ impl Mesh {
             mesh.add_patches(piece_index as u32)?;
         }
         Ok(mesh)
+    }
+
+    /// Adds a surface and its pieces: the whole convex quad, or the
+    /// triangles of any other polygon.
+    fn add_surface(&mut self, spec: SurfaceSpec) {
+        let area = polygon::area(&spec.vertices);
+        if area.is_nan() || area <= 0.0 {
+            return;
+        }
+        let surface = self.surfaces.len() as u32;
+        let normal = spec.normal;
+        self.surfaces.push(Surface {
+            polygon: spec.polygon,
+            material: spec.material,
+            normal,
+            tangent: spec.tangent,
+            bitangent: normal.cross(spec.tangent),
+            area,
+            patches_per_side: spec.patches_per_side,
+            min_element_size: spec.min_element_size,
+            denominator: spec.patches_per_side << SUBDIVISION_BITS,
+            corner_normals: spec.corner_normals,
+            vertices: spec.vertices,
+        });
+        let s = &self.surfaces[surface as usize];
+        if s.vertices.len() == 4 && strictly_convex(&s.vertices, normal) {
+            self.pieces.push(Piece {
+                surface,
+                kind: PieceKind::Quad,
+            });
+        } else {
+            let mut fan = Vec::new();
+            polygon::triangulate(&s.vertices, &mut fan);
+            for t in &fan {
+                let tri = [s.vertices[t[0]], s.vertices[t[1]], s.vertices[t[2]]];
+                // Zero-area pieces (collinear input vertices) would only
+                // create degenerate patches.
+                if polygon::area(&tri) > 1e-14 * area {
+                    self.pieces.push(Piece {
+                        surface,
+                        kind: PieceKind::Triangle([t[0] as u32, t[1] as u32, t[2] as u32]),
+                    });
+                }
+            }
+        }
     }
 
     /// Lays out the N × N patch grid of one piece.

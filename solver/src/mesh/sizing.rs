@@ -97,6 +97,34 @@ impl Sizing {
         }
     }
 
+    /// Patches per side for a part of `polygon` cut along contact lines
+    /// (`mesh::contact`) with vertices `part`: by the size rule, the part's own
+    /// ⌈longest edge / size⌉; by a count (the polygon's own or the flat
+    /// rule's), that count scaled by the part's longest edge over the
+    /// polygon's, so that the parts' patches are about as large as the whole
+    /// polygon's would be. Clamped to [`MAX_PATCHES_PER_SIDE`].
+    pub fn patches_per_side_of_part(&self, polygon: &Polygon, part: &[DVec3]) -> u32 {
+        let by_size = polygon.patches == PATCHES_UNSET
+            && (polygon.sizes.patch_size.is_some() || matches!(self.patches, PatchRule::Size(_)));
+        let n = if by_size {
+            let mut whole = polygon.clone();
+            whole.vertices = part.to_vec();
+            self.requested_patches(&whole)
+        } else {
+            let whole = self.patches_per_side(polygon) as f64;
+            let ratio = longest_edge(part) / longest_edge(&polygon.vertices);
+            // A part whose longest edge is the polygon's keeps its count,
+            // whatever the rounding of its cut corners (1e-9 relative).
+            let n = (whole * ratio * (1.0 - 1e-9)).ceil();
+            if n.is_finite() && n >= 1.0 {
+                n.min(u32::MAX as f64) as u64
+            } else {
+                1
+            }
+        };
+        n.clamp(1, MAX_PATCHES_PER_SIDE as u64) as u32
+    }
+
     /// The smallest element of `polygon`, as a longest edge in scene units: its
     /// own override, else the solve's; `None` for the flat area-fraction floor.
     pub fn min_element_size(&self, polygon: &Polygon) -> Option<f64> {
@@ -111,16 +139,20 @@ impl Sizing {
 /// ⌈longest edge / size⌉ (at least 1), saturating rather than overflowing on
 /// absurd ratios; non-finite input gives 1 (such polygons are skipped anyway).
 pub fn patches_for_size(vertices: &[DVec3], size: f64) -> u64 {
-    let n = vertices.len();
-    let longest = (0..n)
-        .map(|i| (vertices[(i + 1) % n] - vertices[i]).length())
-        .fold(0.0, f64::max);
+    let longest = longest_edge(vertices);
     let ratio = (longest / size).ceil();
     if ratio.is_finite() && ratio >= 1.0 {
         ratio.min(u32::MAX as f64) as u64
     } else {
         1
     }
+}
+
+fn longest_edge(vertices: &[DVec3]) -> f64 {
+    let n = vertices.len();
+    (0..n)
+        .map(|i| (vertices[(i + 1) % n] - vertices[i]).length())
+        .fold(0.0, f64::max)
 }
 
 /// The diagonal of the bounding box of every finite vertex of `scene`, in scene

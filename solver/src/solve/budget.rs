@@ -320,17 +320,30 @@ pub fn counts_before_meshing(scene: &Scene, settings: &SolverSettings) -> Counts
         ..Counts::default()
     };
     let sizing = crate::mesh::Sizing::from_settings(settings, scene);
-    for p in &scene.polygons {
-        let n = sizing.patches_per_side(p) as u64;
-        let pieces = if p.vertices.len() <= 4 {
-            1
-        } else {
-            p.vertices.len() as u64 - 2
-        };
+    let mut count = |corners: usize, n: u64| {
+        let pieces = if corners <= 4 { 1 } else { corners as u64 - 2 };
         c.surfaces += 1;
         c.patches += pieces * n * n;
         c.elements += pieces * n * n;
         c.vertices += pieces * (n + 1) * (n + 1);
+    };
+    // The receivers the mesh cuts along contact lines (`mesh::contact`),
+    // part by part, as `Solver::new` decides.
+    let parts = if settings.whole_receivers || c.directional {
+        vec![None; scene.polygons.len()]
+    } else {
+        crate::mesh::contact::conform(scene)
+    };
+    for (p, parts) in scene.polygons.iter().zip(&parts) {
+        match parts {
+            None => count(p.vertices.len(), sizing.patches_per_side(p) as u64),
+            Some(parts) => {
+                for part in parts {
+                    let n = sizing.patches_per_side_of_part(p, &part.vertices);
+                    count(part.vertices.len(), n as u64);
+                }
+            }
+        }
     }
     c.weight_entries = c.vertices + 3 * c.patches;
     let mut textures: Vec<*const crate::scene::SceneTexture> = Vec::new();

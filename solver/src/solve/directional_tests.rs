@@ -131,6 +131,9 @@ fn with_ks_zero_directional_mode_equals_the_diffuse_solver() {
         // Directional mode shoots each patch's mean uniformly: the diffuse
         // solve must too for the two to solve the same system.
         diffuse.uniform_shooters = true;
+        // And it keeps receivers whole, as directional mode does
+        // (`mesh::contact` cuts them in the diffuse mode only).
+        diffuse.whole_receivers = true;
         let mut directional = diffuse.clone();
         directional.mode = SolveMode::Directional;
         let mut a = Solver::new(&scene, &diffuse).unwrap();

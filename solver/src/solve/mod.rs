@@ -274,7 +274,11 @@ impl Solver {
         )?;
         let offset = scene_centre(scene);
         let sizing = crate::mesh::Sizing::from_settings(settings, scene);
-        let mesh = Mesh::with_sizing(scene, offset, &sizing)?;
+        // Receivers are cut along contact lines in the diffuse mode, whose
+        // output shares the cuts' seams (`seams.rs`); the directional output
+        // has no seam pass for flat facets yet, so it keeps them whole.
+        let conform = !settings.whole_receivers && settings.mode == SolveMode::Diffuse;
+        let mesh = Mesh::with_contacts(scene, offset, &sizing, conform)?;
         let emitter_patches = budget::emitter_patches(scene, &mesh);
         // The same with the mesh's exact counts, before the solve's state
         // (each emitter patch shoots, and is recorded, at least once).

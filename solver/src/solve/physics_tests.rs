@@ -219,7 +219,12 @@ fn translating_the_scene_by_1e6_gives_the_same_answer() {
             *v += DVec3::new(1e6, -1e6, 1e6);
         }
     }
-    let settings = cornell_settings();
+    let mut settings = cornell_settings();
+    // Receivers whole: with the floor cut along the blocks' bases
+    // (`mesh::contact`) the two meshes start equal to 9e-11 but one split of
+    // 638, at shot 36, lands the other way (a split test at its threshold),
+    // and vertex-by-vertex comparison needs the same mesh.
+    settings.whole_receivers = true;
     let (near, far) = (run(&scene, &settings), run(&far, &settings));
     assert_eq!(near.mesh().vertices.len(), far.mesh().vertices.len());
     let peak = near

@@ -268,43 +268,75 @@ fn index_polygon_edges(
                 .collect()
         })
         .collect();
+    // The smooth surfaces cut from one input polygon along contact lines
+    // (`mesh::contact`) meet along cuts whose ends need not be corners of
+    // both sides: a vertex is looked for on the edges of all of them.
+    let mut siblings: HashMap<usize, Vec<u32>> = HashMap::new();
+    for (index, s) in mesh.surfaces.iter().enumerate() {
+        if corner_ids[index].is_some() {
+            siblings.entry(s.polygon).or_default().push(index as u32);
+        }
+    }
     for (v, vertex) in mesh.vertices.iter().enumerate() {
-        let s = &mesh.surfaces[vertex.surface as usize];
-        let Some(corners) = &corner_ids[vertex.surface as usize] else {
+        if corner_ids[vertex.surface as usize].is_none() {
             continue;
-        };
+        }
         let o = shared.output_of[v];
-        let k = s.vertices.len();
-        for i in 0..k {
-            let (a, b) = (s.vertices[i], s.vertices[(i + 1) % k]);
-            let (ia, ib) = (corners[i], corners[(i + 1) % k]);
-            let edge = b - a;
-            let length2 = edge.length_squared();
-            if length2.is_nan() || length2 <= 0.0 {
+        let own = mesh.surfaces[vertex.surface as usize].polygon;
+        for &surface in &siblings[&own] {
+            let s = &mesh.surfaces[surface as usize];
+            let Some(corners) = &corner_ids[surface as usize] else {
                 continue;
-            }
-            let t = (vertex.position - a).dot(edge) / length2;
-            if !(-1e-9..=1.0 + 1e-9).contains(&t) {
-                continue;
-            }
-            if (a + edge * t - vertex.position).length() > tol {
-                continue;
-            }
-            let (key, t) = if ia <= ib {
-                ((ia, ib), t)
-            } else {
-                ((ib, ia), 1.0 - t)
             };
-            let list = shared.on_edges.entry(o).or_default();
-            if !list.iter().any(|(e, _)| *e == key) {
-                list.push((key, t));
-                shared.edge_points.entry(key).or_default().push((t, o));
+            if s.material != mesh.surfaces[vertex.surface as usize].material {
+                continue;
             }
+            record_on_edges(s, corners, vertex.position, o, tol, shared);
         }
     }
     for points in shared.edge_points.values_mut() {
         points.sort_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
         points.dedup_by_key(|p| p.1);
+    }
+}
+
+/// Records that output vertex `o` at `position` lies on the edges of surface
+/// `s` (whose corners are the output vertices `corners`) that pass within
+/// `tol` of it, with its parameter along each.
+fn record_on_edges(
+    s: &crate::mesh::Surface,
+    corners: &[u32],
+    position: DVec3,
+    o: u32,
+    tol: f64,
+    shared: &mut SharedVertices,
+) {
+    let k = s.vertices.len();
+    for i in 0..k {
+        let (a, b) = (s.vertices[i], s.vertices[(i + 1) % k]);
+        let (ia, ib) = (corners[i], corners[(i + 1) % k]);
+        let edge = b - a;
+        let length2 = edge.length_squared();
+        if length2.is_nan() || length2 <= 0.0 {
+            continue;
+        }
+        let t = (position - a).dot(edge) / length2;
+        if !(-1e-9..=1.0 + 1e-9).contains(&t) {
+            continue;
+        }
+        if (a + edge * t - position).length() > tol {
+            continue;
+        }
+        let (key, t) = if ia <= ib {
+            ((ia, ib), t)
+        } else {
+            ((ib, ia), 1.0 - t)
+        };
+        let list = shared.on_edges.entry(o).or_default();
+        if !list.iter().any(|(e, _)| *e == key) {
+            list.push((key, t));
+            shared.edge_points.entry(key).or_default().push((t, o));
+        }
     }
 }
 

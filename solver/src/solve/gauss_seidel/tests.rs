@@ -179,6 +179,9 @@ fn cornell_surface_means(patches: u32) -> (Vec<DVec3>, Vec<DVec3>) {
         .scene;
     scene.fill_default_patches(patches);
     let mut s = settings(patches, 64);
+    // Gauss–Seidel meshes receivers whole; the progressive solve must too
+    // for the two to share their patches.
+    s.whole_receivers = true;
     s.adaptive = false;
     s.samples = 8;
     s.threshold = 2e-3;
@@ -194,15 +197,18 @@ fn cornell_surface_means(patches: u32) -> (Vec<DVec3>, Vec<DVec3>) {
     while progressive.step().is_some() {}
     let mesh = progressive.mesh();
     assert_eq!(mesh.patches.len(), gs.patch_radiance.len());
-    let count = mesh.surfaces.len() + 1;
+    // Per input polygon: the floor and the ceiling are cut into several
+    // surfaces along the blocks' and the light's contact lines
+    // (`mesh::contact`).
+    let count = scene.polygons.len() + 1;
     let (mut g, mut p, mut area) = (
         vec![DVec3::ZERO; count],
         vec![DVec3::ZERO; count],
         vec![0.0; count],
     );
     for (i, patch) in mesh.patches.iter().enumerate() {
-        let k = patch.surface as usize;
-        if scene.materials[mesh.surfaces[k].material]
+        let k = mesh.surfaces[patch.surface as usize].polygon;
+        if scene.materials[mesh.surfaces[patch.surface as usize].material]
             .emission
             .max_element()
             > 0.0

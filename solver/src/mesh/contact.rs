@@ -1,0 +1,451 @@
+//! Receivers conformed to contact lines: a polygon that another object touches
+//! or covers is cut along the edges of the contact's footprint before meshing,
+//! so that no element spans the line where the visible part of the receiver
+//! meets the covered part.
+//!
+//! The Cornell box's floor is one quad that runs under both blocks (which
+//! have no bottom face), and its light hangs 0.1 mm below the ceiling quad.
+//! Meshed as one piece, a floor element that straddles a block's base has
+//! corners under the block; those are hidden (`solve::hidden`) and display
+//! their visible neighbours' radiance, one element away, so the visible floor
+//! next to the block shows a value extended over an element's width instead
+//! of its own (the dark rims round the blocks' bases in docs/accuracy.md).
+//! Conformed, the floor's elements next to the block have their corners on
+//! the contact line, on the visible side, where they receive exactly.
+//!
+//! * **Footprints.** For a convex, flat receiver A, the vertices of other
+//!   polygons that lie on A's plane (within [`CONTACT_TOLERANCE`] of the scene
+//!   diagonal) and inside A are grouped by the object they belong to (the
+//!   polygons connected through shared vertex positions), and each group's
+//!   convex hull in A's plane is a footprint. A's own object (the walls that
+//!   share the floor's corners) and polygons in A's very plane (a decal) do
+//!   not count. The hull may over-cover a
+//!   non-convex footprint; its inner piece is then partly visible, which the
+//!   hidden-vertex probe decides per vertex, so that is harmless.
+//! * **Cutting.** A is cut by the convex difference with each footprint: by
+//!   each footprint edge's line in turn, keeping the piece outside it and
+//!   going on with the rest; what is left is A ∩ footprint, the covered piece
+//!   ([`Part::covered`]). A piece that does not overlap a footprint is not cut
+//!   by its lines.
+//! * **Seams.** The visible pieces are marked as one smooth surface (their
+//!   corner normals are all A's normal), so the solution's seam pass
+//!   (`solve::seams`) gives coincident vertices along their cuts one output
+//!   vertex and resolves the T-junctions across them: no crack and no step
+//!   in value opens along a cut. The covered piece stays a flat facet with
+//!   its own vertices along the contact line, so the hidden vertices there are
+//!   not averaged with the visible ones; a crack along that line could only
+//!   show the covering object's base, which stands on it.
+//!
+//! Receivers left whole: non-convex polygons, smooth ones (their corner
+//! normals would need interpolating), and polygons no other object touches.
+
+use crate::scene::Scene;
+use glam::{DVec2, DVec3};
+use std::collections::HashMap;
+
+/// A point lies on a receiver's plane when it is within this fraction of the
+/// scene diagonal of it. The Cornell box's light hangs 0.1 mm below its
+/// ceiling, 1.04e-4 of the 961 mm diagonal, and must count as covering it;
+/// twice that still leaves a gap no eye can see into.
+pub const CONTACT_TOLERANCE: f64 = 2e-4;
+
+/// Polygons within this fraction of the contact tolerance of a receiver's
+/// plane at every vertex lie in it (rounding of the input's coordinates).
+const COPLANAR: f64 = 1e-3;
+
+/// A piece of a receiver after cutting, counter-clockwise about the
+/// receiver's normal.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Part {
+    pub vertices: Vec<DVec3>,
+    /// Inside a footprint: covered by the object that touches the receiver.
+    pub covered: bool,
+}
+
+/// For every polygon of `scene`, its parts, or `None` where it stays whole.
+pub fn conform(scene: &Scene) -> Vec<Option<Vec<Part>>> {
+    let diagonal = crate::mesh::sizing::scene_diagonal(scene);
+    let mut out = vec![None; scene.polygons.len()];
+    if !(diagonal.is_finite() && diagonal > 0.0) || scene.polygons.len() < 2 {
+        return out;
+    }
+    let tol = CONTACT_TOLERANCE * diagonal;
+    let objects = objects(scene, tol);
+    let grid = VertexGrid::new(scene, diagonal, tol);
+    for (index, polygon) in scene.polygons.iter().enumerate() {
+        let v = &polygon.vertices;
+        if v.len() < 3
+            || polygon.vertex_normals.is_some()
+            || !v.iter().all(|p| p.is_finite())
+            || !crate::geometry::polygon::is_convex(v)
+        {
+            continue;
+        }
+        let Some(frame) = Frame::new(v) else {
+            continue;
+        };
+        let footprints = footprints(scene, index, &frame, &grid, &objects, tol);
+        if footprints.is_empty() {
+            continue;
+        }
+        let outline: Vec<DVec2> = v.iter().map(|&p| frame.project(p)).collect();
+        let parts = cut(&outline, &footprints, tol);
+        if parts.len() > 1 {
+            out[index] = Some(
+                parts
+                    .into_iter()
+                    .map(|(ring, covered)| Part {
+                        // The receiver's own corners are kept bit for bit
+                        // (they meet other polygons' corners); new ones are
+                        // lifted from the plane.
+                        vertices: ring
+                            .iter()
+                            .map(|&q| {
+                                outline
+                                    .iter()
+                                    .position(|&o| (o - q).length() <= 1e-6 * tol)
+                                    .map_or_else(|| frame.lift(q), |k| v[k])
+                            })
+                            .collect(),
+                        covered,
+                    })
+                    .collect(),
+            );
+        }
+    }
+    out
+}
+
+/// A receiver's plane: its first vertex and an orthonormal frame (t, b, n)
+/// with n its Newell normal, so that counter-clockwise about n is
+/// counter-clockwise in (t, b).
+struct Frame {
+    origin: DVec3,
+    t: DVec3,
+    b: DVec3,
+    n: DVec3,
+}
+
+impl Frame {
+    fn new(v: &[DVec3]) -> Option<Frame> {
+        let n = crate::geometry::polygon::newell_normal(v).try_normalize()?;
+        let t = (0..v.len())
+            .map(|i| {
+                let e = v[(i + 1) % v.len()] - v[i];
+                (e - n * n.dot(e)).normalize_or_zero()
+            })
+            .find(|t| *t != DVec3::ZERO)?;
+        Some(Frame {
+            origin: v[0],
+            t,
+            b: n.cross(t),
+            n,
+        })
+    }
+    fn project(&self, p: DVec3) -> DVec2 {
+        let d = p - self.origin;
+        DVec2::new(d.dot(self.t), d.dot(self.b))
+    }
+    fn lift(&self, q: DVec2) -> DVec3 {
+        self.origin + self.t * q.x + self.b * q.y
+    }
+    fn height(&self, p: DVec3) -> f64 {
+        (p - self.origin).dot(self.n)
+    }
+}
+
+/// Per polygon, the object it belongs to: polygons joined through vertices at
+/// the same position (within `tol`, by a grid of `tol`-wide cells, so a pair
+/// that straddles a cell boundary may be missed; that only splits an object's
+/// footprint in two hulls).
+fn objects(scene: &Scene, tol: f64) -> Vec<usize> {
+    let mut parent: Vec<usize> = (0..scene.polygons.len()).collect();
+    fn root(parent: &mut [usize], mut i: usize) -> usize {
+        while parent[i] != i {
+            parent[i] = parent[parent[i]];
+            i = parent[i];
+        }
+        i
+    }
+    let mut first: HashMap<[i64; 3], usize> = HashMap::new();
+    for (index, polygon) in scene.polygons.iter().enumerate() {
+        for p in &polygon.vertices {
+            let key = cell(*p, tol);
+            let other = *first.entry(key).or_insert(index);
+            let (a, b) = (root(&mut parent, index), root(&mut parent, other));
+            if a != b {
+                parent[a.max(b)] = a.min(b);
+            }
+        }
+    }
+    (0..parent.len()).map(|i| root(&mut parent, i)).collect()
+}
+
+fn cell(p: DVec3, size: f64) -> [i64; 3] {
+    let c = (p / size).floor();
+    [c.x as i64, c.y as i64, c.z as i64]
+}
+
+/// Every polygon vertex of the scene in a uniform grid, for the vertices near
+/// one receiver.
+struct VertexGrid {
+    size: f64,
+    cells: HashMap<[i64; 3], Vec<(u32, u32)>>,
+}
+
+impl VertexGrid {
+    fn new(scene: &Scene, diagonal: f64, tol: f64) -> VertexGrid {
+        let count: usize = scene.polygons.iter().map(|p| p.vertices.len()).sum();
+        // About one vertex per cell on a surface-filling scene.
+        let size = (diagonal / (count.max(1) as f64).sqrt()).max(4.0 * tol);
+        let mut cells: HashMap<[i64; 3], Vec<(u32, u32)>> = HashMap::new();
+        for (i, polygon) in scene.polygons.iter().enumerate() {
+            for (k, p) in polygon.vertices.iter().enumerate() {
+                if p.is_finite() {
+                    cells
+                        .entry(cell(*p, size))
+                        .or_default()
+                        .push((i as u32, k as u32));
+                }
+            }
+        }
+        VertexGrid { size, cells }
+    }
+
+    /// The (polygon, vertex) pairs in the cells that the box `lo..hi` touches.
+    fn near(&self, lo: DVec3, hi: DVec3, out: &mut Vec<(u32, u32)>) {
+        out.clear();
+        let (a, b) = (cell(lo, self.size), cell(hi, self.size));
+        let cells = (0..3).map(|k| (b[k] - a[k] + 1) as f64).product::<f64>();
+        if cells > self.cells.len() as f64 {
+            // A receiver larger than the occupied cells: scan them all.
+            for (key, list) in &self.cells {
+                if (0..3).all(|k| key[k] >= a[k] && key[k] <= b[k]) {
+                    out.extend_from_slice(list);
+                }
+            }
+            return;
+        }
+        for x in a[0]..=b[0] {
+            for y in a[1]..=b[1] {
+                for z in a[2]..=b[2] {
+                    if let Some(list) = self.cells.get(&[x, y, z]) {
+                        out.extend_from_slice(list);
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// The footprints on receiver `index`: per touching object, the convex hull
+/// (counter-clockwise, in the receiver's plane) of its vertices on the plane
+/// and inside the receiver.
+fn footprints(
+    scene: &Scene,
+    index: usize,
+    frame: &Frame,
+    grid: &VertexGrid,
+    objects: &[usize],
+    tol: f64,
+) -> Vec<Vec<DVec2>> {
+    let v = &scene.polygons[index].vertices;
+    let (lo, hi) = v
+        .iter()
+        .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), &p| {
+            (lo.min(p), hi.max(p))
+        });
+    let mut near = Vec::new();
+    grid.near(lo - DVec3::splat(tol), hi + DVec3::splat(tol), &mut near);
+    let outline: Vec<DVec2> = v.iter().map(|&p| frame.project(p)).collect();
+    let mut by_object: HashMap<usize, Vec<DVec2>> = HashMap::new();
+    let mut coplanar: HashMap<u32, bool> = HashMap::new();
+    for &(polygon, vertex) in &near {
+        // The receiver's own object (the walls that share the floor's
+        // corners) is meshed as its input joins it.
+        if objects[polygon as usize] == objects[index] {
+            continue;
+        }
+        // A polygon in the receiver's very plane (a decal, overlapping
+        // tiles) is the same surface, not a cover; the Cornell box's light,
+        // 0.1 mm off its ceiling, is not in it.
+        let same_plane = *coplanar.entry(polygon).or_insert_with(|| {
+            scene.polygons[polygon as usize]
+                .vertices
+                .iter()
+                .all(|&p| frame.height(p).abs() <= COPLANAR * tol)
+        });
+        if same_plane {
+            continue;
+        }
+        let p = scene.polygons[polygon as usize].vertices[vertex as usize];
+        if frame.height(p).abs() > tol {
+            continue;
+        }
+        let q = frame.project(p);
+        if inside(&outline, q, tol) {
+            by_object
+                .entry(objects[polygon as usize])
+                .or_default()
+                .push(q);
+        }
+    }
+    let mut keys: Vec<usize> = by_object.keys().copied().collect();
+    keys.sort_unstable();
+    let area = ring_area(&outline);
+    keys.into_iter()
+        .filter_map(|k| {
+            let hull = convex_hull(&by_object[&k]);
+            // A hull of a point or a segment (a wall's base on the floor's
+            // edge) covers nothing.
+            (hull.len() >= 3 && ring_area(&hull) > 1e-9 * area).then_some(hull)
+        })
+        .collect()
+}
+
+/// Whether `q` is inside the counter-clockwise convex `ring`, or within `tol`
+/// outside it.
+fn inside(ring: &[DVec2], q: DVec2, tol: f64) -> bool {
+    (0..ring.len()).all(|i| {
+        let (a, b) = (ring[i], ring[(i + 1) % ring.len()]);
+        let d = b - a;
+        d.perp_dot(q - a) >= -tol * d.length()
+    })
+}
+
+fn ring_area(ring: &[DVec2]) -> f64 {
+    0.5 * (0..ring.len())
+        .map(|i| ring[i].perp_dot(ring[(i + 1) % ring.len()]))
+        .sum::<f64>()
+}
+
+/// Andrew's monotone chain: the convex hull, counter-clockwise, without
+/// collinear points.
+fn convex_hull(points: &[DVec2]) -> Vec<DVec2> {
+    let mut p = points.to_vec();
+    p.sort_by(|a, b| a.x.total_cmp(&b.x).then(a.y.total_cmp(&b.y)));
+    p.dedup();
+    if p.len() < 3 {
+        return p;
+    }
+    let mut hull: Vec<DVec2> = Vec::with_capacity(2 * p.len());
+    for pass in 0..2 {
+        let start = hull.len();
+        let iter: Box<dyn Iterator<Item = &DVec2>> = if pass == 0 {
+            Box::new(p.iter())
+        } else {
+            Box::new(p.iter().rev())
+        };
+        for &q in iter {
+            while hull.len() >= start + 2 {
+                let (a, b) = (hull[hull.len() - 2], hull[hull.len() - 1]);
+                if (b - a).perp_dot(q - a) <= 0.0 {
+                    hull.pop();
+                } else {
+                    break;
+                }
+            }
+            hull.push(q);
+        }
+        hull.pop();
+    }
+    hull
+}
+
+/// `outline` (convex, counter-clockwise) cut by each footprint in turn: the
+/// pieces outside every footprint and the covered pieces, each with whether it
+/// is covered. Pieces with (near) zero area are dropped.
+fn cut(outline: &[DVec2], footprints: &[Vec<DVec2>], tol: f64) -> Vec<(Vec<DVec2>, bool)> {
+    let floor = 1e-9 * ring_area(outline).abs();
+    let snap = 1e-6 * tol.max(f64::MIN_POSITIVE);
+    let mut parts = vec![(outline.to_vec(), false)];
+    for hull in footprints {
+        let mut next = Vec::with_capacity(parts.len() + hull.len());
+        for (part, covered) in parts {
+            // Only a piece that overlaps the footprint is cut by its lines.
+            let mut rest = part.clone();
+            for i in 0..hull.len() {
+                rest = clip(&rest, hull[i], hull[(i + 1) % hull.len()], snap);
+            }
+            if covered || ring_area(&rest) <= floor {
+                next.push((part, covered));
+                continue;
+            }
+            let mut rest = part;
+            for i in 0..hull.len() {
+                let (a, b) = (hull[i], hull[(i + 1) % hull.len()]);
+                let outside = clip(&rest, b, a, snap);
+                if ring_area(&outside) > floor {
+                    next.push((outside, false));
+                }
+                rest = clip(&rest, a, b, snap);
+            }
+            next.push((rest, true));
+        }
+        parts = next;
+    }
+    parts
+}
+
+/// The part of convex `ring` to the left of the directed line a → b (points
+/// within `snap` of it count as on it), without repeated or collinear
+/// vertices.
+fn clip(ring: &[DVec2], a: DVec2, b: DVec2, snap: f64) -> Vec<DVec2> {
+    let d = b - a;
+    let length = d.length();
+    if ring.is_empty() || length <= 0.0 {
+        return Vec::new();
+    }
+    let side = |p: DVec2| {
+        let s = d.perp_dot(p - a) / length;
+        if s.abs() <= snap {
+            0.0
+        } else {
+            s
+        }
+    };
+    let mut out: Vec<DVec2> = Vec::with_capacity(ring.len() + 1);
+    let mut prev = ring[ring.len() - 1];
+    let mut prev_s = side(prev);
+    for &cur in ring {
+        let cur_s = side(cur);
+        if (prev_s > 0.0 && cur_s < 0.0) || (prev_s < 0.0 && cur_s > 0.0) {
+            let t = prev_s / (prev_s - cur_s);
+            out.push(prev + (cur - prev) * t);
+        }
+        if cur_s >= 0.0 {
+            out.push(cur);
+        }
+        prev = cur;
+        prev_s = cur_s;
+    }
+    simplify(out, snap)
+}
+
+/// Drops repeated vertices and vertices on the line through their neighbours.
+fn simplify(mut ring: Vec<DVec2>, snap: f64) -> Vec<DVec2> {
+    let mut changed = true;
+    while changed && ring.len() >= 3 {
+        changed = false;
+        for i in 0..ring.len() {
+            let n = ring.len();
+            let (a, b, c) = (ring[(i + n - 1) % n], ring[i], ring[(i + 1) % n]);
+            let ac = c - a;
+            let straight = ac.length() <= snap
+                || (b - a).length() <= snap
+                || (ac.perp_dot(b - a) / ac.length()).abs() <= snap;
+            if straight {
+                ring.remove(i);
+                changed = true;
+                break;
+            }
+        }
+    }
+    if ring.len() < 3 {
+        ring.clear();
+    }
+    ring
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,244 @@
+use super::*;
+use crate::mesh::{Mesh, Sizing};
+use crate::scene::{Material, MeshSizes, Polygon, SourceRef, PATCHES_UNSET};
+
+fn p(x: f64, y: f64, z: f64) -> DVec3 {
+    DVec3::new(x, y, z)
+}
+
+fn scene_of(polygons: Vec<Vec<DVec3>>) -> Scene {
+    let polygons = polygons
+        .into_iter()
+        .enumerate()
+        .map(|(i, vertices)| Polygon {
+            vertices,
+            vertex_normals: None,
+            material: 0,
+            uv_map: None,
+            patches: PATCHES_UNSET,
+            sizes: MeshSizes::default(),
+            source: SourceRef {
+                item: format!("polygon {i}"),
+                ..SourceRef::default()
+            },
+        })
+        .collect();
+    Scene {
+        polygons,
+        materials: vec![Material {
+            name: "white".into(),
+            kd: DVec3::splat(0.5),
+            ks: DVec3::ZERO,
+            alpha: 0.0,
+            emission: DVec3::ZERO,
+            diffuse_texture: None,
+            emission_texture: None,
+        }],
+        units_per_metre: 1.0,
+        up_axis: solution::camera::UpAxis::PosY,
+        camera: None,
+        recentre_offset: DVec3::ZERO,
+        warnings: Vec::new(),
+    }
+}
+
+/// A floor [0, 2]² at y = 0 facing up, and a box of height 0.3 with no bottom
+/// face standing on it, its base the square with corners `base`
+/// (counter-clockwise seen from above), rotated so that its edges are not
+/// parallel to the floor's.
+fn box_on_floor() -> (Scene, [DVec3; 4]) {
+    let base = [
+        p(0.8, 0., 0.6),
+        p(0.6, 0., 1.2),
+        p(1.2, 0., 1.4),
+        p(1.4, 0., 0.8),
+    ];
+    let floor = vec![p(0., 0., 0.), p(0., 0., 2.), p(2., 0., 2.), p(2., 0., 0.)];
+    let up = DVec3::new(0.0, 0.3, 0.0);
+    let mut polygons = vec![floor, base.iter().rev().map(|&b| b + up).collect()];
+    for i in 0..4 {
+        let (a, b) = (base[i], base[(i + 1) % 4]);
+        // Facing out of the box.
+        polygons.push(vec![a, a + up, b + up, b]);
+    }
+    (scene_of(polygons), base)
+}
+
+fn area3(v: &[DVec3]) -> f64 {
+    crate::geometry::polygon::area(v)
+}
+
+/// Signed distances of `q` (in the floor's xz plane) to the base's edges,
+/// positive inside: the point is inside when all are positive.
+fn inside_base(base: &[DVec3; 4], q: DVec3) -> f64 {
+    (0..4)
+        .map(|i| {
+            let (a, b) = (base[i], base[(i + 1) % 4]);
+            // The base runs counter-clockwise seen from above (+y): inside is
+            // to the left of a → b in the xz plane seen from above.
+            let d = b - a;
+            let r = q - a;
+            (d.z * r.x - d.x * r.z) / d.length()
+        })
+        .fold(f64::INFINITY, f64::min)
+}
+
+#[test]
+fn a_box_cuts_the_floor_into_visible_parts_and_its_footprint() {
+    let (scene, base) = box_on_floor();
+    let parts = conform(&scene);
+    let floor = parts[0].as_ref().expect("the floor is cut");
+    // The parts tile the floor: their areas sum to its area (rounding only).
+    let total: f64 = floor.iter().map(|q| area3(&q.vertices)).sum();
+    assert!((total - 4.0).abs() < 1e-12, "{total}");
+    // One covered part: the base itself (area 0.4 for this base).
+    let covered: Vec<_> = floor.iter().filter(|q| q.covered).collect();
+    assert_eq!(covered.len(), 1);
+    assert!((area3(&covered[0].vertices) - area3(&base)).abs() < 1e-12);
+    for v in &covered[0].vertices {
+        assert!(base.iter().any(|b| (*b - *v).length() < 1e-12), "{v}");
+    }
+    // No visible part reaches into the base (1e-12: rounding of the cuts),
+    // and none is flipped: each faces up like the floor.
+    for part in floor.iter().filter(|q| !q.covered) {
+        for &v in &part.vertices {
+            assert!(inside_base(&base, v) <= 1e-12, "{v} is under the box");
+            assert!(v.y == 0.0);
+        }
+        let n = crate::geometry::polygon::newell_normal(&part.vertices);
+        assert!(n.y > 0.0);
+    }
+    // The box's own faces touch nothing.
+    assert!(parts[1..].iter().all(|p| p.is_none()));
+}
+
+#[test]
+fn a_light_just_under_a_ceiling_covers_it_and_one_further_down_does_not() {
+    // The Cornell box's ceiling and light in millimetres: a ceiling 549 mm up
+    // facing down, a 130 × 105 mm light facing down 0.1 mm under it, and a
+    // floor so that the diagonal is about the box's.
+    let ceiling_at = |drop: f64| {
+        let y = 548.8 - drop;
+        let ceiling = vec![
+            p(0., 548.8, 0.),
+            p(556., 548.8, 0.),
+            p(556., 548.8, 559.),
+            p(0., 548.8, 559.),
+        ];
+        let light = vec![
+            p(213., y, 227.),
+            p(343., y, 227.),
+            p(343., y, 332.),
+            p(213., y, 332.),
+        ];
+        let floor = vec![
+            p(0., 0., 0.),
+            p(0., 0., 559.),
+            p(556., 0., 559.),
+            p(556., 0., 0.),
+        ];
+        conform(&scene_of(vec![ceiling, light, floor]))
+    };
+    let parts = ceiling_at(0.1);
+    let ceiling = parts[0].as_ref().expect("the light covers the ceiling");
+    let covered: Vec<_> = ceiling.iter().filter(|q| q.covered).collect();
+    assert_eq!(covered.len(), 1);
+    assert!((area3(&covered[0].vertices) - 130.0 * 105.0).abs() < 1e-6);
+    // The tolerance is 2e-4 of the diagonal (0.19 mm here): a light 1 mm
+    // down hangs free.
+    assert!(ceiling_at(1.0)[0].is_none());
+}
+
+#[test]
+fn walls_on_the_floors_edges_and_a_lone_wall_cut_nothing() {
+    // Walls standing on the floor's edges share its corners (a hull that is
+    // the floor itself); a single wall inside it touches it along a segment,
+    // which covers nothing.
+    let floor = vec![p(0., 0., 0.), p(0., 0., 2.), p(2., 0., 2.), p(2., 0., 0.)];
+    let back = vec![p(0., 0., 2.), p(0., 1., 2.), p(2., 1., 2.), p(2., 0., 2.)];
+    let left = vec![p(0., 0., 0.), p(0., 1., 0.), p(0., 1., 2.), p(0., 0., 2.)];
+    let lone = vec![
+        p(0.5, 0., 1.),
+        p(0.5, 1., 1.),
+        p(1.5, 1., 1.),
+        p(1.5, 0., 1.),
+    ];
+    let parts = conform(&scene_of(vec![floor, back, left, lone]));
+    assert!(parts.iter().all(|p| p.is_none()));
+}
+
+/// Whether a leaf element of the floor has corners strictly on both sides of
+/// the base's boundary (`margin` from it).
+fn straddlers(mesh: &Mesh, base: &[DVec3; 4], margin: f64) -> usize {
+    mesh.leaves()
+        .filter(|&e| {
+            let el = &mesh.elements[e as usize];
+            let s = &mesh.surfaces[mesh.patches[el.patch as usize].surface as usize];
+            if s.polygon != 0 {
+                return false;
+            }
+            let d: Vec<f64> = el
+                .corners()
+                .iter()
+                .map(|&c| inside_base(base, mesh.vertices[c as usize].position))
+                .collect();
+            d.iter().any(|&x| x > margin) && d.iter().any(|&x| x < -margin)
+        })
+        .count()
+}
+
+#[test]
+fn no_floor_element_straddles_the_contact_line() {
+    let (scene, base) = box_on_floor();
+    let sizing = Sizing::flat(5);
+    let mut conformed = Mesh::with_sizing(&scene, DVec3::ZERO, &sizing).unwrap();
+    let mut whole = Mesh::with_contacts(&scene, DVec3::ZERO, &sizing, false).unwrap();
+    // Refine every floor element twice, as adaptive subdivision would near
+    // the box: the quadtree stays inside its part.
+    for mesh in [&mut conformed, &mut whole] {
+        for _ in 0..2 {
+            let floor: Vec<u32> = mesh
+                .leaves()
+                .filter(|&e| {
+                    let patch = mesh.elements[e as usize].patch;
+                    mesh.surfaces[mesh.patches[patch as usize].surface as usize].polygon == 0
+                })
+                .collect();
+            let mut created = Vec::new();
+            for e in floor {
+                mesh.split(e, &mut created).unwrap();
+            }
+        }
+    }
+    // 1e-12: corners on the contact line are on it up to rounding.
+    assert_eq!(straddlers(&conformed, &base, 1e-12), 0);
+    // The whole floor's elements do straddle it (the test can fail).
+    assert!(straddlers(&whole, &base, 1e-12) > 0);
+    // The conformed floor's leaves cover its area exactly once.
+    let area: f64 = conformed
+        .leaves()
+        .map(|e| &conformed.elements[e as usize])
+        .filter(|el| {
+            let patch = &conformed.patches[el.patch as usize];
+            conformed.surfaces[patch.surface as usize].polygon == 0
+        })
+        .map(|el| el.area)
+        .sum();
+    assert!((area - 4.0).abs() < 1e-9, "{area}");
+    // Visible parts are marked smooth (shared seams), the covered one flat,
+    // all with the floor's frame.
+    let floor: Vec<_> = conformed
+        .surfaces
+        .iter()
+        .filter(|s| s.polygon == 0)
+        .collect();
+    assert!(floor.len() > 2);
+    assert_eq!(
+        floor.iter().filter(|s| s.corner_normals.is_none()).count(),
+        1
+    );
+    for s in &floor {
+        assert_eq!(s.normal, floor[0].normal);
+        assert_eq!(s.tangent, floor[0].tangent);
+    }
+}
