@@ -147,23 +147,7 @@ fn diffuse_texture(
     warnings: &mut Vec<Warning>,
 ) -> Option<std::sync::Arc<super::SceneTexture>> {
     let (file, at) = raw.diffuse_map.as_ref()?;
-    let mut users = polygons.iter().filter(|p| p.material == index);
-    let with_uvs = users.clone().filter(|p| p.uv_map.is_some()).count();
-    if with_uvs == 0 {
-        let first = users
-            .next()
-            .map(|p| format!(" (first: {})", p.source))
-            .unwrap_or_default();
-        warn(
-            warnings,
-            at,
-            format!(
-                "map_Kd texture {}: no face using material `{}` has texture coordinates (`vt`){first}; \
-                 the flat Kd is used",
-                file.display(),
-                raw.name
-            ),
-        );
+    if !some_user_has_uvs(raw, index, polygons, ("map_Kd", "Kd"), file, at, warnings) {
         return None;
     }
     if raw.emission.max_element() > 0.0 {
@@ -219,25 +203,43 @@ fn emission_texture(
         // Ke 0 0 0 times any texture emits nothing (warned by the parser).
         return None;
     }
-    let mut users = polygons.iter().filter(|p| p.material == index);
-    if !users.clone().any(|p| p.uv_map.is_some()) {
-        let first = users
-            .next()
-            .map(|p| format!(" (first: {})", p.source))
-            .unwrap_or_default();
-        warn(
-            warnings,
-            at,
-            format!(
-                "map_Ke texture {}: no face using material `{}` has texture coordinates (`vt`){first}; \
-                 the flat Ke is used",
-                file.display(),
-                raw.name
-            ),
-        );
+    if !some_user_has_uvs(raw, index, polygons, ("map_Ke", "Ke"), file, at, warnings) {
         return None;
     }
     super::texture_file::load_texture(file, raw.emission_bytes.as_deref(), at, "map_Ke", warnings)
+}
+
+/// Whether some polygon using material `index` has UVs, so that its texture
+/// (`statement`, e.g. `map_Kd`, multiplying the flat `factor`) can be used;
+/// if none has, a warning naming the first user says the flat factor is used.
+fn some_user_has_uvs(
+    raw: &RawMaterial,
+    index: usize,
+    polygons: &[Polygon],
+    (statement, factor): (&str, &str),
+    file: &std::path::Path,
+    at: &SourceRef,
+    warnings: &mut Vec<Warning>,
+) -> bool {
+    let mut users = polygons.iter().filter(|p| p.material == index);
+    if users.clone().any(|p| p.uv_map.is_some()) {
+        return true;
+    }
+    let first = users
+        .next()
+        .map(|p| format!(" (first: {})", p.source))
+        .unwrap_or_default();
+    warn(
+        warnings,
+        at,
+        format!(
+            "{statement} texture {}: no face using material `{}` has texture coordinates (`vt`){first}; \
+             the flat {factor} is used",
+            file.display(),
+            raw.name
+        ),
+    );
+    false
 }
 
 fn describe_files(files: &[std::path::PathBuf]) -> String {

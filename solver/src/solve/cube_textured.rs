@@ -178,14 +178,5 @@ fn texture_diffuse_batch(
             });
         }
     }
-    for tri in whole.indices.chunks_exact(3) {
-        let (g, _) = slot[tri[0] as usize];
-        batches[g]
-            .indices
-            .extend(tri.iter().map(|&o| slot[o as usize].1));
-    }
-    if batches[0].vertices.is_empty() {
-        batches.remove(0);
-    }
-    solution.batches.splice(0..0, batches);
+    super::output_textured::place_triangles_and_prepend(solution, batches, &slot, &whole.indices);
 }

@@ -107,23 +107,37 @@ impl Solver {
                 });
             }
         }
-        for tri in whole.indices.chunks_exact(3) {
-            let (g, _) = slot[tri[0] as usize];
-            // A display triangle lies on one surface, so its corners are in
-            // one batch (the seams keep textured and untextured apart).
-            if tri.iter().any(|&o| slot[o as usize].0 != g) {
-                debug_assert!(false, "a triangle spans two batches: {tri:?}");
-                continue;
-            }
-            batches[g]
-                .indices
-                .extend(tri.iter().map(|&o| slot[o as usize].1));
-        }
-        if batches[0].vertices.is_empty() {
-            batches.remove(0);
-        }
-        solution.batches.splice(0..0, batches);
+        place_triangles_and_prepend(solution, batches, &slot, &whole.indices);
     }
+}
+
+/// Gives each display triangle of `indices` (output vertex ids) to the batch
+/// its corners were placed in (`slot[o]` = (batch, index in it)), drops the
+/// first batch (the untextured one) if it is empty, and puts the batches in
+/// front of `solution`'s. Shared by the diffuse output and the cube method's
+/// textured batches (`cube_textured.rs`).
+pub(super) fn place_triangles_and_prepend(
+    solution: &mut Solution,
+    mut batches: Vec<Batch>,
+    slot: &[(usize, u32)],
+    indices: &[u32],
+) {
+    for tri in indices.chunks_exact(3) {
+        let (g, _) = slot[tri[0] as usize];
+        // A display triangle lies on one surface, so its corners are in
+        // one batch (the seams keep textured and untextured apart).
+        if tri.iter().any(|&o| slot[o as usize].0 != g) {
+            debug_assert!(false, "a triangle spans two batches: {tri:?}");
+            continue;
+        }
+        batches[g]
+            .indices
+            .extend(tri.iter().map(|&o| slot[o as usize].1));
+    }
+    if batches.first().is_some_and(|b| b.vertices.is_empty()) {
+        batches.remove(0);
+    }
+    solution.batches.splice(0..0, batches);
 }
 
 /// The index in `textures` of `t`'s texture, added (its 8-bit sRGB texels)
