@@ -11,7 +11,7 @@ use std::collections::BTreeSet;
 use std::f64::consts::PI;
 
 /// Turns `polygon` so that its Newell normal points along `toward`.
-fn facing(mut polygon: Vec<DVec3>, toward: DVec3) -> Vec<DVec3> {
+pub(super) fn facing(mut polygon: Vec<DVec3>, toward: DVec3) -> Vec<DVec3> {
     if crate::geometry::polygon::newell_normal(&polygon).dot(toward) < 0.0 {
         polygon.reverse();
     }
@@ -22,7 +22,7 @@ fn facing(mut polygon: Vec<DVec3>, toward: DVec3) -> Vec<DVec3> {
 /// 8k² triangles, facing outward. Points on the octahedron's edges are
 /// computed from each face separately, so neighbours meet only within
 /// rounding, as in an exported mesh.
-fn sphere(k: usize, centre: DVec3, radius: f64) -> Vec<Vec<DVec3>> {
+pub(super) fn sphere(k: usize, centre: DVec3, radius: f64) -> Vec<Vec<DVec3>> {
     let mut out = Vec::new();
     for sx in [-1.0, 1.0] {
         for sy in [-1.0, 1.0] {

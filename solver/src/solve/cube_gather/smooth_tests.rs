@@ -5,44 +5,12 @@
 use super::tests::{cube_settings, material, scene, tight};
 use super::*;
 use crate::scene::smooth_scene;
+use crate::solve::smooth_tests::facing;
 
-/// Turns `polygon` so that its Newell normal points along `toward`.
-fn facing(mut polygon: Vec<DVec3>, toward: DVec3) -> Vec<DVec3> {
-    if crate::geometry::polygon::newell_normal(&polygon).dot(toward) < 0.0 {
-        polygon.reverse();
-    }
-    polygon
-}
-
-/// An octahedron's faces each cut into k² triangles, pushed onto the unit
-/// sphere at the origin: 8k² triangles, facing outward (the fixture of
-/// `solve/smooth_tests.rs`).
+/// The SH mode's smooth-sphere fixture (`solve/smooth_tests.rs`): the unit
+/// sphere at the origin, 8k² outward triangles.
 fn sphere(k: usize) -> Vec<Vec<DVec3>> {
-    let mut out = Vec::new();
-    for sx in [-1.0, 1.0] {
-        for sy in [-1.0, 1.0] {
-            for sz in [-1.0, 1.0] {
-                let (a, b, c) = (DVec3::X * sx, DVec3::Y * sy, DVec3::Z * sz);
-                let at = |i: usize, j: usize| {
-                    (a + (b - a) * (i as f64 / k as f64) + (c - a) * (j as f64 / k as f64))
-                        .normalize()
-                };
-                for j in 0..k {
-                    for i in 0..k - j {
-                        let mut tris = vec![vec![at(i, j), at(i + 1, j), at(i, j + 1)]];
-                        if i + j + 1 < k {
-                            tris.push(vec![at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)]);
-                        }
-                        for t in tris {
-                            let mid = t.iter().copied().sum::<DVec3>() / 3.0;
-                            out.push(facing(t, mid));
-                        }
-                    }
-                }
-            }
-        }
-    }
-    out
+    crate::solve::smooth_tests::sphere(k, DVec3::ZERO, 1.0)
 }
 
 /// The same mesh as [`solve_cube`] builds (same settings, deterministic).
