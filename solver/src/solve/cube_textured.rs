@@ -1,24 +1,21 @@
 //! Textured surfaces in the global-cube method (`--directional cube`,
-//! [`super::cube_gather`]), around it rather than inside it.
+//! [`super::cube_gather`]): what the gather does with them, and their display.
 //!
-//! The cube gather keeps one radiance per diffuse vertex and reflects a
-//! patch's area-weighted vertex radiance; giving it the E/π representation
-//! and ∫ρE reflection of the other solves (`textured.rs`) would change its
-//! unknowns and its reflection step. Instead, at the least cost:
-//!
-//! * **Transport** uses each textured material's mean reflectance, Kd ⊙ the
-//!   texture's mean (what directional mode did before it modelled
-//!   textures): the light a textured patch reflects is right on average over
-//!   the texture, not per patch, so where a patch covers mostly dark or
-//!   mostly light texels its reflected light is off by that patch's
-//!   deviation from the mean.
+//! * **Transport** is the gather's own ([`super::cube_gather`]'s `textured`
+//!   module): a textured vertex stores E/π, and each patch reflects the
+//!   integral of ρ · E/π over its area through the progressive solver's RGB
+//!   gather weights (the texture integrated over each display triangle's UV
+//!   triangle at its mip level, `crate::texture`), as the other solves do.
+//!   The mesh is fixed, so there is no refinement to steer.
 //! * **Display** is textured for diffuse textured surfaces (Ks = 0): their
 //!   vertices move out of the order-0 batch into a textured SH batch (format
-//!   2 allows textured SH batches beside cube batches) holding E/π =
-//!   (L − Le) / (Kd ⊙ mean), the light the vertex received, so the file shows
-//!   ρ(uv) ⊙ E/π as in the other modes. A glossy textured surface (Ks > 0)
-//!   is a cube batch, which cannot be textured: it stays at its mean
-//!   reflectance, with a warning.
+//!   2 allows textured SH batches beside cube batches) holding their E/π and
+//!   their emission as the SH term, so the file shows ρ(uv) ⊙ E/π + Le as in
+//!   the other modes. A glossy textured surface (Ks > 0) is a cube batch,
+//!   which format 2 cannot texture: it shows, in every cell, its glossy
+//!   light plus the texels' mean around each vertex times its E/π, the
+//!   texture blurred to the mesh's resolution, with a warning. Its transport
+//!   is per element as for a diffuse surface.
 
 use super::cube_gather::{solve_cube, CubeError, CubeLimits, CubeResult};
 use super::textured::SurfaceTexturing;
@@ -49,14 +46,7 @@ pub fn solve_cube_textured(
     if textured_materials.is_empty() {
         return Ok((solve_cube(scene, settings, limits)?, Vec::new()));
     }
-    let mut mean_scene = scene.clone();
-    for &m in &textured_materials {
-        let material = &mut mean_scene.materials[m];
-        if let Some(t) = material.diffuse_texture.take() {
-            material.kd *= t.texture.mean();
-        }
-    }
-    let mut result = solve_cube(&mean_scene, settings, limits)?;
+    let mut result = solve_cube(scene, settings, limits)?;
     let mut warnings = Vec::new();
     let glossy: Vec<&str> = textured_materials
         .iter()
@@ -66,29 +56,19 @@ pub fn solve_cube_textured(
         .collect();
     if !glossy.is_empty() {
         warnings.push(format!(
-            "global cubes: textured glossy material(s) {} are shown and reflect with Kd times \
-             their texture's mean (a cube batch cannot be textured); `--directional sh` models \
-             their textures",
+            "global cubes: textured glossy material(s) {} reflect their texture per patch, but \
+             are shown with the texture averaged around each vertex (solution format 2 cannot \
+             texture a cube batch); `--directional sh` shows their textures",
             glossy.join(", ")
         ));
     }
-    warnings.push(
-        "global cubes: textured surfaces reflect light with Kd times their texture's mean \
-         (their display is textured); the progressive solves integrate the texture per patch"
-            .to_owned(),
-    );
-    texture_diffuse_batch(scene, settings, &mean_scene, &mut result);
+    texture_diffuse_batch(scene, settings, &mut result);
     Ok((result, warnings))
 }
 
 /// Moves the diffuse textured vertices of `result`'s order-0 batch into one
 /// textured batch per material (see the module notes).
-fn texture_diffuse_batch(
-    scene: &Scene,
-    settings: &SolverSettings,
-    mean_scene: &Scene,
-    result: &mut CubeResult,
-) {
+fn texture_diffuse_batch(scene: &Scene, settings: &SolverSettings, result: &mut CubeResult) {
     // The cube solve's mesh, rebuilt: the same scene geometry, offset and
     // sizing give the same mesh (meshing is deterministic).
     let offset = super::scene_centre(scene);
@@ -100,14 +80,10 @@ fn texture_diffuse_batch(
         return;
     }
     let texturing = SurfaceTexturing::new(scene, &mesh, offset);
-    // Per mesh vertex its one value when diffuse (in the order-0 batch).
-    let diffuse: Vec<Option<DVec3>> = mesh
-        .vertices
-        .iter()
-        .enumerate()
-        .map(|(v, mv)| {
-            (!result.is_glossy(v as u32)).then(|| result.radiance_toward(v as u32, mv.normal))
-        })
+    // Per mesh vertex in the order-0 batch (the diffuse ones), its E/π when
+    // textured.
+    let diffuse: Vec<Option<Option<DVec3>>> = (0..mesh.vertices.len() as u32)
+        .map(|v| (!result.is_glossy(v)).then(|| result.irradiance_over_pi(v)))
         .collect();
     let solution = &mut result.solution;
     // The order-0 batch holds the vertices with one RGB value, in mesh order.
@@ -135,9 +111,9 @@ fn texture_diffuse_batch(
         .iter()
         .enumerate()
         .filter_map(|(v, l)| l.map(|l| (v, l)));
-    for (o, (v, radiance)) in diffuse_vertices.enumerate() {
+    for (o, (v, irradiance)) in diffuse_vertices.enumerate() {
         let mv = &mesh.vertices[v];
-        let Some(t) = texturing.get(mv.surface) else {
+        let (Some(t), Some(e)) = (texturing.get(mv.surface), irradiance) else {
             let b = &mut batches[0];
             slot.push((0, b.vertices.len() as u32));
             b.vertices.push(whole.vertices[o]);
@@ -161,10 +137,6 @@ fn texture_diffuse_batch(
             }
         };
         let emission = scene.materials[material].emission;
-        let mean = mean_scene.materials[material].kd;
-        // L = Le + (Kd ⊙ mean) ⊙ E/π in the cube gather.
-        let received = (radiance - emission).max(DVec3::ZERO);
-        let e = DVec3::select(mean.cmpgt(DVec3::ZERO), received / mean, DVec3::ZERO);
         let uv = texturing.uv(t, mv.position).as_vec2().to_array();
         let b = &mut batches[g];
         slot.push((g, b.vertices.len() as u32));

@@ -96,6 +96,7 @@
 //! [`CubeLimits::max_bytes`] (default 2 GiB).
 
 mod lobe;
+mod textured;
 mod transport;
 
 pub use lobe::{CellBrdf, ExactLobe};
@@ -112,6 +113,7 @@ use solution::cube;
 use solution::format::{Batch, Representation, ScalarType, Solution, SolveMode, Vertex};
 use std::f64::consts::PI;
 use std::time::Instant;
+use textured::CubeTexturing;
 use transport::{PairInput, Receiver};
 
 /// Vertices updated together (in parallel) within a Gauss–Seidel sweep.
@@ -286,6 +288,8 @@ pub struct CubeResult {
     /// Per mesh vertex: its frame (n, t).
     frames: Vec<(DVec3, DVec3)>,
     cells: UpperCells,
+    /// The textured patches and vertices ([`textured`]).
+    texturing: CubeTexturing,
     /// Per mesh vertex: the receiving point the factors were computed at
     /// (re-centred coordinates) — the solver's `offset` was subtracted.
     pub receiving_points: Vec<DVec3>,
@@ -311,11 +315,17 @@ pub struct CubeResult {
 impl CubeResult {
     /// Outgoing radiance (RGB) of mesh vertex `v` toward the world direction
     /// `dir`: bilinear in its cube for a glossy vertex (0 below its surface),
-    /// its one value for a diffuse vertex.
+    /// its one value for a diffuse vertex. On a textured surface the diffuse
+    /// part is the texels' mean around the vertex times its E/π, what its
+    /// untextured display shows ([`textured::VertexTexture::reflectance`]).
     pub fn radiance_toward(&self, v: u32, dir: DVec3) -> DVec3 {
         let values = &self.values[v as usize];
+        let texture = self.texturing.vertex(v);
         if values.len() == 3 {
-            return DVec3::from_slice(values);
+            return match texture {
+                Some(t) => t.emission + t.reflectance * DVec3::from_slice(values),
+                None => DVec3::from_slice(values),
+            };
         }
         let (n, t) = self.frames[v as usize];
         let local = solution::sh::to_local(dir.normalize_or_zero(), n, t);
@@ -326,7 +336,19 @@ impl CubeResult {
                 sum += DVec3::from_slice(&values[3 * s as usize..3 * s as usize + 3]) * w;
             }
         }
-        sum
+        match texture {
+            Some(t) if local.z > 0.0 => {
+                sum + t.reflectance * textured::irradiance_over_pi(values)
+            }
+            _ => sum,
+        }
+    }
+
+    /// E/π (incident irradiance over π) of mesh vertex `v` on a textured
+    /// surface ([`textured`]); `None` elsewhere.
+    pub fn irradiance_over_pi(&self, v: u32) -> Option<DVec3> {
+        self.texturing.vertex(v)?;
+        Some(textured::irradiance_over_pi(&self.values[v as usize]))
     }
 
     /// Whether mesh vertex `v` is stored as a cube (its surface is glossy).
@@ -370,9 +392,17 @@ pub fn solve_cube(
     let solver = Solver::new(scene, &base)?;
     let mesh = solver.mesh();
     let (surfaces, glossy_alphas) = surface_materials(scene, mesh)?;
-    let bytes = check_memory(k, mesh, &surfaces, glossy_alphas.len(), settings, limits)?;
+    let rgb_entries = solver.patch_rgb_weights.iter().map(|w| w.len() as u64).sum();
+    let textured_bytes = CubeTexturing::bytes(mesh, rgb_entries);
+    let materials = (&surfaces[..], glossy_alphas.len());
+    let bytes = check_memory(k, mesh, materials, textured_bytes, settings, limits)?;
     let cells = UpperCells::new(k);
     let brdfs = cell_brdfs(&glossy_alphas, settings, &cells, bytes)?;
+    let texturing = CubeTexturing::new(
+        &solver,
+        &surfaces.iter().map(|s| s.brdf.is_some()).collect::<Vec<_>>(),
+        &surfaces.iter().map(|s| s.emission).collect::<Vec<_>>(),
+    );
 
     let start = Instant::now();
     let occluder = mesh_occluder(mesh);
@@ -396,6 +426,7 @@ pub fn solve_cube(
             .collect(),
         receiving: &receiving_points,
         sources: &transport.sources,
+        texturing: &texturing,
     };
     let sweep = run_sweeps(&state, mesh, limits);
     let bounds = Bounds::new(&state, &sweep);
@@ -403,7 +434,13 @@ pub fn solve_cube(
     let rays: u64 = receivers.iter().map(|r| r.rays).sum();
 
     let mut solution = solver.to_solution(false);
-    fill_batches(&solver, &sweep.values, &frames, &cells, k, &mut solution);
+    let layout = BatchLayout {
+        frames: &frames,
+        cells: &cells,
+        k,
+        texturing: &texturing,
+    };
+    fill_batches(&solver, &sweep.values, &layout, &mut solution);
     let report = CubeReport {
         settings,
         limits,
@@ -424,6 +461,7 @@ pub fn solve_cube(
         values: sweep.values,
         frames,
         cells,
+        texturing,
         receiving_points,
         offset: solver.offset(),
         vertex_areas: sweep.area,
@@ -571,11 +609,13 @@ fn is_glossy(mesh: &Mesh, surfaces: &[SurfaceData], v: usize) -> bool {
 
 /// The [`memory_estimate`] of this solve, refused above `limits.max_bytes`
 /// before anything of that size is allocated.
+/// `textured_bytes` is what the textured surfaces add
+/// ([`CubeTexturing::bytes`]).
 fn check_memory(
     k: u32,
     mesh: &Mesh,
-    surfaces: &[SurfaceData],
-    glossy_materials: usize,
+    (surfaces, glossy_materials): (&[SurfaceData], usize),
+    textured_bytes: u128,
     settings: &SolverSettings,
     limits: &CubeLimits,
 ) -> Result<u128, CubeError> {
@@ -588,7 +628,7 @@ fn check_memory(
         mesh.patches.len() as u64,
         glossy_materials as u64,
         settings.samples,
-    );
+    ) + textured_bytes;
     if bytes > limits.max_bytes as u128 {
         return Err(CubeError::TooLarge {
             k,
@@ -735,13 +775,17 @@ fn run_sweeps(state: &State<'_>, mesh: &Mesh, limits: &CubeLimits) -> SweepOutco
     let n = mesh.vertices.len();
     let h = state.cells.len();
     let surfaces = state.surfaces;
+    // Emitted radiance; a textured vertex's E/π (its one value when diffuse,
+    // three more after its cube when glossy) starts at 0.
     let mut values: Vec<Vec<f64>> = (0..n)
         .map(|v| {
             let e = surfaces[mesh.vertices[v].surface as usize].emission;
-            if is_glossy(mesh, surfaces, v) {
-                e.to_array().repeat(h)
-            } else {
-                e.to_array().to_vec()
+            let textured = state.texturing.vertex(v as u32).is_some();
+            match (is_glossy(mesh, surfaces, v), textured) {
+                (true, false) => e.to_array().repeat(h),
+                (true, true) => [e.to_array().repeat(h), vec![0.0; 3]].concat(),
+                (false, false) => e.to_array().to_vec(),
+                (false, true) => vec![0.0; 3],
             }
         })
         .collect();
@@ -781,7 +825,21 @@ fn run_sweeps(state: &State<'_>, mesh: &Mesh, limits: &CubeLimits) -> SweepOutco
             for (&v, new) in block.iter().zip(updated) {
                 let old = &values[v as usize];
                 let mut power = 0.0;
-                for (c, (a, b)) in new.iter().zip(old).enumerate() {
+                if let Some(t) = state.texturing.vertex(v) {
+                    // E/π: its change in the weighted norm ([`textured`]),
+                    // its power through the texels' mean around it.
+                    let len = new.len();
+                    let (a, b) = (&new[len - 3..], &old[len - 3..]);
+                    let d = (DVec3::from_slice(a) - DVec3::from_slice(b)).abs();
+                    largest = largest.max(t.scale * d.max_element());
+                    power += PI * t.reflectance.dot(d);
+                }
+                let cells = if state.texturing.vertex(v).is_some() {
+                    new.len() - 3
+                } else {
+                    new.len()
+                };
+                for (c, (a, b)) in new[..cells].iter().zip(old).enumerate() {
                     let d = (a - b).abs();
                     largest = largest.max(d);
                     power += d * if new.len() == 3 {
@@ -796,8 +854,9 @@ fn run_sweeps(state: &State<'_>, mesh: &Mesh, limits: &CubeLimits) -> SweepOutco
         }
         let scale = values
             .iter()
-            .flat_map(|x| x.iter())
-            .fold(0.0f64, |m, &x| m.max(x.abs()));
+            .enumerate()
+            .map(|(v, x)| state.texturing.largest(v as u32, x))
+            .fold(0.0f64, f64::max);
         change = if scale > 0.0 { largest / scale } else { 0.0 };
         if change < limits.tolerance {
             break;
@@ -924,6 +983,8 @@ struct State<'a> {
     receiving: &'a [DVec3],
     /// Per patch: (centre, normal), as its shot saw them.
     sources: &'a [(DVec3, DVec3)],
+    /// The textured patches and vertices ([`textured`]).
+    texturing: &'a CubeTexturing,
 }
 
 impl State<'_> {
@@ -934,9 +995,21 @@ impl State<'_> {
     /// Radiance of source patch `p` toward receiver `v` of `pair`: the
     /// weighted average of its vertices', each glossy one looked up at the
     /// pair's taps, or in its own frame toward `v` (a smooth surface's vertex;
-    /// nothing when `v` is below its shading horizon).
+    /// nothing when `v` is below its shading horizon). A textured patch adds
+    /// ∫ ρ E/π dA / A through its RGB weights; a diffuse one's vertices hold
+    /// only E/π, so its emission is added instead of their values
+    /// ([`textured`]).
     fn source_radiance(&self, values: &[Vec<f64>], pair: &transport::Pair, v: u32) -> DVec3 {
         let mut sum = DVec3::ZERO;
+        if let Some(rgb) = self.texturing.patch(pair.source) {
+            for &(u, w) in rgb {
+                sum += w * textured::irradiance_over_pi(&values[u as usize]);
+            }
+            let surface = &self.surfaces[self.solver.mesh().patches[pair.source as usize].surface as usize];
+            if surface.brdf.is_none() {
+                return sum + surface.emission;
+            }
+        }
         for &(u, w) in &self.weights[pair.source as usize] {
             let x = &values[u as usize];
             if x.len() == 3 {
@@ -967,11 +1040,16 @@ impl State<'_> {
     fn update(&self, v: u32, values: &[Vec<f64>], incoming: &mut Vec<f64>) -> Vec<f64> {
         let s = self.surface_of(v);
         let receiver = &self.receivers[v as usize];
+        let textured = self.texturing.vertex(v).is_some();
         let Some(b) = s.brdf else {
-            // Diffuse: L = Le + Kd Σ_s F(v←s) L_s (the diffuse solvers' equation).
+            // Diffuse: L = Le + Kd Σ_s F(v←s) L_s (the diffuse solvers' equation),
+            // or on a textured surface its E/π, Σ_s F(v←s) L_s.
             let mut gathered = DVec3::ZERO;
             for pair in &receiver.pairs {
                 gathered += self.source_radiance(values, pair, v) * pair.factor;
+            }
+            if textured {
+                return gathered.to_array().to_vec();
             }
             return (s.emission + s.kd * gathered).to_array().to_vec();
         };
@@ -991,8 +1069,13 @@ impl State<'_> {
             }
             start = pair.entries_end as usize;
         }
-        // Emission and the diffuse part are the same in every upper cell.
-        let base = s.emission + s.kd * irradiance / PI;
+        // Emission and the diffuse part are the same in every upper cell; on
+        // a textured surface the diffuse part is its E/π, kept after the cube.
+        let base = if textured {
+            s.emission
+        } else {
+            s.emission + s.kd * irradiance / PI
+        };
         let mut out = base.to_array().repeat(h);
         let matrix = &self.brdfs[b].matrix;
         for (i, e) in incoming.chunks_exact(3).enumerate() {
@@ -1006,23 +1089,39 @@ impl State<'_> {
                 o[2] += f * e.z;
             }
         }
+        if textured {
+            out.extend((irradiance / PI).to_array());
+        }
         out
     }
 
     /// The largest row sum of vertex `v`'s reflection operator (see the module
     /// documentation's convergence paragraph).
+    /// Each source counts with its gain in the weighted norm, and a textured
+    /// receiver's E/π row with its scale c_v ([`textured`]); both are 1
+    /// without textures.
     fn row_sum(&self, v: u32) -> f64 {
         let s = self.surface_of(v);
         let receiver = &self.receivers[v as usize];
-        let total: f64 = receiver.pairs.iter().map(|p| p.factor).sum();
-        let diffuse = s.kd * total;
+        let gain = |p: &transport::Pair| self.texturing.gain(p.source);
+        let total: f64 = receiver.pairs.iter().map(|p| p.factor * gain(p)).sum();
+        let texture = self.texturing.vertex(v);
+        let (diffuse, own) = match texture {
+            Some(t) => (DVec3::ZERO, t.scale * total),
+            None => (s.kd * total, 0.0),
+        };
         let Some(b) = s.brdf else {
-            return diffuse.max_element();
+            return diffuse.max_element().max(own);
         };
         let h = self.cells.len();
         let mut weight = vec![0.0; h];
-        for &(slot, w) in &receiver.entries {
-            weight[slot as usize] += PI * w;
+        let mut start = 0;
+        for pair in &receiver.pairs {
+            let end = pair.entries_end as usize;
+            for &(slot, w) in &receiver.entries[start..end] {
+                weight[slot as usize] += PI * w * gain(pair);
+            }
+            start = end;
         }
         let matrix = &self.brdfs[b].matrix;
         let mut rows = vec![0.0; h];
@@ -1034,7 +1133,7 @@ impl State<'_> {
             }
         }
         let glossy = rows.iter().copied().fold(0.0, f64::max);
-        (diffuse + s.ks * glossy).max_element()
+        (diffuse + s.ks * glossy).max_element().max(own)
     }
 
     /// Immel, Cohen and Greenberg 1986, Fig. 10: emitters' vertices first, then the vertices that gather
@@ -1086,17 +1185,32 @@ impl State<'_> {
     }
 }
 
+/// What [`fill_batches`] writes the values with.
+struct BatchLayout<'a> {
+    /// Per vertex, its cube's frame.
+    frames: &'a [(DVec3, DVec3)],
+    cells: &'a UpperCells,
+    k: u32,
+    texturing: &'a CubeTexturing,
+}
+
 /// Replaces `solution`'s order-0 batch by a diffuse batch (order-0 SH,
 /// c₀₀ = L·√(4π)) and a cube batch of the glossy vertices (D × 3 values, 0
-/// below the surface), each with the display triangles of its vertices.
+/// below the surface), each with the display triangles of its vertices, and
+/// no textures. A textured vertex shows the texels' mean around it times its E/π (the
+/// display `cube_textured.rs` textures where the format allows).
 fn fill_batches(
     solver: &Solver,
     values: &[Vec<f64>],
-    frames: &[(DVec3, DVec3)],
-    cells: &UpperCells,
-    k: u32,
+    layout: &BatchLayout<'_>,
     solution: &mut Solution,
 ) {
+    let BatchLayout {
+        frames,
+        cells,
+        k,
+        texturing,
+    } = *layout;
     let mesh = solver.mesh();
     let d = cube::direction_count(k) as usize;
     let scale = (4.0 * PI).sqrt();
@@ -1130,20 +1244,29 @@ fn fill_batches(
             normal: f(normal),
             tangent: f(tangent),
         };
+        let texture = texturing.vertex(v as u32);
         if x.len() == 3 {
             local[v] = (false, diffuse.vertices.len() as u32);
             diffuse.vertices.push(vertex);
+            let l = match texture {
+                Some(t) => t.emission + t.reflectance * textured::irradiance_over_pi(x),
+                None => DVec3::from_slice(x),
+            };
             diffuse
                 .coefficients
-                .extend(x.iter().map(|&l| (l * scale) as f32));
+                .extend(l.to_array().map(|l| (l * scale) as f32));
         } else {
             local[v] = (true, glossy.vertices.len() as u32);
             glossy.vertices.push(vertex);
+            let reflected = texture.map_or(DVec3::ZERO, |t| {
+                t.reflectance * textured::irradiance_over_pi(x)
+            });
             let start = glossy.coefficients.len();
             glossy.coefficients.resize(start + 3 * d, 0.0);
             for (slot, &cell) in cells.cells.iter().enumerate() {
                 for c in 0..3 {
-                    glossy.coefficients[start + 3 * cell as usize + c] = x[3 * slot + c] as f32;
+                    glossy.coefficients[start + 3 * cell as usize + c] =
+                        (x[3 * slot + c] + reflected[c]) as f32;
                 }
             }
         }
@@ -1157,6 +1280,9 @@ fn fill_batches(
         .into_iter()
         .filter(|b| !b.vertices.is_empty())
         .collect();
+    // No batch here is textured: the progressive solver's textures, if it
+    // wrote any, are unused (`cube_textured.rs` adds those it shows).
+    solution.textures.clear();
 }
 
 #[cfg(test)]
