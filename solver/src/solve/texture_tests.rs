@@ -607,7 +607,9 @@ fn cube_mode_solves_a_uniform_texture_on_glossy_walls_as_its_flat_reflectance() 
     let (textured, warnings) =
         cube_textured::solve_cube_textured(&room(wall), &s, &limits).unwrap();
     assert!(
-        warnings.iter().any(|w| w.contains("cannot texture a cube batch")),
+        warnings
+            .iter()
+            .any(|w| w.contains("cannot texture a cube batch")),
         "{warnings:?}"
     );
     let (flat, _) =
@@ -616,7 +618,12 @@ fn cube_mode_solves_a_uniform_texture_on_glossy_walls_as_its_flat_reflectance() 
         solution
             .batches
             .iter()
-            .find(|b| matches!(b.representation, solution::format::Representation::Cube { .. }))
+            .find(|b| {
+                matches!(
+                    b.representation,
+                    solution::format::Representation::Cube { .. }
+                )
+            })
             .cloned()
             .expect("a cube batch")
     };

@@ -337,9 +337,7 @@ impl CubeResult {
             }
         }
         match texture {
-            Some(t) if local.z > 0.0 => {
-                sum + t.reflectance * textured::irradiance_over_pi(values)
-            }
+            Some(t) if local.z > 0.0 => sum + t.reflectance * textured::irradiance_over_pi(values),
             _ => sum,
         }
     }
@@ -392,7 +390,11 @@ pub fn solve_cube(
     let solver = Solver::new(scene, &base)?;
     let mesh = solver.mesh();
     let (surfaces, glossy_alphas) = surface_materials(scene, mesh)?;
-    let rgb_entries = solver.patch_rgb_weights.iter().map(|w| w.len() as u64).sum();
+    let rgb_entries = solver
+        .patch_rgb_weights
+        .iter()
+        .map(|w| w.len() as u64)
+        .sum();
     let textured_bytes = CubeTexturing::bytes(mesh, rgb_entries);
     let materials = (&surfaces[..], glossy_alphas.len());
     let bytes = check_memory(k, mesh, materials, textured_bytes, settings, limits)?;
@@ -400,7 +402,10 @@ pub fn solve_cube(
     let brdfs = cell_brdfs(&glossy_alphas, settings, &cells, bytes)?;
     let texturing = CubeTexturing::new(
         &solver,
-        &surfaces.iter().map(|s| s.brdf.is_some()).collect::<Vec<_>>(),
+        &surfaces
+            .iter()
+            .map(|s| s.brdf.is_some())
+            .collect::<Vec<_>>(),
         &surfaces.iter().map(|s| s.emission).collect::<Vec<_>>(),
     );
 
@@ -1005,7 +1010,8 @@ impl State<'_> {
             for &(u, w) in rgb {
                 sum += w * textured::irradiance_over_pi(&values[u as usize]);
             }
-            let surface = &self.surfaces[self.solver.mesh().patches[pair.source as usize].surface as usize];
+            let surface =
+                &self.surfaces[self.solver.mesh().patches[pair.source as usize].surface as usize];
             if surface.brdf.is_none() {
                 return sum + surface.emission;
             }
@@ -1290,3 +1296,6 @@ mod tests;
 
 #[cfg(test)]
 mod smooth_tests;
+
+#[cfg(test)]
+mod textured_tests;
