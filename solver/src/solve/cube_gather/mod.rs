@@ -33,6 +33,17 @@
 //!   directions ([`lobe`]; no Legendre truncation). A diffuse receiver gets
 //!   L_v = Le_v + Kd · Σ_s F(v←s) L_s, the diffuse solvers' equation.
 //!
+//! ## Textured surfaces
+//!
+//! A surface with a diffuse texture and UVs stores per vertex its incident
+//! E/π instead of its diffuse radiance, and each of its patches reflects the
+//! integral of ρ(uv) · E/π over its own area through the progressive
+//! solver's RGB gather weights, the texture integrated exactly over each
+//! display triangle's UV triangle at its mip level ([`textured`]; the same
+//! model as the diffuse, SH and Gauss–Seidel solves). The ∞-norm bound
+//! below is then taken in a norm that weights E/π by the reflectance of the
+//! texels beside it. The mesh is fixed, so nothing refines on E.
+//!
 //! ## Smooth surfaces: cubes about the shading normal
 //!
 //! On a smooth surface (`crease_angle`, docs/smooth-surfaces.md) a glossy
@@ -77,7 +88,8 @@
 //!   bound.
 //! * power: each incident beam reflects at most Kd + Ks of its power
 //!   ([`lobe`]'s normalization, in the cube's quadrature), so the power a sweep
-//!   adds shrinks by ρ_max = the largest Kd + Ks, and the power still missing
+//!   adds shrinks by ρ_max = the largest Kd + Ks (on a textured surface, Ks +
+//!   the largest texel reflectance next to a vertex), and the power still missing
 //!   after a sweep that added P is about ρ_max/(1 − ρ_max) · P
 //!   ([`CubeResult::power_bound`], relative to the emitted power; "about"
 //!   because the lookups' and the splats' discretization conserve power only
@@ -899,10 +911,17 @@ impl Bounds {
         } else {
             f64::INFINITY
         };
-        let rho_max = state
-            .surfaces
-            .iter()
-            .map(|s| (s.kd + s.ks).max_element())
+        // The largest reflectance of any beam: Kd + Ks, or on a textured
+        // surface Ks + the largest texel reflectance next to a vertex (its
+        // scale c_v, [`textured`]).
+        let rho_max = (0..n as u32)
+            .map(|v| {
+                let s = state.surface_of(v);
+                match state.texturing.vertex(v) {
+                    Some(t) => t.scale + s.ks.max_element(),
+                    None => (s.kd + s.ks).max_element(),
+                }
+            })
             .fold(0.0, f64::max);
         let power_bound = if rho_max < 1.0 && sweep.emitted > 0.0 {
             rho_max / (1.0 - rho_max) * sweep.added_power / sweep.emitted
