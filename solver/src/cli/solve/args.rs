@@ -245,11 +245,12 @@ pub struct SolveArgs {
             per glossy vertex (k = --cube-resolution), gathered by Gauss-Seidel sweeps in \
             light-propagation order on the fixed patch mesh (no adaptive meshing, \
             checkpoints or --resume); the BRDF is evaluated exactly at each direction, \
-            with no Legendre truncation or ringing. Diffuse textures (map_Kd): sh \
-            integrates them per patch; cube reflects light with Kd times each \
-            texture's mean (warned) and shows diffuse textured surfaces textured, \
-            glossy ones at that mean (docs/textures.md). Only meaningful with --mode \
-            directional."
+            with no Legendre truncation or ringing. Diffuse textures (map_Kd): both \
+            integrate them per patch (each patch reflects its own texels); sh shows \
+            every textured surface textured, cube shows diffuse ones textured and \
+            glossy ones with the texture averaged around each vertex, since a cube \
+            batch cannot be textured (warned; docs/textures.md). Only meaningful with \
+            --mode directional."
     )]
     pub directional: Option<DirectionalRepresentation>,
 
