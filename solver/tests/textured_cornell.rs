@@ -129,7 +129,9 @@ fn textured_cornell_box_matches_the_path_tracer() {
     let truth = path_trace(&textured, spp);
     let summary = summarize(&ours, &truth);
     let plain_solution = render_solution(&solve(&plain));
-    let plain_summary = summarize(&plain_solution, &path_trace(&plain, spp));
+    // One path-traced image per scene, shared by the three solves below.
+    let plain_truth = path_trace(&plain, spp);
+    let plain_summary = summarize(&plain_solution, &plain_truth);
     // The control: the untextured solution against the textured truth, what
     // a solve that ignored the texture would score.
     let ignored = summarize(&plain_solution, &truth);
@@ -176,7 +178,7 @@ fn textured_cornell_box_matches_the_path_tracer() {
     );
     let sh_plain = summarize(
         &render_solution(&solve_with(&plain, &directional)),
-        &path_trace(&plain, spp),
+        &plain_truth,
     );
     let mean = mean_colour(&textured);
     let sh_mean = summarize(&render_solution(&solve_with(&mean, &directional)), &truth);
@@ -203,10 +205,7 @@ fn textured_cornell_box_matches_the_path_tracer() {
     // commit time: textured 0.1164, untextured 0.1125 (the fixed draft
     // mesh's own error; −4.7% mean signed).
     let cube = summarize(&render_solution(&solve_cube(&textured)), &truth);
-    let cube_plain = summarize(
-        &render_solution(&solve_cube(&plain)),
-        &path_trace(&plain, spp),
-    );
+    let cube_plain = summarize(&render_solution(&solve_cube(&plain)), &plain_truth);
     eprintln!(
         "global cubes: textured box MARE {:.4} (mean signed {:+.4}), untextured box {:.4}",
         cube.mare, cube.mean_signed_relative_error, cube_plain.mare
