@@ -187,7 +187,7 @@ fn directional_mode_shoots_each_patchs_texel_mean_and_emits_pi_times_the_integra
     // (its texels' mean), the SH of isotropic radiance (Y₀₀ = 1/√(4π)),
     // higher bands 0; summed, π Σ_p A_p c₀₀ Y₀₀ = π ∫ Le dA within 1e-9
     // relative (exact integration; the state's 40-bit rounding is 1e-12).
-    // A missing sRGB decode would be 18% off, flat Ke 37%. Both a diffuse
+    // A missing sRGB decode would be 24% off, flat Ke 64%. Both a diffuse
     // (L = 0) and a glossy (L > 0) emitter.
     let g = f64::from(crate::texture::srgb_to_linear(128));
     let want = 3.0 * PI * 3.0 * (g + 1.0) / 2.0;
@@ -411,4 +411,30 @@ fn the_uniform_patch_error_shrinks_as_patch_size_squared_and_stays_within_its_bo
             "d {d}: ratio {ratio}"
         );
     }
+}
+
+#[test]
+fn a_glossy_emitter_on_global_cubes_emits_per_patch_and_is_said_to_show_its_mean() {
+    // A glossy screen (Ks 0.3) is a cube batch, which format 2 cannot
+    // texture: it still emits π ∫ Le dA (1e-9, as above), is warned about,
+    // and no batch is textured.
+    let g = f64::from(crate::texture::srgb_to_linear(128));
+    let mut screen = material("screen", 0.0, 3.0);
+    screen.ks = DVec3::splat(0.3);
+    screen.alpha = 0.2;
+    screen.emission_texture = Some(halves(128, 255));
+    let scene = screen_over_floor(screen, 1.0, 2);
+    let limits = super::cube_gather::CubeLimits::default();
+    let (result, warnings) =
+        super::cube_textured::solve_cube_textured(&scene, &cube(), &limits).unwrap();
+    let want = 3.0 * PI * 3.0 * (g + 1.0) / 2.0;
+    let got = result.emitted_power;
+    assert!((got - want).abs() <= 1e-9 * want, "{got} vs {want}");
+    assert_eq!(warnings.len(), 1, "{warnings:?}");
+    assert!(warnings[0].contains("screen") && warnings[0].contains("mean emitted radiance"));
+    assert!(result
+        .solution
+        .batches
+        .iter()
+        .all(|b| b.texturing.is_none()));
 }
