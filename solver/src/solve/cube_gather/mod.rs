@@ -107,6 +107,7 @@
 //! min(4 × samples, H) incoming cells per pair); the solve is refused above
 //! [`CubeLimits::max_bytes`] (default 2 GiB).
 
+mod emission;
 mod lobe;
 mod textured;
 mod transport;
@@ -316,6 +317,9 @@ pub struct CubeResult {
     pub error_bound: f64,
     /// ρ_max/(1 − ρ_max) × (power the last sweep added / emitted power).
     pub power_bound: f64,
+    /// The power the sources emit, W: Σ_p π A_p Σ_rgb Le_p, with an emission
+    /// texture's per-patch mean (π ∫ Le dA; `emission.rs`).
+    pub emitted_power: f64,
     pub converged: bool,
     pub rays: u64,
     pub form_factor_seconds: f64,
@@ -401,7 +405,9 @@ pub fn solve_cube(
     base.adaptive = false;
     let solver = Solver::new(scene, &base)?;
     let mesh = solver.mesh();
-    let (surfaces, glossy_alphas) = surface_materials(scene, mesh)?;
+    let (mut surfaces, glossy_alphas) = surface_materials(scene, mesh)?;
+    // Emission textures: per-patch means on top of the vertices' (`emission.rs`).
+    let emission_offsets = emission::patch_offsets(&solver, &mut surfaces);
     let rgb_entries = solver
         .patch_rgb_weights
         .iter()
@@ -443,6 +449,7 @@ pub fn solve_cube(
             .collect(),
         receiving: &receiving_points,
         sources: &transport.sources,
+        emission_offsets,
         texturing: &texturing,
     };
     let sweep = run_sweeps(&state, mesh, limits);
@@ -487,6 +494,7 @@ pub fn solve_cube(
         gamma: bounds.gamma,
         error_bound: bounds.error_bound,
         power_bound: bounds.power_bound,
+        emitted_power: sweep.emitted,
         converged,
         rays,
         form_factor_seconds,
@@ -822,11 +830,7 @@ fn run_sweeps(state: &State<'_>, mesh: &Mesh, limits: &CubeLimits) -> SweepOutco
         .zip(&state.cells.directions)
         .map(|(&solid, d)| d.z * solid)
         .collect();
-    let emitted: f64 = mesh
-        .patches
-        .iter()
-        .map(|p| PI * p.area * surfaces[p.surface as usize].emission.element_sum())
-        .sum();
+    let emitted = emission::emitted_power(mesh, surfaces, &state.emission_offsets);
     let mut sweeps = 0;
     let mut change = f64::INFINITY;
     let mut added_power = 0.0;
@@ -1007,7 +1011,10 @@ struct State<'a> {
     receiving: &'a [DVec3],
     /// Per patch: (centre, normal), as its shot saw them.
     sources: &'a [(DVec3, DVec3)],
-    /// The textured patches and vertices ([`textured`]).
+    /// Per patch of an emission-textured surface: its mean Le less its
+    /// vertices' ([`emission::patch_offsets`]); empty when none emits a texture.
+    emission_offsets: Vec<DVec3>,
+    /// The (diffuse-)textured patches and vertices ([`textured`]).
     texturing: &'a CubeTexturing,
 }
 
@@ -1019,12 +1026,14 @@ impl State<'_> {
     /// Radiance of source patch `p` toward receiver `v` of `pair`: the
     /// weighted average of its vertices', each glossy one looked up at the
     /// pair's taps, or in its own frame toward `v` (a smooth surface's vertex;
-    /// nothing when `v` is below its shading horizon). A textured patch adds
-    /// ∫ ρ E/π dA / A through its RGB weights; a diffuse one's vertices hold
-    /// only E/π, so its emission is added instead of their values
-    /// ([`textured`]).
+    /// nothing when `v` is below its shading horizon), plus its emission
+    /// offset on an emission-textured surface (`emission.rs`). A textured
+    /// patch adds ∫ ρ E/π dA / A through its RGB weights; a diffuse one's
+    /// vertices hold only E/π, so its emission is added instead of their
+    /// values ([`textured`]).
     fn source_radiance(&self, values: &[Vec<f64>], pair: &transport::Pair, v: u32) -> DVec3 {
         let mut sum = DVec3::ZERO;
+        let mut vertices = self.weights[pair.source as usize].as_slice();
         if let Some(rgb) = self.texturing.patch(pair.source) {
             for &(u, w) in rgb {
                 sum += w * textured::irradiance_over_pi(&values[u as usize]);
@@ -1032,10 +1041,11 @@ impl State<'_> {
             let surface =
                 &self.surfaces[self.solver.mesh().patches[pair.source as usize].surface as usize];
             if surface.brdf.is_none() {
-                return sum + surface.emission;
+                sum += surface.emission;
+                vertices = &[];
             }
         }
-        for &(u, w) in &self.weights[pair.source as usize] {
+        for &(u, w) in vertices {
             let x = &values[u as usize];
             if x.len() == 3 {
                 sum += DVec3::from_slice(x) * w;
@@ -1057,6 +1067,9 @@ impl State<'_> {
                     }
                 }
             }
+        }
+        if let Some(offset) = self.emission_offsets.get(pair.source as usize) {
+            sum += *offset;
         }
         sum
     }
