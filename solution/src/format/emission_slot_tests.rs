@@ -139,10 +139,7 @@ fn a_bad_emission_slot_is_refused_with_a_clear_error() {
 
 fn slot_factor(solution: &mut Solution, factor: [f32; 3]) {
     let t = solution.batches[3].texturing.as_mut().unwrap();
-    t.emission = Some(TextureSlot {
-        texture: 0,
-        factor,
-    });
+    t.emission = Some(TextureSlot { texture: 0, factor });
 }
 
 #[test]

@@ -19,9 +19,9 @@ mod validate;
 mod write;
 
 #[cfg(test)]
-mod tests;
-#[cfg(test)]
 mod emission_slot_tests;
+#[cfg(test)]
+mod tests;
 #[cfg(test)]
 mod texture_tests;
 

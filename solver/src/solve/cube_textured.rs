@@ -155,6 +155,7 @@ fn texture_diffuse_batch(
                 batches.push(empty(Some(Texturing {
                     texture,
                     factor: t.kd.as_vec3().to_array(),
+                    emission: None,
                     vertices: Vec::new(),
                 })));
                 materials.len()
