@@ -19,11 +19,18 @@
 //!   ρ(uv) ⊙ E/π as in the other modes. A glossy textured surface (Ks > 0)
 //!   is a cube batch, which cannot be textured: it stays at its mean
 //!   reflectance, with a warning.
+//! * **Emission textures** are honoured in the transport: each patch of the
+//!   emitter emits its texel-integrated mean Le (`cube_gather/emission.rs`).
+//!   A diffuse emitter's vertices are shown as the progressive solves show
+//!   them (docs/solution-format.md, "Emission textures"): a textured order-0
+//!   batch with the emission texture, factor Ke, "E/π" 1 and SH holding what
+//!   it reflects, L − m̄ with m̄ the surface's mean Le. A glossy emitter is a
+//!   cube batch at its mean Le, with a warning.
 
 use super::cube_gather::{solve_cube, CubeError, CubeLimits, CubeResult};
 use super::textured::SurfaceTexturing;
 use crate::mesh::{Mesh, Sizing};
-use crate::scene::Scene;
+use crate::scene::{Material, Scene};
 use crate::settings::SolverSettings;
 use glam::DVec3;
 use solution::format::{Batch, TexturedVertex, Texturing};
@@ -37,16 +44,9 @@ pub fn solve_cube_textured(
     settings: &SolverSettings,
     limits: &CubeLimits,
 ) -> Result<(CubeResult, Vec<String>), CubeError> {
-    let textured_materials: Vec<usize> = (0..scene.materials.len())
-        .filter(|&m| {
-            scene.materials[m].diffuse_texture.is_some()
-                && scene
-                    .polygons
-                    .iter()
-                    .any(|p| p.material == m && p.uv_map.is_some())
-        })
-        .collect();
-    if textured_materials.is_empty() {
+    let textured_materials = materials_with_uvs(scene, |m| m.diffuse_texture.is_some());
+    let emitters = materials_with_uvs(scene, |m| m.emission_texture.is_some());
+    if textured_materials.is_empty() && emitters.is_empty() {
         return Ok((solve_cube(scene, settings, limits)?, Vec::new()));
     }
     let mut mean_scene = scene.clone();
@@ -72,17 +72,48 @@ pub fn solve_cube_textured(
             glossy.join(", ")
         ));
     }
-    warnings.push(
-        "global cubes: textured surfaces reflect light with Kd times their texture's mean \
-         (their display is textured); the progressive solves integrate the texture per patch"
-            .to_owned(),
-    );
+    if !textured_materials.is_empty() {
+        warnings.push(
+            "global cubes: textured surfaces reflect light with Kd times their texture's mean \
+             (their display is textured); the progressive solves integrate the texture per patch"
+                .to_owned(),
+        );
+    }
+    let glossy_emitters: Vec<&str> = emitters
+        .iter()
+        .map(|&m| &scene.materials[m])
+        .filter(|m| m.is_glossy())
+        .map(|m| m.name.as_str())
+        .collect();
+    if !glossy_emitters.is_empty() {
+        warnings.push(format!(
+            "global cubes: glossy material(s) {} emit their emission texture per patch but are \
+             shown at their mean emitted radiance (a cube batch cannot be textured); \
+             `--directional sh` shows the texture",
+            glossy_emitters.join(", ")
+        ));
+    }
     texture_diffuse_batch(scene, settings, &mean_scene, &mut result);
     Ok((result, warnings))
 }
 
-/// Moves the diffuse textured vertices of `result`'s order-0 batch into one
-/// textured batch per material (see the module notes).
+/// The materials for which `has` holds (a diffuse or an emission texture)
+/// that some polygon with UVs uses (the surfaces [`SurfaceTexturing::new`]
+/// gives a texture).
+fn materials_with_uvs(scene: &Scene, has: impl Fn(&Material) -> bool) -> Vec<usize> {
+    (0..scene.materials.len())
+        .filter(|&m| {
+            has(&scene.materials[m])
+                && scene
+                    .polygons
+                    .iter()
+                    .any(|p| p.material == m && p.uv_map.is_some())
+        })
+        .collect()
+}
+
+/// Moves the diffuse textured and emission-textured vertices of `result`'s
+/// order-0 batch into one textured batch per material (see the module notes).
 fn texture_diffuse_batch(
     scene: &Scene,
     settings: &SolverSettings,
@@ -100,6 +131,14 @@ fn texture_diffuse_batch(
         return;
     }
     let texturing = SurfaceTexturing::new(scene, &mesh, offset);
+    // Per surface the emission its vertices hold: an emission texture's
+    // mean Le m̄ as in the cube gather (`cube_gather/emission.rs`), else Ke.
+    let mut surface_emission: Vec<DVec3> = mesh
+        .surfaces
+        .iter()
+        .map(|s| scene.materials[s.material].emission)
+        .collect();
+    super::textured::patch_emission(&texturing, &mesh, &mut surface_emission);
     // Per mesh vertex its one value when diffuse (in the order-0 batch).
     let diffuse: Vec<Option<DVec3>> = mesh
         .vertices
@@ -119,6 +158,10 @@ fn texture_diffuse_batch(
         return;
     };
     let whole = solution.batches.remove(diffuse_at);
+    // The cube's batches replaced the base solve's, so no batch uses the
+    // textures that solve listed (an emitter's): the list is rebuilt here,
+    // in the order the batches below index it.
+    solution.textures.clear();
     let empty = |texturing: Option<Texturing>| Batch {
         vertices: Vec::new(),
         coefficients: Vec::new(),
@@ -137,7 +180,7 @@ fn texture_diffuse_batch(
         .filter_map(|(v, l)| l.map(|l| (v, l)));
     for (o, (v, radiance)) in diffuse_vertices.enumerate() {
         let mv = &mesh.vertices[v];
-        let Some(t) = texturing.get(mv.surface) else {
+        let Some(t) = texturing.shown(mv.surface) else {
             let b = &mut batches[0];
             slot.push((0, b.vertices.len() as u32));
             b.vertices.push(whole.vertices[o]);
@@ -161,17 +204,23 @@ fn texture_diffuse_batch(
                 materials.len()
             }
         };
-        let emission = scene.materials[material].emission;
-        let mean = mean_scene.materials[material].kd;
-        // L = Le + (Kd ⊙ mean) ⊙ E/π in the cube gather.
-        let received = (radiance - emission).max(DVec3::ZERO);
-        let e = DVec3::select(mean.cmpgt(DVec3::ZERO), received / mean, DVec3::ZERO);
+        let emission = surface_emission[mv.surface as usize];
+        let (coefficient, e) = if texturing.get(mv.surface).is_some() {
+            let mean = mean_scene.materials[material].kd;
+            // L = Le + (Kd ⊙ mean) ⊙ E/π in the cube gather.
+            let received = (radiance - emission).max(DVec3::ZERO);
+            let e = DVec3::select(mean.cmpgt(DVec3::ZERO), received / mean, DVec3::ZERO);
+            (emission, e)
+        } else {
+            // An emitter: the texture shows Le(uv), the SH what it reflects.
+            ((radiance - emission).max(DVec3::ZERO), DVec3::ONE)
+        };
         let uv = texturing.uv(t, mv.position).as_vec2().to_array();
         let b = &mut batches[g];
         slot.push((g, b.vertices.len() as u32));
         b.vertices.push(whole.vertices[o]);
         b.coefficients
-            .extend((emission * scale).as_vec3().to_array());
+            .extend((coefficient * scale).as_vec3().to_array());
         if let Some(tb) = &mut b.texturing {
             tb.vertices.push(TexturedVertex {
                 uv,

@@ -213,12 +213,20 @@ pub fn diffuse_mode_warning(scene: &Scene, mesh: &Mesh) -> Option<String> {
 
 impl Directional {
     /// Chooses each material's order, builds its lobe, and sets vertex radiance
-    /// and patch unshot to the emission (c₀₀ = Le · √(4π)). Returns the state
-    /// and its warnings (orders capped at `max_sh_order`).
+    /// and patch unshot to the emission (c₀₀ = Le · √(4π), the SH of the
+    /// isotropic radiance Le). `emission` is per mesh surface what its
+    /// vertices start with and `patch_emission` per patch what it shoots,
+    /// as the diffuse solver sets them up ([`Solver::new`]): the material's
+    /// Ke, or on an emission-textured surface its mean Le and each patch's
+    /// texel-integrated mean Le (`solve/textured.rs`), so the emitted power
+    /// is π ∫ Le dA in both modes. Returns the state and its warnings (orders
+    /// capped at `max_sh_order`).
     pub fn new(
         scene: &Scene,
         settings: &SolverSettings,
         mesh: &Mesh,
+        emission: &[DVec3],
+        patch_emission: &[DVec3],
     ) -> Result<(Directional, Vec<String>), SolveError> {
         let mut warnings = Vec::new();
         let mut material_lobe: Vec<Option<Arc<GlossyLobe>>> = Vec::new();
@@ -332,14 +340,13 @@ impl Directional {
         d.patch_unshot = vec![0.0; at];
         let scale = (4.0 * PI).sqrt();
         for (v, mv) in mesh.vertices.iter().enumerate() {
-            let e = scene.materials[mesh.surfaces[mv.surface as usize].material].emission;
+            let e = emission[mv.surface as usize];
             let o = d.vertex_offset[v];
             // The state keeps 40 mantissa bits from the start
             // (`checkpoint/precision.rs`).
             d.radiance[o..o + 3].copy_from_slice(&(e * scale).to_array().map(round_to_kept));
         }
-        for (p, mp) in mesh.patches.iter().enumerate() {
-            let e = scene.materials[mesh.surfaces[mp.surface as usize].material].emission;
+        for (p, &e) in patch_emission.iter().enumerate() {
             let o = d.patch_offset[p];
             d.patch_unshot[o..o + 3].copy_from_slice(&(e * scale).to_array().map(round_to_kept));
         }
@@ -635,7 +642,15 @@ impl Solver {
                 .extend(diffuse_mode_warning(scene, &self.mesh));
             return Ok(());
         }
-        let (d, warnings) = Directional::new(scene, &self.settings, &self.mesh)?;
+        // Before any shot the diffuse fields hold the emission: per vertex its
+        // surface's, per patch what it shoots.
+        let (d, warnings) = Directional::new(
+            scene,
+            &self.settings,
+            &self.mesh,
+            &self.emission,
+            &self.patch_unshot,
+        )?;
         self.warnings.extend(warnings);
         self.directional = Some(Box::new(d));
         Ok(())
@@ -968,8 +983,9 @@ impl Solver {
         let mut batches: BTreeMap<u32, Batch> = BTreeMap::new();
         let mut local = vec![u32::MAX; self.mesh.vertices.len()];
         for (v, mv) in self.mesh.vertices.iter().enumerate() {
-            // Textured surfaces have batches of their own (below).
-            if d.textured[mv.surface as usize] {
+            // Textured surfaces (diffuse or emission textures) have batches
+            // of their own (below).
+            if self.directional_shown(d, mv.surface as usize).is_some() {
                 continue;
             }
             let order = d.surface_order[mv.surface as usize];
@@ -1001,7 +1017,7 @@ impl Solver {
         }
         for t in triangles {
             let surface = self.mesh.vertices[t[0] as usize].surface as usize;
-            if d.textured[surface] {
+            if self.directional_shown(d, surface).is_some() {
                 continue;
             }
             let order = d.surface_order[surface];

@@ -1,5 +1,7 @@
-//! Emission textures in the diffuse solve (`textured.rs`): each patch of a
-//! `map_Ke` emitter shoots its mean Le, the texture's exact integral over it.
+//! Emission textures (`textured.rs`): each patch of a `map_Ke` emitter
+//! shoots its mean Le, the texture's exact integral over it, in the diffuse
+//! solve, in directional (SH) mode (`directional/textured.rs`) and in the
+//! global-cube method (`cube_gather/emission.rs`, `cube_textured.rs`).
 
 use super::tests::{material, scene_of};
 use super::*;
@@ -119,10 +121,6 @@ fn a_half_grey_half_white_emitter_emits_pi_times_the_integral_of_its_radiance() 
 
 #[test]
 fn an_emitters_display_carries_le_of_uv_and_its_reflected_light_apart() {
-    // The emitter's textured batch: texture = the emission texture, factor
-    // Ke, "E/π" 1 at every vertex, so a renderer shows Ke ⊙ texture(uv);
-    // its coefficients hold only reflected light. Here the emitter faces
-    // the floor, whose light comes back to it: positive, and far below Le.
     let mut screen = material("screen", 0.5, 3.0);
     screen.emission_texture = Some(halves(128, 255));
     let scene = screen_over_floor(screen, 1.0, 2);
@@ -130,7 +128,16 @@ fn an_emitters_display_carries_le_of_uv_and_its_reflected_light_apart() {
     for _ in 0..12 {
         solver.step();
     }
-    let solution = solver.to_solution(false);
+    assert_emitter_display(&solver.to_solution(false));
+}
+
+/// Checks the display of [`screen_over_floor`]'s emitter (Ke 3, 2 × 2
+/// patches, Kd 0.5, Ks 0) in `solution`. The emitter's textured batch:
+/// texture = the emission texture, factor Ke, "E/π" 1 at every vertex, so a
+/// renderer shows Ke ⊙ texture(uv); its coefficients (order 0) hold only
+/// reflected light. Here the emitter faces the floor, whose light comes back
+/// to it: positive, and far below Le.
+fn assert_emitter_display(solution: &solution::format::Solution) {
     let textured: Vec<&solution::format::Batch> = solution
         .batches
         .iter()
@@ -155,6 +162,148 @@ fn an_emitters_display_carries_le_of_uv_and_its_reflected_light_apart() {
     assert!(mean > 0.0 && mean < 0.5, "{mean}");
     // The untextured batch (the floor) is unchanged in kind.
     assert!(solution.batches.iter().any(|b| b.texturing.is_none()));
+}
+
+/// Settings for the directional (SH) mode, else as [`settings`].
+fn directional() -> SolverSettings {
+    let mut s = settings();
+    s.mode = SolveMode::Directional;
+    s
+}
+
+/// Settings for the global-cube method at k = 2 (the screen and floor are
+/// diffuse, so no cube is stored and k only sizes the memory estimate).
+fn cube() -> SolverSettings {
+    let mut s = directional();
+    s.directional = crate::settings::DirectionalRepresentation::Cube;
+    s.cube_resolution = 2;
+    s
+}
+
+#[test]
+fn directional_mode_shoots_each_patchs_texel_mean_and_emits_pi_times_the_integral() {
+    // As the diffuse test above, in SH: Ke 3 × (grey 128 | white), 3 × 3
+    // patches. Each patch's unshot SH must start at c₀₀ = √(4π) · Ke ·
+    // (its texels' mean), the SH of isotropic radiance (Y₀₀ = 1/√(4π)),
+    // higher bands 0; summed, π Σ_p A_p c₀₀ Y₀₀ = π ∫ Le dA within 1e-9
+    // relative (exact integration; the state's 40-bit rounding is 1e-12).
+    // A missing sRGB decode would be 24% off, flat Ke 64%. Both a diffuse
+    // (L = 0) and a glossy (L > 0) emitter.
+    let g = f64::from(crate::texture::srgb_to_linear(128));
+    let want = 3.0 * PI * 3.0 * (g + 1.0) / 2.0;
+    let scale = (4.0 * PI).sqrt();
+    for ks in [0.0, 0.3] {
+        let mut screen = material("screen", 0.0, 3.0);
+        screen.ks = DVec3::splat(ks);
+        screen.alpha = 0.2;
+        screen.emission_texture = Some(halves(128, 255));
+        let scene = screen_over_floor(screen, 1.0, 3);
+        let solver = Solver::new(&scene, &directional()).unwrap();
+        assert!(
+            !solver.warnings().iter().any(|w| w.contains("emission")),
+            "{:?}",
+            solver.warnings()
+        );
+        let got = solver.progress().emitted_power;
+        assert!(
+            (got - want).abs() <= 1e-9 * want,
+            "Ks {ks}: {got} vs {want}"
+        );
+        let mut from_sh = 0.0;
+        for (p, patch) in solver.mesh.patches.iter().enumerate() {
+            if patch.surface != 0 {
+                continue;
+            }
+            let sh = solver.directional_patch_unshot(p);
+            assert_eq!(sh.len() > 3, ks > 0.0, "the glossy screen has L > 0");
+            let centre = patch.polygon().iter().sum::<DVec3>() / patch.polygon().len() as f64;
+            let column = ((centre.x + 0.5) * 3.0).floor() as usize;
+            let mean = [g, (g + 1.0) / 2.0, 1.0][column];
+            for (k, &c) in sh.iter().enumerate() {
+                let expected = if k < 3 { scale * 3.0 * mean } else { 0.0 };
+                assert!((c - expected).abs() <= 1e-11 * scale * 3.0, "{k}: {c}");
+            }
+            from_sh += PI * patch.area * (sh[0] + sh[1] + sh[2]) / scale;
+        }
+        assert!((from_sh - want).abs() <= 1e-9 * want, "{from_sh} vs {want}");
+    }
+}
+
+#[test]
+fn an_emitters_display_in_directional_mode_carries_le_of_uv_and_its_reflected_light() {
+    // The diffuse mode's batch convention, in SH mode (order 0 here: Ks 0).
+    let mut screen = material("screen", 0.5, 3.0);
+    screen.emission_texture = Some(halves(128, 255));
+    let scene = screen_over_floor(screen, 1.0, 2);
+    let mut solver = Solver::new(&scene, &directional()).unwrap();
+    for _ in 0..12 {
+        solver.step();
+    }
+    assert_emitter_display(&solver.to_solution(false));
+}
+
+#[test]
+fn the_global_cube_emits_each_patchs_texel_mean() {
+    // Ke 3 × (grey 128 | white) on 2 × 2 patches, Kd 0 (it reflects
+    // nothing), over a Kd 0.5 floor, on global cubes. The emitted power must
+    // be π ∫ Le dA (1e-9 relative, as above). And the transport must use it:
+    // nothing is between the screen and the floor and the screen reflects
+    // nothing, so each floor vertex's radiance is 0.5 · Σ_p F_p m_p with F_p
+    // the exact point-to-patch factor at its receiving point and m_p the
+    // patch's mean. The patches' edges lie on the texture's edge, so that is
+    // 0.5 · E/π of the two halves (grey and white) computed exactly
+    // ([`irradiance`]), to rounding: 1e-9 relative is asserted. The flat Ke,
+    // or the surface's mean Le on every patch, misses it by far more (the
+    // halves differ 4.6×).
+    let g = f64::from(crate::texture::srgb_to_linear(128));
+    let mut screen = material("screen", 0.0, 3.0);
+    screen.emission_texture = Some(halves(128, 255));
+    let scene = screen_over_floor(screen, 1.0, 2);
+    let limits = super::cube_gather::CubeLimits::default();
+    let (result, warnings) =
+        super::cube_textured::solve_cube_textured(&scene, &cube(), &limits).unwrap();
+    assert!(warnings.is_empty(), "{warnings:?}");
+    let want = 3.0 * PI * 3.0 * (g + 1.0) / 2.0;
+    let got = result.emitted_power;
+    assert!((got - want).abs() <= 1e-9 * want, "{got} vs {want}");
+    let half = |x0: f64| {
+        let c = DVec3::new(x0, 1.0, -0.5);
+        vec![
+            c,
+            c + DVec3::X * 0.5,
+            c + DVec3::new(0.5, 0.0, 1.0),
+            c + DVec3::Z,
+        ]
+    };
+    let regions = [(half(-0.5), 3.0 * g), (half(0.0), 3.0)];
+    let mut floor = 0;
+    for v in 0..result.vertex_count() {
+        let x = result.receiving_points[v] + result.offset;
+        if x.y > 0.5 {
+            continue;
+        }
+        floor += 1;
+        let truth = 0.5 * irradiance(x, &regions) / PI;
+        let ours = result.radiance_toward(v as u32, DVec3::Y);
+        assert!(
+            (ours - DVec3::splat(truth)).abs().max_element() <= 1e-9 * truth,
+            "{x}: {ours} vs {truth}"
+        );
+    }
+    assert!(floor >= 4, "{floor} floor vertices");
+}
+
+#[test]
+fn an_emitters_display_on_global_cubes_carries_le_of_uv_and_its_reflected_light() {
+    // The diffuse mode's batch convention, as a textured order-0 batch.
+    let mut screen = material("screen", 0.5, 3.0);
+    screen.emission_texture = Some(halves(128, 255));
+    let scene = screen_over_floor(screen, 1.0, 2);
+    let limits = super::cube_gather::CubeLimits::default();
+    let (result, warnings) =
+        super::cube_textured::solve_cube_textured(&scene, &cube(), &limits).unwrap();
+    assert!(warnings.is_empty(), "{warnings:?}");
+    assert_emitter_display(&result.solution);
 }
 
 /// Irradiance at `x` (normal +y) from `screen` regions of uniform radiance:
@@ -260,6 +409,78 @@ fn the_uniform_patch_error_shrinks_as_patch_size_squared_and_stays_within_its_bo
         assert!(
             ratio <= 1.5 * (9.0f64 / 17.0).powi(2),
             "d {d}: ratio {ratio}"
+        );
+    }
+}
+
+#[test]
+fn a_glossy_emitter_on_global_cubes_emits_per_patch_and_is_said_to_show_its_mean() {
+    // A glossy screen (Ks 0.3) is a cube batch, which format 2 cannot
+    // texture: it still emits π ∫ Le dA (1e-9, as above), is warned about,
+    // and no batch is textured.
+    let g = f64::from(crate::texture::srgb_to_linear(128));
+    let mut screen = material("screen", 0.0, 3.0);
+    screen.ks = DVec3::splat(0.3);
+    screen.alpha = 0.2;
+    screen.emission_texture = Some(halves(128, 255));
+    let scene = screen_over_floor(screen, 1.0, 2);
+    let limits = super::cube_gather::CubeLimits::default();
+    let (result, warnings) =
+        super::cube_textured::solve_cube_textured(&scene, &cube(), &limits).unwrap();
+    let want = 3.0 * PI * 3.0 * (g + 1.0) / 2.0;
+    let got = result.emitted_power;
+    assert!((got - want).abs() <= 1e-9 * want, "{got} vs {want}");
+    assert_eq!(warnings.len(), 1, "{warnings:?}");
+    assert!(warnings[0].contains("screen") && warnings[0].contains("mean emitted radiance"));
+    assert!(result
+        .solution
+        .batches
+        .iter()
+        .all(|b| b.texturing.is_none()));
+}
+
+#[test]
+fn a_directional_solve_with_an_emission_texture_resumes_bit_for_bit() {
+    // A consistency check (the same solve twice): the emitter's per-patch
+    // unshot SH start from its texels' means, which a resume rebuilds from
+    // the scene before restoring the checkpoint's state. Checkpointed after
+    // 3 shots and resumed, a glossy textured emitter over a floor with
+    // adaptive meshing must hold the same bits after 6 as one never stopped.
+    let mut screen = material("screen", 0.2, 3.0);
+    screen.ks = DVec3::splat(0.3);
+    screen.alpha = 0.2;
+    screen.emission_texture = Some(halves(128, 255));
+    let scene = screen_over_floor(screen, 1.0, 3);
+    let mut s = directional();
+    s.adaptive = true;
+    let run = |solver: &mut Solver, shots: usize| {
+        for _ in 0..shots {
+            solver.step();
+        }
+    };
+    let mut straight = Solver::new(&scene, &s).unwrap();
+    run(&mut straight, 6);
+    let mut first = Solver::new(&scene, &s).unwrap();
+    run(&mut first, 3);
+    let mut resumed = Solver::resume(
+        &scene,
+        &s,
+        super::checkpoint::Checkpoint::round_trip(&first),
+    )
+    .unwrap();
+    run(&mut resumed, 3);
+    assert_eq!(straight.mesh.vertices.len(), resumed.mesh.vertices.len());
+    let bits = |x: &[f64]| x.iter().map(|c| c.to_bits()).collect::<Vec<_>>();
+    for v in 0..straight.mesh.vertices.len() {
+        assert_eq!(
+            bits(&straight.directional_vertex(v).1),
+            bits(&resumed.directional_vertex(v).1)
+        );
+    }
+    for p in 0..straight.mesh.patches.len() {
+        assert_eq!(
+            bits(&straight.directional_patch_unshot(p)),
+            bits(&resumed.directional_patch_unshot(p))
         );
     }
 }

@@ -302,22 +302,9 @@ impl Solver {
                 None => scene.materials[s.material].kd,
             })
             .collect();
-        // Diffuse textures are modelled in both modes (diffuse:
-        // `textured.rs`; directional: `directional/textured.rs`); emission
-        // textures in the diffuse mode only.
-        let mut set_up_warnings = Vec::new();
-        let diffuse = settings.mode == SolveMode::Diffuse;
-        if !diffuse && !texturing.emissive.is_empty() {
-            set_up_warnings.push(
-                "emission textures are modelled by the diffuse mode only; this directional solve \
-                 uses each textured emitter's flat emission (Ke)"
-                    .to_owned(),
-            );
-        }
-        let mut texturing = texturing;
-        if !diffuse {
-            texturing.emissive = Vec::new();
-        }
+        // Diffuse and emission textures are modelled in both modes (diffuse:
+        // `textured.rs`; directional: `directional/textured.rs`, whose SH
+        // start from the same per-surface and per-patch emission below).
         let kd: Vec<DVec3> = (0..mesh.surfaces.len())
             .map(|s| match texturing.get(s as u32) {
                 Some(_) => DVec3::ONE,
@@ -410,7 +397,7 @@ impl Solver {
             radiance_level: 0.0,
             timings: Timings::default(),
             directional: None,
-            warnings: set_up_warnings,
+            warnings: Vec::new(),
             pending_warnings: Vec::new(),
             peak_estimate: 0,
             refinement_capped: false,

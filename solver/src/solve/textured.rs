@@ -26,7 +26,10 @@
 //! integration divided by its area ([`SurfaceTexturing::emitted_radiance`]),
 //! uniformly, so the total emitted power is π ∫ Le dA exactly. The surface
 //! reflects with its flat Kd, untextured; its output vertices carry the
-//! texture for display (`output_textured.rs`). Diffuse mode only.
+//! texture for display (`output_textured.rs`). Directional mode starts its
+//! SH from the same per-patch means (`directional.rs`, `Directional::new`),
+//! and the global-cube method adds each patch's mean to its source radiance
+//! (`cube_gather`, `cube_emission.rs`).
 //!
 //! Directional mode keeps the same E/π beside its SH
 //! (`directional/textured.rs`), the Gauss–Seidel method gathers it per patch

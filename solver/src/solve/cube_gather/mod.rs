@@ -95,6 +95,7 @@
 //! min(4 × samples, H) incoming cells per pair); the solve is refused above
 //! [`CubeLimits::max_bytes`] (default 2 GiB).
 
+mod emission;
 mod lobe;
 mod transport;
 
@@ -300,6 +301,9 @@ pub struct CubeResult {
     pub error_bound: f64,
     /// ρ_max/(1 − ρ_max) × (power the last sweep added / emitted power).
     pub power_bound: f64,
+    /// The power the sources emit, W: Σ_p π A_p Σ_rgb Le_p, with an emission
+    /// texture's per-patch mean (π ∫ Le dA; `emission.rs`).
+    pub emitted_power: f64,
     pub converged: bool,
     pub rays: u64,
     pub form_factor_seconds: f64,
@@ -369,7 +373,9 @@ pub fn solve_cube(
     base.adaptive = false;
     let solver = Solver::new(scene, &base)?;
     let mesh = solver.mesh();
-    let (surfaces, glossy_alphas) = surface_materials(scene, mesh)?;
+    let (mut surfaces, glossy_alphas) = surface_materials(scene, mesh)?;
+    // Emission textures: per-patch means on top of the vertices' (`emission.rs`).
+    let emission_offsets = emission::patch_offsets(&solver, &mut surfaces);
     let bytes = check_memory(k, mesh, &surfaces, glossy_alphas.len(), settings, limits)?;
     let cells = UpperCells::new(k);
     let brdfs = cell_brdfs(&glossy_alphas, settings, &cells, bytes)?;
@@ -396,6 +402,7 @@ pub fn solve_cube(
             .collect(),
         receiving: &receiving_points,
         sources: &transport.sources,
+        emission_offsets,
     };
     let sweep = run_sweeps(&state, mesh, limits);
     let bounds = Bounds::new(&state, &sweep);
@@ -432,6 +439,7 @@ pub fn solve_cube(
         gamma: bounds.gamma,
         error_bound: bounds.error_bound,
         power_bound: bounds.power_bound,
+        emitted_power: sweep.emitted,
         converged,
         rays,
         form_factor_seconds,
@@ -761,11 +769,7 @@ fn run_sweeps(state: &State<'_>, mesh: &Mesh, limits: &CubeLimits) -> SweepOutco
         .zip(&state.cells.directions)
         .map(|(&solid, d)| d.z * solid)
         .collect();
-    let emitted: f64 = mesh
-        .patches
-        .iter()
-        .map(|p| PI * p.area * surfaces[p.surface as usize].emission.element_sum())
-        .sum();
+    let emitted = emission::emitted_power(mesh, surfaces, &state.emission_offsets);
     let mut sweeps = 0;
     let mut change = f64::INFINITY;
     let mut added_power = 0.0;
@@ -924,6 +928,9 @@ struct State<'a> {
     receiving: &'a [DVec3],
     /// Per patch: (centre, normal), as its shot saw them.
     sources: &'a [(DVec3, DVec3)],
+    /// Per patch of an emission-textured surface: its mean Le less its
+    /// vertices' ([`emission::patch_offsets`]); empty when none emits a texture.
+    emission_offsets: Vec<DVec3>,
 }
 
 impl State<'_> {
@@ -934,7 +941,8 @@ impl State<'_> {
     /// Radiance of source patch `p` toward receiver `v` of `pair`: the
     /// weighted average of its vertices', each glossy one looked up at the
     /// pair's taps, or in its own frame toward `v` (a smooth surface's vertex;
-    /// nothing when `v` is below its shading horizon).
+    /// nothing when `v` is below its shading horizon), plus its emission
+    /// offset on an emission-textured surface (`emission.rs`).
     fn source_radiance(&self, values: &[Vec<f64>], pair: &transport::Pair, v: u32) -> DVec3 {
         let mut sum = DVec3::ZERO;
         for &(u, w) in &self.weights[pair.source as usize] {
@@ -959,6 +967,9 @@ impl State<'_> {
                     }
                 }
             }
+        }
+        if let Some(offset) = self.emission_offsets.get(pair.source as usize) {
+            sum += *offset;
         }
         sum
     }

@@ -29,11 +29,17 @@
 //!   the coefficients (glossy part, emission), the texture's factor Kd, and
 //!   per vertex its UV and E/π (plus the ambient term, as in diffuse mode).
 //!   Solution format 2 defines this: L = Σ c Y + factor ⊙ ρ(uv) ⊙ E/π.
+//! * **Emission textures** (`map_Ke`, glTF `emissiveTexture`) are the diffuse
+//!   mode's (`solve/textured.rs`): each patch of the emitter starts with its
+//!   texel-integrated mean Le as unshot c₀₀ = Le · √(4π), so the emitted
+//!   power is π ∫ Le dA, and its vertices with the surface's mean Le. Its
+//!   batch has the emission texture, factor Ke and "E/π" 1, and its SH hold
+//!   the radiance less that mean Le: what it reflects, glossy lobe included.
 
 use super::Directional;
 use crate::mesh::Mesh;
 use crate::scene::Scene;
-use crate::solve::textured::SurfaceTexturing;
+use crate::solve::textured::{SurfaceTexturing, Textured};
 use crate::solve::Solver;
 use glam::DVec3;
 use solution::format::{Batch, Representation, ScalarType, Solution, TexturedVertex, Texturing};
@@ -128,6 +134,22 @@ impl Solver {
         sum[2] += c00.z;
     }
 
+    /// The texture of `surface`'s textured batch in directional mode, and
+    /// whether it is an emitter's: a diffuse-textured surface's texture
+    /// (factor Kd, per-vertex E/π), else its emission texture (factor Ke,
+    /// "E/π" 1, SH holding what it reflects: docs/solution-format.md,
+    /// "Emission textures"); `None` for a surface of the untextured batches.
+    pub(super) fn directional_shown(
+        &self,
+        d: &Directional,
+        surface: usize,
+    ) -> Option<(&Textured, bool)> {
+        if d.textured[surface] {
+            return self.texturing.get(surface as u32).map(|t| (t, false));
+        }
+        self.texturing.emissive(surface as u32).map(|t| (t, true))
+    }
+
     /// Appends one textured SH batch per textured material (see the module
     /// notes) to a directional solution whose untextured batches are written,
     /// and the textures they use to its texture list. `ambient` is added to
@@ -138,10 +160,10 @@ impl Solver {
         solution: &mut Solution,
         ambient: DVec3,
     ) {
-        if !d.textured.iter().any(|&t| t) {
+        let mesh = &self.mesh;
+        if (0..mesh.surfaces.len()).all(|s| self.directional_shown(d, s).is_none()) {
             return;
         }
-        let mesh = &self.mesh;
         let triangles = mesh.triangles();
         // E/π per vertex (zero off textured surfaces); hidden vertices show
         // their visible neighbours' light, as in diffuse mode.
@@ -164,11 +186,7 @@ impl Solver {
         let mut local = vec![(usize::MAX, 0u32); mesh.vertices.len()];
         for (v, mv) in mesh.vertices.iter().enumerate() {
             let surface = mv.surface as usize;
-            let Some(t) = self
-                .texturing
-                .get(mv.surface)
-                .filter(|_| d.textured[surface])
-            else {
+            let Some((t, emitter)) = self.directional_shown(d, surface) else {
                 continue;
             };
             let s = &mesh.surfaces[surface];
@@ -207,15 +225,29 @@ impl Solver {
                 normal: f(s.normal),
                 tangent: f(s.tangent),
             });
+            let start = batch.coefficients.len();
             batch.coefficients.extend(
                 coefficients[d.vertex_range(mesh, v)]
                     .iter()
                     .map(|&c| c as f32),
             );
+            let e = if emitter {
+                // An emitter's SH hold what it reflects: its radiance less
+                // the mean Le its vertices started with, plus Kd · ambient as
+                // the untextured batches add; the texture shows Le(uv).
+                let o = d.vertex_offset[v];
+                let scale = (4.0 * PI).sqrt();
+                let c00 = DVec3::from_slice(&coefficients[o..o + 3])
+                    + (self.kd[surface] * ambient - self.emission[surface]) * scale;
+                batch.coefficients[start..start + 3].copy_from_slice(&f(c00.max(DVec3::ZERO)));
+                DVec3::ONE
+            } else {
+                irradiance[v] + ambient
+            };
             if let Some(texturing) = &mut batch.texturing {
                 texturing.vertices.push(TexturedVertex {
                     uv: self.texturing.uv(t, mv.position).as_vec2().to_array(),
-                    irradiance_over_pi: f(irradiance[v] + ambient),
+                    irradiance_over_pi: f(e),
                 });
             }
         }
@@ -244,6 +276,14 @@ impl Solver {
         let slot = &d.radiance[d.vertex_slot(&self.mesh, v)];
         let sh = &d.radiance[d.vertex_range(&self.mesh, v)];
         (d.diffuse_proxy(surface, slot), sh.to_vec())
+    }
+
+    /// Patch `p`'s unshot SH coefficients in directional mode (for the
+    /// emission texture tests).
+    pub(in crate::solve) fn directional_patch_unshot(&self, p: usize) -> Vec<f64> {
+        self.directional.as_deref().map_or(Vec::new(), |d| {
+            d.patch_unshot[d.patch_range(&self.mesh, p)].to_vec()
+        })
     }
 
     /// Whether directional mode models mesh surface `s` as textured.
