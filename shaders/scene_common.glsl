@@ -39,11 +39,16 @@ layout(push_constant) uniform Batch {
     // radiance scale (which keeps half-float colour targets in range).
     float scale;
 #ifdef TEXTURED
-    // Textured batches (32 bytes): the texture factor (MTL Kd) times the
-    // renderer's radiance scale, multiplying the stored E/pi.
+    // Textured batches (44 bytes): the texture factor (MTL Kd) times the
+    // renderer's radiance scale, multiplying the stored E/pi;
     float texture_scale_r;
     float texture_scale_g;
     float texture_scale_b;
+    // and the emission texture's factor (Ke, solution format 3's second slot)
+    // times the radiance scale, zero when the batch has no emission texture.
+    float emission_scale_r;
+    float emission_scale_g;
+    float emission_scale_b;
 #endif
 } batch;
 
@@ -62,6 +67,8 @@ layout(std430, set = 1, binding = 0) readonly buffer Textured { float values[]; 
 layout(location = 1) out vec2 out_st;
 // E/pi times the factor and the radiance scale.
 layout(location = 2) out vec3 out_irradiance;
+// The emission texture's factor times the radiance scale (one per batch).
+layout(location = 3) flat out vec3 out_emission_scale;
 
 void write_textured() {
     uint at = (uint(gl_VertexIndex) - batch.vertex_base) * 5u;
@@ -69,5 +76,7 @@ void write_textured() {
     out_irradiance = vec3(textured.values[at + 2u], textured.values[at + 3u],
                           textured.values[at + 4u])
         * vec3(batch.texture_scale_r, batch.texture_scale_g, batch.texture_scale_b);
+    out_emission_scale =
+        vec3(batch.emission_scale_r, batch.emission_scale_g, batch.emission_scale_b);
 }
 #endif

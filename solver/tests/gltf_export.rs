@@ -269,6 +269,7 @@ fn textured_solution_through_the_cli() {
     let texturing = Texturing {
         texture: 0,
         factor: [1.0, 0.5, 0.25],
+        emission: None,
         vertices: (0..4)
             .map(|k| TexturedVertex {
                 uv: [(k % 2) as f32, (k / 2) as f32 * 0.75],

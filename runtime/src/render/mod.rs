@@ -550,7 +550,7 @@ impl StereoRenderer {
                 .descriptor_count((batches + textured).max(1)),
             vk::DescriptorPoolSize::default()
                 .ty(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
-                .descriptor_count(textured.max(1)),
+                .descriptor_count((2 * textured).max(1)),
             vk::DescriptorPoolSize::default()
                 .ty(vk::DescriptorType::INPUT_ATTACHMENT)
                 .descriptor_count(1),
@@ -599,31 +599,44 @@ impl StereoRenderer {
         let image_info = [vk::DescriptorImageInfo::default()
             .image_view(self.linear.view)
             .image_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)];
-        // Textured batches: their UV + E/π range and their texture.
-        let textured_infos: Vec<
-            Option<([vk::DescriptorBufferInfo; 1], [vk::DescriptorImageInfo; 1])>,
-        > = self
+        // Textured batches: their UV + E/π range, their texture and their
+        // emission texture (the texture again when they have none: its
+        // factor is then zero).
+        type TexturedInfo = (
+            [vk::DescriptorBufferInfo; 1],
+            [vk::DescriptorImageInfo; 1],
+            [vk::DescriptorImageInfo; 1],
+        );
+        let sampled = |view| {
+            [vk::DescriptorImageInfo::default()
+                .sampler(self.scene.textures.sampler)
+                .image_view(view)
+                .image_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)]
+        };
+        let textured_infos: Vec<Option<TexturedInfo>> = self
             .scene
             .draws
             .iter()
             .map(|d| {
                 let t = d.texture.as_ref()?;
                 let view = self.scene.textures.view(t.texture)?;
+                let emission = match t.emission {
+                    Some(e) => self.scene.textures.view(e.texture)?,
+                    None => view,
+                };
                 Some((
                     [vk::DescriptorBufferInfo::default()
                         .buffer(self.scene.textured.raw)
                         .offset(t.offset)
                         .range(t.bytes)],
-                    [vk::DescriptorImageInfo::default()
-                        .sampler(self.scene.textures.sampler)
-                        .image_view(view)
-                        .image_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)],
+                    sampled(view),
+                    sampled(emission),
                 ))
             })
             .collect();
         let mut writes = Vec::new();
         for (set, textured) in self.texture_sets.iter().zip(&textured_infos) {
-            if let (Some(set), Some((buffer, image))) = (set, textured) {
+            if let (Some(set), Some((buffer, image, emission))) = (set, textured) {
                 writes.push(
                     vk::WriteDescriptorSet::default()
                         .dst_set(*set)
@@ -637,6 +650,13 @@ impl StereoRenderer {
                         .dst_binding(1)
                         .descriptor_type(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
                         .image_info(image),
+                );
+                writes.push(
+                    vk::WriteDescriptorSet::default()
+                        .dst_set(*set)
+                        .dst_binding(2)
+                        .descriptor_type(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
+                        .image_info(emission),
                 );
             }
         }
@@ -1134,8 +1154,15 @@ impl StereoRenderer {
                 texture_scale: draw.texture.as_ref().map_or([0.0; 3], |t| {
                     t.factor.map(|f| f * self.scene.radiance_scale)
                 }),
+                emission_scale: draw
+                    .texture
+                    .as_ref()
+                    .and_then(|t| t.emission)
+                    .map_or([0.0; 3], |e| {
+                        e.factor.map(|f| f * self.scene.radiance_scale)
+                    }),
             };
-            // Textured batches bind their second set and push 32 bytes with
+            // Textured batches bind their second set and push 44 bytes with
             // the textured layout; the others exactly what they did before.
             let bytes = constants.bytes();
             let all_sets = [ds, texture_set.unwrap_or_default()];

@@ -47,16 +47,20 @@ pub struct BatchConstants {
     /// Textured batches: the texture factor times the radiance scale (the
     /// shader's `texture_scale_*`; unused by the untextured shaders).
     pub texture_scale: [f32; 3],
+    /// Textured batches: the emission texture's factor (Ke, format 3's second
+    /// slot) times the radiance scale; zero when the batch has none.
+    pub emission_scale: [f32; 3],
 }
 
 impl BatchConstants {
     /// The push-constant range of the untextured pipelines.
     pub const SIZE: u32 = 20;
-    /// The push-constant range of the textured pipeline (`texture_scale` too).
-    pub const TEXTURED_SIZE: u32 = 32;
+    /// The push-constant range of the textured pipeline (`texture_scale` and
+    /// `emission_scale` too).
+    pub const TEXTURED_SIZE: u32 = 44;
 
-    pub fn bytes(&self) -> [u8; 32] {
-        let mut out = [0u8; 32];
+    pub fn bytes(&self) -> [u8; 44] {
+        let mut out = [0u8; 44];
         out[0..4].copy_from_slice(&self.order.to_le_bytes());
         out[4..8].copy_from_slice(&self.vertex_base.to_le_bytes());
         out[8..12].copy_from_slice(&self.coeff_base.to_le_bytes());
@@ -65,6 +69,9 @@ impl BatchConstants {
         for (c, v) in self.texture_scale.iter().enumerate() {
             out[20 + 4 * c..24 + 4 * c].copy_from_slice(&v.to_le_bytes());
         }
+        for (c, v) in self.emission_scale.iter().enumerate() {
+            out[32 + 4 * c..36 + 4 * c].copy_from_slice(&v.to_le_bytes());
+        }
         out
     }
 }
@@ -72,7 +79,7 @@ impl BatchConstants {
 /// Layouts shared by every pass set.
 pub struct Layouts {
     // Newest first.
-    /// Sets 0 (`scene_set`) and 1 (`textured_set`), 32 bytes of constants.
+    /// Sets 0 (`scene_set`) and 1 (`textured_set`), 44 bytes of constants.
     pub textured_pipeline: vk::PipelineLayout,
     pub textured_set: vk::DescriptorSetLayout,
     pub tonemap_pipeline: vk::PipelineLayout,
@@ -97,7 +104,9 @@ impl Layouts {
                 .descriptor_count(1)
                 .stage_flags(vk::ShaderStageFlags::VERTEX),
         ];
-        // Textured batches' second set: their UV + E/π and their texture.
+        // Textured batches' second set: their UV + E/π, their texture and
+        // their emission texture (the first texture again, with a zero
+        // factor, for a batch without format 3's second slot).
         let textured_bindings = [
             vk::DescriptorSetLayoutBinding::default()
                 .binding(0)
@@ -106,6 +115,11 @@ impl Layouts {
                 .stage_flags(vk::ShaderStageFlags::VERTEX),
             vk::DescriptorSetLayoutBinding::default()
                 .binding(1)
+                .descriptor_type(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
+                .descriptor_count(1)
+                .stage_flags(vk::ShaderStageFlags::FRAGMENT),
+            vk::DescriptorSetLayoutBinding::default()
+                .binding(2)
                 .descriptor_type(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
                 .descriptor_count(1)
                 .stage_flags(vk::ShaderStageFlags::FRAGMENT),

@@ -120,13 +120,16 @@ pub struct DrawBatch {
 }
 
 /// How a textured batch (solution format 2) is drawn: `scene_textured.frag`
-/// adds `factor ⊙ ρ(uv) ⊙ E/π` to the SH term.
+/// adds `factor ⊙ ρ(uv) ⊙ E/π` to the SH term, and `Ke ⊙ ρ_e(uv)` when the
+/// batch has format 3's emission slot.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TexturedDraw {
     /// Index into the scene's textures.
     pub texture: u32,
     /// Linear RGB multiplier of the texture (MTL's Kd).
     pub factor: [f32; 3],
+    /// The emission texture and its factor Ke (format 3), if any.
+    pub emission: Option<solution::format::TextureSlot>,
     /// Byte offset and size of the batch's UV + E/π in [`GpuScene::textured`].
     pub offset: u64,
     pub bytes: u64,
@@ -506,6 +509,7 @@ impl Plan {
                     TexturedDraw {
                         texture: t.texture,
                         factor: t.factor,
+                        emission: t.emission,
                         offset,
                         bytes: bytes.max(4),
                     }
@@ -834,6 +838,7 @@ impl GpuScene {
                 texture: batch.texturing.as_ref().map(|t| BatchTexture {
                     texture: t.texture,
                     factor: t.factor,
+                    emission: t.emission,
                 }),
             });
         }
@@ -1179,8 +1184,11 @@ fn check_texturing(
     t: &solution::format::Texturing,
     textures: usize,
 ) -> Result<(), SceneError> {
+    let emission = t.emission.map(|e| e.texture);
     let what = if t.texture as usize >= textures {
         format!("texture {} but the solution has {textures}", t.texture)
+    } else if let Some(e) = emission.filter(|&e| e as usize >= textures) {
+        format!("emission texture {e} but the solution has {textures}")
     } else if t.vertices.len() != batch.vertices.len() {
         format!(
             "{} textured vertices for {} vertices",

@@ -102,6 +102,10 @@ pub fn describe_text(header: &Header, batches: &[BatchInfo]) -> String {
             if let Some(t) = b.texture {
                 writeln!(out, "  texture: {}", t.texture)?;
                 writeln!(out, "  texture_factor: {}", triple(&t.factor))?;
+                if let Some(e) = t.emission {
+                    writeln!(out, "  emission_texture: {}", e.texture)?;
+                    writeln!(out, "  emission_factor: {}", triple(&e.factor))?;
+                }
                 writeln!(
                     out,
                     "  textured_vertex_bytes: {}",
@@ -136,7 +140,11 @@ pub fn batch_json(b: &BatchInfo) -> Value {
         "index_bytes": b.index_bytes(),
         "frame_convention": frame_name(b.frame_convention),
         "basis_convention": basis_name(b.basis_convention),
-        "texture": b.texture.map(|t| json!({ "index": t.texture, "factor": t.factor })),
+        "texture": b.texture.map(|t| json!({
+            "index": t.texture,
+            "factor": t.factor,
+            "emission": t.emission.map(|e| json!({ "index": e.texture, "factor": e.factor })),
+        })),
         "textured_vertex_bytes": b.textured_vertex_bytes(),
     })
 }

@@ -21,7 +21,7 @@ pub enum Problem {
     BadMagic { found: [u8; 8], expected: [u8; 8] },
 
     #[error(
-        "format version {major}.{minor} is not supported: this reader reads major version {known_major} (minor versions up to {known_minor} fully, newer minor versions by skipping what it does not know)"
+        "format version {major}.{minor} is not supported: this reader reads major versions 1 to {known_major} (minor versions up to {known_minor} fully, newer minor versions by skipping what it does not know)"
     )]
     UnsupportedVersion {
         major: u16,

@@ -18,15 +18,23 @@ use super::{Representation, ScalarType, SolveMode};
 /// `type` on DOS.
 pub const MAGIC: [u8; 8] = [0x89, b'R', b'A', b'D', b'\r', b'\n', 0x1A, b'\n'];
 
-/// The newest major version: 2 adds textured batches (a texture index, a factor
-/// and a per-vertex UV + E/π section per batch) and texture sections. Readers
-/// read major versions 1 and 2 and refuse any other. A writer writes version
-/// [`UNTEXTURED_VERSION_MAJOR`].0 when the solution has no textures, so those
-/// files are byte for byte what version-1 writers wrote and version-1 readers
-/// still read them; a file with textures is 2.0, which a version-1 reader
-/// refuses rather than drawing E/π as if it were radiance (the versioning
-/// policy: a field a reader skipped would misdraw, so it is a new major).
-pub const VERSION_MAJOR: u16 = 2;
+/// The newest major version. 2 adds textured batches (a texture index, a factor
+/// and a per-vertex UV + E/π section per batch) and texture sections; 3 adds a
+/// second texture slot per batch (an emission texture index and factor, the
+/// emission map of a surface that also has a diffuse map). Readers read major
+/// versions 1, 2 and 3 and refuse any other. A writer writes the lowest major
+/// version that holds the solution: [`UNTEXTURED_VERSION_MAJOR`].0 when it has
+/// no textures, so those files are byte for byte what version-1 writers wrote
+/// and version-1 readers still read them; [`TEXTURED_VERSION_MAJOR`].0 when no
+/// batch uses the second slot, so those files are what version-2 writers
+/// wrote; 3.0 otherwise. Each step is a major one by the versioning policy: a
+/// reader that skipped the new fields would misdraw (a 1.0 reader would draw
+/// E/π as radiance, a 2.0 reader would draw a textured emitter without its
+/// emission).
+pub const VERSION_MAJOR: u16 = 3;
+/// The major version of files with textures but no second texture slot (the
+/// version-2 layout).
+pub const TEXTURED_VERSION_MAJOR: u16 = 2;
 /// The major version of files without textures (the version-1 layout).
 pub const UNTEXTURED_VERSION_MAJOR: u16 = 1;
 /// The newest minor version this code writes and fully understands. Files with a
@@ -51,6 +59,8 @@ pub const BATCH_ENTRY_LEN: usize = 56;
 /// Size of one batch-table entry in version 2.0 (texture fields appended, the
 /// 1.0 reserved word used for the texture index).
 pub const BATCH_ENTRY_LEN_V2: usize = 72;
+/// Size of one batch-table entry in version 3.0 (the emission slot appended).
+pub const BATCH_ENTRY_LEN_V3: usize = 88;
 /// Size of one stored textured vertex: u, v, E/π RGB as 5 × f32.
 pub const TEXTURED_VERTEX_LEN: usize = 20;
 /// Size of the prefix of a texture section before its encoded image: width,
@@ -59,10 +69,10 @@ pub const TEXTURE_PREFIX_LEN: usize = 16;
 
 /// The batch-entry length a major version defines.
 pub fn batch_entry_len(major: u16) -> usize {
-    if major >= 2 {
-        BATCH_ENTRY_LEN_V2
-    } else {
-        BATCH_ENTRY_LEN
+    match major {
+        0 | 1 => BATCH_ENTRY_LEN,
+        2 => BATCH_ENTRY_LEN_V2,
+        _ => BATCH_ENTRY_LEN_V3,
     }
 }
 /// Size of one section-table entry in version 1.0.
@@ -137,6 +147,12 @@ pub mod batch {
     pub const TEXTURED_VERTICES_SECTION: usize = 56;
     /// Version 2: f32×3, the linear factor of the texture (0 when untextured).
     pub const TEXTURE_FACTOR: usize = 60;
+    /// Version 3: index of the batch's emission texture, the second slot, or
+    /// [`super::NO_TEXTURE`]; only a textured batch may have one.
+    pub const EMISSION_TEXTURE: usize = 72;
+    /// Version 3: f32×3, the linear factor of the emission texture (Ke; 0 when
+    /// the slot is empty).
+    pub const EMISSION_FACTOR: usize = 76;
 }
 
 /// Texture-section prefix field offsets (u32 each), relative to the section's
@@ -445,6 +461,9 @@ mod tests {
         assert_eq!(header::RESERVED + 4, HEADER_LEN);
         assert_eq!(batch::RESERVED + 4, BATCH_ENTRY_LEN);
         assert_eq!(batch::TEXTURE_FACTOR + 12, BATCH_ENTRY_LEN_V2);
+        assert_eq!(batch::EMISSION_TEXTURE, BATCH_ENTRY_LEN_V2);
+        assert_eq!(batch::EMISSION_FACTOR + 12, BATCH_ENTRY_LEN_V3);
+        assert_eq!(BATCH_ENTRY_LEN_V3 % 8, 0);
         assert_eq!(texture::RESERVED + 4, TEXTURE_PREFIX_LEN);
         assert_eq!(BATCH_ENTRY_LEN_V2 % 8, 0);
         assert_eq!(

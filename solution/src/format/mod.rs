@@ -19,6 +19,8 @@ mod validate;
 mod write;
 
 #[cfg(test)]
+mod emission_slot_tests;
+#[cfg(test)]
 mod tests;
 #[cfg(test)]
 mod texture_tests;
@@ -139,22 +141,39 @@ pub struct Batch {
     pub indices: Vec<u32>,
     /// `None`: the coefficients are the vertex's whole outgoing radiance (as in
     /// version 1). `Some`: the batch is textured, and the radiance toward ω is
-    /// `Σ c·Y(ω) + factor ⊙ ρ(uv) ⊙ E/π`, with ρ the texture decoded to linear
-    /// and the coefficients holding only the untextured part (a glossy term,
+    /// `Σ c·Y(ω) + factor ⊙ ρ(uv) ⊙ E/π` (plus `Ke ⊙ ρ_e(uv)` when the
+    /// emission slot is used), with ρ the texture decoded to linear and the
+    /// coefficients holding only the untextured part (a glossy term,
     /// emission; zero for a plain textured diffuse surface).
     pub texturing: Option<Texturing>,
 }
 
 /// How a textured batch is shaded: one texture, a constant factor (the MTL
-/// convention: `Kd` multiplies `map_Kd`) and per vertex a UV and E/π.
+/// convention: `Kd` multiplies `map_Kd`) and per vertex a UV and E/π; and
+/// optionally (format 3) a second texture, the emission map, with its own
+/// factor, sampled at the same UVs.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Texturing {
     /// Index into [`Solution::textures`].
     pub texture: u32,
     /// Linear RGB multiplier of the decoded texture (finite, ≥ 0).
     pub factor: [f32; 3],
+    /// The second slot: an emission texture added as `factor ⊙ ρ_e(uv)`
+    /// (no E/π), so that a surface with both a diffuse and an emission map
+    /// shows `Σ c·Y + Kd ⊙ ρ(uv) ⊙ E/π + Ke ⊙ ρ_e(uv)`. `None` in every
+    /// format-2 batch; a solution using it is written as format 3.
+    pub emission: Option<TextureSlot>,
     /// One per vertex of the batch, in the same order as [`Batch::vertices`].
     pub vertices: Vec<TexturedVertex>,
+}
+
+/// A texture and its factor: the second (emission) slot of a textured batch.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct TextureSlot {
+    /// Index into [`Solution::textures`].
+    pub texture: u32,
+    /// Linear RGB multiplier of the decoded texture (finite, ≥ 0): Ke.
+    pub factor: [f32; 3],
 }
 
 /// Per-vertex data of a textured batch: 20 bytes, tightly packed.

@@ -33,8 +33,8 @@ use super::layout::{self, Fields};
 use super::texture::{self, TextureInfo};
 use super::validate;
 use super::{
-    Batch, Header, Representation, ScalarType, Solution, SolveStats, Texture, TexturedVertex,
-    Texturing, Vertex,
+    Batch, Header, Representation, ScalarType, Solution, SolveStats, Texture, TextureSlot,
+    TexturedVertex, Texturing, Vertex,
 };
 use crate::camera::{Camera, UpAxis};
 use std::ops::Range;
@@ -64,6 +64,9 @@ pub struct BatchTexture {
     pub texture: u32,
     /// Linear RGB multiplier of the decoded texture.
     pub factor: [f32; 3],
+    /// The second slot (format 3): an emission texture and its factor, added
+    /// as `factor ⊙ ρ_e(uv)` (see [`super::Texturing::emission`]).
+    pub emission: Option<TextureSlot>,
 }
 
 impl BatchInfo {
@@ -671,7 +674,7 @@ fn read_batch_entry(
     let scalar = batch_scalar(b, f)?;
     let (frame_convention, basis_convention) = batch_conventions(b, f, representation)?;
     let (texture, textured_vertices) = if blocks.major >= 2 {
-        batch_texture(b, f, representation, texture_count, sections)?
+        batch_texture(b, f, representation, texture_count, sections, blocks.major)?
     } else {
         reserved(
             &format!("batch {b}: reserved field"),
@@ -726,12 +729,21 @@ fn batch_texture(
     representation: Representation,
     texture_count: u64,
     sections: &mut Sections,
+    major: u16,
 ) -> Result<(Option<BatchTexture>, usize), Problem> {
     use layout::batch as bf;
     let texture = f.u32(bf::TEXTURE);
     let section = f.u32(bf::TEXTURED_VERTICES_SECTION);
     let factor = f.f32x3(bf::TEXTURE_FACTOR);
     if texture == layout::NO_TEXTURE {
+        if major >= 3 {
+            check_empty_emission_slot(
+                b,
+                f.u32(bf::EMISSION_TEXTURE),
+                f.f32x3(bf::EMISSION_FACTOR),
+                "an untextured batch",
+            )?;
+        }
         if section != layout::NO_TEXTURE || factor.iter().any(|x| x.to_bits() != 0) {
             return Err(Problem::Invalid {
                 what: format!(
@@ -746,12 +758,63 @@ fn batch_texture(
         return Ok((None, usize::MAX));
     }
     validate::check_batch_texture(b, representation, texture, texture_count, factor)?;
+    let emission = if major >= 3 {
+        emission_slot(b, f, texture_count)?
+    } else {
+        None
+    };
     sections.claim(
         section,
         Role::TexturedVertices(b),
         layout::SECTION_TEXTURED_VERTICES,
     )?;
-    Ok((Some(BatchTexture { texture, factor }), section as usize))
+    Ok((
+        Some(BatchTexture {
+            texture,
+            factor,
+            emission,
+        }),
+        section as usize,
+    ))
+}
+
+/// A format-3 batch entry's second slot: [`layout::NO_TEXTURE`] and a zero
+/// factor when empty, else an emission texture index below the file's texture
+/// count and a finite, non-negative factor ([`validate::check_emission_slot`]).
+fn emission_slot(
+    b: usize,
+    f: &Fields<'_>,
+    texture_count: u64,
+) -> Result<Option<TextureSlot>, Problem> {
+    use layout::batch as bf;
+    let texture = f.u32(bf::EMISSION_TEXTURE);
+    let factor = f.f32x3(bf::EMISSION_FACTOR);
+    if texture == layout::NO_TEXTURE {
+        return check_empty_emission_slot(b, texture, factor, "an empty emission slot");
+    }
+    let slot = TextureSlot { texture, factor };
+    validate::check_emission_slot(b, &slot, texture_count)?;
+    Ok(Some(slot))
+}
+
+/// An emission slot that must be empty (an untextured batch's, or one stored
+/// as empty): [`layout::NO_TEXTURE`] and a zero factor.
+fn check_empty_emission_slot(
+    b: usize,
+    texture: u32,
+    factor: [f32; 3],
+    what: &str,
+) -> Result<Option<TextureSlot>, Problem> {
+    if texture != layout::NO_TEXTURE || factor.iter().any(|x| x.to_bits() != 0) {
+        return Err(Problem::Invalid {
+            what: format!("batch {b}: emission texture {texture} with factor {factor:?}"),
+            reason: format!(
+                "{what} stores {} and a zero factor, and only a textured batch may have an emission texture",
+                layout::NO_TEXTURE
+            ),
+        });
+    }
+    Ok(None)
 }
 
 fn batch_representation(b: usize, f: &Fields<'_>) -> Result<Representation, Problem> {
@@ -1136,6 +1199,7 @@ pub(crate) fn materialize(bytes: &[u8], parsed: &Parsed) -> Result<Solution, Pro
             let texturing = info.texture.map(|bt| Texturing {
                 texture: bt.texture,
                 factor: bt.factor,
+                emission: bt.emission,
                 vertices: section(t)
                     .chunks_exact(layout::TEXTURED_VERTEX_LEN)
                     .map(textured_vertex_at)

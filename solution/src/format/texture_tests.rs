@@ -9,7 +9,7 @@ use super::*;
 /// A `width × height` texture whose bytes come from a small LCG, so that PNG
 /// cannot compress it much (the deflate-ratio check must not be what refuses
 /// a truncated one).
-fn noise_texture(width: u32, height: u32, seed: u32) -> Texture {
+pub(super) fn noise_texture(width: u32, height: u32, seed: u32) -> Texture {
     let mut state = seed.wrapping_mul(2_654_435_761).wrapping_add(1);
     let rgba = (0..width * height * 4)
         .map(|_| {
@@ -32,6 +32,7 @@ pub(super) fn textured_solution() -> Solution {
     quad.texturing = Some(Texturing {
         texture: 1,
         factor: [0.5, 0.25, 1.0],
+        emission: None,
         vertices: (0..4)
             .map(|k| TexturedVertex {
                 uv: [(k % 2) as f32 * 2.0, (k / 2) as f32 - 0.5],
@@ -43,6 +44,7 @@ pub(super) fn textured_solution() -> Solution {
     glossy.texturing = Some(Texturing {
         texture: 0,
         factor: [1.0; 3],
+        emission: None,
         vertices: vec![TexturedVertex::default(); 3],
     });
     solution.batches.push(quad);
@@ -102,7 +104,8 @@ fn mapped_textured_file_exposes_textures_and_uv_sections() {
             quad.texture,
             Some(BatchTexture {
                 texture: 1,
-                factor: [0.5, 0.25, 1.0]
+                factor: [0.5, 0.25, 1.0],
+                emission: None,
             })
         );
         assert_eq!(file.batches()[0].texture, None);
@@ -244,7 +247,7 @@ fn decoded_texture_bytes_are_capped_in_total() {
 }
 
 /// Offset of batch `b`'s entry in a version-2 file.
-fn v2_batch_at(b: usize) -> usize {
+pub(super) fn v2_batch_at(b: usize) -> usize {
     layout::PREAMBLE_LEN + layout::HEADER_LEN + b * layout::BATCH_ENTRY_LEN_V2
 }
 

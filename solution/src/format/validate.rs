@@ -5,7 +5,7 @@ use super::error::FormatError;
 use super::error::Problem;
 use super::layout::{self, MAX_CUBE_RESOLUTION, MAX_SH_ORDER};
 use super::read::BatchInfo;
-use super::{Header, Representation, ScalarType, TexturedVertex, Vertex};
+use super::{Header, Representation, ScalarType, TextureSlot, TexturedVertex, Vertex};
 use std::path::Path;
 
 /// How far from unit length the stored normal and tangent, and how far from zero
@@ -191,6 +191,32 @@ pub fn check_batch_texture(
     if factor.iter().any(|&x| x < 0.0) {
         return Err(Problem::Invalid {
             what: format!("batch {batch}: texture factor {factor:?}"),
+            reason: "it must not be negative".into(),
+        });
+    }
+    Ok(())
+}
+
+/// A textured batch's second (emission) slot: a texture index below the
+/// file's texture count and a finite, non-negative factor.
+pub fn check_emission_slot(
+    batch: usize,
+    slot: &TextureSlot,
+    texture_count: u64,
+) -> Result<(), Problem> {
+    if u64::from(slot.texture) >= texture_count {
+        return Err(Problem::Invalid {
+            what: format!("batch {batch}: emission texture index {}", slot.texture),
+            reason: format!("the file has {texture_count} textures"),
+        });
+    }
+    finite3(
+        &format!("batch {batch}: emission texture factor"),
+        slot.factor,
+    )?;
+    if slot.factor.iter().any(|&x| x < 0.0) {
+        return Err(Problem::Invalid {
+            what: format!("batch {batch}: emission texture factor {:?}", slot.factor),
             reason: "it must not be negative".into(),
         });
     }

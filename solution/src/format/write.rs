@@ -56,7 +56,8 @@ struct SectionPlan {
 
 #[derive(Debug)]
 struct Plan {
-    /// 1 without textures (the version-1 layout, byte for byte), else 2.
+    /// 1 without textures (the version-1 layout, byte for byte), 2 with
+    /// textures but no emission slot (the version-2 layout), else 3.
     major: u16,
     /// Per batch, the section indices of its vertices, coefficients, indices
     /// and (textured batches) textured vertices.
@@ -183,6 +184,9 @@ fn check_texturing(
         texture_count as u64,
         t.factor,
     )?;
+    if let Some(slot) = &t.emission {
+        validate::check_emission_slot(b, slot, texture_count as u64)?;
+    }
     if t.vertices.len() != batch.vertices.len() {
         return Err(Problem::Invalid {
             what: format!(
@@ -271,8 +275,15 @@ fn section_len(what: &str, count: u64, size: u64) -> Result<u64, Problem> {
 fn plan(solution: &Solution, options: &EncodeOptions) -> Result<Plan, Problem> {
     let textured =
         !solution.textures.is_empty() || solution.batches.iter().any(|b| b.texturing.is_some());
-    let major = if textured {
+    // The lowest major version that holds the solution (layout::VERSION_MAJOR).
+    let second_slot = solution
+        .batches
+        .iter()
+        .any(|b| b.texturing.as_ref().is_some_and(|t| t.emission.is_some()));
+    let major = if second_slot {
         layout::VERSION_MAJOR
+    } else if textured {
+        layout::TEXTURED_VERSION_MAJOR
     } else {
         layout::UNTEXTURED_VERSION_MAJOR
     };
@@ -626,6 +637,14 @@ fn metadata_bytes(
             );
             f.u32(bf::TEXTURED_VERTICES_SECTION, refs[3]);
             f.f32x3(bf::TEXTURE_FACTOR, texture.map_or([0.0; 3], |t| t.factor));
+        }
+        if plan.major >= 3 {
+            let slot = batch.texturing.as_ref().and_then(|t| t.emission);
+            f.u32(
+                bf::EMISSION_TEXTURE,
+                slot.map_or(layout::NO_TEXTURE, |s| s.texture),
+            );
+            f.f32x3(bf::EMISSION_FACTOR, slot.map_or([0.0; 3], |s| s.factor));
         }
     }
     for ((section, crc), entry) in plan

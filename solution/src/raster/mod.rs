@@ -44,6 +44,8 @@
 //!    ([`crate::texture::MipChain::sample_trilinear`], over the same mip levels
 //!    the runtime uploads) at the level of detail of the exact derivatives of
 //!    (u, v) at the pixel centre (a GPU differences them across a 2 × 2 quad).
+//!    A batch with format 3's emission slot also adds `Ke ⊙ ρ_e(u, v)`, the
+//!    emission texture filtered the same way at the same (u, v).
 //! 6. **Depth test** LESS against a 32-bit float buffer cleared to 1.0, in draw order
 //!    (batches in file order, triangles in index order). The background is black.
 //!
@@ -255,9 +257,9 @@ pub fn render(
         .enumerate()
         .map(|(k, texture)| {
             let used = solution.batches.iter().any(|b| {
-                b.texturing
-                    .as_ref()
-                    .is_some_and(|t| t.texture as usize == k)
+                b.texturing.as_ref().is_some_and(|t| {
+                    t.texture as usize == k || t.emission.is_some_and(|e| e.texture as usize == k)
+                })
             });
             used.then(|| MipChain::new(texture))
         })
@@ -271,6 +273,11 @@ pub fn render(
         rasterizer.set_texture(
             texturing.and_then(|t| chains.get(t.texture as usize).and_then(Option::as_ref)),
         );
+        rasterizer.set_emission(texturing.and_then(|t| {
+            let slot = t.emission?;
+            let chain = chains.get(slot.texture as usize)?.as_ref()?;
+            Some((chain, slot.factor.map(f64::from)))
+        }));
         // u, v and factor · E/π per vertex (zero when untextured).
         let textured = |v: usize| -> [f64; 5] {
             match texturing.and_then(|t| t.vertices.get(v).map(|tv| (t.factor, tv))) {
@@ -351,12 +358,15 @@ fn check_batch(index: usize, batch: &Batch, textures: usize) -> Result<(), Rende
     check_coefficients(index, batch)?;
     let vertices = batch.vertices.len();
     if let Some(t) = &batch.texturing {
-        if t.texture as usize >= textures {
-            return Err(RenderError::TextureIndex {
-                batch: index,
-                texture: t.texture,
-                count: textures,
-            });
+        let emission = t.emission.map(|e| e.texture);
+        for texture in std::iter::once(t.texture).chain(emission) {
+            if texture as usize >= textures {
+                return Err(RenderError::TextureIndex {
+                    batch: index,
+                    texture,
+                    count: textures,
+                });
+            }
         }
         if t.vertices.len() != vertices {
             return Err(RenderError::TexturedVertexCount {

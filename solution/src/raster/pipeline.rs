@@ -171,6 +171,9 @@ pub struct Rasterizer<'a> {
     cull_back_faces: bool,
     /// The texture of the triangles drawn next (`None`: untextured).
     texture: Option<&'a MipChain>,
+    /// The emission texture of the triangles drawn next and its factor Ke
+    /// (format 3's second slot; `None`: none).
+    emission: Option<(&'a MipChain, [f64; 3])>,
 }
 
 impl<'a> Rasterizer<'a> {
@@ -179,6 +182,7 @@ impl<'a> Rasterizer<'a> {
             image,
             cull_back_faces,
             texture: None,
+            emission: None,
         }
     }
 
@@ -188,6 +192,13 @@ impl<'a> Rasterizer<'a> {
     /// derivatives of (u, v) at the pixel centre.
     pub fn set_texture(&mut self, texture: Option<&'a MipChain>) {
         self.texture = texture;
+    }
+
+    /// Draws the next triangles with an emission texture too (only with a
+    /// texture): each fragment adds `Ke ⊙ ρ_e(u, v)` at the same UV, filtered
+    /// as [`Rasterizer::set_texture`]'s at its own level of detail.
+    pub fn set_emission(&mut self, emission: Option<(&'a MipChain, [f64; 3])>) {
+        self.emission = emission;
     }
 
     /// Clips, culls and rasterizes one triangle given in index order.
@@ -356,7 +367,15 @@ impl<'a> Rasterizer<'a> {
         self.image.depth[index] = depth;
         self.image.pixels[index] = match self.texture {
             Some(texture) => {
-                let textured = textured_term(texture, v, lambda, inv_w, gradient);
+                let at = TexturedAt::new(v, lambda, inv_w, gradient);
+                let rho = at.sample(texture);
+                let mut textured = [0, 1, 2].map(|c| rho[c] * at.factor_e[c]);
+                if let Some((emission, ke)) = self.emission {
+                    let rho_e = at.sample(emission);
+                    for c in 0..3 {
+                        textured[c] += ke[c] * rho_e[c];
+                    }
+                }
                 [0, 1, 2].map(|c| (f64::from(radiance[c]) + textured[c]) as f32)
             }
             None => radiance,
@@ -370,38 +389,50 @@ struct Gradient {
     y: [f64; 3],
 }
 
-/// `ρ(u, v) · (factor · E/π)` at a fragment: the perspective-correct
-/// attributes `a = (Σ λ a/w) / (Σ λ/w)`, their exact derivatives
-/// `∂a = (∂(Σ λ a/w) − a · ∂(Σ λ/w)) / Σ λ/w` for the level of detail (Vulkan
-/// takes them from differences across a 2 × 2 quad: equal for an affine
-/// mapping, within the curvature of the perspective over one pixel otherwise),
-/// and the trilinear sample there.
-fn textured_term(
-    texture: &MipChain,
-    v: &[&ScreenVertex; 3],
-    lambda: [f64; 3],
-    inv_w: f64,
-    gradient: &Gradient,
-) -> [f64; 3] {
-    let sum = |weights: [f64; 3], attribute: usize| -> f64 {
-        (0..3)
-            .map(|k| weights[k] * v[k].textured_over_w[attribute])
-            .sum()
-    };
-    let sum_inv_w = |weights: [f64; 3]| -> f64 { (0..3).map(|k| weights[k] * v[k].inv_w).sum() };
-    let value = |attribute: usize| sum(lambda, attribute) / inv_w;
-    let derivative = |attribute: usize, weights: [f64; 3]| {
-        (sum(weights, attribute) - value(attribute) * sum_inv_w(weights)) / inv_w
-    };
-    let (u, t) = (value(0), value(1));
-    let lod = texture.lod(
-        derivative(0, gradient.x),
-        derivative(1, gradient.x),
-        derivative(0, gradient.y),
-        derivative(1, gradient.y),
-    );
-    let rho = texture.sample_trilinear(u, t, lod);
-    [0, 1, 2].map(|c| rho[c] * value(2 + c))
+/// The textured attributes at a fragment: the perspective-correct
+/// `a = (Σ λ a/w) / (Σ λ/w)` of u, v and factor · E/π, and the exact
+/// derivatives of (u, v), `∂a = (∂(Σ λ a/w) − a · ∂(Σ λ/w)) / Σ λ/w`, for the
+/// level of detail (Vulkan takes them from differences across a 2 × 2 quad:
+/// equal for an affine mapping, within the curvature of the perspective over
+/// one pixel otherwise).
+struct TexturedAt {
+    uv: [f64; 2],
+    /// ∂u/∂x, ∂v/∂x, ∂u/∂y, ∂v/∂y.
+    derivatives: [f64; 4],
+    factor_e: [f64; 3],
+}
+
+impl TexturedAt {
+    fn new(v: &[&ScreenVertex; 3], lambda: [f64; 3], inv_w: f64, gradient: &Gradient) -> Self {
+        let sum = |weights: [f64; 3], attribute: usize| -> f64 {
+            (0..3)
+                .map(|k| weights[k] * v[k].textured_over_w[attribute])
+                .sum()
+        };
+        let sum_inv_w =
+            |weights: [f64; 3]| -> f64 { (0..3).map(|k| weights[k] * v[k].inv_w).sum() };
+        let value = |attribute: usize| sum(lambda, attribute) / inv_w;
+        let derivative = |attribute: usize, weights: [f64; 3]| {
+            (sum(weights, attribute) - value(attribute) * sum_inv_w(weights)) / inv_w
+        };
+        TexturedAt {
+            uv: [value(0), value(1)],
+            derivatives: [
+                derivative(0, gradient.x),
+                derivative(1, gradient.x),
+                derivative(0, gradient.y),
+                derivative(1, gradient.y),
+            ],
+            factor_e: [2, 3, 4].map(value),
+        }
+    }
+
+    /// The texture's trilinear sample here, at its own level of detail.
+    fn sample(&self, texture: &MipChain) -> [f64; 3] {
+        let [a, b, c, d] = self.derivatives;
+        let lod = texture.lod(a, b, c, d);
+        texture.sample_trilinear(self.uv[0], self.uv[1], lod)
+    }
 }
 
 #[cfg(test)]

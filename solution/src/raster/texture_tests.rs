@@ -6,7 +6,8 @@
 use super::*;
 use crate::camera::{Camera, Fov, UpAxis};
 use crate::format::{
-    Header, ScalarType, SolveMode, SolveStats, Texture, TexturedVertex, Texturing, Vertex,
+    Header, ScalarType, SolveMode, SolveStats, Texture, TextureSlot, TexturedVertex, Texturing,
+    Vertex,
 };
 use crate::texture::srgb8_to_linear;
 
@@ -58,6 +59,7 @@ fn quad(texture: Texture, factor: [f32; 3], e: f32, c00: f32) -> Solution {
         texturing: Some(Texturing {
             texture: 0,
             factor,
+            emission: None,
             vertices: textured,
         }),
     };
@@ -176,5 +178,72 @@ fn a_texture_index_out_of_range_is_refused() {
     assert!(matches!(
         render(&solution, &view(), &RenderOptions::default()),
         Err(RenderError::TextureIndex { texture: 0, .. })
+    ));
+}
+
+/// A `width × height` texture of one sRGB colour.
+fn constant(width: u32, height: u32, rgb: [u8; 3]) -> Texture {
+    Texture {
+        width,
+        height,
+        rgba: (0..width * height)
+            .flat_map(|_| [rgb[0], rgb[1], rgb[2], 255])
+            .collect(),
+    }
+}
+
+#[test]
+fn a_batch_with_both_textures_shows_the_sh_the_diffuse_and_the_emission_term() {
+    // Constant textures make every trilinear sample exactly the texel's linear
+    // value (the weights sum to 1 over equal texels, on every mip level, since
+    // a level is the linear mean of equal texels re-encoded to the same byte),
+    // so each pixel is c00·Y00 + Kd ⊙ ρ ⊙ E/π + Ke ⊙ ρ_e, to f32 rounding.
+    // The emission texture has another size (its own level of detail).
+    let rho = [200, 100, 30];
+    let rho_e = [40, 250, 128];
+    let (kd, e, c00) = ([0.5, 1.0, 0.8], 0.25, 0.3);
+    let ke = [3.0, 0.5, 2.0];
+    let mut solution = quad(constant(4, 4, rho), kd, e, c00);
+    solution.textures.push(constant(3, 7, rho_e));
+    solution.batches[0].texturing.as_mut().unwrap().emission = Some(TextureSlot {
+        texture: 1,
+        factor: ke,
+    });
+    let image = render(&solution, &view(), &RenderOptions::default()).unwrap();
+    let sh = (f64::from(c00) * sh::Y00) as f32 as f64;
+    let expected: [f64; 3] = [0, 1, 2].map(|c| {
+        let diffuse = f64::from(kd[c] * e) * f64::from(srgb8_to_linear(rho[c]));
+        sh + diffuse + f64::from(ke[c]) * f64::from(srgb8_to_linear(rho_e[c]))
+    });
+    for (x, y) in [(0.1, 0.2), (-0.8, -0.9), (0.7, -0.3)] {
+        let (i, j) = pixel_at(x, y);
+        let p = image.pixel(i, j);
+        for c in 0..3 {
+            // The f32 image holds the f64 sum rounded once (relative 6e-8).
+            assert!(
+                (f64::from(p[c]) - expected[c]).abs() < 1e-6 * expected[c],
+                "({x}, {y}) channel {c}: {p:?} against {expected:?}"
+            );
+        }
+    }
+    // Each term is at least 1e-3 in every channel, over 100 × the tolerance, so
+    // a renderer dropping either texture fails the check above.
+    for c in 0..3 {
+        let diffuse = f64::from(kd[c] * e) * f64::from(srgb8_to_linear(rho[c]));
+        let emission = f64::from(ke[c]) * f64::from(srgb8_to_linear(rho_e[c]));
+        assert!(diffuse.min(emission) > 1e-3, "channel {c}");
+    }
+}
+
+#[test]
+fn an_emission_texture_index_out_of_range_is_refused() {
+    let mut solution = quad(checkerboard(2, 1), [1.0; 3], 1.0, 0.0);
+    solution.batches[0].texturing.as_mut().unwrap().emission = Some(TextureSlot {
+        texture: 1,
+        factor: [1.0; 3],
+    });
+    assert!(matches!(
+        render(&solution, &view(), &RenderOptions::default()),
+        Err(RenderError::TextureIndex { texture: 1, .. })
     ));
 }

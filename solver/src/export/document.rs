@@ -31,6 +31,9 @@ pub(crate) struct Placed {
     /// A textured batch's texture index and linear factor: `TEXCOORD_0`
     /// follows the four attributes, and the batch has its own material.
     pub texture: Option<(u32, [f32; 3])>,
+    /// A textured batch's emission texture and its factor Ke (solution format
+    /// 3's second slot): the material's `emissiveTexture` and factor.
+    pub emission: Option<(u32, [f32; 3])>,
     /// The smallest and largest exported position per axis (the spec requires
     /// them on `POSITION`, §3.7.2.1).
     pub min: [f32; 3],
@@ -69,6 +72,7 @@ pub(crate) fn document(
     let mut meshes = Vec::new();
     let mut nodes = Vec::new();
     let mut materials = vec![unlit_material(MATERIAL_NAME, [1.0; 3], None)];
+    let mut emissive_strength = false;
     for p in placed {
         let base = accessors.len();
         for k in 0..4u64 {
@@ -115,7 +119,19 @@ pub(crate) fn document(
             end += 8 * p.vertices;
             material = materials.len();
             let name = format!("{} (textured)", p.name);
-            materials.push(unlit_material(&name, factor, Some(texture)));
+            let mut material = unlit_material(&name, factor, Some(texture));
+            if let Some((emission, ke)) = p.emission {
+                add_emission(
+                    &mut material,
+                    emission,
+                    ke,
+                    f64::from(options.exposure_stops),
+                );
+                emissive_strength |= material["extensions"]
+                    .get("KHR_materials_emissive_strength")
+                    .is_some();
+            }
+            materials.push(material);
         }
         views.push(json!({
             "buffer": 0,
@@ -166,7 +182,11 @@ pub(crate) fn document(
             "generator": concat!("solver export ", env!("CARGO_PKG_VERSION")),
             "extras": asset_extras(options, glossy_eye),
         },
-        "extensionsUsed": ["KHR_materials_unlit"],
+        "extensionsUsed": if emissive_strength {
+            json!(["KHR_materials_unlit", "KHR_materials_emissive_strength"])
+        } else {
+            json!(["KHR_materials_unlit"])
+        },
         "scene": 0,
         "scenes": [{"name": "solution", "nodes": (0..nodes.len()).collect::<Vec<_>>()}],
         "nodes": nodes,
@@ -218,6 +238,24 @@ fn unlit_material(name: &str, factor: [f32; 3], texture: Option<u32>) -> Value {
         "pbrMetallicRoughness": pbr,
         "extensions": {"KHR_materials_unlit": {}},
     })
+}
+
+/// Adds a textured batch's emission (the solution's second texture slot) to
+/// its unlit material: `emissiveTexture` the emission texture, and the factor
+/// Ke × 2^exposure, the display value the runtime's clamp tone map gives the
+/// emission below saturation (COLOR_0 holds the curve of E/π × 2^exposure the
+/// same way). glTF caps `emissiveFactor` at 1 (§5.19), so a larger factor is
+/// divided by its largest channel, which becomes
+/// `KHR_materials_emissive_strength`.
+fn add_emission(material: &mut Value, texture: u32, ke: [f32; 3], exposure_stops: f64) {
+    let scaled = ke.map(|k| f64::from(k) * exposure_stops.exp2());
+    let strength = scaled.iter().fold(1.0f64, |m, &x| m.max(x));
+    material["emissiveTexture"] = json!({"index": texture});
+    material["emissiveFactor"] = json!(scaled.map(|x| x / strength));
+    if strength > 1.0 {
+        material["extensions"]["KHR_materials_emissive_strength"] =
+            json!({"emissiveStrength": strength});
+    }
 }
 
 /// What the attributes hold, in the file itself, for whoever reads it back.

@@ -36,7 +36,9 @@
 //! A textured batch (format 2) gets `TEXCOORD_0` = (u, 1 − v), a material of
 //! its own with the stored PNG as `baseColorTexture` times the batch's
 //! factor, and E/π in `_RADIANCE` (tone-mapped in COLOR_0); its untextured SH
-//! part is left out, which [`Exporter::add_batch`] reports.
+//! part is left out, which [`Exporter::add_batch`] reports. A batch with
+//! format 3's emission slot also gets `emissiveTexture` and Ke × 2^exposure
+//! as its emissive factor (`document.rs`).
 
 mod attributes;
 mod document;
@@ -328,6 +330,10 @@ impl<'h> Exporter<'h> {
             vertices: slot.vertices,
             indices: slot.indices,
             texture: slot.texture.map(|t| (t.texture, t.factor)),
+            emission: slot
+                .texture
+                .and_then(|t| t.emission)
+                .map(|e| (e.texture, e.factor)),
             min,
             max,
         });

@@ -446,6 +446,7 @@ fn textured_batches_carry_their_png_uvs_and_e_over_pi() {
     let texturing = Texturing {
         texture: 0,
         factor: [0.5, 1.0, 0.25],
+        emission: None,
         vertices: (0..4)
             .map(|k| TexturedVertex {
                 uv: [0.25 * k as f32, 0.125 + 0.25 * k as f32],
@@ -520,5 +521,88 @@ fn textured_batches_carry_their_png_uvs_and_e_over_pi() {
         assert_eq!(png, file.texture_bytes(0));
         let decoded = solution::format::decode_png(png, 2, 2).unwrap();
         assert_eq!(decoded.rgba, rgba);
+    }
+}
+
+/// A batch with both textures (format 3's emission slot): its material keeps
+/// the base-colour texture and factor, and adds the emission texture with
+/// Ke × 2^exposure as `emissiveFactor` × `KHR_materials_emissive_strength`
+/// (glTF caps the factor at 1), so a viewer shows Kd ρ y + Ke ρ_e 2^E.
+#[test]
+fn a_batch_with_an_emission_slot_exports_an_emissive_texture() {
+    use solution::format::{Texture, TextureSlot, TexturedVertex, Texturing};
+    let mut solution = solution(UpAxis::PosY);
+    solution.batches.truncate(1);
+    solution.batches[0].coefficients.fill(0.0);
+    solution.batches[0].texturing = Some(Texturing {
+        texture: 0,
+        factor: [0.5, 1.0, 0.25],
+        emission: Some(TextureSlot {
+            texture: 1,
+            factor: [3.0, 0.5, 1.5],
+        }),
+        vertices: vec![
+            TexturedVertex {
+                uv: [0.5, 0.5],
+                irradiance_over_pi: [1.0; 3],
+            };
+            4
+        ],
+    });
+    let texture = |b: u8| Texture {
+        width: 1,
+        height: 1,
+        rgba: vec![b, b, b, 255],
+    };
+    solution.textures = vec![texture(200), texture(90)];
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("two.sol");
+    write_solution(&path, &solution).unwrap();
+    let file = MappedSolution::open(&path).unwrap();
+    assert_eq!(file.version(), (3, 0));
+    let options = ExportOptions {
+        exposure_stops: -1.0,
+        ..Default::default()
+    };
+    let mut exporter =
+        Exporter::new(file.header(), file.batches(), file.textures(), options).unwrap();
+    let bytes = BatchBytes {
+        vertices: file.vertex_bytes(0),
+        coefficients: file.coefficient_bytes(0),
+        indices: file.index_bytes(0),
+        textured_vertices: file.textured_vertex_bytes(0),
+    };
+    // No untextured term: the emission is in the second slot, not the SH.
+    assert!(!exporter
+        .add_batch(0, &file.batches()[0], bytes, |_| {})
+        .unwrap());
+    for k in 0..2 {
+        exporter.add_texture(k, file.texture_bytes(k)).unwrap();
+    }
+    let exported = exporter.finish(None).unwrap();
+    let (document, _) = read_back(&glb(&exported));
+    let material = document
+        .meshes()
+        .next()
+        .unwrap()
+        .primitives()
+        .next()
+        .unwrap()
+        .material();
+    assert!(material.extension_value("KHR_materials_unlit").is_some());
+    let pbr = material.pbr_metallic_roughness();
+    assert_eq!(pbr.base_color_factor(), [0.5, 1.0, 0.25, 1.0]);
+    assert_eq!(pbr.base_color_texture().unwrap().texture().index(), 0);
+    assert_eq!(material.emissive_texture().unwrap().texture().index(), 1);
+    // Ke × 2⁻¹ = (1.5, 0.25, 0.75): factor (1, 1/6, 1/2), strength 1.5; their
+    // product is Ke × 2^E to f32 rounding.
+    let strength = material.emissive_strength().unwrap();
+    assert_eq!(strength, 1.5);
+    for (f, ke) in material
+        .emissive_factor()
+        .into_iter()
+        .zip([3.0f32, 0.5, 1.5])
+    {
+        assert!((f * strength - ke * 0.5).abs() <= 1e-6, "{f} × {strength}");
     }
 }

@@ -137,8 +137,11 @@ pub(crate) fn build_scene(mut raw: RawScene, options: &BuildOptions) -> Result<S
 pub const DARK_TEXTURE: f64 = 0.02;
 
 /// Reads material `index`'s `map_Kd` (`raw.diffuse_map`) when some polygon
-/// using it has UVs and it emits nothing, with warnings for a texture that is
-/// not used, cannot be read, or makes a very dark product.
+/// using it has UVs, with warnings for a texture that is not used, cannot be
+/// read, or makes a very dark product. An emitter's `map_Kd` is read too: its
+/// surface reflects and shows ρ(uv) like any diffuse-textured one, beside its
+/// emission (flat Ke, or `map_Ke` in the second texture slot of the solution
+/// file).
 fn diffuse_texture(
     raw: &RawMaterial,
     kd: DVec3,
@@ -148,19 +151,6 @@ fn diffuse_texture(
 ) -> Option<std::sync::Arc<super::SceneTexture>> {
     let (file, at) = raw.diffuse_map.as_ref()?;
     if !some_user_has_uvs(raw, index, polygons, ("map_Kd", "Kd"), file, at, warnings) {
-        return None;
-    }
-    if raw.emission.max_element() > 0.0 {
-        warn(
-            warnings,
-            at,
-            format!(
-                "map_Kd texture {}: material `{}` emits; textured emitters are not modelled, so the \
-                 flat Kd is used",
-                file.display(),
-                raw.name
-            ),
-        );
         return None;
     }
     let texture = super::texture_file::load_texture(

@@ -1080,6 +1080,21 @@ fn convert_material(
         Some(info) => material_texture(ctx, buffers, &info, EMISSIVE, &mut warn),
         None => None,
     };
+    // Both textures of a surface are sampled at its one UV set (the solution
+    // file's two slots share the textured vertices' UVs), so an emitter's
+    // base-colour texture is modelled when it maps like its emissive texture.
+    let base_colour = match (base_colour, &emissive) {
+        (Some(b), Some(e)) if b.uv_map != e.uv_map => {
+            warn(
+                "baseColorTexture and emissiveTexture map differently (texCoord or \
+                 KHR_texture_transform) and a surface has one UV set: the emissive texture is \
+                 used and the flat base colour reflects"
+                    .to_owned(),
+            );
+            None
+        }
+        (b, _) => b,
+    };
     if pbr.metallic_roughness_texture().is_some() {
         warn(format!(
             "metallicRoughnessTexture ignored, the flat factors used (metallic {metallic}, \
@@ -1133,9 +1148,8 @@ fn convert_material(
             .map(|t| (t.name.clone(), ctx.source(item.clone()))),
         emission_bytes: emissive.as_ref().and_then(|t| t.bytes.clone()),
     };
-    // A polygon has one UV set. An emitter's base-colour texture is not
-    // modelled (its flat Kd is used, as for MTL), so an emissive texture's
-    // mapping wins.
+    // A polygon has one UV set: the two textures' maps are equal when both
+    // are kept (above).
     let uv_map = emissive.or(base_colour).map(|t| t.uv_map);
     (raw, warnings, uv_map)
 }

@@ -865,7 +865,8 @@ fn texture_transform_rotation_turns_as_the_extensions_example_says() {
 
 /// An emissive texture: Le = emissiveFactor × strength × texture(uv), decoded
 /// from sRGB, through its own `KHR_texture_transform` (rotation π/2, as in
-/// the test above); the emitter's base-colour texture is not modelled.
+/// the test above); the emitter's base-colour texture, mapped without the
+/// rotation, cannot share its UV set and is not modelled (warned).
 #[test]
 fn emissive_texture_multiplies_factor_and_strength_and_follows_its_transform() {
     let dir = tempfile::tempdir().unwrap();
@@ -885,6 +886,14 @@ fn emissive_texture_multiplies_factor_and_strength_and_follows_its_transform() {
     let m = &scene.materials[screens[0].material];
     assert!(m.emission_texture.is_some(), "{:?}", scene.warnings);
     assert!(m.diffuse_texture.is_none());
+    assert!(
+        scene
+            .warnings
+            .iter()
+            .any(|w| w.message.contains("map differently")),
+        "{:?}",
+        scene.warnings
+    );
     for (column, row) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
         let (x, y) = (0.25 + 0.5 * column as f64, 0.25 + 0.5 * row as f64);
         let p = DVec3::new(x, y, 0.0) - scene.recentre_offset;
@@ -909,6 +918,34 @@ fn emissive_texture_multiplies_factor_and_strength_and_follows_its_transform() {
             .any(|w| w.message.contains("does not emit")),
         "{:?}",
         loaded.scene.warnings
+    );
+}
+
+/// An emitter whose base-colour and emissive textures share their mapping
+/// keeps both (the solution file's two texture slots), with no warning about
+/// either.
+#[test]
+fn an_emitter_keeps_its_base_colour_texture_when_both_map_alike() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut f = textured_quad();
+    let material = &mut f.json["materials"][0];
+    material["emissiveFactor"] = json!([2.0, 2.0, 2.0]);
+    material["emissiveTexture"] = json!({"index": 0});
+    let scene = load(&write_gltf(dir.path(), "both", &f)).scene;
+    let m = scene
+        .materials
+        .iter()
+        .find(|m| m.name == "checker")
+        .unwrap();
+    assert!(m.emission_texture.is_some(), "{:?}", scene.warnings);
+    assert!(m.diffuse_texture.is_some(), "{:?}", scene.warnings);
+    assert!(
+        !scene
+            .warnings
+            .iter()
+            .any(|w| w.message.contains("map differently") || w.message.contains("map_Kd")),
+        "{:?}",
+        scene.warnings
     );
 }
 

@@ -183,6 +183,7 @@ fn texture_diffuse_batch(scene: &Scene, settings: &SolverSettings, result: &mut 
                 batches.push(empty(Some(Texturing {
                     texture,
                     factor: t.kd.as_vec3().to_array(),
+                    emission: None,
                     vertices: Vec::new(),
                 })));
                 materials.len()

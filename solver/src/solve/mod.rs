@@ -912,3 +912,5 @@ mod smooth_tests;
 mod tests;
 #[cfg(test)]
 mod texture_tests;
+#[cfg(test)]
+mod two_slot_tests;

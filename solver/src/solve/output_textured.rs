@@ -5,19 +5,21 @@
 //! untextured term: its emission, zero for a plain diffuse textured surface. The textures go to the
 //! solution's texture list once each, as their 8-bit sRGB texels.
 //!
-//! An emission-textured surface (`textured.rs`) fits the same batch with no
-//! change to the format (docs/solution-format.md, "Emission textures"): its
+//! An emission-textured surface (`textured.rs`) without a diffuse texture
+//! fits the same batch (docs/solution-format.md, "Emission textures"): its
 //! texture is the emission texture, the factor Ke, the per-vertex "E/π" 1,
 //! so the textured term is Le(uv) = Ke ⊙ texture(uv); its SH coefficients
 //! hold the light it reflects with its flat Kd (its radiance less its mean
-//! emission).
+//! emission). A surface with both textures is a diffuse-textured batch (E/π,
+//! Kd, no SH term) whose second slot (format 3) holds the emission texture
+//! and Ke, so it shows Kd ⊙ ρ(uv) ⊙ E/π + Ke ⊙ ρ_e(uv).
 
 use super::seams::SharedVertices;
 use super::textured::Textured;
 use super::Solver;
 use crate::scene::SceneTexture;
 use glam::DVec3;
-use solution::format::{Batch, Solution, Texture, TexturedVertex, Texturing};
+use solution::format::{Batch, Solution, Texture, TextureSlot, TexturedVertex, Texturing};
 use std::sync::Arc;
 
 impl Solver {
@@ -68,10 +70,15 @@ impl Solver {
                 Some(k) => k + 1,
                 None => {
                     let texture = texture_index(&mut sources, &mut solution.textures, t);
+                    let emission = self.second_slot(v.surface).map(|e| TextureSlot {
+                        texture: texture_index(&mut sources, &mut solution.textures, e),
+                        factor: e.kd.as_vec3().to_array(),
+                    });
                     materials.push(material);
                     batches.push(empty(Some(Texturing {
                         texture,
                         factor: t.kd.as_vec3().to_array(),
+                        emission,
                         vertices: Vec::new(),
                     })));
                     materials.len()
@@ -83,14 +90,18 @@ impl Solver {
             // E/π for a diffuse-textured vertex; for an emitter's, 1, with
             // its reflected light in the coefficients.
             let e = if self.texturing.get(v.surface).is_some() {
-                // The vertex holds E/π plus its surface's flat emission
-                // (from the start of the solve): the emission is the
-                // untextured term (zero for the diffuse-textured surfaces
-                // the importers make, which refuse them on emitters).
+                // The vertex holds E/π plus its surface's emission (from the
+                // start of the solve; the mean Le of an emission texture).
+                // A flat emission is the untextured term; an emission
+                // texture is shown by the second slot instead.
                 let emission = self.emission[v.surface as usize];
-                let c00 = emission * (4.0 * std::f64::consts::PI).sqrt();
+                let untextured = match self.second_slot(v.surface) {
+                    Some(_) => DVec3::ZERO,
+                    None => emission,
+                };
+                let c00 = untextured * (4.0 * std::f64::consts::PI).sqrt();
                 b.coefficients.extend(c00.as_vec3().to_array());
-                shared.radiance[o] - emission + ambient
+                (shared.radiance[o] - emission + ambient).max(DVec3::ZERO)
             } else {
                 // As `to_solution` computes the coefficients, less Le.
                 let s = v.surface as usize;
@@ -108,6 +119,15 @@ impl Solver {
             }
         }
         place_triangles_and_prepend(solution, batches, &slot, &whole.indices);
+    }
+}
+
+impl Solver {
+    /// The emission texture shown in the second slot of `surface`'s batch:
+    /// its emission texture when it also has a diffuse one (the first slot).
+    fn second_slot(&self, surface: u32) -> Option<&Textured> {
+        self.texturing.get(surface)?;
+        self.texturing.emissive(surface)
     }
 }
 

@@ -7,7 +7,7 @@ use crate::settings::Preset;
 
 /// The six inward-facing faces of the cube [0, size]³ (counter-clockwise seen
 /// from inside), all of material 0.
-fn cube(size: f64, offset: DVec3) -> Vec<(Vec<DVec3>, usize)> {
+pub(super) fn cube(size: f64, offset: DVec3) -> Vec<(Vec<DVec3>, usize)> {
     let c = |x: f64, y: f64, z: f64| DVec3::new(x, y, z) * size + offset;
     let faces = [
         [c(0., 0., 0.), c(1., 0., 0.), c(1., 1., 0.), c(0., 1., 0.)],

@@ -210,6 +210,7 @@ impl Solver {
                         texturing: Some(Texturing {
                             texture,
                             factor: t.kd.as_vec3().to_array(),
+                            emission: None,
                             vertices: Vec::new(),
                         }),
                     });
