@@ -57,10 +57,11 @@
 //! Every member's unshot radiance is zeroed before the shot and its power is
 //! the shot's, π U_p A_p each; what receivers get is gathered into patches as
 //! after any shot, so shot = received + absorbed + escaped holds exactly as
-//! for single shots (test `grouped_shooting_loses_no_energy`). Members shoot
-//! their mean unshot radiance, uniform over the patch (no quadrants,
-//! `regions.rs`): a half-shadowed member lights its neighbours a little more
-//! evenly than it would alone.
+//! for single shots (test `grouped_shooting_loses_no_energy`). An unevenly
+//! lit quad member shoots as its four quadrants, each its own piece with its
+//! own unshot radiance (`regions.rs`, Σ_q U_q A_q = U_p A_p), as it would
+//! alone: shooting members uniformly cost 1.3 MARE points on the Cornell box
+//! at draft (docs/benchmarks.md, "Grouped shooters").
 
 use super::shoot::{receiving_point, Received, SamplePool, Scratch, Shot};
 use super::Solver;
@@ -106,25 +107,50 @@ pub struct Member {
     colour: DVec3,
 }
 
-impl Member {
-    fn new(mesh: &Mesh, patch: u32, unshot: DVec3) -> Member {
+/// A polygon that shoots in a group: a whole patch, or one quadrant of an
+/// unevenly lit one (`regions.rs`), with its own unshot radiance.
+#[derive(Clone, Copy, Debug)]
+pub struct Piece {
+    pub surface: u32,
+    pub corners: [DVec3; 4],
+    pub corner_count: usize,
+    pub area: f64,
+    pub unshot: DVec3,
+}
+
+impl Piece {
+    /// Patch `patch` whole, shooting `unshot` uniformly.
+    pub fn whole(mesh: &Mesh, patch: u32, unshot: DVec3) -> Piece {
         let p = &mesh.patches[patch as usize];
-        let polygon = p.polygon();
+        Piece {
+            surface: p.surface,
+            corners: p.corners,
+            corner_count: p.corner_count as usize,
+            area: p.area,
+            unshot,
+        }
+    }
+}
+
+impl Member {
+    fn new(mesh: &Mesh, piece: &Piece) -> Member {
+        let polygon = &piece.corners[..piece.corner_count];
         let centre = polygon.iter().copied().sum::<DVec3>() / polygon.len() as f64;
         let diameter = polygon
             .iter()
             .flat_map(|a| polygon.iter().map(move |b| (*a - *b).length()))
             .fold(0.0, f64::max);
+        let unshot = piece.unshot;
         let sum = unshot.element_sum();
         Member {
-            surface: p.surface,
-            corners: p.corners,
-            corner_count: p.corner_count as usize,
+            surface: piece.surface,
+            corners: piece.corners,
+            corner_count: piece.corner_count,
             source: SourcePolygon::new(polygon),
-            normal: mesh.surfaces[p.surface as usize].normal,
+            normal: mesh.surfaces[piece.surface as usize].normal,
             centre,
             diameter,
-            area: p.area,
+            area: piece.area,
             unshot,
             colour: if sum > 0.0 { unshot / sum } else { DVec3::ZERO },
         }
@@ -225,10 +251,10 @@ pub struct GroupShot<'a> {
 }
 
 impl<'a> GroupShot<'a> {
-    /// The shot of `members` ((patch, unshot radiance), the seed first).
+    /// The shot of `pieces` (the seed's first).
     pub fn new(
         mesh: &Mesh,
-        members: &[(u32, DVec3)],
+        pieces: &[Piece],
         index: u64,
         settings: &crate::settings::SolverSettings,
         occluder: &'a Occluder,
@@ -241,10 +267,7 @@ impl<'a> GroupShot<'a> {
             shadows: settings.shadows,
             occluder,
             kd,
-            members: members
-                .iter()
-                .map(|&(p, u)| Member::new(mesh, p, u))
-                .collect(),
+            members: pieces.iter().map(|p| Member::new(mesh, p)).collect(),
         }
     }
 
@@ -411,6 +434,39 @@ impl Solver {
             .sum();
         self.timings.shot_power += shot_power;
         Some(members)
+    }
+
+    /// The pieces `members` (patch, unshot) shoot as: each unevenly lit quad
+    /// patch as its four quadrants with their own unshot radiance, as the
+    /// patch shooter shoots it alone (`regions.rs`; Σ_q U_q A_q = U_p A_p, so
+    /// the power is the same), the others whole; all whole with
+    /// `uniform_shooters`.
+    pub(super) fn group_pieces(&self, members: &[(u32, DVec3)]) -> Vec<Piece> {
+        let mut pieces = Vec::with_capacity(members.len());
+        for &(p, u) in members {
+            let whole = Piece::whole(&self.mesh, p, u);
+            let regions = if self.settings.uniform_shooters {
+                None
+            } else {
+                self.source_regions(p, u)
+            };
+            match regions {
+                Some(r) => {
+                    let quadrants = super::regions::quadrants(&whole.corners);
+                    for (k, corners) in quadrants.into_iter().enumerate() {
+                        pieces.push(Piece {
+                            corners,
+                            corner_count: 4,
+                            area: r.areas[k],
+                            unshot: r.unshot[k],
+                            ..whole
+                        });
+                    }
+                }
+                None => pieces.push(whole),
+            }
+        }
+        pieces
     }
 
     /// Whether patch `p` may shoot in a group: a reflector's always, an

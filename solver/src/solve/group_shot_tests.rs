@@ -1,7 +1,7 @@
 //! Grouped shooters (`group_shot.rs`): the estimate against the members'
 //! own shots, energy bookkeeping, a furnace, determinism.
 
-use super::group_shot::GroupShot;
+use super::group_shot::{GroupShot, Piece};
 use super::physics_tests::{furnace, furnace_settings, worst_error};
 use super::shoot::{SamplePool, Scratch, Shot};
 use super::*;
@@ -32,7 +32,11 @@ fn settings(shooters: Shooters, adaptive: bool) -> SolverSettings {
 fn group_and_members(solver: &Solver, members: &[(u32, DVec3)], samples: u32) -> (f64, f64) {
     let mut s = solver.settings.clone();
     s.samples = samples;
-    let group = GroupShot::new(&solver.mesh, members, 0, &s, &solver.occluder, &solver.kd);
+    let pieces: Vec<Piece> = members
+        .iter()
+        .map(|&(p, u)| Piece::whole(&solver.mesh, p, u))
+        .collect();
+    let group = GroupShot::new(&solver.mesh, &pieces, 0, &s, &solver.occluder, &solver.kd);
     let shots: Vec<(Shot, SamplePool)> = members
         .iter()
         .enumerate()

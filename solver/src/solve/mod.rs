@@ -516,7 +516,8 @@ impl Solver {
         if !recorded && !self.settings.uniform_shooters && members.is_none() {
             shot.regions = self.source_regions(source, unshot).map(Box::new);
         }
-        let group = members.as_ref().map(|m| {
+        let pieces = members.as_ref().map(|m| self.group_pieces(m));
+        let group = pieces.as_ref().map(|m| {
             group_shot::GroupShot::new(
                 &self.mesh,
                 m,

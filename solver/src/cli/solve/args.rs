@@ -656,6 +656,20 @@ mod tests {
     }
 
     #[test]
+    fn shooters_flag_and_toml_key_reach_the_settings() {
+        // One patch per shot unless asked for.
+        let default = SolverSettings::resolve(Preset::Medium, &[&parse(&[]).patch()]).unwrap();
+        assert_eq!(default.shooters, Shooters::Patch);
+        let flag = parse(&["--shooters", "grouped"]).patch();
+        assert_eq!(flag.shooters, Some(Shooters::Grouped));
+        let config: SettingsPatch = toml::from_str("shooters = \"grouped\"").unwrap();
+        let resolved =
+            SolverSettings::resolve(Preset::Draft, &[&config, &parse(&[]).patch()]).unwrap();
+        assert_eq!(resolved.shooters, Shooters::Grouped);
+        assert!(toml::from_str::<SettingsPatch>("shooters = \"clusters\"").is_err());
+    }
+
+    #[test]
     fn flag_names_match_the_command_line() {
         assert_eq!(flag_name("max_shots"), "--max-shots");
         assert_eq!(flag_name("shadows"), "--no-shadows");
