@@ -466,8 +466,9 @@ impl Solver {
         let ambient = self.ambient_from_index();
         let unshot = std::mem::replace(&mut self.patch_unshot[source as usize], DVec3::ZERO);
         self.unshot_changed(&[source]);
-        // A reflecting source may take its bright neighbours along
-        // (`group_shot.rs`); emitters shoot alone, recorded.
+        // With grouped shooters the source may take its bright neighbours
+        // along (`group_shot.rs`); an emitter's patch shoots its emission
+        // alone first, recorded.
         let source_surface = self.mesh.patches[source as usize].surface;
         self.timings.shot_power +=
             PI * self.patch_shoot_area[source as usize] * unshot.element_sum();
