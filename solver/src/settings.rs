@@ -60,6 +60,18 @@ pub enum Shooting {
     Bounded,
 }
 
+/// What shoots in one pass (`--shooters`; `solve/group_shot.rs`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+#[derive(clap::ValueEnum)]
+pub enum Shooters {
+    /// One patch per shot: Remington's (1992) progressive refinement.
+    #[default]
+    Patch,
+    /// A reflecting patch and its bright neighbours shoot together, each receiver's rays shared among them by importance.
+    Grouped,
+}
+
 /// Default of `shooting_tolerance`: the largest that kept the Cornell box's
 /// medium-preset MARE within 0.15 points of flat shooting's (1e-3 cost 2.5
 /// points); `docs/benchmarks.md`, "Bounded shooting".
@@ -175,6 +187,9 @@ pub struct SolverSettings {
     /// Bounded shooting skips a surface whose bound on a shot's ΔL is below this fraction of the scene's radiance level.
     #[serde(default = "default_shooting_tolerance")]
     pub shooting_tolerance: f64,
+    /// One patch per shot, or groups of nearby reflecting patches shot together.
+    #[serde(default)]
+    pub shooters: Shooters,
     /// Scene units per metre (scene config or flag).
     pub units_per_metre: f64,
     /// Turn import warnings (Kd + Ks > 1, …) into errors.
@@ -237,6 +252,7 @@ pub struct SettingsPatch {
     pub cube_resolution: Option<u32>,
     pub shooting: Option<Shooting>,
     pub shooting_tolerance: Option<f64>,
+    pub shooters: Option<Shooters>,
     pub units_per_metre: Option<f64>,
     pub strict: Option<bool>,
     pub crease_angle: Option<f64>,
@@ -286,6 +302,7 @@ impl SolverSettings {
             cube_resolution: DEFAULT_CUBE_RESOLUTION,
             shooting: Shooting::Flat,
             shooting_tolerance: DEFAULT_SHOOTING_TOLERANCE,
+            shooters: Shooters::Patch,
             units_per_metre: 1.0,
             strict: false,
             crease_angle: default_crease_angle(),
@@ -343,6 +360,7 @@ impl SolverSettings {
             cube_resolution,
             shooting,
             shooting_tolerance,
+            shooters,
             units_per_metre,
             strict,
             crease_angle,

@@ -447,6 +447,15 @@ impl session::Shooter for Solver {
         for warning in self.take_warnings() {
             eprintln!("solver: warning: {warning}");
         }
+        let t = self.timings();
+        if stepped && Solver::is_done(self) && t.group_shots > 0 {
+            eprintln!(
+                "solver: grouped shooters: {} of {} shots grouped, {} patches shot in them",
+                t.group_shots,
+                self.progress().shots,
+                t.grouped_patches
+            );
+        }
         stepped
     }
     fn memory_note(&self) -> Option<String> {

@@ -328,6 +328,38 @@ impl ReceiverTree {
         }
     }
 
+    /// The surfaces whose polygon's box comes within `radius` of `centre`,
+    /// appended to `out` in tree order (grouped shooters, `group_shot.rs`).
+    pub(super) fn surfaces_near(&self, centre: DVec3, radius: f64, out: &mut Vec<u32>) {
+        let mut stack = if self.nodes.is_empty() {
+            vec![]
+        } else {
+            vec![0u32]
+        };
+        while let Some(n) = stack.pop() {
+            let node = &self.nodes[n as usize];
+            if box_point_distance(node.lo, node.hi, centre) > radius {
+                continue;
+            }
+            if node.left != u32::MAX {
+                stack.push(node.left + 1);
+                stack.push(node.left);
+                continue;
+            }
+            for &s in &self.order[node.start as usize..node.end as usize] {
+                let b = &self.surfaces[s as usize];
+                if box_point_distance(b.lo, b.hi, centre) <= radius {
+                    out.push(s);
+                }
+            }
+        }
+    }
+
+    /// The scene's diagonal: the length of the root's box (0 when empty).
+    pub(super) fn diagonal(&self) -> f64 {
+        self.nodes.first().map_or(0.0, |n| (n.hi - n.lo).length())
+    }
+
     /// The receipts of every surface from `shot`, whose bounded receivers get
     /// less than `tolerance` (radiance, brightest channel) each.
     pub fn plan(&self, shot: &Shot, pool: &SamplePool, tolerance: f64) -> Plan {

@@ -27,8 +27,9 @@
 //! list header per surface.
 
 use super::cluster::{Plan, Receipt};
+use super::group_shot::Shooter;
 use super::refine::VertexState;
-use super::shoot::{Received, SamplePool, Scratch, Shot};
+use super::shoot::{Received, Scratch};
 use super::Solver;
 use crate::mesh::Mesh;
 use glam::DVec3;
@@ -114,7 +115,7 @@ impl Footprint {
     }
 }
 
-/// Shoots `shot` to its receivers and adds each one's ΔL to its radiance
+/// Shoots `shooter` to its receivers and adds each one's ΔL to its radiance
 /// (and to its recorded-shot part when `recorded`): flat shooting (`plan`
 /// `None`) to every vertex, bounded shooting to the vertices of the surfaces
 /// its plan visits. Marks the surfaces touched; returns the rays. (A free
@@ -123,14 +124,13 @@ pub(super) fn shoot_receivers(
     mesh: &Mesh,
     footprint: &mut Footprint,
     mut state: VertexState<'_>,
-    shot: &Shot,
-    pool: &SamplePool,
+    shooter: &Shooter,
     plan: Option<&Plan>,
     recorded: bool,
 ) -> u64 {
     footprint.surface_vertices.catch_up(mesh);
     footprint.begin_shot(mesh.surfaces.len());
-    let receive = |scratch: &mut Scratch, v: u32| shot.receive(mesh, v, pool, scratch);
+    let receive = |scratch: &mut Scratch, v: u32| shooter.receive(mesh, v, scratch);
     let Some(plan) = plan else {
         let results: Vec<Received> = (0..mesh.vertices.len() as u32)
             .into_par_iter()

@@ -63,6 +63,7 @@ mod output;
 mod output_textured;
 pub(crate) use output::default_camera;
 mod footprint;
+mod group_shot;
 mod refine;
 pub mod regions;
 mod seams;
@@ -150,6 +151,14 @@ pub struct Timings {
     pub visited_receivers: u64,
     /// Vertices that bounded shooting gave a bounded estimate instead.
     pub bounded_receivers: u64,
+    /// Patches shot by grouped shots, summed over them (`group_shot.rs`;
+    /// 0 with `--shooters patch`).
+    pub grouped_patches: u64,
+    /// Grouped shots (of two patches or more).
+    pub group_shots: u64,
+    /// Power shot (π U A over the shots' patches, scene units, summed over
+    /// the channels), for the energy bookkeeping of grouped shots.
+    pub shot_power: f64,
 }
 
 /// Where the solve stands.
@@ -242,6 +251,9 @@ pub struct Solver {
     /// The patches' unshot power under a tree of sums and maxima, built on the
     /// first diffuse step ([`unshot_tree`]).
     unshot_index: Option<unshot_tree::UnshotIndex>,
+    /// Which emitter patches have shot their emission, for grouped shooters
+    /// (derived from `recorded`, so a resume rebuilds it).
+    emitters_shot: group_shot::EmittersShot,
 }
 
 impl Solver {
@@ -404,6 +416,7 @@ impl Solver {
             receivers,
             footprint: footprint::Footprint::default(),
             unshot_index: None,
+            emitters_shot: group_shot::EmittersShot::default(),
         };
         solver.init_directional(scene)?;
         let all: Vec<u32> = (0..solver.mesh.surfaces.len() as u32).collect();
@@ -440,6 +453,18 @@ impl Solver {
         let ambient = self.ambient_from_index();
         let unshot = std::mem::replace(&mut self.patch_unshot[source as usize], DVec3::ZERO);
         self.unshot_changed(&[source]);
+        // With grouped shooters the source may take its bright neighbours
+        // along (`group_shot.rs`); an emitter's patch shoots its emission
+        // alone first, recorded.
+        let source_surface = self.mesh.patches[source as usize].surface;
+        self.timings.shot_power +=
+            PI * self.patch_shoot_area[source as usize] * unshot.element_sum();
+        let grouped = self.settings.shooters == crate::settings::Shooters::Grouped;
+        let members = if grouped && self.may_group(source) {
+            self.take_group(source, unshot)
+        } else {
+            None
+        };
         let mut shot = Shot::for_patch(
             &self.mesh,
             source,
@@ -451,8 +476,9 @@ impl Solver {
         );
         // Shots from emitters are remembered: vertices that later splits create
         // receive them exactly (see `refine`).
-        let mut recorded =
-            self.emission[shot.source_surface as usize] != DVec3::ZERO && !self.refinement_capped;
+        let mut recorded = self.emission[source_surface as usize] != DVec3::ZERO
+            && !self.refinement_capped
+            && members.is_none();
         if recorded {
             if let Some(warning) = self.recording_overflows(None, 0) {
                 recorded = false;
@@ -475,11 +501,36 @@ impl Solver {
         // Recorded (emitter) shots stay uniform: their replay to new vertices
         // rebuilds them from the patch and its mean unshot alone. So do all
         // shots when the settings ask for uniform shooters.
-        if !recorded && !self.settings.uniform_shooters {
+        if !recorded && !self.settings.uniform_shooters && members.is_none() {
             shot.regions = self.source_regions(source, unshot).map(Box::new);
         }
-        let pool = SamplePool::new(&shot);
-        let plan = self.plan_receivers(&shot, &pool);
+        let pieces = members.as_ref().map(|m| self.group_pieces(m));
+        let group = pieces.as_ref().map(|m| {
+            group_shot::GroupShot::new(
+                &self.mesh,
+                m,
+                self.shots,
+                &self.settings,
+                &self.occluder,
+                &self.kd,
+            )
+        });
+        let pool = match group {
+            Some(_) => SamplePool::with_sets(&shot, 0),
+            None => SamplePool::new(&shot),
+        };
+        let shooter = match &group {
+            Some(g) => group_shot::Shooter::Group(g),
+            None => group_shot::Shooter::Patch {
+                shot: &shot,
+                pool: &pool,
+            },
+        };
+        // Bounded shooting plans for one patch; a group visits every vertex.
+        let plan = match group {
+            Some(_) => None,
+            None => self.plan_receivers(&shot, &pool),
+        };
         let mut rays = footprint::shoot_receivers(
             &self.mesh,
             &mut self.footprint,
@@ -489,8 +540,7 @@ impl Solver {
                 visible: &mut self.visible,
                 direct: &mut self.direct,
             },
-            &shot,
-            &pool,
+            &shooter,
             plan.as_ref(),
             recorded,
         );
@@ -522,8 +572,7 @@ impl Solver {
                         direct: &mut self.direct,
                     },
                     replay: &replay,
-                    shot: &shot,
-                    pool: &pool,
+                    shooter: &shooter,
                     scan: scan.as_deref(),
                 },
                 &refine::Criteria {
@@ -902,6 +951,8 @@ mod cluster_tests;
 mod directional_tests;
 #[cfg(test)]
 mod emissive_tests;
+#[cfg(test)]
+mod group_shot_tests;
 #[cfg(test)]
 mod hidden_tests;
 #[cfg(test)]

@@ -32,7 +32,7 @@ pub(super) fn cube(size: f64, offset: DVec3) -> Vec<(Vec<DVec3>, usize)> {
         .collect()
 }
 
-fn furnace(rho: f64, patches: u32) -> Scene {
+pub(super) fn furnace(rho: f64, patches: u32) -> Scene {
     scene_of(
         cube(1.0, DVec3::ZERO),
         vec![material("furnace", rho, 1.0)],
@@ -40,7 +40,7 @@ fn furnace(rho: f64, patches: u32) -> Scene {
     )
 }
 
-fn furnace_settings(threshold: f64) -> SolverSettings {
+pub(super) fn furnace_settings(threshold: f64) -> SolverSettings {
     let mut s = SolverSettings::preset(Preset::Draft);
     s.samples = 4;
     s.threshold = threshold;
@@ -50,7 +50,7 @@ fn furnace_settings(threshold: f64) -> SolverSettings {
 }
 
 /// Largest |L − L∞| / L∞ over the vertices and channels.
-fn worst_error(solver: &Solver, exact: f64) -> f64 {
+pub(super) fn worst_error(solver: &Solver, exact: f64) -> f64 {
     solver
         .vertex_radiance()
         .iter()

@@ -46,6 +46,7 @@
 //! tested again when the shot changed one of its ends.
 
 use super::budget::SplitBudget;
+use super::group_shot::Shooter;
 use super::shoot::{Received, SamplePool, Scratch, Shot};
 use crate::mesh::{Mesh, NewVertex};
 use crate::settings::SolverSettings;
@@ -367,8 +368,8 @@ pub fn refine_field<F: Field>(
 pub struct DiffuseField<'s, 'a, 'b> {
     pub state: VertexState<'s>,
     pub replay: &'s Replay<'a, 'b>,
-    pub shot: &'s Shot<'s>,
-    pub pool: &'s SamplePool,
+    /// The current shot: a patch or a group (`group_shot.rs`).
+    pub shooter: &'s Shooter<'s, 's>,
     /// The patches to scan for candidates ([`Field::scan`]).
     pub scan: Option<&'s [u32]>,
 }
@@ -386,7 +387,7 @@ impl Field for DiffuseField<'_, '_, '_> {
         let s = &self.state;
         criteria.should_split_at(
             mesh,
-            Some(self.shot.kd),
+            Some(self.shooter.kd()),
             s.radiance,
             s.received,
             s.visible,
@@ -428,7 +429,7 @@ impl Field for DiffuseField<'_, '_, '_> {
     }
 
     fn receive(&mut self, mesh: &Mesh, created: &[NewVertex]) -> u64 {
-        let (replay, shot, pool) = (self.replay, self.shot, self.pool);
+        let (replay, shooter) = (self.replay, self.shooter);
         let results: Vec<(DVec3, Received, u64)> = created
             .par_iter()
             .map_init(Scratch::default, |scratch, nv| {
@@ -441,7 +442,7 @@ impl Field for DiffuseField<'_, '_, '_> {
                     rays += current.rays as u64;
                 }
                 if !replay.current_recorded {
-                    current = shot.receive(mesh, nv.id, pool, scratch);
+                    current = shooter.receive(mesh, nv.id, scratch);
                     rays += current.rays as u64;
                 }
                 (exact, current, rays)

@@ -41,9 +41,13 @@ pub struct Received {
 /// Per-worker buffers: the source samples and their visibility flags.
 #[derive(Default)]
 pub struct Scratch {
-    points: Vec<DVec3>,
-    clipped: Vec<DVec3>,
-    flags: Vec<bool>,
+    pub(super) points: Vec<DVec3>,
+    pub(super) clipped: Vec<DVec3>,
+    pub(super) flags: Vec<bool>,
+    /// Grouped shots (`group_shot.rs`): per member its share of the
+    /// receiver's estimate, and per ray the member it was sent to.
+    pub(super) weights: Vec<f64>,
+    pub(super) members: Vec<u32>,
 }
 
 /// How many jittered sample sets a shot draws on its source ([`SamplePool`]).
