@@ -279,20 +279,22 @@ impl Solver {
         // has no seam pass for flat facets yet, so it keeps them whole.
         let conform = !settings.whole_receivers && settings.mode == SolveMode::Diffuse;
         let mesh = Mesh::with_contacts(scene, offset, &sizing, conform)?;
-        let emitter_patches = budget::emitter_patches(scene, &mesh);
-        // The same with the mesh's exact counts, before the solve's state
-        // (each emitter patch shoots, and is recorded, at least once).
-        check_coarsest(
-            &budget::counts_for_mesh(&mesh, settings, |_| 0, emitter_patches),
-            settings,
-            "the unrefined mesh",
-        )?;
         match mesh.surfaces.len() {
             0 => return Err(SolveError::EmptyScene),
             1 => return Err(SolveError::SinglePolygon),
             _ => {}
         }
         let texturing = textured::SurfaceTexturing::new(scene, &mesh, offset);
+        // The same with the mesh's exact counts, before the solve's state
+        // (each emitter patch shoots, and is recorded, at least once; a
+        // directional solve's textured vertices also hold E/π).
+        let emitter_patches = budget::emitter_patches(scene, &mesh);
+        let textured: Vec<bool> = texturing.per_surface.iter().map(Option::is_some).collect();
+        check_coarsest(
+            &budget::counts_for_mesh(&mesh, settings, |_| 0, &textured, emitter_patches),
+            settings,
+            "the unrefined mesh",
+        )?;
         let albedo: Vec<DVec3> = mesh
             .surfaces
             .iter()
