@@ -9,8 +9,10 @@
 //! structure that holds it (see the functions below for the exact list):
 //!
 //! * **fixed**: the process before any solve state ([`FIXED_BYTES`], measured:
-//!   the executable, the allocator, the worker threads), plus the scene and its
-//!   occlusion BVH per surface;
+//!   the executable, the allocator, the worker threads), the scene as imported
+//!   ([`scene_bytes`]: per input polygon its [`Polygon`], corners, shading
+//!   normals and source reference, which the command line keeps for the whole
+//!   solve), and per mesh surface its tables and occlusion BVH share;
 //! * **mesh**: per vertex a [`MeshVertex`] and its slot in the vertex table (a
 //!   hashbrown map: a power-of-two bucket count at most 7/8 full, each bucket
 //!   one `(VertexKey, u32)` and one control byte), per element an [`Element`],
@@ -73,7 +75,7 @@ use super::shoot::{Received, RecordedShot, Shot, POOL_POINTS, POOL_SETS, REPLAY_
 use super::unshot_tree::NODE_BYTES;
 use super::{Directional, Solver};
 use crate::mesh::{Element, Mesh, MeshVertex, Patch, Surface, VertexKey};
-use crate::scene::Scene;
+use crate::scene::{Polygon, Scene};
 use crate::settings::SolverSettings;
 use glam::DVec3;
 use std::mem::size_of;
@@ -96,13 +98,49 @@ pub const ORDER_SHARE: f64 = 0.5;
 /// `--preset medium` less its estimated solve state).
 pub const FIXED_BYTES: u64 = 7 << 20;
 
-/// The scene (its polygon and material), the mesh's surface and piece, the
-/// per-surface tables of both modes and the occlusion BVH's share, per
-/// surface: a bound from the structures' sizes, rounded up.
+/// The mesh's surface and piece, the per-surface tables of both modes and
+/// the occlusion BVH's share, per surface: a bound from the structures'
+/// sizes, rounded up. (The input polygons are [`scene_bytes`]: a surface may
+/// weld many of them.)
 pub fn surface_bytes() -> u64 {
-    // The polygon (4 positions and their Vec), the surface (its Vec of 4), the
-    // BVH's triangles and nodes (two f32 triangles, about one node each).
-    (size_of::<Surface>() + 2 * (4 * size_of::<DVec3>() + 24) + 2 * 64 + 128 + 96) as u64
+    // The surface (its Vec of 4 positions), the BVH's triangles and nodes
+    // (two f32 triangles, about one node each).
+    (size_of::<Surface>() + 4 * size_of::<DVec3>() + 24 + 2 * 64 + 128 + 96) as u64
+}
+
+/// The scene as imported, per input polygon: its [`Polygon`] (held inline in
+/// the scene's vector), the heap blocks of its corners and of its shading
+/// normals, and its source reference's file path and item name. The scene
+/// lives for the whole solve (the command line holds it), and on a
+/// tessellated model it is one of the largest terms: the 99,628 triangles of
+/// the floor-plan scale scene take 26 MB.
+pub fn scene_bytes(scene: &Scene) -> u64 {
+    scene.polygons.iter().map(polygon_bytes).sum()
+}
+
+/// The bytes glibc's malloc takes for a block of `bytes`: an 8-byte header,
+/// rounded up to 16, at least 32 (its smallest chunk); none for an empty
+/// vector or string, which allocates nothing.
+pub(super) fn heap_chunk(bytes: usize) -> u64 {
+    if bytes == 0 {
+        return 0;
+    }
+    ((bytes as u64 + 8).div_ceil(16) * 16).max(32)
+}
+
+fn polygon_bytes(p: &Polygon) -> u64 {
+    let block = heap_chunk;
+    let normals = p
+        .vertex_normals
+        .as_ref()
+        .map_or(0, |n| block(n.len() * size_of::<DVec3>()));
+    size_of::<Polygon>() as u64
+        + block(p.vertices.len() * size_of::<DVec3>())
+        + normals
+        + block(p.source.file.as_os_str().len())
+        // The item name ("face 12 (line 40)") is built piece by piece, so
+        // its capacity doubled to the power of two above its length.
+        + block(p.source.item.len().next_power_of_two())
 }
 
 /// The buffer a checkpoint streams through (`solution::atomic::write_atomically_buffered`).
@@ -144,6 +182,8 @@ pub struct Counts {
     /// Decoded diffuse textures (RGBA texels and linear pyramids) and the
     /// textured patches' RGB gather weights, in bytes (`textured.rs`).
     pub texture_bytes: u64,
+    /// The scene as imported ([`scene_bytes`]).
+    pub scene_bytes: u64,
     /// Σ over surfaces of [`list_slots`] of its vertex count: the entries
     /// the footprint's per-surface vertex lists hold room for.
     pub index_slots: u64,
@@ -306,7 +346,7 @@ fn pool_bytes(samples: u64, sets: u32) -> u64 {
 pub fn estimate(c: &Counts) -> MemoryEstimate {
     let dvec3 = size_of::<DVec3>() as u64;
     let f64_ = size_of::<f64>() as u64;
-    let fixed = FIXED_BYTES + c.surfaces * surface_bytes() + c.texture_bytes;
+    let fixed = FIXED_BYTES + c.surfaces * surface_bytes() + c.texture_bytes + c.scene_bytes;
     let mesh = c.vertices * size_of::<MeshVertex>() as u64
         + table_bytes(c.vertices)
         + c.elements * size_of::<Element>() as u64
@@ -410,6 +450,7 @@ pub fn counts_before_meshing(scene: &Scene, settings: &SolverSettings) -> Counts
         samples: settings.samples as u64,
         directional: settings.mode == solution::format::SolveMode::Directional,
         bounded: settings.shooting == crate::settings::Shooting::Bounded,
+        scene_bytes: scene_bytes(scene),
         ..Counts::default()
     };
     let sizing = crate::mesh::Sizing::from_settings(settings, scene);
@@ -533,24 +574,28 @@ pub fn emitter_patches(scene: &Scene, mesh: &Mesh) -> u64 {
 /// first such material on ties) drops by one, since the coefficients of one
 /// vertex grow as (L+1)² and the highest order costs the most per band. Orders
 /// stop at 0; the caller refuses what still does not fit. `textured` marks
-/// the surfaces whose vertices also hold E/π ([`counts_for_mesh`]).
+/// the surfaces whose vertices also hold E/π ([`counts_for_mesh`]); the
+/// scene itself takes `scene_bytes` ([`scene_bytes`]).
 pub fn orders_within(
     mesh: &Mesh,
     settings: &SolverSettings,
     material_orders: &[u32],
     textured: &[bool],
-    recorded_shots: u64,
+    (recorded_shots, scene_bytes): (u64, u64),
     target: u64,
 ) -> Vec<u32> {
     let mut orders = material_orders.to_vec();
     loop {
-        let counts = counts_for_mesh(
-            mesh,
-            settings,
-            |s| orders[mesh.surfaces[s].material],
-            textured,
-            recorded_shots,
-        );
+        let counts = Counts {
+            scene_bytes,
+            ..counts_for_mesh(
+                mesh,
+                settings,
+                |s| orders[mesh.surfaces[s].material],
+                textured,
+                recorded_shots,
+            )
+        };
         if estimate(&counts).peak() <= target {
             return orders;
         }
@@ -708,6 +753,7 @@ impl Solver {
             samples: self.settings.samples as u64,
             directional: false,
             texture_bytes: self.texture_bytes(),
+            scene_bytes: self.scene_bytes,
             bounded: self.settings.shooting == crate::settings::Shooting::Bounded,
             ..Counts::default()
         };

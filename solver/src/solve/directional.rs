@@ -424,7 +424,15 @@ fn cap_orders(
     let target = (budget::plan(limit) as f64 * budget::ORDER_SHARE) as u64;
     let recorded = budget::emitter_patches(scene, mesh);
     let textured = textured::textured_surfaces(scene, mesh);
-    let kept = budget::orders_within(mesh, settings, &wanted, &textured, recorded, target);
+    let scene_bytes = budget::scene_bytes(scene);
+    let kept = budget::orders_within(
+        mesh,
+        settings,
+        &wanted,
+        &textured,
+        (recorded, scene_bytes),
+        target,
+    );
     for (m, (&want, &keep)) in wanted.iter().zip(&kept).enumerate() {
         if keep == want {
             continue;

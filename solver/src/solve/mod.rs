@@ -233,6 +233,9 @@ pub struct Solver {
     pending_warnings: Vec<String>,
     /// The largest peak memory estimated so far ([`budget`]).
     peak_estimate: u64,
+    /// The scene as imported, which the caller holds during the solve
+    /// ([`budget::scene_bytes`]).
+    scene_bytes: u64,
     /// Whether the memory budget has refused a split (warned once).
     refinement_capped: bool,
     /// The surfaces under a bounding-volume hierarchy, for bounded shooting.
@@ -290,8 +293,12 @@ impl Solver {
         // directional solve's textured vertices also hold E/π).
         let emitter_patches = budget::emitter_patches(scene, &mesh);
         let textured: Vec<bool> = texturing.per_surface.iter().map(Option::is_some).collect();
+        let scene_bytes = budget::scene_bytes(scene);
         check_coarsest(
-            &budget::counts_for_mesh(&mesh, settings, |_| 0, &textured, emitter_patches),
+            &budget::Counts {
+                scene_bytes,
+                ..budget::counts_for_mesh(&mesh, settings, |_| 0, &textured, emitter_patches)
+            },
             settings,
             "the unrefined mesh",
         )?;
@@ -415,6 +422,7 @@ impl Solver {
             warnings: set_up_warnings,
             pending_warnings: Vec::new(),
             peak_estimate: 0,
+            scene_bytes,
             refinement_capped: false,
             receivers,
             footprint: footprint::Footprint::default(),

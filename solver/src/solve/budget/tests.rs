@@ -211,6 +211,47 @@ fn estimate_matches_the_allocated_state_of_a_directional_solve() {
     assert!(e.sh > e.mesh + e.vertex_state);
 }
 
+/// The scene term against the imported polygons' allocations: the vector of
+/// polygons by length (a large vector: its spare capacity is never touched,
+/// see the module documentation), and per polygon the heap blocks of its
+/// corners, its shading normals and its source reference's path and item
+/// name by capacity, each the chunk glibc's malloc takes for it
+/// (`heap_chunk`). The model counts lengths (and the item names' doubling
+/// growth): the two agree exactly when each block's spare capacity stays
+/// within its chunk's rounding.
+#[test]
+fn scene_bytes_match_the_imported_polygons() {
+    for file in ["cornell_box.obj", "glossy_floor.toml", "box_room.toml"] {
+        let (scene, _) = bundled(file, Preset::Draft, SolveMode::Diffuse, 4);
+        let block = heap_chunk;
+        let dvec3 = size_of::<DVec3>();
+        let allocated: u64 = (scene.polygons.len() * size_of::<Polygon>()) as u64
+            + scene
+                .polygons
+                .iter()
+                .map(|p| {
+                    block(p.vertices.capacity() * dvec3)
+                        + p.vertex_normals
+                            .as_ref()
+                            .map_or(0, |n| block(n.capacity() * dvec3))
+                        + block(p.source.file.capacity())
+                        + block(p.source.item.capacity())
+                })
+                .sum::<u64>();
+        // Exact for the OBJ importer's names; other names' capacities need
+        // not be a power of two, so the model may be one 16-byte chunk off a
+        // polygon: within 16 bytes per polygon.
+        let model = scene_bytes(&scene);
+        if file.ends_with(".obj") {
+            assert_eq!(model, allocated, "{file}");
+        }
+        assert!(
+            model.abs_diff(allocated) <= 16 * scene.polygons.len() as u64,
+            "{file}: {model} against {allocated}"
+        );
+    }
+}
+
 /// The vertex table: its bucket count is the smallest power of two at most
 /// 7/8 full, which is hashbrown's rule; checked against a real map grown one
 /// entry at a time (its capacity is 7/8 of its buckets).
