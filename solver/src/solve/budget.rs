@@ -9,24 +9,35 @@
 //! structure that holds it (see the functions below for the exact list):
 //!
 //! * **fixed**: the process before any solve state ([`FIXED_BYTES`], measured:
-//!   the executable, the allocator, the worker threads), plus the scene and its
-//!   occlusion BVH per surface;
+//!   the executable, the allocator, the worker threads), the scene as imported
+//!   ([`scene_bytes`]: per input polygon its [`Polygon`], corners, shading
+//!   normals and source reference, which the command line keeps for the whole
+//!   solve), and per mesh surface its tables and occlusion BVH share;
 //! * **mesh**: per vertex a [`MeshVertex`] and its slot in the vertex table (a
 //!   hashbrown map: a power-of-two bucket count at most 7/8 full, each bucket
 //!   one `(VertexKey, u32)` and one control byte), per element an [`Element`],
 //!   per split a split-log entry;
 //! * **vertex state**: the solver's per-vertex radiance, ΔL and recorded-shot
-//!   radiance (three `DVec3`) and visibility (`u32`);
+//!   radiance (three `DVec3`), visibility (`u32`) and hidden flag (`bool`);
 //! * **SH**: directional mode's radiance, ΔL and recorded-shot coefficients,
-//!   `3 (L+1)²` f64 per vertex each at its surface's order L, an offset per
-//!   vertex, and the patches' unshot coefficients;
-//! * **patches**: per patch a [`Patch`], its unshot radiance and its gather
-//!   weights (`(u32, f64)` per vertex of the patch, in a heap block of its own);
+//!   `3 (L+1)²` f64 per vertex each at its surface's order L (three more, E/π,
+//!   on a textured surface: `directional/textured.rs`), an offset per vertex,
+//!   and the patches' unshot coefficients;
+//! * **patches**: per patch a [`Patch`], its unshot radiance, its shooting
+//!   area and its gather weights (`(u32, f64)` per vertex of the patch, in a
+//!   heap block of its own);
+//! * **indexes** (diffuse mode, which alone uses them): the footprint's
+//!   per-surface vertex lists (`footprint.rs`: a `u32` per vertex in a list
+//!   per surface, each list's capacity as `Vec::push` grows it, see
+//!   [`list_slots`]), its per-surface marks, and under bounded shooting the
+//!   last shot's visited vertices (at most one `u32` per vertex); and the
+//!   unshot tree (`unshot_tree.rs`: two nodes per leaf, the leaves the patch
+//!   count rounded up to a power of two);
 //! * **recorded shots**: what refinement replays, per emitter shot its
 //!   [`RecordedShot`], its replay sample pool (points on and lifted off the
 //!   source) and the rebuilt [`Shot`], and in directional mode its unshot SH.
 //!
-//! and three transient peaks, of which only the largest counts (they never
+//! and four transient peaks, of which only the largest counts (they never
 //! overlap: each is freed before the next begins):
 //!
 //! * **shot**: one shot's per-vertex results (directional: a heap vector of
@@ -40,7 +51,11 @@
 //! * **output**: the solution ([`Solver::to_solution`]): per vertex a stored
 //!   vertex and its f32 coefficients, per display triangle its indices, and in
 //!   directional mode the diffuse-style batch that the per-order batches
-//!   replace, alive while they are built.
+//!   replace, alive while they are built;
+//! * **gather** (diffuse mode): the touched patches' list and its copy, and
+//!   the larger of the per-patch sums and the unshot tree rebuilt beside the
+//!   old one (`UnshotTree::update_many` when a shot changed more than 1/8 of
+//!   the patches).
 //!
 //! Large vectors are counted by length, not capacity: they live in their own
 //! memory mappings, and the unused part of a capacity that doubled is never
@@ -57,9 +72,10 @@
 //! is refused before its state is allocated.
 
 use super::shoot::{Received, RecordedShot, Shot, POOL_POINTS, POOL_SETS, REPLAY_POOL_SETS};
+use super::unshot_tree::NODE_BYTES;
 use super::{Directional, Solver};
 use crate::mesh::{Element, Mesh, MeshVertex, Patch, Surface, VertexKey};
-use crate::scene::Scene;
+use crate::scene::{Polygon, Scene};
 use crate::settings::SolverSettings;
 use glam::DVec3;
 use std::mem::size_of;
@@ -82,13 +98,49 @@ pub const ORDER_SHARE: f64 = 0.5;
 /// `--preset medium` less its estimated solve state).
 pub const FIXED_BYTES: u64 = 7 << 20;
 
-/// The scene (its polygon and material), the mesh's surface and piece, the
-/// per-surface tables of both modes and the occlusion BVH's share, per
-/// surface: a bound from the structures' sizes, rounded up.
+/// The mesh's surface and piece, the per-surface tables of both modes and
+/// the occlusion BVH's share, per surface: a bound from the structures'
+/// sizes, rounded up. (The input polygons are [`scene_bytes`]: a surface may
+/// weld many of them.)
 pub fn surface_bytes() -> u64 {
-    // The polygon (4 positions and their Vec), the surface (its Vec of 4), the
-    // BVH's triangles and nodes (two f32 triangles, about one node each).
-    (size_of::<Surface>() + 2 * (4 * size_of::<DVec3>() + 24) + 2 * 64 + 128 + 96) as u64
+    // The surface (its Vec of 4 positions), the BVH's triangles and nodes
+    // (two f32 triangles, about one node each).
+    (size_of::<Surface>() + 4 * size_of::<DVec3>() + 24 + 2 * 64 + 128 + 96) as u64
+}
+
+/// The scene as imported, per input polygon: its [`Polygon`] (held inline in
+/// the scene's vector), the heap blocks of its corners and of its shading
+/// normals, and its source reference's file path and item name. The scene
+/// lives for the whole solve (the command line holds it), and on a
+/// tessellated model it is one of the largest terms: the 99,628 triangles of
+/// the floor-plan scale scene take 26 MB.
+pub fn scene_bytes(scene: &Scene) -> u64 {
+    scene.polygons.iter().map(polygon_bytes).sum()
+}
+
+/// The bytes glibc's malloc takes for a block of `bytes`: an 8-byte header,
+/// rounded up to 16, at least 32 (its smallest chunk); none for an empty
+/// vector or string, which allocates nothing.
+pub(super) fn heap_chunk(bytes: usize) -> u64 {
+    if bytes == 0 {
+        return 0;
+    }
+    ((bytes as u64 + 8).div_ceil(16) * 16).max(32)
+}
+
+fn polygon_bytes(p: &Polygon) -> u64 {
+    let block = heap_chunk;
+    let normals = p
+        .vertex_normals
+        .as_ref()
+        .map_or(0, |n| block(n.len() * size_of::<DVec3>()));
+    size_of::<Polygon>() as u64
+        + block(p.vertices.len() * size_of::<DVec3>())
+        + normals
+        + block(p.source.file.as_os_str().len())
+        // The item name ("face 12 (line 40)") is built piece by piece, so
+        // its capacity doubled to the power of two above its length.
+        + block(p.source.item.len().next_power_of_two())
 }
 
 /// The buffer a checkpoint streams through (`solution::atomic::write_atomically_buffered`).
@@ -101,7 +153,7 @@ const PACKER_STATE_BYTES: u64 = 320 << 10;
 
 /// glibc's per-allocation overhead on a small heap block: an 8-byte header,
 /// rounded up to 16.
-const HEAP_BLOCK_OVERHEAD: u64 = 16;
+pub(super) const HEAP_BLOCK_OVERHEAD: u64 = 16;
 
 /// A 1 MiB buffered writer per output file written.
 const WRITER_BUFFER: u64 = 1 << 20;
@@ -130,6 +182,16 @@ pub struct Counts {
     /// Decoded diffuse textures (RGBA texels and linear pyramids) and the
     /// textured patches' RGB gather weights, in bytes (`textured.rs`).
     pub texture_bytes: u64,
+    /// The scene as imported ([`scene_bytes`]).
+    pub scene_bytes: u64,
+    /// Σ over surfaces of [`list_slots`] of its vertex count: the entries
+    /// the footprint's per-surface vertex lists hold room for.
+    pub index_slots: u64,
+    /// Surfaces with at least one vertex (one heap block each in the index).
+    pub index_lists: u64,
+    /// Bounded shooting (`--shooting bounded`), which keeps the last shot's
+    /// visited vertices.
+    pub bounded: bool,
 }
 
 /// The estimate in bytes, per term (see the module documentation).
@@ -144,17 +206,30 @@ pub struct MemoryEstimate {
     pub shot: u64,
     pub checkpoint: u64,
     pub output: u64,
+    /// The footprint index and the unshot tree (diffuse mode).
+    pub index: u64,
+    /// The gather's transient (diffuse mode).
+    pub gather: u64,
 }
 
 impl MemoryEstimate {
     /// What the solve holds between shots.
     pub fn persistent(&self) -> u64 {
-        self.fixed + self.mesh + self.vertex_state + self.sh + self.patches + self.recorded
+        self.fixed
+            + self.mesh
+            + self.vertex_state
+            + self.sh
+            + self.patches
+            + self.recorded
+            + self.index
     }
 
     /// The largest of the transient peaks (they do not overlap).
     pub fn transient(&self) -> u64 {
-        self.shot.max(self.checkpoint).max(self.output)
+        self.shot
+            .max(self.checkpoint)
+            .max(self.output)
+            .max(self.gather)
     }
 
     /// The peak: what is held plus the largest transient.
@@ -167,16 +242,18 @@ impl MemoryEstimate {
         let h = |b: u64| human_bytes(b as u128);
         format!(
             "fixed {}, mesh {}, vertex state {}, SH coefficients {}, patches {}, recorded shots \
-             {}, and the largest of shot {} / checkpoint {} / output {}",
+             {}, indexes {}, and the largest of shot {} / checkpoint {} / output {} / gather {}",
             h(self.fixed),
             h(self.mesh),
             h(self.vertex_state),
             h(self.sh),
             h(self.patches),
             h(self.recorded),
+            h(self.index),
             h(self.shot),
             h(self.checkpoint),
-            h(self.output)
+            h(self.output),
+            h(self.gather)
         )
     }
 }
@@ -204,6 +281,56 @@ fn table_bytes(n: u64) -> u64 {
     buckets * (size_of::<(VertexKey, u32)>() as u64 + 1)
 }
 
+/// The capacity, in entries, of a `Vec<u32>` grown by `n` pushes from
+/// empty: `RawVec` doubles, from at least 4 entries for elements of 4 bytes
+/// (its `MIN_NON_ZERO_CAP`), so 0 for none and max(4, n rounded up to a
+/// power of two) otherwise. The footprint's per-surface lists grow this way
+/// (`SurfaceVertices::catch_up`). Unlike the solver's large vectors, these
+/// are many small heap blocks, so their unused capacity is resident.
+pub fn list_slots(n: u64) -> u64 {
+    match n {
+        0 => 0,
+        _ => n.next_power_of_two().max(4),
+    }
+}
+
+/// The unshot tree's bytes over `patches` patches: two nodes per leaf, the
+/// leaves a power of two ≥ the patch count (`UnshotTree::new`).
+pub fn unshot_tree_bytes(patches: u64) -> u64 {
+    2 * patches.max(1).next_power_of_two() * NODE_BYTES
+}
+
+/// The indexes of a diffuse solve (see the module documentation): the
+/// footprint's lists (their slots, a heap block and a header each) and its
+/// per-surface mark (`bool`) and touched list (`u32`, by length), bounded
+/// shooting's visited list (at most every vertex), and the unshot tree.
+fn index_bytes(c: &Counts) -> u64 {
+    if c.directional {
+        return 0;
+    }
+    let lists = c.index_slots * size_of::<u32>() as u64
+        + c.index_lists * HEAP_BLOCK_OVERHEAD
+        + c.surfaces * (size_of::<Vec<u32>>() + size_of::<bool>() + size_of::<u32>()) as u64;
+    let visited = if c.bounded {
+        c.vertices * size_of::<u32>() as u64
+    } else {
+        0
+    };
+    lists + visited + unshot_tree_bytes(c.patches)
+}
+
+/// The gather's transient (diffuse mode): the touched patches and their copy
+/// (`u32` each, at most every patch), then the larger of the per-patch sums
+/// (`DVec3`) and the rebuilt unshot tree, which exists beside the old one
+/// while it replaces it.
+fn gather_bytes(c: &Counts) -> u64 {
+    if c.directional {
+        return 0;
+    }
+    2 * c.patches * size_of::<u32>() as u64
+        + (c.patches * size_of::<DVec3>() as u64).max(unshot_tree_bytes(c.patches))
+}
+
 /// Points of a sample pool of `sets` sets of `samples` (as `SamplePool::with_sets`).
 fn pool_points(samples: u64, sets: u32) -> u64 {
     let sets = (sets as u64).min((POOL_POINTS as u64 / samples.max(1)).max(8));
@@ -219,12 +346,13 @@ fn pool_bytes(samples: u64, sets: u32) -> u64 {
 pub fn estimate(c: &Counts) -> MemoryEstimate {
     let dvec3 = size_of::<DVec3>() as u64;
     let f64_ = size_of::<f64>() as u64;
-    let fixed = FIXED_BYTES + c.surfaces * surface_bytes() + c.texture_bytes;
+    let fixed = FIXED_BYTES + c.surfaces * surface_bytes() + c.texture_bytes + c.scene_bytes;
     let mesh = c.vertices * size_of::<MeshVertex>() as u64
         + table_bytes(c.vertices)
         + c.elements * size_of::<Element>() as u64
         + c.splits * size_of::<u32>() as u64;
-    let vertex_state = c.vertices * (3 * dvec3 + size_of::<u32>() as u64);
+    let vertex_state =
+        c.vertices * (3 * dvec3 + size_of::<u32>() as u64 + size_of::<bool>() as u64);
     // Radiance, ΔL and recorded-shot radiance per vertex coefficient; an
     // offset per vertex and per patch; the patches' unshot coefficients.
     let sh = if c.directional {
@@ -236,7 +364,7 @@ pub fn estimate(c: &Counts) -> MemoryEstimate {
     };
     let weight_entry = size_of::<(u32, f64)>() as u64;
     let patches = c.patches
-        * (size_of::<Patch>() as u64 + dvec3 + size_of::<Vec<(u32, f64)>>() as u64)
+        * (size_of::<Patch>() as u64 + dvec3 + f64_ + size_of::<Vec<(u32, f64)>>() as u64)
         + c.weight_entries * weight_entry
         + c.patches * HEAP_BLOCK_OVERHEAD;
     let recorded = c.recorded_shots
@@ -270,6 +398,8 @@ pub fn estimate(c: &Counts) -> MemoryEstimate {
         shot,
         checkpoint,
         output,
+        index: index_bytes(c),
+        gather: gather_bytes(c),
     }
 }
 
@@ -312,20 +442,31 @@ fn output_bytes(c: &Counts) -> u64 {
 /// The counts of a mesh not yet built: N patches per side (the solve's
 /// [`crate::mesh::Sizing`] rule for each polygon) gives N² elements
 /// per triangle or quad piece and at most (N+1)² vertices (a polygon of k > 4
-/// vertices is counted as k − 2 triangles), at SH order 0.
+/// vertices is counted as k − 2 triangles), at SH order 0, with E/π on the
+/// vertices of a directional solve's textured surfaces (a diffuse texture
+/// and UVs, as `SurfaceTexturing::new` decides).
 pub fn counts_before_meshing(scene: &Scene, settings: &SolverSettings) -> Counts {
     let mut c = Counts {
         samples: settings.samples as u64,
         directional: settings.mode == solution::format::SolveMode::Directional,
+        bounded: settings.shooting == crate::settings::Shooting::Bounded,
+        scene_bytes: scene_bytes(scene),
         ..Counts::default()
     };
     let sizing = crate::mesh::Sizing::from_settings(settings, scene);
-    let mut count = |corners: usize, n: u64| {
+    let mut textured_vertices = 0;
+    let mut count = |corners: usize, n: u64, textured: bool| {
         let pieces = if corners <= 4 { 1 } else { corners as u64 - 2 };
+        let vertices = pieces * (n + 1) * (n + 1);
         c.surfaces += 1;
         c.patches += pieces * n * n;
         c.elements += pieces * n * n;
-        c.vertices += pieces * (n + 1) * (n + 1);
+        c.vertices += vertices;
+        c.index_slots += list_slots(vertices);
+        c.index_lists += 1;
+        if textured {
+            textured_vertices += vertices;
+        }
     };
     // The receivers the mesh cuts along contact lines (`mesh::contact`),
     // part by part, as `Solver::new` decides.
@@ -335,12 +476,17 @@ pub fn counts_before_meshing(scene: &Scene, settings: &SolverSettings) -> Counts
         crate::mesh::contact::conform(scene)
     };
     for (p, parts) in scene.polygons.iter().zip(&parts) {
+        let textured = p.uv_map.is_some() && scene.materials[p.material].diffuse_texture.is_some();
         match parts {
-            None => count(p.vertices.len(), sizing.patches_per_side(p) as u64),
+            None => count(
+                p.vertices.len(),
+                sizing.patches_per_side(p) as u64,
+                textured,
+            ),
             Some(parts) => {
                 for part in parts {
                     let n = sizing.patches_per_side_of_part(p, &part.vertices);
-                    count(part.vertices.len(), n as u64);
+                    count(part.vertices.len(), n as u64, textured);
                 }
             }
         }
@@ -358,13 +504,15 @@ pub fn counts_before_meshing(scene: &Scene, settings: &SolverSettings) -> Counts
         }
     }
     if c.directional {
-        c.vertex_coefficients = 3 * c.vertices;
+        c.vertex_coefficients = 3 * c.vertices + 3 * textured_vertices;
         c.patch_coefficients = 3 * c.patches;
     }
     c
 }
 
-/// The counts of a built mesh, its surfaces at SH orders `order_of(surface)`,
+/// The counts of a built mesh, its surfaces at SH orders `order_of(surface)`
+/// (with E/π on the vertices of the surfaces `textured` marks, in a
+/// directional solve; an empty slice marks none),
 /// with `recorded_shots` (of order-0 sources) and the weights as a fresh
 /// mesh has them (each vertex once per patch it is a corner of, bounded by
 /// vertices + 3 per patch).
@@ -372,6 +520,7 @@ pub fn counts_for_mesh(
     mesh: &Mesh,
     settings: &SolverSettings,
     order_of: impl Fn(usize) -> u32,
+    textured: &[bool],
     recorded_shots: u64,
 ) -> Counts {
     let directional = settings.mode == solution::format::SolveMode::Directional;
@@ -393,13 +542,17 @@ pub fn counts_for_mesh(
         recorded_shots,
         samples: settings.samples as u64,
         directional,
+        index_slots: per_surface_vertices.iter().map(|&n| list_slots(n)).sum(),
+        index_lists: per_surface_vertices.iter().filter(|&&n| n > 0).count() as u64,
+        bounded: settings.shooting == crate::settings::Shooting::Bounded,
         ..Counts::default()
     };
     if directional {
         c.recorded_coefficients = 3 * recorded_shots;
         for s in 0..mesh.surfaces.len() {
+            let e_over_pi = if textured.get(s) == Some(&true) { 3 } else { 0 };
             let k = coefficients(order_of(s));
-            c.vertex_coefficients += per_surface_vertices[s] * k;
+            c.vertex_coefficients += per_surface_vertices[s] * (k + e_over_pi);
             c.patch_coefficients += per_surface_patches[s] * k;
         }
     }
@@ -420,22 +573,29 @@ pub fn emitter_patches(scene: &Scene, mesh: &Mesh) -> u64 {
 /// peak fits in `target` bytes: while it does not, the highest order (the
 /// first such material on ties) drops by one, since the coefficients of one
 /// vertex grow as (L+1)² and the highest order costs the most per band. Orders
-/// stop at 0; the caller refuses what still does not fit.
+/// stop at 0; the caller refuses what still does not fit. `textured` marks
+/// the surfaces whose vertices also hold E/π ([`counts_for_mesh`]); the
+/// scene itself takes `scene_bytes` ([`scene_bytes`]).
 pub fn orders_within(
     mesh: &Mesh,
     settings: &SolverSettings,
     material_orders: &[u32],
-    recorded_shots: u64,
+    textured: &[bool],
+    (recorded_shots, scene_bytes): (u64, u64),
     target: u64,
 ) -> Vec<u32> {
     let mut orders = material_orders.to_vec();
     loop {
-        let counts = counts_for_mesh(
-            mesh,
-            settings,
-            |s| orders[mesh.surfaces[s].material],
-            recorded_shots,
-        );
+        let counts = Counts {
+            scene_bytes,
+            ..counts_for_mesh(
+                mesh,
+                settings,
+                |s| orders[mesh.surfaces[s].material],
+                textured,
+                recorded_shots,
+            )
+        };
         if estimate(&counts).peak() <= target {
             return orders;
         }
@@ -493,30 +653,43 @@ pub fn coefficients(order: u32) -> u64 {
 }
 
 /// The bytes one split may add on a surface of `coefficients` values per
-/// vertex: four elements, at most five vertices (four edge midpoints and a
-/// centre) with their gather-weight entries (two each: a vertex on a patch
-/// edge is in both patches) and their SH, charged at their persistent size
-/// plus their share of the largest transient and a doubling vertex table.
-pub fn split_cost(coefficients: u64, directional: bool) -> u64 {
+/// vertex (its SH, and E/π on a textured surface): four elements, at most
+/// five vertices (four edge midpoints and a centre) with their gather-weight
+/// entries (two each: a vertex on a patch edge is in both patches) and their
+/// SH, charged at their persistent size plus their share of the largest
+/// transient, a doubling vertex table and, in diffuse mode, a doubling
+/// footprint list (two `u32` slots a vertex).
+pub fn split_cost(coefficients: u64, directional: bool, bounded: bool) -> u64 {
     let delta = Counts {
         elements: 4,
         vertices: 5,
         splits: 1,
         weight_entries: 10,
         directional,
+        bounded,
         vertex_coefficients: if directional { 5 * coefficients } else { 0 },
         ..Counts::default()
     };
     let e = estimate(&delta);
     // Without the constants that `estimate` adds whatever the counts (the
-    // fixed bytes, the pool, the writer buffer, the table of 5 entries).
-    let persistent = e.persistent() - FIXED_BYTES - table_bytes(5);
+    // fixed bytes, the pool, the writer buffer, the table of 5 entries, the
+    // one-leaf unshot tree and its gather).
+    let empty = Counts {
+        directional,
+        ..Counts::default()
+    };
+    let persistent = e.persistent() - FIXED_BYTES - table_bytes(5) - index_bytes(&empty);
     let transient = (e.shot - pool_bytes(0, POOL_SETS))
         .max(e.checkpoint)
         .max(e.output - WRITER_BUFFER);
     // A doubling table holds up to two buckets per entry (8/7 · 2).
     let table = 5 * 16 * (size_of::<(VertexKey, u32)>() as u64 + 1) / 7;
-    persistent + transient + table
+    let lists = if directional {
+        0
+    } else {
+        5 * 2 * size_of::<u32>() as u64
+    };
+    persistent + transient + table + lists
 }
 
 /// How much refinement may still add this shot: bytes left under the plan and
@@ -580,6 +753,8 @@ impl Solver {
             samples: self.settings.samples as u64,
             directional: false,
             texture_bytes: self.texture_bytes(),
+            scene_bytes: self.scene_bytes,
+            bounded: self.settings.shooting == crate::settings::Shooting::Bounded,
             ..Counts::default()
         };
         if let Some(d) = d {
@@ -589,6 +764,13 @@ impl Solver {
                 c.patch_coefficients,
                 c.recorded_coefficients,
             ) = d.coefficient_totals();
+        } else {
+            // The footprint's lists as they are once they have caught up with
+            // the mesh (they do at the next shot or gather).
+            for n in self.footprint.surface_vertices.lengths(&self.mesh) {
+                c.index_slots += list_slots(n);
+                c.index_lists += u64::from(n > 0);
+            }
         }
         c
     }
@@ -618,8 +800,8 @@ impl Solver {
         };
         let cost = (0..self.mesh.surfaces.len())
             .map(|s| {
-                let order = directional.map_or(0, |d| d.surface_orders()[s]);
-                split_cost(coefficients(order), directional.is_some())
+                let values = directional.map_or(0, |d| d.vertex_values(s));
+                split_cost(values, directional.is_some(), counts.bounded)
             })
             .collect();
         // The vertex table grows by doubling, all at once: plan as if this

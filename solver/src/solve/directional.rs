@@ -381,6 +381,12 @@ impl Directional {
         &self.surface_order
     }
 
+    /// Values held per vertex of mesh surface `s` in each per-vertex array:
+    /// its coefficients, and E/π when it is textured (for the memory budget).
+    pub(super) fn vertex_values(&self, s: usize) -> u64 {
+        self.vertex_width(s) as u64
+    }
+
     fn vertex_range(&self, mesh: &Mesh, v: usize) -> std::ops::Range<usize> {
         let o = self.vertex_offset[v];
         o..o + 3 * coefficient_count(self.surface_order[mesh.vertices[v].surface as usize])
@@ -424,7 +430,16 @@ fn cap_orders(
         .collect();
     let target = (budget::plan(limit) as f64 * budget::ORDER_SHARE) as u64;
     let recorded = budget::emitter_patches(scene, mesh);
-    let kept = budget::orders_within(mesh, settings, &wanted, recorded, target);
+    let textured = textured::textured_surfaces(scene, mesh);
+    let scene_bytes = budget::scene_bytes(scene);
+    let kept = budget::orders_within(
+        mesh,
+        settings,
+        &wanted,
+        &textured,
+        (recorded, scene_bytes),
+        target,
+    );
     for (m, (&want, &keep)) in wanted.iter().zip(&kept).enumerate() {
         if keep == want {
             continue;

@@ -56,6 +56,34 @@ impl SurfaceVertices {
         self.indexed = mesh.vertices.len();
     }
 
+    /// Per surface of `mesh`, the length its list has once it has caught up
+    /// with the mesh (for the memory estimate, `budget.rs`): O(surfaces +
+    /// the vertices not yet indexed).
+    pub fn lengths(&self, mesh: &Mesh) -> Vec<u64> {
+        let mut lengths = vec![0u64; mesh.surfaces.len()];
+        for (n, list) in lengths.iter_mut().zip(&self.lists) {
+            *n = list.len() as u64;
+        }
+        for v in &mesh.vertices[self.indexed.min(mesh.vertices.len())..] {
+            lengths[v.surface as usize] += 1;
+        }
+        lengths
+    }
+
+    /// The bytes the lists hold as allocated: their capacities, a heap block
+    /// overhead for each non-empty one and their headers (tests of the
+    /// memory estimate).
+    #[cfg(test)]
+    pub fn allocated_bytes(&self) -> u64 {
+        let blocks = self.lists.iter().filter(|l| l.capacity() > 0).count() as u64;
+        self.lists
+            .iter()
+            .map(|l| (l.capacity() * std::mem::size_of::<u32>()) as u64)
+            .sum::<u64>()
+            + blocks * super::budget::HEAP_BLOCK_OVERHEAD
+            + (self.lists.capacity() * std::mem::size_of::<Vec<u32>>()) as u64
+    }
+
     /// The vertices of surface `s`.
     pub fn of(&self, s: u32) -> &[u32] {
         self.lists.get(s as usize).map_or(&[], |l| l.as_slice())
@@ -97,6 +125,17 @@ impl Footprint {
         return self.always_sparse;
         #[cfg(not(test))]
         false
+    }
+
+    /// The lengths of the per-surface marks, the touched list and bounded
+    /// shooting's visited list (tests of the memory estimate).
+    #[cfg(test)]
+    pub fn set_lengths(&self) -> (usize, usize, usize) {
+        (
+            self.marked.len(),
+            self.touched.len(),
+            self.last_visited.len(),
+        )
     }
 
     fn begin_shot(&mut self, surfaces: usize) {

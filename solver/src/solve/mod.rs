@@ -242,6 +242,9 @@ pub struct Solver {
     pending_warnings: Vec<String>,
     /// The largest peak memory estimated so far ([`budget`]).
     peak_estimate: u64,
+    /// The scene as imported, which the caller holds during the solve
+    /// ([`budget::scene_bytes`]).
+    scene_bytes: u64,
     /// Whether the memory budget has refused a split (warned once).
     refinement_capped: bool,
     /// The surfaces under a bounding-volume hierarchy, for bounded shooting.
@@ -291,20 +294,26 @@ impl Solver {
         // has no seam pass for flat facets yet, so it keeps them whole.
         let conform = !settings.whole_receivers && settings.mode == SolveMode::Diffuse;
         let mesh = Mesh::with_contacts(scene, offset, &sizing, conform)?;
-        let emitter_patches = budget::emitter_patches(scene, &mesh);
-        // The same with the mesh's exact counts, before the solve's state
-        // (each emitter patch shoots, and is recorded, at least once).
-        check_coarsest(
-            &budget::counts_for_mesh(&mesh, settings, |_| 0, emitter_patches),
-            settings,
-            "the unrefined mesh",
-        )?;
         match mesh.surfaces.len() {
             0 => return Err(SolveError::EmptyScene),
             1 => return Err(SolveError::SinglePolygon),
             _ => {}
         }
         let texturing = textured::SurfaceTexturing::new(scene, &mesh, offset);
+        // The same with the mesh's exact counts, before the solve's state
+        // (each emitter patch shoots, and is recorded, at least once; a
+        // directional solve's textured vertices also hold E/π).
+        let emitter_patches = budget::emitter_patches(scene, &mesh);
+        let textured: Vec<bool> = texturing.per_surface.iter().map(Option::is_some).collect();
+        let scene_bytes = budget::scene_bytes(scene);
+        check_coarsest(
+            &budget::Counts {
+                scene_bytes,
+                ..budget::counts_for_mesh(&mesh, settings, |_| 0, &textured, emitter_patches)
+            },
+            settings,
+            "the unrefined mesh",
+        )?;
         let albedo: Vec<DVec3> = mesh
             .surfaces
             .iter()
@@ -412,6 +421,7 @@ impl Solver {
             warnings: Vec::new(),
             pending_warnings: Vec::new(),
             peak_estimate: 0,
+            scene_bytes,
             refinement_capped: false,
             receivers,
             footprint: footprint::Footprint::default(),

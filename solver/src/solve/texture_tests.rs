@@ -247,6 +247,59 @@ fn textures_are_counted_in_the_memory_budget() {
     assert_eq!(plain.memory_counts().texture_bytes, 0);
 }
 
+/// A directional solve's textured vertices hold E/π (three values after
+/// their coefficients in each per-vertex array): the estimates before the
+/// state is allocated count them, exactly for the built mesh and as the
+/// usual (N+1)² upper bound before meshing, and the split cost charges them.
+#[test]
+fn directional_e_over_pi_is_counted_in_the_memory_budget() {
+    let mut wall = material("wall", 1.0, 0.0);
+    wall.diffuse_texture = Some(texture(8, |x, y| if (x + y) % 2 == 0 { 40 } else { 220 }));
+    let scene = room(wall);
+    let settings = directional_settings();
+    let solver = Solver::new(&scene, &settings).unwrap();
+    let d = solver.directional().unwrap();
+    // The allocated per-vertex values, summed from the arrays themselves.
+    let (allocated, _, _) = d.coefficient_totals();
+    let textured: Vec<bool> = solver
+        .texturing
+        .per_surface
+        .iter()
+        .map(Option::is_some)
+        .collect();
+    let textured_vertices = solver
+        .mesh
+        .vertices
+        .iter()
+        .filter(|v| textured[v.surface as usize])
+        .count() as u64;
+    assert!(textured_vertices > 0);
+    let orders = d.surface_orders().to_vec();
+    let recorded = budget::emitter_patches(&scene, &solver.mesh);
+    let model =
+        budget::counts_for_mesh(&solver.mesh, &settings, |s| orders[s], &textured, recorded);
+    assert_eq!(model.vertex_coefficients, allocated);
+    // Without E/π it would be three values short per textured vertex
+    // (half of an order-0 textured vertex's six).
+    let plain = budget::counts_for_mesh(&solver.mesh, &settings, |s| orders[s], &[], recorded);
+    assert_eq!(plain.vertex_coefficients + 3 * textured_vertices, allocated);
+    // Before meshing: N² patches and (N+1)² vertices a quad, six values per
+    // textured vertex at order 0: an upper bound (the walls' patch corners
+    // are shared along their edges only within a wall, as counted).
+    let before = budget::counts_before_meshing(&scene, &settings);
+    assert!(before.vertex_coefficients >= allocated);
+    let before_plain_walls = 3 * before.vertices;
+    assert!(before.vertex_coefficients > before_plain_walls);
+    // A split on a textured surface charges its five new vertices' E/π too.
+    let s = textured.iter().position(|&t| t).unwrap();
+    assert_eq!(d.vertex_values(s), 6);
+    // Five vertices × three more values in the radiance, ΔL and recorded
+    // arrays (f64) at least.
+    assert!(
+        budget::split_cost(6, true, false) >= budget::split_cost(3, true, false) + 5 * 3 * 3 * 8
+    );
+}
+
 #[test]
 fn a_checkpoint_refuses_a_changed_texture_and_resumes_the_same_one() {
     // Textured vertices hold E/π and their patches shoot through the

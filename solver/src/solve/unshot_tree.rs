@@ -30,6 +30,9 @@ struct Node {
     patch: u32,
 }
 
+/// A node's bytes, for the memory estimate (`budget.rs`).
+pub(super) const NODE_BYTES: u64 = std::mem::size_of::<Node>() as u64;
+
 const EMPTY: Node = Node {
     sum: DVec3::ZERO,
     power: f64::NEG_INFINITY,
@@ -109,6 +112,12 @@ impl UnshotTree {
         }
     }
 
+    /// The bytes its nodes hold as allocated (tests of the memory estimate).
+    #[cfg(test)]
+    pub fn allocated_bytes(&self) -> u64 {
+        (self.nodes.capacity() * std::mem::size_of::<Node>()) as u64
+    }
+
     /// Σ_p U_p · a_p (RGB).
     pub fn unshot_area_sum(&self) -> DVec3 {
         self.nodes[1].sum
@@ -164,6 +173,13 @@ impl Solver {
                 reflect,
             }
         })
+    }
+
+    /// The unshot tree's bytes as allocated, once built (tests of the
+    /// memory estimate).
+    #[cfg(test)]
+    pub(super) fn unshot_tree_allocated(&self) -> Option<u64> {
+        self.unshot_index.as_ref().map(|i| i.tree.allocated_bytes())
     }
 
     /// The patch with the most unshot power ([`Solver::choose_source`]'s
