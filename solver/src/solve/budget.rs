@@ -470,7 +470,7 @@ pub fn counts_before_meshing(scene: &Scene, settings: &SolverSettings) -> Counts
     };
     // The receivers the mesh cuts along contact lines (`mesh::contact`),
     // part by part, as `Solver::new` decides.
-    let parts = if settings.whole_receivers || c.directional {
+    let parts = if settings.whole_receivers {
         vec![None; scene.polygons.len()]
     } else {
         crate::mesh::contact::conform(scene)

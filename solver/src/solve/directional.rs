@@ -94,6 +94,7 @@ use std::sync::Arc;
 use std::time::Instant;
 
 mod hidden_fill;
+mod seams;
 mod state;
 mod textured;
 
@@ -994,10 +995,16 @@ impl Solver {
         let scale = (4.0 * PI).sqrt();
         let triangles = self.mesh.triangles();
         let radiance = self.displayed_coefficients(d, &triangles);
-        // Per order: the batch and the map from mesh vertex to batch vertex.
+        // The pieces of a receiver cut along contact lines share their
+        // seams (`directional/seams.rs`); every other vertex maps to itself.
+        let (shared, radiance) =
+            seams::share_coefficients(&self.mesh, |v| d.vertex_range(&self.mesh, v), &radiance);
+        // Per order: the batch and the map from output vertex to batch vertex.
         let mut batches: BTreeMap<u32, Batch> = BTreeMap::new();
-        let mut local = vec![u32::MAX; self.mesh.vertices.len()];
-        for (v, mv) in self.mesh.vertices.iter().enumerate() {
+        let mut local = vec![u32::MAX; shared.representative.len()];
+        for (o, &v) in shared.representative.iter().enumerate() {
+            let v = v as usize;
+            let mv = &self.mesh.vertices[v];
             // Textured surfaces (diffuse or emission textures) have batches
             // of their own (below).
             if self.directional_shown(d, mv.surface as usize).is_some() {
@@ -1013,7 +1020,7 @@ impl Solver {
                 indices: Vec::new(),
                 texturing: None,
             });
-            local[v] = batch.vertices.len() as u32;
+            local[o] = batch.vertices.len() as u32;
             let f = |x: DVec3| x.as_vec3().to_array();
             batch.vertices.push(Vertex {
                 position: f(mv.position),
@@ -1030,8 +1037,9 @@ impl Solver {
                 + self.kd[mv.surface as usize] * ambient * scale;
             batch.coefficients[start..start + 3].copy_from_slice(&c00.as_vec3().to_array());
         }
-        for t in triangles {
-            let surface = self.mesh.vertices[t[0] as usize].surface as usize;
+        for t in shared.triangles(&triangles) {
+            let first = shared.representative[t[0] as usize];
+            let surface = self.mesh.vertices[first as usize].surface as usize;
             if self.directional_shown(d, surface).is_some() {
                 continue;
             }
@@ -1221,8 +1229,8 @@ impl Field for DirField<'_, '_> {
 /// L2 norm of its ends' coefficient difference (by Parseval, the L2
 /// difference of their radiance over the sphere) exceeds the threshold times
 /// the larger end's norm, per channel, after the diffuse test's allowance for
-/// sampling noise; elements whose children would have an edge shorter than
-/// the surface's [`min_glossy_edge`] do not split.
+/// sampling noise; elements whose children's longest edge would be shorter
+/// than the surface's [`min_glossy_edge`] do not split.
 fn should_split_sh(
     mesh: &Mesh,
     d: &Directional,
@@ -1239,14 +1247,21 @@ fn should_split_sh(
         return false;
     }
     let corners = el.corners();
-    // The α floor: a split halves every edge.
-    let shortest = (0..corners.len())
+    // The α floor, on the longest edge (a split halves every edge): as the
+    // diffuse floor (`Criteria::at_smallest`), since the longest edge bounds
+    // the distance over which the lobe is interpolated linearly. A sliver
+    // (the thin pieces a contact cut leaves along its lines) is refined
+    // until its long side is short; tested on its shortest edge, it never
+    // split, and its long elements spread the light's reflection on the
+    // glossy Cornell box's floor (docs/accuracy.md, "Glossy: contact cuts in
+    // directional mode").
+    let longest = (0..corners.len())
         .map(|k| {
             let (a, b) = (corners[k], corners[(k + 1) % corners.len()]);
             (mesh.vertices[a as usize].position - mesh.vertices[b as usize].position).length()
         })
-        .fold(f64::INFINITY, f64::min);
-    if 0.5 * shortest < d.min_edge[surface_index] {
+        .fold(0.0, f64::max);
+    if 0.5 * longest < d.min_edge[surface_index] {
         return false;
     }
     let n = corners.len();

@@ -674,8 +674,8 @@ fn glossy_furnace_uniformity_by_normalization() {
 
 /// Glossy refinement stops at the α floor: on the glossy floor (α = 0.1),
 /// with the area and depth limits below it, the floor refines (the
-/// highlight) but no floor leaf has an edge shorter than `min_glossy_edge`
-/// (α · D / 2, D half the diagonal of the scene's bounds).
+/// highlight) but no floor leaf has a longest edge shorter than
+/// `min_glossy_edge` (α · D / 2, D half the diagonal of the scene's bounds).
 #[test]
 fn glossy_elements_stop_at_the_alpha_floor() {
     let (scene, mut settings) = glossy_floor();
@@ -697,6 +697,8 @@ fn glossy_elements_stop_at_the_alpha_floor() {
     let h_min = super::directional::min_glossy_edge(0.1, 0.5 * (hi - lo).length());
     let orders = solver.directional().unwrap().surface_orders();
     let mut glossy_splits = 0;
+    // The floor is measured on each leaf's longest edge (a sliver refines
+    // until its long side is short): the shortest of those.
     let mut shortest_glossy = f64::INFINITY;
     for el in &mesh.elements {
         let surface = mesh.patches[el.patch as usize].surface as usize;
@@ -708,14 +710,16 @@ fn glossy_elements_stop_at_the_alpha_floor() {
             continue;
         }
         let c = el.corners();
-        for k in 0..c.len() {
-            let (a, b) = (c[k] as usize, c[(k + 1) % c.len()] as usize);
-            let edge = (mesh.vertices[a].position - mesh.vertices[b].position).length();
-            shortest_glossy = shortest_glossy.min(edge);
-        }
+        let longest = (0..c.len())
+            .map(|k| {
+                let (a, b) = (c[k] as usize, c[(k + 1) % c.len()] as usize);
+                (mesh.vertices[a].position - mesh.vertices[b].position).length()
+            })
+            .fold(0.0, f64::max);
+        shortest_glossy = shortest_glossy.min(longest);
     }
     println!(
-        "α floor {h_min:.3}: {glossy_splits} glossy splits, shortest glossy edge \
+        "α floor {h_min:.3}: {glossy_splits} glossy splits, shortest longest glossy edge \
          {shortest_glossy:.3}"
     );
     assert!(glossy_splits > 0);
@@ -733,6 +737,11 @@ fn glossy_elements_stop_at_the_alpha_floor() {
 /// glossy floor. Every polygon is cut into 5 × 5 patches, so the floor
 /// elements [0.4, 0.8] × … straddle the box's face at x = 0.7.
 fn glossy_box_on_floor(kd: f64, ks: f64, alpha: f64, le: f64) -> Scene {
+    glossy_box_on_floor_under(kd, ks, alpha, le, contact_light())
+}
+
+/// [`glossy_box_on_floor`] lit by `light` (a black emitter of Le `le`).
+fn glossy_box_on_floor_under(kd: f64, ks: f64, alpha: f64, le: f64, light: Vec<DVec3>) -> Scene {
     let p = |x: f64, y: f64, z: f64| DVec3::new(x, y, z);
     let (a, b, h) = (0.7, 1.3, 0.3);
     let floor = vec![p(0., 0., 0.), p(0., 0., 2.), p(2., 0., 2.), p(2., 0., 0.)];
@@ -749,7 +758,7 @@ fn glossy_box_on_floor(kd: f64, ks: f64, alpha: f64, le: f64) -> Scene {
             (back, 1),
             (left, 1),
             (right, 1),
-            (contact_light(), 2),
+            (light, 2),
         ],
         vec![
             glossy("floor", kd, ks, alpha),
@@ -828,6 +837,10 @@ fn glossy_floor_next_to_a_contact_line_shows_its_own_exitance() {
     settings.samples = 16;
     settings.ambient = false;
     settings.threshold = 1e-4;
+    // Whole receivers, so that floor elements straddle the box's base and
+    // their hidden corners are filled (conformed to the base, none would be
+    // hidden: `conformed_glossy_floor_on_the_contact_line_receives_exactly`).
+    settings.whole_receivers = true;
     let solver = run(&scene, &settings);
     let solution = solver.to_solution(false);
     let offset = solver.offset();
@@ -860,4 +873,121 @@ fn glossy_floor_next_to_a_contact_line_shows_its_own_exitance() {
         worst < 0.03,
         "worst relative error {worst:.4} beside the contact line"
     );
+}
+
+/// A 0.4 × 0.4 light facing down 0.2 above the floor beside the box, over x
+/// in [0.2, 0.6], z in [0.8, 1.2] (`hidden_tests.rs`'s near light): the
+/// floor's irradiance at z = 1 falls by a factor of 3.4 from x = 0.4 to the
+/// box's face at x = 0.7, so a value extended over an element's width is far
+/// off there.
+fn near_light() -> Vec<DVec3> {
+    let p = |x: f64, z: f64| DVec3::new(x, 0.2, z);
+    vec![p(0.2, 0.8), p(0.6, 0.8), p(0.6, 1.2), p(0.2, 1.2)]
+}
+
+/// Directional mode cuts receivers along contact lines (`mesh::contact`) as
+/// the diffuse mode does: the glossy floor's vertices on the box's base, on
+/// the visible side, receive where they are, and the displayed SH there has
+/// the exact exitance (Kd + Ks) π Le F (F the exact point-to-polygon factor;
+/// the box and the light are black, so only the light reaches the floor, and
+/// the lobe's normalization reflects exactly Ks of each beam, see
+/// [`glossy_floor_next_to_a_contact_line_shows_its_own_exitance`]).
+#[test]
+fn conformed_glossy_floor_on_the_contact_line_receives_exactly() {
+    use crate::geometry::formfactor::SourcePolygon;
+    let (kd, ks, alpha, le) = (0.3, 0.5, 0.3, 6.0);
+    let scene = glossy_box_on_floor_under(kd, ks, alpha, le, near_light());
+    let light = SourcePolygon::new(&near_light());
+    let exact =
+        |x: f64, z: f64| (kd + ks) * PI * le * light.form_factor(DVec3::new(x, 0.0, z), DVec3::Y);
+    let worst = |whole: bool| {
+        let mut settings = directional_settings();
+        settings.samples = 16;
+        settings.ambient = false;
+        settings.threshold = 1e-4;
+        settings.whole_receivers = whole;
+        let solver = run(&scene, &settings);
+        let solution = solver.to_solution(false);
+        let mut worst: f64 = 0.0;
+        for z in [0.8, 1.2] {
+            let x = 0.7 - 1e-7;
+            let (order, sh) = displayed_floor_sh(&solution, solver.offset(), x, z);
+            let shown = exitance(order, &sh).x;
+            let truth = exact(x, z);
+            let error = (shown - truth).abs() / truth;
+            println!("whole {whole}: floor ({x}, {z}) L={order}: shown {shown:.5}, exact {truth:.5}, error {error:.4}");
+            worst = worst.max(error);
+        }
+        worst
+    };
+    // 1%, as the diffuse test (`hidden_tests.rs`): the vertex receives at a
+    // point stepped 1e-3 of the way toward its element's centre (under 0.3
+    // mm, where F changes by under 0.1%), all 16 visibility rays reach the
+    // light, and the SH is stored in f32.
+    let conformed = worst(false);
+    assert!(conformed < 0.01, "conformed: worst error {conformed:.4}");
+    // Whole, the element [0.4, 0.8] straddles the line and its corners at x
+    // = 0.8 show their visible neighbours' mean, 0.4 away: far off.
+    let whole = worst(true);
+    assert!(whole > 0.3, "whole floor: worst error {whole:.4}");
+}
+
+/// The glossy floor's cut pieces share their seams in the SH output
+/// (`directional/seams.rs`): after adaptive subdivision every edge of the
+/// displayed floor is shared by two triangles (one output vertex per
+/// position, no T-junction across the cuts), except on the floor's outline
+/// and round the box's base, where the covered piece meets the visible ones.
+#[test]
+fn conformed_glossy_floor_seams_are_crack_free() {
+    let scene = glossy_box_on_floor_under(0.3, 0.5, 0.3, 6.0, near_light());
+    let mut settings = directional_settings();
+    settings.adaptive = true;
+    settings.ambient = false;
+    let mut solver = Solver::new(&scene, &settings).unwrap();
+    for _ in 0..40 {
+        if solver.step().is_none() {
+            break;
+        }
+    }
+    let solution = solver.to_solution(false);
+    let offset = solver.offset();
+    let batch = solution
+        .batches
+        .iter()
+        .find(|b| !matches!(b.representation, Representation::Sh { order: 0 }))
+        .expect("the glossy floor's batch");
+    let position =
+        |i: u32| glam::Vec3::from_array(batch.vertices[i as usize].position).as_dvec3() + offset;
+    let mut edges = std::collections::HashMap::new();
+    for t in batch.indices.chunks_exact(3) {
+        for k in 0..3 {
+            *edges.entry((t[k], t[(k + 1) % 3])).or_insert(0u32) += 1;
+        }
+    }
+    let triangles = batch.indices.len() / 3;
+    // 25 patches, two triangles each, before any cut or split.
+    assert!(triangles > 100, "{triangles} floor triangles");
+    // On the outline x or z ∈ {0, 2}, or on the base's boundary; 1e-6: the
+    // positions are stored in f32.
+    let on = |v: f64, a: f64| (v - a).abs() < 1e-6;
+    let boundary = |p: DVec3| {
+        on(p.x, 0.0) || on(p.x, 2.0) || on(p.z, 0.0) || on(p.z, 2.0) || {
+            let inside = |v: f64| (0.7 - 1e-6..=1.3 + 1e-6).contains(&v);
+            inside(p.x) && inside(p.z) && [p.x, p.z].iter().any(|&v| on(v, 0.7) || on(v, 1.3))
+        }
+    };
+    let mut open = 0;
+    for (&(a, b), &count) in &edges {
+        assert_eq!(count, 1, "edge {a}-{b} used twice in one direction");
+        if edges.contains_key(&(b, a)) {
+            continue;
+        }
+        let (pa, pb) = (position(a), position(b));
+        if boundary(pa) && boundary(pb) && boundary((pa + pb) * 0.5) {
+            continue;
+        }
+        println!("open edge {pa} - {pb}");
+        open += 1;
+    }
+    assert_eq!(open, 0, "{open} floor edges without a neighbour");
 }

@@ -289,10 +289,10 @@ impl Solver {
         )?;
         let offset = scene_centre(scene);
         let sizing = crate::mesh::Sizing::from_settings(settings, scene);
-        // Receivers are cut along contact lines in the diffuse mode, whose
-        // output shares the cuts' seams (`seams.rs`); the directional output
-        // has no seam pass for flat facets yet, so it keeps them whole.
-        let conform = !settings.whole_receivers && settings.mode == SolveMode::Diffuse;
+        // Receivers are cut along contact lines (`mesh::contact`) in both
+        // modes; each output shares the cuts' seams (diffuse: `seams.rs`,
+        // directional: `directional/seams.rs`).
+        let conform = !settings.whole_receivers;
         let mesh = Mesh::with_contacts(scene, offset, &sizing, conform)?;
         match mesh.surfaces.len() {
             0 => return Err(SolveError::EmptyScene),

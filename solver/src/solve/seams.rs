@@ -135,6 +135,45 @@ pub(crate) fn share_vertices_with_uvs(
     radiance: &[DVec3],
     uv: &dyn Fn(u32, DVec3) -> Option<glam::DVec2>,
 ) -> SharedVertices {
+    share_vertices(mesh, radiance, uv, false)
+}
+
+/// [`share_vertices_with_uvs`] for outputs whose vertex values are written in
+/// their polygon's frame (directional mode's SH): only vertices of surfaces
+/// cut from one input polygon (`mesh::contact`'s pieces, which share its
+/// normal and tangent) merge, and T-junctions are resolved only across those
+/// pieces, so no value of one frame is ever averaged with, or interpolated
+/// as, a value of another. Untextured; the returned radiance is unused
+/// (zero): callers average their own values over [`SharedVertices::output_of`]
+/// with [`vertex_weights`].
+pub(crate) fn share_vertices_within_polygons(mesh: &Mesh) -> SharedVertices {
+    let zero = vec![DVec3::ZERO; mesh.vertices.len()];
+    share_vertices(mesh, &zero, &|_, _| None, true)
+}
+
+/// Each mesh vertex's share of the displayed area: a third or a quarter of
+/// every leaf element that has it as a corner (the weights of the merged
+/// vertices' mean).
+pub(crate) fn vertex_weights(mesh: &Mesh) -> Vec<f64> {
+    let mut weight = vec![0.0; mesh.vertices.len()];
+    for e in mesh.elements.iter().filter(|e| e.is_leaf()) {
+        for &c in e.corners() {
+            weight[c as usize] += e.area / e.corners().len() as f64;
+        }
+    }
+    weight
+}
+
+fn share_vertices(
+    mesh: &Mesh,
+    radiance: &[DVec3],
+    uv: &dyn Fn(u32, DVec3) -> Option<glam::DVec2>,
+    within_polygon: bool,
+) -> SharedVertices {
+    // Whether two surfaces' vertices may share an output vertex.
+    let same_frame = |a: u32, b: u32| {
+        !within_polygon || mesh.surfaces[a as usize].polygon == mesh.surfaces[b as usize].polygon
+    };
     // Whether mesh vertex `r` has the UV that `surface` has at `p`.
     let same_uv = |r: u32, surface: u32, p: DVec3| {
         let r = &mesh.vertices[r as usize];
@@ -150,12 +189,7 @@ pub(crate) fn share_vertices_with_uvs(
             .corner_normals
             .is_some()
     };
-    let mut weight = vec![0.0; n];
-    for e in mesh.elements.iter().filter(|e| e.is_leaf()) {
-        for &c in e.corners() {
-            weight[c as usize] += e.area / e.corners().len() as f64;
-        }
-    }
+    let weight = vertex_weights(mesh);
     let tol = SMOOTH_TOLERANCE * mesh_diagonal(mesh);
     let mut grid = Grid {
         tol: tol.max(f64::MIN_POSITIVE),
@@ -175,7 +209,8 @@ pub(crate) fn share_vertices_with_uvs(
         let vertex = &mesh.vertices[v];
         let material = mesh.surfaces[vertex.surface as usize].material;
         let coincides = |r: &crate::mesh::MeshVertex| {
-            mesh.surfaces[r.surface as usize].material == material
+            same_frame(r.surface, vertex.surface)
+                && mesh.surfaces[r.surface as usize].material == material
                 && (r.position - vertex.position).length() <= tol
                 && r.normal.dot(vertex.normal) >= SAME_NORMAL
         };
@@ -230,7 +265,7 @@ pub(crate) fn share_vertices_with_uvs(
         on_edges: HashMap::new(),
         edge_points: HashMap::new(),
     };
-    index_polygon_edges(mesh, &grid, tol, &same_uv, &mut shared);
+    index_polygon_edges(mesh, &grid, tol, &same_uv, &same_frame, &mut shared);
     shared
 }
 
@@ -241,6 +276,7 @@ fn index_polygon_edges(
     grid: &Grid,
     tol: f64,
     same_uv: &dyn Fn(u32, u32, DVec3) -> bool,
+    same_frame: &dyn Fn(u32, u32) -> bool,
     shared: &mut SharedVertices,
 ) {
     // The output vertex at each corner of each smooth surface (`None` for a
@@ -259,7 +295,8 @@ fn index_polygon_edges(
                     grid.find(p, |o| {
                         let id = shared.representative[o as usize];
                         let r = &mesh.vertices[id as usize];
-                        mesh.surfaces[r.surface as usize].material == s.material
+                        same_frame(r.surface, index as u32)
+                            && mesh.surfaces[r.surface as usize].material == s.material
                             && (r.position - p).length() <= tol
                             && r.normal.dot(normal) >= SAME_NORMAL
                             && same_uv(id, index as u32, p)
