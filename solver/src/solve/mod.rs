@@ -57,6 +57,7 @@ pub mod cluster;
 pub mod cube_gather;
 pub mod cube_textured;
 pub mod directional;
+pub mod enclosure;
 pub mod gauss_seidel;
 pub mod hidden;
 mod output;

@@ -1,8 +1,9 @@
 //! The solution the solver hands to the file writer (Remington 1992, Fig. 3.6 steps 5d and
 //! 6), and the ambient term of the light not yet shot.
 
-use super::Solver;
+use super::{enclosure, Solver};
 use glam::DVec3;
+use rayon::prelude::*;
 use solution::camera::{Camera, UpAxis};
 use solution::format::{
     Batch, Header, Representation, ScalarType, Solution, SolveMode, SolveStats, Vertex,
@@ -64,6 +65,51 @@ impl Solver {
         }
     }
 
+    /// Per mesh vertex of `representative`, the ambient radiance it shows
+    /// before its reflectance: Cohen et al.'s (1988) `ambient` weighted by
+    /// the vertex's enclosure over the scene's mean, ε_v / ε̄ ([`enclosure`]),
+    /// so that a point looking partly out of the scene gets less of it and
+    /// the term's total over the surfaces (Σ A · ambient) stays Cohen's. A
+    /// closed scene (ε = 1) gets `ambient` at every vertex. Hidden vertices
+    /// keep `ambient` (they show their neighbours' radiance anyway). No
+    /// probes are cast when `ambient` is zero or in directional mode, whose
+    /// batches carry Cohen's term unweighted.
+    pub(super) fn enclosed_ambient(&self, representative: &[u32], ambient: DVec3) -> Vec<DVec3> {
+        if ambient == DVec3::ZERO || self.directional.is_some() {
+            return vec![ambient; representative.len()];
+        }
+        let mesh = &self.mesh;
+        let occluder = &self.occluder;
+        let epsilon = occluder.scene_epsilon();
+        // ε̄: the area-weighted mean over the patches, each probed at its
+        // centroid.
+        let (area, weighted) = mesh
+            .patches
+            .par_iter()
+            .map(|p| {
+                let corners = p.polygon();
+                let centroid = corners.iter().sum::<DVec3>() / corners.len() as f64;
+                let normal = mesh.surfaces[p.surface as usize].normal;
+                let e = enclosure::enclosure(occluder, centroid, normal);
+                (p.area, e * p.area)
+            })
+            .reduce(|| (0.0, 0.0), |x, y| (x.0 + y.0, x.1 + y.1));
+        let mean = weighted / area;
+        if !(mean.is_finite() && mean > 0.0) {
+            return vec![ambient; representative.len()];
+        }
+        representative
+            .par_iter()
+            .map(|&r| {
+                if self.hidden.get(r as usize).copied().unwrap_or(false) {
+                    return ambient;
+                }
+                let (q, n) = super::shoot::receiving_point(mesh, r, epsilon);
+                ambient * (enclosure::enclosure(occluder, q, n) / mean)
+            })
+            .collect()
+    }
+
     /// The solution: one batch of order-0 SH (the diffuse mode), one vertex per
     /// mesh vertex of a flat facet and one per position of a smooth surface,
     /// with its shading normal; the display triangles with T-vertices resolved,
@@ -87,14 +133,20 @@ impl Solver {
         let shared = super::seams::share_vertices_with_uvs(&self.mesh, &radiance, &|s, p| {
             texturing.shown(s).map(|t| texturing.uv(t, p))
         });
+        let ambient_at = self.enclosed_ambient(&shared.representative, ambient);
         let mut vertices = Vec::with_capacity(shared.representative.len());
         let mut coefficients = Vec::with_capacity(3 * shared.representative.len());
         let mut lo = DVec3::splat(f64::INFINITY);
         let mut hi = DVec3::splat(f64::NEG_INFINITY);
-        for (&r, l) in shared.representative.iter().zip(&shared.radiance) {
+        for ((&r, l), a) in shared
+            .representative
+            .iter()
+            .zip(&shared.radiance)
+            .zip(&ambient_at)
+        {
             let v = &self.mesh.vertices[r as usize];
             let s = &self.mesh.surfaces[v.surface as usize];
-            let shown = *l + self.kd[v.surface as usize] * ambient;
+            let shown = *l + self.kd[v.surface as usize] * *a;
             let f = |d: DVec3| d.as_vec3().to_array();
             // A shading normal is not the polygon's: its frame's tangent is
             // the polygon's made orthogonal to it (the format wants an
@@ -157,7 +209,7 @@ impl Solver {
             textures: Vec::new(),
         };
         // Textured surfaces: batches of UV and E/π (`output_textured.rs`).
-        self.split_textured(&shared, &mut solution, ambient);
+        self.split_textured(&shared, &mut solution, &ambient_at);
         // Directional mode: one batch per SH order instead.
         self.directional_batches(&mut solution, ambient);
         if self.scene_camera.is_none() {

@@ -24,14 +24,14 @@ use std::sync::Arc;
 
 impl Solver {
     /// Splits `solution.batches[0]` (every output vertex of `shared`, in
-    /// order) into the untextured batch and the textured ones; `ambient` is
-    /// the ambient term added to E/π, as the untextured vertices add Kd ·
-    /// ambient. Nothing changes when no surface is textured.
+    /// order) into the untextured batch and the textured ones; `ambient_at`
+    /// is, per output vertex, the ambient term added to E/π, as the
+    /// untextured vertices add Kd · ambient. Nothing changes when no surface is textured.
     pub(super) fn split_textured(
         &self,
         shared: &SharedVertices,
         solution: &mut Solution,
-        ambient: DVec3,
+        ambient_at: &[DVec3],
     ) {
         // Directional mode writes its textured batches itself
         // (`directional/textured.rs`).
@@ -57,6 +57,7 @@ impl Solver {
         let mut slot: Vec<(usize, u32)> = Vec::with_capacity(whole.vertices.len());
         for (o, &r) in shared.representative.iter().enumerate() {
             let v = &self.mesh.vertices[r as usize];
+            let ambient = ambient_at[o];
             let Some(t) = self.texturing.shown(v.surface) else {
                 let b = &mut batches[0];
                 slot.push((0, b.vertices.len() as u32));

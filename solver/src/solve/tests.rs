@@ -366,14 +366,21 @@ fn solution_holds_sh_order_0_and_the_ambient_term_while_light_is_unshot() {
         "light is left unshot after one shot"
     );
     // With it (the default), partial and final files alike carry the estimate
-    // of the light still unshot: displayed = L + Kd · ambient, and the
+    // of the light still unshot: displayed = L + Kd · ambient · ε / ε̄, the
+    // term weighted by the vertex's enclosure (`enclosure.rs`; the two
+    // facing squares are open all round, so ε < 1 at a corner), and the
     // solver's own radiance is unchanged.
+    let weighted = solver.enclosed_ambient(&[0], ambient)[0];
+    assert!(
+        weighted.x > 0.0 && weighted.x < ambient.x,
+        "{weighted} {ambient}"
+    );
     for partial in [true, false] {
         let file = solver.to_solution(partial);
         assert_eq!(file.header.partial, partial);
         assert_eq!(file.header.stats.ambient, ambient.as_vec3().to_array());
         let shown = file.batches[0].coefficients[0] as f64 / (2.0 * PI.sqrt());
-        assert!((shown - (radiance[0].x + 0.5 * ambient.x)).abs() < 1e-6 * shown);
+        assert!((shown - (radiance[0].x + 0.5 * weighted.x)).abs() < 1e-6 * shown);
     }
     assert_eq!(solver.vertex_radiance(), &radiance[..]);
     // Header: the settings travel as JSON, and the re-centring offset is the

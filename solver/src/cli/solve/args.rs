@@ -397,7 +397,11 @@ pub struct SolveArgs {
         long_help = "Do not add Cohen et al.'s ambient term (the estimated light not yet \
             shot, Remington 1992, appendix A line 8) to partial solutions. With it, early partial \
             solutions look about as bright as the converged one; without it they show \
-            only the light shot so far."
+            only the light shot so far. A converged file carries it too, for the light its \
+            threshold leaves unshot. In diffuse mode each vertex gets the term weighted by how \
+            enclosed it is (the share of its hemisphere that meets a surface, over the scene's \
+            mean), so a face looking out of an open scene is not over-brightened; a closed room \
+            gets Cohen's term unchanged (docs/accuracy.md)."
     )]
     pub no_ambient: bool,
 
