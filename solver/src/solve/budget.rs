@@ -51,7 +51,8 @@
 //! * **output**: the solution ([`Solver::to_solution`]): per vertex a stored
 //!   vertex and its f32 coefficients, per display triangle its indices, and in
 //!   directional mode the diffuse-style batch that the per-order batches
-//!   replace, alive while they are built;
+//!   replace, alive while they are built, and the f64 coefficients shown
+//!   (hidden vertices filled, contact cuts averaged);
 //! * **gather** (diffuse mode): the touched patches' list and its copy, and
 //!   the larger of the per-patch sums and the unshot tree rebuilt beside the
 //!   old one (`UnshotTree::update_many` when a shot changed more than 1/8 of
@@ -429,9 +430,12 @@ fn output_bytes(c: &Counts) -> u64 {
     // triangle list its indices are flattened from.
     let diffuse = c.vertices * (stored_vertex + 3 * f32_) + triangles * 2 * index_triple;
     let directional = if c.directional {
-        // The per-order batches, the vertex map and a second triangle list.
+        // The per-order batches, the vertex map and a second triangle list,
+        // and the f64 coefficients shown (`Solver::displayed_coefficients`:
+        // the solver's with hidden vertices filled, then averaged across
+        // contact cuts in place by `directional/seams.rs`).
         c.vertices * (stored_vertex + size_of::<u32>() as u64)
-            + c.vertex_coefficients * f32_
+            + c.vertex_coefficients * (f32_ + size_of::<f64>() as u64)
             + triangles * 2 * index_triple
     } else {
         0

@@ -998,7 +998,7 @@ impl Solver {
         // The pieces of a receiver cut along contact lines share their
         // seams (`directional/seams.rs`); every other vertex maps to itself.
         let (shared, radiance) =
-            seams::share_coefficients(&self.mesh, |v| d.vertex_range(&self.mesh, v), &radiance);
+            seams::share_coefficients(&self.mesh, |v| d.vertex_range(&self.mesh, v), radiance);
         // Per order: the batch and the map from output vertex to batch vertex.
         let mut batches: BTreeMap<u32, Batch> = BTreeMap::new();
         let mut local = vec![u32::MAX; shared.representative.len()];

@@ -27,10 +27,12 @@ use std::ops::Range;
 /// output vertex `o`, the weighted mean of the blocks (`range(v)` of
 /// `values`) of the mesh vertices merged into it, in the layout of `values`
 /// at its representative's block (other blocks are left as they were).
+/// `values` is taken and changed in place: a copy of every coefficient would
+/// add 8 bytes a coefficient to the output's peak (`budget.rs`, "output").
 pub(super) fn share_coefficients(
     mesh: &Mesh,
     range: impl Fn(usize) -> Range<usize>,
-    values: &[f64],
+    values: Vec<f64>,
 ) -> (SharedVertices, Vec<f64>) {
     let shared = share_vertices_within_polygons(mesh);
     let merged = mean_blocks(
@@ -44,7 +46,8 @@ pub(super) fn share_coefficients(
 }
 
 /// `values` with each representative's block replaced by the weighted mean of
-/// the blocks of every vertex mapped to its output vertex. A block whose
+/// the blocks of every vertex mapped to its output vertex (every mean is
+/// summed before any block is written, so changing `values` in place is safe). A block whose
 /// length differs from the representative's is skipped (never the case for
 /// pieces of one polygon; kept so that no two layouts are ever mixed).
 fn mean_blocks(
@@ -52,16 +55,15 @@ fn mean_blocks(
     representative: &[u32],
     weight: &[f64],
     range: impl Fn(usize) -> Range<usize>,
-    values: &[f64],
+    mut values: Vec<f64>,
 ) -> Vec<f64> {
-    let mut merged = values.to_vec();
     // Only outputs that gathered more than one vertex change.
     let mut members = vec![0u32; representative.len()];
     for &o in output_of {
         members[o as usize] += 1;
     }
     if members.iter().all(|&m| m <= 1) {
-        return merged;
+        return values;
     }
     let mut sum: Vec<Vec<f64>> = vec![Vec::new(); representative.len()];
     let mut total = vec![0.0; representative.len()];
@@ -91,11 +93,11 @@ fn mean_blocks(
             continue;
         }
         let into = range(representative[o] as usize);
-        for (x, acc) in merged[into].iter_mut().zip(s) {
+        for (x, acc) in values[into].iter_mut().zip(s) {
             *x = acc / total[o];
         }
     }
-    merged
+    values
 }
 
 #[cfg(test)]
@@ -109,7 +111,7 @@ mod tests {
         // so it is the mean of the radiance functions in every direction.
         let block = |v: usize| 4 * v..4 * v + 4;
         let values: Vec<f64> = (0..12).map(|k| k as f64).collect();
-        let merged = mean_blocks(&[0, 1, 0], &[0, 1], &[1.0, 5.0, 3.0], block, &values);
+        let merged = mean_blocks(&[0, 1, 0], &[0, 1], &[1.0, 5.0, 3.0], block, values.clone());
         for k in 0..4 {
             let expected = (values[k] + 3.0 * values[8 + k]) / 4.0;
             assert!((merged[k] - expected).abs() < 1e-12, "{k}");
@@ -125,7 +127,7 @@ mod tests {
         // 12-value block): it must be skipped, leaving vertex 0's block.
         let ranges = [0..12, 12..15];
         let values: Vec<f64> = (0..15).map(|k| 1.0 + k as f64).collect();
-        let merged = mean_blocks(&[0, 0], &[0], &[1.0, 1.0], |v| ranges[v].clone(), &values);
+        let merged = mean_blocks(&[0, 0], &[0], &[1.0, 1.0], |v| ranges[v].clone(), values.clone());
         assert_eq!(merged, values);
     }
 }
