@@ -127,7 +127,13 @@ mod tests {
         // 12-value block): it must be skipped, leaving vertex 0's block.
         let ranges = [0..12, 12..15];
         let values: Vec<f64> = (0..15).map(|k| 1.0 + k as f64).collect();
-        let merged = mean_blocks(&[0, 0], &[0], &[1.0, 1.0], |v| ranges[v].clone(), values.clone());
+        let merged = mean_blocks(
+            &[0, 0],
+            &[0],
+            &[1.0, 1.0],
+            |v| ranges[v].clone(),
+            values.clone(),
+        );
         assert_eq!(merged, values);
     }
 }
