@@ -1,16 +1,18 @@
 //! How enclosed a receiving point is: the cosine-weighted fraction ε of its
 //! hemisphere that meets a surface, for the ambient term weighted by
-//! enclosure ([`super::Solver::display_ambient_at`]).
+//! enclosure ([`super::Solver::enclosed_ambient`], `output.rs`).
 //!
 //! Cohen, Chen, Wallace and Greenberg's (1988) ambient term spreads the light
 //! not yet shot uniformly over a closed room: every point gets ρ · R · Ū. A
 //! point that looks partly out of the scene (the Cornell box's short block
 //! faces the open front) receives that light only from the part of its
 //! hemisphere that meets a surface: its first bounce of the uniform unshot
-//! radiance Ū is the irradiance ε · π · Ū, so it is shown ρ · ε · R′ · Ū. The
-//! interreflection series loses the escaping share at every bounce as well,
-//! R′ = 1 / (1 − ρ_avg · ε_avg) with ε_avg the area-weighted enclosure of the
-//! scene. A closed room has ε = 1 everywhere and keeps Cohen's term exactly.
+//! radiance Ū is the irradiance ε · π · Ū, not π · Ū. The output keeps the
+//! total of Cohen's estimate over the surfaces (it is an estimate of how much
+//! light is left, not of where it lands) and redistributes it by enclosure:
+//! each vertex shows Cohen's term times ε_v / ε̄, with ε̄ the area-weighted
+//! mean of ε over the patches' centroids. A closed room has ε = 1 everywhere
+//! and keeps Cohen's term exactly.
 
 use crate::geometry::visibility::Occluder;
 use glam::DVec3;
