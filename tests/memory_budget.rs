@@ -193,7 +193,10 @@ fn a_capped_mirror_sphere_stays_under_its_budget() {
     assert_eq!(named_budget, budget);
     // The estimate within ±25% of the measured peak (issue 13's bound).
     let ratio = estimate as f64 / m.peak_rss as f64;
-    eprintln!("estimate {estimate} B, measured peak {} B, ratio {ratio:.2}", m.peak_rss);
+    eprintln!(
+        "estimate {estimate} B, measured peak {} B, ratio {ratio:.2}",
+        m.peak_rss
+    );
     assert!(
         (0.75..=1.25).contains(&ratio),
         "estimate {estimate} against measured {} ({ratio:.2})",

@@ -74,7 +74,7 @@ pub struct SolveArgs {
             and a loose threshold, under a second for the Cornell box, with visible \
             noise in penumbrae (about 4% error). medium (default): enough rays that \
             two seeds look alike, about 6 s for the Cornell box on two cores (about 2.3% \
-            error). final: a fine mesh, about 7 times slower than medium (about 1.6% \
+            error). final: a fine mesh, about 7 times slower than medium (about 1.4% \
             error). Any other flag overrides the preset's value."
     )]
     pub preset: Option<Preset>,
