@@ -53,6 +53,15 @@ pub const CONTACT_TOLERANCE: f64 = 2e-4;
 /// plane at every vertex lie in it (rounding of the input's coordinates).
 const COPLANAR: f64 = 1e-3;
 
+/// A receiver touched by more objects than this stays whole. Cutting is
+/// quadratic in the footprints (each one is cut through every piece so far),
+/// and each cut line carries patches along its whole length: a floor under
+/// 83,000 small boxes (the 1M-triangle scale scene) took over 13 minutes of
+/// one core before its first shot. Such a receiver keeps the hidden-vertex
+/// treatment (`solve/hidden.rs`), which every receiver had before the cuts.
+/// The Cornell box's floor has two footprints and its ceiling one.
+pub const MAX_FOOTPRINTS: usize = 64;
+
 /// A piece of a receiver after cutting, counter-clockwise about the
 /// receiver's normal.
 #[derive(Clone, Debug, PartialEq)]
@@ -84,7 +93,9 @@ pub fn conform(scene: &Scene) -> Vec<Option<Vec<Part>>> {
         let Some(frame) = Frame::new(v) else {
             continue;
         };
-        let footprints = footprints(scene, index, &frame, &grid, &objects, tol);
+        let Some(footprints) = footprints(scene, index, &frame, &grid, &objects, tol) else {
+            continue;
+        };
         if footprints.is_empty() {
             continue;
         }
@@ -240,7 +251,8 @@ impl VertexGrid {
 
 /// The footprints on receiver `index`: per touching object, the convex hull
 /// (counter-clockwise, in the receiver's plane) of its vertices on the plane
-/// and inside the receiver.
+/// and inside the receiver; `None` when more than [`MAX_FOOTPRINTS`] objects
+/// touch it (it stays whole, and no hull is computed).
 fn footprints(
     scene: &Scene,
     index: usize,
@@ -248,7 +260,7 @@ fn footprints(
     grid: &VertexGrid,
     objects: &[usize],
     tol: f64,
-) -> Vec<Vec<DVec2>> {
+) -> Option<Vec<Vec<DVec2>>> {
     let v = &scene.polygons[index].vertices;
     let (lo, hi) = v
         .iter()
@@ -290,17 +302,22 @@ fn footprints(
                 .push(q);
         }
     }
+    if by_object.len() > MAX_FOOTPRINTS {
+        return None;
+    }
     let mut keys: Vec<usize> = by_object.keys().copied().collect();
     keys.sort_unstable();
     let area = ring_area(&outline);
-    keys.into_iter()
+    let hulls = keys
+        .into_iter()
         .filter_map(|k| {
             let hull = convex_hull(&by_object[&k]);
             // A hull of a point or a segment (a wall's base on the floor's
             // edge) covers nothing.
             (hull.len() >= 3 && ring_area(&hull) > 1e-9 * area).then_some(hull)
         })
-        .collect()
+        .collect();
+    Some(hulls)
 }
 
 /// Whether `q` is inside the counter-clockwise convex `ring`, or within `tol`

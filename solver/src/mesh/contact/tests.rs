@@ -242,3 +242,45 @@ fn no_floor_element_straddles_the_contact_line() {
         assert_eq!(s.tangent, floor[0].tangent);
     }
 }
+
+/// A floor [0, 10]² at y = 0 facing up with `n` separate boxes of side 0.2
+/// and height 0.2 standing on it in rows of ten, each as its top and four
+/// sides (no two boxes share a vertex, so each is an object of its own).
+fn floor_with_boxes(n: usize) -> Scene {
+    let floor = vec![
+        p(0., 0., 0.),
+        p(0., 0., 10.),
+        p(10., 0., 10.),
+        p(10., 0., 0.),
+    ];
+    let mut polygons = vec![floor];
+    for i in 0..n {
+        let (x, z) = (0.5 + (i % 10) as f64 * 0.9, 0.5 + (i / 10) as f64 * 0.9);
+        let base = [
+            p(x, 0., z),
+            p(x, 0., z + 0.2),
+            p(x + 0.2, 0., z + 0.2),
+            p(x + 0.2, 0., z),
+        ];
+        let up = DVec3::new(0.0, 0.2, 0.0);
+        polygons.push(base.iter().map(|&b| b + up).collect());
+        for k in 0..4 {
+            let (a, b) = (base[k], base[(k + 1) % 4]);
+            polygons.push(vec![a, a + up, b + up, b]);
+        }
+    }
+    scene_of(polygons)
+}
+
+#[test]
+fn a_receiver_under_more_objects_than_the_cap_stays_whole() {
+    // At the cap the floor is cut: one covered part per box.
+    let parts = conform(&floor_with_boxes(MAX_FOOTPRINTS));
+    let floor = parts[0].as_ref().expect("a floor under 64 boxes is cut");
+    assert_eq!(floor.iter().filter(|p| p.covered).count(), MAX_FOOTPRINTS);
+    // One more object and it stays whole (cutting is quadratic in the
+    // footprints); the boxes' own faces are never cut by the floor.
+    let parts = conform(&floor_with_boxes(MAX_FOOTPRINTS + 1));
+    assert!(parts[0].is_none());
+    assert!(parts.iter().all(Option::is_none));
+}
