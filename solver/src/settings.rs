@@ -216,6 +216,11 @@ pub struct SolverSettings {
     /// measuring what the cut changes.
     #[serde(default)]
     pub whole_receivers: bool,
+    /// A receiver gets every visibility ray from a shot whose unoccluded
+    /// gain is at least this fraction of its radiance, fewer in proportion
+    /// below (`solve::ray_share`); 0 traces every ray to every receiver.
+    #[serde(default)]
+    pub full_rays_above: f64,
 }
 
 fn default_crease_angle() -> f64 {
@@ -260,6 +265,8 @@ pub struct SettingsPatch {
     pub memory_budget: Option<u64>,
     /// `true` shoots every patch's mean unshot radiance uniformly (`solve::regions`).
     pub uniform_shooters: Option<bool>,
+    /// Fraction of a receiver's level above which a shot traces every ray (`solve::ray_share`).
+    pub full_rays_above: Option<f64>,
 }
 
 /// A setting whose value is out of its range.
@@ -309,6 +316,7 @@ impl SolverSettings {
             memory_budget: None,
             uniform_shooters: false,
             whole_receivers: false,
+            full_rays_above: 0.0,
         }
     }
 
@@ -364,7 +372,8 @@ impl SolverSettings {
             units_per_metre,
             strict,
             crease_angle,
-            uniform_shooters
+            uniform_shooters,
+            full_rays_above
         );
         if patch.threads.is_some() {
             self.threads = patch.threads;
@@ -525,6 +534,14 @@ impl SolverSettings {
             "shooting_tolerance",
             self.shooting_tolerance,
             "0 to 1 (a fraction of the scene's radiance level; 0 visits every receiver)",
+        )?;
+        check(
+            self.full_rays_above.is_finite()
+                && self.full_rays_above >= 0.0
+                && self.full_rays_above <= 1.0,
+            "full_rays_above",
+            self.full_rays_above,
+            "0 to 1 (a fraction of a receiver's radiance; 0 traces every ray)",
         )?;
         check(
             self.units_per_metre.is_finite() && self.units_per_metre > 0.0,

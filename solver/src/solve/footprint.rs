@@ -169,7 +169,10 @@ pub(super) fn shoot_receivers(
 ) -> u64 {
     footprint.surface_vertices.catch_up(mesh);
     footprint.begin_shot(mesh.surfaces.len());
-    let receive = |scratch: &mut Scratch, v: u32| shooter.receive(mesh, v, scratch);
+    // Radiance before the shot, for the ray share (`ray_share.rs`): results
+    // are added only after every receiver has been shot.
+    let prior: &[DVec3] = state.radiance;
+    let receive = |scratch: &mut Scratch, v: u32| shooter.receive(mesh, v, scratch, Some(prior));
     let Some(plan) = plan else {
         let results: Vec<Received> = (0..mesh.vertices.len() as u32)
             .into_par_iter()

@@ -248,6 +248,8 @@ pub struct GroupShot<'a> {
     pub occluder: &'a Occluder,
     pub kd: &'a [DVec3],
     pub members: Vec<Member>,
+    /// Fewer rays where the group adds little (`ray_share.rs`).
+    pub ray_share: Option<super::ray_share::RayShare>,
 }
 
 impl<'a> GroupShot<'a> {
@@ -268,12 +270,20 @@ impl<'a> GroupShot<'a> {
             occluder,
             kd,
             members: pieces.iter().map(|p| Member::new(mesh, p)).collect(),
+            ray_share: None,
         }
     }
 
     /// ΔL_v: the importance-sampled sum of the members' shots (see the module
     /// documentation).
-    pub fn receive(&self, mesh: &Mesh, v: u32, scratch: &mut Scratch) -> Received {
+    /// `prior`: every vertex's radiance before this shot, for the ray share.
+    pub fn receive(
+        &self,
+        mesh: &Mesh,
+        v: u32,
+        scratch: &mut Scratch,
+        prior: Option<&[DVec3]>,
+    ) -> Received {
         let surface = mesh.vertices[v as usize].surface;
         let kd = self.kd[surface as usize];
         if kd == DVec3::ZERO {
@@ -320,7 +330,22 @@ impl<'a> GroupShot<'a> {
                 rays: 0,
             };
         }
-        let rays = self.samples;
+        // The ray share compares the members' summed unoccluded gain with
+        // the receiver's level (`ray_share.rs`): ΔL̂ = Kd ⊙ Σ colour_p w_p,
+        // against a unit source of that colour at factor W.
+        let rays = match (&self.ray_share, prior) {
+            (Some(share), Some(prior)) => {
+                let gain: DVec3 = self
+                    .members
+                    .iter()
+                    .zip(weights.iter())
+                    .map(|(m, &w)| m.colour * w)
+                    .sum();
+                let full = share.full_factor(prior[v as usize], kd, gain / total);
+                super::ray_share::rays_for(self.samples, total, full)
+            }
+            _ => self.samples,
+        };
         let mut rng = Rng::new(self.seed, stream_id(self.index, v as u64));
         let offset = rng.next_f64();
         points.clear();
@@ -352,7 +377,7 @@ impl<'a> GroupShot<'a> {
         }
         Received {
             radiance: kd * sum * (total / rays as f64),
-            visible,
+            visible: visible * (self.samples / rays),
             rays,
         }
     }
@@ -369,10 +394,18 @@ pub enum Shooter<'s, 'a> {
 
 impl Shooter<'_, '_> {
     /// ΔL_v from this shooter.
-    pub fn receive(&self, mesh: &Mesh, v: u32, scratch: &mut Scratch) -> Received {
+    /// `prior`: every vertex's radiance before this shot (the ray share's
+    /// level, `ray_share.rs`); `None` traces every ray.
+    pub fn receive(
+        &self,
+        mesh: &Mesh,
+        v: u32,
+        scratch: &mut Scratch,
+        prior: Option<&[DVec3]>,
+    ) -> Received {
         match self {
-            Shooter::Patch { shot, pool } => shot.receive(mesh, v, pool, scratch),
-            Shooter::Group(group) => group.receive(mesh, v, scratch),
+            Shooter::Patch { shot, pool } => shot.receive(mesh, v, pool, scratch, prior),
+            Shooter::Group(group) => group.receive(mesh, v, scratch, prior),
         }
     }
 

@@ -58,12 +58,12 @@ fn group_and_members(solver: &Solver, members: &[(u32, DVec3)], samples: u32) ->
     let (mut grouped, mut single) = (0.0, 0.0);
     for v in 0..solver.mesh.vertices.len() as u32 {
         grouped += group
-            .receive(&solver.mesh, v, &mut scratch)
+            .receive(&solver.mesh, v, &mut scratch, None)
             .radiance
             .element_sum();
         for (shot, pool) in &shots {
             single += shot
-                .receive(&solver.mesh, v, pool, &mut scratch)
+                .receive(&solver.mesh, v, pool, &mut scratch, None)
                 .radiance
                 .element_sum();
         }

@@ -66,6 +66,7 @@ pub(crate) use output::default_camera;
 mod footprint;
 mod group_shot;
 mod refine;
+pub mod ray_share;
 pub mod regions;
 mod seams;
 pub mod shoot;
@@ -515,16 +516,23 @@ impl Solver {
         if !recorded && !self.settings.uniform_shooters && members.is_none() {
             shot.regions = self.source_regions(source, unshot).map(Box::new);
         }
+        // Recorded shots keep every ray: later splits replay them exactly.
+        let share = ray_share::RayShare::new(self.settings.full_rays_above, ambient);
+        if !recorded {
+            shot.ray_share = share;
+        }
         let pieces = members.as_ref().map(|m| self.group_pieces(m));
         let group = pieces.as_ref().map(|m| {
-            group_shot::GroupShot::new(
+            let mut group = group_shot::GroupShot::new(
                 &self.mesh,
                 m,
                 self.shots,
                 &self.settings,
                 &self.occluder,
                 &self.kd,
-            )
+            );
+            group.ray_share = share;
+            group
         });
         let pool = match group {
             Some(_) => SamplePool::with_sets(&shot, 0),

@@ -430,6 +430,8 @@ impl Field for DiffuseField<'_, '_, '_> {
 
     fn receive(&mut self, mesh: &Mesh, created: &[NewVertex]) -> u64 {
         let (replay, shooter) = (self.replay, self.shooter);
+        // A new vertex's level for the ray share: its interpolated radiance.
+        let prior: &[DVec3] = self.state.radiance;
         let results: Vec<(DVec3, Received, u64)> = created
             .par_iter()
             .map_init(Scratch::default, |scratch, nv| {
@@ -437,12 +439,12 @@ impl Field for DiffuseField<'_, '_, '_> {
                 let mut rays = 0u64;
                 let mut current = Received::default();
                 for (r, p) in replay.recorded.iter().zip(replay.pools) {
-                    current = r.receive(mesh, nv.id, p, scratch);
+                    current = r.receive(mesh, nv.id, p, scratch, None);
                     exact += current.radiance;
                     rays += current.rays as u64;
                 }
                 if !replay.current_recorded {
-                    current = shooter.receive(mesh, nv.id, scratch);
+                    current = shooter.receive(mesh, nv.id, scratch, Some(prior));
                     rays += current.rays as u64;
                 }
                 (exact, current, rays)

@@ -129,12 +129,20 @@ impl SamplePool {
 
     /// The set receiver `v` of `shot` uses: (points on the source, lifted).
     pub fn set_for(&self, shot: &Shot, v: u32) -> (&[DVec3], &[DVec3]) {
+        self.set_and_offset(shot, v).0
+    }
+
+    /// [`SamplePool::set_for`], and the offset of a strided subset of it
+    /// ([`super::ray_share::strided`]): the receiver stream's second draw.
+    fn set_and_offset(&self, shot: &Shot, v: u32) -> ((&[DVec3], &[DVec3]), u32) {
         if self.on_source.is_empty() {
-            return (&[], &[]);
+            return ((&[], &[]), 0);
         }
-        let k = Rng::new(shot.seed, stream_id(shot.index, v as u64)).next_u32() % self.sets;
+        let mut rng = Rng::new(shot.seed, stream_id(shot.index, v as u64));
+        let k = rng.next_u32() % self.sets;
         let range = k as usize * self.samples..(k as usize + 1) * self.samples;
-        (&self.on_source[range.clone()], &self.lifted[range])
+        let offset = rng.next_u32();
+        ((&self.on_source[range.clone()], &self.lifted[range]), offset)
     }
 }
 
@@ -176,6 +184,9 @@ pub struct Shot<'a> {
     /// The source's quadrants with their own unshot radiance, where it is lit
     /// unevenly ([`super::regions`]); `None` shoots U_s uniformly.
     pub regions: Option<Box<Regions>>,
+    /// Fewer rays where the shot adds little ([`super::ray_share`]); `None`
+    /// traces every ray to every receiver.
+    pub ray_share: Option<super::ray_share::RayShare>,
 }
 
 /// A shot the solver remembers: every shot from an emitter's patch, so that a
@@ -256,6 +267,7 @@ impl<'a> Shot<'a> {
             occluder,
             kd,
             regions: None,
+            ray_share: None,
         }
     }
 }
@@ -304,6 +316,22 @@ impl Shot<'_> {
         pool: &SamplePool,
         scratch: &mut Scratch,
     ) -> (f64, u32, u32) {
+        self.form_factor_sharing(mesh, v, pool, scratch, 0.0)
+    }
+
+    /// [`Shot::form_factor`], with the `Analytic` method's rays cut in
+    /// proportion below the unoccluded factor `full_factor`
+    /// ([`super::ray_share`]; 0 traces every ray). The visible count is
+    /// returned scaled to `samples` rays (k of n as k · samples / n), the
+    /// rays as traced.
+    pub fn form_factor_sharing(
+        &self,
+        mesh: &Mesh,
+        v: u32,
+        pool: &SamplePool,
+        scratch: &mut Scratch,
+        full_factor: f64,
+    ) -> (f64, u32, u32) {
         let (q, n) = self.receiving_point(mesh, v);
         // Cheap culls before the contour integral: a receiver clearly behind the
         // one-sided source, or one that faces away from every source corner,
@@ -332,16 +360,24 @@ impl Shot<'_> {
                 // its end, which the occluder excludes. The tolerance, 1e-6 ε,
                 // absorbs rounding of corners on the plane and moves such a
                 // crossing no further than 1e-6 of the segment from its end.
+                let rays = super::ray_share::rays_for(self.samples, unoccluded, full_factor);
                 let visible = if self.source_above_horizon(q, n) {
-                    self.occluder.count_visible(origin, pool.set_for(self, v).1)
+                    let ((_, lifted), offset) = pool.set_and_offset(self, v);
+                    if rays == self.samples {
+                        self.occluder.count_visible(origin, lifted)
+                    } else {
+                        super::ray_share::strided(lifted, rays, offset, &mut scratch.points);
+                        self.occluder.count_visible(origin, &scratch.points)
+                    }
                 } else {
-                    self.draw_visible_part_samples(q, n, v, scratch);
+                    self.draw_part_samples(q, n, v, rays, &mut scratch.clipped, &mut scratch.points);
                     let lift = self.normal * self.occluder.scene_epsilon();
                     scratch.points.iter_mut().for_each(|p| *p += lift);
                     self.occluder.count_visible(origin, &scratch.points)
                 };
-                let fraction = visible as f64 / self.samples as f64;
-                (unoccluded * fraction, visible, self.samples)
+                let fraction = visible as f64 / rays as f64;
+                let scaled = visible * (self.samples / rays);
+                (unoccluded * fraction, scaled, rays)
             }
             FormFactorMethod::Wallace => {
                 let (points, targets) = pool.set_for(self, v);
@@ -447,7 +483,7 @@ impl Shot<'_> {
             points.clear();
             points.extend_from_slice(pool.set_for(self, v).0);
         } else {
-            self.draw_part_samples(q, n, v, clipped, points);
+            self.draw_part_samples(q, n, v, self.samples, clipped, points);
         }
     }
 
@@ -464,7 +500,7 @@ impl Shot<'_> {
     /// at the origin's height rather than the point's keeps every ray above
     /// the receiving plane, at the cost of an ε-thin band of the source.
     pub fn draw_visible_part_samples(&self, q: DVec3, n: DVec3, v: u32, scratch: &mut Scratch) {
-        self.draw_part_samples(q, n, v, &mut scratch.clipped, &mut scratch.points);
+        self.draw_part_samples(q, n, v, self.samples, &mut scratch.clipped, &mut scratch.points);
     }
 
     fn draw_part_samples(
@@ -472,6 +508,7 @@ impl Shot<'_> {
         q: DVec3,
         n: DVec3,
         v: u32,
+        count: u32,
         clipped: &mut Vec<DVec3>,
         points: &mut Vec<DVec3>,
     ) {
@@ -485,17 +522,22 @@ impl Shot<'_> {
             self.polygon()
         };
         let mut rng = Rng::new(self.seed, stream_id(self.index, v as u64));
-        stratified_points(part, self.samples, &mut rng, points);
+        stratified_points(part, count, &mut rng, points);
     }
 
     /// ΔL_v = Kd · U_s · F(v←s) (Remington 1992, Fig. 3.6: ΔRad = SP.unshotRad ·
     /// V.reflectance · F, in radiance: L = B/π on both sides).
+    ///
+    /// `prior`: every vertex's radiance before this shot, for the ray share
+    /// ([`super::ray_share`]); `None`, or a shot without a share, traces
+    /// every ray.
     pub fn receive(
         &self,
         mesh: &Mesh,
         v: u32,
         pool: &SamplePool,
         scratch: &mut Scratch,
+        prior: Option<&[DVec3]>,
     ) -> Received {
         let surface = mesh.vertices[v as usize].surface;
         // A planar polygon cannot light itself; a black one reflects nothing.
@@ -503,7 +545,11 @@ impl Shot<'_> {
         if surface == self.source_surface || kd == DVec3::ZERO {
             return Received::default();
         }
-        let (factor, visible, rays) = self.form_factor(mesh, v, pool, scratch);
+        let full_factor = match (&self.ray_share, prior) {
+            (Some(share), Some(prior)) => share.full_factor(prior[v as usize], kd, self.unshot),
+            _ => 0.0,
+        };
+        let (factor, visible, rays) = self.form_factor_sharing(mesh, v, pool, scratch, full_factor);
         let radiance = match &self.regions {
             Some(regions) if factor > 0.0 && self.method == FormFactorMethod::Analytic => {
                 kd * self.region_radiance(mesh, v, regions, factor)

@@ -182,6 +182,21 @@ pub struct SolveArgs {
     )]
     pub shooting_tolerance: Option<f64>,
 
+    /// Visibility rays in proportion to what a shot adds, below this fraction of a receiver's light.
+    #[arg(
+        long,
+        value_name = "FRACTION",
+        long_help = "A receiver gets every one of --samples visibility rays from a shot \
+            whose unoccluded contribution is at least this fraction of the light it \
+            already holds (its radiance plus the reflected ambient term); below, it gets \
+            rays in proportion, at least one (0 to 1; 0 traces every ray, the thesis's \
+            method). The estimate stays unbiased; only its noise grows, where the shot's \
+            share is small: at most sqrt(FRACTION / (4 x samples)) of a vertex's radiance \
+            in all. Larger: fewer rays late in a solve of many small patches, where most \
+            shots are dim. Emitters' first shots keep every ray."
+    )]
+    pub full_rays_above: Option<f64>,
+
     /// What shoots in one pass: patch (default) or grouped.
     #[arg(
         long,
@@ -492,6 +507,7 @@ impl SolveArgs {
             form_factors: self.form_factors,
             shooting: self.shooting,
             shooting_tolerance: self.shooting_tolerance,
+            full_rays_above: self.full_rays_above,
             shooters: self.shooters,
             samples: self.samples,
             hemicube_resolution: self.hemicube_resolution,
