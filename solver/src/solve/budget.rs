@@ -352,8 +352,13 @@ pub fn estimate(c: &Counts) -> MemoryEstimate {
         + table_bytes(c.vertices)
         + c.elements * size_of::<Element>() as u64
         + c.splits * size_of::<u32>() as u64;
-    let vertex_state =
-        c.vertices * (3 * dvec3 + size_of::<u32>() as u64 + size_of::<bool>() as u64);
+    // Radiance, ΔL and recorded-shot radiance, the visible count, the hidden
+    // flag and the enclosure cache's f32.
+    let vertex_state = c.vertices
+        * (3 * dvec3
+            + size_of::<u32>() as u64
+            + size_of::<bool>() as u64
+            + size_of::<f32>() as u64);
     // Radiance, ΔL and recorded-shot radiance per vertex coefficient; an
     // offset per vertex and per patch; the patches' unshot coefficients.
     let sh = if c.directional {

@@ -16,6 +16,77 @@
 
 use crate::geometry::visibility::Occluder;
 use glam::DVec3;
+use std::sync::Mutex;
+
+/// ε per mesh vertex and the patches' mean ε̄, kept between the files a solve
+/// writes. Vertices never move and patches never change, so each is probed
+/// once: before, every partial solution probed every vertex again (64 rays
+/// each), which on the large scale scenes cost as much as hundreds of shots
+/// per checkpoint. Values are stored as f32, exact for ε = k / 64; NaN marks
+/// a vertex not probed yet. 4 bytes a vertex (`budget.rs`, vertex state).
+#[derive(Debug, Default)]
+pub struct EnclosureCache {
+    state: Mutex<CacheState>,
+}
+
+#[derive(Debug, Default)]
+struct CacheState {
+    mean: Option<f64>,
+    per_vertex: Vec<f32>,
+}
+
+impl EnclosureCache {
+    /// Grows the per-vertex slots to `vertices` (new ones not probed).
+    pub fn catch_up(&mut self, vertices: usize) {
+        let state = self.state.get_mut().unwrap_or_else(|e| e.into_inner());
+        if state.per_vertex.len() < vertices {
+            state.per_vertex.resize(vertices, f32::NAN);
+        }
+    }
+
+    /// The per-vertex slots (tests of the memory estimate).
+    #[cfg(test)]
+    pub fn slots(&mut self) -> usize {
+        let state = self.state.get_mut().unwrap_or_else(|e| e.into_inner());
+        state.per_vertex.len()
+    }
+
+    /// ε̄, computed by `mean` on first use.
+    pub fn mean(&self, mean: impl FnOnce() -> f64) -> f64 {
+        let mut state = self.state.lock().unwrap_or_else(|e| e.into_inner());
+        *state.mean.get_or_insert_with(mean)
+    }
+
+    /// ε at each of `vertices` (mesh vertex ids below `count`, the mesh's
+    /// vertex count), probing with `probe` only those not probed before.
+    pub fn at(
+        &self,
+        count: usize,
+        vertices: &[u32],
+        probe: impl Fn(u32) -> f64 + Sync,
+    ) -> Vec<f64> {
+        use rayon::prelude::*;
+        let mut state = self.state.lock().unwrap_or_else(|e| e.into_inner());
+        if state.per_vertex.len() < count {
+            state.per_vertex.resize(count, f32::NAN);
+        }
+        let mut missing: Vec<u32> = vertices
+            .iter()
+            .copied()
+            .filter(|&v| state.per_vertex[v as usize].is_nan())
+            .collect();
+        missing.sort_unstable();
+        missing.dedup();
+        let probed: Vec<f64> = missing.par_iter().map(|&v| probe(v)).collect();
+        for (&v, &e) in missing.iter().zip(&probed) {
+            state.per_vertex[v as usize] = e as f32;
+        }
+        vertices
+            .iter()
+            .map(|&v| state.per_vertex[v as usize] as f64)
+            .collect()
+    }
+}
 
 /// Probe rays per point. The directions are a fixed cosine-weighted
 /// Hammersley set, the same at every point, so ε varies smoothly over a
@@ -53,6 +124,27 @@ fn cosine_direction(k: u32, t: DVec3, b: DVec3, n: DVec3) -> DVec3 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A vertex is probed once however many files ask for it, new vertices
+    /// are probed when first asked, and the mean is computed once.
+    #[test]
+    fn the_cache_probes_each_vertex_once() {
+        use std::sync::atomic::{AtomicUsize, Ordering};
+        let probes = AtomicUsize::new(0);
+        let probe = |v: u32| {
+            probes.fetch_add(1, Ordering::Relaxed);
+            v as f64 / 64.0
+        };
+        let mut cache = EnclosureCache::default();
+        cache.catch_up(4);
+        assert_eq!(cache.at(4, &[0, 2, 2], probe), vec![0.0, 2.0 / 64.0, 2.0 / 64.0]);
+        assert_eq!(probes.load(Ordering::Relaxed), 2);
+        assert_eq!(cache.at(6, &[2, 5, 0], probe), vec![2.0 / 64.0, 5.0 / 64.0, 0.0]);
+        assert_eq!(probes.load(Ordering::Relaxed), 3);
+        assert_eq!(cache.slots(), 6);
+        assert_eq!(cache.mean(|| 0.5), 0.5);
+        assert_eq!(cache.mean(|| unreachable!("computed once")), 0.5);
+    }
 
     fn quad(c: DVec3, e1: DVec3, e2: DVec3) -> Vec<DVec3> {
         vec![c, c + e1, c + e1 + e2, c + e2]

@@ -259,6 +259,9 @@ pub struct Solver {
     /// Which emitter patches have shot their emission, for grouped shooters
     /// (derived from `recorded`, so a resume rebuilds it).
     emitters_shot: group_shot::EmittersShot,
+    /// Each vertex's enclosure, probed once for all the files the solve
+    /// writes (`enclosure.rs`).
+    enclosure: enclosure::EnclosureCache,
 }
 
 impl Solver {
@@ -429,7 +432,9 @@ impl Solver {
             footprint: footprint::Footprint::default(),
             unshot_index: None,
             emitters_shot: group_shot::EmittersShot::default(),
+            enclosure: enclosure::EnclosureCache::default(),
         };
+        solver.enclosure.catch_up(vertex_count);
         solver.init_directional(scene)?;
         let all: Vec<u32> = (0..solver.mesh.surfaces.len() as u32).collect();
         solver.update_weights(&all);
@@ -455,9 +460,17 @@ impl Solver {
         if self.is_done() {
             return None;
         }
-        if self.directional.is_some() {
-            return self.step_directional();
-        }
+        let report = if self.directional.is_some() {
+            self.step_directional()
+        } else {
+            self.step_diffuse()
+        };
+        self.enclosure.catch_up(self.mesh.vertices.len());
+        report
+    }
+
+    /// [`Solver::step`] in diffuse mode.
+    fn step_diffuse(&mut self) -> Option<ShotReport> {
         let start = Instant::now();
         let source = self.brightest_patch();
         // The light not yet shot, this shot's included, for the meshing's

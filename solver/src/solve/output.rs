@@ -82,30 +82,40 @@ impl Solver {
         let occluder = &self.occluder;
         let epsilon = occluder.scene_epsilon();
         // ε̄: the area-weighted mean over the patches, each probed at its
-        // centroid.
-        let (area, weighted) = mesh
-            .patches
-            .par_iter()
-            .map(|p| {
-                let corners = p.polygon();
-                let centroid = corners.iter().sum::<DVec3>() / corners.len() as f64;
-                let normal = mesh.surfaces[p.surface as usize].normal;
-                let e = enclosure::enclosure(occluder, centroid, normal);
-                (p.area, e * p.area)
-            })
-            .reduce(|| (0.0, 0.0), |x, y| (x.0 + y.0, x.1 + y.1));
-        let mean = weighted / area;
+        // centroid; both it and each vertex's ε are probed once per solve
+        // (`EnclosureCache`).
+        let mean = self.enclosure.mean(|| {
+            let (area, weighted) = mesh
+                .patches
+                .par_iter()
+                .map(|p| {
+                    let corners = p.polygon();
+                    let centroid = corners.iter().sum::<DVec3>() / corners.len() as f64;
+                    let normal = mesh.surfaces[p.surface as usize].normal;
+                    let e = enclosure::enclosure(occluder, centroid, normal);
+                    (p.area, e * p.area)
+                })
+                .reduce(|| (0.0, 0.0), |x, y| (x.0 + y.0, x.1 + y.1));
+            weighted / area
+        });
         if !(mean.is_finite() && mean > 0.0) {
             return vec![ambient; representative.len()];
         }
+        let hidden = |r: u32| self.hidden.get(r as usize).copied().unwrap_or(false);
+        let shown: Vec<u32> = representative.iter().copied().filter(|&r| !hidden(r)).collect();
+        let epsilons = self.enclosure.at(mesh.vertices.len(), &shown, |r| {
+            let (q, n) = super::shoot::receiving_point(mesh, r, epsilon);
+            enclosure::enclosure(occluder, q, n)
+        });
+        let mut shown_epsilons = epsilons.into_iter();
         representative
-            .par_iter()
+            .iter()
             .map(|&r| {
-                if self.hidden.get(r as usize).copied().unwrap_or(false) {
+                if hidden(r) {
                     return ambient;
                 }
-                let (q, n) = super::shoot::receiving_point(mesh, r, epsilon);
-                ambient * (enclosure::enclosure(occluder, q, n) / mean)
+                let e = shown_epsilons.next().unwrap_or(mean);
+                ambient * (e / mean)
             })
             .collect()
     }
