@@ -990,6 +990,8 @@ mod hidden_tests;
 #[cfg(test)]
 mod physics_tests;
 #[cfg(test)]
+mod ray_share_tests;
+#[cfg(test)]
 mod smooth_tests;
 #[cfg(test)]
 mod tests;
