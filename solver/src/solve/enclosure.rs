@@ -137,9 +137,15 @@ mod tests {
         };
         let mut cache = EnclosureCache::default();
         cache.catch_up(4);
-        assert_eq!(cache.at(4, &[0, 2, 2], probe), vec![0.0, 2.0 / 64.0, 2.0 / 64.0]);
+        assert_eq!(
+            cache.at(4, &[0, 2, 2], probe),
+            vec![0.0, 2.0 / 64.0, 2.0 / 64.0]
+        );
         assert_eq!(probes.load(Ordering::Relaxed), 2);
-        assert_eq!(cache.at(6, &[2, 5, 0], probe), vec![2.0 / 64.0, 5.0 / 64.0, 0.0]);
+        assert_eq!(
+            cache.at(6, &[2, 5, 0], probe),
+            vec![2.0 / 64.0, 5.0 / 64.0, 0.0]
+        );
         assert_eq!(probes.load(Ordering::Relaxed), 3);
         assert_eq!(cache.slots(), 6);
         assert_eq!(cache.mean(|| 0.5), 0.5);

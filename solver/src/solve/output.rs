@@ -102,7 +102,11 @@ impl Solver {
             return vec![ambient; representative.len()];
         }
         let hidden = |r: u32| self.hidden.get(r as usize).copied().unwrap_or(false);
-        let shown: Vec<u32> = representative.iter().copied().filter(|&r| !hidden(r)).collect();
+        let shown: Vec<u32> = representative
+            .iter()
+            .copied()
+            .filter(|&r| !hidden(r))
+            .collect();
         let epsilons = self.enclosure.at(mesh.vertices.len(), &shown, |r| {
             let (q, n) = super::shoot::receiving_point(mesh, r, epsilon);
             enclosure::enclosure(occluder, q, n)

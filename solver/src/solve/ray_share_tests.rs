@@ -58,14 +58,22 @@ fn one_ray_a_receiver_keeps_the_expectation() {
             let r = shot.receive(&solver.mesh, v, &pool, &mut scratch, Some(&prior));
             shared += r.radiance.element_sum();
             shared_rays += r.rays as u64;
-            assert!(r.rays <= 1 && r.visible <= 32, "{} rays, {} visible", r.rays, r.visible);
+            assert!(
+                r.rays <= 1 && r.visible <= 32,
+                "{} rays, {} visible",
+                r.rays,
+                r.visible
+            );
         }
     }
     eprintln!(
         "every ray {full:.6} ({full_rays} rays), shared {shared:.6} ({shared_rays} rays), {:+.3e}",
         shared / full - 1.0
     );
-    assert!(full > 0.0 && (shared / full - 1.0).abs() < 0.01, "{shared} {full}");
+    assert!(
+        full > 0.0 && (shared / full - 1.0).abs() < 0.01,
+        "{shared} {full}"
+    );
     assert!(shared_rays * 30 <= full_rays, "{shared_rays} {full_rays}");
 }
 

@@ -142,7 +142,10 @@ impl SamplePool {
         let k = rng.next_u32() % self.sets;
         let range = k as usize * self.samples..(k as usize + 1) * self.samples;
         let offset = rng.next_u32();
-        ((&self.on_source[range.clone()], &self.lifted[range]), offset)
+        (
+            (&self.on_source[range.clone()], &self.lifted[range]),
+            offset,
+        )
     }
 }
 
@@ -370,7 +373,14 @@ impl Shot<'_> {
                         self.occluder.count_visible(origin, &scratch.points)
                     }
                 } else {
-                    self.draw_part_samples(q, n, v, rays, &mut scratch.clipped, &mut scratch.points);
+                    self.draw_part_samples(
+                        q,
+                        n,
+                        v,
+                        rays,
+                        &mut scratch.clipped,
+                        &mut scratch.points,
+                    );
                     let lift = self.normal * self.occluder.scene_epsilon();
                     scratch.points.iter_mut().for_each(|p| *p += lift);
                     self.occluder.count_visible(origin, &scratch.points)
@@ -500,7 +510,14 @@ impl Shot<'_> {
     /// at the origin's height rather than the point's keeps every ray above
     /// the receiving plane, at the cost of an ε-thin band of the source.
     pub fn draw_visible_part_samples(&self, q: DVec3, n: DVec3, v: u32, scratch: &mut Scratch) {
-        self.draw_part_samples(q, n, v, self.samples, &mut scratch.clipped, &mut scratch.points);
+        self.draw_part_samples(
+            q,
+            n,
+            v,
+            self.samples,
+            &mut scratch.clipped,
+            &mut scratch.points,
+        );
     }
 
     fn draw_part_samples(

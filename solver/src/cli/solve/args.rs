@@ -73,9 +73,9 @@ pub struct SolveArgs {
             chosen against a path-traced truth (docs/accuracy.md). draft: a coarse mesh \
             and a loose threshold, under a second for the Cornell box, with visible \
             noise in penumbrae (about 4% error). medium (default): enough rays that \
-            two seeds look alike, about 6 s for the Cornell box on two cores (about 2.3% \
+            two seeds look alike, about 3 s for the Cornell box on two cores (about 2.3% \
             error). final: a fine mesh, about 7 times slower than medium (about 1.4% \
-            error). Any other flag overrides the preset's value."
+            error, about 21 s). Any other flag overrides the preset's value."
     )]
     pub preset: Option<Preset>,
 
@@ -84,8 +84,10 @@ pub struct SolveArgs {
         long,
         value_name = "N",
         long_help = "Visibility rays per receiving vertex and source patch (1 to 4096). \
-            More rays give smoother penumbrae and less shadow noise; time grows about \
-            linearly with N."
+            More rays give smoother penumbrae and less shadow noise. Time grows about \
+            linearly with N where shots are bright; with --full-rays-above (every preset: \
+            0.01) a receiver gets all N only from shots that add at least that share of \
+            its light, so late, dim shots cost far less than N rays each."
     )]
     pub samples: Option<u32>,
 
@@ -193,7 +195,9 @@ pub struct SolveArgs {
             method). The estimate stays unbiased; only its noise grows, where the shot's \
             share is small: at most sqrt(FRACTION / (4 x samples)) of a vertex's radiance \
             in all. Larger: fewer rays late in a solve of many small patches, where most \
-            shots are dim. Emitters' first shots keep every ray."
+            shots are dim. Emitters' first shots keep every ray. Every preset uses \
+            0.01: the Cornell box's final solve takes 21 s instead of 37 s at the same \
+            error against the path-traced truth (1.44% against 1.43%, docs/accuracy.md)."
     )]
     pub full_rays_above: Option<f64>,
 
