@@ -134,6 +134,9 @@ fn with_ks_zero_directional_mode_equals_the_diffuse_solver() {
         // And it keeps receivers whole, as directional mode does
         // (`mesh::contact` cuts them in the diffuse mode only).
         diffuse.whole_receivers = true;
+        // And every ray: directional mode has no ray share
+        // (`solve/ray_share.rs`), so the two sample the same points.
+        diffuse.full_rays_above = 0.0;
         // The diffuse output weights the ambient term by each vertex's
         // enclosure (`solve/enclosure.rs`) and the directional output
         // carries Cohen's term unweighted, so the files are compared

@@ -421,6 +421,7 @@ fn directional_with_ks_zero_a_checkerboard_solves_as_in_diffuse_mode() {
         let mut diffuse = settings();
         diffuse.adaptive = adaptive;
         diffuse.uniform_shooters = true;
+        diffuse.full_rays_above = 0.0;
         diffuse.shooting = crate::settings::Shooting::Flat;
         let mut directional = diffuse.clone();
         directional.mode = SolveMode::Directional;
