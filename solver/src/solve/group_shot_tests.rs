@@ -217,3 +217,60 @@ fn grouped_shooting_is_deterministic_across_threads() {
     assert_eq!(one.mesh().split_log, three.mesh().split_log);
     assert_eq!(bits(one.vertex_radiance()), bits(three.vertex_radiance()));
 }
+
+/// A receiver far from the whole group takes every member's kernel without
+/// the per-member tests: over every vertex of the Cornell box, a group of
+/// four 4 mm squares on the light gives each receiver
+/// the same ΔL, visible count and rays as when every receiver goes through
+/// the per-member tests (a consistency check of the shortcut, which must
+/// change no result; the kernel itself is checked against the exact factors
+/// by `group_estimate_matches_the_members_shots`). Most receivers must take
+/// the shortcut, or the test would check nothing.
+#[test]
+fn far_receivers_take_the_kernels_directly() {
+    let scene = cornell();
+    let s = settings(Shooters::Grouped, false);
+    let solver = Solver::new(&scene, &s).unwrap();
+    let light = (0..solver.mesh.surfaces.len())
+        .find(|&k| solver.emission[k] != DVec3::ZERO)
+        .expect("the Cornell box has a light");
+    // Four small squares on the light's first patch: each the patch shrunk
+    // to a tenth about a point between its centre and one corner.
+    let patch = Piece::whole(
+        &solver.mesh,
+        solver.surface_patches[light].start,
+        DVec3::ONE,
+    );
+    let centre = patch.corners.iter().sum::<DVec3>() / 4.0;
+    let pieces: Vec<Piece> = (0..4)
+        .map(|k| {
+            let about = centre + 0.3 * (patch.corners[k] - centre);
+            Piece {
+                corners: patch.corners.map(|c| about + 0.1 * (c - centre)),
+                area: patch.area * 0.01,
+                unshot: DVec3::new(1.0, 0.5 + k as f64, 2.0),
+                ..patch
+            }
+        })
+        .collect();
+    let mut fast = GroupShot::new(&solver.mesh, &pieces, 3, &s, &solver.occluder, &solver.kd);
+    let mut slow = GroupShot::new(&solver.mesh, &pieces, 3, &s, &solver.occluder, &solver.kd);
+    slow.always_near = true;
+    fast.always_near = false;
+    let mut scratch = Scratch::default();
+    let mut far = 0;
+    let vertices = solver.mesh.vertices.len() as u32;
+    for v in 0..vertices {
+        let a = fast.receive(&solver.mesh, v, &mut scratch, None);
+        let b = slow.receive(&solver.mesh, v, &mut scratch, None);
+        let (q, n) =
+            super::shoot::receiving_point(&solver.mesh, v, solver.occluder.scene_epsilon());
+        if fast.all_far_for_tests(q, n) {
+            far += 1;
+        }
+        assert_eq!(a.radiance, b.radiance, "vertex {v}");
+        assert_eq!((a.visible, a.rays), (b.visible, b.rays), "vertex {v}");
+    }
+    eprintln!("{far} of {vertices} receivers far from the group");
+    assert!(2 * far > vertices, "{far} of {vertices} far");
+}
