@@ -176,32 +176,18 @@ impl Member {
         if self.polygon().iter().all(|&c| n.dot(c - q) <= 0.0) {
             return 0.0;
         }
-        let r2 = (q - self.centre).length_squared();
-        let far = r2 > (FAR * self.diameter).powi(2) && self.above_horizon(q, n, epsilon);
-        if far {
-            self.kernel(q, n)
-        } else {
-            let f = self.source.form_factor(q, n);
-            if f.is_finite() && f > 0.0 {
-                f
-            } else {
-                0.0
-            }
-        }
-    }
-
-    /// The differential kernel A cos θ_s cos θ_r / (π r²) at the member's
-    /// centroid, 0 where either side faces away: [`Member::factor`] for a
-    /// far member wholly above the receiver's horizon.
-    #[inline]
-    fn kernel(&self, q: DVec3, n: DVec3) -> f64 {
         let d = q - self.centre;
         let r2 = d.length_squared();
-        let (cs, cr) = (self.normal.dot(d), -n.dot(d));
-        let f = if cs <= 0.0 || cr <= 0.0 {
-            0.0
+        let far = r2 > (FAR * self.diameter).powi(2) && self.above_horizon(q, n, epsilon);
+        let f = if far {
+            let (cs, cr) = (self.normal.dot(d), -n.dot(d));
+            if cs <= 0.0 || cr <= 0.0 {
+                0.0
+            } else {
+                self.area * cs * cr / (PI * r2 * r2)
+            }
         } else {
-            self.area * cs * cr / (PI * r2 * r2)
+            self.source.form_factor(q, n)
         };
         if f.is_finite() && f > 0.0 {
             f
@@ -251,46 +237,6 @@ fn uniform_point(polygon: &[DVec3], rng: &mut Rng) -> DVec3 {
     a * (1.0 - r) + b * (r * (1.0 - s)) + c * (r * s)
 }
 
-/// A sphere about every member's corners, and the largest member's
-/// diameter: a receiver far enough from it, with the sphere wholly above its
-/// horizon, is far from every member, so each member's factor is its kernel
-/// ([`Member::kernel`]) without the per-member tests of [`Member::factor`].
-#[derive(Clone, Copy, Debug)]
-struct GroupBound {
-    centre: DVec3,
-    radius: f64,
-    widest: f64,
-}
-
-impl GroupBound {
-    fn new(members: &[Member]) -> GroupBound {
-        let count = members.len().max(1) as f64;
-        let centre = members.iter().map(|m| m.centre).sum::<DVec3>() / count;
-        let radius = members
-            .iter()
-            .flat_map(|m| m.polygon().iter().map(|&c| (c - centre).length()))
-            .fold(0.0, f64::max);
-        let widest = members.iter().map(|m| m.diameter).fold(0.0, f64::max);
-        GroupBound {
-            centre,
-            radius,
-            widest,
-        }
-    }
-
-    /// Whether every member is far from receiving point `q` (normal `n`) in
-    /// the sense of [`Member::factor`]: each member's centre lies within
-    /// `radius` of `centre`, so its distance is at least r − radius, which
-    /// exceeds [`FAR`] × its diameter; and every corner's height above the
-    /// receiver's plane is at least n · (centre − q) − radius ≥ 0. So the
-    /// kernel path gives the same bits as the per-member tests would.
-    fn all_far(&self, q: DVec3, n: DVec3) -> bool {
-        let d = self.centre - q;
-        let r = d.length();
-        r - self.radius > FAR * self.widest && n.dot(d) - self.radius >= 0.0
-    }
-}
-
 /// One grouped shot: its members and what its receivers share.
 pub struct GroupShot<'a> {
     /// Shot number: with the seed and the vertex id it names the RNG stream.
@@ -304,26 +250,9 @@ pub struct GroupShot<'a> {
     pub members: Vec<Member>,
     /// Fewer rays where the group adds little (`ray_share.rs`).
     pub ray_share: Option<super::ray_share::RayShare>,
-    bound: GroupBound,
-    /// Tests only: every receiver through the per-member tests.
-    #[cfg(test)]
-    pub always_near: bool,
 }
 
 impl<'a> GroupShot<'a> {
-    /// [`GroupBound::all_far`] (tests).
-    #[cfg(test)]
-    pub fn all_far_for_tests(&self, q: DVec3, n: DVec3) -> bool {
-        self.bound.all_far(q, n)
-    }
-
-    fn always_near(&self) -> bool {
-        #[cfg(test)]
-        return self.always_near;
-        #[cfg(not(test))]
-        false
-    }
-
     /// The shot of `pieces` (the seed's first).
     pub fn new(
         mesh: &Mesh,
@@ -333,7 +262,6 @@ impl<'a> GroupShot<'a> {
         occluder: &'a Occluder,
         kd: &'a [DVec3],
     ) -> GroupShot<'a> {
-        let members: Vec<Member> = pieces.iter().map(|p| Member::new(mesh, p)).collect();
         GroupShot {
             index,
             seed: settings.seed,
@@ -341,11 +269,8 @@ impl<'a> GroupShot<'a> {
             shadows: settings.shadows,
             occluder,
             kd,
-            bound: GroupBound::new(&members),
-            members,
+            members: pieces.iter().map(|p| Member::new(mesh, p)).collect(),
             ray_share: None,
-            #[cfg(test)]
-            always_near: false,
         }
     }
 
@@ -376,15 +301,10 @@ impl<'a> GroupShot<'a> {
         weights.clear();
         let mut total = 0.0;
         let mut last = 0;
-        // A receiver far from the whole group (most of them, for a group of
-        // small patches) takes every member's kernel directly.
-        let all_far = self.bound.all_far(q, n) && !self.always_near();
         for (k, m) in self.members.iter().enumerate() {
             // A planar polygon cannot light its own surface.
             let w = if m.surface == surface {
                 0.0
-            } else if all_far {
-                m.kernel(q, n) * m.unshot.element_sum()
             } else {
                 m.factor(q, n, epsilon) * m.unshot.element_sum()
             };
