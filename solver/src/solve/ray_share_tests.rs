@@ -6,6 +6,22 @@ use super::shoot::{SamplePool, Scratch, Shot};
 use super::*;
 use crate::settings::Preset;
 
+/// The Cornell box at draft with 32 rays and no refinement, and the patch
+/// with the most unshot power (the light's).
+fn cornell_light() -> (Solver, SolverSettings, u32) {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../config/cornell_box.obj");
+    let mut scene = crate::scene::load_scene(&path, &Default::default())
+        .unwrap()
+        .scene;
+    scene.fill_default_patches(4);
+    let mut settings = SolverSettings::preset(Preset::Draft);
+    settings.samples = 32;
+    settings.adaptive = false;
+    let mut solver = Solver::new(&scene, &settings).unwrap();
+    let light = solver.brightest_patch();
+    (solver, settings, light)
+}
+
 /// Σ over the Cornell box's vertices and 64 shot indices of ΔL from the
 /// light's patch (its shadows from the two blocks give partial visibility)
 /// with all 32 rays, and with the share cut to one ray a receiver (every
@@ -22,16 +38,7 @@ use crate::settings::Preset;
 /// `strided_subsets_take_one_point_a_block`.
 #[test]
 fn one_ray_a_receiver_keeps_the_expectation() {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../config/cornell_box.obj");
-    let mut scene = crate::scene::load_scene(&path, &Default::default())
-        .unwrap()
-        .scene;
-    scene.fill_default_patches(4);
-    let mut settings = SolverSettings::preset(Preset::Draft);
-    settings.samples = 32;
-    settings.adaptive = false;
-    let mut solver = Solver::new(&scene, &settings).unwrap();
-    let light = solver.brightest_patch();
+    let (solver, settings, light) = cornell_light();
     let unshot = DVec3::new(1.0, 0.9, 0.8);
     let prior = vec![DVec3::splat(1e9); solver.mesh.vertices.len()];
     let (mut full, mut shared) = (0.0, 0.0);
@@ -81,15 +88,7 @@ fn one_ray_a_receiver_keeps_the_expectation() {
 /// the shot's gain exceeds, gets every ray: the first shots are unchanged.
 #[test]
 fn dark_receivers_get_every_ray() {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../config/cornell_box.obj");
-    let mut scene = crate::scene::load_scene(&path, &Default::default())
-        .unwrap()
-        .scene;
-    scene.fill_default_patches(4);
-    let mut settings = SolverSettings::preset(Preset::Draft);
-    settings.samples = 32;
-    let mut solver = Solver::new(&scene, &settings).unwrap();
-    let light = solver.brightest_patch();
+    let (solver, settings, light) = cornell_light();
     let mut shot = Shot::for_patch(
         &solver.mesh,
         light,
