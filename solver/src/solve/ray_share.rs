@@ -37,8 +37,10 @@
 //!
 //! Recorded (emitter) shots, which later splits replay to new vertices and
 //! which carry the direct light; receivers with no light yet (L̂ = 0); and
-//! every shot when c = 0 (the default of `SolverSettings::base`, so tests and
-//! the thesis's method are unchanged). The refinement test reads a reduced
+//! every shot when c = 0 (the default of `SolverSettings::base`, the
+//! thesis's method; every preset sets 0.01, and the tests that compare the
+//! diffuse solve with directional mode, which has no share, set 0). The
+//! refinement test reads a reduced
 //! receiver's k of n visible rays as k · R / n of R (`visible` keeps its
 //! meaning, the visible share); its noise allowance, computed for R rays, is
 //! then too small for such receivers, but their ΔL is below c of their level,
