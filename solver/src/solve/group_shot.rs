@@ -317,13 +317,17 @@ impl<'a> GroupShot<'a> {
         if total.is_nan() || total <= 0.0 {
             return Received::default();
         }
-        if !self.shadows {
-            let sum: DVec3 = self
-                .members
+        // Σ_p U_p F̂_p: the members' unoccluded shots summed (colour_p w_p =
+        // U_p F̂_p), the receiver's ΔL without shadows.
+        let unoccluded = |weights: &[f64]| -> DVec3 {
+            self.members
                 .iter()
-                .zip(weights.iter())
+                .zip(weights)
                 .map(|(m, &w)| m.colour * w)
-                .sum();
+                .sum()
+        };
+        if !self.shadows {
+            let sum = unoccluded(weights);
             return Received {
                 radiance: kd * sum,
                 visible: self.samples,
@@ -335,12 +339,7 @@ impl<'a> GroupShot<'a> {
         // against a unit source of that colour at factor W.
         let rays = match (&self.ray_share, prior) {
             (Some(share), Some(prior)) => {
-                let gain: DVec3 = self
-                    .members
-                    .iter()
-                    .zip(weights.iter())
-                    .map(|(m, &w)| m.colour * w)
-                    .sum();
+                let gain = unoccluded(weights);
                 let full = share.full_factor(prior[v as usize], kd, gain / total);
                 super::ray_share::rays_for(self.samples, total, full)
             }

@@ -299,7 +299,7 @@ impl Shot<'_> {
     ///   the part of the source above the receiver's horizon (design notes,
     ///   "Form factors"): a pooled set ([`SamplePool`]) when the whole source is
     ///   above it, else a set drawn on the clipped part
-    ///   ([`Shot::draw_visible_part_samples`]).
+    ///   ([`Shot::draw_part_samples`]).
     /// * `Wallace`: Remington 1992, eq. 3.1 over a pooled set on the whole source.
     /// * `Hemicube`: the exact unoccluded factor when the source's centre is
     ///   visible by a hemicube item buffer on it (radiosity lecture notes, "on the shooting patch
@@ -477,7 +477,7 @@ impl Shot<'_> {
     /// The (unlifted) sample points on the source that receiver `v` at `q`, with
     /// normal `n`, traces to, written into `points`: the shot's pooled set when
     /// the source is above the receiver's horizon, else a set over the part in
-    /// front of it ([`Shot::draw_visible_part_samples`]). The directional
+    /// front of it ([`Shot::draw_part_samples`]). The directional
     /// transports (SH and global cube) draw their samples here, so they are
     /// exactly the diffuse path's.
     pub fn receiver_samples(
@@ -497,8 +497,8 @@ impl Shot<'_> {
         }
     }
 
-    /// Draws `samples` stratified, jittered points (RNG stream (seed, shot,
-    /// vertex)) into `scratch.points` over the part of the source in front of
+    /// Draws `count` stratified, jittered points (RNG stream (seed, shot,
+    /// vertex)) into `points` over the part of the source in front of
     /// the receiver: the source clipped to the half-space n · (x − o) ≥ 0 with o
     /// the ray origin, ε above the receiving point.
     ///
@@ -508,18 +508,8 @@ impl Shot<'_> {
     /// the fraction of the source above the horizon a second time (and blocked
     /// rays through the receiver's own surface would make it noisy). Clipping
     /// at the origin's height rather than the point's keeps every ray above
-    /// the receiving plane, at the cost of an ε-thin band of the source.
-    pub fn draw_visible_part_samples(&self, q: DVec3, n: DVec3, v: u32, scratch: &mut Scratch) {
-        self.draw_part_samples(
-            q,
-            n,
-            v,
-            self.samples,
-            &mut scratch.clipped,
-            &mut scratch.points,
-        );
-    }
-
+    /// the receiving plane, at the cost of an ε-thin band of the source. `count` is `samples`, or
+    /// fewer under the ray share ([`super::ray_share`]).
     fn draw_part_samples(
         &self,
         q: DVec3,
