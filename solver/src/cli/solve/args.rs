@@ -195,7 +195,7 @@ pub struct SolveArgs {
             method). The estimate stays unbiased; only its noise grows, where the shot's \
             share is small: at most sqrt(FRACTION / (4 x samples)) of a vertex's radiance \
             in all. Larger: fewer rays late in a solve of many small patches, where most \
-            shots are dim. Emitters' first shots keep every ray. Every preset uses \
+            shots are dim. An emitting patch's own shots, which refinement replays, keep every ray. Every preset uses \
             0.01: the Cornell box's final solve takes 21 s instead of 37 s at the same \
             error against the path-traced truth (1.44% against 1.43%, docs/accuracy.md)."
     )]
