@@ -221,6 +221,17 @@ pub struct SolverSettings {
     /// below (`solve::ray_share`); 0 traces every ray to every receiver.
     #[serde(default)]
     pub full_rays_above: f64,
+    /// The smallest element edge on a glossy surface, as a multiple of its
+    /// lobe's α times the scene's viewing distance (half its diagonal; see
+    /// `solve::directional::min_glossy_edge`).
+    #[serde(default = "default_glossy_edge")]
+    pub glossy_edge: f64,
+}
+
+/// The glossy floor's factor before it became a setting (checkpoints
+/// written then were solved with it).
+fn default_glossy_edge() -> f64 {
+    0.5
 }
 
 fn default_crease_angle() -> f64 {
@@ -267,6 +278,8 @@ pub struct SettingsPatch {
     pub uniform_shooters: Option<bool>,
     /// Fraction of a receiver's level above which a shot traces every ray (`solve::ray_share`).
     pub full_rays_above: Option<f64>,
+    /// Smallest glossy element edge, in α × viewing distance (`solve::directional`).
+    pub glossy_edge: Option<f64>,
 }
 
 /// A setting whose value is out of its range.
@@ -317,6 +330,7 @@ impl SolverSettings {
             uniform_shooters: false,
             whole_receivers: false,
             full_rays_above: 0.0,
+            glossy_edge: default_glossy_edge(),
         }
     }
 
@@ -373,7 +387,8 @@ impl SolverSettings {
             strict,
             crease_angle,
             uniform_shooters,
-            full_rays_above
+            full_rays_above,
+            glossy_edge
         );
         if patch.threads.is_some() {
             self.threads = patch.threads;
@@ -542,6 +557,12 @@ impl SolverSettings {
             "full_rays_above",
             self.full_rays_above,
             "0 to 1 (a fraction of a receiver's radiance; 0 traces every ray)",
+        )?;
+        check(
+            self.glossy_edge.is_finite() && self.glossy_edge > 0.0 && self.glossy_edge <= 10.0,
+            "glossy_edge",
+            self.glossy_edge,
+            "above 0, at most 10 (a multiple of α × half the scene's diagonal)",
         )?;
         check(
             self.units_per_metre.is_finite() && self.units_per_metre > 0.0,

@@ -146,20 +146,26 @@ pub struct Directional {
 /// (half the diagonal of the scene's bounds: a walkthrough's eye is inside
 /// the scene, so that is the distance its surfaces are typically seen from).
 ///
-/// Rule: `h_min = α · D / 2`. Why: the runtime evaluates each vertex's SH
-/// toward the eye and interpolates between vertices, so what the mesh must
-/// resolve is the radiance toward one eye as it varies across the surface.
-/// Seen from distance D, a step Δx on the surface turns the direction to the
-/// eye by about Δx / D, and the lobe g = exp(−tan²(θ0/2)/α²) falls to 1/e at
-/// θ0 ≈ 2α, so a highlight's 1/e half-width on the surface is at least
-/// w ≈ 2αD (more where the source is far too, since the mirror direction
-/// also turns). Vertices every w/4 = αD/2 interpolate that Gaussian
-/// profile to within h²/8 · max|g''| = (w/4)²/8 · 2/w² = 1/64 ≈ 1.6% of its
-/// peak; finer elements cannot show the eye more (the lobe itself blurs
-/// anything smaller), only cost coefficients, (L+1)² per vertex. The floor
-/// scales with α: a narrow lobe (more bands) may be meshed finer.
-pub fn min_glossy_edge(alpha: f64, view_distance: f64) -> f64 {
-    0.5 * alpha * view_distance
+/// Rule: `h_min = k · α · D`, k the setting `glossy_edge` (0.5 unless a
+/// preset or the user says otherwise). Why: the runtime evaluates each
+/// vertex's SH toward the eye and interpolates between vertices, so what the
+/// mesh must resolve is the radiance toward one eye as it varies across the
+/// surface. A step Δx on the surface turns the direction to an eye at
+/// distance d_e by about Δx / d_e and the mirror direction of a source at
+/// d_s by about Δx / d_s, the other way, so the angle between them changes
+/// by Δx / d with 1/d = 1/d_e + 1/d_s. The lobe g = exp(−tan²(θ0/2)/α²)
+/// falls to 1/e at θ0 ≈ 2α, so a highlight's 1/e half-width on the surface
+/// is w ≈ 2αd: 2αD for a far source, αD when eye and source are both D
+/// away. Vertices every w/4 interpolate that Gaussian profile to within
+/// h²/8 · max|g''| = (w/4)²/8 · 2/w² = 1/64 ≈ 1.6% of its peak: k = 0.5
+/// for a far source, 0.25 for a near one (measured on the glossy room: k =
+/// 0.25 with the smallest element halved too takes its MARE from 6.1% to
+/// 4.3%, docs/accuracy.md). Finer
+/// elements cannot show the eye more (the lobe itself blurs anything
+/// smaller), only cost coefficients, (L+1)² per vertex. The floor scales
+/// with α: a narrow lobe (more bands) may be meshed finer.
+pub fn min_glossy_edge(alpha: f64, view_distance: f64, factor: f64) -> f64 {
+    factor * alpha * view_distance
 }
 
 /// The directional part of a [`super::Checkpoint`] as read back: coefficients
@@ -328,8 +334,9 @@ impl Directional {
             .lobes
             .iter()
             .map(|l| {
-                l.as_ref()
-                    .map_or(0.0, |l| min_glossy_edge(l.alpha, view_distance))
+                l.as_ref().map_or(0.0, |l| {
+                    min_glossy_edge(l.alpha, view_distance, settings.glossy_edge)
+                })
             })
             .collect();
         d.extend_vertices(mesh);

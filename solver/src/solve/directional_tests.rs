@@ -702,7 +702,7 @@ fn glossy_elements_stop_at_the_alpha_floor() {
         lo = lo.min(v.position);
         hi = hi.max(v.position);
     }
-    let h_min = super::directional::min_glossy_edge(0.1, 0.5 * (hi - lo).length());
+    let h_min = super::directional::min_glossy_edge(0.1, 0.5 * (hi - lo).length(), 0.5);
     let orders = solver.directional().unwrap().surface_orders();
     let mut glossy_splits = 0;
     // The floor is measured on each leaf's longest edge (a sliver refines

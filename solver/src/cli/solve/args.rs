@@ -201,6 +201,21 @@ pub struct SolveArgs {
     )]
     pub full_rays_above: Option<f64>,
 
+    /// Smallest element edge on a glossy surface, as K × α × half the scene's diagonal.
+    #[arg(
+        long,
+        value_name = "K",
+        long_help = "Directional mode: adaptive subdivision of a glossy surface stops at \
+            elements whose longest edge is K × α × D, with α the lobe's RMS slope and D \
+            half the scene's diagonal (the distance its surfaces are seen from). The \
+            preset's --min-element-size floors every surface as well. A highlight's \
+            width on a surface is about 2α·D_e, with D_e the harmonic mean of the eye's \
+            and the source's distances over two; K = 0.25 puts four vertices across it. \
+            Smaller K: sharper highlights and reflections, at the cost of more \
+            elements, each with (L+1)² coefficients per channel."
+    )]
+    pub glossy_edge: Option<f64>,
+
     /// What shoots in one pass: patch (default) or grouped.
     #[arg(
         long,
@@ -512,6 +527,7 @@ impl SolveArgs {
             shooting: self.shooting,
             shooting_tolerance: self.shooting_tolerance,
             full_rays_above: self.full_rays_above,
+            glossy_edge: self.glossy_edge,
             shooters: self.shooters,
             samples: self.samples,
             hemicube_resolution: self.hemicube_resolution,
