@@ -22,4 +22,5 @@ pub mod formfactor;
 pub mod hemicube;
 pub mod polygon;
 pub mod sampling;
+pub mod solid_angle;
 pub mod visibility;

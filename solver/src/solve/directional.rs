@@ -48,7 +48,11 @@
 //! ## Transport (design notes, "Directional mode")
 //!
 //! For every visible source sample i with form-factor share F_i (analytic
-//! method: the exact unoccluded factor divided evenly over the samples, the
+//! method, where the receiver is glossy or the source's radiance depends on
+//! direction: samples uniform in the solid angle of the source's part in
+//! front of the receiver, sharing the exact unoccluded factor by the
+//! receiver's cosine, `shoot::visible_samples_by_direction`; between two
+//! diffuse ends: the exact factor divided evenly over area samples; the
 //! visible ones kept; Wallace: Remington 1992, eq. 3.1's per-sample term), with ω_i the
 //! direction from the receiver to the sample:
 //!
@@ -76,7 +80,9 @@ use super::budget;
 use super::checkpoint::precision::round_to_kept;
 use super::refine::{Criteria, Field};
 use super::shoot::RecordedShot;
-use super::shoot::{visible_samples, SamplePool, SampleScratch, Shot};
+use super::shoot::{
+    visible_samples, visible_samples_by_direction, SamplePool, SampleScratch, Shot,
+};
 use super::{ShotReport, SolveError, Solver};
 use crate::brdf::normalization::funk_hecke_d;
 use crate::brdf::GlossyLobe;
@@ -553,8 +559,15 @@ impl DirShot<'_> {
                 rays: 0,
             };
         }
-        let (q, visible, rays) =
-            visible_samples(self.shot, mesh, v, self.pool, &mut scratch.sampling);
+        // Where the light's direction matters (a glossy receiver, or a
+        // source whose radiance depends on direction), samples by solid
+        // angle; between two diffuse ends, the diffuse solver's own samples.
+        let sample = if order > 0 || self.source_order > 0 {
+            visible_samples_by_direction
+        } else {
+            visible_samples
+        };
+        let (q, visible, rays) = sample(self.shot, mesh, v, self.pool, &mut scratch.sampling);
         let s = &mesh.surfaces[surface];
         let shading = mesh.vertices[v as usize].normal;
         let source_count = coefficient_count(self.source_order);

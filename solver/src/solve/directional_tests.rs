@@ -618,19 +618,23 @@ fn furnace_spread(solver: &Solver, exact: f64) -> (f64, f64, f64, f64, f64) {
 /// α = 0.3 and emit Le = 1. A reciprocal BRDF whose albedo were Ks for every
 /// direction would give Le / (1 − Ks) = L∞ = 2 everywhere; the figures printed
 /// are each normalization's deviation from it (recorded in docs/sh-bands.md).
-/// Measured (3 × 3 patches per face, 16 rays, threshold 1%): the thesis's
-/// L/L∞ spans 0.50..1.56 over vertices × directions (RMS deviation 0.27), the
-/// reciprocal variant's 0.50..1.05 (RMS 0.35, mean exitance 0.72 of π L∞: its
-/// albedo falls toward grazing).
+/// Measured (3 × 3 patches per face, 16 rays, threshold 1%), with the
+/// samples of a glossy receiver spread by solid angle
+/// (`geometry/solid_angle.rs`): the thesis's L/L∞ spans 0.60..1.15 over
+/// vertices × directions (RMS deviation 0.17, mean exitance 0.980 of π L∞),
+/// the reciprocal variant's 0.54..0.92 (RMS 0.32, mean exitance 0.75: its
+/// albedo falls toward grazing). With equal shares of area samples they
+/// were 0.50..1.56 (RMS 0.27, mean exitance 0.932) and 0.50..1.05.
 ///
 /// Asserted, each with its reason:
 /// * the diffuse control (Kd = 0.5, Ks = 0) is uniform to the unshot light:
 ///   error ≈ ρ × unshot fraction ≤ 0.5%, so 0.97..1.02;
 /// * the thesis's C_R reflects exactly Ks of every beam, so the room's power
 ///   balances and the mean exitance is π L∞ less the unshot light (1%) and
-///   the glossy transport's discretization loss (measured 6.8% at 3 × 3
-///   patches, 4.3% at 6 × 6: lobes aimed at grazing directions land near
-///   edges, where few vertices sample them), so 0.90..1.01;
+///   the glossy transport's discretization loss (measured 1%: lobes aimed at
+///   grazing directions land near edges, where few vertices sample them; it
+///   was 6.8% with equal shares of area samples, which sent a corner
+///   vertex's light from the far faces), so 0.95..1.01;
 /// * no direction of the reciprocal variant exceeds L∞ beyond the sampling
 ///   noise of the reflected lobes (6%: 16 rays per patch of 1/9 face, a 0.3 rad
 ///   lobe), since its albedo is ≤ Ks; the thesis's exceeds it by far more
@@ -672,7 +676,7 @@ fn glossy_furnace_uniformity_by_normalization() {
         );
         match label {
             "diffuse control" => assert!(lo > 0.97 && hi < 1.02, "{lo} {hi}"),
-            "thesis" => assert!((0.90..1.01).contains(&mean_exitance), "{mean_exitance}"),
+            "thesis" => assert!((0.95..1.01).contains(&mean_exitance), "{mean_exitance}"),
             _ => {
                 assert!(hi <= 1.06, "{hi}");
                 assert!(highs[1] > hi + 0.1, "{hi} {highs:?}");

@@ -11,6 +11,7 @@ use crate::geometry::formfactor::{wallace, SourcePolygon};
 use crate::geometry::hemicube::{self, ItemBuffer};
 use crate::geometry::polygon::clip_to_halfspace;
 use crate::geometry::sampling::{stratified_points, stream_id, Rng};
+use crate::geometry::solid_angle::stratified_solid_angle_points;
 use crate::geometry::visibility::Occluder;
 use crate::mesh::Mesh;
 use crate::settings::FormFactorMethod;
@@ -635,6 +636,77 @@ pub struct SampleScratch {
     pub samples: Vec<(DVec3, f64)>,
 }
 
+/// [`visible_samples`] for a receiver that reflects light by direction (a
+/// glossy vertex) or a source whose light depends on direction: the samples
+/// are spread uniformly in the solid angle the part of the source in front
+/// of the receiver subtends (`geometry/solid_angle.rs`), and each visible one
+/// carries the share F · cos θ_i / Σ_j cos θ_j of the exact unoccluded factor
+/// F (θ the angle at the receiver; the sum over every sample, visible or
+/// not). So the shares estimate the factor's distribution over incoming
+/// directions without bias however near the source is, which equal shares
+/// of area samples do not (docs/accuracy.md, "Glossy: samples by solid
+/// angle"). Same returns as [`visible_samples`]; falls back to it where the
+/// source has no Analytic factor, no shadows or no part in front.
+pub fn visible_samples_by_direction(
+    s: &Shot,
+    mesh: &Mesh,
+    v: u32,
+    pool: &SamplePool,
+    scratch: &mut SampleScratch,
+) -> (DVec3, u32, u32) {
+    if !matches!(s.method, FormFactorMethod::Analytic) || !s.shadows {
+        return visible_samples(s, mesh, v, pool, scratch);
+    }
+    scratch.samples.clear();
+    let (q, n) = s.receiving_point(mesh, v);
+    if s.normal.dot(q - s.centre) < -1e-6 * s.diameter {
+        return (q, 0, 0);
+    }
+    if s.polygon().iter().all(|&c| n.dot(c - q) <= 0.0) {
+        return (q, 0, 0);
+    }
+    let unoccluded = s.source.form_factor(q, n);
+    if unoccluded.is_nan() || unoccluded <= 0.0 {
+        return (q, 0, 0);
+    }
+    let origin = q + n * s.occluder.scene_epsilon();
+    clip_to_halfspace(s.polygon(), origin, n, &mut scratch.clipped);
+    if scratch.clipped.len() < 3 {
+        return visible_samples(s, mesh, v, pool, scratch);
+    }
+    let mut rng = Rng::new(s.seed, stream_id(s.index, v as u64));
+    let solid_angle = stratified_solid_angle_points(
+        origin,
+        &scratch.clipped,
+        s.samples,
+        &mut rng,
+        &mut scratch.points,
+    );
+    if solid_angle <= 0.0 || scratch.points.is_empty() {
+        return visible_samples(s, mesh, v, pool, scratch);
+    }
+    let lift = s.normal * s.occluder.scene_epsilon();
+    scratch.targets.clear();
+    scratch
+        .targets
+        .extend(scratch.points.iter().map(|&p| p + lift));
+    s.occluder
+        .visible_each(origin, &scratch.targets, &mut scratch.flags);
+    let cosine = |p: DVec3| (p - origin).normalize_or_zero().dot(n).max(0.0);
+    let total: f64 = scratch.points.iter().map(|&p| cosine(p)).sum();
+    if total <= 0.0 {
+        return visible_samples(s, mesh, v, pool, scratch);
+    }
+    let mut visible = 0;
+    for (p, &f) in scratch.points.iter().zip(&scratch.flags) {
+        if f {
+            visible += 1;
+            scratch.samples.push((*p, unoccluded * cosine(*p) / total));
+        }
+    }
+    (q, visible, s.samples)
+}
+
 /// The visible samples of `shot`'s source seen from vertex `v`'s receiving
 /// point, with their shares of F(v←s), into `scratch.samples`: the samples,
 /// culls and visibility of [`Shot::form_factor`], so the shares sum to its
@@ -678,13 +750,16 @@ pub fn visible_samples(
                 .extend(scratch.points.iter().map(|&p| p + lift));
             s.occluder
                 .visible_each(origin, &scratch.targets, &mut scratch.flags);
-            // Equal shares, as the SH shooter divides the factor: the samples
-            // are uniform in area, so the incoming directions of a source much
-            // larger than its distance are spread by area rather than by
-            // differential factor (weighting by Remington 1992, eq. 3.1's term was tried:
-            // with 16 samples it concentrates a corner's light on a few cells
-            // and raised the largest row sum γ of a glossy furnace from 0.87
-            // to 0.999).
+            // Equal shares: the samples are uniform in area, so the incoming
+            // directions of a source much larger than its distance are spread
+            // by area rather than by differential factor. That is harmless
+            // between two diffuse ends (only the visible fraction matters);
+            // where direction matters the SH shooter samples by solid angle
+            // instead ([`visible_samples_by_direction`]). (Weighting area
+            // samples by Remington 1992, eq. 3.1's term was tried: with 16
+            // samples it concentrates a corner's light on a few cells and
+            // raised the largest row sum γ of a glossy furnace from 0.87 to
+            // 0.999.)
             let share = unoccluded / s.samples as f64;
             let mut visible = 0;
             for (p, &f) in scratch.points.iter().zip(&scratch.flags) {
