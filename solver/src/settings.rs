@@ -207,9 +207,8 @@ pub struct SolverSettings {
     pub memory_budget: Option<u64>,
     /// Shoot every patch's mean unshot radiance uniformly, as Remington 1992
     /// does, instead of from the quadrants of an unevenly lit patch
-    /// (`solve::regions`), or, in directional mode, from its elements
-    /// (`solve/directional/source_shape.rs`). Off by default; tests comparing
-    /// the two modes set it, since the two shapes differ.
+    /// (`solve::regions`). Off by default; the directional transports always
+    /// shoot uniformly, so tests comparing them with the diffuse solve set it.
     #[serde(default)]
     pub uniform_shooters: bool,
     /// Mesh every receiver whole instead of cutting it along the lines where

@@ -94,7 +94,6 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use solution::format::{Batch, Representation, ScalarType, Solution, Vertex};
 use solution::sh::{self, coefficient_count, Y00};
-use source_shape::{ElementView, ShapeInput, SourceShape};
 use std::collections::BTreeMap;
 use std::f64::consts::PI;
 use std::sync::Arc;
@@ -102,7 +101,6 @@ use std::time::Instant;
 
 mod hidden_fill;
 mod seams;
-mod source_shape;
 mod state;
 mod textured;
 
@@ -508,9 +506,6 @@ struct DirShot<'a> {
     /// The shot's jittered sample sets, shared with the diffuse path.
     pool: &'a SamplePool,
     unshot: &'a [f64],
-    /// The unshot radiance as it varies over the source
-    /// (`directional/source_shape.rs`); `None`: `unshot` from every point.
-    shape: Option<&'a SourceShape>,
     source_order: u32,
     source_tangent: DVec3,
     tables: &'a Tables,
@@ -580,16 +575,14 @@ impl DirShot<'_> {
             let Some(toward_source) = (p - q).try_normalize() else {
                 continue;
             };
-            // U_s toward the receiver, from the source's SH in its frame
-            // where this sample lies on it.
-            let source = self.shape.map_or(self.unshot, |shape| shape.at(p));
+            // U_s toward the receiver, from the source's SH in its frame.
             let unshot = if self.source_order == 0 {
-                DVec3::from_slice(&source[..3]) * Y00
+                DVec3::from_slice(&self.unshot[..3]) * Y00
             } else {
                 let local = sh::to_local(-toward_source, self.shot.normal, self.source_tangent);
                 sh::eval_basis(self.source_order, local, &mut scratch.basis);
                 let mut u = DVec3::ZERO;
-                for (c, y) in source.chunks_exact(3).zip(&scratch.basis) {
+                for (c, y) in self.unshot.chunks_exact(3).zip(&scratch.basis) {
                     u += DVec3::from_slice(c) * *y;
                 }
                 u
@@ -768,13 +761,11 @@ impl Solver {
         let pool = SamplePool::new(&shot);
         let source_order = d.surface_order[source_surface];
         let tables = Tables::new(d, &self.mesh);
-        let shape = self.source_shape(d, source, &unshot);
         let mut rays = 0u64;
         let dir_shot = DirShot {
             shot: &shot,
             pool: &pool,
             unshot: &unshot,
-            shape: shape.as_ref(),
             source_order,
             source_tangent: tables.tangent[source_surface],
             tables: &tables,
@@ -833,8 +824,6 @@ impl Solver {
                         shot,
                         pool,
                         unshot,
-                        // Emitters shoot uniformly (`source_shape.rs`).
-                        shape: None,
                         source_order: tables.surface_order[surface],
                         source_tangent: tables.tangent[surface],
                         tables: &tables,
@@ -923,49 +912,6 @@ impl Solver {
             vertices: self.mesh.vertices.len(),
             splits,
         }
-    }
-
-    /// The shape of source patch `source`'s unshot radiance `unshot` over
-    /// its area (`directional/source_shape.rs`), or `None` where it shoots
-    /// uniformly: with `uniform_shooters`, and from emitting or textured
-    /// surfaces.
-    fn source_shape(&self, d: &Directional, source: u32, unshot: &[f64]) -> Option<SourceShape> {
-        let mesh = &self.mesh;
-        let patch = &mesh.patches[source as usize];
-        let surface = patch.surface as usize;
-        if self.settings.uniform_shooters
-            || self.emission[surface] != DVec3::ZERO
-            || d.textured[surface]
-        {
-            return None;
-        }
-        let order = d.surface_order[surface];
-        let element = |e: u32| {
-            let el = &mesh.elements[e as usize];
-            ElementView {
-                corners: el.corners,
-                positions: el.corners.map(|v| mesh.vertices[v as usize].position),
-                corner_count: el.corner_count as usize,
-                first_child: (!el.is_leaf()).then_some(el.first_child),
-                area: el.area,
-            }
-        };
-        let vertex = |v: u32| {
-            (!self.hidden.get(v as usize).copied().unwrap_or(false))
-                .then(|| &d.radiance[d.vertex_range(mesh, v as usize)])
-        };
-        let power = |c: &[f64]| d.hemisphere_equivalent(order, c);
-        SourceShape::build(
-            &ShapeInput {
-                element: &element,
-                vertex: &vertex,
-                power: &power,
-            },
-            patch.root,
-            mesh.surfaces[surface].normal,
-            patch.area,
-            unshot,
-        )
     }
 
     /// Restores the directional state after the mesh was replayed; an error

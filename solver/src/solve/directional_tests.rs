@@ -128,10 +128,8 @@ fn with_ks_zero_directional_mode_equals_the_diffuse_solver() {
         diffuse.samples = 4;
         diffuse.max_shots = 12;
         diffuse.adaptive = adaptive;
-        // Both shoot each patch's mean uniformly (the diffuse solve's
-        // quadrants and the directional solve's element shapes,
-        // `directional/source_shape.rs`, differ), so that the two solve the
-        // same system; the directional settings are a clone of these.
+        // Directional mode shoots each patch's mean uniformly: the diffuse
+        // solve must too for the two to solve the same system.
         diffuse.uniform_shooters = true;
         // And it keeps receivers whole, as directional mode does
         // (`mesh::contact` cuts them in the diffuse mode only).

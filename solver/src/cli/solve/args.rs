@@ -449,11 +449,7 @@ pub struct SolveArgs {
             biased where a patch is half in shadow: its dark half lights its \
             neighbours as brightly as its lit half (the Cornell box's final MARE \
             against the path-traced truth is 2.9% uniform against 2.0% by quadrants, \
-            docs/accuracy.md). Directional solves shoot each part of a patch's area \
-            with the radiance function its elements hold there (a glossy floor's \
-            reflection of the light goes back up from where it is, not from the \
-            whole patch); this flag makes them uniform too. Cube solves always shoot \
-            uniformly."
+            docs/accuracy.md). Directional and cube solves always shoot uniformly."
     )]
     pub uniform_shooters: bool,
 

@@ -52,8 +52,6 @@ fn make_dir_shot<'a>(
         shot,
         pool,
         unshot,
-        // Recorded shots are emitters', which shoot uniformly.
-        shape: None,
         source_order: tables.surface_order[source_surface],
         source_tangent: tables.tangent[source_surface],
         tables,
