@@ -1003,3 +1003,86 @@ fn conformed_glossy_floor_seams_are_crack_free() {
     }
     assert_eq!(open, 0, "{open} floor edges without a neighbour");
 }
+
+/// A glossy floor (Kd 0, Ks 1, α = 0.1) under a 0.25 m square emitter 1 m
+/// above it, after the emitter's one shot: each floor vertex in the
+/// highlight seen from an eye at (0, 0.8, 0.9), its SH evaluated toward the
+/// eye, against a 100 × 100 midpoint quadrature of the exact lobe
+/// (`reference::lobe`, not the solver's expansion) over the emitter:
+/// L = ∫ f_s(ω_i, ω_o) Le cos θ_r cos θ_s / r² dA. With 256 samples by solid
+/// angle the mean |relative error| over the vertices above a tenth of the
+/// peak is 0.59% (mean −0.05%), the SH truncation at 1e-4 and the samples'
+/// noise; 1.5% is asserted. Area samples with equal shares measured 3.8% at
+/// 256 samples and 4.5% at 32 (3.1% by solid angle): their error does not
+/// fall with the sample count.
+#[test]
+fn glossy_highlight_at_each_vertex_matches_a_quadrature_of_the_exact_lobe() {
+    use crate::reference::lobe::ExactLobe;
+    let light = square(DVec3::new(0.0, 1.0, 0.0), -DVec3::Y, 0.25);
+    let mut scene = scene_of(
+        vec![(floor(1.0), 0), (light.clone(), 1)],
+        vec![glossy("floor", 0.0, 1.0, 0.1), material("light", 0.0, 1.0)],
+        32,
+    );
+    scene.polygons[1].patches = 1;
+    let mut settings = directional_settings();
+    settings.max_shots = 1;
+    settings.samples = 256;
+    settings.sh_error_target = 1e-4;
+    let solver = run(&scene, &settings);
+    let exact = ExactLobe::new(0.1, BrdfNormalization::Thesis);
+    let eye = DVec3::new(0.0, 0.8, 0.9);
+    // The mirror point of the light's centre for this eye: (0, 0, 0.5).
+    let mirror_point = DVec3::new(0.0, 0.0, 0.5);
+    let s = &solver.mesh().surfaces[0];
+    let (a, b, d) = (light[0], light[1], light[3]);
+    let area = (b - a).cross(d - a).length();
+    let quadrature = |p: DVec3, wo: DVec3| {
+        let n = 100;
+        let mut sum = 0.0;
+        for i in 0..n {
+            for j in 0..n {
+                let x = a
+                    + (b - a) * ((i as f64 + 0.5) / n as f64)
+                    + (d - a) * ((j as f64 + 0.5) / n as f64);
+                let to = x - p;
+                let r2 = to.length_squared();
+                let wi = to / r2.sqrt();
+                // Both cosines are wi.y: the floor faces up, the light down.
+                sum += exact.eval(wi, wo, DVec3::Y) * wi.y * wi.y / r2;
+            }
+        }
+        sum * area / (n * n) as f64
+    };
+    let mut rows = Vec::new();
+    for v in 0..solver.mesh().vertices.len() as u32 {
+        let p = solver.mesh().vertices[v as usize].position + solver.offset();
+        if solver.mesh().vertices[v as usize].surface != 0 || (p - mirror_point).length() > 0.3 {
+            continue;
+        }
+        let wo = (eye - p).normalize();
+        let (order, sh) = solver.vertex_sh(v).unwrap();
+        let mut basis = vec![0.0; coefficient_count(order)];
+        solution::sh::eval_basis(
+            order,
+            solution::sh::to_local(wo, s.normal, s.tangent),
+            &mut basis,
+        );
+        let shown: f64 = sh.chunks_exact(3).zip(&basis).map(|(c, y)| c[0] * y).sum();
+        rows.push((shown, quadrature(p, wo)));
+    }
+    let peak = rows.iter().map(|r| r.1).fold(0.0, f64::max);
+    let lit: Vec<f64> = rows
+        .iter()
+        .filter(|r| r.1 > 0.1 * peak)
+        .map(|r| r.0 / r.1 - 1.0)
+        .collect();
+    let mean_abs = lit.iter().map(|e| e.abs()).sum::<f64>() / lit.len() as f64;
+    println!(
+        "{} vertices in the highlight: mean |relative error| {mean_abs:.4}, mean {:+.4}",
+        lit.len(),
+        lit.iter().sum::<f64>() / lit.len() as f64
+    );
+    assert!(lit.len() >= 16, "{}", lit.len());
+    assert!(mean_abs <= 0.015, "{mean_abs}");
+}
