@@ -123,6 +123,20 @@ pub fn stratified_points(polygon: &[DVec3], n: u32, rng: &mut Rng, out: &mut Vec
         out.extend(std::iter::repeat_n(centre, n as usize));
         return;
     }
+    stratified_square(n, rng, |u, v| {
+        out.push(map_square_to_fan(polygon, cum, total, u, v))
+    });
+}
+
+/// Calls `f(u, v)` for `n` jittered points of the unit square, one in each
+/// of `n` equal-area cells: ⌊√n⌋ rows of ⌊n/rows⌋ or one more cells. Each
+/// point draws u, then v, from `rng`. Through an area-preserving map the
+/// cells become equal strata of a polygon ([`stratified_points`]) or of a
+/// solid angle (`solid_angle::stratified_solid_angle_points`).
+pub fn stratified_square(n: u32, rng: &mut Rng, mut f: impl FnMut(f64, f64)) {
+    if n == 0 {
+        return;
+    }
     let rows = (n as f64).sqrt().floor().max(1.0) as u32;
     let base = n / rows;
     let extra = n % rows;
@@ -133,7 +147,7 @@ pub fn stratified_points(polygon: &[DVec3], n: u32, rng: &mut Rng, out: &mut Vec
         for cell in 0..cells {
             let u = (cell as f64 + rng.next_f64()) / cells as f64;
             let v = v_start + rng.next_f64() * height;
-            out.push(map_square_to_fan(polygon, cum, total, u, v));
+            f(u, v);
         }
         v_start += height;
     }

@@ -15,7 +15,7 @@
 
 use glam::DVec3;
 
-use super::sampling::Rng;
+use super::sampling::{stratified_square, Rng};
 
 /// Below this solid angle (steradians) a triangle is sampled uniformly by
 /// area: its directions differ by less than 1e-4 rad, and Arvo's formulas lose
@@ -86,54 +86,55 @@ pub fn stratified_solid_angle_points(
     }
     let dir = |p: DVec3| (p - origin).normalize_or_zero();
     let d0 = dir(polygon[0]);
-    let mut cumulative = Vec::with_capacity(count - 2);
+    // Cumulative solid angles of the fan's triangles; on the stack for the
+    // few-cornered polygons a clipped patch is (this runs per receiver and
+    // shot).
+    let mut stack = [0.0f64; 16];
+    let mut heap: Vec<f64>;
+    let cumulative: &mut [f64] = if count - 2 <= stack.len() {
+        &mut stack[..count - 2]
+    } else {
+        heap = vec![0.0; count - 2];
+        &mut heap
+    };
     let mut total = 0.0;
     for i in 1..count - 1 {
         total += triangle_solid_angle(d0, dir(polygon[i]), dir(polygon[i + 1]));
-        cumulative.push(total);
+        cumulative[i - 1] = total;
     }
     if !total.is_finite() || total <= 0.0 {
         return 0.0;
     }
     let plane_normal = (polygon[1] - polygon[0]).cross(polygon[2] - polygon[0]);
-    let rows = (n as f64).sqrt().floor().max(1.0) as u32;
-    let (base, extra) = (n / rows, n % rows);
-    let mut v_start = 0.0;
-    for row in 0..rows {
-        let cells = base + u32::from(row < extra);
-        let height = cells as f64 / n as f64;
-        for cell in 0..cells {
-            let u = (cell as f64 + rng.next_f64()) / cells as f64;
-            let v = v_start + rng.next_f64() * height;
-            // The fan triangle holding solid-angle fraction u, and u within it.
-            let target = u * total;
-            let tri = cumulative
-                .iter()
-                .position(|&c| c > target)
-                .unwrap_or(cumulative.len() - 1);
-            let lo = if tri == 0 { 0.0 } else { cumulative[tri - 1] };
-            let width = cumulative[tri] - lo;
-            let (b, c) = (polygon[tri + 1], polygon[tri + 2]);
-            let point = if width < TINY {
-                // A sliver seen edge-on or far away: uniform by area.
-                let w = ((target - lo) / width.max(f64::MIN_POSITIVE)).clamp(0.0, 1.0);
-                polygon[0] + (b.lerp(c, w) - polygon[0]) * v.sqrt()
+    stratified_square(n, rng, |u, v| {
+        // The fan triangle holding solid-angle fraction u, and u within it.
+        let target = u * total;
+        let tri = cumulative
+            .iter()
+            .position(|&c| c > target)
+            .unwrap_or(cumulative.len() - 1);
+        let lo = if tri == 0 { 0.0 } else { cumulative[tri - 1] };
+        let width = cumulative[tri] - lo;
+        let (b, c) = (polygon[tri + 1], polygon[tri + 2]);
+        let w = ((target - lo) / width.max(f64::MIN_POSITIVE)).clamp(0.0, 1.0);
+        // A sliver seen edge-on or far away, or a direction that misses the
+        // plane by rounding: uniform by area in the triangle.
+        let by_area = || polygon[0] + (b.lerp(c, w) - polygon[0]) * v.sqrt();
+        let point = if width < TINY {
+            by_area()
+        } else {
+            let d = sample_spherical_triangle(d0, dir(b), dir(c), w, v);
+            // Where the direction meets the polygon's plane.
+            let along = plane_normal.dot(d);
+            let t = plane_normal.dot(polygon[0] - origin) / along;
+            if along != 0.0 && t.is_finite() && t > 0.0 {
+                origin + d * t
             } else {
-                let w = ((target - lo) / width).clamp(0.0, 1.0);
-                let d = sample_spherical_triangle(d0, dir(b), dir(c), w, v);
-                // Where the direction meets the polygon's plane.
-                let along = plane_normal.dot(d);
-                let t = plane_normal.dot(polygon[0] - origin) / along;
-                if along != 0.0 && t.is_finite() && t > 0.0 {
-                    origin + d * t
-                } else {
-                    polygon[0] + (b.lerp(c, w) - polygon[0]) * v.sqrt()
-                }
-            };
-            out.push(point);
-        }
-        v_start += height;
-    }
+                by_area()
+            }
+        };
+        out.push(point);
+    });
     total
 }
 

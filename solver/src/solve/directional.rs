@@ -51,7 +51,7 @@
 //! method, where the receiver is glossy or the source's radiance depends on
 //! direction: samples uniform in the solid angle of the source's part in
 //! front of the receiver, sharing the exact unoccluded factor by the
-//! receiver's cosine, `shoot::visible_samples_by_direction`; between two
+//! receiver's cosine, `shoot::SampleBy::SolidAngle`; between two
 //! diffuse ends: the exact factor divided evenly over area samples; the
 //! visible ones kept; Wallace: Remington 1992, eq. 3.1's per-sample term), with ω_i the
 //! direction from the receiver to the sample:
@@ -80,9 +80,7 @@ use super::budget;
 use super::checkpoint::precision::round_to_kept;
 use super::refine::{Criteria, Field};
 use super::shoot::RecordedShot;
-use super::shoot::{
-    visible_samples, visible_samples_by_direction, SamplePool, SampleScratch, Shot,
-};
+use super::shoot::{visible_samples, SampleBy, SamplePool, SampleScratch, Shot};
 use super::{ShotReport, SolveError, Solver};
 use crate::brdf::normalization::funk_hecke_d;
 use crate::brdf::GlossyLobe;
@@ -557,12 +555,13 @@ impl DirShot<'_> {
         // Where the light's direction matters (a glossy receiver, or a
         // source whose radiance depends on direction), samples by solid
         // angle; between two diffuse ends, the diffuse solver's own samples.
-        let sample = if order > 0 || self.source_order > 0 {
-            visible_samples_by_direction
+        let by = if order > 0 || self.source_order > 0 {
+            SampleBy::SolidAngle
         } else {
-            visible_samples
+            SampleBy::Area
         };
-        let (q, visible, rays) = sample(self.shot, mesh, v, self.pool, &mut scratch.sampling);
+        let (q, visible, rays) =
+            visible_samples(self.shot, mesh, v, self.pool, &mut scratch.sampling, by);
         let s = &mesh.surfaces[surface];
         let shading = mesh.vertices[v as usize].normal;
         let source_count = coefficient_count(self.source_order);

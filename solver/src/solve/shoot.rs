@@ -498,6 +498,30 @@ impl Shot<'_> {
         }
     }
 
+    /// Writes `samples` points of the part of the source in front of the
+    /// receiver (ray origin `origin`, normal `n`) into `scratch.points`,
+    /// stratified uniformly in the solid angle it subtends (RNG stream
+    /// (seed, shot, vertex), as [`Shot::draw_part_samples`]); `false`, with
+    /// nothing drawn, when that part subtends no solid angle.
+    fn solid_angle_samples(
+        &self,
+        origin: DVec3,
+        n: DVec3,
+        v: u32,
+        scratch: &mut SampleScratch,
+    ) -> bool {
+        clip_to_halfspace(self.polygon(), origin, n, &mut scratch.clipped);
+        let mut rng = Rng::new(self.seed, stream_id(self.index, v as u64));
+        let solid_angle = stratified_solid_angle_points(
+            origin,
+            &scratch.clipped,
+            self.samples,
+            &mut rng,
+            &mut scratch.points,
+        );
+        solid_angle > 0.0 && !scratch.points.is_empty()
+    }
+
     /// Draws `count` stratified, jittered points (RNG stream (seed, shot,
     /// vertex)) into `points` over the part of the source in front of
     /// the receiver: the source clipped to the half-space n · (x − o) ≥ 0 with o
@@ -625,6 +649,17 @@ pub fn receiving_point(mesh: &Mesh, v: u32, epsilon: f64) -> (DVec3, DVec3) {
     (q, vertex.normal)
 }
 
+/// How [`visible_samples`] spreads its samples over a source.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SampleBy {
+    /// Uniform in area, equal shares: the diffuse path's samples, enough
+    /// where only the visible fraction matters (both ends diffuse).
+    Area,
+    /// Uniform in solid angle, shares by the receiver's cosine: where the
+    /// incoming direction matters (a glossy receiver or source).
+    SolidAngle,
+}
+
 /// Per-worker buffers of [`visible_samples`]; `samples` holds its answer.
 #[derive(Default)]
 pub struct SampleScratch {
@@ -636,77 +671,6 @@ pub struct SampleScratch {
     pub samples: Vec<(DVec3, f64)>,
 }
 
-/// [`visible_samples`] for a receiver that reflects light by direction (a
-/// glossy vertex) or a source whose light depends on direction: the samples
-/// are spread uniformly in the solid angle the part of the source in front
-/// of the receiver subtends (`geometry/solid_angle.rs`), and each visible one
-/// carries the share F · cos θ_i / Σ_j cos θ_j of the exact unoccluded factor
-/// F (θ the angle at the receiver; the sum over every sample, visible or
-/// not). So the shares estimate the factor's distribution over incoming
-/// directions without bias however near the source is, which equal shares
-/// of area samples do not (docs/accuracy.md, "Glossy: samples by solid
-/// angle"). Same returns as [`visible_samples`]; falls back to it where the
-/// source has no Analytic factor, no shadows or no part in front.
-pub fn visible_samples_by_direction(
-    s: &Shot,
-    mesh: &Mesh,
-    v: u32,
-    pool: &SamplePool,
-    scratch: &mut SampleScratch,
-) -> (DVec3, u32, u32) {
-    if !matches!(s.method, FormFactorMethod::Analytic) || !s.shadows {
-        return visible_samples(s, mesh, v, pool, scratch);
-    }
-    scratch.samples.clear();
-    let (q, n) = s.receiving_point(mesh, v);
-    if s.normal.dot(q - s.centre) < -1e-6 * s.diameter {
-        return (q, 0, 0);
-    }
-    if s.polygon().iter().all(|&c| n.dot(c - q) <= 0.0) {
-        return (q, 0, 0);
-    }
-    let unoccluded = s.source.form_factor(q, n);
-    if unoccluded.is_nan() || unoccluded <= 0.0 {
-        return (q, 0, 0);
-    }
-    let origin = q + n * s.occluder.scene_epsilon();
-    clip_to_halfspace(s.polygon(), origin, n, &mut scratch.clipped);
-    if scratch.clipped.len() < 3 {
-        return visible_samples(s, mesh, v, pool, scratch);
-    }
-    let mut rng = Rng::new(s.seed, stream_id(s.index, v as u64));
-    let solid_angle = stratified_solid_angle_points(
-        origin,
-        &scratch.clipped,
-        s.samples,
-        &mut rng,
-        &mut scratch.points,
-    );
-    if solid_angle <= 0.0 || scratch.points.is_empty() {
-        return visible_samples(s, mesh, v, pool, scratch);
-    }
-    let lift = s.normal * s.occluder.scene_epsilon();
-    scratch.targets.clear();
-    scratch
-        .targets
-        .extend(scratch.points.iter().map(|&p| p + lift));
-    s.occluder
-        .visible_each(origin, &scratch.targets, &mut scratch.flags);
-    let cosine = |p: DVec3| (p - origin).normalize_or_zero().dot(n).max(0.0);
-    let total: f64 = scratch.points.iter().map(|&p| cosine(p)).sum();
-    if total <= 0.0 {
-        return visible_samples(s, mesh, v, pool, scratch);
-    }
-    let mut visible = 0;
-    for (p, &f) in scratch.points.iter().zip(&scratch.flags) {
-        if f {
-            visible += 1;
-            scratch.samples.push((*p, unoccluded * cosine(*p) / total));
-        }
-    }
-    (q, visible, s.samples)
-}
-
 /// The visible samples of `shot`'s source seen from vertex `v`'s receiving
 /// point, with their shares of F(v←s), into `scratch.samples`: the samples,
 /// culls and visibility of [`Shot::form_factor`], so the shares sum to its
@@ -715,12 +679,25 @@ pub fn visible_samples_by_direction(
 /// point, the visible sample count and the rays traced. The directional
 /// transports (SH shooting and the global-cube gather) read their incoming
 /// directions from here.
+///
+/// `by`: [`SampleBy::Area`] takes the diffuse path's samples, uniform in
+/// area with equal shares. [`SampleBy::SolidAngle`] (Analytic factor with
+/// shadows only; otherwise as `Area`) spreads them uniformly in the solid
+/// angle the part of the source in front of the receiver subtends
+/// (`geometry/solid_angle.rs`), and each visible one carries F · cos θ_i /
+/// Σ_j cos θ_j of the exact unoccluded factor F (θ the angle at the
+/// receiver, the sum over every sample, visible or not). Equal area shares
+/// estimate F times the source's mean over its *area*, so near a source they
+/// send a glossy receiver's light from the wrong directions, a bias no
+/// sample count removes; shares by solid angle follow dF
+/// (docs/accuracy.md, "Glossy: samples by solid angle").
 pub fn visible_samples(
     s: &Shot,
     mesh: &Mesh,
     v: u32,
     pool: &SamplePool,
     scratch: &mut SampleScratch,
+    by: SampleBy,
 ) -> (DVec3, u32, u32) {
     scratch.samples.clear();
     let (q, n) = s.receiving_point(mesh, v);
@@ -743,7 +720,12 @@ pub fn visible_samples(
                 scratch.samples.push((s.centre, unoccluded));
                 return (q, s.samples, 0);
             }
-            s.receiver_samples(pool, q, n, v, &mut scratch.clipped, &mut scratch.points);
+            let solid_angle = by == SampleBy::SolidAngle
+                && matches!(s.method, FormFactorMethod::Analytic)
+                && s.solid_angle_samples(origin, n, v, scratch);
+            if !solid_angle {
+                s.receiver_samples(pool, q, n, v, &mut scratch.clipped, &mut scratch.points);
+            }
             scratch.targets.clear();
             scratch
                 .targets
@@ -755,17 +737,29 @@ pub fn visible_samples(
             // by area rather than by differential factor. That is harmless
             // between two diffuse ends (only the visible fraction matters);
             // where direction matters the SH shooter samples by solid angle
-            // instead ([`visible_samples_by_direction`]). (Weighting area
+            // instead ([`SampleBy::SolidAngle`]). (Weighting area
             // samples by Remington 1992, eq. 3.1's term was tried: with 16
             // samples it concentrates a corner's light on a few cells and
             // raised the largest row sum γ of a glossy furnace from 0.87 to
             // 0.999.)
-            let share = unoccluded / s.samples as f64;
+            let cosine = |p: DVec3| (p - origin).normalize_or_zero().dot(n).max(0.0);
+            let total: f64 = if solid_angle {
+                scratch.points.iter().map(|&p| cosine(p)).sum()
+            } else {
+                0.0
+            };
+            let share = |p: DVec3| {
+                if total > 0.0 {
+                    unoccluded * cosine(p) / total
+                } else {
+                    unoccluded / s.samples as f64
+                }
+            };
             let mut visible = 0;
             for (p, &f) in scratch.points.iter().zip(&scratch.flags) {
                 if f {
                     visible += 1;
-                    scratch.samples.push((*p, share));
+                    scratch.samples.push((*p, share(*p)));
                 }
             }
             (q, visible, s.samples)

@@ -280,7 +280,14 @@ fn pair_factors_equal_the_shooters() {
             if mesh.vertices[v as usize].surface == shot.source_surface {
                 continue;
             }
-            crate::solve::shoot::visible_samples(&shot, mesh, v, &pool, &mut scratch);
+            crate::solve::shoot::visible_samples(
+                &shot,
+                mesh,
+                v,
+                &pool,
+                &mut scratch,
+                crate::solve::shoot::SampleBy::Area,
+            );
             let ours: f64 = scratch_factor(&scratch);
             let (theirs, visible, _) = shot.form_factor(mesh, v, &pool, &mut shooter_scratch);
             assert!(

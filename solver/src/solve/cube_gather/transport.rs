@@ -19,7 +19,7 @@
 
 use super::UpperCells;
 use crate::mesh::Mesh;
-use crate::solve::shoot::{visible_samples, SamplePool, SampleScratch, Shot};
+use crate::solve::shoot::{visible_samples, SampleBy, SamplePool, SampleScratch, Shot};
 use glam::DVec3;
 use solution::sh;
 
@@ -85,7 +85,14 @@ impl PairInput<'_> {
         if surface == shot.source_surface {
             return None;
         }
-        let (q, _, rays) = visible_samples(shot, mesh, v, self.pool, &mut scratch.sampling);
+        let (q, _, rays) = visible_samples(
+            shot,
+            mesh,
+            v,
+            self.pool,
+            &mut scratch.sampling,
+            SampleBy::Area,
+        );
         let factor: f64 = scratch.sampling.samples.iter().map(|s| s.1).sum();
         if !(factor > 0.0 && factor.is_finite()) {
             return None;
