@@ -141,6 +141,10 @@ pub struct Directional {
     /// Per surface: the smallest element edge glossy refinement may create
     /// (see [`min_glossy_edge`]); 0 for L = 0 surfaces.
     min_edge: Vec<f64>,
+    /// The scene's viewing distance scale D (half its bounds' diagonal, as in
+    /// [`min_glossy_edge`]): the split test's view term turns the direction
+    /// to an eye by an edge's length over D (`directional/split.rs`).
+    view_distance: f64,
     /// Per surface: whether it is textured. A textured surface's vertex
     /// slot holds its SH coefficients (glossy lobe and emission only) and
     /// then E/π, three more values (`directional/textured.rs`).
@@ -324,6 +328,7 @@ impl Directional {
             direct: Vec::new(),
             recorded_unshot: Vec::new(),
             min_edge: Vec::new(),
+            view_distance: 0.0,
             textured: textured::textured_surfaces(scene, mesh),
         };
         let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
@@ -336,6 +341,7 @@ impl Directional {
         } else {
             0.0
         };
+        d.view_distance = view_distance;
         d.min_edge = d
             .lobes
             .iter()
