@@ -613,6 +613,7 @@ mod tests {
         );
         assert!(d.samples <= m.samples && m.samples <= f.samples);
         assert!(d.threshold > m.threshold && m.threshold >= f.threshold);
+        assert!(d.glossy_edge >= m.glossy_edge && m.glossy_edge >= f.glossy_edge);
     }
 
     #[test]
