@@ -208,7 +208,10 @@ pub struct SolveArgs {
         long_help = "Directional mode: adaptive subdivision of a glossy surface stops at \
             elements whose longest edge is K × α × D, with α the lobe's RMS slope and D \
             half the scene's diagonal (the distance its surfaces are seen from). The \
-            preset's --min-element-size floors every surface as well. A highlight's \
+            preset's --min-element-size floors every surface as well. Where a lobe \
+            varies, the split test refines toward this floor: an edge splits when the \
+            radiance an eye at distance D sees can turn by more than the edge threshold \
+            along it. A highlight's \
             width on a surface is about 2α·D_e, with D_e the harmonic mean of the eye's \
             and the source's distances over two; K = 0.25 puts four vertices across it. \
             Smaller K: sharper highlights and reflections, at the cost of more \
