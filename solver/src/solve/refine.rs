@@ -109,15 +109,31 @@ impl Criteria {
         let el = &mesh.elements[e as usize];
         let surface = &mesh.surfaces[mesh.patches[el.patch as usize].surface as usize];
         match surface.min_element_size {
-            Some(size) => {
-                let corners = el.corners();
-                let position = |k: usize| mesh.vertices[corners[k] as usize].position;
-                let longest = (0..corners.len())
-                    .map(|k| (position((k + 1) % corners.len()) - position(k)).length())
-                    .fold(0.0, f64::max);
-                longest <= size
-            }
+            Some(size) => longest_edge(mesh, e) <= size,
             None => el.area <= self.min_element_area * surface.area,
+        }
+    }
+
+    /// The threshold for an edge whose ends saw `visible_a` and `visible_b`
+    /// of the shot's rays: the shadow threshold across a visibility change,
+    /// else the edge threshold.
+    pub fn threshold_between(&self, visible_a: u32, visible_b: u32) -> f64 {
+        if visible_a != visible_b {
+            self.shadow_threshold
+        } else {
+            self.edge_threshold
+        }
+    }
+
+    /// The binomial relative variance (n − k)/(k n) of a visible fraction
+    /// k/n, n the samples per source: σ² of a shot's ΔL over ΔL². 0 when
+    /// every ray or none got through (see [`Criteria::should_split_at`]).
+    pub fn visibility_variance(&self, visible: u32) -> f64 {
+        let (k, n) = (visible as f64, self.samples.max(1) as f64);
+        if k > 0.0 && k < n {
+            (n - k) / (k * n)
+        } else {
+            0.0
         }
     }
 
@@ -183,22 +199,10 @@ impl Criteria {
         if (hi - lo).max_element() <= least {
             return false;
         }
-        let n = self.samples.max(1) as f64;
-        let sigma = |v: usize| {
-            let k = visible[v] as f64;
-            if k > 0.0 && k < n {
-                received[v].abs() * ((n - k) / (k * n)).sqrt()
-            } else {
-                DVec3::ZERO
-            }
-        };
+        let sigma = |v: usize| received[v].abs() * self.visibility_variance(visible[v]).sqrt();
         (0..count).any(|k| {
             let (a, b) = (corners[k] as usize, corners[(k + 1) % count] as usize);
-            let threshold = if visible[a] != visible[b] {
-                self.shadow_threshold
-            } else {
-                self.edge_threshold
-            };
+            let threshold = self.threshold_between(visible[a], visible[b]);
             let (la, lb) = (radiance[a], radiance[b]);
             let local = level(a).max(level(b)).max(self.dark_floor);
             let (sa, sb) = (sigma(a), sigma(b));
@@ -206,6 +210,16 @@ impl Criteria {
             local > 0.0 && ((la - lb).abs() - noise).max_element() > threshold * local
         })
     }
+}
+
+/// The longest edge of element `e`: it bounds the distance over which
+/// radiance is interpolated linearly (a split halves every edge).
+pub fn longest_edge(mesh: &Mesh, e: u32) -> f64 {
+    let corners = mesh.elements[e as usize].corners();
+    let position = |k: usize| mesh.vertices[corners[k] as usize].position;
+    (0..corners.len())
+        .map(|k| (position((k + 1) % corners.len()) - position(k)).length())
+        .fold(0.0, f64::max)
 }
 
 /// The per-vertex state refinement reads and extends.

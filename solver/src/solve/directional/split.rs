@@ -4,9 +4,8 @@
 
 use super::Directional;
 use crate::mesh::Mesh;
-use crate::solve::refine::Criteria;
+use crate::solve::refine::{longest_edge, Criteria};
 use glam::DVec3;
-use solution::sh::degree_order;
 use std::f64::consts::PI;
 
 /// Whether leaf `e` of a glossy surface must split: an edge fails when the
@@ -40,13 +39,7 @@ pub(super) fn should_split_sh(
     // split, and its long elements spread the light's reflection on the
     // glossy Cornell box's floor (docs/accuracy.md, "Glossy: contact cuts in
     // directional mode").
-    let longest = (0..corners.len())
-        .map(|k| {
-            let (a, b) = (corners[k], corners[(k + 1) % corners.len()]);
-            (mesh.vertices[a as usize].position - mesh.vertices[b as usize].position).length()
-        })
-        .fold(0.0, f64::max);
-    if 0.5 * longest < d.min_edge[surface_index] {
+    if 0.5 * longest_edge(mesh, e) < d.min_edge[surface_index] {
         return false;
     }
     let n = corners.len();
@@ -59,24 +52,14 @@ pub(super) fn should_split_sh(
         s
     };
     // The diffuse test's allowance for sampling noise (see
-    // `Criteria::should_split`), on this shot's ΔL norm: σ_v = |ΔL_v| ·
-    // √((n − k)/(k n)) for k of n visible rays.
-    let samples = criteria.samples.max(1) as f64;
+    // `Criteria::should_split_at`), on this shot's ΔL norm: σ_v² = |ΔL_v|² ·
+    // (n − k)/(k n) for k of n visible rays.
     let sigma2 = |v: usize| {
-        let k = visible[v] as f64;
-        if k > 0.0 && k < samples {
-            norms(&d.received[d.vertex_range(mesh, v)]) * ((samples - k) / (k * samples))
-        } else {
-            DVec3::ZERO
-        }
+        norms(&d.received[d.vertex_range(mesh, v)]) * criteria.visibility_variance(visible[v])
     };
     (0..n).any(|k| {
         let (a, b) = (corners[k] as usize, corners[(k + 1) % n] as usize);
-        let threshold = if visible[a] != visible[b] {
-            criteria.shadow_threshold
-        } else {
-            criteria.edge_threshold
-        };
+        let threshold = criteria.threshold_between(visible[a], visible[b]);
         let noise = (sigma2(a) + sigma2(b)).max_element().sqrt();
         let (ca, cb) = (
             &d.radiance[d.vertex_range(mesh, a)],
@@ -137,10 +120,19 @@ fn view_turn(
 /// (l = 0, a diffuse surface) has none.
 fn angular_gradient_norm(coefficients: &[f64]) -> f64 {
     let mut sum = DVec3::ZERO;
-    for (k, c) in coefficients.chunks_exact(3).enumerate() {
-        let l = degree_order(k).0 as f64;
-        let c = DVec3::from_slice(c);
-        sum += c * c * (l * (l + 1.0));
+    // Degree l holds the 2l + 1 coefficients (RGB each) from index l² on.
+    let mut start = 0;
+    for l in 0.. {
+        let end = (3 * (l + 1) * (l + 1)).min(coefficients.len());
+        if start >= end {
+            break;
+        }
+        let weight = (l * (l + 1)) as f64;
+        for c in coefficients[start..end].chunks_exact(3) {
+            let c = DVec3::from_slice(c);
+            sum += c * c * weight;
+        }
+        start = end;
     }
     sum.max_element().sqrt()
 }
