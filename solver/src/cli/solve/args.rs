@@ -215,7 +215,9 @@ pub struct SolveArgs {
             width on a surface is about 2α·D_e, with D_e the harmonic mean of the eye's \
             and the source's distances over two; K = 0.25 puts four vertices across it. \
             Smaller K: sharper highlights and reflections, at the cost of more \
-            elements, each with (L+1)² coefficients per channel."
+            elements, each with (L+1)² coefficients per channel. Default: the preset's \
+            (0.5 for draft and medium, 0.25 for final; docs/accuracy.md, \"Glossy: the \
+            view term\", has the cost and error of each)."
     )]
     pub glossy_edge: Option<f64>,
 
