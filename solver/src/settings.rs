@@ -207,8 +207,9 @@ pub struct SolverSettings {
     pub memory_budget: Option<u64>,
     /// Shoot every patch's mean unshot radiance uniformly, as Remington 1992
     /// does, instead of from the quadrants of an unevenly lit patch
-    /// (`solve::regions`). Off by default; the directional transports always
-    /// shoot uniformly, so tests comparing them with the diffuse solve set it.
+    /// (`solve::regions`). Off by default; directional shots read it too (each
+    /// source sample weighted by its quadrant); the cube gather always shoots
+    /// uniformly.
     #[serde(default)]
     pub uniform_shooters: bool,
     /// Mesh every receiver whole instead of cutting it along the lines where

@@ -58,6 +58,13 @@
 //!
 //! * ΔE_i = U_s(−ω_i) · π · F_i, U_s evaluated from the source's SH in the
 //!   source's frame (clamped at 0: ringing of a truncated lobe is not light);
+//!   a quad source lit unevenly (`regions.rs`, as in the diffuse solve)
+//!   scales U_s at each sample by its quadrant's s_q (Σ_q s_q A_q = A_p, so
+//!   the shot's power is unchanged), times the ratio that makes the
+//!   unoccluded sum the quadrants' exact factors
+//!   ([`super::regions::QuadrantScale`]); such a shot samples by solid angle
+//!   even between two diffuse ends, since equal area shares would average
+//!   the quadrants out. Emitters' recorded shots stay uniform;
 //! * diffuse: c₀₀ += Kd · ΔE_i / π · √(4π);
 //! * glossy: c_lm += ΔE_i · Ks · C_R(μ_i) · a_l · 4π/(2l+1) · Y_lm(r_i)
 //!   ([`GlossyLobe::add_lobe_sh`], built with Ks = 1 and scaled per channel,
@@ -79,6 +86,7 @@
 use super::budget;
 use super::checkpoint::precision::round_to_kept;
 use super::refine::{Criteria, Field};
+use super::regions::QuadrantScale;
 use super::shoot::RecordedShot;
 use super::shoot::{visible_samples, SampleBy, SamplePool, SampleScratch, Shot};
 use super::{ShotReport, SolveError, Solver};
@@ -515,6 +523,9 @@ struct DirShot<'a> {
     source_order: u32,
     source_tangent: DVec3,
     tables: &'a Tables,
+    /// A quad source lit unevenly: its quadrants' scales of `unshot`
+    /// ([`QuadrantScale`]); `None` shoots `unshot` uniformly.
+    quadrants: Option<&'a QuadrantScale>,
 }
 
 /// Per-surface tables a shot reads (a copy, so the state can grow meanwhile).
@@ -562,16 +573,25 @@ impl DirShot<'_> {
         }
         // Where the light's direction matters (a glossy receiver, or a
         // source whose radiance depends on direction), samples by solid
-        // angle; between two diffuse ends, the diffuse solver's own samples.
-        let by = if order > 0 || self.source_order > 0 {
+        // angle; so too where it matters which part of the source a sample
+        // comes from (a source shooting by quadrants: equal shares of area
+        // samples would average the quadrants out). Between two diffuse ends
+        // of a uniform shot, the diffuse solver's own samples.
+        let by = if order > 0 || self.source_order > 0 || self.quadrants.is_some() {
             SampleBy::SolidAngle
         } else {
             SampleBy::Area
         };
         let (q, visible, rays) =
             visible_samples(self.shot, mesh, v, self.pool, &mut scratch.sampling, by);
-        let s = &mesh.surfaces[surface];
         let shading = mesh.vertices[v as usize].normal;
+        // A source shooting by quadrants: each sample's scale is its
+        // quadrant's, times the ratio that makes their unoccluded sum exact.
+        let correction = self.quadrants.map(|quadrants| {
+            let sampling = &scratch.sampling;
+            quadrants.correction(q, shading, &sampling.samples, &sampling.occluded)
+        });
+        let s = &mesh.surfaces[surface];
         let source_count = coefficient_count(self.source_order);
         scratch.basis.resize(source_count, 0.0);
         scratch.unit.resize(count, 0.0);
@@ -593,6 +613,10 @@ impl DirShot<'_> {
                     u += DVec3::from_slice(c) * *y;
                 }
                 u
+            };
+            let unshot = match (self.quadrants, correction) {
+                (Some(quadrants), Some(correction)) => unshot * quadrants.scale_at(p) * correction,
+                _ => unshot,
             };
             // Ringing of a truncated lobe below zero is not light to shoot.
             let irradiance = unshot.max(DVec3::ZERO) * PI * share;
@@ -707,6 +731,21 @@ impl Solver {
         Some(report)
     }
 
+    /// The quadrant scales of quad patch `source` lit unevenly
+    /// ([`Solver::source_regions`] with a unit mean); `None` for a triangle or
+    /// an evenly lit patch.
+    fn quadrant_scale(&self, source: u32, shot: &Shot) -> Option<QuadrantScale> {
+        let regions = self.source_regions(source, DVec3::ONE)?;
+        let patch = &self.mesh.patches[source as usize];
+        Some(QuadrantScale {
+            corners: patch.corners,
+            normal: shot.normal,
+            centre: shot.centre,
+            diameter: shot.diameter,
+            regions,
+        })
+    }
+
     fn choose_directional_source(&self, d: &Directional) -> u32 {
         match d.choice {
             SourceChoice::Hemisphere => self.choose_source(),
@@ -768,6 +807,13 @@ impl Solver {
         let pool = SamplePool::new(&shot);
         let source_order = d.surface_order[source_surface];
         let tables = Tables::new(d, &self.mesh);
+        // Recorded (emitter) shots stay uniform: refinement replays them from
+        // the patch's mean alone (as in `Solver::step`).
+        let quadrants = if recorded || self.settings.uniform_shooters {
+            None
+        } else {
+            self.quadrant_scale(source, &shot)
+        };
         let mut rays = 0u64;
         let dir_shot = DirShot {
             shot: &shot,
@@ -776,6 +822,7 @@ impl Solver {
             source_order,
             source_tangent: tables.tangent[source_surface],
             tables: &tables,
+            quadrants: quadrants.as_ref(),
         };
         {
             let mesh = &self.mesh;
@@ -834,6 +881,7 @@ impl Solver {
                         source_order: tables.surface_order[surface],
                         source_tangent: tables.tangent[surface],
                         tables: &tables,
+                        quadrants: None,
                     }
                 })
                 .collect();

@@ -57,6 +57,101 @@ impl Regions {
     }
 }
 
+impl Regions {
+    /// (Σ_q U_q F(x←q), Σ_q F(x←q)) at receiving point `q` (normal `n`) of a
+    /// source centred at `centre`, of diameter `diameter`, facing
+    /// `source_normal`. Within [`FAR`] diameters the factors are the exact
+    /// point-to-polygon ones; farther only their ratios matter, and the
+    /// differential kernel at each quadrant's centroid gives those to
+    /// O((D / 2d)²) of the correction, without four contour integrals.
+    pub fn factor_weights(
+        &self,
+        centre: DVec3,
+        diameter: f64,
+        source_normal: DVec3,
+        q: DVec3,
+        n: DVec3,
+    ) -> (DVec3, f64) {
+        let far = (q - centre).length() > FAR * diameter;
+        let mut whole = 0.0;
+        let mut weighted = DVec3::ZERO;
+        for (k, unshot) in self.unshot.iter().enumerate() {
+            let f = if far {
+                self.kernel(k, source_normal, q, n)
+            } else {
+                self.polygons[k].form_factor(q, n)
+            };
+            if f.is_finite() && f > 0.0 {
+                whole += f;
+                weighted += *unshot * f;
+            }
+        }
+        (weighted, whole)
+    }
+}
+
+/// A quad source's quadrants as per-channel scales s_q of its mean unshot
+/// radiance (Σ_q s_q A_q = A_p per channel), for directional shots, whose
+/// samples carry their own position and direction: each sample's unshot is
+/// scaled by the quadrant it lies in, so a glossy receiver near the source
+/// also gets the light from the right part of it.
+pub struct QuadrantScale {
+    pub corners: [DVec3; 4],
+    pub normal: DVec3,
+    pub centre: DVec3,
+    pub diameter: f64,
+    /// The quadrants with unit mean: `unshot` holds s_q.
+    pub regions: Regions,
+}
+
+impl QuadrantScale {
+    /// The scale at point `p` of the quad: its quadrant's, or the mean of the
+    /// quadrants it borders on a dividing line.
+    pub fn scale_at(&self, p: DVec3) -> DVec3 {
+        let shares = shares(&self.corners, self.normal, p);
+        (0..4).map(|q| self.regions.unshot[q] * shares[q]).sum()
+    }
+
+    /// The factor that makes the samples' estimate of the quadrant-weighted
+    /// factor exact where nothing occludes: (Σ_q s_q F_q / Σ_q F_q), the
+    /// exact factors' ([`Regions::factor_weights`]), over (Σ_i F_i s(p_i) /
+    /// Σ_i F_i), the samples' own (`visible` and `occluded`, each a point
+    /// and its share of the factor). A ratio estimator: the samples still
+    /// decide what is visible and from where the light comes, but a step
+    /// between quadrants inside a sample's stratum no longer adds noise
+    /// (9% at a wall corner with 256 samples, without it). 1 where either
+    /// side is undefined.
+    pub fn correction(
+        &self,
+        q: DVec3,
+        n: DVec3,
+        visible: &[(DVec3, f64)],
+        occluded: &[(DVec3, f64)],
+    ) -> DVec3 {
+        let (weighted, whole) =
+            self.regions
+                .factor_weights(self.centre, self.diameter, self.normal, q, n);
+        let mut sampled = DVec3::ZERO;
+        let mut total = 0.0;
+        for &(p, share) in visible.iter().chain(occluded) {
+            sampled += self.scale_at(p) * share;
+            total += share;
+        }
+        if whole <= 0.0 || total <= 0.0 {
+            return DVec3::ONE;
+        }
+        let exact = weighted / whole;
+        let sampled = sampled / total;
+        DVec3::from_array(std::array::from_fn(|k| {
+            if sampled[k] > 0.0 {
+                exact[k] / sampled[k]
+            } else {
+                1.0
+            }
+        }))
+    }
+}
+
 /// The four quadrants of quad `c`: quadrant i has corner c_i, the midpoints of
 /// its two edges and the vertex average.
 pub fn quadrants(c: &[DVec3; 4]) -> [[DVec3; 4]; 4] {

@@ -6,7 +6,7 @@
 //! of `samples` visibility rays from a shared origin, with no allocation per ray
 //! (the sample buffer lives in per-worker [`Scratch`]).
 
-use super::regions::{self, Regions};
+use super::regions::Regions;
 use crate::geometry::formfactor::{wallace, SourcePolygon};
 use crate::geometry::hemicube::{self, ItemBuffer};
 use crate::geometry::polygon::clip_to_halfspace;
@@ -610,20 +610,8 @@ impl Shot<'_> {
     /// without four contour integrals per receiver.
     fn region_radiance(&self, mesh: &Mesh, v: u32, regions: &Regions, factor: f64) -> DVec3 {
         let (q, n) = self.receiving_point(mesh, v);
-        let far = (q - self.centre).length() > regions::FAR * self.diameter;
-        let mut whole = 0.0;
-        let mut weighted = DVec3::ZERO;
-        for (k, unshot) in regions.unshot.iter().enumerate() {
-            let f = if far {
-                regions.kernel(k, self.normal, q, n)
-            } else {
-                regions.polygons[k].form_factor(q, n)
-            };
-            if f.is_finite() && f > 0.0 {
-                whole += f;
-                weighted += *unshot * f;
-            }
-        }
+        let (weighted, whole) =
+            regions.factor_weights(self.centre, self.diameter, self.normal, q, n);
         if whole > 0.0 {
             weighted * (factor / whole)
         } else {
@@ -669,6 +657,9 @@ pub struct SampleScratch {
     flags: Vec<bool>,
     /// Visible samples: (point on the source, share of the factor).
     pub samples: Vec<(DVec3, f64)>,
+    /// The occluded samples, likewise (the Analytic factor's): with the
+    /// visible ones their shares sum to the unoccluded factor.
+    pub occluded: Vec<(DVec3, f64)>,
 }
 
 /// The visible samples of `shot`'s source seen from vertex `v`'s receiving
@@ -700,6 +691,7 @@ pub fn visible_samples(
     by: SampleBy,
 ) -> (DVec3, u32, u32) {
     scratch.samples.clear();
+    scratch.occluded.clear();
     let (q, n) = s.receiving_point(mesh, v);
     if s.normal.dot(q - s.centre) < -1e-6 * s.diameter {
         return (q, 0, 0);
@@ -760,6 +752,8 @@ pub fn visible_samples(
                 if f {
                     visible += 1;
                     scratch.samples.push((*p, share(*p)));
+                } else {
+                    scratch.occluded.push((*p, share(*p)));
                 }
             }
             (q, visible, s.samples)

@@ -55,6 +55,8 @@ fn make_dir_shot<'a>(
         source_order: tables.surface_order[source_surface],
         source_tangent: tables.tangent[source_surface],
         tables,
+        // Recorded (emitter) shots are uniform.
+        quadrants: None,
     }
 }
 
