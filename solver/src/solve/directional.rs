@@ -511,6 +511,9 @@ struct DirScratch {
     basis: Vec<f64>,
     unit: Vec<f64>,
     lobe_scratch: Vec<f64>,
+    /// Per visible sample, its scale of the unshot radiance when the source
+    /// shoots by quadrants ([`QuadrantScale::sample_scales`]); empty otherwise.
+    scales: Vec<DVec3>,
 }
 
 /// One directional shot: the diffuse [`Shot`] (geometry, samples,
@@ -587,10 +590,17 @@ impl DirShot<'_> {
         let shading = mesh.vertices[v as usize].normal;
         // A source shooting by quadrants: each sample's scale is its
         // quadrant's, times the ratio that makes their unoccluded sum exact.
-        let correction = self.quadrants.map(|quadrants| {
+        scratch.scales.clear();
+        if let Some(quadrants) = self.quadrants {
             let sampling = &scratch.sampling;
-            quadrants.correction(q, shading, &sampling.samples, &sampling.occluded)
-        });
+            quadrants.sample_scales(
+                q,
+                shading,
+                &sampling.samples,
+                &sampling.occluded,
+                &mut scratch.scales,
+            );
+        }
         let s = &mesh.surfaces[surface];
         let source_count = coefficient_count(self.source_order);
         scratch.basis.resize(source_count, 0.0);
@@ -598,7 +608,7 @@ impl DirShot<'_> {
         scratch.lobe_scratch.resize(count, 0.0);
         let samples = std::mem::take(&mut scratch.sampling.samples);
         let sqrt_4pi = (4.0 * PI).sqrt();
-        for &(p, share) in &samples {
+        for (i, &(p, share)) in samples.iter().enumerate() {
             let Some(toward_source) = (p - q).try_normalize() else {
                 continue;
             };
@@ -614,10 +624,10 @@ impl DirShot<'_> {
                 }
                 u
             };
-            let unshot = match (self.quadrants, correction) {
-                (Some(quadrants), Some(correction)) => unshot * quadrants.scale_at(p) * correction,
-                _ => unshot,
-            };
+            let unshot = scratch
+                .scales
+                .get(i)
+                .map_or(unshot, |&scale| unshot * scale);
             // Ringing of a truncated lobe below zero is not light to shoot.
             let irradiance = unshot.max(DVec3::ZERO) * PI * share;
             if textured {

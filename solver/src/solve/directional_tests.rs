@@ -1095,7 +1095,7 @@ fn glossy_highlight_at_each_vertex_matches_a_quadrature_of_the_exact_lobe() {
 /// uncovered quadrants, with their exact point-to-polygon factors (Baum,
 /// Rushmeier and Winget 1989). The shot estimates it from its samples by
 /// solid angle, each weighted by the quadrant it lies in and made exact
-/// where nothing occludes ([`super::regions::QuadrantScale::correction`]), so
+/// where nothing occludes ([`super::regions::QuadrantScale::sample_scales`]), so
 /// the cover is what the samples must get right. Nothing else occludes the
 /// floor from the wall (the light sits below every wall-to-floor line).
 ///

@@ -112,43 +112,56 @@ impl QuadrantScale {
         (0..4).map(|q| self.regions.unshot[q] * shares[q]).sum()
     }
 
-    /// The factor that makes the samples' estimate of the quadrant-weighted
-    /// factor exact where nothing occludes: (Σ_q s_q F_q / Σ_q F_q), the
-    /// exact factors' ([`Regions::factor_weights`]), over (Σ_i F_i s(p_i) /
-    /// Σ_i F_i), the samples' own (`visible` and `occluded`, each a point
-    /// and its share of the factor). A ratio estimator: the samples still
-    /// decide what is visible and from where the light comes, but a step
-    /// between quadrants inside a sample's stratum no longer adds noise
-    /// (9% at a wall corner with 256 samples, without it). 1 where either
-    /// side is undefined.
-    pub fn correction(
+    /// Each visible sample's scale of the source's mean unshot radiance,
+    /// written to `scales` (one per entry of `visible`): its quadrant's
+    /// ([`Self::scale_at`]) times the factor that makes the samples' estimate
+    /// of the quadrant-weighted factor exact where nothing occludes,
+    /// (Σ_q s_q F_q / Σ_q F_q), the exact factors'
+    /// ([`Regions::factor_weights`]), over (Σ_i F_i s(p_i) / Σ_i F_i), the
+    /// samples' own (`visible` and `occluded`, each a point and its share of
+    /// the factor). A ratio estimator: the samples still decide what is
+    /// visible and from where the light comes, but a step between quadrants
+    /// inside a sample's stratum no longer adds noise (9% at a wall corner
+    /// with 256 samples, without it). The factor is 1 where either side is
+    /// undefined.
+    pub fn sample_scales(
         &self,
         q: DVec3,
         n: DVec3,
         visible: &[(DVec3, f64)],
         occluded: &[(DVec3, f64)],
-    ) -> DVec3 {
-        let (weighted, whole) =
-            self.regions
-                .factor_weights(self.centre, self.diameter, self.normal, q, n);
+        scales: &mut Vec<DVec3>,
+    ) {
+        scales.clear();
+        scales.extend(visible.iter().map(|&(p, _)| self.scale_at(p)));
         let mut sampled = DVec3::ZERO;
         let mut total = 0.0;
-        for &(p, share) in visible.iter().chain(occluded) {
+        for (&(_, share), scale) in visible.iter().zip(scales.iter()) {
+            sampled += *scale * share;
+            total += share;
+        }
+        for &(p, share) in occluded {
             sampled += self.scale_at(p) * share;
             total += share;
         }
+        let (weighted, whole) =
+            self.regions
+                .factor_weights(self.centre, self.diameter, self.normal, q, n);
         if whole <= 0.0 || total <= 0.0 {
-            return DVec3::ONE;
+            return;
         }
         let exact = weighted / whole;
         let sampled = sampled / total;
-        DVec3::from_array(std::array::from_fn(|k| {
+        let correction = DVec3::from_array(std::array::from_fn(|k| {
             if sampled[k] > 0.0 {
                 exact[k] / sampled[k]
             } else {
                 1.0
             }
-        }))
+        }));
+        for scale in scales.iter_mut() {
+            *scale *= correction;
+        }
     }
 }
 
