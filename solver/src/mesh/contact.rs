@@ -35,6 +35,12 @@
 //!   its own vertices along the contact line, so the hidden vertices there are
 //!   not averaged with the visible ones; a crack along that line could only
 //!   show the covering object's base, which stands on it.
+//! * **Shadow lines** (directional mode, [`Cuts::ShadowLines`]). The
+//!   visible parts are also cut along the lines that the occluder's edges
+//!   standing on each footprint corner cast from each emitter vertex
+//!   ([`cut_shadow_lines`]). The corner is then an apex where the radiance's
+//!   limit depends on the side: each part keeps its own vertex there
+//!   ([`Part::apexes`]), which the seam pass does not merge.
 //!
 //! Receivers left whole: non-convex polygons, smooth ones (their corner
 //! normals would need interpolating), and polygons no other object touches.
@@ -62,6 +68,11 @@ const COPLANAR: f64 = 1e-3;
 /// The Cornell box's floor has two footprints and its ceiling one.
 pub const MAX_FOOTPRINTS: usize = 64;
 
+/// Shadow lines are cut only when the emitters have at most this many
+/// vertices in all (the Cornell box's light has 4): each adds a line at every
+/// footprint corner.
+pub const MAX_SHADOW_LIGHT_VERTICES: usize = 16;
+
 /// A piece of a receiver after cutting, counter-clockwise about the
 /// receiver's normal.
 #[derive(Clone, Debug, PartialEq)]
@@ -69,18 +80,70 @@ pub struct Part {
     pub vertices: Vec<DVec3>,
     /// Inside a footprint: covered by the object that touches the receiver.
     pub covered: bool,
+    /// The footprint corners among this part's vertices that shadow lines
+    /// leave from ([`cut_shadow_lines`]): there the radiance's limit depends
+    /// on the direction of approach, so the part keeps its own vertex.
+    pub apexes: Vec<DVec3>,
+}
+
+/// How receivers are cut before meshing.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Cuts {
+    /// Every receiver whole.
+    None,
+    /// Along contact lines (this module's cuts).
+    Contacts,
+    /// Along contact lines, and along the shadow lines that leave each
+    /// footprint corner ([`cut_shadow_lines`]).
+    ShadowLines,
+}
+
+impl Cuts {
+    /// The cuts a solve with `settings` makes. Shadow lines are cut in
+    /// directional mode only: there they take the glossy Cornell box's floor
+    /// camera from 9.60% to 6.28% MARE at `medium`, while in diffuse mode
+    /// they made the Cornell box worse at every preset (`final` 1.44% →
+    /// 1.55%, the short block's lower front face 10% too dark; docs/accuracy.md,
+    /// "Shadow lines at contact corners").
+    pub fn for_settings(settings: &crate::settings::SolverSettings) -> Cuts {
+        if settings.whole_receivers {
+            Cuts::None
+        } else if settings.mode == solution::format::SolveMode::Directional {
+            Cuts::ShadowLines
+        } else {
+            Cuts::Contacts
+        }
+    }
 }
 
 /// For every polygon of `scene`, its parts, or `None` where it stays whole.
-pub fn conform(scene: &Scene) -> Vec<Option<Vec<Part>>> {
+pub fn conform(scene: &Scene, cuts: Cuts) -> Vec<Option<Vec<Part>>> {
     let diagonal = crate::mesh::sizing::scene_diagonal(scene);
     let mut out = vec![None; scene.polygons.len()];
-    if !(diagonal.is_finite() && diagonal > 0.0) || scene.polygons.len() < 2 {
+    if cuts == Cuts::None || !(diagonal.is_finite() && diagonal > 0.0) || scene.polygons.len() < 2 {
         return out;
     }
     let tol = CONTACT_TOLERANCE * diagonal;
     let objects = objects(scene, tol);
     let grid = VertexGrid::new(scene, diagonal, tol);
+    // Shadow lines are cut only under a few emitters: each emitter vertex
+    // adds a line at every footprint corner, and a receiver's parts grow with
+    // the lines (a scene lit by many polygons keeps the contact cuts alone).
+    let mut emitter_vertices: Vec<DVec3> = scene
+        .polygons
+        .iter()
+        .filter(|p| {
+            cuts == Cuts::ShadowLines
+                && scene
+                    .materials
+                    .get(p.material)
+                    .is_some_and(|m| m.emission != DVec3::ZERO)
+        })
+        .flat_map(|p| p.vertices.iter().copied())
+        .collect();
+    if emitter_vertices.len() > MAX_SHADOW_LIGHT_VERTICES {
+        emitter_vertices.clear();
+    }
     for (index, polygon) in scene.polygons.iter().enumerate() {
         let v = &polygon.vertices;
         if v.len() < 3
@@ -100,12 +163,26 @@ pub fn conform(scene: &Scene) -> Vec<Option<Vec<Part>>> {
             continue;
         }
         let outline: Vec<DVec2> = v.iter().map(|&p| frame.project(p)).collect();
-        let parts = cut(&outline, &footprints, tol);
+        let mut parts = cut(&outline, &footprints, tol);
+        let lights: Vec<DVec2> = emitter_vertices
+            .iter()
+            .filter(|&&p| frame.height(p) > tol)
+            .map(|&p| frame.project(p))
+            .collect();
+        let mut corners = Vec::new();
+        if !lights.is_empty() {
+            (parts, corners) = cut_shadow_lines(parts, &footprints, &lights, tol);
+        }
         if parts.len() > 1 {
             out[index] = Some(
                 parts
                     .into_iter()
                     .map(|(ring, covered)| Part {
+                        apexes: corners
+                            .iter()
+                            .filter(|&&c| !covered && ring.iter().any(|&q| (q - c).length() <= tol))
+                            .map(|&c| frame.lift(c))
+                            .collect(),
                         // The receiver's own corners are kept bit for bit
                         // (they meet other polygons' corners); new ones are
                         // lifted from the plane.
@@ -402,6 +479,110 @@ fn cut(outline: &[DVec2], footprints: &[Vec<DVec2>], tol: f64) -> Vec<(Vec<DVec2
         parts = next;
     }
     parts
+}
+
+/// The uncovered parts cut along the shadow lines that leave each footprint
+/// corner, and the corners where a line split a part (the apexes).
+///
+/// An occluder's edge that stands on the receiver at a footprint corner casts,
+/// from each emitter vertex, a shadow line through the corner, directed away
+/// from the vertex's projection onto the plane. Between the extreme lines lies
+/// the edge's penumbra, which narrows to nothing at the corner, so near it the
+/// radiance steps from umbra to light within a fraction of any element. With
+/// an element edge on every line, Gouraud shading interpolates each wedge
+/// between the lines from its own vertices; and since the radiance's limit at
+/// the corner itself depends on the wedge it is approached from (lit on one
+/// side, dark in the umbra), every part meeting there keeps its own vertex
+/// at the apex, received a step inside the part (`Surface::apexes`,
+/// `solve/seams.rs`). Corners under the emitter (its vertices spread over a
+/// right angle or more as seen from the corner) get no lines: there the
+/// edge's shadow is not a narrow wedge.
+fn cut_shadow_lines(
+    mut parts: Vec<(Vec<DVec2>, bool)>,
+    footprints: &[Vec<DVec2>],
+    lights: &[DVec2],
+    tol: f64,
+) -> (Vec<(Vec<DVec2>, bool)>, Vec<DVec2>) {
+    let mut apexes = Vec::new();
+    let snap = 1e-6 * tol.max(f64::MIN_POSITIVE);
+    let floor = 1e-9 * parts.iter().map(|(r, _)| ring_area(r).abs()).sum::<f64>();
+    for hull in footprints {
+        for &c in hull {
+            let directions: Vec<DVec2> = lights
+                .iter()
+                .filter_map(|&l| (c - l).try_normalize())
+                .collect();
+            let Some(&first) = directions.first() else {
+                continue;
+            };
+            // The extremes by angle about the first direction (the emitter's
+            // vertices all lie on one side of the corner when it is not
+            // under the emitter; otherwise the lines are skipped).
+            let angle = |d: DVec2| first.perp_dot(d).atan2(first.dot(d));
+            let (lo, hi) = directions
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &d| {
+                    (lo.min(angle(d)), hi.max(angle(d)))
+                });
+            if hi - lo >= std::f64::consts::FRAC_PI_2 {
+                continue;
+            }
+            let mut split = false;
+            for &d in &directions {
+                let mut next = Vec::with_capacity(parts.len() + 1);
+                for (part, covered) in parts {
+                    // The corner lies on the part's boundary (a vertex, or
+                    // on an edge: the footprint's cut lines run past it), and
+                    // the shadow line, a ray from the corner, runs into the
+                    // part (the line's other half, toward the emitter, is no
+                    // shadow's edge).
+                    let touches = (0..part.len()).any(|i| {
+                        segment_distance(c, part[i], part[(i + 1) % part.len()]) <= 1e3 * snap
+                    });
+                    let step = 1e-3 * ring_area(&part).abs().sqrt();
+                    if covered || !touches || !inside_convex(&part, c + d * step) {
+                        next.push((part, covered));
+                        continue;
+                    }
+                    let left = clip(&part, c, c + d, snap);
+                    let right = clip(&part, c + d, c, snap);
+                    if ring_area(&left) > floor && ring_area(&right) > floor {
+                        next.push((left, false));
+                        next.push((right, false));
+                        split = true;
+                    } else {
+                        next.push((part, false));
+                    }
+                }
+                parts = next;
+            }
+            // Lines that only run into the footprint split nothing, and the
+            // corner stays an ordinary vertex.
+            if split {
+                apexes.push(c);
+            }
+        }
+    }
+    (parts, apexes)
+}
+
+/// Whether `p` lies strictly inside the convex counter-clockwise `ring`.
+fn inside_convex(ring: &[DVec2], p: DVec2) -> bool {
+    (0..ring.len()).all(|i| {
+        let (a, b) = (ring[i], ring[(i + 1) % ring.len()]);
+        (b - a).perp_dot(p - a) > 0.0
+    })
+}
+
+/// The distance from `p` to the segment a–b.
+fn segment_distance(p: DVec2, a: DVec2, b: DVec2) -> f64 {
+    let ab = b - a;
+    let t = if ab.length_squared() > 0.0 {
+        ((p - a).dot(ab) / ab.length_squared()).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    (p - (a + ab * t)).length()
 }
 
 /// The part of convex `ring` to the left of the directed line a → b (points

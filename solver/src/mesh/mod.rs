@@ -61,6 +61,11 @@ pub struct Surface {
     /// Unit shading normals at the polygon's corners on a smooth surface
     /// (`scene::smooth`); `None` for a flat facet.
     pub corner_normals: Option<Vec<DVec3>>,
+    /// Re-centred points of the boundary (contact pieces' shadow apexes,
+    /// [`contact::Part::apexes`]) where the radiance's limit depends on the
+    /// side it is approached from: the surface's vertex there is never merged
+    /// with a sibling piece's in the output (`solve/seams.rs`).
+    pub apexes: Vec<DVec3>,
 }
 
 /// A vertex shared by every element of its surface that has it as a corner.
@@ -222,6 +227,7 @@ struct SurfaceSpec {
     patches_per_side: u32,
     min_element_size: Option<f64>,
     corner_normals: Option<Vec<DVec3>>,
+    apexes: Vec<DVec3>,
 }
 
 /// Patches, elements and vertices of every surface.
@@ -254,16 +260,16 @@ impl Mesh {
     /// quadtree), positions re-centred by subtracting `offset`, with patch
     /// counts and smallest elements from `sizing`.
     pub fn with_sizing(scene: &Scene, offset: DVec3, sizing: &Sizing) -> Result<Mesh, MeshError> {
-        Self::with_contacts(scene, offset, sizing, true)
+        Self::with_contacts(scene, offset, sizing, contact::Cuts::Contacts)
     }
 
-    /// [`Self::with_sizing`], with receivers cut along contact lines
-    /// ([`contact`]) when `conform` is set, or left whole.
+    /// [`Self::with_sizing`], with receivers cut as `cuts` says
+    /// ([`contact`]).
     pub fn with_contacts(
         scene: &Scene,
         offset: DVec3,
         sizing: &Sizing,
-        conform: bool,
+        cuts: contact::Cuts,
     ) -> Result<Mesh, MeshError> {
         let mut mesh = Mesh {
             surfaces: Vec::new(),
@@ -276,11 +282,7 @@ impl Mesh {
             piece_patches: Vec::new(),
             table: VertexTable::default(),
         };
-        let parts = if conform {
-            contact::conform(scene)
-        } else {
-            vec![None; scene.polygons.len()]
-        };
+        let parts = contact::conform(scene, cuts);
         for (index, poly) in scene.polygons.iter().enumerate() {
             if poly.material >= scene.materials.len() {
                 return Err(MeshError::BadMaterial {
@@ -321,18 +323,20 @@ impl Mesh {
                 .as_ref()
                 .filter(|c| c.len() == vertices.len() && c.iter().all(|n| n.is_finite()))
                 .cloned();
-            let spec = |vertices: Vec<DVec3>, patches_per_side, corner_normals| SurfaceSpec {
-                polygon: index,
-                material: poly.material,
-                vertices,
-                normal,
-                tangent,
-                patches_per_side,
-                min_element_size: sizing.min_element_size(poly),
-                corner_normals,
-            };
+            let spec =
+                |vertices: Vec<DVec3>, patches_per_side, corner_normals, apexes| SurfaceSpec {
+                    polygon: index,
+                    material: poly.material,
+                    vertices,
+                    normal,
+                    tangent,
+                    patches_per_side,
+                    min_element_size: sizing.min_element_size(poly),
+                    corner_normals,
+                    apexes,
+                };
             match &parts[index] {
-                None => mesh.add_surface(spec(vertices, n, corner_normals)),
+                None => mesh.add_surface(spec(vertices, n, corner_normals, Vec::new())),
                 Some(parts) => {
                     for part in parts {
                         let vertices: Vec<DVec3> =
@@ -341,7 +345,8 @@ impl Mesh {
                         // The visible parts share their seams as one smooth
                         // surface would (`contact`, "Seams").
                         let corners = (!part.covered).then(|| vec![normal; vertices.len()]);
-                        mesh.add_surface(spec(vertices, n, corners));
+                        let apexes = part.apexes.iter().map(|&a| a - offset).collect();
+                        mesh.add_surface(spec(vertices, n, corners, apexes));
                     }
                 }
             }
@@ -373,6 +378,7 @@ impl Mesh {
             denominator: spec.patches_per_side << SUBDIVISION_BITS,
             corner_normals: spec.corner_normals,
             vertices: spec.vertices,
+            apexes: spec.apexes,
         });
         let s = &self.surfaces[surface as usize];
         if s.vertices.len() == 4 && strictly_convex(&s.vertices, normal) {

@@ -479,11 +479,8 @@ pub fn counts_before_meshing(scene: &Scene, settings: &SolverSettings) -> Counts
     };
     // The receivers the mesh cuts along contact lines (`mesh::contact`),
     // part by part, as `Solver::new` decides.
-    let parts = if settings.whole_receivers {
-        vec![None; scene.polygons.len()]
-    } else {
-        crate::mesh::contact::conform(scene)
-    };
+    let parts =
+        crate::mesh::contact::conform(scene, crate::mesh::contact::Cuts::for_settings(settings));
     for (p, parts) in scene.polygons.iter().zip(&parts) {
         let textured = p.uv_map.is_some() && scene.materials[p.material].diffuse_texture.is_some();
         match parts {

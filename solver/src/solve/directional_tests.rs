@@ -887,6 +887,97 @@ fn glossy_floor_next_to_a_contact_line_shows_its_own_exitance() {
     );
 }
 
+/// Shadow lines (`mesh::contact::cut_shadow_lines`, directional mode) at
+/// the box's corner (0.7, 0.7) under a light over x in [−0.5, 0.3], z in
+/// [0.8, 1.6], 20 above the floor. Seen from the corner (angles in the floor
+/// plane from +x toward +z) the light spans 114°–175° and the box 0°–90°, so
+/// near the corner, where the box is a vertical wedge, a floor point sees all
+/// of the light between 90° and 294° and none of it between 355° and 360°
+/// (the umbra, a thin wedge in front of the box's face z = 0.7), with the
+/// penumbra between. The corner is an apex: every part meeting there keeps
+/// its own output vertex, received a step inside the part. The truth there
+/// is exact: the light and the box are black and a plane cannot light
+/// itself, so a floor point gets only the light's direct light, and a lit
+/// part's vertex shows the exitance (Kd + Ks) π Le F(corner) (F the exact
+/// point-to-polygon factor; see
+/// [`glossy_floor_next_to_a_contact_line_shows_its_own_exitance`]), the
+/// umbra's none. Merged into one vertex, as the seam pass did before, the
+/// corner shows one mean of the parts, which is neither.
+#[test]
+fn each_part_at_a_shadow_apex_keeps_its_own_radiance() {
+    use crate::geometry::formfactor::SourcePolygon;
+    let (kd, ks, alpha, le) = (0.3, 0.5, 0.3, 400.0);
+    let p = |x: f64, z: f64| DVec3::new(x, 20.0, z);
+    // Counter-clockwise seen from below: the normal points down.
+    let light = vec![p(-0.5, 0.8), p(0.3, 0.8), p(0.3, 1.6), p(-0.5, 1.6)];
+    let scene = glossy_box_on_floor_under(kd, ks, alpha, le, light.clone());
+    let mut settings = directional_settings();
+    settings.samples = 16;
+    settings.ambient = false;
+    settings.threshold = 1e-4;
+    let solver = run(&scene, &settings);
+    let solution = solver.to_solution(false);
+    let corner = DVec3::new(0.7, 0.0, 0.7);
+    let lit = (kd + ks) * PI * le * SourcePolygon::new(&light).form_factor(corner, DVec3::Y);
+    let batch = solution
+        .batches
+        .iter()
+        .find(|b| !matches!(b.representation, Representation::Sh { order: 0 }))
+        .expect("a glossy batch");
+    let Representation::Sh { order } = batch.representation else {
+        unreachable!()
+    };
+    let n = 3 * coefficient_count(order);
+    let position = |i: u32| {
+        glam::Vec3::from_array(batch.vertices[i as usize].position).as_dvec3() + solver.offset()
+    };
+    // The visible floor's vertices at the corner (1e-6: positions are
+    // stored in f32): those of triangles outside the box's base (the covered
+    // piece has its own, hidden ones).
+    let mut at_corner = std::collections::BTreeSet::new();
+    for t in batch.indices.chunks_exact(3) {
+        let centre = (position(t[0]) + position(t[1]) + position(t[2])) / 3.0;
+        let under = (0.7..1.3).contains(&centre.x) && (0.7..1.3).contains(&centre.z);
+        if centre.y.abs() < 1e-6 && !under {
+            at_corner.extend(
+                t.iter()
+                    .copied()
+                    .filter(|&i| (position(i) - corner).length() < 1e-6),
+            );
+        }
+    }
+    let shown: Vec<f64> = at_corner
+        .into_iter()
+        .map(|i| i as usize)
+        .map(|i| {
+            let block: Vec<f64> = batch.coefficients[n * i..n * (i + 1)]
+                .iter()
+                .map(|&c| c as f64)
+                .collect();
+            exitance(order, &block).x
+        })
+        .collect();
+    println!("exitance at the apex: {shown:.4?}, fully lit {lit:.4}");
+    // The umbra part, the penumbra's parts and the lit ones: three at least.
+    assert!(shown.len() >= 3, "{} vertices at the apex", shown.len());
+    let (lo, hi) = shown.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), &e| {
+        (lo.min(e), hi.max(e))
+    });
+    // The umbra's vertex: exactly dark (every ray is blocked, nothing else
+    // reaches it); 1e-3 of the lit value allows only rounding.
+    assert!(
+        lo < 1e-3 * lit,
+        "darkest vertex at the apex {lo:.5}, lit {lit:.5}"
+    );
+    // A lit part's vertex: 1%, as `conformed_glossy_floor_on_the_contact_line_receives_exactly`
+    // (a receiving step under 1e-3 of its element, every ray reaches the
+    // light, f32 SH).
+    assert!(
+        (hi - lit).abs() < 0.01 * lit,
+        "brightest vertex at the apex {hi:.5}, exact {lit:.5}"
+    );
+}
+
 /// A 0.4 × 0.4 light facing down 0.2 above the floor beside the box, over x
 /// in [0.2, 0.6], z in [0.8, 1.2] (`hidden_tests.rs`'s near light): the
 /// floor's irradiance at z = 1 falls by a factor of 3.4 from x = 0.4 to the
@@ -947,8 +1038,9 @@ fn conformed_glossy_floor_on_the_contact_line_receives_exactly() {
 /// The glossy floor's cut pieces share their seams in the SH output
 /// (`directional/seams.rs`): after adaptive subdivision every edge of the
 /// displayed floor is shared by two triangles (one output vertex per
-/// position, no T-junction across the cuts), except on the floor's outline
-/// and round the box's base, where the covered piece meets the visible ones.
+/// position, no T-junction across the cuts), except on the floor's outline,
+/// round the box's base, where the covered piece meets the visible ones, and
+/// at the shadow apexes, where neighbouring edges meet in position only.
 #[test]
 fn conformed_glossy_floor_seams_are_crack_free() {
     let scene = glossy_box_on_floor_under(0.3, 0.5, 0.3, 6.0, near_light());
@@ -988,7 +1080,18 @@ fn conformed_glossy_floor_seams_are_crack_free() {
             inside(p.x) && inside(p.z) && [p.x, p.z].iter().any(|&v| on(v, 0.7) || on(v, 1.3))
         }
     };
-    let mut open = 0;
+    // Each part meeting at a shadow apex (a corner of the base,
+    // `mesh::contact::cut_shadow_lines`) has its own vertex there, so an
+    // edge from an apex meets its neighbour's in position, not in index: a
+    // step in value, no crack.
+    let corner =
+        |p: DVec3| [0.7, 1.3].iter().any(|&x| on(p.x, x)) && [0.7, 1.3].iter().any(|&z| on(p.z, z));
+    let key = |p: DVec3| (p * 1e5).round().to_array().map(|c| c as i64);
+    let by_position: std::collections::HashSet<_> = edges
+        .keys()
+        .map(|&(a, b)| (key(position(a)), key(position(b))))
+        .collect();
+    let (mut open, mut at_apex) = (0, 0);
     for (&(a, b), &count) in &edges {
         assert_eq!(count, 1, "edge {a}-{b} used twice in one direction");
         if edges.contains_key(&(b, a)) {
@@ -998,10 +1101,16 @@ fn conformed_glossy_floor_seams_are_crack_free() {
         if boundary(pa) && boundary(pb) && boundary((pa + pb) * 0.5) {
             continue;
         }
+        if (corner(pa) || corner(pb)) && by_position.contains(&(key(pb), key(pa))) {
+            at_apex += 1;
+            continue;
+        }
         println!("open edge {pa} - {pb}");
         open += 1;
     }
     assert_eq!(open, 0, "{open} floor edges without a neighbour");
+    // The light beside the box leaves shadow lines at its far corners.
+    assert!(at_apex > 0, "no edge from a shadow apex");
 }
 
 /// A glossy floor (Kd 0, Ks 1, α = 0.1) under a 0.25 m square emitter 1 m

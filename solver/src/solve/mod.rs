@@ -295,10 +295,11 @@ impl Solver {
         let offset = scene_centre(scene);
         let sizing = crate::mesh::Sizing::from_settings(settings, scene);
         // Receivers are cut along contact lines (`mesh::contact`) in both
-        // modes; each output shares the cuts' seams (diffuse: `seams.rs`,
-        // directional: `directional/seams.rs`).
-        let conform = !settings.whole_receivers;
-        let mesh = Mesh::with_contacts(scene, offset, &sizing, conform)?;
+        // modes, and along shadow lines in directional mode; each output
+        // shares the cuts' seams (diffuse: `seams.rs`, directional:
+        // `directional/seams.rs`).
+        let cuts = crate::mesh::contact::Cuts::for_settings(settings);
+        let mesh = Mesh::with_contacts(scene, offset, &sizing, cuts)?;
         match mesh.surfaces.len() {
             0 => return Err(SolveError::EmptyScene),
             1 => return Err(SolveError::SinglePolygon),

@@ -191,6 +191,11 @@ fn share_vertices(
     };
     let weight = vertex_weights(mesh);
     let tol = SMOOTH_TOLERANCE * mesh_diagonal(mesh);
+    let pinned: Vec<bool> = mesh
+        .vertices
+        .iter()
+        .map(|v| at_apex(&mesh.surfaces[v.surface as usize], v.position, tol))
+        .collect();
     let mut grid = Grid {
         tol: tol.max(f64::MIN_POSITIVE),
         cells: HashMap::new(),
@@ -209,7 +214,8 @@ fn share_vertices(
         let vertex = &mesh.vertices[v];
         let material = mesh.surfaces[vertex.surface as usize].material;
         let coincides = |r: &crate::mesh::MeshVertex| {
-            same_frame(r.surface, vertex.surface)
+            (!pinned[v] || r.surface == vertex.surface)
+                && same_frame(r.surface, vertex.surface)
                 && mesh.surfaces[r.surface as usize].material == material
                 && (r.position - vertex.position).length() <= tol
                 && r.normal.dot(vertex.normal) >= SAME_NORMAL
@@ -217,10 +223,13 @@ fn share_vertices(
         let (found, light) = if smooth(v) {
             let found = grid.find(vertex.position, |o| {
                 let r = representative[o as usize];
-                coincides(&mesh.vertices[r as usize]) && same_uv(r, vertex.surface, vertex.position)
+                !pinned[r as usize]
+                    && coincides(&mesh.vertices[r as usize])
+                    && same_uv(r, vertex.surface, vertex.position)
             });
             let light = light_grid.find(vertex.position, |g| {
-                coincides(&mesh.vertices[light_first[g as usize] as usize])
+                let r = light_first[g as usize];
+                !pinned[r as usize] && coincides(&mesh.vertices[r as usize])
             });
             (found, light)
         } else {
@@ -295,7 +304,8 @@ fn index_polygon_edges(
                     grid.find(p, |o| {
                         let id = shared.representative[o as usize];
                         let r = &mesh.vertices[id as usize];
-                        same_frame(r.surface, index as u32)
+                        (!at_apex(s, p, tol) || r.surface == index as u32)
+                            && same_frame(r.surface, index as u32)
                             && mesh.surfaces[r.surface as usize].material == s.material
                             && (r.position - p).length() <= tol
                             && r.normal.dot(normal) >= SAME_NORMAL
@@ -447,6 +457,16 @@ impl SharedVertices {
         }
         Vec::new()
     }
+}
+
+/// Whether `position` is one of `surface`'s shadow apexes (`Surface::apexes`),
+/// where its vertex keeps its own output vertex: the radiance's limit there
+/// differs between the pieces that meet at the point.
+fn at_apex(surface: &crate::mesh::Surface, position: DVec3, tol: f64) -> bool {
+    surface
+        .apexes
+        .iter()
+        .any(|&a| (a - position).length() <= tol)
 }
 
 fn mesh_diagonal(mesh: &Mesh) -> f64 {

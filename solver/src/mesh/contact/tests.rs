@@ -86,7 +86,7 @@ fn inside_base(base: &[DVec3; 4], q: DVec3) -> f64 {
 #[test]
 fn a_box_cuts_the_floor_into_visible_parts_and_its_footprint() {
     let (scene, base) = box_on_floor();
-    let parts = conform(&scene);
+    let parts = conform(&scene, Cuts::Contacts);
     let floor = parts[0].as_ref().expect("the floor is cut");
     // The parts tile the floor: their areas sum to its area (rounding only).
     let total: f64 = floor.iter().map(|q| area3(&q.vertices)).sum();
@@ -137,7 +137,7 @@ fn a_light_just_under_a_ceiling_covers_it_and_one_further_down_does_not() {
             p(556., 0., 559.),
             p(556., 0., 0.),
         ];
-        conform(&scene_of(vec![ceiling, light, floor]))
+        conform(&scene_of(vec![ceiling, light, floor]), Cuts::Contacts)
     };
     let parts = ceiling_at(0.1);
     let ceiling = parts[0].as_ref().expect("the light covers the ceiling");
@@ -163,7 +163,7 @@ fn walls_on_the_floors_edges_and_a_lone_wall_cut_nothing() {
         p(1.5, 1., 1.),
         p(1.5, 0., 1.),
     ];
-    let parts = conform(&scene_of(vec![floor, back, left, lone]));
+    let parts = conform(&scene_of(vec![floor, back, left, lone]), Cuts::Contacts);
     assert!(parts.iter().all(|p| p.is_none()));
 }
 
@@ -192,7 +192,7 @@ fn no_floor_element_straddles_the_contact_line() {
     let (scene, base) = box_on_floor();
     let sizing = Sizing::flat(5);
     let mut conformed = Mesh::with_sizing(&scene, DVec3::ZERO, &sizing).unwrap();
-    let mut whole = Mesh::with_contacts(&scene, DVec3::ZERO, &sizing, false).unwrap();
+    let mut whole = Mesh::with_contacts(&scene, DVec3::ZERO, &sizing, Cuts::None).unwrap();
     // Refine every floor element twice, as adaptive subdivision would near
     // the box: the quadtree stays inside its part.
     for mesh in [&mut conformed, &mut whole] {
@@ -275,12 +275,99 @@ fn floor_with_boxes(n: usize) -> Scene {
 #[test]
 fn a_receiver_under_more_objects_than_the_cap_stays_whole() {
     // At the cap the floor is cut: one covered part per box.
-    let parts = conform(&floor_with_boxes(MAX_FOOTPRINTS));
+    let parts = conform(&floor_with_boxes(MAX_FOOTPRINTS), Cuts::Contacts);
     let floor = parts[0].as_ref().expect("a floor under 64 boxes is cut");
     assert_eq!(floor.iter().filter(|p| p.covered).count(), MAX_FOOTPRINTS);
     // One more object and it stays whole (cutting is quadratic in the
     // footprints); the boxes' own faces are never cut by the floor.
-    let parts = conform(&floor_with_boxes(MAX_FOOTPRINTS + 1));
+    let parts = conform(&floor_with_boxes(MAX_FOOTPRINTS + 1), Cuts::Contacts);
     assert!(parts[0].is_none());
     assert!(parts.iter().all(Option::is_none));
+}
+
+/// [`box_on_floor`] under a 0.2-wide emitter 2 above the floor, over x in
+/// [0.1, 0.3] and z in [1.6, 1.8]: up and to the left of the box's base as
+/// seen from above, so that the shadow lines from the base's corners run
+/// out over the floor on the far side.
+fn box_on_floor_under_a_light() -> (Scene, [DVec3; 4], Vec<DVec3>) {
+    let (mut scene, base) = box_on_floor();
+    let light = vec![
+        p(0.1, 2., 1.6),
+        p(0.3, 2., 1.6),
+        p(0.3, 2., 1.8),
+        p(0.1, 2., 1.8),
+    ];
+    let mut polygon = scene.polygons[0].clone();
+    polygon.vertices = light.clone();
+    polygon.material = 1;
+    scene.polygons.push(polygon);
+    let mut emitter = scene.materials[0].clone();
+    emitter.kd = DVec3::ZERO;
+    emitter.emission = DVec3::ONE;
+    scene.materials.push(emitter);
+    (scene, base, light)
+}
+
+#[test]
+fn shadow_lines_run_from_the_base_corners_away_from_each_light_vertex() {
+    let (scene, base, light) = box_on_floor_under_a_light();
+    // Contact cuts alone mark no apex.
+    let plain = conform(&scene, Cuts::Contacts);
+    let plain = plain[0].as_ref().expect("the floor is cut");
+    assert!(plain.iter().all(|q| q.apexes.is_empty()));
+    let parts = conform(&scene, Cuts::ShadowLines);
+    let floor = parts[0].as_ref().expect("the floor is cut");
+    // The parts still tile the floor, and one is still the covered base.
+    let total: f64 = floor.iter().map(|q| area3(&q.vertices)).sum();
+    assert!((total - 4.0).abs() < 1e-12, "{total}");
+    assert_eq!(floor.iter().filter(|q| q.covered).count(), 1);
+    assert!(
+        floor.len() > plain.len(),
+        "{} parts, {} before",
+        floor.len(),
+        plain.len()
+    );
+    let apexes: Vec<DVec3> = floor.iter().flat_map(|q| q.apexes.clone()).collect();
+    assert!(!apexes.is_empty());
+    for &c in &apexes {
+        assert!(
+            base.iter().any(|&b| (b - c).length() < 1e-12),
+            "apex {c} is no corner"
+        );
+        // Every part listing the apex has it as a vertex, and is visible.
+        for q in floor.iter().filter(|q| q.apexes.contains(&c)) {
+            assert!(!q.covered);
+            assert!(q.vertices.iter().any(|&v| (v - c).length() < 1e-12));
+        }
+        // From each light vertex, the ray from the corner directed away
+        // from it (in the floor's plane) is an edge of a part that lists
+        // the apex, unless it runs under the box.
+        for &l in &light {
+            let away = DVec3::new(c.x - l.x, 0.0, c.z - l.z).normalize();
+            let under = inside_base(&base, c + away * 1e-6) > 0.0;
+            let edge = floor.iter().filter(|q| q.apexes.contains(&c)).any(|q| {
+                q.vertices.iter().any(|&v| {
+                    let e = v - c;
+                    e.length() > 1e-9 && e.normalize().dot(away) > 1.0 - 1e-12
+                })
+            });
+            assert!(
+                edge || under,
+                "no edge from apex {c} away from light vertex {l}"
+            );
+        }
+    }
+    // The corner facing the light, (0.6, 1.2), is no apex: its lines run
+    // under the box, and their other halves, toward the light, are no
+    // shadow's edges and cut nothing (the parts touching it are the contact
+    // cuts' own).
+    let facing = base[1];
+    assert!(!apexes.contains(&facing));
+    let touching = |parts: &[Part]| {
+        parts
+            .iter()
+            .filter(|q| q.vertices.iter().any(|&v| (v - facing).length() < 1e-12))
+            .count()
+    };
+    assert_eq!(touching(floor), touching(plain));
 }
