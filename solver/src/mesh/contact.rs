@@ -101,10 +101,11 @@ pub enum Cuts {
 impl Cuts {
     /// The cuts a solve with `settings` makes. Shadow lines are cut in
     /// directional mode only: there they take the glossy Cornell box's floor
-    /// camera from 9.60% to 6.28% MARE at `medium`, while in diffuse mode
-    /// they made the Cornell box worse at every preset (`final` 1.44% →
-    /// 1.55%, the short block's lower front face 10% too dark; docs/accuracy.md,
-    /// "Shadow lines at contact corners").
+    /// camera from 7.50% to 4.40% MARE at `final` (9.60% to 5.97% at
+    /// `medium`), while in diffuse mode they made the Cornell box's `final`
+    /// worse (1.44% → 1.52%, past its 1.5% target; the foot of the short
+    /// block's front face 12% too dark) for a gain at `medium` (2.32% →
+    /// 2.20%): docs/accuracy.md, "Glossy: shadow lines at contact corners".
     pub fn for_settings(settings: &crate::settings::SolverSettings) -> Cuts {
         if settings.whole_receivers {
             Cuts::None
