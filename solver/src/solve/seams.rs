@@ -213,8 +213,10 @@ fn share_vertices(
     for v in 0..n {
         let vertex = &mesh.vertices[v];
         let material = mesh.surfaces[vertex.surface as usize].material;
-        let coincides = |r: &crate::mesh::MeshVertex| {
-            (!pinned[v] || r.surface == vertex.surface)
+        // A vertex at a shadow apex merges only within its own surface.
+        let coincides = |id: u32| {
+            let r = &mesh.vertices[id as usize];
+            (r.surface == vertex.surface || !(pinned[v] || pinned[id as usize]))
                 && same_frame(r.surface, vertex.surface)
                 && mesh.surfaces[r.surface as usize].material == material
                 && (r.position - vertex.position).length() <= tol
@@ -223,14 +225,9 @@ fn share_vertices(
         let (found, light) = if smooth(v) {
             let found = grid.find(vertex.position, |o| {
                 let r = representative[o as usize];
-                !pinned[r as usize]
-                    && coincides(&mesh.vertices[r as usize])
-                    && same_uv(r, vertex.surface, vertex.position)
+                coincides(r) && same_uv(r, vertex.surface, vertex.position)
             });
-            let light = light_grid.find(vertex.position, |g| {
-                let r = light_first[g as usize];
-                !pinned[r as usize] && coincides(&mesh.vertices[r as usize])
-            });
+            let light = light_grid.find(vertex.position, |g| coincides(light_first[g as usize]));
             (found, light)
         } else {
             (None, None)
@@ -304,7 +301,9 @@ fn index_polygon_edges(
                     grid.find(p, |o| {
                         let id = shared.representative[o as usize];
                         let r = &mesh.vertices[id as usize];
-                        (!at_apex(s, p, tol) || r.surface == index as u32)
+                        let pinned = at_apex(s, p, tol)
+                            || at_apex(&mesh.surfaces[r.surface as usize], r.position, tol);
+                        (r.surface == index as u32 || !pinned)
                             && same_frame(r.surface, index as u32)
                             && mesh.surfaces[r.surface as usize].material == s.material
                             && (r.position - p).length() <= tol
