@@ -787,6 +787,20 @@ fn contact_light() -> Vec<DVec3> {
     vec![p(-0.5, 0.6), p(0.3, 0.6), p(0.3, 1.4), p(-0.5, 1.4)]
 }
 
+/// The solution's first batch above SH order 0 (the glossy floor's) and its
+/// order.
+fn glossy_batch(solution: &solution::format::Solution) -> (&solution::format::Batch, u32) {
+    let batch = solution
+        .batches
+        .iter()
+        .find(|b| !matches!(b.representation, Representation::Sh { order: 0 }))
+        .expect("a glossy batch");
+    let Representation::Sh { order } = batch.representation else {
+        unreachable!()
+    };
+    (batch, order)
+}
+
 /// The floor's displayed SH at scene point (x, 0, z): the coefficients of
 /// the glossy batch's triangle holding it, interpolated barycentrically, as
 /// the runtime interpolates before evaluating toward the eye. Returns the
@@ -797,14 +811,7 @@ fn displayed_floor_sh(
     x: f64,
     z: f64,
 ) -> (u32, Vec<f64>) {
-    let batch = solution
-        .batches
-        .iter()
-        .find(|b| !matches!(b.representation, Representation::Sh { order: 0 }))
-        .expect("a glossy batch");
-    let Representation::Sh { order } = batch.representation else {
-        unreachable!()
-    };
+    let (batch, order) = glossy_batch(solution);
     let n = 3 * coefficient_count(order);
     let position =
         |i: u32| glam::Vec3::from_array(batch.vertices[i as usize].position).as_dvec3() + offset;
@@ -919,14 +926,7 @@ fn each_part_at_a_shadow_apex_keeps_its_own_radiance() {
     let solution = solver.to_solution(false);
     let corner = DVec3::new(0.7, 0.0, 0.7);
     let lit = (kd + ks) * PI * le * SourcePolygon::new(&light).form_factor(corner, DVec3::Y);
-    let batch = solution
-        .batches
-        .iter()
-        .find(|b| !matches!(b.representation, Representation::Sh { order: 0 }))
-        .expect("a glossy batch");
-    let Representation::Sh { order } = batch.representation else {
-        unreachable!()
-    };
+    let (batch, order) = glossy_batch(&solution);
     let n = 3 * coefficient_count(order);
     let position = |i: u32| {
         glam::Vec3::from_array(batch.vertices[i as usize].position).as_dvec3() + solver.offset()
