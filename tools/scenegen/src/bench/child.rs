@@ -10,6 +10,7 @@
 
 use anyhow::{bail, Context};
 use std::fs::File;
+use std::os::unix::process::CommandExt;
 use std::path::Path;
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
@@ -56,6 +57,18 @@ pub fn run_limited(
     let err = out
         .try_clone()
         .with_context(|| format!("duplicating {}", log.display()))?;
+    // A bench started in the background by a shell without job control
+    // inherits SIGINT ignored, and an ignored signal stays ignored across
+    // exec: the child gets the default action back, or the limit's SIGINT
+    // would be lost on a child that installs no handler of its own.
+    // SAFETY: the closure runs in the forked child before exec and only
+    // calls signal(2), which is async-signal-safe.
+    unsafe {
+        command.pre_exec(|| {
+            libc::signal(libc::SIGINT, libc::SIG_DFL);
+            Ok(())
+        });
+    }
     let start = Instant::now();
     let child = command
         .stdin(Stdio::null())
