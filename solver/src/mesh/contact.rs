@@ -103,8 +103,8 @@ impl Cuts {
     /// directional mode only: there they take the glossy Cornell box's floor
     /// camera from 7.50% to 4.40% MARE at `final` (9.60% to 5.97% at
     /// `medium`), while in diffuse mode they made the Cornell box's `final`
-    /// worse (1.44% → 1.52%, past its 1.5% target; the foot of the short
-    /// block's front face 12% too dark) for a gain at `medium` (2.32% →
+    /// worse (1.44% → 1.52%, past its 1.5% target; errors of 12–40% at the
+    /// foot of the short block's front face) for a gain at `medium` (2.32% →
     /// 2.20%): docs/accuracy.md, "Glossy: shadow lines at contact corners".
     pub fn for_settings(settings: &crate::settings::SolverSettings) -> Cuts {
         if settings.whole_receivers {
