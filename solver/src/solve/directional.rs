@@ -85,8 +85,9 @@
 
 use super::budget;
 use super::checkpoint::precision::round_to_kept;
+use super::fine_shape::FineShape;
 use super::refine::{Criteria, Field};
-use super::regions::QuadrantScale;
+use super::regions::{self, QuadrantScale};
 use super::shoot::RecordedShot;
 use super::shoot::{visible_samples, SampleBy, SamplePool, SampleScratch, Shot};
 use super::{ShotReport, SolveError, Solver};
@@ -745,14 +746,24 @@ impl Solver {
     /// ([`Solver::source_regions`] with a unit mean); `None` for a triangle or
     /// an evenly lit patch.
     fn quadrant_scale(&self, source: u32, shot: &Shot) -> Option<QuadrantScale> {
-        let regions = self.source_regions(source, DVec3::ONE)?;
         let patch = &self.mesh.patches[source as usize];
+        if patch.corner_count != 4 {
+            return None;
+        }
+        let fine = FineShape::new(&patch.corners, self.shape_samples(source));
+        // A patch lit evenly quadrant by quadrant may still hold a step
+        // inside one (a shadow's edge): its quadrants shoot at their mean,
+        // each shaped inside.
+        let regions = self
+            .source_regions(source, DVec3::ONE)
+            .or_else(|| fine.as_ref().map(|_| regions::uniform(&patch.corners)))?;
         Some(QuadrantScale {
             corners: patch.corners,
             normal: shot.normal,
             centre: shot.centre,
             diameter: shot.diameter,
             regions,
+            fine,
         })
     }
 

@@ -63,6 +63,7 @@ pub mod hidden;
 mod output;
 mod output_textured;
 pub(crate) use output::default_camera;
+pub mod fine_shape;
 mod footprint;
 mod group_shot;
 pub mod ray_share;
@@ -892,17 +893,23 @@ impl Solver {
         if patch.corner_count != 4 || unshot == DVec3::ZERO {
             return None;
         }
-        let emission = self.emission[patch.surface as usize];
         let normal = self.mesh.surfaces[patch.surface as usize].normal;
-        let samples = self.patch_weights[source as usize]
+        regions::regions(&patch.corners, normal, unshot, self.shape_samples(source))
+    }
+
+    /// The shape of patch `source`'s light: each visible vertex's position,
+    /// gather weight and displayed received radiance (L − emission).
+    fn shape_samples(&self, source: u32) -> impl Iterator<Item = (DVec3, f64, DVec3)> + '_ {
+        let patch = &self.mesh.patches[source as usize];
+        let emission = self.emission[patch.surface as usize];
+        self.patch_weights[source as usize]
             .iter()
             .filter(|(v, _)| !self.hidden[*v as usize])
-            .map(|&(v, w)| {
+            .map(move |&(v, w)| {
                 let position = self.mesh.vertices[v as usize].position;
                 let received = (self.radiance[v as usize] - emission).max(DVec3::ZERO);
                 (position, w, received)
-            });
-        regions::regions(&patch.corners, normal, unshot, samples)
+            })
     }
 
     /// Per vertex, whether it is hidden ([`hidden`]).

@@ -19,6 +19,7 @@
 //! of its power) and the later, smaller shots of indirect light are smoother
 //! than this shape, so they are shot a little too unevenly.
 
+use super::fine_shape::FineShape;
 use crate::geometry::formfactor::SourcePolygon;
 use glam::DVec3;
 
@@ -102,14 +103,22 @@ pub struct QuadrantScale {
     pub diameter: f64,
     /// The quadrants with unit mean: `unshot` holds s_q.
     pub regions: Regions,
+    /// The shape inside each quadrant, relative to the quadrant's mean;
+    /// `None`: each quadrant shoots uniformly.
+    pub fine: Option<FineShape>,
 }
 
 impl QuadrantScale {
     /// The scale at point `p` of the quad: its quadrant's, or the mean of the
-    /// quadrants it borders on a dividing line.
+    /// quadrants it borders on a dividing line, times the fine shape there
+    /// (whose mean over each quadrant is 1).
     pub fn scale_at(&self, p: DVec3) -> DVec3 {
         let shares = shares(&self.corners, self.normal, p);
-        (0..4).map(|q| self.regions.unshot[q] * shares[q]).sum()
+        let quadrant: DVec3 = (0..4).map(|q| self.regions.unshot[q] * shares[q]).sum();
+        match &self.fine {
+            Some(fine) => quadrant * fine.at(p),
+            None => quadrant,
+        }
     }
 
     /// Each visible sample's scale of the source's mean unshot radiance,
@@ -264,12 +273,23 @@ pub fn regions(
     {
         return None;
     }
-    Some(Regions {
+    Some(with_unshot(c, unshot))
+}
+
+/// Quad `c`'s quadrants at unit unshot each: for a patch lit evenly quadrant
+/// by quadrant but unevenly inside them ([`super::fine_shape`]).
+pub fn uniform(c: &[DVec3; 4]) -> Regions {
+    with_unshot(c, [DVec3::ONE; 4])
+}
+
+fn with_unshot(c: &[DVec3; 4], unshot: [DVec3; 4]) -> Regions {
+    let polygons = quadrants(c);
+    Regions {
         centroids: polygons.map(|p| (p[0] + p[1] + p[2] + p[3]) / 4.0),
+        areas: polygons.map(|p| quad_area(&p)),
         polygons: polygons.map(|p| SourcePolygon::new(&p)),
         unshot,
-        areas: area,
-    })
+    }
 }
 
 fn quad_area(p: &[DVec3; 4]) -> f64 {
