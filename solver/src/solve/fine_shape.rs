@@ -288,16 +288,8 @@ pub fn bilinear_coordinates(c: &[DVec3; 4], p: DVec3) -> (f64, f64) {
 
 #[cfg(test)]
 mod tests {
+    use super::super::regions::tests::square;
     use super::*;
-
-    fn square() -> [DVec3; 4] {
-        [
-            DVec3::new(0.0, 0.0, 0.0),
-            DVec3::new(2.0, 0.0, 0.0),
-            DVec3::new(2.0, 2.0, 0.0),
-            DVec3::new(0.0, 2.0, 0.0),
-        ]
-    }
 
     #[test]
     fn bilinear_coordinates_invert_the_map_on_a_trapezoid() {

@@ -297,10 +297,11 @@ fn quad_area(p: &[DVec3; 4]) -> f64 {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
-    fn square() -> [DVec3; 4] {
+    /// A 2 × 2 square in the z = 0 plane, corners in bilinear order.
+    pub(crate) fn square() -> [DVec3; 4] {
         [
             DVec3::new(0.0, 0.0, 0.0),
             DVec3::new(2.0, 0.0, 0.0),
