@@ -1,6 +1,6 @@
 //! `solver compare` end to end: EXR and .npy inputs through the binary, with known
 //! answers for the metrics, the per-material table, the reference noise, the JSON
-//! report, the heatmap PNG and the size-mismatch error; and HDR-FLIP through the
+//! report, the heatmap and FLIP-map PNGs and the size-mismatch error; and HDR-FLIP through the
 //! binary against flip-evaluator's number for a committed fixture pair.
 
 use exr::prelude::*;
@@ -156,6 +156,65 @@ fn json_report_and_heatmap_have_the_known_answers() {
         .unwrap()
         .collect();
     assert_eq!(names.len(), 1);
+}
+
+#[test]
+fn flip_map_is_black_where_the_images_agree_and_brighter_where_they_differ() {
+    let dir = tempfile::tempdir().unwrap();
+    let (test, reference) = scene(dir.path());
+    let map_of = |a: &Path, b: &Path, name: &str| {
+        let map = dir.path().join(name);
+        let report = json(&solver(&[
+            a.as_os_str(),
+            b.as_os_str(),
+            "--json".as_ref(),
+            "--flip-map".as_ref(),
+            map.as_os_str(),
+        ]));
+        (report, image::open(&map).unwrap().to_rgb8())
+    };
+    // An image against itself: FLIP is exactly 0 at every pixel (every
+    // difference FLIP filters is 0), drawn as magma's black.
+    let (same, png) = map_of(&reference, &reference, "same.png");
+    assert_eq!(same["flip"]["mean"].as_f64(), Some(0.0));
+    assert_eq!(png.dimensions(), (W as u32, H as u32));
+    assert!(png.pixels().all(|p| p.0 == [0, 0, 4]), "{png:?}");
+    // The scene's pair: the map is named in the report, brighter where the test
+    // is off (the right half) than where it is exact (the left edge), and
+    // somewhere not black.
+    let (report, png) = map_of(&test, &reference, "flip.png");
+    assert!(report["flip"]["map"]
+        .as_str()
+        .unwrap()
+        .ends_with("flip.png"));
+    let sum = |x: u32, y: u32| {
+        png.get_pixel(x, y)
+            .0
+            .iter()
+            .map(|&v| u32::from(v))
+            .sum::<u32>()
+    };
+    assert!(sum(W as u32 - 1, 1) > sum(0, 1), "{png:?}");
+    assert!(png.pixels().any(|p| p.0 != [0, 0, 4]));
+}
+
+#[test]
+fn flip_map_without_a_flip_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let (test, reference) = scene(dir.path());
+    let map = dir.path().join("flip.png");
+    let output = solver(&[
+        test.as_os_str(),
+        reference.as_os_str(),
+        "--flip".as_ref(),
+        "none".as_ref(),
+        "--flip-map".as_ref(),
+        map.as_os_str(),
+    ]);
+    assert!(!output.status.success());
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(stderr.contains("--flip-map"), "{stderr}");
+    assert!(!map.exists());
 }
 
 #[test]

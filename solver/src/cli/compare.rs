@@ -68,6 +68,12 @@ pub struct CompareArgs {
     /// the reference is unlit (skipped by MARE).
     #[arg(long, value_name = "PNG")]
     pub heatmap: Option<PathBuf>,
+    /// Write the per-pixel FLIP error (the `--flip` variant; for HDR-FLIP each
+    /// pixel's maximum over the exposures) as a PNG in the FLIP authors' magma
+    /// colours: black where no difference is perceived, through purple and red
+    /// to pale yellow at 1. It shows where the mean FLIP comes from.
+    #[arg(long, value_name = "PNG")]
+    pub flip_map: Option<PathBuf>,
     /// Relative error at which the heatmap's colours saturate (0.25: ±25 %).
     #[arg(long, value_name = "FRACTION", default_value_t = heatmap::DEFAULT_RANGE)]
     pub heatmap_range: f64,
@@ -107,6 +113,9 @@ struct FlipReport {
     pixels_per_degree: f32,
     mean: f32,
     exposures: Option<Exposures>,
+    /// Where `--flip-map` wrote the per-pixel map.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    map: Option<String>,
 }
 
 #[derive(serde::Serialize)]
@@ -121,6 +130,9 @@ pub fn run(args: CompareArgs) -> anyhow::Result<ExitCode> {
             "--heatmap-range must be a positive number, not {}",
             args.heatmap_range
         );
+    }
+    if args.flip_map.is_some() && args.flip == FlipChoice::None {
+        bail!("--flip-map needs a FLIP to draw: drop `--flip none` or the --flip-map");
     }
     let ppd = args.ppd.unwrap_or_else(default_pixels_per_degree);
     if !(ppd > 0.0 && ppd.is_finite()) {
@@ -170,11 +182,15 @@ pub fn run(args: CompareArgs) -> anyhow::Result<ExitCode> {
             };
             let result = flip_with_progress(t, r, variant, ppd, &mut progress)
                 .with_context(|| format!("FLIP of {}", args.reference.display()))?;
+            if let Some(path) = &args.flip_map {
+                write_png(path, &heatmap::render_flip(&result.map), t.width, t.height)?;
+            }
             Some(FlipReport {
                 variant,
                 pixels_per_degree: ppd,
                 mean: result.mean,
                 exposures: result.exposures,
+                map: args.flip_map.as_ref().map(|p| p.display().to_string()),
             })
         }
     };
@@ -227,15 +243,24 @@ fn load(path: &Path) -> anyhow::Result<LoadedImage> {
 }
 
 fn write_heatmap(path: &Path, test: &Image, reference: &Image, range: f64) -> anyhow::Result<()> {
-    use image::ImageEncoder;
     let errors = signed_relative_luminance_error(test, reference).errors;
-    let rgb = heatmap::render(&errors, range);
+    write_png(
+        path,
+        &heatmap::render(&errors, range),
+        test.width,
+        test.height,
+    )
+}
+
+/// Writes RGB8 pixels (row 0 at the top) as a PNG, atomically.
+fn write_png(path: &Path, rgb: &[u8], width: usize, height: usize) -> anyhow::Result<()> {
+    use image::ImageEncoder;
     let mut png = Vec::new();
     image::codecs::png::PngEncoder::new(&mut png)
         .write_image(
-            &rgb,
-            test.width as u32,
-            test.height as u32,
+            rgb,
+            width as u32,
+            height as u32,
             image::ExtendedColorType::Rgb8,
         )
         .with_context(|| format!("encoding {}", path.display()))?;
@@ -323,6 +348,9 @@ fn describe(r: &Report) -> String {
     }
     if let Some(h) = &r.heatmap {
         let _ = writeln!(out, "\nheatmap: {} (saturates at ±{})", h.file, h.range);
+    }
+    if let Some(map) = r.flip.as_ref().and_then(|f| f.map.as_ref()) {
+        let _ = writeln!(out, "FLIP map: {map} (magma: black 0, pale yellow 1)");
     }
     out
 }
