@@ -743,8 +743,9 @@ impl Solver {
     }
 
     /// The quadrant scales of quad patch `source` lit unevenly
-    /// ([`Solver::source_regions`] with a unit mean); `None` for a triangle or
-    /// an evenly lit patch.
+    /// ([`Solver::source_regions`] with a unit mean), each shaped inside by
+    /// [`FineShape`] where subdivision split it; `None` for a triangle, or a
+    /// patch lit evenly and not split inside a quadrant.
     fn quadrant_scale(&self, source: u32, shot: &Shot) -> Option<QuadrantScale> {
         let patch = &self.mesh.patches[source as usize];
         if patch.corner_count != 4 {
