@@ -210,6 +210,36 @@ pub fn ray_triangle(origin: DVec3, dir: DVec3, v0: DVec3, v1: DVec3, v2: DVec3) 
     Some(e2.dot(qvec) * inv)
 }
 
+/// (s, t) in [0, 1]² with bilinear(q, s, t) = `p` (projected onto the quad's
+/// plane; corners q₀ at (0, 0), q₁ at (1, 0), q₂ at (1, 1), q₃ at (0, 1), the
+/// order of `mesh::param::VertexKey::position`), by Newton's method: the map is smooth and a
+/// convex quad's inverse is unique, so a few steps from the centre reach f64
+/// rounding.
+pub fn inverse_bilinear(q: &[DVec3], p: DVec3) -> (f64, f64) {
+    let (mut s, mut t) = (0.5, 0.5);
+    for _ in 0..12 {
+        let bottom = q[0] * (1.0 - s) + q[1] * s;
+        let top = q[3] * (1.0 - s) + q[2] * s;
+        let r = bottom * (1.0 - t) + top * t - p;
+        let ds = (q[1] - q[0]) * (1.0 - t) + (q[2] - q[3]) * t;
+        let dt = top - bottom;
+        // Solve [ds dt] (δs, δt) = −r in the plane, by the normal equations.
+        let (a, b, c) = (ds.dot(ds), ds.dot(dt), dt.dot(dt));
+        let det = a * c - b * b;
+        if det.is_nan() || det <= 0.0 {
+            break;
+        }
+        let (u, v) = (-r.dot(ds), -r.dot(dt));
+        let (step_s, step_t) = ((c * u - b * v) / det, (a * v - b * u) / det);
+        s = (s + step_s).clamp(0.0, 1.0);
+        t = (t + step_t).clamp(0.0, 1.0);
+        if step_s.abs() + step_t.abs() < 1e-14 {
+            break;
+        }
+    }
+    (s, t)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -285,5 +315,28 @@ mod tests {
         assert_eq!(t, Some(1.0));
         let miss = ray_triangle(DVec3::new(0.2, 0.8, 1.0), -DVec3::Z, s[0], s[1], s[2]);
         assert_eq!(miss, None);
+    }
+
+    #[test]
+    fn inverse_bilinear_recovers_the_coordinates_on_a_trapezoid() {
+        // A convex non-parallelogram, the point lifted off its plane: Newton's
+        // iterations recover (s, t) to 1e-9 (they stop at 1e-14 steps; the
+        // quad is of size 3).
+        let c = [
+            DVec3::new(0.0, 0.0, 1.0),
+            DVec3::new(3.0, 0.0, 1.0),
+            DVec3::new(2.0, 2.0, 1.0),
+            DVec3::new(0.5, 1.5, 1.0),
+        ];
+        for &(s, t) in &[(0.1, 0.2), (0.5, 0.5), (0.9, 0.7), (0.0, 1.0), (0.3, 0.95)] {
+            let bottom = c[0] * (1.0 - s) + c[1] * s;
+            let top = c[3] * (1.0 - s) + c[2] * s;
+            let p = bottom * (1.0 - t) + top * t;
+            let (gs, gt) = inverse_bilinear(&c, p + DVec3::Z * 0.25);
+            assert!(
+                (gs - s).abs() < 1e-9 && (gt - t).abs() < 1e-9,
+                "({s}, {t}) → ({gs}, {gt})"
+            );
+        }
     }
 }

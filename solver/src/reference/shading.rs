@@ -46,7 +46,7 @@ impl CornerNormals {
     pub fn at(&self, vertices: &[DVec3], point: DVec3, fallback: DVec3) -> DVec3 {
         let n = &self.normals;
         let interpolated = if self.triangles.is_empty() {
-            let (s, t) = inverse_bilinear(vertices, point);
+            let (s, t) = crate::geometry::polygon::inverse_bilinear(vertices, point);
             let bottom = n[0] * (1.0 - s) + n[1] * s;
             let top = n[3] * (1.0 - s) + n[2] * s;
             bottom * (1.0 - t) + top * t
@@ -80,35 +80,6 @@ fn barycentric(t: [DVec3; 3], p: DVec3) -> DVec3 {
     let w1 = (c * u - b * v) / det;
     let w2 = (a * v - b * u) / det;
     DVec3::new(1.0 - w1 - w2, w1, w2)
-}
-
-/// (s, t) in [0, 1]² with bilinear(q, s, t) = `p` (projected onto the quad's
-/// plane), by Newton's method: the map is smooth and a
-/// convex quad's inverse is unique, so a few steps from the centre reach f64
-/// rounding.
-fn inverse_bilinear(q: &[DVec3], p: DVec3) -> (f64, f64) {
-    let (mut s, mut t) = (0.5, 0.5);
-    for _ in 0..12 {
-        let bottom = q[0] * (1.0 - s) + q[1] * s;
-        let top = q[3] * (1.0 - s) + q[2] * s;
-        let r = bottom * (1.0 - t) + top * t - p;
-        let ds = (q[1] - q[0]) * (1.0 - t) + (q[2] - q[3]) * t;
-        let dt = top - bottom;
-        // Solve [ds dt] (δs, δt) = −r in the plane, by the normal equations.
-        let (a, b, c) = (ds.dot(ds), ds.dot(dt), dt.dot(dt));
-        let det = a * c - b * b;
-        if det.is_nan() || det <= 0.0 {
-            break;
-        }
-        let (u, v) = (-r.dot(ds), -r.dot(dt));
-        let (step_s, step_t) = ((c * u - b * v) / det, (a * v - b * u) / det);
-        s = (s + step_s).clamp(0.0, 1.0);
-        t = (t + step_t).clamp(0.0, 1.0);
-        if step_s.abs() + step_t.abs() < 1e-14 {
-            break;
-        }
-    }
-    (s, t)
 }
 
 #[cfg(test)]

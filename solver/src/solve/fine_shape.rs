@@ -23,6 +23,7 @@
 //! quadrant factors of [`super::regions::QuadrantScale::sample_scales`], stay
 //! as they were: the fine shape only moves light within a quadrant.
 
+use crate::geometry::polygon::inverse_bilinear;
 use glam::DVec3;
 
 /// Cells per side of the fine grid. Even, so that the quadrants' dividing lines
@@ -51,14 +52,19 @@ const SIDE: usize = FINE_CELLS + 1;
 impl FineShape {
     /// The shape of quad `c` (corners in bilinear order: (0,0), (1,0), (1,1),
     /// (0,1)) from `samples` (position, gather weight, received radiance) of
-    /// its visible vertices; `None` when no sample has weight or the shape is
-    /// flat within [`FLAT_TOLERANCE`].
+    /// its visible vertices; `None` when no sample lies inside a quadrant
+    /// ([`refined_inside_a_quadrant`]) or the shape is flat within
+    /// [`FLAT_TOLERANCE`].
     pub fn new(c: &[DVec3; 4], samples: impl Iterator<Item = (DVec3, f64, DVec3)>) -> Option<Self> {
-        let samples: Vec<_> = samples.filter(|s| s.1 > 0.0).collect();
-        if !refined_inside_a_quadrant(c, &samples) {
+        // Each weighted sample in bilinear coordinates, inverted once.
+        let samples: Vec<_> = samples
+            .filter(|s| s.1 > 0.0)
+            .map(|(x, w, l)| (inverse_bilinear(c, x), w, l))
+            .collect();
+        if !refined_inside_a_quadrant(&samples) {
             return None;
         }
-        let nodes = splat(c, samples.into_iter())?;
+        let nodes = splat(&samples);
         let mean = nodes.iter().copied().sum::<DVec3>() / nodes.len() as f64;
         let limit = FLAT_TOLERANCE * mean.max_element();
         if limit <= 0.0
@@ -76,11 +82,9 @@ impl FineShape {
 
     /// The shape at point `p` of the quad's plane over its quadrant's mean.
     pub fn at(&self, p: DVec3) -> DVec3 {
-        let (u, v) = bilinear_coordinates(&self.corners, p);
-        let (x, y) = (
-            u.clamp(0.0, 1.0) * FINE_CELLS as f64,
-            v.clamp(0.0, 1.0) * FINE_CELLS as f64,
-        );
+        // inverse_bilinear's (u, v) lie in [0, 1]².
+        let (u, v) = inverse_bilinear(&self.corners, p);
+        let (x, y) = (u * FINE_CELLS as f64, v * FINE_CELLS as f64);
         let q = quadrant_of(x, y);
         // Coordinates within the quadrant's own (HALF + 1)² nodes.
         let (ox, oy) = quadrant_origin(q);
@@ -106,9 +110,8 @@ impl FineShape {
 /// quadrant a bilinear ramp at most, which the quadrants' exact factors
 /// already shoot as its mean; shaping them would invent a profile between
 /// vertices that no split found.
-fn refined_inside_a_quadrant(c: &[DVec3; 4], samples: &[(DVec3, f64, DVec3)]) -> bool {
-    samples.iter().any(|&(x, _, _)| {
-        let (u, v) = bilinear_coordinates(c, x);
+fn refined_inside_a_quadrant(samples: &[((f64, f64), f64, DVec3)]) -> bool {
+    samples.iter().any(|&((u, v), _, _)| {
         let off = |t: f64| {
             let half = 2.0 * t;
             (half - half.round()).abs() > 1e-6
@@ -139,20 +142,16 @@ fn quadrant_origin(q: usize) -> (usize, usize) {
     }
 }
 
-/// The grid's node values: each sample's weighted value spread bilinearly over
-/// its cell's four nodes, unreached nodes filled from their neighbours.
-fn splat(c: &[DVec3; 4], samples: impl Iterator<Item = (DVec3, f64, DVec3)>) -> Option<Vec<DVec3>> {
+/// The grid's node values from samples ((u, v), gather weight > 0, value):
+/// each sample's weighted value spread bilinearly over its cell's four
+/// nodes, unreached nodes filled from their neighbours. At least one sample
+/// is given ([`FineShape::new`] returns before otherwise), so every node
+/// gets a value.
+fn splat(samples: &[((f64, f64), f64, DVec3)]) -> Vec<DVec3> {
     let mut sum = vec![DVec3::ZERO; SIDE * SIDE];
     let mut weight = vec![0.0f64; SIDE * SIDE];
-    for (x, w, l) in samples {
-        if w.is_nan() || w <= 0.0 {
-            continue;
-        }
-        let (u, v) = bilinear_coordinates(c, x);
-        let (gx, gy) = (
-            u.clamp(0.0, 1.0) * FINE_CELLS as f64,
-            v.clamp(0.0, 1.0) * FINE_CELLS as f64,
-        );
+    for &((u, v), w, l) in samples {
+        let (gx, gy) = (u * FINE_CELLS as f64, v * FINE_CELLS as f64);
         let (i, j) = (
             (gx as usize).min(FINE_CELLS - 1),
             (gy as usize).min(FINE_CELLS - 1),
@@ -169,21 +168,16 @@ fn splat(c: &[DVec3; 4], samples: impl Iterator<Item = (DVec3, f64, DVec3)>) -> 
             weight[k] += w * b;
         }
     }
-    if weight.iter().all(|&w| w <= 0.0) {
-        return None;
-    }
     let mut nodes: Vec<Option<DVec3>> = sum
         .iter()
         .zip(&weight)
         .map(|(s, &w)| (w > 0.0).then(|| *s / w))
         .collect();
     fill_from_neighbours(&mut nodes);
-    Some(
-        nodes
-            .into_iter()
-            .map(|n| n.unwrap_or(DVec3::ZERO))
-            .collect(),
-    )
+    nodes
+        .into_iter()
+        .map(|n| n.unwrap_or(DVec3::ZERO))
+        .collect()
 }
 
 /// Gives each empty node the mean of its filled 4-neighbours, ring by ring
@@ -255,64 +249,10 @@ fn relative_to_mean(nodes: &[DVec3], q: usize) -> Vec<DVec3> {
     out
 }
 
-/// The bilinear coordinates (u, v) of point `p` (projected onto the quad's
-/// plane) in planar quad `c`: c(u, v) = (1−u)(1−v) c₀ + u(1−v) c₁ + uv c₂ +
-/// (1−u)v c₃. Newton's method from the centre, on the normal equations of the
-/// plane's two directions; exact after one step for a parallelogram, and
-/// within 1e-12 of the quad's size in a few for a convex quad.
-pub fn bilinear_coordinates(c: &[DVec3; 4], p: DVec3) -> (f64, f64) {
-    let (mut u, mut v) = (0.5, 0.5);
-    for _ in 0..8 {
-        let point = c[0] * ((1.0 - u) * (1.0 - v))
-            + c[1] * (u * (1.0 - v))
-            + c[2] * (u * v)
-            + c[3] * ((1.0 - u) * v);
-        let r = point - p;
-        let du = (c[1] - c[0]) * (1.0 - v) + (c[2] - c[3]) * v;
-        let dv = (c[3] - c[0]) * (1.0 - u) + (c[2] - c[1]) * u;
-        let (a, b, d) = (du.dot(du), du.dot(dv), dv.dot(dv));
-        let det = a * d - b * b;
-        if det == 0.0 || !det.is_finite() {
-            break;
-        }
-        let (ru, rv) = (du.dot(r), dv.dot(r));
-        let (su, sv) = ((d * ru - b * rv) / det, (a * rv - b * ru) / det);
-        u -= su;
-        v -= sv;
-        if su.abs() + sv.abs() < 1e-13 {
-            break;
-        }
-    }
-    (u, v)
-}
-
 #[cfg(test)]
 mod tests {
     use super::super::regions::tests::square;
     use super::*;
-
-    #[test]
-    fn bilinear_coordinates_invert_the_map_on_a_trapezoid() {
-        // A convex non-parallelogram: Newton's iterations recover (u, v) to
-        // 1e-9 (the iteration stops at 1e-13 steps; the quad is of size 3).
-        let c = [
-            DVec3::new(0.0, 0.0, 1.0),
-            DVec3::new(3.0, 0.0, 1.0),
-            DVec3::new(2.0, 2.0, 1.0),
-            DVec3::new(0.5, 1.5, 1.0),
-        ];
-        for &(u, v) in &[(0.1, 0.2), (0.5, 0.5), (0.9, 0.7), (0.0, 1.0), (0.3, 0.95)] {
-            let p = c[0] * ((1.0 - u) * (1.0 - v))
-                + c[1] * (u * (1.0 - v))
-                + c[2] * (u * v)
-                + c[3] * ((1.0 - u) * v);
-            let (gu, gv) = bilinear_coordinates(&c, p + DVec3::Z * 0.25);
-            assert!(
-                (gu - u).abs() < 1e-9 && (gv - v).abs() < 1e-9,
-                "({u}, {v}) → ({gu}, {gv})"
-            );
-        }
-    }
 
     /// Samples on the node lattice of the square with value `f(x, y)`.
     fn lattice(f: impl Fn(f64, f64) -> f64) -> Vec<(DVec3, f64, DVec3)> {
