@@ -55,7 +55,9 @@ fn power_heuristic(a: f64, b: f64) -> f64 {
 
 impl Integrator<'_> {
     /// The nearest surface along the unit direction `dir` from `origin`, with the
-    /// hit point recomputed in f64 on the polygon's plane.
+    /// hit point recomputed in f64 on the polygon's plane. Hits nearer than the
+    /// occluder's scene epsilon along the ray are skipped (`closest_hit`), so
+    /// that a ray leaving a surface does not meet that surface again.
     pub fn intersect(&self, origin: DVec3, dir: DVec3) -> Option<SurfaceHit> {
         let hit = self
             .scene
@@ -101,6 +103,12 @@ impl Integrator<'_> {
 
     /// One sample of the radiance leaving `point` on polygon `polygon` toward
     /// unit `wo` (above its front side): emission plus reflection.
+    ///
+    /// Rays leaving `point` skip hits nearer than the scene epsilon along
+    /// them ([`Integrator::intersect`]), so a point within about that
+    /// distance of another surface (a corner) does not see that surface's
+    /// nearest band: probe a solver's vertex a millimetre into its element,
+    /// not at its receiving point (docs/accuracy.md, "edges and corners").
     pub fn outgoing(&self, polygon: usize, point: DVec3, wo: DVec3, rng: &mut Rng) -> DVec3 {
         let hit = SurfaceHit {
             polygon,
