@@ -210,7 +210,17 @@ pub fn ray_triangle(origin: DVec3, dir: DVec3, v0: DVec3, v1: DVec3, v2: DVec3) 
     Some(e2.dot(qvec) * inv)
 }
 
-/// (s, t) in [0, 1]² with bilinear(q, s, t) = `p` (projected onto the quad's
+/// The bilinear map of quad `q` at (s, t): q₀ at (0, 0), q₁ at (1, 0), q₂ at
+/// (1, 1), q₃ at (0, 1). Linear along every edge and iso-line, exact at the
+/// corners. Also interpolates per-corner values (shading normals).
+#[inline]
+pub fn bilinear(q: &[DVec3], s: f64, t: f64) -> DVec3 {
+    let bottom = q[0] * (1.0 - s) + q[1] * s;
+    let top = q[3] * (1.0 - s) + q[2] * s;
+    bottom * (1.0 - t) + top * t
+}
+
+/// (s, t) in [0, 1]² with [`bilinear`]`(q, s, t)` = `p` (projected onto the quad's
 /// plane; corners q₀ at (0, 0), q₁ at (1, 0), q₂ at (1, 1), q₃ at (0, 1), the
 /// order of `mesh::param::VertexKey::position`), by Newton's method: the map is smooth and a
 /// convex quad's inverse is unique, so a few steps from the centre reach f64
@@ -329,10 +339,7 @@ mod tests {
             DVec3::new(0.5, 1.5, 1.0),
         ];
         for &(s, t) in &[(0.1, 0.2), (0.5, 0.5), (0.9, 0.7), (0.0, 1.0), (0.3, 0.95)] {
-            let bottom = c[0] * (1.0 - s) + c[1] * s;
-            let top = c[3] * (1.0 - s) + c[2] * s;
-            let p = bottom * (1.0 - t) + top * t;
-            let (gs, gt) = inverse_bilinear(&c, p + DVec3::Z * 0.25);
+            let (gs, gt) = inverse_bilinear(&c, bilinear(&c, s, t) + DVec3::Z * 0.25);
             assert!(
                 (gs - s).abs() < 1e-9 && (gt - t).abs() < 1e-9,
                 "({s}, {t}) → ({gs}, {gt})"

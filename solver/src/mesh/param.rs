@@ -55,9 +55,7 @@ impl VertexKey {
                 let (s, t) = (s as f64 / d, t as f64 / d);
                 // Bilinear map; exact at the corners and linear along every edge
                 // and iso-line, so element edges are straight in space.
-                let bottom = vertices[0] * (1.0 - s) + vertices[1] * s;
-                let top = vertices[3] * (1.0 - s) + vertices[2] * s;
-                bottom * (1.0 - t) + top * t
+                crate::geometry::polygon::bilinear(vertices, s, t)
             }
             VertexKey::Bary { weights, .. } => {
                 let mut p = DVec3::ZERO;

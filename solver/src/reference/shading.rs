@@ -13,7 +13,7 @@
 //! cosines and its sampling frame; the geometric normal still decides which
 //! side is the front and whether a direction leaves the surface.
 
-use crate::geometry::polygon::triangulate;
+use crate::geometry::polygon::{bilinear, inverse_bilinear, triangulate};
 use crate::mesh::strictly_convex;
 use glam::DVec3;
 
@@ -46,10 +46,8 @@ impl CornerNormals {
     pub fn at(&self, vertices: &[DVec3], point: DVec3, fallback: DVec3) -> DVec3 {
         let n = &self.normals;
         let interpolated = if self.triangles.is_empty() {
-            let (s, t) = crate::geometry::polygon::inverse_bilinear(vertices, point);
-            let bottom = n[0] * (1.0 - s) + n[1] * s;
-            let top = n[3] * (1.0 - s) + n[2] * s;
-            bottom * (1.0 - t) + top * t
+            let (s, t) = inverse_bilinear(vertices, point);
+            bilinear(n, s, t)
         } else {
             // The triangle whose smallest barycentric weight is largest: the
             // one that holds the point (or the nearest, for a point on an edge
