@@ -41,7 +41,8 @@
 //! overlap: each is freed before the next begins):
 //!
 //! * **shot**: one shot's per-vertex results (directional: a heap vector of
-//!   coefficients per vertex) and its sample pool;
+//!   coefficients per vertex) and its sample pool, and a grouped shot's
+//!   members and their tree ([`group_shot_bytes`]);
 //! * **checkpoint**: the writer's buffers. Checkpoints stream section by
 //!   section from the solver's own arrays through a 1 MiB buffer
 //!   ([`Solver::write_checkpoint`]), their f64 arrays packed a 256 KiB chunk
@@ -193,6 +194,9 @@ pub struct Counts {
     /// Bounded shooting (`--shooting bounded`), which keeps the last shot's
     /// visited vertices.
     pub bounded: bool,
+    /// Grouped shooters (`--shooters grouped`), whose shot holds its members
+    /// and their tree ([`group_shot_bytes`]).
+    pub grouped: bool,
 }
 
 /// The estimate in bytes, per term (see the module documentation).
@@ -391,6 +395,11 @@ pub fn estimate(c: &Counts) -> MemoryEstimate {
                 + c.vertex_coefficients * f64_
         } else {
             c.vertices * size_of::<Received>() as u64
+        }
+        + if c.grouped {
+            group_shot_bytes(c.patches)
+        } else {
+            0
         };
     let checkpoint = checkpoint_bytes(c);
     let output = output_bytes(c);
@@ -459,6 +468,7 @@ pub fn counts_before_meshing(scene: &Scene, settings: &SolverSettings) -> Counts
         samples: settings.samples as u64,
         directional: settings.mode == solution::format::SolveMode::Directional,
         bounded: settings.shooting == crate::settings::Shooting::Bounded,
+        grouped: settings.shooters == crate::settings::Shooters::Grouped,
         scene_bytes: scene_bytes(scene),
         ..Counts::default()
     };
@@ -551,6 +561,7 @@ pub fn counts_for_mesh(
         index_slots: per_surface_vertices.iter().map(|&n| list_slots(n)).sum(),
         index_lists: per_surface_vertices.iter().filter(|&&n| n > 0).count() as u64,
         bounded: settings.shooting == crate::settings::Shooting::Bounded,
+        grouped: settings.shooters == crate::settings::Shooters::Grouped,
         ..Counts::default()
     };
     if directional {
@@ -658,6 +669,16 @@ pub fn coefficients(order: u32) -> u64 {
     3 * solution::sh::coefficient_count(order) as u64
 }
 
+/// A grouped shot's own bytes (`group_shot.rs`, `group_tree.rs`): the
+/// candidates it ranks (at most every patch, an `(f64, u32)` each) and up to
+/// [`MAX_MEMBERS`](super::group_shot::MAX_MEMBERS) members of four quadrant
+/// pieces each, every piece with its [`Piece`](super::group_shot::Piece),
+/// its member, two tree nodes and a cumulative weight.
+pub fn group_shot_bytes(patches: u64) -> u64 {
+    let members = patches.min(super::group_shot::MAX_MEMBERS as u64);
+    patches * size_of::<(f64, u32)>() as u64 + members * 4 * super::group_tree::bytes_per_piece()
+}
+
 /// The bytes one split may add on a surface of `coefficients` values per
 /// vertex (its SH, and E/π on a textured surface): four elements, at most
 /// five vertices (four edge midpoints and a centre) with their gather-weight
@@ -761,6 +782,7 @@ impl Solver {
             texture_bytes: self.texture_bytes(),
             scene_bytes: self.scene_bytes,
             bounded: self.settings.shooting == crate::settings::Shooting::Bounded,
+            grouped: self.settings.shooters == crate::settings::Shooters::Grouped,
             ..Counts::default()
         };
         if let Some(d) = d {

@@ -7,8 +7,12 @@
 //! On a scene of many small lit patches (thousands of boxes on a floor) every
 //! lit patch must shoot once, so the shots grow with the scene, and each early
 //! shot visits most receivers: a solve costs shots × receivers. A group of g
-//! patches shot together costs one pass, g exact form factors and the same R
-//! rays per receiver, instead of g passes of R rays.
+//! patches shot together costs one pass and the same R rays per receiver,
+//! instead of g passes of R rays. Each receiver sees the group through a cut
+//! of a tree over its members (`group_tree.rs`): the members near it with
+//! their exact factors, far clusters of them as one item each, so a
+//! receiver's cost grows with the log of the group, not with g, and groups
+//! can hold thousands of patches.
 //!
 //! ## The estimate (unbiased for the sum of the members' shots)
 //!
@@ -31,7 +35,11 @@
 //! receiver's horizon) use the differential kernel at their centroid
 //! instead of the contour integral: relative error O((D/d)²) ≤ 1/FAR² = 1%
 //! of that member's factor, a small, smooth bias on light from far patches,
-//! which saves the contour integral for most of a group's members.
+//! which saves the contour integral for most of a group's members. Clusters
+//! of members far from the receiver enter its weights as one item each
+//! (`group_tree.rs`), by the cluster kernel (the same centroid expansion
+//! over the cluster) or, where members straddle its horizon, sampled
+//! without bias; a ray to a cluster goes to one of its members.
 //!
 //! ## What is grouped, and why an emitter's first shot is not
 //!
@@ -63,6 +71,7 @@
 //! alone: shooting members uniformly cost 1.3 MARE points on the Cornell box
 //! at draft (docs/benchmarks.md, "Grouped shooters").
 
+use super::group_tree::{Item, MemberTree, Receiver};
 use super::shoot::{receiving_point, Received, SamplePool, Scratch, Shot};
 use super::Solver;
 use crate::geometry::formfactor::SourcePolygon;
@@ -79,12 +88,16 @@ pub const FRACTION: f64 = 0.1;
 
 /// Members lie on surfaces within this fraction of the scene's diagonal of
 /// the seed's centre, so that the group is local and its members share
-/// occluders.
-pub const RADIUS: f64 = 0.1;
+/// occluders. On the Cornell box at draft against the truth, 0.1 and 0.2
+/// measure 3.69% / 3.70% MARE, 0.3 and the whole scene 4.33% / 4.89%
+/// (docs/scale.md, "Clustered group shots").
+pub const RADIUS: f64 = 0.2;
 
-/// The most patches one grouped shot carries: each receiver computes a factor
-/// to each member, so the group's cost per receiver grows with it.
-pub const MAX_MEMBERS: usize = 64;
+/// The most patches one grouped shot carries. Receivers see the group
+/// through the cluster tree (`group_tree.rs`), so a receiver's cost grows
+/// with the log of the members; what the cap bounds is the shot's memory
+/// (`budget.rs`, `group_shot_bytes`: about 14 MiB at this cap).
+pub const MAX_MEMBERS: usize = 4096;
 
 /// Members farther than this many of their own diameters use the
 /// differential kernel at their centroid (see the module documentation).
@@ -134,6 +147,11 @@ impl Piece {
 
 impl Member {
     fn new(mesh: &Mesh, piece: &Piece) -> Member {
+        Member::of(piece, mesh.surfaces[piece.surface as usize].normal)
+    }
+
+    /// The member for `piece`, whose plane has unit normal `normal`.
+    pub(super) fn of(piece: &Piece, normal: DVec3) -> Member {
         let polygon = &piece.corners[..piece.corner_count];
         let centre = polygon.iter().copied().sum::<DVec3>() / polygon.len() as f64;
         let diameter = polygon
@@ -147,7 +165,7 @@ impl Member {
             corners: piece.corners,
             corner_count: piece.corner_count,
             source: SourcePolygon::new(polygon),
-            normal: mesh.surfaces[piece.surface as usize].normal,
+            normal,
             centre,
             diameter,
             area: piece.area,
@@ -156,8 +174,34 @@ impl Member {
         }
     }
 
-    fn polygon(&self) -> &[DVec3] {
+    pub(super) fn polygon(&self) -> &[DVec3] {
         &self.corners[..self.corner_count]
+    }
+
+    pub(super) fn centre(&self) -> DVec3 {
+        self.centre
+    }
+
+    pub(super) fn normal(&self) -> DVec3 {
+        self.normal
+    }
+
+    pub(super) fn surface(&self) -> u32 {
+        self.surface
+    }
+
+    pub(super) fn area(&self) -> f64 {
+        self.area
+    }
+
+    /// U_p / |U_p|.
+    pub(super) fn colour(&self) -> DVec3 {
+        self.colour
+    }
+
+    /// A_p |U_p|: the member's share of a far cluster (`group_tree.rs`).
+    pub(super) fn strength(&self) -> f64 {
+        self.area * self.unshot.element_sum()
     }
 
     /// Whether the whole member lies in the closed upper half-space of the
@@ -169,7 +213,7 @@ impl Member {
 
     /// F̂(q←p): the unoccluded factor, with the patch shooter's culls; the
     /// centroid kernel when far (see the module documentation).
-    fn factor(&self, q: DVec3, n: DVec3, epsilon: f64) -> f64 {
+    pub(super) fn factor(&self, q: DVec3, n: DVec3, epsilon: f64) -> f64 {
         if self.normal.dot(q - self.centre) < -1e-6 * self.diameter {
             return 0.0;
         }
@@ -221,7 +265,7 @@ impl Member {
 
 /// A uniform point on convex polygon `polygon`: a fan triangle chosen by
 /// area, then a uniform point in it (Turk 1990, square-root warp).
-fn uniform_point(polygon: &[DVec3], rng: &mut Rng) -> DVec3 {
+pub(super) fn uniform_point(polygon: &[DVec3], rng: &mut Rng) -> DVec3 {
     let a = polygon[0];
     let area = |i: usize| (polygon[i] - a).cross(polygon[i + 1] - a).length();
     let total: f64 = (1..polygon.len() - 1).map(area).sum();
@@ -247,7 +291,9 @@ pub struct GroupShot<'a> {
     pub shadows: bool,
     pub occluder: &'a Occluder,
     pub kd: &'a [DVec3],
+    /// In tree order (`group_tree.rs`).
     pub members: Vec<Member>,
+    tree: MemberTree,
     /// Fewer rays where the group adds little (`ray_share.rs`).
     pub ray_share: Option<super::ray_share::RayShare>,
 }
@@ -262,6 +308,8 @@ impl<'a> GroupShot<'a> {
         occluder: &'a Occluder,
         kd: &'a [DVec3],
     ) -> GroupShot<'a> {
+        let mut members: Vec<Member> = pieces.iter().map(|p| Member::new(mesh, p)).collect();
+        let tree = MemberTree::build(&mut members);
         GroupShot {
             index,
             seed: settings.seed,
@@ -269,12 +317,14 @@ impl<'a> GroupShot<'a> {
             shadows: settings.shadows,
             occluder,
             kd,
-            members: pieces.iter().map(|p| Member::new(mesh, p)).collect(),
+            members,
+            tree,
             ray_share: None,
         }
     }
 
-    /// ΔL_v: the importance-sampled sum of the members' shots (see the module
+    /// ΔL_v: the importance-sampled sum of the members' shots, far clusters
+    /// of members taken whole (`group_tree.rs`; see the module
     /// documentation).
     /// `prior`: every vertex's radiance before this shot, for the ray share.
     pub fn receive(
@@ -296,40 +346,32 @@ impl<'a> GroupShot<'a> {
             clipped,
             flags,
             weights,
-            members,
+            items,
+            carried,
         } = scratch;
         weights.clear();
-        let mut total = 0.0;
-        let mut last = 0;
-        for (k, m) in self.members.iter().enumerate() {
-            // A planar polygon cannot light its own surface.
-            let w = if m.surface == surface {
-                0.0
-            } else {
-                m.factor(q, n, epsilon) * m.unshot.element_sum()
-            };
-            if w > 0.0 {
-                last = k;
-            }
-            total += w;
-            weights.push(w);
-        }
+        items.clear();
+        // Σ_p U_p F̂_p: the members' unoccluded shots summed, the receiver's
+        // ΔL without shadows.
+        let unoccluded = self.tree.items(
+            &self.members,
+            &Receiver {
+                q,
+                n,
+                surface,
+                epsilon,
+            },
+            self.shadows,
+            items,
+            weights,
+        );
+        let total: f64 = weights.iter().sum();
         if total.is_nan() || total <= 0.0 {
             return Received::default();
         }
-        // Σ_p U_p F̂_p: the members' unoccluded shots summed (colour_p w_p =
-        // U_p F̂_p), the receiver's ΔL without shadows.
-        let unoccluded = |weights: &[f64]| -> DVec3 {
-            self.members
-                .iter()
-                .zip(weights)
-                .map(|(m, &w)| m.colour * w)
-                .sum()
-        };
         if !self.shadows {
-            let sum = unoccluded(weights);
             return Received {
-                radiance: kd * sum,
+                radiance: kd * unoccluded,
                 visible: self.samples,
                 rays: 0,
             };
@@ -339,8 +381,7 @@ impl<'a> GroupShot<'a> {
         // against a unit source of that colour at factor W.
         let rays = match (&self.ray_share, prior) {
             (Some(share), Some(prior)) => {
-                let gain = unoccluded(weights);
-                let full = share.full_factor(prior[v as usize], kd, gain / total);
+                let full = share.full_factor(prior[v as usize], kd, unoccluded / total);
                 super::ray_share::rays_for(self.samples, total, full)
             }
             _ => self.samples,
@@ -348,7 +389,8 @@ impl<'a> GroupShot<'a> {
         let mut rng = Rng::new(self.seed, stream_id(self.index, v as u64));
         let offset = rng.next_f64();
         points.clear();
-        members.clear();
+        carried.clear();
+        let last = weights.len() - 1;
         let (mut k, mut cumulative) = (0, weights[0]);
         for i in 0..rays {
             let u = (i as f64 + offset) / rays as f64 * total;
@@ -356,22 +398,32 @@ impl<'a> GroupShot<'a> {
                 k += 1;
                 cumulative += weights[k];
             }
-            // Rounding can leave u at the very top: the last member with
-            // weight takes it, never one with none.
-            let chosen = k.min(last);
-            let m = &self.members[chosen];
-            let y = m.sample_point(q, n, epsilon, &mut rng, clipped);
-            points.push(y + m.normal * epsilon);
-            members.push(chosen as u32);
+            match items[k] {
+                Item::Member(member) => {
+                    let m = &self.members[member as usize];
+                    let y = m.sample_point(q, n, epsilon, &mut rng, clipped);
+                    points.push(y + m.normal * epsilon);
+                    carried.push(m.colour);
+                }
+                cluster => {
+                    let ray = self
+                        .tree
+                        .ray(&self.members, cluster, weights[k], q, n, &mut rng);
+                    if let Some((y, normal, colour)) = ray {
+                        points.push(y + normal * epsilon);
+                        carried.push(colour);
+                    }
+                }
+            }
         }
         let origin = q + n * epsilon;
         self.occluder.visible_each(origin, points, flags);
         let mut sum = DVec3::ZERO;
         let mut visible = 0;
-        for (&k, &f) in members.iter().zip(flags.iter()) {
+        for (&c, &f) in carried.iter().zip(flags.iter()) {
             if f {
                 visible += 1;
-                sum += self.members[k as usize].colour;
+                sum += c;
             }
         }
         Received {
@@ -379,6 +431,40 @@ impl<'a> GroupShot<'a> {
             visible: visible * (self.samples / rays),
             rays,
         }
+    }
+}
+
+#[cfg(test)]
+impl GroupShot<'_> {
+    /// How receiver `v` sees the group: the weights of the single members,
+    /// the far clusters and the sampled clusters in its cut.
+    pub fn cut_weights(&self, mesh: &Mesh, v: u32) -> [f64; 3] {
+        let surface = mesh.vertices[v as usize].surface;
+        let epsilon = self.occluder.scene_epsilon();
+        let (q, n) = receiving_point(mesh, v, epsilon);
+        let (mut items, mut weights) = (Vec::new(), Vec::new());
+        self.tree.items(
+            &self.members,
+            &Receiver {
+                q,
+                n,
+                surface,
+                epsilon,
+            },
+            true,
+            &mut items,
+            &mut weights,
+        );
+        let mut sums = [0.0; 3];
+        for (item, w) in items.iter().zip(&weights) {
+            let k = match item {
+                Item::Member(_) => 0,
+                Item::Far(_) => 1,
+                Item::Sampled(_) => 2,
+            };
+            sums[k] += w;
+        }
+        sums
     }
 }
 

@@ -66,6 +66,7 @@ pub(crate) use output::default_camera;
 pub mod fine_shape;
 mod footprint;
 mod group_shot;
+mod group_tree;
 pub mod ray_share;
 mod refine;
 pub mod regions;

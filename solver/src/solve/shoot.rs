@@ -45,10 +45,12 @@ pub struct Scratch {
     pub(super) points: Vec<DVec3>,
     pub(super) clipped: Vec<DVec3>,
     pub(super) flags: Vec<bool>,
-    /// Grouped shots (`group_shot.rs`): per member its share of the
-    /// receiver's estimate, and per ray the member it was sent to.
+    /// Grouped shots (`group_shot.rs`): the members and far clusters a
+    /// receiver sees with their shares of its estimate, and per ray the
+    /// colour it carries if it arrives.
     pub(super) weights: Vec<f64>,
-    pub(super) members: Vec<u32>,
+    pub(super) items: Vec<super::group_tree::Item>,
+    pub(super) carried: Vec<DVec3>,
 }
 
 /// How many jittered sample sets a shot draws on its source ([`SamplePool`]).
