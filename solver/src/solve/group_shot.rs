@@ -96,8 +96,11 @@ pub const RADIUS: f64 = 0.2;
 /// The most patches one grouped shot carries. Receivers see the group
 /// through the cluster tree (`group_tree.rs`), so a receiver's cost grows
 /// with the log of the members; what the cap bounds is the shot's memory
-/// (`budget.rs`, `group_shot_bytes`: about 14 MiB at this cap).
-pub const MAX_MEMBERS: usize = 4096;
+/// (`budget.rs`, `group_shot_bytes`: about 72 MiB at this cap, 4.4 KiB a
+/// member of four quadrant pieces). At 4,096 the 100k boxes took 202 s at
+/// medium and the 1M boxes stopped at 6.2% unshot at draft; at this cap
+/// 167 s and 5.6% in less time (docs/scale.md, "Clustered group shots").
+pub const MAX_MEMBERS: usize = 16384;
 
 /// Members farther than this many of their own diameters use the
 /// differential kernel at their centroid (see the module documentation).
