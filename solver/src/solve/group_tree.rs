@@ -115,7 +115,7 @@ struct Node {
     cone: f64,
     cone_sin: f64,
     cone_cos: f64,
-    /// S = Σ A_p |U_p|, N = Σ A_p |U_p| n_p, M's rows Σ A_p U_p,c n_p.
+    /// S = Σ A_p |U_p|.
     strength: f64,
     /// Σ A_p U_p / S: the colour of the node's unshot power.
     colour: DVec3,
@@ -611,6 +611,25 @@ mod tests {
             .collect()
     }
 
+    /// The cut receiver `q` (normal `n`, on no member's surface) sees: its
+    /// items, their weights and its unoccluded gain.
+    fn cut(
+        tree: &MemberTree,
+        members: &[Member],
+        q: DVec3,
+        n: DVec3,
+    ) -> (Vec<Item>, Vec<f64>, DVec3) {
+        let receiver = Receiver {
+            q,
+            n,
+            surface: u32::MAX,
+            epsilon: 1e-6,
+        };
+        let (mut items, mut weights) = (Vec::new(), Vec::new());
+        let gain = tree.items(members, &receiver, true, &mut items, &mut weights);
+        (items, weights, gain)
+    }
+
     /// Σ_p U_p F(q←p) with the exact point-to-polygon factor.
     fn exact(members: &[Member], q: DVec3, n: DVec3) -> DVec3 {
         members
@@ -639,19 +658,7 @@ mod tests {
         for scale in [1.0, 2.0] {
             let r = scale * (CLUSTER_FAR * 2.0 + 0.05) * root.radius;
             let q = root.centre + direction * r;
-            let (mut items, mut weights) = (Vec::new(), Vec::new());
-            let gain = tree.items(
-                &members,
-                &Receiver {
-                    q,
-                    n,
-                    surface: u32::MAX,
-                    epsilon: 1e-6,
-                },
-                true,
-                &mut items,
-                &mut weights,
-            );
+            let (items, weights, gain) = cut(&tree, &members, q, n);
             assert!(matches!(items[..], [Item::Far(0)]), "{items:?}");
             let truth = exact(&members, q, n);
             let error = ((gain - truth) / truth).abs().max_element();
@@ -706,19 +713,7 @@ mod tests {
             .collect();
         let tree = MemberTree::build(&mut members);
         let (q, n) = (DVec3::new(10.0, 4.0, 0.0), DVec3::Z);
-        let (mut items, mut weights) = (Vec::new(), Vec::new());
-        tree.items(
-            &members,
-            &Receiver {
-                q,
-                n,
-                surface: u32::MAX,
-                epsilon: 1e-6,
-            },
-            true,
-            &mut items,
-            &mut weights,
-        );
+        let (items, weights, _) = cut(&tree, &members, q, n);
         assert!(matches!(items[..], [Item::Sampled(0)]), "{items:?}");
         let draws = 200_000;
         let mut rng = Rng::new(7, 0);
