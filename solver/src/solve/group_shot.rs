@@ -408,7 +408,7 @@ impl<'a> GroupShot<'a> {
                     points.push(y + m.normal * epsilon);
                     carried.push(m.colour);
                 }
-                cluster => {
+                Item::Cluster(cluster) => {
                     let ray = self
                         .tree
                         .ray(&self.members, cluster, weights[k], q, n, &mut rng);
@@ -462,8 +462,8 @@ impl GroupShot<'_> {
         for (item, w) in items.iter().zip(&weights) {
             let k = match item {
                 Item::Member(_) => 0,
-                Item::Far(_) => 1,
-                Item::Sampled(_) => 2,
+                Item::Cluster(c) if !c.sampled => 1,
+                Item::Cluster(_) => 2,
             };
             sums[k] += w;
         }

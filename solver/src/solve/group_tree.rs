@@ -142,12 +142,18 @@ pub struct Receiver {
 }
 
 /// What a receiver sees of the group: single members (index in tree order)
-/// and far clusters (node index).
-#[derive(Clone, Copy, Debug)]
+/// and clusters taken whole.
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Item {
     Member(u32),
-    Far(u32),
-    Sampled(u32),
+    Cluster(Cluster),
+}
+
+/// A node taken whole: by the cluster kernel (far) or `sampled`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Cluster {
+    pub node: u32,
+    pub sampled: bool,
 }
 
 /// The bytes a grouped shot holds per piece: the piece, its member, two tree
@@ -278,7 +284,7 @@ impl MemberTree {
                 continue;
             }
             let taken = match node.far(q, n, epsilon) {
-                Far::Taken(weight, g) => Some((Item::Far(stack[depth]), weight, g)),
+                Far::Taken(weight, g) => Some((far(stack[depth]), weight, g)),
                 Far::Near => None,
                 // Members facing apart are parted near the root, so such a
                 // node opens; one of a single orientation that straddles
@@ -286,7 +292,7 @@ impl MemberTree {
                 Far::Mixed if node.cone > NORMAL_SPLIT => None,
                 Far::Mixed => node
                     .bound(q, n)
-                    .map(|weight| (Item::Sampled(stack[depth]), weight, node.colour * weight)),
+                    .map(|weight| (sampled(stack[depth]), weight, node.colour * weight)),
             };
             match taken {
                 Some((item, weight, g)) => {
@@ -323,8 +329,8 @@ impl MemberTree {
 }
 
 impl MemberTree {
-    /// One ray of receiver `q` (normal `n`) to cluster `item` (far or
-    /// sampled) with importance `weight`: a member in proportion
+    /// One ray of receiver `q` (normal `n`) to `cluster` with importance
+    /// `weight`: a member in proportion
     /// to A_p |U_p|, a uniform point y on it, and what the ray carries if it
     /// arrives (see the module documentation): (y, the member's normal, the
     /// colour), or `None` when y cannot light q (a sampled node's member
@@ -332,17 +338,16 @@ impl MemberTree {
     pub fn ray(
         &self,
         members: &[Member],
-        item: Item,
+        cluster: Cluster,
         weight: f64,
         q: DVec3,
         n: DVec3,
         rng: &mut Rng,
     ) -> Option<(DVec3, DVec3, DVec3)> {
-        let (cluster, sampled) = match item {
-            Item::Far(node) => (node, false),
-            Item::Sampled(node) => (node, true),
-            Item::Member(_) => unreachable!("a single member is not a cluster"),
-        };
+        let Cluster {
+            node: cluster,
+            sampled,
+        } = cluster;
         let (member, strength) = self.pick(cluster, rng.next_f64());
         let m = &members[member as usize];
         let y = uniform_point(m.polygon(), rng);
@@ -552,6 +557,20 @@ fn point_kernel(q: DVec3, n: DVec3, y: DVec3, m: DVec3) -> f64 {
     cq * cy / (PI * r2 * r2)
 }
 
+fn far(node: u32) -> Item {
+    Item::Cluster(Cluster {
+        node,
+        sampled: false,
+    })
+}
+
+fn sampled(node: u32) -> Item {
+    Item::Cluster(Cluster {
+        node,
+        sampled: true,
+    })
+}
+
 /// How a receiver may take a node by the cluster kernel.
 enum Far {
     Taken(f64, DVec3),
@@ -611,6 +630,13 @@ mod tests {
             .collect()
     }
 
+    fn cluster_of(item: Item) -> Cluster {
+        match item {
+            Item::Cluster(c) => c,
+            Item::Member(m) => panic!("member {m} where a cluster was expected"),
+        }
+    }
+
     /// The cut receiver `q` (normal `n`, on no member's surface) sees: its
     /// items, their weights and its unoccluded gain.
     fn cut(
@@ -659,7 +685,7 @@ mod tests {
             let r = scale * (CLUSTER_FAR * 2.0 + 0.05) * root.radius;
             let q = root.centre + direction * r;
             let (items, weights, gain) = cut(&tree, &members, q, n);
-            assert!(matches!(items[..], [Item::Far(0)]), "{items:?}");
+            assert_eq!(items, [far(0)]);
             let truth = exact(&members, q, n);
             let error = ((gain - truth) / truth).abs().max_element();
             let weight_error = (weights[0] / truth.element_sum() - 1.0).abs();
@@ -678,7 +704,7 @@ mod tests {
             let draws = 20_000;
             let mean = (0..draws)
                 .map(|_| {
-                    tree.ray(&members, items[0], weights[0], q, n, &mut rng)
+                    tree.ray(&members, cluster_of(items[0]), weights[0], q, n, &mut rng)
                         .unwrap()
                         .2
                 })
@@ -714,22 +740,23 @@ mod tests {
         let tree = MemberTree::build(&mut members);
         let (q, n) = (DVec3::new(10.0, 4.0, 0.0), DVec3::Z);
         let (items, weights, _) = cut(&tree, &members, q, n);
-        assert!(matches!(items[..], [Item::Sampled(0)]), "{items:?}");
+        assert_eq!(items, [sampled(0)]);
         let draws = 200_000;
         let mut rng = Rng::new(7, 0);
         let (mut sum, mut squares) = (DVec3::ZERO, DVec3::ZERO);
         for _ in 0..draws {
-            let estimate = match tree.ray(&members, items[0], weights[0], q, n, &mut rng) {
-                Some((_, _, carried)) => {
-                    let limit = members
-                        .iter()
-                        .map(|m| m.colour().max_element())
-                        .fold(0.0, f64::max);
-                    assert!(carried.max_element() <= limit * (1.0 + 1e-12), "{carried}");
-                    carried * weights[0]
-                }
-                None => DVec3::ZERO,
-            };
+            let estimate =
+                match tree.ray(&members, cluster_of(items[0]), weights[0], q, n, &mut rng) {
+                    Some((_, _, carried)) => {
+                        let limit = members
+                            .iter()
+                            .map(|m| m.colour().max_element())
+                            .fold(0.0, f64::max);
+                        assert!(carried.max_element() <= limit * (1.0 + 1e-12), "{carried}");
+                        carried * weights[0]
+                    }
+                    None => DVec3::ZERO,
+                };
             sum += estimate;
             squares += estimate * estimate;
         }
