@@ -21,7 +21,10 @@ use common::cornell_against_truth;
 /// noise (a member gets its share of a receiver's rays, not all of them) for
 /// 20× fewer shots, and the test guards against more than that. Shooting the
 /// members uniformly instead of by quadrants measured 5.10% / 5.22%, 1.3
-/// points worse, and fails it.
+/// points worse, and fails it. Since the cluster tree (`group_tree.rs`,
+/// 4 December 2026) grouped measures 3.69% against the patch shooter's
+/// 3.69%; the allowance is kept, not tightened, because one seed per side
+/// cannot resolve less than the draft's seed spread.
 const MARE_ALLOWANCE: f64 = 0.009;
 
 fn mare(dir: &Path, shooters: &str) -> f64 {
