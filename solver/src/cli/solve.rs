@@ -88,6 +88,9 @@ pub fn run(args: SolveArgs) -> anyhow::Result<ExitCode> {
     }
     warn_clamped_patches(&scene, &settings);
     apply_smoothing(&mut scene, settings.crease_angle);
+    // The import's text and parse tables are freed; give their pages back
+    // before meshing (`memory::return_freed_memory`).
+    memory::return_freed_memory();
     let budget_source = match settings.memory_budget {
         Some(_) => "as set".to_string(),
         None => {
@@ -300,6 +303,7 @@ fn solve(
         let (meta, state) = session.load::<Checkpoint>()?;
         let solver = Solver::resume(scene, settings, state)
             .with_context(|| format!("resuming from {}", session.checkpoint_path.display()))?;
+        memory::return_freed_memory();
         eprintln!(
             "solver: resuming {} at shot {} ({:.1} s spent before)",
             args.scene.display(),
@@ -311,6 +315,8 @@ fn solve(
         let solver = Solver::new(scene, settings)
             .map_err(plain)
             .with_context(|| format!("setting up the solve of {}", args.scene.display()))?;
+        // Set-up's transients (contact cuts, grown vectors) are freed.
+        memory::return_freed_memory();
         solver
             .warnings()
             .iter()
