@@ -11,7 +11,7 @@ pub(crate) mod args;
 mod checkpoint;
 mod eta;
 pub(crate) mod files;
-mod memory;
+pub mod memory;
 mod preview;
 mod progress;
 mod session;
