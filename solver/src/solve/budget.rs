@@ -12,7 +12,8 @@
 //!   the executable, the allocator, the worker threads), the scene as imported
 //!   ([`scene_bytes`]: per input polygon its [`Polygon`], corners, shading
 //!   normals and source reference, which the command line keeps for the whole
-//!   solve), and per mesh surface its tables and occlusion BVH share;
+//!   solve), and per mesh surface its tables, occlusion BVH share and
+//!   receiver-tree share ([`surface_bytes`]);
 //! * **mesh**: per vertex a [`MeshVertex`] and its slot in the vertex table (a
 //!   hashbrown map: a power-of-two bucket count at most 7/8 full, each bucket
 //!   one `(VertexKey, u32)` and one control byte), per element an [`Element`],
@@ -100,14 +101,27 @@ pub const ORDER_SHARE: f64 = 0.5;
 /// `--preset medium` less its estimated solve state).
 pub const FIXED_BYTES: u64 = 7 << 20;
 
-/// The mesh's surface and piece, the per-surface tables of both modes and
-/// the occlusion BVH's share, per surface: a bound from the structures'
-/// sizes, rounded up. (The input polygons are [`scene_bytes`]: a surface may
-/// weld many of them.)
+/// The bytes each surface costs wherever it is held, from the structures'
+/// sizes (a quad surface: four corners, two triangles; the test
+/// `surface_term_matches_the_allocated_per_surface_structures` sums the real
+/// tables): the mesh's [`Surface`], its heap block of corners, its piece and
+/// the piece's patch range; the occlusion BVH's two triangles
+/// ([`crate::geometry::visibility::Occluder::bytes_per_triangle`]); the
+/// receiver tree's share ([`super::cluster::ReceiverTree::bytes_per_surface`]);
+/// and the solver's per-surface reflectance, albedo, emission, patch range
+/// and texturing slot. (The input polygons are [`scene_bytes`]: a surface may
+/// weld many of them.) It was a rounded guess of 664 bytes until the 1M
+/// Cornell boxes measured 28% over the estimate; it is 944 bytes now.
 pub fn surface_bytes() -> u64 {
-    // The surface (its Vec of 4 positions), the BVH's triangles and nodes
-    // (two f32 triangles, about one node each).
-    (size_of::<Surface>() + 4 * size_of::<DVec3>() + 24 + 2 * 64 + 128 + 96) as u64
+    let range = size_of::<std::ops::Range<u32>>();
+    let mesh = size_of::<Surface>()
+        + heap_chunk(4 * size_of::<DVec3>()) as usize
+        + size_of::<crate::mesh::Piece>()
+        + range;
+    let solver = 3 * size_of::<DVec3>() + range + size_of::<Option<super::textured::Textured>>();
+    (mesh + solver) as u64
+        + 2 * crate::geometry::visibility::Occluder::bytes_per_triangle()
+        + super::cluster::ReceiverTree::bytes_per_surface()
 }
 
 /// The scene as imported, per input polygon: its [`Polygon`] (held inline in

@@ -238,6 +238,23 @@ pub fn form_factor_bound(
 }
 
 impl ReceiverTree {
+    /// The bytes one surface costs, for the memory estimate: its bounds, its
+    /// slot in the order and two nodes (a binary tree over n leaves has
+    /// 2n − 1).
+    pub fn bytes_per_surface() -> u64 {
+        (std::mem::size_of::<SurfaceBounds>()
+            + std::mem::size_of::<u32>()
+            + 2 * std::mem::size_of::<Node>()) as u64
+    }
+
+    /// Bytes its node, order and surface tables hold (by length), for the
+    /// memory estimate's test (`budget/tests.rs`).
+    pub fn allocated_bytes(&self) -> u64 {
+        (std::mem::size_of_val(self.nodes.as_slice())
+            + std::mem::size_of_val(self.order.as_slice())
+            + std::mem::size_of_val(self.surfaces.as_slice())) as u64
+    }
+
     /// The tree over the surfaces of `mesh`, with reflectances `kd`.
     pub fn new(mesh: &Mesh, kd: &[DVec3]) -> ReceiverTree {
         let surfaces: Vec<SurfaceBounds> = mesh
