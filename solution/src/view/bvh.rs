@@ -48,6 +48,18 @@ pub struct Bvh {
 }
 
 impl Bvh {
+    /// The bytes one triangle costs while the hierarchy is built: its
+    /// positions, its slot in the order, its centroid (freed after the
+    /// build) and its share of the nodes (a binary tree whose leaves hold
+    /// about [`LEAF_SIZE`] / 2 triangles after median splits: 2n / LEAF_SIZE
+    /// nodes, the capacity `build` reserves).
+    pub(super) fn bytes_per_triangle() -> u64 {
+        (std::mem::size_of::<[Vec3; 3]>()
+            + std::mem::size_of::<u32>()
+            + std::mem::size_of::<Vec3>()
+            + 2 * std::mem::size_of::<Node>() / LEAF_SIZE) as u64
+    }
+
     /// Builds the hierarchy. Degenerate triangles are kept (a ray never hits
     /// them); non-finite positions do not occur in a validated solution.
     pub fn build(triangles: Vec<[Vec3; 3]>) -> Bvh {

@@ -54,7 +54,9 @@
 //!   vertex and its f32 coefficients, per display triangle its indices, and in
 //!   directional mode the diffuse-style batch that the per-order batches
 //!   replace, alive while they are built, and the f64 coefficients shown
-//!   (hidden vertices filled, contact cuts averaged);
+//!   (hidden vertices filled, contact cuts averaged), and when the scene names
+//!   no camera the default view's hierarchy over the solution's triangles
+//!   (`solution::view::transient_bytes`, 80 bytes a triangle);
 //! * **gather** (diffuse mode): the touched patches' list and its copy, and
 //!   the larger of the per-patch sums and the unshot tree rebuilt beside the
 //!   old one (`UnshotTree::update_many` when a shot changed more than 1/8 of
@@ -211,6 +213,9 @@ pub struct Counts {
     /// Grouped shooters (`--shooters grouped`), whose shot holds its members
     /// and their tree ([`group_shot_bytes`]).
     pub grouped: bool,
+    /// The scene names no camera, so the output chooses a view over the
+    /// solution's triangles ([`solution::view::transient_bytes`]).
+    pub chooses_view: bool,
 }
 
 /// The estimate in bytes, per term (see the module documentation).
@@ -468,7 +473,12 @@ fn output_bytes(c: &Counts) -> u64 {
     } else {
         0
     };
-    diffuse + directional + WRITER_BUFFER
+    let view = if c.chooses_view {
+        solution::view::transient_bytes(triangles)
+    } else {
+        0
+    };
+    diffuse + directional + view + WRITER_BUFFER
 }
 
 /// The counts of a mesh not yet built: N patches per side (the solve's
@@ -484,6 +494,7 @@ pub fn counts_before_meshing(scene: &Scene, settings: &SolverSettings) -> Counts
         bounded: settings.shooting == crate::settings::Shooting::Bounded,
         grouped: settings.shooters == crate::settings::Shooters::Grouped,
         scene_bytes: scene_bytes(scene),
+        chooses_view: scene.camera.is_none(),
         ..Counts::default()
     };
     let sizing = crate::mesh::Sizing::from_settings(settings, scene);
@@ -612,13 +623,14 @@ pub fn orders_within(
     settings: &SolverSettings,
     material_orders: &[u32],
     textured: &[bool],
-    (recorded_shots, scene_bytes): (u64, u64),
+    (recorded_shots, scene_bytes, chooses_view): (u64, u64, bool),
     target: u64,
 ) -> Vec<u32> {
     let mut orders = material_orders.to_vec();
     loop {
         let counts = Counts {
             scene_bytes,
+            chooses_view,
             ..counts_for_mesh(
                 mesh,
                 settings,
@@ -797,6 +809,7 @@ impl Solver {
             scene_bytes: self.scene_bytes,
             bounded: self.settings.shooting == crate::settings::Shooting::Bounded,
             grouped: self.settings.shooters == crate::settings::Shooters::Grouped,
+            chooses_view: self.scene_camera.is_none(),
             ..Counts::default()
         };
         if let Some(d) = d {

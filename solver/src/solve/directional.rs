@@ -466,7 +466,7 @@ fn cap_orders(
         settings,
         &wanted,
         &textured,
-        (recorded, scene_bytes),
+        (recorded, scene_bytes, scene.camera.is_none()),
         target,
     );
     for (m, (&want, &keep)) in wanted.iter().zip(&kept).enumerate() {

@@ -317,6 +317,7 @@ impl Solver {
         check_coarsest(
             &budget::Counts {
                 scene_bytes,
+                chooses_view: scene.camera.is_none(),
                 ..budget::counts_for_mesh(&mesh, settings, |_| 0, &textured, emitter_patches)
             },
             settings,
