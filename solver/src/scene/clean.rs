@@ -101,6 +101,11 @@ pub(crate) fn build_scene(mut raw: RawScene, options: &BuildOptions) -> Result<S
         )));
     }
     weld(&mut polygons, diagonal);
+    // Welding merges pairs of triangles into quads, so a triangle mesh keeps
+    // about half the polygons it was reserved (and filled) for; the scene
+    // lives for the whole solve and the memory estimate counts it by length
+    // (`solve::budget::scene_bytes`): 122 MiB of the 1M Cornell boxes.
+    polygons.shrink_to_fit();
 
     let materials = finish_materials(&raw.materials, &mut polygons, &mut warnings)?;
     if !polygons.iter().any(|p| materials[p.material].is_emitter()) {
