@@ -104,7 +104,7 @@ pub(crate) fn build_scene(mut raw: RawScene, options: &BuildOptions) -> Result<S
     // Welding merges pairs of triangles into quads, so a triangle mesh keeps
     // about half the polygons it was reserved (and filled) for; the scene
     // lives for the whole solve and the memory estimate counts it by length
-    // (`solve::budget::scene_bytes`): 122 MiB of the 1M Cornell boxes.
+    // (`solve::budget::scene_bytes`): about 100 MiB of the 1M Cornell boxes' peak.
     polygons.shrink_to_fit();
 
     let materials = finish_materials(&raw.materials, &mut polygons, &mut warnings)?;
