@@ -212,7 +212,7 @@ impl DefaultView {
 /// The most memory [`default_camera`] holds beside the solution over
 /// `triangles` triangles: the hierarchy being built
 /// ([`bvh::Bvh::bytes_per_triangle`]) and each triangle's corner luminance;
-/// 80 bytes a triangle. The solver's memory estimate adds it to the output's
+/// 85 bytes a triangle. The solver's memory estimate adds it to the output's
 /// peak when the scene names no camera.
 pub fn transient_bytes(triangles: u64) -> u64 {
     triangles * (bvh::Bvh::bytes_per_triangle() + std::mem::size_of::<[f32; 3]>() as u64)

@@ -90,7 +90,8 @@ pub struct Occluder {
 impl Occluder {
     /// Bytes its node, triangle and polygon tables hold (by length), for the
     /// memory estimate's test (`solve/budget/tests.rs`).
-    pub fn allocated_bytes(&self) -> u64 {
+    #[cfg(test)]
+    pub(crate) fn allocated_bytes(&self) -> u64 {
         (std::mem::size_of_val(self.nodes.as_slice())
             + std::mem::size_of_val(self.triangles.as_slice())
             + std::mem::size_of_val(self.polygon_of.as_slice())) as u64

@@ -56,7 +56,7 @@
 //!   replace, alive while they are built, and the f64 coefficients shown
 //!   (hidden vertices filled, contact cuts averaged), and when the scene names
 //!   no camera the default view's hierarchy over the solution's triangles
-//!   (`solution::view::transient_bytes`, 80 bytes a triangle);
+//!   (`solution::view::transient_bytes`, about 85 bytes a triangle);
 //! * **gather** (diffuse mode): the touched patches' list and its copy, and
 //!   the larger of the per-patch sums and the unshot tree rebuilt beside the
 //!   old one (`UnshotTree::update_many` when a shot changed more than 1/8 of
@@ -112,8 +112,9 @@ pub const FIXED_BYTES: u64 = 7 << 20;
 /// receiver tree's share ([`super::cluster::ReceiverTree::bytes_per_surface`]);
 /// and the solver's per-surface reflectance, albedo, emission, patch range
 /// and texturing slot. (The input polygons are [`scene_bytes`]: a surface may
-/// weld many of them.) It was a rounded guess of 664 bytes until the 1M
-/// Cornell boxes measured 28% over the estimate; it is 944 bytes now.
+/// weld many of them.) It was a rounded guess of 664 bytes, which left out
+/// the receiver tree, until the 1M Cornell boxes measured a peak 28% above
+/// the estimate; it is 944 bytes now.
 pub fn surface_bytes() -> u64 {
     let range = size_of::<std::ops::Range<u32>>();
     let mesh = size_of::<Surface>()

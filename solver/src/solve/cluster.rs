@@ -249,7 +249,8 @@ impl ReceiverTree {
 
     /// Bytes its node, order and surface tables hold (by length), for the
     /// memory estimate's test (`budget/tests.rs`).
-    pub fn allocated_bytes(&self) -> u64 {
+    #[cfg(test)]
+    pub(crate) fn allocated_bytes(&self) -> u64 {
         (std::mem::size_of_val(self.nodes.as_slice())
             + std::mem::size_of_val(self.order.as_slice())
             + std::mem::size_of_val(self.surfaces.as_slice())) as u64
