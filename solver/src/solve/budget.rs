@@ -482,6 +482,13 @@ fn output_bytes(c: &Counts) -> u64 {
     diffuse + directional + view + WRITER_BUFFER
 }
 
+/// Whether a solve with `settings` makes grouped shots: only diffuse solves
+/// do (directional ones shoot patches whatever `shooters` says).
+fn groups_shots(settings: &SolverSettings) -> bool {
+    settings.shooters == crate::settings::Shooters::Grouped
+        && settings.mode != solution::format::SolveMode::Directional
+}
+
 /// The counts of a mesh not yet built: N patches per side (the solve's
 /// [`crate::mesh::Sizing`] rule for each polygon) gives N² elements
 /// per triangle or quad piece and at most (N+1)² vertices (a polygon of k > 4
@@ -493,7 +500,7 @@ pub fn counts_before_meshing(scene: &Scene, settings: &SolverSettings) -> Counts
         samples: settings.samples as u64,
         directional: settings.mode == solution::format::SolveMode::Directional,
         bounded: settings.shooting == crate::settings::Shooting::Bounded,
-        grouped: settings.shooters == crate::settings::Shooters::Grouped,
+        grouped: groups_shots(settings),
         scene_bytes: scene_bytes(scene),
         chooses_view: scene.camera.is_none(),
         ..Counts::default()
@@ -587,7 +594,7 @@ pub fn counts_for_mesh(
         index_slots: per_surface_vertices.iter().map(|&n| list_slots(n)).sum(),
         index_lists: per_surface_vertices.iter().filter(|&&n| n > 0).count() as u64,
         bounded: settings.shooting == crate::settings::Shooting::Bounded,
-        grouped: settings.shooters == crate::settings::Shooters::Grouped,
+        grouped: groups_shots(settings),
         ..Counts::default()
     };
     if directional {
@@ -809,7 +816,7 @@ impl Solver {
             texture_bytes: self.texture_bytes(),
             scene_bytes: self.scene_bytes,
             bounded: self.settings.shooting == crate::settings::Shooting::Bounded,
-            grouped: self.settings.shooters == crate::settings::Shooters::Grouped,
+            grouped: groups_shots(&self.settings),
             chooses_view: self.scene_camera.is_none(),
             ..Counts::default()
         };
