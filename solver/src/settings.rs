@@ -72,6 +72,15 @@ pub enum Shooters {
     Grouped,
 }
 
+/// Default of `group_samples` where no preset sets it (every preset does:
+/// 16, 64, 256): twice the base `samples`, since a group's rays are shared
+/// among its members (docs/accuracy.md, "Grouped shooters against the truth").
+pub const DEFAULT_GROUP_SAMPLES: u32 = 32;
+
+fn default_group_samples() -> u32 {
+    DEFAULT_GROUP_SAMPLES
+}
+
 /// Default of `shooting_tolerance`: the largest that kept the Cornell box's
 /// medium-preset MARE within 0.15 points of flat shooting's (1e-3 cost 2.5
 /// points); `docs/benchmarks.md`, "Bounded shooting".
@@ -190,6 +199,10 @@ pub struct SolverSettings {
     /// One patch per shot, or groups of nearby reflecting patches shot together.
     #[serde(default)]
     pub shooters: Shooters,
+    /// Visibility rays per receiving vertex for a grouped shot, shared among
+    /// its members by importance (`solve/group_shot.rs`).
+    #[serde(default = "default_group_samples")]
+    pub group_samples: u32,
     /// Scene units per metre (scene config or flag).
     pub units_per_metre: f64,
     /// Turn import warnings (Kd + Ks > 1, …) into errors.
@@ -270,6 +283,7 @@ pub struct SettingsPatch {
     pub shooting: Option<Shooting>,
     pub shooting_tolerance: Option<f64>,
     pub shooters: Option<Shooters>,
+    pub group_samples: Option<u32>,
     pub units_per_metre: Option<f64>,
     pub strict: Option<bool>,
     pub crease_angle: Option<f64>,
@@ -324,6 +338,7 @@ impl SolverSettings {
             shooting: Shooting::Flat,
             shooting_tolerance: DEFAULT_SHOOTING_TOLERANCE,
             shooters: Shooters::Patch,
+            group_samples: DEFAULT_GROUP_SAMPLES,
             units_per_metre: 1.0,
             strict: false,
             crease_angle: default_crease_angle(),
@@ -384,6 +399,7 @@ impl SolverSettings {
             shooting,
             shooting_tolerance,
             shooters,
+            group_samples,
             units_per_metre,
             strict,
             crease_angle,
@@ -455,6 +471,12 @@ impl SolverSettings {
             self.samples >= 1 && self.samples <= 4096,
             "samples",
             self.samples,
+            "1 to 4096",
+        )?;
+        check(
+            self.group_samples >= 1 && self.group_samples <= 4096,
+            "group_samples",
+            self.group_samples,
             "1 to 4096",
         )?;
         check(
@@ -613,6 +635,7 @@ mod tests {
             SolverSettings::preset(Preset::Final),
         );
         assert!(d.samples <= m.samples && m.samples <= f.samples);
+        assert!(d.group_samples <= m.group_samples && m.group_samples <= f.group_samples);
         assert!(d.threshold > m.threshold && m.threshold >= f.threshold);
         assert!(d.glossy_edge >= m.glossy_edge && m.glossy_edge >= f.glossy_edge);
     }

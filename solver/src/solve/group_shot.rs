@@ -289,7 +289,7 @@ pub struct GroupShot<'a> {
     /// Shot number: with the seed and the vertex id it names the RNG stream.
     pub index: u64,
     pub seed: u64,
-    /// Rays per receiver, shared among the members.
+    /// Rays per receiver, shared among the members (`group_samples`).
     pub samples: u32,
     pub shadows: bool,
     pub occluder: &'a Occluder,
@@ -316,7 +316,7 @@ impl<'a> GroupShot<'a> {
         GroupShot {
             index,
             seed: settings.seed,
-            samples: settings.samples.max(1),
+            samples: settings.group_samples.max(1),
             shadows: settings.shadows,
             occluder,
             kd,
