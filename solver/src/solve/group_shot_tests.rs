@@ -169,29 +169,34 @@ fn grouped_shooting_loses_no_energy() {
     );
 }
 
-/// The furnace (closed cube, Kd = ρ = 0.5 and Le = 1 on every face, ambient
-/// off) with grouped shots: L = Le/(1 − ρ) at every vertex within 1%, the
-/// patch shooter's tolerance (`furnace_converges_to_le_over_one_minus_rho`:
-/// at threshold 0.002 the light not yet shot leaves ≈ ρ × 0.2% = 0.1%; the
-/// rest of the 1% is the rays' noise, here spread over the members). Four
-/// patches a face so that a face's patches group once each has shot its
-/// emission alone (the first shots are recorded, `group_shot.rs`).
+/// The furnace (closed cube, Kd = ρ and Le = 1 on every face, ambient off)
+/// with grouped shots: L = Le/(1 − ρ) at every vertex within the patch
+/// shooter's tolerances (`furnace_converges_to_le_over_one_minus_rho`: the
+/// light not yet shot leaves ≈ ρ × the threshold, 0.1% at ρ = 0.5 and
+/// threshold 0.002, 0.95% at ρ = 0.95 and 0.01; 1% and 2% asserted, the
+/// rest for the rays' noise, here spread over the members). Two by two
+/// patches a face, which group once each has shot its emission alone (the
+/// first shots are recorded, `group_shot.rs`). Every patch here emits, so
+/// every member shoots uniformly, as the patch shooter's recorded emitter
+/// shots do: with quadrants shaped by vertex radiance the worst vertex was
+/// 0.64% and 2.20% off (measured; `group_pieces`), failing ρ = 0.95.
 #[test]
 fn grouped_furnace_converges_to_le_over_one_minus_rho() {
-    let rho = 0.5;
-    let mut s = furnace_settings(0.002);
-    s.shooters = Shooters::Grouped;
-    let mut solver = Solver::new(&furnace(rho, 4), &s).unwrap();
-    while solver.step().is_some() {}
-    let p = solver.progress();
-    let t = solver.timings();
-    let err = worst_error(&solver, 1.0 / (1.0 - rho));
-    eprintln!(
-        "grouped furnace: {} shots ({} grouped, {} patches), unshot {:.2e}, worst error {err:.2e}",
-        p.shots, t.group_shots, t.grouped_patches, p.unshot_fraction
-    );
-    assert!(t.group_shots > 0 && p.unshot_fraction < 0.002);
-    assert!(err < 0.01, "{err}");
+    for (rho, threshold, tolerance) in [(0.5, 0.002, 0.01), (0.95, 0.01, 0.02)] {
+        let mut s = furnace_settings(threshold);
+        s.shooters = Shooters::Grouped;
+        let mut solver = Solver::new(&furnace(rho, 2), &s).unwrap();
+        while solver.step().is_some() {}
+        let p = solver.progress();
+        let t = solver.timings();
+        let err = worst_error(&solver, 1.0 / (1.0 - rho));
+        eprintln!(
+            "grouped furnace ρ = {rho}: {} shots ({} grouped, {} patches), unshot {:.2e}, worst error {err:.2e}",
+            p.shots, t.group_shots, t.grouped_patches, p.unshot_fraction
+        );
+        assert!(t.group_shots > 0 && p.unshot_fraction < threshold);
+        assert!(err < tolerance, "ρ = {rho}: {err}");
+    }
 }
 
 /// Grouped shots give bit-identical radiance on one and three threads
