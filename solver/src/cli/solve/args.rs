@@ -241,8 +241,8 @@ pub struct SolveArgs {
             replay). On the Cornell box against the path-traced truth it is more accurate \
             than the patch shooter at every preset and 2-3x faster at draft and medium \
             (final: 1.27% against 1.44% MARE, 21 s against 24 s), but noisier between \
-            seeds, and not yet the default: furnaces at high albedo and a scene moved \
-            by 1e6 do not yet hold to the patch shooter's bounds (docs/accuracy.md, \
+            seeds, and not yet the default: a scene moved by 1e6 and emission scaled by \
+            1e6 do not yet give the patch shooter's bits (docs/accuracy.md, \
             \"Grouped shooters against the truth\"). Diffuse mode only (directional \
             solves shoot patches)."
     )]
