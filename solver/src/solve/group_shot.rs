@@ -69,7 +69,17 @@
 //! lit quad member shoots as its four quadrants, each its own piece with its
 //! own unshot radiance (`regions.rs`, Σ_q U_q A_q = U_p A_p), as it would
 //! alone: shooting members uniformly cost 1.3 MARE points on the Cornell box
-//! at draft (docs/benchmarks.md, "Grouped shooters").
+//! at draft (docs/benchmarks.md, "Grouped shooters"). An emitter's patch
+//! shoots uniformly, as alone its shots are recorded and so uniform: shaped
+//! by its vertices it took a furnace of emitting faces 2.2% off at ρ = 0.95.
+//!
+//! ## Rays
+//!
+//! A receiver's `group_samples` rays are shared among the members, so a
+//! member gets fewer than a patch shot's `samples`; on the Cornell box
+//! against the truth a group needs about twice to eight times as many for
+//! the same accuracy (docs/accuracy.md, "Grouped shooters against the
+//! truth").
 
 use super::group_tree::{Item, MemberTree, Receiver};
 use super::shoot::{receiving_point, Received, SamplePool, Scratch, Shot};
@@ -560,7 +570,8 @@ impl Solver {
     /// The pieces `members` (patch, unshot) shoot as: each unevenly lit quad
     /// patch as its four quadrants with their own unshot radiance, as the
     /// patch shooter shoots it alone (`regions.rs`; Σ_q U_q A_q = U_p A_p, so
-    /// the power is the same), the others whole; all whole with
+    /// the power is the same), the others whole; an emitter's patch whole,
+    /// as the patch shooter's recorded shots are; all whole with
     /// `uniform_shooters`.
     pub(super) fn group_pieces(&self, members: &[(u32, DVec3)]) -> Vec<Piece> {
         let mut pieces = Vec::with_capacity(members.len());
@@ -570,8 +581,9 @@ impl Solver {
             // recorded emitter shots do: its vertices' radiance (less the
             // emission) is no measure of how its unshot light lies. In a
             // furnace where every face emits, quadrants shaped by it put the
-            // vertices 1.987-2.005 against the exact 2 at ρ = 0.5, and 2.2%
-            // off at ρ = 0.95 (test `grouped_furnace_converges_to_le_over_one_minus_rho`).
+            // vertices at 1.987-2.005 against the exact 2 at ρ = 0.5, and
+            // 2.2% off at ρ = 0.95 (test
+            // `grouped_furnace_converges_to_le_over_one_minus_rho`).
             let emits = self.emission[whole.surface as usize] != DVec3::ZERO;
             let regions = if self.settings.uniform_shooters || emits {
                 None

@@ -259,7 +259,7 @@ pub struct SolveArgs {
             Cornell box at final, 32 measured 1.54% MARE against the path-traced truth, 64 \
             1.37% (12 s) and 256 1.27% (20 s); at medium 64 rays leave 0.91% image noise \
             between seeds and 512 0.44% (4.7 s). Time grows with N where shots are \
-            bright: 100k boxes at medium took 167 s at 32 and 402 s at 256 \
+            bright: 100k boxes at medium took 167 s at 32 and 196 s at 64 \
             (docs/accuracy.md, \"Grouped shooters against the truth\"). Ignored by patch \
             shots, which use --samples."
     )]
