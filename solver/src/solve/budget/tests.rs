@@ -430,3 +430,31 @@ fn surface_term_matches_the_allocated_per_surface_structures() {
         m.surfaces.len()
     );
 }
+
+/// A grouped shot's bytes are counted where shots are grouped: in a diffuse
+/// solve with `--shooters grouped`, not in a directional one (which shoots
+/// patches whatever `shooters` says) and not with the patch shooter.
+#[test]
+fn the_group_term_follows_what_the_solve_shoots() {
+    for (mode, shooters, grouped) in [
+        (SolveMode::Diffuse, crate::settings::Shooters::Grouped, true),
+        (SolveMode::Diffuse, crate::settings::Shooters::Patch, false),
+        (
+            SolveMode::Directional,
+            crate::settings::Shooters::Grouped,
+            false,
+        ),
+    ] {
+        let (scene, mut settings) = bundled("cornell_box.obj", Preset::Draft, mode, 2);
+        settings.shooters = shooters;
+        assert_eq!(
+            counts_before_meshing(&scene, &settings).grouped,
+            grouped,
+            "{mode:?}, {shooters:?}"
+        );
+        let with = estimate(&counts_before_meshing(&scene, &settings)).shot;
+        settings.shooters = crate::settings::Shooters::Patch;
+        let without = estimate(&counts_before_meshing(&scene, &settings)).shot;
+        assert_eq!(with > without, grouped, "{mode:?}, {shooters:?}");
+    }
+}
