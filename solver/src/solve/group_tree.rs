@@ -234,23 +234,20 @@ impl MemberTree {
         let (low, span) = (lo[axis], hi[axis] - lo[axis]);
         let quantize = |x: f64| {
             if span > 0.0 {
-                ((x - low) / span * 1e6).round()
+                ((x - low) / span * 1e6).round() as i64
             } else {
-                0.0
+                0
             }
         };
-        let order = |a: &Member, b: &Member| {
-            let (ca, cb) = (a.centre(), b.centre());
-            let (ka, kb) = (quantize(key(a, axis)), quantize(key(b, axis)));
-            ka.total_cmp(&kb)
-                .then(a.surface().cmp(&b.surface()))
-                .then_with(|| {
-                    (0..3).fold(std::cmp::Ordering::Equal, |o, i| {
-                        o.then_with(|| quantize(ca[i]).total_cmp(&quantize(cb[i])))
-                    })
-                })
+        let rank = |m: &Member| {
+            let c = m.centre();
+            (
+                quantize(key(m, axis)),
+                m.surface(),
+                [quantize(c.x), quantize(c.y), quantize(c.z)],
+            )
         };
-        part.select_nth_unstable_by(middle, order);
+        part.select_nth_unstable_by_key(middle, rank);
         let left = self.nodes.len();
         self.nodes[k].left = left as u32;
         self.nodes.push(Node::over(members, start, start + middle));
