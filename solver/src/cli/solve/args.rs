@@ -236,7 +236,7 @@ pub struct SolveArgs {
             sum of their shots. Far fewer shots, and passes over the receivers, where \
             many small patches are lit (thousands of boxes on a floor), at the price of \
             fewer visibility rays per patch (--group-samples): 100k boxes at medium \
-            converge in under 3 minutes on 2 cores, which the patch shooter does not in 5. \
+            converge in 196 s on 2 cores, which the patch shooter does not in 5 minutes. \
             An emitter's patch shoots its emission alone first (recorded for refinement's \
             replay). On the Cornell box against the path-traced truth it is more accurate \
             than the patch shooter at every preset and 2-3x faster at draft and medium \
