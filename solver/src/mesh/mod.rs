@@ -720,13 +720,21 @@ impl Mesh {
             self.leaf_boundary(leaf, &mut boundary);
             if boundary.len() == self.elements[leaf as usize].corner_count as usize {
                 // No T-vertices: the element itself (a quad as two triangles on
-                // its shorter diagonal, which follows the surface best).
+                // its shorter diagonal, which follows the surface best). A
+                // square's diagonals tie; within a billionth they count as
+                // tied and take 0–2, so rounding (a translated scene) cannot
+                // choose the other: the choice sets the patches' gather
+                // weights (test `translating_the_scene_by_1e6_gives_the_same_answer`).
                 let c = &boundary;
                 if c.len() == 3 {
                     out.push([c[0].0, c[1].0, c[2].0]);
                 } else {
                     let p = |i: usize| self.vertices[c[i].0 as usize].position;
-                    if (p(2) - p(0)).length_squared() <= (p(3) - p(1)).length_squared() {
+                    let (first, second) = (
+                        (p(2) - p(0)).length_squared(),
+                        (p(3) - p(1)).length_squared(),
+                    );
+                    if first <= second * (1.0 + 1e-9) {
                         out.push([c[0].0, c[1].0, c[2].0]);
                         out.push([c[0].0, c[2].0, c[3].0]);
                     } else {
