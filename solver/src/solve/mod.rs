@@ -614,6 +614,13 @@ impl Solver {
                 &refine::Criteria {
                     dark_floor: refine::DARK_FLOOR * self.radiance_level,
                     ambient,
+                    // The visible counts are out of this shot's rays: a
+                    // group's `group_samples`, not a patch's `samples`.
+                    samples: if self.settings.shadows {
+                        shooter.samples()
+                    } else {
+                        0
+                    },
                     ..refine::Criteria::from_settings(&self.settings)
                 },
                 &mut split_budget,
