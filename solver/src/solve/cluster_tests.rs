@@ -21,6 +21,9 @@ fn settings(shooting: Shooting, tolerance: f64, adaptive: bool) -> SolverSetting
     s.adaptive = adaptive;
     s.shooting = shooting;
     s.shooting_tolerance = tolerance;
+    // Bounded shooting plans a patch shot's receivers; a grouped shot visits
+    // every receiver (`group_shot.rs`), so these tests shoot patches.
+    s.shooters = crate::settings::Shooters::Patch;
     s
 }
 
@@ -195,6 +198,7 @@ fn bounded_furnace_converges_to_le_over_one_minus_rho() {
         s.ambient = false;
         s.shooting = Shooting::Bounded;
         s.shooting_tolerance = tolerance;
+        s.shooters = crate::settings::Shooters::Patch;
         let solver = run(&scene, &s);
         let p = solver.progress();
         assert!(p.unshot_fraction < 0.002, "did not converge: {p:?}");

@@ -137,6 +137,9 @@ fn with_ks_zero_directional_mode_equals_the_diffuse_solver() {
         // And every ray: directional mode has no ray share
         // (`solve/ray_share.rs`), so the two sample the same points.
         diffuse.full_rays_above = 0.0;
+        // And one patch a shot: directional solves shoot patches whatever
+        // `shooters` says.
+        diffuse.shooters = crate::settings::Shooters::Patch;
         // The diffuse output weights the ambient term by each vertex's
         // enclosure (`solve/enclosure.rs`) and the directional output
         // carries Cohen's term unweighted, so the files are compared

@@ -415,8 +415,8 @@ fn directional_with_ks_zero_a_checkerboard_solves_as_in_diffuse_mode() {
     // per wall, codes 255 and 30, Kd 0.9) must shoot the same sources,
     // split the same elements (refinement on E/π in both) and give every
     // vertex the same E/π. Directional mode shoots each patch's mean
-    // uniformly and visits every receiver, so the diffuse solve is set to do
-    // the same. They differ in rounding only (c₀₀ = L √(4π) and back), so
+    // uniformly, one patch a shot, and visits every receiver, so the diffuse
+    // solve is set to do the same. They differ in rounding only (c₀₀ = L √(4π) and back), so
     // 1e-9 of the peak E/π is asserted, with adaptive meshing off and on.
     let squares = texture(64, |x, y| if (x / 8 + y / 8) % 2 == 0 { 255 } else { 30 });
     let mut wall = material("wall", 0.9, 0.0);
@@ -428,6 +428,7 @@ fn directional_with_ks_zero_a_checkerboard_solves_as_in_diffuse_mode() {
         diffuse.uniform_shooters = true;
         diffuse.full_rays_above = 0.0;
         diffuse.shooting = crate::settings::Shooting::Flat;
+        diffuse.shooters = crate::settings::Shooters::Patch;
         let mut directional = diffuse.clone();
         directional.mode = SolveMode::Directional;
         let mut a = Solver::new(&scene, &diffuse).unwrap();

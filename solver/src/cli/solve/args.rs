@@ -731,12 +731,15 @@ mod tests {
 
     #[test]
     fn shooters_flag_and_toml_key_reach_the_settings() {
-        // One patch per shot unless asked for; a grouped shot's rays from the
-        // preset, at least the patch shot's.
+        // Grouped shots in every preset unless asked for one patch a shot; a
+        // grouped shot's rays from the preset, at least the patch shot's.
         for preset in [Preset::Draft, Preset::Medium, Preset::Final] {
             let default = SolverSettings::resolve(preset, &[&parse(&[]).patch()]).unwrap();
-            assert_eq!(default.shooters, Shooters::Patch);
+            assert_eq!(default.shooters, Shooters::Grouped);
             assert!(default.group_samples >= default.samples);
+            let patch = parse(&["--shooters", "patch"]).patch();
+            let resolved = SolverSettings::resolve(preset, &[&patch]).unwrap();
+            assert_eq!(resolved.shooters, Shooters::Patch);
         }
         let flag = parse(&["--shooters", "grouped", "--group-samples", "48"]).patch();
         assert_eq!(flag.shooters, Some(Shooters::Grouped));
