@@ -507,15 +507,6 @@ impl Shooter<'_, '_> {
         }
     }
 
-    /// Rays per receiver at full share: the `n` of the visible counts k/n
-    /// that `receive` reports (a group's are in `group_samples`).
-    pub fn samples(&self) -> u32 {
-        match self {
-            Shooter::Patch { shot, .. } => shot.samples,
-            Shooter::Group(group) => group.samples,
-        }
-    }
-
     /// Diffuse reflectance per surface.
     pub fn kd(&self) -> &[DVec3] {
         match self {

@@ -611,16 +611,17 @@ impl Solver {
                     shooter: &shooter,
                     scan: scan.as_deref(),
                 },
+                // A grouped shot's visible counts are out of `group_samples`
+                // rays but are judged against `samples`: a group's count also
+                // drops for rays that carry nothing (a sampled member's point
+                // behind the receiver's horizon), so it is not binomial, and
+                // judging it out of `group_samples` gave partly seen
+                // receivers a noise allowance that stopped their refinement
+                // (Cornell box, medium: 1.78% / 1.70% MARE → 2.21% / 1.81%;
+                // docs/accuracy.md, "Grouped shooters by default").
                 &refine::Criteria {
                     dark_floor: refine::DARK_FLOOR * self.radiance_level,
                     ambient,
-                    // The visible counts are out of this shot's rays: a
-                    // group's `group_samples`, not a patch's `samples`.
-                    samples: if self.settings.shadows {
-                        shooter.samples()
-                    } else {
-                        0
-                    },
                     ..refine::Criteria::from_settings(&self.settings)
                 },
                 &mut split_budget,
