@@ -226,25 +226,23 @@ pub struct SolveArgs {
         long,
         value_enum,
         value_name = "WHO",
-        long_help = "What shoots in one pass. patch (default): the patch with the most \
-            unshot power, one per shot (Remington 1992). grouped: that patch and up to 16,383 \
-            patches within a fifth of the scene diagonal with at least a tenth of its \
-            unshot power shoot together (the shooter side of Smits, Arvo and \
-            Greenberg's 1994 clustering): each receiver sees the group through a \
-            cluster tree (near patches by their exact form factor, far clusters as one \
-            item each) and shares its rays among them by importance, an estimate of the \
-            sum of their shots. Far fewer shots, and passes over the receivers, where \
-            many small patches are lit (thousands of boxes on a floor), at the price of \
-            fewer visibility rays per patch (--group-samples): 100k boxes at medium \
-            converge in 196 s on 2 cores, which the patch shooter does not in 5 minutes. \
-            An emitter's patch shoots its emission alone first (recorded for refinement's \
-            replay). On the Cornell box against the path-traced truth it is more accurate \
-            than the patch shooter at every preset and 2-3x faster at draft and medium \
-            (final: 1.27% against 1.44% MARE, 21 s against 24 s), but noisier between \
-            seeds, and not yet the default: a scene moved by 1e6 and emission scaled by \
-            1e6 do not yet give the patch shooter's bits (docs/accuracy.md, \
-            \"Grouped shooters against the truth\"). Diffuse mode only (directional \
-            solves shoot patches)."
+        long_help = "What shoots in one pass. grouped (every preset): the patch with the \
+            most unshot power and up to 16,383 patches within a fifth of the scene \
+            diagonal with at least a tenth of its unshot power shoot together (the \
+            shooter side of Smits, Arvo and Greenberg's 1994 clustering): each receiver \
+            sees the group through a cluster tree (near patches by their exact form \
+            factor, far clusters as one item each) and shares its rays among them by \
+            importance, an estimate of the sum of their shots. Far fewer shots, and \
+            passes over the receivers, where many small patches are lit (thousands of \
+            boxes on a floor): 100k boxes at medium converge in 196 s on 2 cores, which \
+            the patch shooter does not in 5 minutes. An emitter's patch shoots its \
+            emission alone first (recorded for refinement's replay). patch: the patch \
+            with the most unshot power, one per shot (Remington 1992). On the Cornell \
+            box against the path-traced truth grouped is the more accurate at every \
+            preset (final: 1.27% against 1.44% MARE, 19 s against 24 s; medium: 1.74% \
+            against 2.3%, 1.2 s against 4.8 s) but noisier between seeds at equal rays \
+            (--group-samples; docs/accuracy.md, \"Grouped shooters by default\"). \
+            Diffuse mode only (directional solves shoot patches)."
     )]
     pub shooters: Option<Shooters>,
 
@@ -257,8 +255,8 @@ pub struct SolveArgs {
             grouped; the presets: draft 16, medium 64, final 256). A group carries many \
             patches' light in one pass, so it needs more rays than one patch shot: on the \
             Cornell box at final, 32 measured 1.54% MARE against the path-traced truth, 64 \
-            1.37% (12 s) and 256 1.27% (20 s); at medium 64 rays leave 0.91% image noise \
-            between seeds and 512 0.44% (4.7 s). Time grows with N where shots are \
+            1.37% (12 s) and 256 1.27% (20 s); at medium 64 rays leave 0.89% image noise \
+            between seeds and 512 0.47% (4.4 s, the main job). Time grows with N where shots are \
             bright: 100k boxes at medium took 167 s at 32 and 196 s at 64 \
             (docs/accuracy.md, \"Grouped shooters against the truth\"). Ignored by patch \
             shots, which use --samples."
