@@ -24,7 +24,9 @@ use common::cornell_against_truth;
 /// points worse, and fails it. Since the cluster tree (`group_tree.rs`,
 /// 4 December 2026) grouped measures 3.69% against the patch shooter's
 /// 3.69%; the allowance is kept, not tightened, because one seed per side
-/// cannot resolve less than the draft's seed spread.
+/// cannot resolve less than the draft's seed spread. Grouped is now every
+/// preset's shooter (draft 3.19% / 3.25% against the patch shooter's 3.69%
+/// / 3.73%), so this test holds the default to the patch shooter it replaced.
 const MARE_ALLOWANCE: f64 = 0.009;
 
 fn mare(dir: &Path, shooters: &str) -> f64 {
