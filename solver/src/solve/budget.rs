@@ -43,7 +43,9 @@
 //!
 //! * **shot**: one shot's per-vertex results (directional: a heap vector of
 //!   coefficients per vertex) and its sample pool, and a grouped shot's
-//!   members and their tree ([`group_shot_bytes`]);
+//!   members and their tree ([`group_shot_bytes`]), for as many patches as
+//!   lie within the group radius of one point (`Counts::group_candidates`;
+//!   every patch before the solver is built);
 //! * **checkpoint**: the writer's buffers. Checkpoints stream section by
 //!   section from the solver's own arrays through a 1 MiB buffer
 //!   ([`Solver::write_checkpoint`]), their f64 arrays packed a 256 KiB chunk
@@ -214,6 +216,10 @@ pub struct Counts {
     /// Grouped shooters (`--shooters grouped`), whose shot holds its members
     /// and their tree ([`group_shot_bytes`]).
     pub grouped: bool,
+    /// The most patches one grouped shot can rank as candidates (its
+    /// members among them): `cluster::ReceiverTree::most_patches_near` once
+    /// the solver has its receivers, else 0, read as every patch.
+    pub group_candidates: u64,
     /// The scene names no camera, so the output chooses a view over the
     /// solution's triangles ([`solution::view::transient_bytes`]).
     pub chooses_view: bool,
@@ -417,7 +423,11 @@ pub fn estimate(c: &Counts) -> MemoryEstimate {
             c.vertices * size_of::<Received>() as u64
         }
         + if c.grouped {
-            group_shot_bytes(c.patches)
+            let candidates = match c.group_candidates {
+                0 => c.patches,
+                n => n.min(c.patches),
+            };
+            group_shot_bytes(candidates)
         } else {
             0
         };
@@ -703,14 +713,15 @@ pub fn coefficients(order: u32) -> u64 {
     3 * solution::sh::coefficient_count(order) as u64
 }
 
-/// A grouped shot's own bytes (`group_shot.rs`, `group_tree.rs`): the
-/// candidates it ranks (at most every patch, an `(f64, u32)` each) and up to
-/// [`MAX_MEMBERS`](super::group_shot::MAX_MEMBERS) members of four quadrant
-/// pieces each, every piece with its [`Piece`](super::group_shot::Piece),
-/// its member, two tree nodes and a cumulative weight.
-pub fn group_shot_bytes(patches: u64) -> u64 {
-    let members = patches.min(super::group_shot::MAX_MEMBERS as u64);
-    patches * size_of::<(f64, u32)>() as u64 + members * 4 * super::group_tree::bytes_per_piece()
+/// A grouped shot's own bytes (`group_shot.rs`, `group_tree.rs`) when it
+/// may rank up to `candidates` patches: an `(f64, u32)` each, and up to
+/// [`MAX_MEMBERS`](super::group_shot::MAX_MEMBERS) of them as members of
+/// four quadrant pieces each, every piece with its
+/// [`Piece`](super::group_shot::Piece), its member, two tree nodes and a
+/// cumulative weight.
+pub fn group_shot_bytes(candidates: u64) -> u64 {
+    let members = candidates.min(super::group_shot::MAX_MEMBERS as u64);
+    candidates * size_of::<(f64, u32)>() as u64 + members * 4 * super::group_tree::bytes_per_piece()
 }
 
 /// The bytes one split may add on a surface of `coefficients` values per
@@ -817,6 +828,7 @@ impl Solver {
             scene_bytes: self.scene_bytes,
             bounded: self.settings.shooting == crate::settings::Shooting::Bounded,
             grouped: groups_shots(&self.settings),
+            group_candidates: self.group_candidates,
             chooses_view: self.scene_camera.is_none(),
             ..Counts::default()
         };

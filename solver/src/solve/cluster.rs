@@ -164,6 +164,10 @@ fn max_over_box(n: DVec3, lo: DVec3, hi: DVec3) -> f64 {
     (n * lo).max(n * hi).element_sum()
 }
 
+/// The most cells a side of [`ReceiverTree::most_patches_near`]'s grid: a
+/// cubic room at a quarter of the group radius (0.2 of the diagonal) needs 12.
+const CANDIDATE_GRID: usize = 16;
+
 /// The distance from the box [lo, hi] to the point p (0 inside).
 fn box_point_distance(lo: DVec3, hi: DVec3, p: DVec3) -> f64 {
     (lo - p).max(p - hi).max(DVec3::ZERO).length()
@@ -371,6 +375,57 @@ impl ReceiverTree {
                 }
             }
         }
+    }
+
+    /// An upper bound on the patches one grouped shot can rank: the most
+    /// patches (`patches`, per surface) on surfaces whose box comes within
+    /// `radius` of any one point, as [`ReceiverTree::surfaces_near`] tests.
+    /// Counted on a grid of cells a quarter of `radius` wide (at most
+    /// [`CANDIDATE_GRID`] a side): each surface is charged to every cell whose
+    /// box comes within `radius` of its box, so every candidate of a seed is
+    /// charged to the cell holding the seed's centre, and the fullest cell
+    /// bounds them all. The grid's cells make it loose by about a cell's width
+    /// on the radius. Every patch when `radius` is not positive.
+    pub(super) fn most_patches_near(&self, radius: f64, patches: &[u64]) -> u64 {
+        let total: u64 = patches.iter().sum();
+        let Some(root) = self.nodes.first() else {
+            return total;
+        };
+        if !(radius > 0.0 && radius.is_finite()) {
+            return total;
+        }
+        let extent = root.hi - root.lo;
+        let dims = extent
+            .to_array()
+            .map(|e| ((4.0 * e / radius).ceil() as usize).clamp(1, CANDIDATE_GRID));
+        let size = DVec3::from_array(std::array::from_fn(|a| extent[a] / dims[a] as f64));
+        let cell = |axis: usize, x: f64| {
+            let k = if size[axis] > 0.0 {
+                ((x - root.lo[axis]) / size[axis]).floor()
+            } else {
+                0.0
+            };
+            (k.max(0.0) as usize).min(dims[axis] - 1)
+        };
+        let mut counts = vec![0u64; dims[0] * dims[1] * dims[2]];
+        for (s, b) in self.surfaces.iter().enumerate() {
+            let n = patches.get(s).copied().unwrap_or(0);
+            if n == 0 {
+                continue;
+            }
+            let (lo, hi) = (b.lo - DVec3::splat(radius), b.hi + DVec3::splat(radius));
+            for i in cell(0, lo.x)..=cell(0, hi.x) {
+                for j in cell(1, lo.y)..=cell(1, hi.y) {
+                    for k in cell(2, lo.z)..=cell(2, hi.z) {
+                        let low = root.lo + size * DVec3::new(i as f64, j as f64, k as f64);
+                        if box_box_distance(low, low + size, b.lo, b.hi) <= radius {
+                            counts[(i * dims[1] + j) * dims[2] + k] += n;
+                        }
+                    }
+                }
+            }
+        }
+        counts.into_iter().max().unwrap_or(0).min(total)
     }
 
     /// The scene's diagonal: the length of the root's box (0 when empty).

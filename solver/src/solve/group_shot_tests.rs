@@ -293,3 +293,68 @@ fn the_far_field_cut_keeps_the_members_shots() {
     );
     assert!((g / s - 1.0).abs() < 1e-2, "{g} {s}");
 }
+
+#[test]
+fn the_candidate_bound_holds_for_every_seed_and_is_tighter_than_every_patch() {
+    // A 12 × 12 grid of unit squares (facing up, 2 × 2 patches each) spread
+    // over a 56 × 56 floor, lit from above: the group radius (0.2 of the
+    // 80-unit diagonal, 16 units) reaches a fraction of them from any seed
+    // (152 of 580 patches at most, bounded by 188 when this was written).
+    // The memory estimate's bound (`ReceiverTree::most_patches_near`) must be
+    // at least what any seed's `surfaces_near` query can return, and below
+    // every patch, else it bounds nothing the patch count did not.
+    let mut polygons = Vec::new();
+    for i in 0..12 {
+        for j in 0..12 {
+            let (x, z) = (5.0 * i as f64, 5.0 * j as f64);
+            let c = |dx: f64, dz: f64| DVec3::new(x + dx, 0.0, z + dz);
+            polygons.push((vec![c(0., 0.), c(0., 1.), c(1., 1.), c(1., 0.)], 0));
+        }
+    }
+    let light = |dx: f64, dz: f64| DVec3::new(25.0 + dx, 10.0, 25.0 + dz);
+    polygons.push((
+        vec![light(0., 0.), light(5., 0.), light(5., 5.), light(0., 5.)],
+        1,
+    ));
+    let scene = tests::scene_of(
+        polygons,
+        vec![
+            tests::material("grey", 0.5, 0.0),
+            tests::material("light", 0.0, 1.0),
+        ],
+        2,
+    );
+    let solver = Solver::new(&scene, &settings(Shooters::Grouped, false)).unwrap();
+    let mut per_surface = vec![0u64; solver.mesh.surfaces.len()];
+    for p in &solver.mesh.patches {
+        per_surface[p.surface as usize] += 1;
+    }
+    let radius = group_shot::RADIUS * solver.receivers.diagonal();
+    let mut surfaces = Vec::new();
+    let most = (0..solver.mesh.patches.len())
+        .map(|p| {
+            let patch = &solver.mesh.patches[p];
+            let corners = &patch.corners[..patch.corner_count as usize];
+            let centre = corners.iter().copied().sum::<DVec3>() / corners.len() as f64;
+            surfaces.clear();
+            solver
+                .receivers
+                .surfaces_near(centre, radius, &mut surfaces);
+            surfaces
+                .iter()
+                .map(|&s| per_surface[s as usize])
+                .sum::<u64>()
+        })
+        .max()
+        .unwrap();
+    let bound = solver.group_candidates;
+    let total = solver.mesh.patches.len() as u64;
+    assert!(
+        most <= bound,
+        "a seed ranks {most} patches, over the bound {bound}"
+    );
+    assert!(
+        bound < total / 2,
+        "the bound {bound} of {total} patches bounds little"
+    );
+}

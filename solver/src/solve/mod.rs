@@ -253,6 +253,8 @@ pub struct Solver {
     refinement_capped: bool,
     /// The surfaces under a bounding-volume hierarchy, for bounded shooting.
     receivers: cluster::ReceiverTree,
+    /// The most patches a grouped shot can rank ([`budget::Counts`]).
+    group_candidates: u64,
     /// What each shot touched, for the sparse passes ([`footprint`]).
     footprint: footprint::Footprint,
     /// The patches' unshot power under a tree of sums and maxima, built on the
@@ -388,6 +390,13 @@ impl Solver {
         let vertex_count = mesh.vertices.len();
         let patch_count = mesh.patches.len();
         let receivers = cluster::ReceiverTree::new(&mesh, &kd);
+        let group_candidates = {
+            let mut per_surface = vec![0u64; mesh.surfaces.len()];
+            for p in &mesh.patches {
+                per_surface[p.surface as usize] += 1;
+            }
+            receivers.most_patches_near(group_shot::RADIUS * receivers.diagonal(), &per_surface)
+        };
         let texturing_any = texturing.any();
         let mut solver = Solver {
             settings: settings.clone(),
@@ -433,6 +442,7 @@ impl Solver {
             scene_bytes,
             refinement_capped: false,
             receivers,
+            group_candidates,
             footprint: footprint::Footprint::default(),
             unshot_index: None,
             emitters_shot: group_shot::EmittersShot::default(),
