@@ -68,6 +68,17 @@ pub const REPLAY_POOL_SETS: u32 = 32;
 /// the receivers' streams.
 const POOL_STREAM: u64 = 1 << 62;
 
+/// A patch shot's unoccluded factor at or below this counts as none: the
+/// receiver gets nothing and traces no ray. A receiver in the source's plane
+/// (a floor vertex on a block's contact line, with the block's face
+/// shooting) has a factor of 0 that rounding makes ±1e-17 or so; without
+/// the floor its visible count went 0 or all rays with that rounding, and
+/// the split test, which tightens its threshold where neighbours' counts
+/// differ, split by it: the Cornell box moved by 1e6 refined one element
+/// more (test `translating_the_scene_by_1e6_gives_the_same_answer`). 1e-12
+/// of a unit factor delivers nothing visible.
+pub const NEGLIGIBLE_FACTOR: f64 = 1e-12;
+
 /// Stratified, jittered sample sets over one shot's source, drawn once per
 /// shot: [`POOL_SETS`] sets of `samples` points, set k from the RNG stream
 /// (seed, shot, 2^62 + k). A receiver whose view of the source is not clipped
@@ -353,7 +364,7 @@ impl Shot<'_> {
         match self.method {
             FormFactorMethod::Analytic => {
                 let unoccluded = self.source.form_factor(q, n);
-                if unoccluded.is_nan() || unoccluded <= 0.0 {
+                if unoccluded.is_nan() || unoccluded <= NEGLIGIBLE_FACTOR {
                     return (0.0, 0, 0);
                 }
                 if !self.shadows {
@@ -410,7 +421,7 @@ impl Shot<'_> {
             }
             FormFactorMethod::Hemicube => {
                 let unoccluded = self.source.form_factor(q, n);
-                if unoccluded.is_nan() || unoccluded <= 0.0 {
+                if unoccluded.is_nan() || unoccluded <= NEGLIGIBLE_FACTOR {
                     return (0.0, 0, 0);
                 }
                 if !self.shadows {
