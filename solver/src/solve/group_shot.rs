@@ -246,7 +246,9 @@ impl Member {
         } else {
             self.source.form_factor(q, n)
         };
-        if f.is_finite() && f > 0.0 {
+        // The patch shooter's floor: a member in the receiver's plane has a
+        // factor of 0 up to rounding.
+        if f.is_finite() && f > super::shoot::NEGLIGIBLE_FACTOR {
             f
         } else {
             0.0
