@@ -218,8 +218,8 @@ pub struct Counts {
     pub grouped: bool,
     /// The most patches one grouped shot can rank as candidates (its
     /// members among them): `cluster::ReceiverTree::most_patches_near` once
-    /// the solver has its receivers, else 0, read as every patch.
-    pub group_candidates: u64,
+    /// the solver has its receivers; `None`, every patch, before.
+    pub group_candidates: Option<u64>,
     /// The scene names no camera, so the output chooses a view over the
     /// solution's triangles ([`solution::view::transient_bytes`]).
     pub chooses_view: bool,
@@ -423,11 +423,7 @@ pub fn estimate(c: &Counts) -> MemoryEstimate {
             c.vertices * size_of::<Received>() as u64
         }
         + if c.grouped {
-            let candidates = match c.group_candidates {
-                0 => c.patches,
-                n => n.min(c.patches),
-            };
-            group_shot_bytes(candidates)
+            group_shot_bytes(c.group_candidates.unwrap_or(c.patches).min(c.patches))
         } else {
             0
         };

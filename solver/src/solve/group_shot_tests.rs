@@ -347,7 +347,7 @@ fn the_candidate_bound_holds_for_every_seed_and_is_tighter_than_every_patch() {
         })
         .max()
         .unwrap();
-    let bound = solver.group_candidates;
+    let bound = solver.group_candidates.unwrap_or(u64::MAX);
     let total = solver.mesh.patches.len() as u64;
     assert!(
         most <= bound,

@@ -254,7 +254,7 @@ pub struct Solver {
     /// The surfaces under a bounding-volume hierarchy, for bounded shooting.
     receivers: cluster::ReceiverTree,
     /// The most patches a grouped shot can rank ([`budget::Counts`]).
-    group_candidates: u64,
+    group_candidates: Option<u64>,
     /// What each shot touched, for the sparse passes ([`footprint`]).
     footprint: footprint::Footprint,
     /// The patches' unshot power under a tree of sums and maxima, built on the
@@ -390,13 +390,10 @@ impl Solver {
         let vertex_count = mesh.vertices.len();
         let patch_count = mesh.patches.len();
         let receivers = cluster::ReceiverTree::new(&mesh, &kd);
-        let group_candidates = {
-            let mut per_surface = vec![0u64; mesh.surfaces.len()];
-            for p in &mesh.patches {
-                per_surface[p.surface as usize] += 1;
-            }
-            receivers.most_patches_near(group_shot::RADIUS * receivers.diagonal(), &per_surface)
-        };
+        let per_surface: Vec<u64> = surface_patches.iter().map(|r| r.len() as u64).collect();
+        let group_candidates = Some(
+            receivers.most_patches_near(group_shot::RADIUS * receivers.diagonal(), &per_surface),
+        );
         let texturing_any = texturing.any();
         let mut solver = Solver {
             settings: settings.clone(),
