@@ -234,7 +234,7 @@ pub struct SolveArgs {
             factor, far clusters as one item each) and shares its rays among them by \
             importance, an estimate of the sum of their shots. Far fewer shots, and \
             passes over the receivers, where many small patches are lit (thousands of \
-            boxes on a floor): 100k boxes at medium converge in 196 s on 2 cores, which \
+            boxes on a floor): 100k boxes at medium converge in 196-212 s on 2 cores, which \
             the patch shooter does not in 5 minutes. An emitter's patch shoots its \
             emission alone first (recorded for refinement's replay). patch: the patch \
             with the most unshot power, one per shot (Remington 1992). On the Cornell \
