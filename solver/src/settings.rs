@@ -225,6 +225,12 @@ pub struct SolverSettings {
     /// uniformly.
     #[serde(default)]
     pub uniform_shooters: bool,
+    /// Receive a shot at every vertex of a small flat surface (one patch
+    /// already at its smallest element size) instead of once at its centroid
+    /// for all its vertices (`solve::small`). Off by default; for measuring
+    /// what the single sample changes.
+    #[serde(default)]
+    pub per_vertex_small: bool,
     /// Mesh every receiver whole instead of cutting it along the lines where
     /// other objects touch or cover it (`mesh::contact`). Off by default; for
     /// measuring what the cut changes.
@@ -291,6 +297,8 @@ pub struct SettingsPatch {
     pub memory_budget: Option<u64>,
     /// `true` shoots every patch's mean unshot radiance uniformly (`solve::regions`).
     pub uniform_shooters: Option<bool>,
+    /// `true` receives at every vertex of a small flat surface (`solve::small`).
+    pub per_vertex_small: Option<bool>,
     /// Fraction of a receiver's level above which a shot traces every ray (`solve::ray_share`).
     pub full_rays_above: Option<f64>,
     /// Smallest glossy element edge, in α × viewing distance (`solve::directional`).
@@ -344,6 +352,7 @@ impl SolverSettings {
             crease_angle: default_crease_angle(),
             memory_budget: None,
             uniform_shooters: false,
+            per_vertex_small: false,
             whole_receivers: false,
             full_rays_above: 0.0,
             glossy_edge: default_glossy_edge(),
@@ -404,6 +413,7 @@ impl SolverSettings {
             strict,
             crease_angle,
             uniform_shooters,
+            per_vertex_small,
             full_rays_above,
             glossy_edge
         );

@@ -327,6 +327,13 @@ fn solve(
             crate::solve::budget::human_bytes(estimate.peak() as u128),
             estimate.breakdown()
         );
+        let small = solver.small_surface_count();
+        if small > 0 {
+            eprintln!(
+                "solver: {small} small flat surfaces (one patch within the smallest element) \
+                 receive once per shot, at their centroid (--per-vertex-small: at every vertex)"
+            );
+        }
         session.run(solver, 0.0)
     }
 }

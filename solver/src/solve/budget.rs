@@ -31,9 +31,10 @@
 //!   per-surface vertex lists (`footprint.rs`: a `u32` per vertex in a list
 //!   per surface, each list's capacity as `Vec::push` grows it, see
 //!   [`list_slots`]), its per-surface marks, and under bounded shooting the
-//!   last shot's visited vertices (at most one `u32` per vertex); and the
-//!   unshot tree (`unshot_tree.rs`: two nodes per leaf, the leaves the patch
-//!   count rounded up to a power of two);
+//!   last shot's visited vertices (at most one `u32` per vertex); the small
+//!   surfaces' index (`u32` per surface) and receiving points (`small.rs`);
+//!   and the unshot tree (`unshot_tree.rs`: two nodes per leaf, the leaves
+//!   the patch count rounded up to a power of two);
 //! * **recorded shots**: what refinement replays, per emitter shot its
 //!   [`RecordedShot`], its replay sample pool (points on and lifted off the
 //!   source) and the rebuilt [`Shot`], and in directional mode its unshot SH.
@@ -41,7 +42,8 @@
 //! and four transient peaks, of which only the largest counts (they never
 //! overlap: each is freed before the next begins):
 //!
-//! * **shot**: one shot's per-vertex results (directional: a heap vector of
+//! * **shot**: one shot's per-vertex and per-small-surface results
+//!   (directional: a heap vector of
 //!   coefficients per vertex) and its sample pool, and a grouped shot's
 //!   members and their tree ([`group_shot_bytes`]), for as many patches as
 //!   lie within the group radius of one point (`Counts::group_candidates`;
@@ -220,6 +222,9 @@ pub struct Counts {
     /// members among them): `cluster::ReceiverTree::most_patches_near` once
     /// the solver has its receivers; `None`, every patch, before.
     pub group_candidates: Option<u64>,
+    /// The small flat surfaces that receive once per shot (`small.rs`);
+    /// `None`, every surface, before the solver has meshed.
+    pub small_surfaces: Option<u64>,
     /// The scene names no camera, so the output chooses a view over the
     /// solution's triangles ([`solution::view::transient_bytes`]).
     pub chooses_view: bool,
@@ -347,7 +352,13 @@ fn index_bytes(c: &Counts) -> u64 {
     } else {
         0
     };
-    lists + visited + unshot_tree_bytes(c.patches)
+    let small = super::small::SmallSurfaces::bytes(c.surfaces, small_surfaces(c));
+    lists + visited + small + unshot_tree_bytes(c.patches)
+}
+
+/// The surfaces that receive once per shot, at most every surface.
+fn small_surfaces(c: &Counts) -> u64 {
+    c.small_surfaces.unwrap_or(c.surfaces).min(c.surfaces)
 }
 
 /// The gather's transient (diffuse mode): the touched patches and their copy
@@ -420,7 +431,7 @@ pub fn estimate(c: &Counts) -> MemoryEstimate {
             c.vertices * (size_of::<Vec<f64>>() as u64 + 8 + HEAP_BLOCK_OVERHEAD)
                 + c.vertex_coefficients * f64_
         } else {
-            c.vertices * size_of::<Received>() as u64
+            (c.vertices + small_surfaces(c)) * size_of::<Received>() as u64
         }
         + if c.grouped {
             group_shot_bytes(c.group_candidates.unwrap_or(c.patches).min(c.patches))
@@ -825,6 +836,7 @@ impl Solver {
             bounded: self.settings.shooting == crate::settings::Shooting::Bounded,
             grouped: groups_shots(&self.settings),
             group_candidates: self.group_candidates,
+            small_surfaces: Some(self.small.len() as u64),
             chooses_view: self.scene_camera.is_none(),
             ..Counts::default()
         };

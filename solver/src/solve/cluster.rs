@@ -542,7 +542,7 @@ impl super::Solver {
 
 /// The area centroid of a planar convex polygon (its fan's triangle centroids
 /// weighted by area); the vertex average when the area vanishes.
-fn polygon_centroid(vertices: &[DVec3], normal: DVec3) -> DVec3 {
+pub(super) fn polygon_centroid(vertices: &[DVec3], normal: DVec3) -> DVec3 {
     let average = vertices.iter().copied().sum::<DVec3>() / vertices.len().max(1) as f64;
     let mut sum = DVec3::ZERO;
     let mut area = 0.0;

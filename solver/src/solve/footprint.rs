@@ -30,6 +30,7 @@ use super::cluster::{Plan, Receipt};
 use super::group_shot::Shooter;
 use super::refine::VertexState;
 use super::shoot::{Received, Scratch};
+use super::small::SmallSurfaces;
 use super::Solver;
 use crate::mesh::Mesh;
 use glam::DVec3;
@@ -157,11 +158,14 @@ impl Footprint {
 /// Shoots `shooter` to its receivers and adds each one's ΔL to its radiance
 /// (and to its recorded-shot part when `recorded`): flat shooting (`plan`
 /// `None`) to every vertex, bounded shooting to the vertices of the surfaces
-/// its plan visits. Marks the surfaces touched; returns the rays. (A free
-/// function: the shot borrows the solver's occluder and reflectances.)
+/// its plan visits; a `small` surface's vertices all get the one sample at
+/// its centroid (`small.rs`). Marks the surfaces touched; returns the rays.
+/// (A free function: the shot borrows the solver's occluder and
+/// reflectances.)
 pub(super) fn shoot_receivers(
     mesh: &Mesh,
     footprint: &mut Footprint,
+    small: &SmallSurfaces,
     mut state: VertexState<'_>,
     shooter: &Shooter,
     plan: Option<&Plan>,
@@ -172,7 +176,25 @@ pub(super) fn shoot_receivers(
     // Radiance before the shot, for the ray share (`ray_share.rs`): results
     // are added only after every receiver has been shot.
     let prior: &[DVec3] = state.radiance;
-    let receive = |scratch: &mut Scratch, v: u32| shooter.receive(mesh, v, scratch, Some(prior));
+    let visits_surface = |s: u32| plan.is_none_or(|p| p.receipts[s as usize] == Receipt::Visit);
+    let small_results = receive_small(
+        mesh,
+        &footprint.surface_vertices,
+        small,
+        shooter,
+        prior,
+        visits_surface,
+    );
+    let small_rays: u64 = small_results.iter().map(|r| r.rays as u64).sum();
+    // A small surface's vertices copy its sample; its rays count once.
+    let receive = |scratch: &mut Scratch, v: u32| match small.of(mesh.vertices[v as usize].surface)
+    {
+        Some(k) => Received {
+            rays: 0,
+            ..small_results[k]
+        },
+        None => shooter.receive(mesh, v, scratch, Some(prior)),
+    };
     let Some(plan) = plan else {
         let results: Vec<Received> = (0..mesh.vertices.len() as u32)
             .into_par_iter()
@@ -186,7 +208,7 @@ pub(super) fn shoot_receivers(
                 footprint.mark(vertex.surface);
             }
         }
-        return add_received(&mut state, 0.., &results, recorded);
+        return add_received(&mut state, 0.., &results, recorded) + small_rays;
     };
     for v in std::mem::take(&mut footprint.last_visited) {
         state.visible[v as usize] = 0;
@@ -242,7 +264,34 @@ pub(super) fn shoot_receivers(
     }
     let rays = add_received(&mut state, visit.iter().copied(), &results, recorded);
     footprint.last_visited = visit;
-    rays
+    rays + small_rays
+}
+
+/// One sample per small surface the shot visits, at its centroid (see
+/// `small.rs`), in the order of `small.points()`; a surface not visited, or
+/// with no vertex, gets nothing and traces nothing. Its level for the ray
+/// share is its vertices' mean radiance before the shot.
+fn receive_small(
+    mesh: &Mesh,
+    index: &SurfaceVertices,
+    small: &SmallSurfaces,
+    shooter: &Shooter,
+    prior: &[DVec3],
+    visits: impl Fn(u32) -> bool + Sync,
+) -> Vec<Received> {
+    small
+        .points()
+        .par_iter()
+        .map_init(Scratch::default, |scratch, at| {
+            let vertices = index.of(at.surface);
+            if vertices.is_empty() || !visits(at.surface) {
+                return Received::default();
+            }
+            let level =
+                vertices.iter().map(|&v| prior[v as usize]).sum::<DVec3>() / vertices.len() as f64;
+            shooter.receive_at(mesh, at, scratch, Some(level))
+        })
+        .collect()
 }
 
 /// Adds the shot's `results` at `vertices` (same order); returns the rays.

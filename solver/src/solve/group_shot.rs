@@ -82,7 +82,7 @@
 //! truth").
 
 use super::group_tree::{Item, MemberTree, Receiver};
-use super::shoot::{receiving_point, Received, SamplePool, Scratch, Shot};
+use super::shoot::{Received, ReceivingPoint, SamplePool, Scratch, Shot};
 use super::Solver;
 use crate::geometry::formfactor::SourcePolygon;
 use crate::geometry::polygon::clip_to_halfspace;
@@ -349,13 +349,29 @@ impl<'a> GroupShot<'a> {
         scratch: &mut Scratch,
         prior: Option<&[DVec3]>,
     ) -> Received {
-        let surface = mesh.vertices[v as usize].surface;
+        let at = ReceivingPoint::of_vertex(mesh, v, self.occluder.scene_epsilon());
+        self.receive_at(&at, scratch, prior.map(|p| p[v as usize]))
+    }
+
+    /// [`GroupShot::receive`] at a receiving point; `prior`: its radiance
+    /// before this shot, for the ray share.
+    pub fn receive_at(
+        &self,
+        at: &ReceivingPoint,
+        scratch: &mut Scratch,
+        prior: Option<DVec3>,
+    ) -> Received {
+        let ReceivingPoint {
+            q,
+            n,
+            surface,
+            stream,
+        } = *at;
         let kd = self.kd[surface as usize];
         if kd == DVec3::ZERO {
             return Received::default();
         }
         let epsilon = self.occluder.scene_epsilon();
-        let (q, n) = receiving_point(mesh, v, epsilon);
         let Scratch {
             points,
             clipped,
@@ -396,12 +412,12 @@ impl<'a> GroupShot<'a> {
         // against a unit source of that colour at factor W.
         let rays = match (&self.ray_share, prior) {
             (Some(share), Some(prior)) => {
-                let full = share.full_factor(prior[v as usize], kd, unoccluded / total);
+                let full = share.full_factor(prior, kd, unoccluded / total);
                 super::ray_share::rays_for(self.samples, total, full)
             }
             _ => self.samples,
         };
-        let mut rng = Rng::new(self.seed, stream_id(self.index, v as u64));
+        let mut rng = Rng::new(self.seed, stream_id(self.index, stream as u64));
         let offset = rng.next_f64();
         points.clear();
         carried.clear();
@@ -456,7 +472,7 @@ impl GroupShot<'_> {
     pub fn cut_weights(&self, mesh: &Mesh, v: u32) -> [f64; 3] {
         let surface = mesh.vertices[v as usize].surface;
         let epsilon = self.occluder.scene_epsilon();
-        let (q, n) = receiving_point(mesh, v, epsilon);
+        let (q, n) = super::shoot::receiving_point(mesh, v, epsilon);
         let (mut items, mut weights) = (Vec::new(), Vec::new());
         self.tree.items(
             &self.members,
@@ -506,6 +522,20 @@ impl Shooter<'_, '_> {
         match self {
             Shooter::Patch { shot, pool } => shot.receive(mesh, v, pool, scratch, prior),
             Shooter::Group(group) => group.receive(mesh, v, scratch, prior),
+        }
+    }
+
+    /// ΔL at a receiving point; `prior`: its radiance before this shot.
+    pub fn receive_at(
+        &self,
+        mesh: &Mesh,
+        at: &ReceivingPoint,
+        scratch: &mut Scratch,
+        prior: Option<DVec3>,
+    ) -> Received {
+        match self {
+            Shooter::Patch { shot, pool } => shot.receive_at(mesh, at, pool, scratch, prior),
+            Shooter::Group(group) => group.receive_at(at, scratch, prior),
         }
     }
 

@@ -72,6 +72,7 @@ mod refine;
 pub mod regions;
 mod seams;
 pub mod shoot;
+mod small;
 mod textured;
 mod unshot_tree;
 
@@ -255,6 +256,8 @@ pub struct Solver {
     receivers: cluster::ReceiverTree,
     /// The most patches a grouped shot can rank ([`budget::Counts`]).
     group_candidates: Option<u64>,
+    /// The small flat surfaces that receive once per shot ([`small`]).
+    small: small::SmallSurfaces,
     /// What each shot touched, for the sparse passes ([`footprint`]).
     footprint: footprint::Footprint,
     /// The patches' unshot power under a tree of sums and maxima, built on the
@@ -394,6 +397,11 @@ impl Solver {
         let group_candidates = Some(
             receivers.most_patches_near(group_shot::RADIUS * receivers.diagonal(), &per_surface),
         );
+        let small = if settings.per_vertex_small {
+            small::SmallSurfaces::default()
+        } else {
+            small::SmallSurfaces::new(&mesh, &surface_patches)
+        };
         let texturing_any = texturing.any();
         let mut solver = Solver {
             settings: settings.clone(),
@@ -440,6 +448,7 @@ impl Solver {
             refinement_capped: false,
             receivers,
             group_candidates,
+            small,
             footprint: footprint::Footprint::default(),
             unshot_index: None,
             emitters_shot: group_shot::EmittersShot::default(),
@@ -577,6 +586,7 @@ impl Solver {
         let mut rays = footprint::shoot_receivers(
             &self.mesh,
             &mut self.footprint,
+            &self.small,
             refine::VertexState {
                 radiance: &mut self.radiance,
                 received: &mut self.received,
@@ -927,6 +937,11 @@ impl Solver {
                 let received = (self.radiance[v as usize] - emission).max(DVec3::ZERO);
                 (position, w, received)
             })
+    }
+
+    /// How many small flat surfaces receive once per shot ([`small`]).
+    pub fn small_surface_count(&self) -> usize {
+        self.small.len()
     }
 
     /// Per vertex, whether it is hidden ([`hidden`]).

@@ -39,6 +39,33 @@ pub struct Received {
     pub rays: u32,
 }
 
+/// Where a receiver samples a shot: its point, its unit normal, its surface
+/// and the RNG stream its rays draw from. A vertex receives at its receiving
+/// point ([`receiving_point`]) on stream `v`; a small flat surface that takes
+/// one sample for all its vertices (`footprint.rs`) at its centroid on a
+/// stream above every vertex id.
+#[derive(Clone, Copy, Debug)]
+pub struct ReceivingPoint {
+    pub q: DVec3,
+    pub n: DVec3,
+    pub surface: u32,
+    pub stream: u32,
+}
+
+impl ReceivingPoint {
+    /// Vertex `v`'s receiving point, for an occluder of scene epsilon
+    /// `epsilon`.
+    pub fn of_vertex(mesh: &Mesh, v: u32, epsilon: f64) -> ReceivingPoint {
+        let (q, n) = receiving_point(mesh, v, epsilon);
+        ReceivingPoint {
+            q,
+            n,
+            surface: mesh.vertices[v as usize].surface,
+            stream: v,
+        }
+    }
+}
+
 /// Per-worker buffers: the source samples and their visibility flags.
 #[derive(Default)]
 pub struct Scratch {
@@ -333,7 +360,8 @@ impl Shot<'_> {
         pool: &SamplePool,
         scratch: &mut Scratch,
     ) -> (f64, u32, u32) {
-        self.form_factor_sharing(mesh, v, pool, scratch, 0.0)
+        let at = ReceivingPoint::of_vertex(mesh, v, self.occluder.scene_epsilon());
+        self.form_factor_sharing(mesh, &at, pool, scratch, 0.0)
     }
 
     /// [`Shot::form_factor`], with the `Analytic` method's rays cut in
@@ -344,12 +372,17 @@ impl Shot<'_> {
     pub fn form_factor_sharing(
         &self,
         mesh: &Mesh,
-        v: u32,
+        at: &ReceivingPoint,
         pool: &SamplePool,
         scratch: &mut Scratch,
         full_factor: f64,
     ) -> (f64, u32, u32) {
-        let (q, n) = self.receiving_point(mesh, v);
+        let ReceivingPoint {
+            q,
+            n,
+            surface,
+            stream: v,
+        } = *at;
         // Cheap culls before the contour integral: a receiver clearly behind the
         // one-sided source, or one that faces away from every source corner,
         // gets nothing. The margin leaves points near the source's plane to
@@ -427,7 +460,6 @@ impl Shot<'_> {
                 if !self.shadows {
                     return (unoccluded, 1, 0);
                 }
-                let surface = mesh.vertices[v as usize].surface;
                 if self.hemicube_visible(mesh, q, surface) {
                     (unoccluded, 1, 0)
                 } else {
@@ -584,20 +616,34 @@ impl Shot<'_> {
         scratch: &mut Scratch,
         prior: Option<&[DVec3]>,
     ) -> Received {
-        let surface = mesh.vertices[v as usize].surface;
+        let at = ReceivingPoint::of_vertex(mesh, v, self.occluder.scene_epsilon());
+        self.receive_at(mesh, &at, pool, scratch, prior.map(|p| p[v as usize]))
+    }
+
+    /// [`Shot::receive`] at a receiving point; `prior`: its radiance before
+    /// this shot, for the ray share.
+    pub fn receive_at(
+        &self,
+        mesh: &Mesh,
+        at: &ReceivingPoint,
+        pool: &SamplePool,
+        scratch: &mut Scratch,
+        prior: Option<DVec3>,
+    ) -> Received {
         // A planar polygon cannot light itself; a black one reflects nothing.
-        let kd = self.kd[surface as usize];
-        if surface == self.source_surface || kd == DVec3::ZERO {
+        let kd = self.kd[at.surface as usize];
+        if at.surface == self.source_surface || kd == DVec3::ZERO {
             return Received::default();
         }
         let full_factor = match (&self.ray_share, prior) {
-            (Some(share), Some(prior)) => share.full_factor(prior[v as usize], kd, self.unshot),
+            (Some(share), Some(prior)) => share.full_factor(prior, kd, self.unshot),
             _ => 0.0,
         };
-        let (factor, visible, rays) = self.form_factor_sharing(mesh, v, pool, scratch, full_factor);
+        let (factor, visible, rays) =
+            self.form_factor_sharing(mesh, at, pool, scratch, full_factor);
         let radiance = match &self.regions {
             Some(regions) if factor > 0.0 && self.method == FormFactorMethod::Analytic => {
-                kd * self.region_radiance(mesh, v, regions, factor)
+                kd * self.region_radiance(at.q, at.n, regions, factor)
             }
             _ => kd * self.unshot * factor,
         };
@@ -621,8 +667,7 @@ impl Shot<'_> {
     /// only their ratios matter, and the differential kernel at each
     /// quadrant's centroid gives those to O((D / 2d)²) of the correction,
     /// without four contour integrals per receiver.
-    fn region_radiance(&self, mesh: &Mesh, v: u32, regions: &Regions, factor: f64) -> DVec3 {
-        let (q, n) = self.receiving_point(mesh, v);
+    fn region_radiance(&self, q: DVec3, n: DVec3, regions: &Regions, factor: f64) -> DVec3 {
         let (weighted, whole) =
             regions.factor_weights(self.centre, self.diameter, self.normal, q, n);
         if whole > 0.0 {

@@ -480,6 +480,19 @@ pub struct SolveArgs {
     )]
     pub uniform_shooters: bool,
 
+    /// Receive at every vertex of a small flat surface instead of once per surface.
+    #[arg(
+        long,
+        long_help = "Receive each shot at every vertex of a small flat surface (one patch \
+            whose longest edge is within the smallest element size, which refinement \
+            never splits) instead of once at its centroid for all its vertices (the \
+            default). The mesh resolves nothing inside such a face, so one sample \
+            gives it the same light at a quarter of the receivers: on 100k small boxes \
+            at draft the shot's cost falls with the receivers (docs/scale.md, \"Small \
+            surfaces receive once\"). No surface of the Cornell box is that small."
+    )]
+    pub per_vertex_small: bool,
+
     /// Largest angle (degrees) between neighbouring polygons that still shade as one smooth surface.
     #[arg(
         long,
@@ -575,6 +588,7 @@ impl SolveArgs {
             min_element_size: self.min_element_size,
             min_element_area: self.min_element_area,
             uniform_shooters: self.uniform_shooters.then_some(true),
+            per_vertex_small: self.per_vertex_small.then_some(true),
             ..SettingsPatch::default()
         }
     }
@@ -704,6 +718,25 @@ mod tests {
         assert_eq!(
             parse(&["--memory-budget", "2GiB"]).patch().memory_budget,
             Some(2 << 30)
+        );
+    }
+
+    #[test]
+    fn per_vertex_small_flag_and_toml_key_reach_the_settings() {
+        // Off unless asked for: small flat surfaces receive once by default.
+        let default = SolverSettings::resolve(Preset::Draft, &[&parse(&[]).patch()]).unwrap();
+        assert!(!default.per_vertex_small);
+        let flag = parse(&["--per-vertex-small"]).patch();
+        assert!(
+            SolverSettings::resolve(Preset::Draft, &[&flag])
+                .unwrap()
+                .per_vertex_small
+        );
+        let config: SettingsPatch = toml::from_str("per_vertex_small = true").unwrap();
+        assert!(
+            SolverSettings::resolve(Preset::Draft, &[&config])
+                .unwrap()
+                .per_vertex_small
         );
     }
 

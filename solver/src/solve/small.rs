@@ -1,0 +1,292 @@
+//! Small flat surfaces receive one sample per shot (issue 13: a scene's cost
+//! follows what it needs to show, not how many polygons it was exported
+//! with).
+//!
+//! A flat surface that is one patch whose longest edge is already within its
+//! smallest element size is one element that refinement never splits
+//! (`refine::Criteria::at_smallest`): the solution resolves nothing inside
+//! it. Receiving a shot at each of its vertices then buys no detail the mesh
+//! can keep, only four noisy point samples of a field that varies over the
+//! face by less than the mesh's own resolution. Such a surface receives once,
+//! at its area centroid with its facet normal and the shooter's usual rays,
+//! and every vertex of it gets that ΔL: the estimate of the face's mean the
+//! bounded plan's uniform receipts also use (`cluster.rs`), here exact in its
+//! factor and traced like any receiver.
+//!
+//! On a floor of small boxes (the scale scenes' 1M Cornell boxes: faces of
+//! 0.5–1 mm against a 25 mm smallest element at `draft`) this is one
+//! receiver per face instead of four, and the shot's cost, which every
+//! receiver pays, falls with it. No surface of the Cornell box qualifies (its
+//! smallest face is 165 mm), so its solves do not change by a bit.
+//!
+//! What it changes: each such face is flat-shaded shot by shot, where its
+//! four vertices used to carry their own samples' noise. The energy
+//! bookkeeping is untouched: the vertices' ΔL is gathered into the patch
+//! as any receiver's (test `small_surfaces_lose_no_energy`). Smooth
+//! surfaces keep per-vertex receiving, since their vertices' shading normals
+//! differ; so does every surface under `per_vertex_small`.
+
+use super::shoot::ReceivingPoint;
+use crate::mesh::Mesh;
+use glam::DVec3;
+
+/// A surface's entry in [`SmallSurfaces::index`] when it is not small.
+const NOT_SMALL: u32 = u32::MAX;
+
+/// The small flat surfaces of a mesh and where each receives.
+#[derive(Default)]
+pub struct SmallSurfaces {
+    /// Per surface: its index in `points`, or [`NOT_SMALL`].
+    index: Vec<u32>,
+    /// Per small surface, in increasing surface order: its receiving point.
+    points: Vec<ReceivingPoint>,
+}
+
+impl SmallSurfaces {
+    /// The surfaces of `mesh` that receive once per shot (see the module
+    /// documentation); `patches[s]` is surface `s`'s patch count.
+    pub fn new(mesh: &Mesh, patches: &[std::ops::Range<u32>]) -> SmallSurfaces {
+        let mut small = SmallSurfaces {
+            index: vec![NOT_SMALL; mesh.surfaces.len()],
+            points: Vec::new(),
+        };
+        for (s, surface) in mesh.surfaces.iter().enumerate() {
+            let Some(size) = surface.min_element_size else {
+                continue;
+            };
+            if surface.corner_normals.is_some() || patches[s].len() != 1 {
+                continue;
+            }
+            if longest_edge(&surface.vertices) > size {
+                continue;
+            }
+            small.index[s] = small.points.len() as u32;
+            small.points.push(ReceivingPoint {
+                q: super::cluster::polygon_centroid(&surface.vertices, surface.normal),
+                n: surface.normal,
+                surface: s as u32,
+                // A stream above every vertex id in practice, as the bounded
+                // plan's centroid estimate of the same surface uses.
+                stream: u32::MAX - s as u32,
+            });
+        }
+        small.points.shrink_to_fit();
+        small
+    }
+
+    /// The bytes the index and the points hold as allocated (tests of the
+    /// memory estimate).
+    #[cfg(test)]
+    pub fn allocated_bytes(&self) -> u64 {
+        (self.index.capacity() * std::mem::size_of::<u32>()
+            + self.points.capacity() * std::mem::size_of::<ReceivingPoint>()) as u64
+    }
+
+    /// Surface `s`'s index among the small surfaces, if it is one.
+    pub fn of(&self, s: u32) -> Option<usize> {
+        match self.index.get(s as usize) {
+            Some(&k) if k != NOT_SMALL => Some(k as usize),
+            _ => None,
+        }
+    }
+
+    /// The small surfaces' receiving points, in increasing surface order.
+    pub fn points(&self) -> &[ReceivingPoint] {
+        &self.points
+    }
+
+    /// How many surfaces receive once per shot.
+    pub(super) fn len(&self) -> usize {
+        self.points.len()
+    }
+
+    /// The bytes the index holds per surface, and per small surface its
+    /// receiving point (the memory estimate, `budget.rs`).
+    pub fn bytes(surfaces: u64, small: u64) -> u64 {
+        surfaces * std::mem::size_of::<u32>() as u64
+            + small * std::mem::size_of::<ReceivingPoint>() as u64
+    }
+}
+
+/// The longest side of a closed polygon.
+fn longest_edge(corners: &[DVec3]) -> f64 {
+    (0..corners.len())
+        .map(|k| (corners[(k + 1) % corners.len()] - corners[k]).length())
+        .fold(0.0, f64::max)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::physics_tests::cube;
+    use super::super::tests::{material, scene_of};
+    use super::super::Solver;
+    use crate::scene::{Scene, PATCHES_UNSET};
+    use crate::settings::{Preset, Shooters, SolverSettings};
+    use glam::DVec3;
+    use std::f64::consts::PI;
+
+    /// Howell's catalogue B-3: a differential area at height `h` under one
+    /// corner of a parallel rectangle `a` × `b`, facing it.
+    fn under_corner(a: f64, b: f64, h: f64) -> f64 {
+        let (x, y) = (a / h, b / h);
+        let (sx, sy) = ((1.0 + x * x).sqrt(), (1.0 + y * y).sqrt());
+        (x / sx * (y / sx).atan() + y / sy * (x / sy).atan()) / (2.0 * PI)
+    }
+
+    fn settings(per_vertex_small: bool) -> SolverSettings {
+        let mut s = SolverSettings::preset(Preset::Draft);
+        s.ambient = false;
+        s.adaptive = false;
+        s.per_vertex_small = per_vertex_small;
+        s
+    }
+
+    /// A 1 mm square receiver (Kd 0.5) facing up at (x0, 0, z0), under a
+    /// 200 mm square emitter (Le 1, black) 100 mm above, centred on the axis.
+    fn square_under_light(x0: f64, z0: f64) -> Scene {
+        let square = |y: f64, half: f64, cx: f64, cz: f64, up: bool| {
+            let mut q = vec![
+                DVec3::new(cx - half, y, cz - half),
+                DVec3::new(cx - half, y, cz + half),
+                DVec3::new(cx + half, y, cz + half),
+                DVec3::new(cx + half, y, cz - half),
+            ];
+            if !up {
+                q.reverse();
+            }
+            q
+        };
+        scene_of(
+            vec![
+                (square(0.0, 0.5, x0, z0, true), 0),
+                (square(100.0, 100.0, 0.0, 0.0, false), 1),
+            ],
+            vec![material("receiver", 0.5, 0.0), material("light", 0.0, 1.0)],
+            PATCHES_UNSET,
+        )
+    }
+
+    #[test]
+    fn a_small_surface_receives_the_exact_factor_at_its_centroid() {
+        // The only light the receiver gets is the emitter's direct light, with
+        // nothing in between, so every vertex's L = ρ Le F(c ← emitter) at the
+        // receiver's centroid c: the emitter split into patches as the sizes
+        // ask, each factor exact (contour integral, ~1e-13) and every ray
+        // visible. F by Howell B-3, four rectangles meeting under c. 1e-9
+        // relative: the sum over the emitter's patches of exact factors.
+        let (x0, z0, h, a) = (30.0, 20.0, 100.0, 100.0);
+        let exact = 0.5
+            * (under_corner(a - x0, a - z0, h)
+                + under_corner(a + x0, a - z0, h)
+                + under_corner(a - x0, a + z0, h)
+                + under_corner(a + x0, a + z0, h));
+        let scene = square_under_light(x0, z0);
+        for shooters in [Shooters::Patch, Shooters::Grouped] {
+            let mut s = settings(false);
+            s.shooters = shooters;
+            let mut solver = Solver::new(&scene, &s).unwrap();
+            assert_eq!(solver.small_surface_count(), 1, "the 1 mm receiver only");
+            while solver.step().is_some() {}
+            let receiver: Vec<DVec3> = (0..solver.mesh().vertices.len())
+                .filter(|&v| solver.mesh().vertices[v].surface == 0)
+                .map(|v| solver.vertex_radiance()[v])
+                .collect();
+            assert_eq!(receiver.len(), 4);
+            for l in &receiver {
+                assert_eq!(*l, receiver[0], "{shooters:?}: one sample for all");
+                let error = (l.x - exact).abs() / exact;
+                assert!(error < 1e-9, "{shooters:?}: {} against {exact}", l.x);
+            }
+        }
+        // Received at each vertex instead, the corners see the emitter from
+        // 0.5 mm apart and differ by far more than the tolerance above: the
+        // equality is the single sample's doing.
+        let mut solver = Solver::new(&scene, &settings(true)).unwrap();
+        assert_eq!(solver.small_surface_count(), 0);
+        while solver.step().is_some() {}
+        let receiver: Vec<f64> = (0..solver.mesh().vertices.len())
+            .filter(|&v| solver.mesh().vertices[v].surface == 0)
+            .map(|v| solver.vertex_radiance()[v].x)
+            .collect();
+        let spread = receiver.iter().copied().fold(f64::MIN, f64::max)
+            - receiver.iter().copied().fold(f64::MAX, f64::min);
+        assert!(spread > 1e-6 * exact, "spread {spread}");
+    }
+
+    /// A closed 1 m room (Kd 0.5) lit by a ceiling panel, with 16 boxes of
+    /// 20 mm (Kd 0.7) on its floor: their faces are within the draft
+    /// preset's smallest element (0.026 of the 1.7 m diagonal, 45 mm).
+    fn room_with_small_boxes() -> Scene {
+        let mut polygons = cube(1000.0, DVec3::ZERO);
+        let light = [
+            (400.0, 400.0),
+            (400.0, 600.0),
+            (600.0, 600.0),
+            (600.0, 400.0),
+        ];
+        polygons.push((
+            light
+                .iter()
+                .map(|&(x, z)| DVec3::new(x, 999.0, z))
+                .collect(),
+            1,
+        ));
+        for i in 0..4 {
+            for j in 0..4 {
+                let offset = DVec3::new(200.0 + 200.0 * i as f64, 0.0, 200.0 + 200.0 * j as f64);
+                for (mut face, _) in cube(20.0, offset) {
+                    face.reverse();
+                    polygons.push((face, 2));
+                }
+            }
+        }
+        scene_of(
+            polygons,
+            vec![
+                material("walls", 0.5, 0.0),
+                material("light", 0.0, 10.0),
+                material("boxes", 0.7, 0.0),
+            ],
+            PATCHES_UNSET,
+        )
+    }
+
+    #[test]
+    fn small_surfaces_lose_no_energy() {
+        // Emitted + reflected = shot + unshot (the bookkeeping of
+        // `bounded_shooting_loses_no_energy`), to 1e-9 of the emitted power:
+        // one sample's ΔL on all of a face's vertices is gathered into its
+        // patch like any vertex's.
+        let scene = room_with_small_boxes();
+        for shooters in [Shooters::Patch, Shooters::Grouped] {
+            let mut s = settings(false);
+            s.shooters = shooters;
+            s.threshold = 0.01;
+            let mut solver = Solver::new(&scene, &s).unwrap();
+            // Every box face, and the floor's piece under each box (its
+            // contact cut, `mesh::contact`).
+            assert_eq!(solver.small_surface_count(), 16 * 6 + 16);
+            while solver.step().is_some() {}
+            let emitted = solver.emitted_power;
+            let left = solver.total_unshot_power();
+            let mut reflected = 0.0;
+            for (p, patch) in solver.mesh.patches.iter().enumerate() {
+                let surface = patch.surface as usize;
+                let le = solver.emission[surface];
+                for &(v, w) in solver.patch_weights(p as u32) {
+                    if !solver.hidden_vertices()[v as usize] {
+                        let gained = solver.radiance[v as usize] - le;
+                        reflected += PI * w * gained.element_sum();
+                    }
+                }
+            }
+            let shot = solver.timings().shot_power;
+            let balance = (emitted + reflected) - (shot + left);
+            assert!(
+                balance.abs() <= 1e-9 * emitted,
+                "{shooters:?}: emitted {emitted} + reflected {reflected} vs shot {shot} + \
+                 unshot {left}: off by {balance}"
+            );
+        }
+    }
+}
