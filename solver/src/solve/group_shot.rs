@@ -46,7 +46,15 @@
 //! The seed is the patch with the most unshot power. It takes the patches
 //! on surfaces within [`RADIUS`] of the scene diagonal of its centre with at
 //! least [`FRACTION`] of its unshot power, the brightest first, up to
-//! [`MAX_MEMBERS`] in all. Nearby members share most of their occluders, so a
+//! [`MAX_MEMBERS`] in all. A small surface's patch (`small.rs`) joins with
+//! [`FRACTION`] of the seed's unshot *radiance* instead: on a floor of 83,000
+//! small boxes each face holds a thousandth of a wall patch's power, so by
+//! power alone no face ever joined a wall's seed, the walls kept seeding
+//! groups of a few dozen patches, and each shot took 0.02% of the power
+//! while the faces held most of it (docs/scale.md, "Small surfaces receive
+//! once"). Other patches keep the power rule: admitting every patch by
+//! radiance took the Cornell box at draft from 3.19% / 3.25% MARE to 3.76% /
+//! 3.54% against the truth (wider groups, docs/accuracy.md). Nearby members share most of their occluders, so a
 //! receiver's rays to the group see one visibility, and the mixed estimate is
 //! little noisier than the seed's own. An emitter's patch joins (or seeds) a
 //! group only after it has shot once on its own: that first shot carries its
@@ -92,8 +100,9 @@ use crate::mesh::Mesh;
 use glam::DVec3;
 use std::f64::consts::PI;
 
-/// A member's unshot power must be at least this fraction of the seed's: a
-/// weaker patch adds little to the group's shot and would get few rays.
+/// A member's unshot power must be at least this fraction of the seed's (a
+/// small surface's, its unshot radiance): a weaker patch adds little to the
+/// group's shot and would get few rays.
 pub const FRACTION: f64 = 0.1;
 
 /// Members lie on surfaces within this fraction of the scene's diagonal of
@@ -573,7 +582,7 @@ impl Solver {
             .flat_map(|&s| self.surface_patches[s as usize].clone())
             .filter(|&p| p != seed && self.groupable(p))
             .map(|p| (power(p), p))
-            .filter(|&(w, _)| w >= least)
+            .filter(|&(w, p)| w >= least || self.bright_small(p, unshot))
             .collect();
         if candidates.is_empty() {
             return None;
@@ -597,6 +606,16 @@ impl Solver {
             .sum();
         self.timings.shot_power += shot_power;
         Some(members)
+    }
+
+    /// Whether patch `p` is a small surface's (`small.rs`) whose unshot
+    /// radiance is at least [`FRACTION`] of the seed's `unshot`: such a patch
+    /// is weak in power because it is small, not because it is dim, and
+    /// joins by its brightness (see the module documentation).
+    fn bright_small(&self, p: u32, unshot: DVec3) -> bool {
+        let surface = self.mesh.patches[p as usize].surface;
+        self.small.of(surface).is_some()
+            && self.patch_unshot[p as usize].element_sum() >= FRACTION * unshot.element_sum()
     }
 
     /// The pieces `members` (patch, unshot) shoot as: each unevenly lit quad

@@ -252,6 +252,59 @@ mod tests {
     }
 
     #[test]
+    fn small_faces_join_a_group_by_their_radiance() {
+        // A floor patch of the room seeds a group with unshot radiance 1; the
+        // boxes' faces have 0.5, but each holds 400 mm² against the patch's
+        // 62,500, so under a tenth of its power. By power alone none joins
+        // (the walls' groups of a few dozen patches at 1M boxes); as small
+        // faces a tenth as bright as the seed, those within the group radius
+        // do.
+        let scene = room_with_small_boxes();
+        for per_vertex_small in [false, true] {
+            let mut s = settings(per_vertex_small);
+            s.shooters = Shooters::Grouped;
+            let mut solver = Solver::new(&scene, &s).unwrap();
+            let faces: Vec<u32> = (0..solver.mesh.patches.len() as u32)
+                .filter(|&p| solver.kd[solver.mesh.patches[p as usize].surface as usize].x == 0.7)
+                .collect();
+            solver.patch_unshot.fill(DVec3::ZERO);
+            for &p in &faces {
+                solver.patch_unshot[p as usize] = DVec3::splat(0.5);
+            }
+            let centre = |p: u32| {
+                let patch = &solver.mesh.patches[p as usize];
+                patch.polygon().iter().copied().sum::<DVec3>() / patch.corner_count as f64
+            };
+            let floor = (0..solver.mesh.patches.len() as u32)
+                .filter(|&p| {
+                    solver.mesh.surfaces[solver.mesh.patches[p as usize].surface as usize]
+                        .normal
+                        .y
+                        > 0.9
+                })
+                .filter(|&p| solver.kd[solver.mesh.patches[p as usize].surface as usize].x == 0.5)
+                .min_by(|&a, &b| {
+                    let target = DVec3::new(500.0, 0.0, 500.0) - solver.offset;
+                    (centre(a) - target)
+                        .length()
+                        .total_cmp(&(centre(b) - target).length())
+                })
+                .unwrap();
+            // Unshot power π U A: the seed's with U = 1, a face's with 0.5.
+            let seed_power = solver.patch_shoot_area[floor as usize];
+            let face_power = 0.5 * solver.patch_shoot_area[faces[0] as usize];
+            assert!(face_power < 0.1 * seed_power, "{face_power} {seed_power}");
+            let members = solver.take_group(floor, DVec3::ONE);
+            let joined = members.map_or(0, |m| m.iter().filter(|(p, _)| faces.contains(p)).count());
+            if per_vertex_small {
+                assert_eq!(joined, 0);
+            } else {
+                assert!(joined >= 4 * 5, "{joined} faces joined");
+            }
+        }
+    }
+
+    #[test]
     fn small_surfaces_lose_no_energy() {
         // Emitted + reflected = shot + unshot (the bookkeeping of
         // `bounded_shooting_loses_no_energy`), to 1e-9 of the emitted power:
