@@ -24,7 +24,9 @@
 //! bookkeeping is untouched: the vertices' ΔL is gathered into the patch
 //! as any receiver's (test `small_surfaces_lose_no_energy`). Smooth
 //! surfaces keep per-vertex receiving, since their vertices' shading normals
-//! differ; so does every surface under `per_vertex_small`.
+//! differ; so does every surface under `per_vertex_small`, and every
+//! surface in directional mode, whose shots receive SH per vertex
+//! (`directional.rs`).
 
 use super::shoot::ReceivingPoint;
 use crate::mesh::Mesh;
