@@ -399,11 +399,29 @@ impl SharedVertices {
                 out.push(mapped);
                 continue;
             }
+            // Fanning a triangle with k₁, k₂, k₃ points inside its edges
+            // makes 1 + k₁ + k₂ + k₃ triangles: the fan's new inner edges run
+            // from an edge's points to the opposite corner, and carry points
+            // only when that corner lies on the same polygon edge, a triangle
+            // of zero area, which `split_once` leaves alone. Fanning such
+            // slivers did not end on 100k triangles of spheres (gigabytes in
+            // the output). The bound is the backstop: a triangle whose fan
+            // would exceed it is kept whole.
+            let bound = 1
+                + (0..3)
+                    .map(|k| self.points_between(mapped[k], mapped[(k + 1) % 3]).len())
+                    .sum::<usize>();
+            let start = out.len();
             stack.push(mapped);
             while let Some(tri) = stack.pop() {
                 match self.split_once(tri) {
                     Some(parts) => stack.extend(parts.into_iter().rev()),
                     None => out.push(tri),
+                }
+                if out.len() - start + stack.len() > bound {
+                    stack.clear();
+                    out.truncate(start);
+                    out.push(mapped);
                 }
             }
         }
@@ -416,7 +434,9 @@ impl SharedVertices {
         for k in 0..3 {
             let (a, b, c) = (tri[k], tri[(k + 1) % 3], tri[(k + 2) % 3]);
             let inside = self.points_between(a, b);
-            if inside.is_empty() {
+            // A corner on the same polygon edge as the other two: the
+            // triangle has no area, and fanning it would only make slivers.
+            if inside.is_empty() || self.shares_an_edge(a, b, c) {
                 continue;
             }
             let mut chain = Vec::with_capacity(inside.len() + 2);
@@ -426,6 +446,14 @@ impl SharedVertices {
             return Some(chain.windows(2).map(|w| [w[0], w[1], c]).collect());
         }
         None
+    }
+
+    /// Whether `a`, `b` and `c` all lie on one polygon edge.
+    fn shares_an_edge(&self, a: u32, b: u32, c: u32) -> bool {
+        let on = |v: u32| self.on_edges.get(&v).map_or(&[][..], |e| e.as_slice());
+        on(a).iter().any(|(edge, _)| {
+            on(b).iter().any(|(e, _)| e == edge) && on(c).iter().any(|(e, _)| e == edge)
+        })
     }
 
     /// The output vertices strictly between `a` and `b` on a polygon edge both
@@ -479,5 +507,38 @@ fn mesh_diagonal(mesh: &Mesh) -> f64 {
         0.0
     } else {
         (hi - lo).length()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Output vertices 0–3 on one polygon edge (0, 3) at parameters 0, ¼, ½
+    /// and 1; vertex 4 off it.
+    fn one_edge() -> SharedVertices {
+        let edge: EdgeKey = (0, 3);
+        let points = vec![(0.0, 0), (0.25, 1), (0.5, 2), (1.0, 3)];
+        SharedVertices {
+            output_of: (0..5).collect(),
+            representative: (0..5).collect(),
+            radiance: vec![DVec3::ZERO; 5],
+            on_edges: points.iter().map(|&(t, o)| (o, vec![(edge, t)])).collect(),
+            edge_points: HashMap::from([(edge, points)]),
+        }
+    }
+
+    #[test]
+    fn a_triangle_is_fanned_at_its_edge_points_and_a_sliver_is_kept_whole() {
+        let shared = one_edge();
+        // A proper triangle on the edge: fanned from its opposite corner.
+        assert_eq!(
+            shared.triangles(&[[0, 3, 4]]),
+            vec![[0, 1, 4], [1, 2, 4], [2, 3, 4]]
+        );
+        // A triangle whose three corners lie on the edge has no area; fanned,
+        // it became slivers with repeated corners, and on 100k triangles of
+        // spheres such fans never ended. It is kept as it is.
+        assert_eq!(shared.triangles(&[[0, 3, 1]]), vec![[0, 3, 1]]);
     }
 }
