@@ -30,7 +30,6 @@
 
 use super::shoot::ReceivingPoint;
 use crate::mesh::Mesh;
-use glam::DVec3;
 
 /// A surface's entry in [`SmallSurfaces::index`] when it is not small.
 const NOT_SMALL: u32 = u32::MAX;
@@ -59,7 +58,10 @@ impl SmallSurfaces {
             if surface.corner_normals.is_some() || patches[s].len() != 1 {
                 continue;
             }
-            if longest_edge(&surface.vertices) > size {
+            // The test refinement applies (`Criteria::at_smallest`) to the
+            // surface's one patch, its root element.
+            let root = mesh.patches[patches[s].start as usize].root;
+            if super::refine::longest_edge(mesh, root) > size {
                 continue;
             }
             small.index[s] = small.points.len() as u32;
@@ -108,13 +110,6 @@ impl SmallSurfaces {
         surfaces * std::mem::size_of::<u32>() as u64
             + small * std::mem::size_of::<ReceivingPoint>() as u64
     }
-}
-
-/// The longest side of a closed polygon.
-fn longest_edge(corners: &[DVec3]) -> f64 {
-    (0..corners.len())
-        .map(|k| (corners[(k + 1) % corners.len()] - corners[k]).length())
-        .fold(0.0, f64::max)
 }
 
 #[cfg(test)]
