@@ -46,13 +46,15 @@
 //! The seed is the patch with the most unshot power. It takes the patches
 //! on surfaces within [`RADIUS`] of the scene diagonal of its centre with at
 //! least [`FRACTION`] of its unshot power, the brightest first, up to
-//! [`MAX_MEMBERS`] in all. A small surface's patch (`small.rs`) joins with
-//! [`FRACTION`] of the seed's unshot *radiance* instead: on a floor of 83,000
-//! small boxes each face holds a thousandth of a wall patch's power, so by
-//! power alone no face ever joined a wall's seed, the walls kept seeding
-//! groups of a few dozen patches, and each shot took 0.02% of the power
-//! while the faces held most of it (docs/scale.md, "Small surfaces receive
-//! once"). Other patches keep the power rule: admitting every patch by
+//! [`MAX_MEMBERS`] in all. A small patch, one element that refinement never
+//! splits (a small flat surface of `small.rs`, or a facet of a finely
+//! tessellated sphere), joins with [`FRACTION`] of the seed's unshot
+//! *radiance* instead: on a floor of 83,000 small boxes each face holds a
+//! thousandth of a wall patch's power, so by power alone no face ever joined
+//! a wall's seed, the walls kept seeding groups of a few dozen patches, and
+//! each shot took 0.02% of the power while the faces held most of it
+//! (docs/scale.md, "Small surfaces receive once"; the spheres' facets, "Small
+//! patches join by radiance"). Other patches keep the power rule: admitting every patch by
 //! radiance took the Cornell box at draft from 3.19% / 3.25% MARE to 3.76% /
 //! 3.54% against the truth (wider groups, docs/accuracy.md). Nearby members share most of their occluders, so a
 //! receiver's rays to the group see one visibility, and the mixed estimate is
@@ -608,14 +610,20 @@ impl Solver {
         Some(members)
     }
 
-    /// Whether patch `p` is a small surface's (`small.rs`) whose unshot
-    /// radiance is at least [`FRACTION`] of the seed's `unshot`: such a patch
-    /// is weak in power because it is small, not because it is dim, and
-    /// joins by its brightness (see the module documentation).
+    /// Whether patch `p` is small, one element that refinement never splits
+    /// (its longest edge within its surface's smallest element size, the
+    /// test of `refine::Criteria::at_smallest`), and its unshot radiance is
+    /// at least [`FRACTION`] of the seed's `unshot`: such a patch is weak in
+    /// power because it is small, not because it is dim, and joins by its
+    /// brightness (see the module documentation). A small flat surface
+    /// (`small.rs`) is one such patch; a finely tessellated sphere is many.
     fn bright_small(&self, p: u32, unshot: DVec3) -> bool {
-        let surface = self.mesh.patches[p as usize].surface;
-        self.small.of(surface).is_some()
-            && self.patch_unshot[p as usize].element_sum() >= FRACTION * unshot.element_sum()
+        let patch = &self.mesh.patches[p as usize];
+        let Some(size) = self.mesh.surfaces[patch.surface as usize].min_element_size else {
+            return false;
+        };
+        self.patch_unshot[p as usize].element_sum() >= FRACTION * unshot.element_sum()
+            && super::refine::longest_edge(&self.mesh, patch.root) <= size
     }
 
     /// The pieces `members` (patch, unshot) shoot as: each unevenly lit quad

@@ -358,3 +358,65 @@ fn the_candidate_bound_holds_for_every_seed_and_is_tighter_than_every_patch() {
         "the bound {bound} of {total} patches bounds little"
     );
 }
+
+#[test]
+fn small_facets_of_a_smooth_sphere_join_a_group_by_their_radiance() {
+    // A smooth sphere of radius 100 mm in a 1 m room, 8 · 8² = 512 facets of
+    // at most 28 mm (a quarter great circle over 8, 20 mm, stretched by the
+    // octahedron's projection by up to √2), under draft's smallest element
+    // (0.026 of the 1,732 mm diagonal: 45 mm), so refinement never splits
+    // them, yet the sphere is not a small flat surface (its vertices'
+    // normals differ). A floor patch seeds with unshot radiance 1; each
+    // facet holds under a tenth of its power. At half its radiance the
+    // facets join (all of them: the sphere lies within the group radius of
+    // the seed); at 0.09 none does.
+    let mut polygons = physics_tests::cube(1000.0, DVec3::ZERO);
+    let light = [
+        (400.0, 400.0),
+        (400.0, 600.0),
+        (600.0, 600.0),
+        (600.0, 400.0),
+    ];
+    polygons.push((light.map(|(x, z)| DVec3::new(x, 999.0, z)).to_vec(), 1));
+    let facets = super::smooth_tests::sphere(8, DVec3::new(500.0, 150.0, 500.0), 100.0);
+    let facet_count = facets.len();
+    polygons.extend(facets.into_iter().map(|t| (t, 2)));
+    let mut scene = super::tests::scene_of(
+        polygons,
+        vec![
+            super::tests::material("walls", 0.5, 0.0),
+            super::tests::material("light", 0.0, 10.0),
+            super::tests::material("sphere", 0.7, 0.0),
+        ],
+        crate::scene::PATCHES_UNSET,
+    );
+    crate::scene::smooth_scene(&mut scene, 30.0);
+    let mut s = SolverSettings::preset(Preset::Draft);
+    s.ambient = false;
+    s.adaptive = false;
+    s.shooters = Shooters::Grouped;
+    for (facet_unshot, joins) in [(0.5, true), (0.09, false)] {
+        let mut solver = Solver::new(&scene, &s).unwrap();
+        let on_sphere: Vec<u32> = (0..solver.mesh.patches.len() as u32)
+            .filter(|&p| solver.kd[solver.mesh.patches[p as usize].surface as usize].x == 0.7)
+            .collect();
+        assert_eq!(on_sphere.len(), facet_count, "one patch per facet");
+        assert_eq!(solver.small_surface_count(), 0, "the sphere is not flat");
+        solver.patch_unshot.fill(DVec3::ZERO);
+        for &p in &on_sphere {
+            solver.patch_unshot[p as usize] = DVec3::splat(facet_unshot);
+        }
+        let floor = physics_tests::floor_patch_nearest(&solver, DVec3::new(500.0, 0.0, 500.0));
+        let seed_power = solver.patch_shoot_area[floor as usize];
+        let largest = on_sphere
+            .iter()
+            .map(|&p| solver.patch_shoot_area[p as usize])
+            .fold(0.0, f64::max);
+        assert!(0.5 * largest < 0.1 * seed_power, "{largest} {seed_power}");
+        let members = solver.take_group(floor, DVec3::ONE);
+        let joined = members.map_or(0, |m| {
+            m.iter().filter(|(p, _)| on_sphere.contains(p)).count()
+        });
+        assert_eq!(joined, if joins { facet_count } else { 0 });
+    }
+}

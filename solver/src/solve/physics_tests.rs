@@ -382,3 +382,24 @@ fn wallace_form_factors_darken_the_furnace_near_edges_as_the_design_notes_say() 
     assert!(low < 0.95 * exact, "{low}");
     assert!(high <= exact * (1.0 + 1e-9), "{high}");
 }
+
+/// The upward-facing patch (the room's floor, Kd 0.5) whose centre is
+/// nearest `target` (scene coordinates).
+pub(super) fn floor_patch_nearest(solver: &Solver, target: DVec3) -> u32 {
+    let centre = |p: u32| {
+        let patch = &solver.mesh.patches[p as usize];
+        patch.polygon().iter().copied().sum::<DVec3>() / patch.corner_count as f64
+    };
+    let target = target - solver.offset;
+    (0..solver.mesh.patches.len() as u32)
+        .filter(|&p| {
+            let surface = solver.mesh.patches[p as usize].surface as usize;
+            solver.mesh.surfaces[surface].normal.y > 0.9 && solver.kd[surface].x == 0.5
+        })
+        .min_by(|&a, &b| {
+            (centre(a) - target)
+                .length()
+                .total_cmp(&(centre(b) - target).length())
+        })
+        .unwrap()
+}
