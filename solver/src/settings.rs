@@ -231,6 +231,11 @@ pub struct SolverSettings {
     /// what the single sample changes.
     #[serde(default)]
     pub per_vertex_small: bool,
+    /// Receive a shot at every polygon's copy of a smooth surface's shared
+    /// vertex instead of once per point (`solve::twins`). Off by default;
+    /// for measuring what the single sample changes.
+    #[serde(default)]
+    pub per_copy_vertices: bool,
     /// Mesh every receiver whole instead of cutting it along the lines where
     /// other objects touch or cover it (`mesh::contact`). Off by default; for
     /// measuring what the cut changes.
@@ -299,6 +304,8 @@ pub struct SettingsPatch {
     pub uniform_shooters: Option<bool>,
     /// `true` receives at every vertex of a small flat surface (`solve::small`).
     pub per_vertex_small: Option<bool>,
+    /// `true` receives at every copy of a smooth surface's shared vertex (`solve::twins`).
+    pub per_copy_vertices: Option<bool>,
     /// Fraction of a receiver's level above which a shot traces every ray (`solve::ray_share`).
     pub full_rays_above: Option<f64>,
     /// Smallest glossy element edge, in α × viewing distance (`solve::directional`).
@@ -353,6 +360,7 @@ impl SolverSettings {
             memory_budget: None,
             uniform_shooters: false,
             per_vertex_small: false,
+            per_copy_vertices: false,
             whole_receivers: false,
             full_rays_above: 0.0,
             glossy_edge: default_glossy_edge(),
@@ -414,6 +422,7 @@ impl SolverSettings {
             crease_angle,
             uniform_shooters,
             per_vertex_small,
+            per_copy_vertices,
             full_rays_above,
             glossy_edge
         );

@@ -334,6 +334,13 @@ fn solve(
                  receive once per shot, at their centroid (--per-vertex-small: at every vertex)"
             );
         }
+        let copies = solver.twin_copy_count();
+        if copies > 0 {
+            eprintln!(
+                "solver: {copies} vertices copy a coincident vertex of their smooth surface \
+                 and take its sample (--per-copy-vertices: each receives on its own)"
+            );
+        }
         session.run(solver, 0.0)
     }
 }

@@ -33,6 +33,8 @@
 //!   [`list_slots`]), its per-surface marks, and under bounded shooting the
 //!   last shot's visited vertices (at most one `u32` per vertex); the small
 //!   surfaces' index (`u32` per surface) and receiving points (`small.rs`);
+//!   the table of coincident smooth vertices (`u32` per vertex of the
+//!   unrefined mesh, `twins.rs`);
 //!   and the unshot tree (`unshot_tree.rs`: two nodes per leaf, the leaves
 //!   the patch count rounded up to a power of two);
 //! * **recorded shots**: what refinement replays, per emitter shot its
@@ -225,6 +227,10 @@ pub struct Counts {
     /// The small flat surfaces that receive once per shot (`small.rs`);
     /// `None`, every surface, before the solver has meshed.
     pub small_surfaces: Option<u64>,
+    /// The vertices the table of coincident smooth vertices covers
+    /// (`twins.rs`: the unrefined mesh's, none when no vertex copies
+    /// another); `None`, every vertex, before the solver has built it.
+    pub twin_table: Option<u64>,
     /// The scene names no camera, so the output chooses a view over the
     /// solution's triangles ([`solution::view::transient_bytes`]).
     pub chooses_view: bool,
@@ -353,7 +359,8 @@ fn index_bytes(c: &Counts) -> u64 {
         0
     };
     let small = super::small::SmallSurfaces::bytes(c.surfaces, small_surfaces(c));
-    lists + visited + small + unshot_tree_bytes(c.patches)
+    let twins = super::twins::Twins::bytes(c.twin_table.unwrap_or(c.vertices));
+    lists + visited + small + twins + unshot_tree_bytes(c.patches)
 }
 
 /// The surfaces that receive once per shot, at most every surface.
@@ -837,6 +844,7 @@ impl Solver {
             grouped: groups_shots(&self.settings),
             group_candidates: self.group_candidates,
             small_surfaces: Some(self.small.len() as u64),
+            twin_table: Some(self.twins.table_len() as u64),
             chooses_view: self.scene_camera.is_none(),
             ..Counts::default()
         };

@@ -31,6 +31,7 @@ use super::group_shot::Shooter;
 use super::refine::VertexState;
 use super::shoot::{Received, Scratch};
 use super::small::SmallSurfaces;
+use super::twins::Twins;
 use super::Solver;
 use crate::mesh::Mesh;
 use glam::DVec3;
@@ -159,13 +160,15 @@ impl Footprint {
 /// (and to its recorded-shot part when `recorded`): flat shooting (`plan`
 /// `None`) to every vertex, bounded shooting to the vertices of the surfaces
 /// its plan visits; a `small` surface's vertices all get the one sample at
-/// its centroid (`small.rs`). Marks the surfaces touched; returns the rays.
+/// its centroid (`small.rs`), and under flat shooting a vertex that `twins`
+/// names a copy takes the sample of the vertex it copies (`twins.rs`). Marks the surfaces touched; returns the rays.
 /// (A free function: the shot borrows the solver's occluder and
 /// reflectances.)
 pub(super) fn shoot_receivers(
     mesh: &Mesh,
     footprint: &mut Footprint,
     small: &SmallSurfaces,
+    twins: &Twins,
     mut state: VertexState<'_>,
     shooter: &Shooter,
     plan: Option<&Plan>,
@@ -196,10 +199,14 @@ pub(super) fn shoot_receivers(
         None => shooter.receive(mesh, v, scratch, Some(prior)),
     };
     let Some(plan) = plan else {
-        let results: Vec<Received> = (0..mesh.vertices.len() as u32)
+        let mut results: Vec<Received> = (0..mesh.vertices.len() as u32)
             .into_par_iter()
-            .map_init(Scratch::default, receive)
+            .map_init(Scratch::default, |scratch, v| match twins.of(v) {
+                Some(_) => Received::default(),
+                None => receive(scratch, v),
+            })
             .collect();
+        copy_twins(&mut results, twins);
         // Flat shooting visits every vertex; the surfaces it touched are
         // those where one received something (read in vertex order, so the
         // surface ids stream from memory).
@@ -231,6 +238,7 @@ pub(super) fn shoot_receivers(
     };
     let visits =
         |v: u32| plan.receipts[mesh.vertices[v as usize].surface as usize] == Receipt::Visit;
+    // Bounded shooting builds no twins (`twins.rs`): each vertex receives.
     let results: Vec<Received> = visit
         .par_iter()
         .map_init(Scratch::default, |scratch, &v| {
@@ -265,6 +273,17 @@ pub(super) fn shoot_receivers(
     let rays = add_received(&mut state, visit.iter().copied(), &results, recorded);
     footprint.last_visited = visit;
     rays + small_rays
+}
+
+/// Gives each copy its twin's result (`twins.rs`); `results` is indexed by
+/// vertex. The rays count once, at the twin.
+fn copy_twins(results: &mut [Received], twins: &Twins) {
+    for (v, twin) in twins.pairs() {
+        results[v as usize] = Received {
+            rays: 0,
+            ..results[twin as usize]
+        };
+    }
 }
 
 /// One sample per small surface the shot visits, at its centroid (see

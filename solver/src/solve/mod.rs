@@ -74,6 +74,7 @@ mod seams;
 pub mod shoot;
 mod small;
 mod textured;
+mod twins;
 mod unshot_tree;
 
 pub use checkpoint::Checkpoint;
@@ -258,6 +259,9 @@ pub struct Solver {
     group_candidates: Option<u64>,
     /// The small flat surfaces that receive once per shot ([`small`]).
     small: small::SmallSurfaces,
+    /// Coincident vertices of a smooth surface that take one sample per
+    /// shot ([`twins`]).
+    twins: twins::Twins,
     /// What each shot touched, for the sparse passes ([`footprint`]).
     footprint: footprint::Footprint,
     /// The patches' unshot power under a tree of sums and maxima, built on the
@@ -449,6 +453,7 @@ impl Solver {
             receivers,
             group_candidates,
             small,
+            twins: twins::Twins::default(),
             footprint: footprint::Footprint::default(),
             unshot_index: None,
             emitters_shot: group_shot::EmittersShot::default(),
@@ -458,6 +463,13 @@ impl Solver {
         solver.init_directional(scene)?;
         let all: Vec<u32> = (0..solver.mesh.surfaces.len() as u32).collect();
         solver.update_weights(&all);
+        // After `update_weights`, which classifies the vertices as hidden.
+        if !settings.per_copy_vertices
+            && solver.directional.is_none()
+            && settings.shooting == crate::settings::Shooting::Flat
+        {
+            solver.twins = twins::Twins::new(&solver.mesh, &solver.hidden);
+        }
         solver.unshot_power = solver.total_unshot_power();
         solver.radiance_level = solver.ambient().max_element();
         solver.peak_estimate = solver.memory_estimate().peak();
@@ -587,6 +599,7 @@ impl Solver {
             &self.mesh,
             &mut self.footprint,
             &self.small,
+            &self.twins,
             refine::VertexState {
                 radiance: &mut self.radiance,
                 received: &mut self.received,
@@ -942,6 +955,11 @@ impl Solver {
     /// How many small flat surfaces receive once per shot ([`small`]).
     pub fn small_surface_count(&self) -> usize {
         self.small.len()
+    }
+
+    /// How many vertices copy a coincident vertex's sample ([`twins`]).
+    pub fn twin_copy_count(&self) -> usize {
+        self.twins.copies()
     }
 
     /// Per vertex, whether it is hidden ([`hidden`]).

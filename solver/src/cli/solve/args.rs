@@ -495,6 +495,21 @@ pub struct SolveArgs {
     )]
     pub per_vertex_small: bool,
 
+    /// Receive at every polygon's copy of a shared smooth vertex.
+    #[arg(
+        long,
+        long_help = "Receive each shot at every polygon's copy of a smooth surface's shared \
+            vertex instead of once per point (the default). The solver keeps each \
+            polygon's vertices apart, so a point that six triangles of a smooth mesh \
+            share is six receivers with one position and one shading normal; by \
+            default the first takes the sample and the others copy it, a third of the \
+            receivers on a tessellated sphere. The expected radiance is the same; the \
+            shot noise per point is one receiver's instead of the mean of its copies' \
+            (docs/scale.md, \"Shared vertices receive once\"). Diffuse mode only: \
+            directional shots receive at every vertex."
+    )]
+    pub per_copy_vertices: bool,
+
     /// Largest angle (degrees) between neighbouring polygons that still shade as one smooth surface.
     #[arg(
         long,
@@ -591,6 +606,7 @@ impl SolveArgs {
             min_element_area: self.min_element_area,
             uniform_shooters: self.uniform_shooters.then_some(true),
             per_vertex_small: self.per_vertex_small.then_some(true),
+            per_copy_vertices: self.per_copy_vertices.then_some(true),
             ..SettingsPatch::default()
         }
     }
@@ -739,6 +755,25 @@ mod tests {
             SolverSettings::resolve(Preset::Draft, &[&config])
                 .unwrap()
                 .per_vertex_small
+        );
+    }
+
+    #[test]
+    fn per_copy_vertices_flag_and_toml_key_reach_the_settings() {
+        // Off unless asked for: a shared smooth vertex receives once by default.
+        let default = SolverSettings::resolve(Preset::Draft, &[&parse(&[]).patch()]).unwrap();
+        assert!(!default.per_copy_vertices);
+        let flag = parse(&["--per-copy-vertices"]).patch();
+        assert!(
+            SolverSettings::resolve(Preset::Draft, &[&flag])
+                .unwrap()
+                .per_copy_vertices
+        );
+        let config: SettingsPatch = toml::from_str("per_copy_vertices = true").unwrap();
+        assert!(
+            SolverSettings::resolve(Preset::Draft, &[&config])
+                .unwrap()
+                .per_copy_vertices
         );
     }
 
