@@ -156,24 +156,32 @@ impl Footprint {
     }
 }
 
+/// Where one sample serves several vertices: a small flat surface's (`small.rs`)
+/// and coincident vertices of a smooth surface (`twins.rs`).
+#[derive(Clone, Copy)]
+pub(super) struct SampleSharing<'a> {
+    pub small: &'a SmallSurfaces,
+    pub twins: &'a Twins,
+}
+
 /// Shoots `shooter` to its receivers and adds each one's ΔL to its radiance
 /// (and to its recorded-shot part when `recorded`): flat shooting (`plan`
 /// `None`) to every vertex, bounded shooting to the vertices of the surfaces
-/// its plan visits; a `small` surface's vertices all get the one sample at
-/// its centroid (`small.rs`), and under flat shooting a vertex that `twins`
-/// names a copy takes the sample of the vertex it copies (`twins.rs`). Marks the surfaces touched; returns the rays.
+/// its plan visits; a small surface's vertices all get the one sample at
+/// its centroid (`small.rs`), and under flat shooting a vertex that the
+/// twins name a copy takes the sample of the vertex it copies (`twins.rs`). Marks the surfaces touched; returns the rays.
 /// (A free function: the shot borrows the solver's occluder and
 /// reflectances.)
 pub(super) fn shoot_receivers(
     mesh: &Mesh,
     footprint: &mut Footprint,
-    small: &SmallSurfaces,
-    twins: &Twins,
+    sharing: SampleSharing<'_>,
     mut state: VertexState<'_>,
     shooter: &Shooter,
     plan: Option<&Plan>,
     recorded: bool,
 ) -> u64 {
+    let SampleSharing { small, twins } = sharing;
     footprint.surface_vertices.catch_up(mesh);
     footprint.begin_shot(mesh.surfaces.len());
     // Radiance before the shot, for the ray share (`ray_share.rs`): results

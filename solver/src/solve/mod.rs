@@ -598,8 +598,10 @@ impl Solver {
         let mut rays = footprint::shoot_receivers(
             &self.mesh,
             &mut self.footprint,
-            &self.small,
-            &self.twins,
+            footprint::SampleSharing {
+                small: &self.small,
+                twins: &self.twins,
+            },
             refine::VertexState {
                 radiance: &mut self.radiance,
                 received: &mut self.received,
