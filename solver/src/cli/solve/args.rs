@@ -505,7 +505,7 @@ pub struct SolveArgs {
             default the first takes the sample and the others copy it, a third of the \
             receivers on a tessellated sphere. The expected radiance is the same; the \
             shot noise per point is one receiver's instead of the mean of its copies' \
-            (docs/scale.md, \"Shared vertices receive once\"). Diffuse mode only: \
+            (docs/scale.md, \"Small patches join by radiance; shared points receive once\"). Diffuse mode only: \
             directional shots receive at every vertex."
     )]
     pub per_copy_vertices: bool,
