@@ -218,6 +218,13 @@ pub struct SolverSettings {
     /// the machine's available memory.
     #[serde(skip)]
     pub memory_budget: Option<u64>,
+    /// The process's resident bytes measured just before meshing, when the
+    /// command line could read them (`None` in the pure core and its tests):
+    /// the memory estimate's fixed term is at least this (`solve::budget`),
+    /// since import leaves freed pages resident that no structure owns. Not
+    /// stored, like `memory_budget`.
+    #[serde(skip)]
+    pub resident_before_meshing: Option<u64>,
     /// Shoot every patch's mean unshot radiance uniformly, as Remington 1992
     /// does, instead of from the quadrants of an unevenly lit patch
     /// (`solve::regions`). Off by default; directional shots read it too (each
@@ -358,6 +365,7 @@ impl SolverSettings {
             strict: false,
             crease_angle: default_crease_angle(),
             memory_budget: None,
+            resident_before_meshing: None,
             uniform_shooters: false,
             per_vertex_small: false,
             per_copy_vertices: false,

@@ -91,6 +91,8 @@ pub fn run(args: SolveArgs) -> anyhow::Result<ExitCode> {
     // The import's text and parse tables are freed; give their pages back
     // before meshing (`memory::return_freed_memory`).
     memory::return_freed_memory();
+    // What import left resident, freed or not, is where the estimate starts.
+    settings.resident_before_meshing = memory::resident_bytes();
     let budget_source = match settings.memory_budget {
         Some(_) => "as set".to_string(),
         None => {
@@ -99,8 +101,17 @@ pub fn run(args: SolveArgs) -> anyhow::Result<ExitCode> {
             source
         }
     };
+    let resident = settings
+        .resident_before_meshing
+        .map(|r| {
+            format!(
+                "; {} resident after import",
+                crate::solve::budget::human_bytes(r as u128)
+            )
+        })
+        .unwrap_or_default();
     eprintln!(
-        "solver: memory budget {} ({budget_source})",
+        "solver: memory budget {} ({budget_source}){resident}",
         crate::solve::budget::human_bytes(settings.memory_budget.unwrap_or(0) as u128)
     );
 

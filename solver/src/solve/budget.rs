@@ -9,10 +9,12 @@
 //! structure that holds it (see the functions below for the exact list):
 //!
 //! * **fixed**: the process before any solve state ([`FIXED_BYTES`], measured:
-//!   the executable, the allocator, the worker threads), the scene as imported
-//!   ([`scene_bytes`]: per input polygon its [`Polygon`], corners, shading
-//!   normals and source reference, which the command line keeps for the whole
-//!   solve), and per mesh surface its tables, occlusion BVH share and
+//!   the executable, the allocator, the worker threads) and the scene as
+//!   imported ([`scene_bytes`]: per input polygon its [`Polygon`], corners,
+//!   shading normals and source reference, which the command line keeps for
+//!   the whole solve), or the resident set measured before meshing where the
+//!   command line could read it and it is larger (import's freed pages that
+//!   the allocator keeps), and per mesh surface its tables, occlusion BVH share and
 //!   receiver-tree share ([`surface_bytes`]);
 //! * **mesh**: per vertex a [`MeshVertex`] and its slot in the vertex table (a
 //!   hashbrown map: a power-of-two bucket count at most 7/8 full, each bucket
@@ -209,6 +211,10 @@ pub struct Counts {
     pub texture_bytes: u64,
     /// The scene as imported ([`scene_bytes`]).
     pub scene_bytes: u64,
+    /// The process's resident bytes measured before meshing (0: not
+    /// measured), which the fixed term is at least
+    /// (`SolverSettings::resident_before_meshing`).
+    pub resident_before_meshing: u64,
     /// Σ over surfaces of [`list_slots`] of its vertex count: the entries
     /// the footprint's per-surface vertex lists hold room for.
     pub index_slots: u64,
@@ -395,7 +401,12 @@ fn pool_bytes(samples: u64, sets: u32) -> u64 {
 pub fn estimate(c: &Counts) -> MemoryEstimate {
     let dvec3 = size_of::<DVec3>() as u64;
     let f64_ = size_of::<f64>() as u64;
-    let fixed = FIXED_BYTES + c.surfaces * surface_bytes() + c.texture_bytes + c.scene_bytes;
+    // The measured resident set before meshing holds the process and the
+    // scene, and also what import freed but the allocator kept: on the 1M
+    // floor plan 254 MiB where these terms give 68 MiB, the estimate's whole
+    // shortfall (docs/scale.md, "What import leaves resident").
+    let before_meshing = (FIXED_BYTES + c.scene_bytes).max(c.resident_before_meshing);
+    let fixed = before_meshing + c.surfaces * surface_bytes() + c.texture_bytes;
     let mesh = c.vertices * size_of::<MeshVertex>() as u64
         + table_bytes(c.vertices)
         + c.elements * size_of::<Element>() as u64
@@ -527,6 +538,7 @@ pub fn counts_before_meshing(scene: &Scene, settings: &SolverSettings) -> Counts
         grouped: groups_shots(settings),
         scene_bytes: scene_bytes(scene),
         chooses_view: scene.camera.is_none(),
+        resident_before_meshing: settings.resident_before_meshing.unwrap_or(0),
         ..Counts::default()
     };
     let sizing = crate::mesh::Sizing::from_settings(settings, scene);
@@ -619,6 +631,7 @@ pub fn counts_for_mesh(
         index_lists: per_surface_vertices.iter().filter(|&&n| n > 0).count() as u64,
         bounded: settings.shooting == crate::settings::Shooting::Bounded,
         grouped: groups_shots(settings),
+        resident_before_meshing: settings.resident_before_meshing.unwrap_or(0),
         ..Counts::default()
     };
     if directional {
@@ -845,6 +858,7 @@ impl Solver {
             group_candidates: self.group_candidates,
             small_surfaces: Some(self.small.len() as u64),
             twin_table: Some(self.twins.table_len() as u64),
+            resident_before_meshing: self.settings.resident_before_meshing.unwrap_or(0),
             chooses_view: self.scene_camera.is_none(),
             ..Counts::default()
         };

@@ -13,8 +13,28 @@ pub const FALLBACK_BUDGET: u64 = 4 << 30;
 /// `MemAvailable` in bytes from the text of /proc/meminfo (`MemAvailable:
 /// 123456 kB`); `None` when absent or malformed.
 pub fn parse_mem_available(meminfo: &str) -> Option<u64> {
-    let line = meminfo.lines().find(|l| l.starts_with("MemAvailable:"))?;
-    let mut words = line["MemAvailable:".len()..].split_whitespace();
+    parse_field(meminfo, "MemAvailable:")
+}
+
+/// `VmRSS`, the resident set, in bytes from the text of /proc/self/status;
+/// `None` when absent or malformed.
+pub fn parse_resident(status: &str) -> Option<u64> {
+    parse_field(status, "VmRSS:")
+}
+
+/// The process's resident bytes now, where /proc/self/status can be read.
+/// Read after import (the solver's estimate starts from it, `solve::budget`).
+pub fn resident_bytes() -> Option<u64> {
+    std::fs::read_to_string("/proc/self/status")
+        .ok()
+        .as_deref()
+        .and_then(parse_resident)
+}
+
+/// The value of the line starting with `name` (`name 123456 kB`), in bytes.
+fn parse_field(text: &str, name: &str) -> Option<u64> {
+    let line = text.lines().find(|l| l.starts_with(name))?;
+    let mut words = line[name.len()..].split_whitespace();
     let value: u64 = words.next()?.parse().ok()?;
     match words.next() {
         Some("kB") => value.checked_mul(1024),
@@ -72,6 +92,14 @@ pub fn return_freed_memory() {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn resident_set_is_read_in_bytes() {
+        let status = "Name:\tsolver\nVmPeak:\t  900 kB\nVmRSS:\t  254244 kB\nRssAnon:\t 1 kB\n";
+        assert_eq!(parse_resident(status), Some(254_244 * 1024));
+        assert_eq!(parse_resident("VmRSS:\t 12 MB\n"), None);
+        assert_eq!(parse_resident("Name:\tsolver\n"), None);
+    }
 
     #[test]
     fn mem_available_is_read_in_bytes() {
