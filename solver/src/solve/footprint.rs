@@ -169,7 +169,8 @@ pub(super) struct SampleSharing<'a> {
 /// `None`) to every vertex, bounded shooting to the vertices of the surfaces
 /// its plan visits; a small surface's vertices all get the one sample at
 /// its centroid (`small.rs`), and under flat shooting a vertex that the
-/// twins name a copy takes the sample of the vertex it copies (`twins.rs`). Marks the surfaces touched; returns the rays.
+/// twins name a copy takes the sample of the vertex it copies
+/// (`twins.rs`). Marks the surfaces touched; returns the rays.
 /// (A free function: the shot borrows the solver's occluder and
 /// reflectances.)
 pub(super) fn shoot_receivers(
