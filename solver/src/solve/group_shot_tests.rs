@@ -370,26 +370,9 @@ fn small_facets_of_a_smooth_sphere_join_a_group_by_their_radiance() {
     // facet holds under a tenth of its power. At half its radiance the
     // facets join (all of them: the sphere lies within the group radius of
     // the seed); at 0.09 none does.
-    let mut polygons = physics_tests::cube(1000.0, DVec3::ZERO);
-    let light = [
-        (400.0, 400.0),
-        (400.0, 600.0),
-        (600.0, 600.0),
-        (600.0, 400.0),
-    ];
-    polygons.push((light.map(|(x, z)| DVec3::new(x, 999.0, z)).to_vec(), 1));
     let facets = super::smooth_tests::sphere(8, DVec3::new(500.0, 150.0, 500.0), 100.0);
     let facet_count = facets.len();
-    polygons.extend(facets.into_iter().map(|t| (t, 2)));
-    let mut scene = super::tests::scene_of(
-        polygons,
-        vec![
-            super::tests::material("walls", 0.5, 0.0),
-            super::tests::material("light", 0.0, 10.0),
-            super::tests::material("sphere", 0.7, 0.0),
-        ],
-        crate::scene::PATCHES_UNSET,
-    );
+    let mut scene = physics_tests::lit_room_with(facets, "sphere");
     crate::scene::smooth_scene(&mut scene, 30.0);
     let mut s = SolverSettings::preset(Preset::Draft);
     s.ambient = false;

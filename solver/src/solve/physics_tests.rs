@@ -403,3 +403,27 @@ pub(super) fn floor_patch_nearest(solver: &Solver, target: DVec3) -> u32 {
         })
         .unwrap()
 }
+
+/// A closed 1 m room (`cube`, Kd 0.5) lit by a 200 mm ceiling panel (Le 10)
+/// around `objects`, each a polygon of a third material `name` (Kd 0.7);
+/// patches by size.
+pub(super) fn lit_room_with(objects: Vec<Vec<DVec3>>, name: &str) -> Scene {
+    let mut polygons = cube(1000.0, DVec3::ZERO);
+    let light = [
+        (400.0, 400.0),
+        (400.0, 600.0),
+        (600.0, 600.0),
+        (600.0, 400.0),
+    ];
+    polygons.push((light.map(|(x, z)| DVec3::new(x, 999.0, z)).to_vec(), 1));
+    polygons.extend(objects.into_iter().map(|p| (p, 2)));
+    scene_of(
+        polygons,
+        vec![
+            material("walls", 0.5, 0.0),
+            material("light", 0.0, 10.0),
+            material(name, 0.7, 0.0),
+        ],
+        crate::scene::PATCHES_UNSET,
+    )
+}

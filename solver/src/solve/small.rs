@@ -114,7 +114,7 @@ impl SmallSurfaces {
 
 #[cfg(test)]
 mod tests {
-    use super::super::physics_tests::{cube, floor_patch_nearest};
+    use super::super::physics_tests::{cube, floor_patch_nearest, lit_room_with};
     use super::super::tests::{material, scene_of};
     use super::super::Solver;
     use crate::scene::{Scene, PATCHES_UNSET};
@@ -214,38 +214,17 @@ mod tests {
     /// 20 mm (Kd 0.7) on its floor: their faces are within the draft
     /// preset's smallest element (0.026 of the 1.7 m diagonal, 45 mm).
     fn room_with_small_boxes() -> Scene {
-        let mut polygons = cube(1000.0, DVec3::ZERO);
-        let light = [
-            (400.0, 400.0),
-            (400.0, 600.0),
-            (600.0, 600.0),
-            (600.0, 400.0),
-        ];
-        polygons.push((
-            light
-                .iter()
-                .map(|&(x, z)| DVec3::new(x, 999.0, z))
-                .collect(),
-            1,
-        ));
+        let mut faces = Vec::new();
         for i in 0..4 {
             for j in 0..4 {
                 let offset = DVec3::new(200.0 + 200.0 * i as f64, 0.0, 200.0 + 200.0 * j as f64);
                 for (mut face, _) in cube(20.0, offset) {
                     face.reverse();
-                    polygons.push((face, 2));
+                    faces.push(face);
                 }
             }
         }
-        scene_of(
-            polygons,
-            vec![
-                material("walls", 0.5, 0.0),
-                material("light", 0.0, 10.0),
-                material("boxes", 0.7, 0.0),
-            ],
-            PATCHES_UNSET,
-        )
+        lit_room_with(faces, "boxes")
     }
 
     #[test]

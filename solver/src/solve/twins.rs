@@ -132,11 +132,10 @@ impl Twins {
 
 #[cfg(test)]
 mod tests {
-    use super::super::physics_tests::cube;
+    use super::super::physics_tests::lit_room_with;
     use super::super::smooth_tests::facing;
-    use super::super::tests::{material, scene_of};
     use super::super::Solver;
-    use crate::scene::{smooth_scene, Scene, PATCHES_UNSET};
+    use crate::scene::{smooth_scene, Scene};
     use crate::settings::{Preset, SolverSettings};
     use glam::DVec3;
 
@@ -151,31 +150,16 @@ mod tests {
             let r2 = ((x - 500.0).powi(2) + (z - 500.0).powi(2)) / (200.0 * 200.0);
             DVec3::new(x, 100.0 + 50.0 * (-r2).exp(), z)
         };
-        let mut polygons = cube(1000.0, DVec3::ZERO);
-        let light = [
-            (400.0, 400.0),
-            (400.0, 600.0),
-            (600.0, 600.0),
-            (600.0, 400.0),
-        ];
-        polygons.push((light.map(|(x, z)| DVec3::new(x, 999.0, z)).to_vec(), 1));
+        let mut facets = Vec::new();
         for i in 0..m {
             for j in 0..m {
                 let cell = [at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)];
                 for t in [[0, 1, 2], [0, 2, 3]] {
-                    polygons.push((facing(t.map(|k| cell[k]).to_vec(), DVec3::Y), 2));
+                    facets.push(facing(t.map(|k| cell[k]).to_vec(), DVec3::Y));
                 }
             }
         }
-        let mut scene = scene_of(
-            polygons,
-            vec![
-                material("walls", 0.5, 0.0),
-                material("light", 0.0, 10.0),
-                material("bump", 0.7, 0.0),
-            ],
-            PATCHES_UNSET,
-        );
+        let mut scene = lit_room_with(facets, "bump");
         smooth_scene(&mut scene, 30.0);
         scene
     }
