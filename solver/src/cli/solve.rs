@@ -352,6 +352,14 @@ fn solve(
                  and take its sample (--per-copy-vertices: each receives on its own)"
             );
         }
+        let (interpolated, sites) = solver.site_counts();
+        if interpolated > 0 {
+            eprintln!(
+                "solver: {interpolated} points of finely tessellated smooth surfaces \
+                 interpolate {sites} sites (--site-angle {}°; 0: every point receives)",
+                solver.settings().site_angle
+            );
+        }
         session.run(solver, 0.0)
     }
 }

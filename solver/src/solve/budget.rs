@@ -36,7 +36,9 @@
 //!   last shot's visited vertices (at most one `u32` per vertex); the small
 //!   surfaces' index (`u32` per surface) and receiving points (`small.rs`);
 //!   the table of coincident smooth vertices (`u32` per vertex of the
-//!   unrefined mesh, `twins.rs`);
+//!   unrefined mesh, `twins.rs`); the sites' tables (a `bool` per vertex
+//!   of the unrefined mesh, two `u32` per interpolating point and a
+//!   `(u32, f32)` per source, `sites.rs`);
 //!   and the unshot tree (`unshot_tree.rs`: two nodes per leaf, the leaves
 //!   the patch count rounded up to a power of two);
 //! * **recorded shots**: what refinement replays, per emitter shot its
@@ -237,6 +239,11 @@ pub struct Counts {
     /// (`twins.rs`: the unrefined mesh's, none when no vertex copies
     /// another); `None`, every vertex, before the solver has built it.
     pub twin_table: Option<u64>,
+    /// The sites' tables (`sites.rs`): (vertices covered, interpolating
+    /// points, sources); `None` before the solver has built them, counted as
+    /// none (at most 45 bytes per interpolating point, a few percent of a
+    /// vertex's own bytes even where every point of a scene interpolates).
+    pub site_tables: Option<(u64, u64, u64)>,
     /// The scene names no camera, so the output chooses a view over the
     /// solution's triangles ([`solution::view::transient_bytes`]).
     pub chooses_view: bool,
@@ -366,7 +373,9 @@ fn index_bytes(c: &Counts) -> u64 {
     };
     let small = super::small::SmallSurfaces::bytes(c.surfaces, small_surfaces(c));
     let twins = super::twins::Twins::bytes(c.twin_table.unwrap_or(c.vertices));
-    lists + visited + small + twins + unshot_tree_bytes(c.patches)
+    let (covered, targets, sources) = c.site_tables.unwrap_or_default();
+    let sites = super::sites::Sites::bytes(covered, targets, sources);
+    lists + visited + small + twins + sites + unshot_tree_bytes(c.patches)
 }
 
 /// The surfaces that receive once per shot, at most every surface.
@@ -858,6 +867,7 @@ impl Solver {
             group_candidates: self.group_candidates,
             small_surfaces: Some(self.small.len() as u64),
             twin_table: Some(self.twins.table_len() as u64),
+            site_tables: Some(self.sites.counts()),
             resident_before_meshing: self.settings.resident_before_meshing.unwrap_or(0),
             chooses_view: self.scene_camera.is_none(),
             ..Counts::default()

@@ -30,6 +30,7 @@ use super::cluster::{Plan, Receipt};
 use super::group_shot::Shooter;
 use super::refine::VertexState;
 use super::shoot::{Received, Scratch};
+use super::sites::Sites;
 use super::small::SmallSurfaces;
 use super::twins::Twins;
 use super::Solver;
@@ -156,20 +157,23 @@ impl Footprint {
     }
 }
 
-/// Where one sample serves several vertices: a small flat surface's (`small.rs`)
-/// and coincident vertices of a smooth surface (`twins.rs`).
+/// Where one sample serves several vertices: a small flat surface's (`small.rs`),
+/// coincident vertices of a smooth surface (`twins.rs`) and the points of a
+/// finely tessellated smooth surface that interpolate sites (`sites.rs`).
 #[derive(Clone, Copy)]
 pub(super) struct SampleSharing<'a> {
     pub small: &'a SmallSurfaces,
     pub twins: &'a Twins,
+    pub sites: &'a Sites,
 }
 
 /// Shoots `shooter` to its receivers and adds each one's ΔL to its radiance
 /// (and to its recorded-shot part when `recorded`): flat shooting (`plan`
 /// `None`) to every vertex, bounded shooting to the vertices of the surfaces
 /// its plan visits; a small surface's vertices all get the one sample at
-/// its centroid (`small.rs`), and under flat shooting a vertex that the
-/// twins name a copy takes the sample of the vertex it copies
+/// its centroid (`small.rs`), and under flat shooting a point that
+/// interpolates sites takes their weighted mean (`sites.rs`) and a vertex
+/// that the twins name a copy takes the sample of the vertex it copies
 /// (`twins.rs`). Marks the surfaces touched; returns the rays.
 /// (A free function: the shot borrows the solver's occluder and
 /// reflectances.)
@@ -182,7 +186,11 @@ pub(super) fn shoot_receivers(
     plan: Option<&Plan>,
     recorded: bool,
 ) -> u64 {
-    let SampleSharing { small, twins } = sharing;
+    let SampleSharing {
+        small,
+        twins,
+        sites,
+    } = sharing;
     footprint.surface_vertices.catch_up(mesh);
     footprint.begin_shot(mesh.surfaces.len());
     // Radiance before the shot, for the ray share (`ray_share.rs`): results
@@ -210,11 +218,15 @@ pub(super) fn shoot_receivers(
     let Some(plan) = plan else {
         let mut results: Vec<Received> = (0..mesh.vertices.len() as u32)
             .into_par_iter()
-            .map_init(Scratch::default, |scratch, v| match twins.of(v) {
-                Some(_) => Received::default(),
-                None => receive(scratch, v),
+            .map_init(Scratch::default, |scratch, v| {
+                if twins.of(v).is_some() || sites.interpolates(v) {
+                    Received::default()
+                } else {
+                    receive(scratch, v)
+                }
             })
             .collect();
+        interpolate_sites(&mut results, sites);
         copy_twins(&mut results, twins);
         // Flat shooting visits every vertex; the surfaces it touched are
         // those where one received something (read in vertex order, so the
@@ -282,6 +294,26 @@ pub(super) fn shoot_receivers(
     let rays = add_received(&mut state, visit.iter().copied(), &results, recorded);
     footprint.last_visited = visit;
     rays + small_rays
+}
+
+/// Gives each point that interpolates sites the weighted mean of their
+/// results (`sites.rs`), and the visibility of the site that weighs most
+/// (sources come heaviest first); it traces no rays. `results` is indexed by
+/// vertex; sites never interpolate, so their results are final.
+fn interpolate_sites(results: &mut [Received], sites: &Sites) {
+    for (v, sources) in sites.sources() {
+        // Linear-precision weights may be slightly negative (`sites.rs`).
+        let radiance = sources
+            .iter()
+            .map(|&(s, w)| results[s as usize].radiance * w as f64)
+            .sum::<DVec3>()
+            .max(DVec3::ZERO);
+        results[v as usize] = Received {
+            radiance,
+            visible: results[sources[0].0 as usize].visible,
+            rays: 0,
+        };
+    }
 }
 
 /// Gives each copy its twin's result (`twins.rs`); `results` is indexed by

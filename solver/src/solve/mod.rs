@@ -72,6 +72,7 @@ mod refine;
 pub mod regions;
 mod seams;
 pub mod shoot;
+mod sites;
 mod small;
 mod textured;
 mod twins;
@@ -262,6 +263,9 @@ pub struct Solver {
     /// Coincident vertices of a smooth surface that take one sample per
     /// shot ([`twins`]).
     twins: twins::Twins,
+    /// The points of finely tessellated smooth surfaces that interpolate
+    /// sites instead of receiving ([`sites`]).
+    sites: sites::Sites,
     /// What each shot touched, for the sparse passes ([`footprint`]).
     footprint: footprint::Footprint,
     /// The patches' unshot power under a tree of sums and maxima, built on the
@@ -454,6 +458,7 @@ impl Solver {
             group_candidates,
             small,
             twins: twins::Twins::default(),
+            sites: sites::Sites::default(),
             footprint: footprint::Footprint::default(),
             unshot_index: None,
             emitters_shot: group_shot::EmittersShot::default(),
@@ -464,11 +469,19 @@ impl Solver {
         let all: Vec<u32> = (0..solver.mesh.surfaces.len() as u32).collect();
         solver.update_weights(&all);
         // After `update_weights`, which classifies the vertices as hidden.
-        if !settings.per_copy_vertices
-            && solver.directional.is_none()
-            && settings.shooting == crate::settings::Shooting::Flat
-        {
+        let flat =
+            solver.directional.is_none() && settings.shooting == crate::settings::Shooting::Flat;
+        if flat && !settings.per_copy_vertices {
             solver.twins = twins::Twins::new(&solver.mesh, &solver.hidden);
+        }
+        if flat {
+            solver.sites = sites::Sites::new(
+                &solver.mesh,
+                &solver.hidden,
+                &solver.twins,
+                &solver.small_patch_surfaces(),
+                settings.site_angle,
+            );
         }
         solver.unshot_power = solver.total_unshot_power();
         solver.radiance_level = solver.ambient().max_element();
@@ -601,6 +614,7 @@ impl Solver {
             footprint::SampleSharing {
                 small: &self.small,
                 twins: &self.twins,
+                sites: &self.sites,
             },
             refine::VertexState {
                 radiance: &mut self.radiance,
@@ -962,6 +976,31 @@ impl Solver {
     /// How many vertices copy a coincident vertex's sample ([`twins`]).
     pub fn twin_copy_count(&self) -> usize {
         self.twins.copies()
+    }
+
+    /// How many points of finely tessellated smooth surfaces interpolate
+    /// sites, and how many of those surfaces' points receive as sites
+    /// ([`sites`]).
+    pub fn site_counts(&self) -> (usize, usize) {
+        (self.sites.interpolated_count(), self.sites.site_count())
+    }
+
+    /// Per surface, whether it is one patch that refinement never splits:
+    /// its root element's longest edge within the surface's smallest
+    /// element size (the test of `refine::Criteria::at_smallest`).
+    fn small_patch_surfaces(&self) -> Vec<bool> {
+        self.mesh
+            .surfaces
+            .iter()
+            .zip(&self.surface_patches)
+            .map(|(surface, patches)| match surface.min_element_size {
+                Some(size) if patches.len() == 1 => {
+                    let root = self.mesh.patches[patches.start as usize].root;
+                    refine::longest_edge(&self.mesh, root) <= size
+                }
+                _ => false,
+            })
+            .collect()
     }
 
     /// Per vertex, whether it is hidden ([`hidden`]).

@@ -77,8 +77,8 @@ fn modelled(solver: &Solver) -> u64 {
 /// to shot, and the estimate charges their largest (one `bool` and one `u32`
 /// per surface, one `u32` per vertex): their lengths are checked against
 /// those bounds, and the bounds make up the rest of the term. The small
-/// surfaces' index and points (`small.rs`) and the twins' table (`twins.rs`)
-/// are summed from their capacities.
+/// surfaces' index and points (`small.rs`), the twins' table (`twins.rs`)
+/// and the sites' tables (`sites.rs`) are summed from their capacities.
 fn check_index_term(solver: &Solver) {
     let c = solver.memory_counts();
     let e = estimate(&c);
@@ -94,7 +94,9 @@ fn check_index_term(solver: &Solver) {
         assert_eq!(visited, 0);
     }
     let bounds = (surfaces * (1 + 4)) as u64 + if c.bounded { 4 * vertices as u64 } else { 0 };
-    let small = solver.small.allocated_bytes() + solver.twins.allocated_bytes();
+    let small = solver.small.allocated_bytes()
+        + solver.twins.allocated_bytes()
+        + solver.sites.allocated_bytes();
     assert_eq!(e.index, lists + tree + bounds + small, "{c:?}");
 }
 
