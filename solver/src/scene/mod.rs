@@ -28,6 +28,9 @@ mod texture_file;
 pub mod uv;
 mod weld;
 
+/// A hash map for integer keys derived from geometry (`weld::IntHasher`).
+pub(crate) use weld::IntMap;
+
 #[cfg(test)]
 mod tests;
 

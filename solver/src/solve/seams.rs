@@ -39,9 +39,9 @@
 //! and the same triangles as before.
 
 use crate::mesh::Mesh;
+use crate::scene::IntMap;
 use crate::scene::SMOOTH_TOLERANCE;
 use glam::DVec3;
-use std::collections::HashMap;
 
 /// Two shading normals are the same when their dot product is at least this:
 /// far above the rounding of normalising the same interpolation (1e-15), far
@@ -60,9 +60,9 @@ pub(crate) struct SharedVertices {
     pub radiance: Vec<DVec3>,
     /// Per output vertex on a smooth polygon's boundary: the polygon edges it
     /// lies on, as (edge, parameter along it from the edge's first end).
-    on_edges: HashMap<u32, Vec<(EdgeKey, f64)>>,
+    on_edges: IntMap<u32, Vec<(EdgeKey, f64)>>,
     /// Per polygon edge, its points sorted by parameter.
-    edge_points: HashMap<EdgeKey, Vec<(f64, u32)>>,
+    edge_points: IntMap<EdgeKey, Vec<(f64, u32)>>,
 }
 
 /// A polygon edge of a smooth surface by its end points' output vertices, the
@@ -74,7 +74,7 @@ type EdgeKey = (u32, u32);
 /// cells nearest to it.
 struct Grid {
     tol: f64,
-    cells: HashMap<(i64, i64, i64), Vec<u32>>,
+    cells: IntMap<(i64, i64, i64), Vec<u32>>,
 }
 
 impl Grid {
@@ -198,12 +198,12 @@ fn share_vertices(
         .collect();
     let mut grid = Grid {
         tol: tol.max(f64::MIN_POSITIVE),
-        cells: HashMap::new(),
+        cells: IntMap::default(),
     };
     // Lighting groups (merged ignoring UVs) and their first vertex.
     let mut light_grid = Grid {
         tol: grid.tol,
-        cells: HashMap::new(),
+        cells: IntMap::default(),
     };
     let mut light_first: Vec<u32> = Vec::new();
     let mut light_of: Vec<u32> = Vec::with_capacity(n);
@@ -268,8 +268,8 @@ fn share_vertices(
         output_of,
         representative,
         radiance,
-        on_edges: HashMap::new(),
-        edge_points: HashMap::new(),
+        on_edges: IntMap::default(),
+        edge_points: IntMap::default(),
     };
     index_polygon_edges(mesh, &grid, tol, &same_uv, &same_frame, &mut shared);
     shared
@@ -317,27 +317,48 @@ fn index_polygon_edges(
     // The smooth surfaces cut from one input polygon along contact lines
     // (`mesh::contact`) meet along cuts whose ends need not be corners of
     // both sides: a vertex is looked for on the edges of all of them.
-    let mut siblings: HashMap<usize, Vec<u32>> = HashMap::new();
+    let mut siblings: IntMap<usize, Vec<u32>> = IntMap::default();
     for (index, s) in mesh.surfaces.iter().enumerate() {
         if corner_ids[index].is_some() {
             siblings.entry(s.polygon).or_default().push(index as u32);
         }
     }
+    // A polygon cut into many pieces (a floor under a hundred cylinders: 6,000
+    // pieces) would have each of its vertices test every piece's edges;
+    // its pieces' edges go into a grid instead.
+    let grids: IntMap<usize, EdgeGrid> = siblings
+        .iter()
+        .filter(|(_, pieces)| pieces.len() > EdgeGrid::MIN_PIECES)
+        .map(|(&polygon, pieces)| (polygon, EdgeGrid::new(mesh, pieces, tol)))
+        .collect();
+    let mut near = Vec::new();
     for (v, vertex) in mesh.vertices.iter().enumerate() {
         if corner_ids[vertex.surface as usize].is_none() {
             continue;
         }
         let o = shared.output_of[v];
         let own = mesh.surfaces[vertex.surface as usize].polygon;
-        for &surface in &siblings[&own] {
+        let material = mesh.surfaces[vertex.surface as usize].material;
+        near.clear();
+        match grids.get(&own) {
+            Some(grid) => near.extend_from_slice(grid.near(vertex.position)),
+            None => {
+                for &surface in &siblings[&own] {
+                    let count = mesh.surfaces[surface as usize].vertices.len() as u32;
+                    near.extend((0..count).map(|i| (surface, i)));
+                }
+            }
+        }
+        // In surface and edge order, as a scan of every sibling records them.
+        near.sort_unstable();
+        for &(surface, i) in &near {
             let s = &mesh.surfaces[surface as usize];
             let Some(corners) = &corner_ids[surface as usize] else {
                 continue;
             };
-            if s.material != mesh.surfaces[vertex.surface as usize].material {
-                continue;
+            if s.material == material {
+                record_on_edge(s, corners, i as usize, vertex.position, o, tol, shared);
             }
-            record_on_edges(s, corners, vertex.position, o, tol, shared);
         }
     }
     for points in shared.edge_points.values_mut() {
@@ -346,43 +367,99 @@ fn index_polygon_edges(
     }
 }
 
-/// Records that output vertex `o` at `position` lies on the edges of surface
-/// `s` (whose corners are the output vertices `corners`) that pass within
-/// `tol` of it, with its parameter along each.
-fn record_on_edges(
+/// The edges of one polygon's many pieces (`mesh::contact`) in a uniform
+/// grid: each edge, widened by the tolerance, is listed in every cell its box
+/// overlaps, so the edges that pass within the tolerance of a point are among
+/// those of the point's cell.
+struct EdgeGrid {
+    cell: f64,
+    cells: IntMap<(i64, i64, i64), Vec<(u32, u32)>>,
+}
+
+impl EdgeGrid {
+    /// Polygons with more pieces than this get a grid.
+    const MIN_PIECES: usize = 16;
+
+    fn new(mesh: &crate::mesh::Mesh, pieces: &[u32], tol: f64) -> EdgeGrid {
+        let points = || {
+            pieces
+                .iter()
+                .flat_map(|&s| mesh.surfaces[s as usize].vertices.iter().copied())
+        };
+        let lo = points().fold(DVec3::splat(f64::INFINITY), DVec3::min);
+        let hi = points().fold(DVec3::splat(f64::NEG_INFINITY), DVec3::max);
+        // About one piece per cell of the polygon's extent.
+        let extent = (hi - lo).max_element();
+        let cell = (extent / (pieces.len() as f64).sqrt()).max(4.0 * tol);
+        let mut grid = EdgeGrid {
+            cell,
+            cells: IntMap::default(),
+        };
+        for &surface in pieces {
+            let corners = &mesh.surfaces[surface as usize].vertices;
+            for i in 0..corners.len() {
+                let (a, b) = (corners[i], corners[(i + 1) % corners.len()]);
+                let (from, to) = (grid.key(a.min(b) - tol), grid.key(a.max(b) + tol));
+                for x in from.0..=to.0 {
+                    for y in from.1..=to.1 {
+                        for z in from.2..=to.2 {
+                            let list = grid.cells.entry((x, y, z)).or_default();
+                            list.push((surface, i as u32));
+                        }
+                    }
+                }
+            }
+        }
+        grid
+    }
+
+    fn key(&self, p: DVec3) -> (i64, i64, i64) {
+        let c = (p / self.cell).floor();
+        (c.x as i64, c.y as i64, c.z as i64)
+    }
+
+    /// The (piece, edge index) pairs listed in `p`'s cell.
+    fn near(&self, p: DVec3) -> &[(u32, u32)] {
+        self.cells.get(&self.key(p)).map_or(&[], |l| l.as_slice())
+    }
+}
+
+/// Records that output vertex `o` at `position` lies on edge `i` of surface
+/// `s` (whose corners are the output vertices `corners`) if it passes within
+/// `tol` of it, with its parameter along it.
+fn record_on_edge(
     s: &crate::mesh::Surface,
     corners: &[u32],
+    i: usize,
     position: DVec3,
     o: u32,
     tol: f64,
     shared: &mut SharedVertices,
 ) {
     let k = s.vertices.len();
-    for i in 0..k {
-        let (a, b) = (s.vertices[i], s.vertices[(i + 1) % k]);
-        let (ia, ib) = (corners[i], corners[(i + 1) % k]);
-        let edge = b - a;
-        let length2 = edge.length_squared();
-        if length2.is_nan() || length2 <= 0.0 {
-            continue;
-        }
-        let t = (position - a).dot(edge) / length2;
-        if !(-1e-9..=1.0 + 1e-9).contains(&t) {
-            continue;
-        }
-        if (a + edge * t - position).length() > tol {
-            continue;
-        }
-        let (key, t) = if ia <= ib {
-            ((ia, ib), t)
-        } else {
-            ((ib, ia), 1.0 - t)
-        };
-        let list = shared.on_edges.entry(o).or_default();
-        if !list.iter().any(|(e, _)| *e == key) {
-            list.push((key, t));
-            shared.edge_points.entry(key).or_default().push((t, o));
-        }
+    let (a, b) = (s.vertices[i], s.vertices[(i + 1) % k]);
+    let (ia, ib) = (corners[i], corners[(i + 1) % k]);
+    let edge = b - a;
+    let length2 = edge.length_squared();
+    if length2.is_nan() || length2 <= 0.0 {
+        return;
+    }
+    let t = (position - a).dot(edge) / length2;
+    if !(-1e-9..=1.0 + 1e-9).contains(&t) {
+        return;
+    }
+    if (a + edge * t - position).length() > tol {
+        return;
+    }
+    let (key, t) = if ia <= ib {
+        ((ia, ib), t)
+    } else {
+        ((ib, ia), 1.0 - t)
+    };
+    let list = shared.on_edges.entry(o).or_default();
+    if !list.iter().any(|(e, _)| *e == key) {
+        list.push((key, t));
+        shared.edge_points.entry(key).or_default().push((t, o));
     }
 }
 
@@ -516,6 +593,69 @@ fn mesh_diagonal(mesh: &Mesh) -> f64 {
 mod tests {
     use super::*;
 
+    #[test]
+    fn an_edge_grid_lists_every_piece_edge_near_a_point() {
+        // A 2 × 2 floor under 25 open boxes (four sides each, standing on
+        // it) is cut along their footprints into many pieces. For every
+        // piece corner and for points along every edge, lifted off it by
+        // less than the tolerance, each edge within the tolerance (by brute
+        // force over all pieces) is in the point's cell.
+        use crate::solve::tests::{material, scene_of};
+        let p = |x: f64, y: f64, z: f64| DVec3::new(x, y, z);
+        let mut polygons = vec![(
+            vec![p(0., 0., 0.), p(0., 0., 2.), p(2., 0., 2.), p(2., 0., 0.)],
+            0,
+        )];
+        for i in 0..5 {
+            for j in 0..5 {
+                let (a, b) = (0.1 + 0.4 * i as f64, 0.1 + 0.4 * j as f64);
+                let (c, d, h) = (a + 0.17, b + 0.23, 0.2);
+                polygons.push((vec![p(a, 0., b), p(a, h, b), p(c, h, b), p(c, 0., b)], 0));
+                polygons.push((vec![p(a, 0., d), p(c, 0., d), p(c, h, d), p(a, h, d)], 0));
+                polygons.push((vec![p(a, 0., b), p(a, 0., d), p(a, h, d), p(a, h, b)], 0));
+                polygons.push((vec![p(c, 0., b), p(c, h, b), p(c, h, d), p(c, 0., d)], 0));
+            }
+        }
+        let scene = scene_of(polygons, vec![material("grey", 0.5, 1.0)], 1);
+        let mesh = crate::mesh::Mesh::new(&scene, DVec3::ZERO, 1).unwrap();
+        let pieces: Vec<u32> = (0..mesh.surfaces.len() as u32)
+            .filter(|&s| mesh.surfaces[s as usize].polygon == 0)
+            .collect();
+        assert!(pieces.len() > EdgeGrid::MIN_PIECES, "{}", pieces.len());
+        let tol = 1e-5;
+        let grid = EdgeGrid::new(&mesh, &pieces, tol);
+        let within = |q: DVec3, s: u32, i: usize| {
+            let v = &mesh.surfaces[s as usize].vertices;
+            let (a, b) = (v[i], v[(i + 1) % v.len()]);
+            let t = ((q - a).dot(b - a) / (b - a).length_squared()).clamp(0.0, 1.0);
+            (a + (b - a) * t - q).length() <= tol
+        };
+        let mut points = Vec::new();
+        for &s in &pieces {
+            let v = &mesh.surfaces[s as usize].vertices;
+            for i in 0..v.len() {
+                let (a, b) = (v[i], v[(i + 1) % v.len()]);
+                for k in 0..=16 {
+                    let lift = DVec3::new(0.3, 0.5, -0.8).normalize() * tol * (k % 3) as f64 / 3.0;
+                    points.push(a + (b - a) * (k as f64 / 16.0) + lift);
+                }
+            }
+        }
+        let mut checked = 0;
+        for q in points {
+            let near = grid.near(q);
+            for &s in &pieces {
+                for i in 0..mesh.surfaces[s as usize].vertices.len() {
+                    if within(q, s, i) {
+                        assert!(near.contains(&(s, i as u32)), "edge {i} of {s} at {q}");
+                        checked += 1;
+                    }
+                }
+            }
+        }
+        assert!(checked > 1000, "{checked}");
+    }
+
     /// Output vertices 0–3 on one polygon edge (0, 3) at parameters 0, ¼, ½
     /// and 1; vertex 4 off it.
     fn one_edge() -> SharedVertices {
@@ -526,7 +666,7 @@ mod tests {
             representative: (0..5).collect(),
             radiance: vec![DVec3::ZERO; 5],
             on_edges: points.iter().map(|&(t, o)| (o, vec![(edge, t)])).collect(),
-            edge_points: HashMap::from([(edge, points)]),
+            edge_points: IntMap::from_iter([(edge, points)]),
         }
     }
 
