@@ -216,6 +216,15 @@ impl Sites {
         self.interpolated.get(v as usize).copied().unwrap_or(false)
     }
 
+    /// The (site, weight) pairs vertex `v` interpolates, if it does.
+    pub fn sources_of(&self, v: u32) -> Option<&[(u32, f32)]> {
+        if !self.interpolates(v) {
+            return None;
+        }
+        let k = self.targets.binary_search(&v).ok()?;
+        Some(&self.sources[self.offsets[k] as usize..self.offsets[k + 1] as usize])
+    }
+
     /// How many points interpolate.
     pub fn interpolated_count(&self) -> usize {
         self.targets.len()
