@@ -347,6 +347,8 @@ mod tests {
         let small = super::systematic_draws(&vec![1e-3; 1000], 10);
         assert_eq!(small.len(), 10);
         assert!(small.iter().all(|d| d.1 == 1));
-        assert!(small.windows(2).all(|w| (99..=101).contains(&(w[1].0 - w[0].0))));
+        assert!(small
+            .windows(2)
+            .all(|w| (99..=101).contains(&(w[1].0 - w[0].0))));
     }
 }

@@ -201,10 +201,19 @@ impl Sites {
         out.offsets.push(0);
         let cos2 = (2.0 * angle).to_radians().cos();
         for p in rest {
+            // The site that covered the point always weighs; a point left
+            // without one (no case is known) receives on its own.
+            let sources = weights(grid, p, cos2);
+            if sources.is_empty() {
+                continue;
+            }
             out.interpolated[p.vertex as usize] = true;
             out.targets.push(p.vertex);
-            out.sources.extend(weights(grid, p, cos2));
+            out.sources.extend(sources);
             out.offsets.push(out.sources.len() as u32);
+        }
+        if out.targets.is_empty() {
+            return Sites::default();
         }
         // The estimate counts the pairs, not the capacity guessed above.
         out.sources.shrink_to_fit();
@@ -323,8 +332,11 @@ fn weights(grid: &Grid, p: &Point, cos2: f64) -> Vec<(u32, f32)> {
         .collect();
     found.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.vertex.cmp(&b.0.vertex)));
     found.truncate(MOST_SOURCES);
-    if found[0].1 == f64::MAX {
-        return vec![(found[0].0.vertex, 1.0)];
+    let Some(&(nearest, k)) = found.first() else {
+        return Vec::new();
+    };
+    if k == f64::MAX {
+        return vec![(nearest.vertex, 1.0)];
     }
     let kernels: Vec<f64> = found.iter().map(|f| f.1).collect();
     let offsets: Vec<[f64; 2]> = found
