@@ -472,7 +472,7 @@ impl UnionFind {
 
 #[cfg(test)]
 mod tests {
-    use super::super::smooth_tests::{facing, sphere};
+    use super::super::smooth_tests::{sphere, square_light};
     use super::super::tests::{material, scene_of};
     use super::super::Solver;
     use crate::scene::{smooth_scene, Scene, PATCHES_UNSET};
@@ -493,16 +493,7 @@ mod tests {
     fn lit_fine_sphere() -> (Scene, f64) {
         let (d, a) = (20.0, 0.2);
         let le = d * d / (a * a);
-        let source = facing(
-            vec![
-                DVec3::new(-a / 2.0, d, -a / 2.0),
-                DVec3::new(a / 2.0, d, -a / 2.0),
-                DVec3::new(a / 2.0, d, a / 2.0),
-                DVec3::new(-a / 2.0, d, a / 2.0),
-            ],
-            -DVec3::Y,
-        );
-        let mut polygons = vec![(source, 1)];
+        let mut polygons = vec![(square_light(d, a), 1)];
         polygons.extend(sphere(24, DVec3::ZERO, 1.0).into_iter().map(|t| (t, 0)));
         let materials = vec![material("sphere", 0.5, 0.0), material("light", 0.0, le)];
         let mut scene = scene_of(polygons, materials, PATCHES_UNSET);

@@ -18,6 +18,20 @@ pub(super) fn facing(mut polygon: Vec<DVec3>, toward: DVec3) -> Vec<DVec3> {
     polygon
 }
 
+/// An `a` × `a` square at height `d` over the origin, facing down: a small
+/// distant source for Lambert's law.
+pub(super) fn square_light(d: f64, a: f64) -> Vec<DVec3> {
+    facing(
+        vec![
+            DVec3::new(-a / 2.0, d, -a / 2.0),
+            DVec3::new(a / 2.0, d, -a / 2.0),
+            DVec3::new(a / 2.0, d, a / 2.0),
+            DVec3::new(-a / 2.0, d, a / 2.0),
+        ],
+        -DVec3::Y,
+    )
+}
+
 /// An octahedron's faces each cut into k² triangles, pushed onto the sphere:
 /// 8k² triangles, facing outward. Points on the octahedron's edges are
 /// computed from each face separately, so neighbours meet only within
@@ -184,16 +198,7 @@ fn lit_smooth_sphere_follows_lamberts_cosine_law() {
     // can hide the source from a shading normal that still faces it.
     let (k, d, a) = (6, 20.0, 0.2);
     let le = d * d / (a * a);
-    let source = facing(
-        vec![
-            DVec3::new(-a / 2.0, d, -a / 2.0),
-            DVec3::new(a / 2.0, d, -a / 2.0),
-            DVec3::new(a / 2.0, d, a / 2.0),
-            DVec3::new(-a / 2.0, d, a / 2.0),
-        ],
-        -DVec3::Y,
-    );
-    let mut polygons = vec![(source, 1)];
+    let mut polygons = vec![(square_light(d, a), 1)];
     polygons.extend(sphere(k, DVec3::ZERO, 1.0).into_iter().map(|t| (t, 0)));
     let materials = vec![material("sphere", 0.5, 0.0), material("light", 0.0, le)];
     let mut flat = scene_of(polygons, materials, 2);
@@ -304,16 +309,7 @@ fn glossy_smooth_sphere_reflects_about_its_shading_normals() {
     let (k, d, a) = (4, 20.0, 0.2);
     let le = d * d / (a * a);
     let (kd, ks, alpha) = (0.2, 0.5, 0.3);
-    let source = facing(
-        vec![
-            DVec3::new(-a / 2.0, d, -a / 2.0),
-            DVec3::new(a / 2.0, d, -a / 2.0),
-            DVec3::new(a / 2.0, d, a / 2.0),
-            DVec3::new(-a / 2.0, d, a / 2.0),
-        ],
-        -DVec3::Y,
-    );
-    let mut polygons = vec![(source, 1)];
+    let mut polygons = vec![(square_light(d, a), 1)];
     polygons.extend(sphere(k, DVec3::ZERO, 1.0).into_iter().map(|t| (t, 0)));
     let mut glossy = material("sphere", kd, 0.0);
     glossy.ks = DVec3::splat(ks);

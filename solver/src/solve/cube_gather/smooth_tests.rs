@@ -56,16 +56,7 @@ fn glossy_smooth_sphere_cube_reflects_about_its_shading_normals() {
     let (k, d, a) = (16, 20.0, 0.2);
     let le = d * d / (a * a);
     let (kd, ks, alpha) = (0.2, 0.5, 0.3);
-    let source = facing(
-        vec![
-            DVec3::new(-a / 2.0, d, -a / 2.0),
-            DVec3::new(a / 2.0, d, -a / 2.0),
-            DVec3::new(a / 2.0, d, a / 2.0),
-            DVec3::new(-a / 2.0, d, a / 2.0),
-        ],
-        -DVec3::Y,
-    );
-    let mut polygons = vec![(source, 1, 1)];
+    let mut polygons = vec![(crate::solve::smooth_tests::square_light(d, a), 1, 1)];
     polygons.extend(sphere(4).into_iter().map(|t| (t, 0, 1)));
     let mut scene = scene(
         polygons,
