@@ -282,19 +282,20 @@ fn object_of(source: &SourceRef) -> String {
     }
 }
 
-/// Disjoint sets of polygon indices, by parent pointers with path halving.
-struct UnionFind {
+/// Disjoint sets of indices (polygons here, surfaces in `solve::sites`), by
+/// parent pointers with path halving.
+pub(crate) struct UnionFind {
     parent: Vec<usize>,
 }
 
 impl UnionFind {
-    fn new(n: usize) -> Self {
+    pub(crate) fn new(n: usize) -> Self {
         UnionFind {
             parent: (0..n).collect(),
         }
     }
 
-    fn find(&mut self, mut i: usize) -> usize {
+    pub(crate) fn find(&mut self, mut i: usize) -> usize {
         while self.parent[i] != i {
             self.parent[i] = self.parent[self.parent[i]];
             i = self.parent[i];
@@ -312,7 +313,7 @@ impl UnionFind {
 
     /// Joins the sets of `a` and `b`; the smaller index becomes the root, so
     /// roots (and the group count) do not depend on the order of unions.
-    fn union(&mut self, a: usize, b: usize) {
+    pub(crate) fn union(&mut self, a: usize, b: usize) {
         let (ra, rb) = (self.find(a), self.find(b));
         if ra != rb {
             let (lo, hi) = (ra.min(rb), ra.max(rb));

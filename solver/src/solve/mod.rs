@@ -985,21 +985,12 @@ impl Solver {
         (self.sites.interpolated_count(), self.sites.site_count())
     }
 
-    /// Per surface, whether it is one patch that refinement never splits:
-    /// its root element's longest edge within the surface's smallest
-    /// element size (the test of `refine::Criteria::at_smallest`).
+    /// Per surface, whether it is one patch that refinement never splits
+    /// ([`small::one_small_patch`]).
     fn small_patch_surfaces(&self) -> Vec<bool> {
-        self.mesh
-            .surfaces
+        self.surface_patches
             .iter()
-            .zip(&self.surface_patches)
-            .map(|(surface, patches)| match surface.min_element_size {
-                Some(size) if patches.len() == 1 => {
-                    let root = self.mesh.patches[patches.start as usize].root;
-                    refine::longest_edge(&self.mesh, root) <= size
-                }
-                _ => false,
-            })
+            .map(|patches| small::one_small_patch(&self.mesh, patches))
             .collect()
     }
 

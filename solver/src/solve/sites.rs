@@ -54,6 +54,7 @@
 
 use super::twins::Twins;
 use crate::mesh::Mesh;
+use crate::scene::smooth::UnionFind;
 use glam::DVec3;
 use std::collections::HashMap;
 
@@ -339,9 +340,13 @@ fn weights(grid: &Grid, p: &Point, cos2: f64) -> Vec<(u32, f32)> {
         return vec![(nearest.vertex, 1.0)];
     }
     let kernels: Vec<f64> = found.iter().map(|f| f.1).collect();
+    let (t, b) = p.normal.any_orthonormal_pair();
     let offsets: Vec<[f64; 2]> = found
         .iter()
-        .map(|(s, _)| tangent_offset(p, s.position))
+        .map(|(s, _)| {
+            let d = s.position - p.position;
+            [d.dot(t), d.dot(b)]
+        })
         .collect();
     let w = linear_weights(&kernels, &offsets).unwrap_or_else(|| {
         let sum: f64 = kernels.iter().sum();
@@ -352,14 +357,6 @@ fn weights(grid: &Grid, p: &Point, cos2: f64) -> Vec<(u32, f32)> {
         .zip(w)
         .map(|((s, _), w)| (s.vertex, w as f32))
         .collect()
-}
-
-/// Site position `x` relative to `p` in `p`'s tangent plane.
-fn tangent_offset(p: &Point, x: DVec3) -> [f64; 2] {
-    let t = p.normal.any_orthonormal_vector();
-    let b = p.normal.cross(t);
-    let d = x - p.position;
-    [d.dot(t), d.dot(b)]
 }
 
 /// The weights of a moving least-squares fit of a + g · u (Lancaster &
@@ -436,38 +433,6 @@ fn connected_surfaces(mesh: &Mesh) -> UnionFind {
         }
     }
     components
-}
-
-/// Disjoint sets of surfaces, by path halving.
-struct UnionFind {
-    parent: Vec<u32>,
-}
-
-impl UnionFind {
-    fn new(n: usize) -> UnionFind {
-        UnionFind {
-            parent: (0..n as u32).collect(),
-        }
-    }
-
-    fn find(&mut self, mut x: usize) -> usize {
-        while self.parent[x] as usize != x {
-            let grand = self.parent[self.parent[x] as usize];
-            self.parent[x] = grand;
-            x = grand as usize;
-        }
-        x
-    }
-
-    fn union(&mut self, a: usize, b: usize) {
-        let (a, b) = (self.find(a), self.find(b));
-        if a != b {
-            // The lower root stays, so components are named the same way
-            // whatever the order of the unions.
-            let (low, high) = (a.min(b), a.max(b));
-            self.parent[high] = low as u32;
-        }
-    }
 }
 
 #[cfg(test)]

@@ -43,6 +43,21 @@ pub struct SmallSurfaces {
     points: Vec<ReceivingPoint>,
 }
 
+/// Whether a surface whose patches are `patches` is one patch that
+/// refinement never splits: the test refinement applies
+/// (`refine::Criteria::at_smallest`) to its root element, its longest edge
+/// within the surface's absolute smallest element size.
+pub(super) fn one_small_patch(mesh: &Mesh, patches: &std::ops::Range<u32>) -> bool {
+    if patches.len() != 1 {
+        return false;
+    }
+    let patch = &mesh.patches[patches.start as usize];
+    match mesh.surfaces[patch.surface as usize].min_element_size {
+        Some(size) => super::refine::longest_edge(mesh, patch.root) <= size,
+        None => false,
+    }
+}
+
 impl SmallSurfaces {
     /// The surfaces of `mesh` that receive once per shot (see the module
     /// documentation); `patches[s]` is surface `s`'s patch count.
@@ -52,16 +67,7 @@ impl SmallSurfaces {
             points: Vec::new(),
         };
         for (s, surface) in mesh.surfaces.iter().enumerate() {
-            let Some(size) = surface.min_element_size else {
-                continue;
-            };
-            if surface.corner_normals.is_some() || patches[s].len() != 1 {
-                continue;
-            }
-            // The test refinement applies (`Criteria::at_smallest`) to the
-            // surface's one patch, its root element.
-            let root = mesh.patches[patches[s].start as usize].root;
-            if super::refine::longest_edge(mesh, root) > size {
+            if surface.corner_normals.is_some() || !one_small_patch(mesh, &patches[s]) {
                 continue;
             }
             small.index[s] = small.points.len() as u32;
