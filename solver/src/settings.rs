@@ -274,10 +274,12 @@ fn default_glossy_edge() -> f64 {
     0.5
 }
 
-/// The default site angle (degrees, `solve::sites`): interpolating the
-/// irradiance across normals up to twice this apart is biased by at most
-/// 1 − cos 20° relative to the peak, measured at about a fifth of that
-/// (test `sites_on_a_fine_sphere_follow_lamberts_law`).
+/// The default site angle (degrees, `solve::sites`): the interpolated
+/// irradiance under a source misses by the normals' curvature across the
+/// sites, E_peak Σ |w_s| (1 − n_s · n) at each point, of the order of
+/// 1 − cos 10° = 1.5% of the peak; measured 1.6% at the worst point of a
+/// 4,608-facet sphere against 0.13% with every point receiving (test
+/// `sites_on_a_fine_sphere_follow_lamberts_law`).
 pub const DEFAULT_SITE_ANGLE: f64 = 10.0;
 
 fn default_crease_angle() -> f64 {
