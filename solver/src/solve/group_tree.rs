@@ -69,7 +69,7 @@
 //! bound also serves the ray share and the no-shadow case is never sampled:
 //! without shadows every node opens to its members (exact factors).
 
-use super::group_shot::{uniform_point, Member};
+use super::group_shot::Member;
 use crate::geometry::sampling::Rng;
 use glam::DVec3;
 use std::f64::consts::PI;
@@ -378,7 +378,7 @@ impl MemberTree {
         } = cluster;
         let (member, strength) = self.pick(cluster, rng.next_f64());
         let m = &members[member as usize];
-        let y = uniform_point(m.polygon(), rng);
+        let y = m.uniform_point(rng);
         let carried = if sampled {
             let kernel = point_kernel(q, n, y, m.normal());
             if kernel <= 0.0 {
