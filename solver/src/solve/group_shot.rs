@@ -740,20 +740,21 @@ impl EmittersShot {
 mod tests {
     use super::*;
 
-    /// Points drawn on a quad land inside it, and their mean is the quad's
-    /// area centroid within the Monte Carlo error (σ of the mean ≈ 0.3/√n
-    /// per axis for this quad: 4,000 points give 0.005; allowed 0.02).
+    /// A trapezoid: its centroid is not its vertex average, and its two fan
+    /// triangles differ in area.
+    const TRAPEZOID: [DVec3; 4] = [
+        DVec3::new(0.0, 0.0, 0.0),
+        DVec3::new(2.0, 0.0, 0.0),
+        DVec3::new(1.5, 1.0, 0.0),
+        DVec3::new(0.5, 1.0, 0.0),
+    ];
+
     #[test]
     fn a_members_points_are_uniform_points_of_its_polygon() {
         // The member keeps its fan's areas; the points must be the bits
         // `uniform_point` gives from the same draws, for a triangle and for
         // a quad whose two fan triangles differ in area.
-        let quad = [
-            DVec3::new(0.0, 0.0, 0.0),
-            DVec3::new(2.0, 0.0, 0.0),
-            DVec3::new(1.5, 1.0, 0.0),
-            DVec3::new(0.5, 1.0, 0.0),
-        ];
+        let quad = TRAPEZOID;
         for corner_count in [3, 4] {
             let polygon = &quad[..corner_count];
             let mut corners = quad;
@@ -776,15 +777,12 @@ mod tests {
         }
     }
 
+    /// Points drawn on a quad land inside it, and their mean is the quad's
+    /// area centroid within the Monte Carlo error (σ of the mean ≈ 0.3/√n
+    /// per axis for this quad: 4,000 points give 0.005; allowed 0.02).
     #[test]
     fn uniform_points_cover_a_quad_evenly() {
-        // A trapezoid: its centroid is not its vertex average.
-        let quad = [
-            DVec3::new(0.0, 0.0, 0.0),
-            DVec3::new(2.0, 0.0, 0.0),
-            DVec3::new(1.5, 1.0, 0.0),
-            DVec3::new(0.5, 1.0, 0.0),
-        ];
+        let quad = TRAPEZOID;
         let mut rng = Rng::new(7, 1);
         let n = 4000;
         let mut mean = DVec3::ZERO;
