@@ -162,13 +162,13 @@ impl Solver {
             .copied()
             .filter(|&r| !hidden(r))
             .collect();
-        let probed: Vec<u32> = shown
-            .iter()
-            .flat_map(|&r| match self.sites.sources_of(r) {
-                Some(sources) => sources.iter().map(|s| s.0).collect(),
-                None => vec![r],
-            })
-            .collect();
+        let mut probed = Vec::with_capacity(shown.len());
+        for &r in &shown {
+            match self.sites.sources_of(r) {
+                Some(sources) => probed.extend(sources.iter().map(|s| s.0)),
+                None => probed.push(r),
+            }
+        }
         let epsilons = self.enclosure.at(mesh.vertices.len(), &probed, |r| {
             let (q, n) = super::shoot::receiving_point(mesh, r, epsilon);
             enclosure::enclosure(occluder, q, n)
