@@ -368,9 +368,9 @@ fn index_polygon_edges(
 }
 
 /// The edges of one polygon's many pieces (`mesh::contact`) in a uniform
-/// grid: each edge, widened by the tolerance, is listed in every cell its box
-/// overlaps, so the edges that pass within the tolerance of a point are among
-/// those of the point's cell.
+/// grid: each edge is listed in every cell that a point within the tolerance
+/// of it can lie in, so the edges that pass within the tolerance of a point
+/// are among those of the point's cell.
 struct EdgeGrid {
     cell: f64,
     cells: IntMap<(i64, i64, i64), Vec<(u32, u32)>>,
@@ -399,18 +399,45 @@ impl EdgeGrid {
             let corners = &mesh.surfaces[surface as usize].vertices;
             for i in 0..corners.len() {
                 let (a, b) = (corners[i], corners[(i + 1) % corners.len()]);
-                let (from, to) = (grid.key(a.min(b) - tol), grid.key(a.max(b) + tol));
-                for x in from.0..=to.0 {
-                    for y in from.1..=to.1 {
-                        for z in from.2..=to.2 {
-                            let list = grid.cells.entry((x, y, z)).or_default();
-                            list.push((surface, i as u32));
+                grid.insert_edge(a, b, tol, (surface, i as u32));
+            }
+        }
+        grid
+    }
+
+    /// Lists `edge` (from `a` to `b`) in every cell within `tol` of it.
+    ///
+    /// The edge is walked in steps of at most half a cell. A point within
+    /// `tol` of the edge is within `tol` plus half a step of the nearest
+    /// sample, so the box of that reach round each sample holds its cell;
+    /// the reach is at most half a cell (`cell ≥ 4·tol`), so each box
+    /// touches at most 2 × 2 × 2 cells. An edge thus costs cells in
+    /// proportion to its length in cells, in any direction: listing its
+    /// whole bounding box instead costs the cube of that on a polygon tilted
+    /// off every axis (a long edge of a finely cut sloping roof would fill
+    /// a cube of cells).
+    fn insert_edge(&mut self, a: DVec3, b: DVec3, tol: f64, edge: (u32, u32)) {
+        let steps = ((b - a).length() / (0.5 * self.cell)).ceil().max(1.0);
+        // Mesh vertices are finite, so `steps` is too; the cap only bounds
+        // the loop should that ever fail.
+        let steps = steps.min(1e9) as u32;
+        let reach = DVec3::splat(0.5 * (b - a).length() / f64::from(steps) + tol);
+        for k in 0..=steps {
+            let p = a.lerp(b, f64::from(k) / f64::from(steps));
+            let (from, to) = (self.key(p - reach), self.key(p + reach));
+            for x in from.0..=to.0 {
+                for y in from.1..=to.1 {
+                    for z in from.2..=to.2 {
+                        let list = self.cells.entry((x, y, z)).or_default();
+                        // The samples of one edge come one after another, so
+                        // a cell that already lists it lists it last.
+                        if list.last() != Some(&edge) {
+                            list.push(edge);
                         }
                     }
                 }
             }
         }
-        grid
     }
 
     fn key(&self, p: DVec3) -> (i64, i64, i64) {
@@ -595,21 +622,37 @@ mod tests {
 
     #[test]
     fn an_edge_grid_lists_every_piece_edge_near_a_point() {
-        // A 2 × 2 floor under 25 open boxes (four sides each, standing on
-        // it) is cut along their footprints into many pieces. For every
-        // piece corner and for points along every edge, lifted off it by
-        // less than the tolerance, each edge within the tolerance (by brute
-        // force over all pieces) is in the point's cell.
+        check_edge_grid(glam::DQuat::IDENTITY, 5);
+    }
+
+    #[test]
+    fn an_edge_grid_on_a_tilted_polygon_lists_each_edge_along_its_length() {
+        // Tilted off every axis, a long edge's bounding box spans many cells
+        // along all three: with 10 × 10 boxes the floor's 2-long edges are
+        // 12 cells long, and listing their boxes (about 7 cells a side) would
+        // fail the per-edge bound.
+        let tilt = glam::DQuat::from_axis_angle(DVec3::new(1.0, 0.4, 0.7).normalize(), 0.9);
+        check_edge_grid(tilt, 8);
+    }
+
+    /// A 2 × 2 floor under `n` × `n` open boxes (four sides each, standing on
+    /// it), turned by `rotation`, is cut along their footprints into many pieces.
+    /// For every piece corner and for points along every edge, lifted off it
+    /// by less than the tolerance, each edge within the tolerance (by brute
+    /// force over all pieces) is in the point's cell. And each edge is listed
+    /// in at most 8 cells per half cell of its length, plus 8 for its end.
+    fn check_edge_grid(rotation: glam::DQuat, n: usize) {
         use crate::solve::tests::{material, scene_of};
-        let p = |x: f64, y: f64, z: f64| DVec3::new(x, y, z);
+        let p = |x: f64, y: f64, z: f64| rotation * DVec3::new(x, y, z);
         let mut polygons = vec![(
             vec![p(0., 0., 0.), p(0., 0., 2.), p(2., 0., 2.), p(2., 0., 0.)],
             0,
         )];
-        for i in 0..5 {
-            for j in 0..5 {
-                let (a, b) = (0.1 + 0.4 * i as f64, 0.1 + 0.4 * j as f64);
-                let (c, d, h) = (a + 0.17, b + 0.23, 0.2);
+        let pitch = 2.0 / n as f64;
+        for i in 0..n {
+            for j in 0..n {
+                let (a, b) = (pitch * (i as f64 + 0.25), pitch * (j as f64 + 0.25));
+                let (c, d, h) = (a + 0.425 * pitch, b + 0.575 * pitch, 0.2);
                 polygons.push((vec![p(a, 0., b), p(a, h, b), p(c, h, b), p(c, 0., b)], 0));
                 polygons.push((vec![p(a, 0., d), p(c, 0., d), p(c, h, d), p(a, h, d)], 0));
                 polygons.push((vec![p(a, 0., b), p(a, 0., d), p(a, h, d), p(a, h, b)], 0));
@@ -654,6 +697,21 @@ mod tests {
             }
         }
         assert!(checked > 1000, "{checked}");
+        let mut listed: std::collections::HashMap<(u32, u32), f64> = Default::default();
+        for list in grid.cells.values() {
+            for &edge in list {
+                *listed.entry(edge).or_default() += 1.0;
+            }
+        }
+        for (&(s, i), &cells) in &listed {
+            let v = &mesh.surfaces[s as usize].vertices;
+            let length = (v[(i as usize + 1) % v.len()] - v[i as usize]).length();
+            let bound = 8.0 * ((length / (0.5 * grid.cell)).ceil().max(1.0) + 1.0);
+            assert!(
+                cells <= bound,
+                "edge {i} of {s}: {cells} cells, bound {bound}"
+            );
+        }
     }
 
     /// Output vertices 0–3 on one polygon edge (0, 3) at parameters 0, ¼, ½
