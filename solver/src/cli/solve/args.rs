@@ -235,13 +235,13 @@ pub struct SolveArgs {
             factor, far clusters as one item each) and shares its rays among them by \
             importance, an estimate of the sum of their shots. Far fewer shots, and \
             passes over the receivers, where many small patches are lit (thousands of \
-            boxes on a floor): 100k boxes at medium converge in 50 s on 2 cores and 1M at \
-            draft in 7 minutes, which the patch shooter does not in 5 and 10 minutes. An emitter's patch shoots its \
+            boxes on a floor): 100k boxes at medium converge in 40 s on 2 cores and 1M at \
+            draft in 5 minutes, which the patch shooter does not in 5 and 10 minutes. An emitter's patch shoots its \
             emission alone first (recorded for refinement's replay). patch: the patch \
             with the most unshot power, one per shot (Remington 1992). On the Cornell \
             box against the path-traced truth grouped is the more accurate at every \
-            preset (final: 1.27% against 1.44% MARE, 19 s against 24 s; medium: 1.74% \
-            against 2.3%, 1.2 s against 4.8 s) but noisier between seeds at equal rays \
+            preset (final: 1.27% against 1.44% MARE, 19 s against 24 s when compared, 13 s \
+            since; medium: 1.74% against 2.3%, 1.2 s against 4.8 s) but noisier between seeds at equal rays \
             (--group-samples; docs/accuracy.md, \"Grouped shooters by default\"). \
             Diffuse mode only (directional solves shoot patches)."
     )]
