@@ -628,9 +628,10 @@ mod tests {
     #[test]
     fn an_edge_grid_on_a_tilted_polygon_lists_each_edge_along_its_length() {
         // Tilted off every axis, a long edge's bounding box spans many cells
-        // along all three: with 10 × 10 boxes the floor's 2-long edges are
-        // 12 cells long, and listing their boxes (about 7 cells a side) would
-        // fail the per-edge bound.
+        // along all three: with 8 × 8 boxes (the most a receiver is cut by,
+        // `MAX_FOOTPRINTS`) the floor's 2-long edges are about 10 cells
+        // long, and listing their boxes put one in 315 cells, over its bound
+        // of 168.
         let tilt = glam::DQuat::from_axis_angle(DVec3::new(1.0, 0.4, 0.7).normalize(), 0.9);
         check_edge_grid(tilt, 8);
     }
