@@ -3,9 +3,10 @@
 //! The byte layout is specified in `docs/solution-format.md`; this module holds the
 //! in-memory form ([`Solution`]), the atomic writer and the memory-mapped,
 //! validating reader. Positions are re-centred scene units stored as f32; radiance
-//! is linear RGB (W·sr⁻¹·m⁻²). Vertices come in batches, one per representation
+//! is linear RGB (W·sr⁻¹·m⁻²). Vertices come in batches of one representation
 //! (SH order L, or D discrete directions), so the runtime can draw each batch with
-//! a loop bound fixed per draw.
+//! a loop bound fixed per draw; a representation may span several batches
+//! ([`split_to_storage_range`]).
 
 use crate::camera::{Camera, UpAxis};
 use serde::{Deserialize, Serialize};
@@ -14,6 +15,7 @@ mod describe;
 mod error;
 pub mod layout;
 mod read;
+mod split;
 mod texture;
 mod validate;
 mod write;
@@ -31,6 +33,7 @@ pub use describe::{
 pub use error::{FormatError, Problem};
 pub use layout::MAX_SH_ORDER;
 pub use read::{decode, read_solution, BatchInfo, BatchSection, BatchTexture, MappedSolution};
+pub use split::{split_to_storage_range, PORTABLE_STORAGE_RANGE};
 pub use texture::{decode_png, encode_png, TextureInfo};
 pub use validate::{
     check_frame_cost, frame_cost, terms_per_vertex, BOUNDS_RELATIVE_SLACK, DEFAULT_MAX_FRAME_COST,
