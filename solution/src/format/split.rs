@@ -9,13 +9,13 @@
 //! cuts such a batch into batches of whole triangles that each fit, before it
 //! writes the file.
 
-use super::Batch;
+use super::{layout, Batch};
 
 /// The largest storage-buffer range every Vulkan device binds (2²⁷ bytes = 128 MiB).
 pub const PORTABLE_STORAGE_RANGE: u64 = 1 << 27;
 
-/// Every batch of `batches` whose coefficients, stored as f32 (the larger of
-/// the two stored types), exceed `max_bytes`, replaced in place by batches of
+/// Every batch of `batches` whose coefficients, as stored (the batch's
+/// `scalar`, as the runtime counts them), exceed `max_bytes`, replaced in place by batches of
 /// consecutive whole triangles whose vertices' coefficients each fit. A
 /// vertex that triangles of two pieces share is copied into both, with the
 /// same position, frame, coefficients and texturing, so the pieces draw
@@ -25,7 +25,8 @@ pub const PORTABLE_STORAGE_RANGE: u64 = 1 << 27;
 pub fn split_to_storage_range(batches: Vec<Batch>, max_bytes: u64) -> Vec<Batch> {
     let mut out = Vec::with_capacity(batches.len());
     for batch in batches {
-        let per_vertex = 4 * batch.representation.coefficients_per_channel() * 3;
+        let per_vertex =
+            layout::scalar_size(batch.scalar) * batch.representation.coefficients_per_channel() * 3;
         let capacity = max_bytes.checked_div(per_vertex).unwrap_or(u64::MAX);
         let bytes = per_vertex.saturating_mul(batch.vertices.len() as u64);
         if bytes <= max_bytes || capacity < 3 {

@@ -536,14 +536,13 @@ fn finish(
     scene_camera: Option<Camera>,
 ) -> anyhow::Result<ExitCode> {
     let Outcome {
-        solution,
+        mut solution,
         stats,
         interrupted,
         converged,
     } = outcome;
     if !interrupted {
-        solution::format::write_solution(&args.out, &solution)
-            .with_context(|| format!("writing solution {}", args.out.display()))?;
+        files::write_solution(&args.out, &mut solution, "solution")?;
     }
     eprintln!("solver: {}", stats.summary(settings.threshold));
     if let Some(path) = &args.stats_json {

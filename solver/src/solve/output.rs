@@ -295,12 +295,6 @@ impl Solver {
         self.split_textured(&shared, &mut solution, &ambient_at);
         // Directional mode: one batch per SH order instead.
         self.directional_batches(&mut solution, ambient);
-        // A batch whose coefficients exceed the storage range every Vulkan
-        // device binds is cut into batches of whole triangles that fit.
-        solution.batches = ::solution::format::split_to_storage_range(
-            std::mem::take(&mut solution.batches),
-            ::solution::format::PORTABLE_STORAGE_RANGE,
-        );
         if self.scene_camera.is_none() {
             // No authored camera: an eye inside the enclosed space that sees lit
             // surfaces, standing on the floor (`solution::view`, whose notes say

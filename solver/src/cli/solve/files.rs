@@ -3,10 +3,34 @@
 //! Every file the command writes (checkpoint, stats JSON, preview PNG) goes through
 //! [`write_atomic`], so a crash or Ctrl-C never leaves a half-written file under its
 //! final name (brief, "Standards"). The solution file itself is written by
-//! `format::write_solution`, which is atomic in the same way.
+//! [`write_solution`], through `format::write_solution`, which is atomic in the
+//! same way.
 
 use anyhow::Context;
+use solution::format::{split_to_storage_range, Solution, PORTABLE_STORAGE_RANGE};
 use std::path::{Path, PathBuf};
+
+/// Writes a solution file (the final one, or the partial one a checkpoint
+/// leaves for a viewer), whichever method produced it, with every batch cut to
+/// the storage-buffer range every Vulkan device binds
+/// ([`split_to_storage_range`]), so that no runtime refuses a batch as too
+/// large to bind; `solution` is left as written. `what` names the file in the
+/// error.
+pub fn write_solution(path: &Path, solution: &mut Solution, what: &str) -> anyhow::Result<()> {
+    write_solution_within(path, solution, what, PORTABLE_STORAGE_RANGE)
+}
+
+/// [`write_solution`] with the batch limit as a parameter (tests use a small one).
+fn write_solution_within(
+    path: &Path,
+    solution: &mut Solution,
+    what: &str,
+    max_bytes: u64,
+) -> anyhow::Result<()> {
+    solution.batches = split_to_storage_range(std::mem::take(&mut solution.batches), max_bytes);
+    solution::format::write_solution(path, solution)
+        .with_context(|| format!("writing {what} {}", path.display()))
+}
 
 /// Writes `bytes` to `path` atomically through the contract crate's one writer
 /// ([`solution::atomic::write_atomically`]: temporary file in the same folder,
@@ -82,6 +106,62 @@ mod tests {
         assert_eq!(std::fs::read_dir(dir.path().join("a")).unwrap().count(), 0);
         let err = check_writable(dir.path()).unwrap_err();
         assert!(format!("{err:#}").contains("not a file name"), "{err:#}");
+    }
+
+    /// The solve command writes every file through the cut: a quad of two
+    /// triangles (4 vertices of 12 bytes) under a limit of 3 vertices is read
+    /// back as two batches, each within the limit, drawing both triangles.
+    #[test]
+    fn solution_files_are_written_with_batches_cut_to_the_limit() {
+        use solution::format::{
+            read_solution, Batch, Header, Representation, ScalarType, SolveMode, Vertex,
+        };
+        let vertex = |x: f32, y: f32| Vertex {
+            position: [x, y, 0.0],
+            normal: [0.0, 0.0, 1.0],
+            tangent: [1.0, 0.0, 0.0],
+        };
+        let mut solution = Solution {
+            header: Header {
+                units_per_metre: 1.0,
+                up_axis: Default::default(),
+                recentre_offset: [0.0; 3],
+                camera: Default::default(),
+                bounds_min: [0.0; 3],
+                bounds_max: [1.0, 1.0, 0.0],
+                partial: false,
+                mode: SolveMode::Diffuse,
+                stats: Default::default(),
+                settings_json: "{}".into(),
+            },
+            batches: vec![Batch {
+                representation: Representation::Sh { order: 0 },
+                scalar: ScalarType::F32,
+                vertices: vec![
+                    vertex(0.0, 0.0),
+                    vertex(1.0, 0.0),
+                    vertex(1.0, 1.0),
+                    vertex(0.0, 1.0),
+                ],
+                coefficients: (0..12).map(|k| k as f32).collect(),
+                indices: vec![0, 1, 2, 0, 2, 3],
+                texturing: None,
+            }],
+            textures: Vec::new(),
+        };
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("quad.sol");
+        write_solution_within(&path, &mut solution, "solution", 36).unwrap();
+        let read = read_solution(&path).unwrap();
+        assert_eq!(read.batches.len(), 2);
+        for b in &read.batches {
+            assert!(b.coefficients.len() * 4 <= 36 && b.indices.len() == 3);
+        }
+        // The second triangle's corners 0, 2, 3, with their coefficients.
+        assert_eq!(
+            read.batches[1].coefficients,
+            [0., 1., 2., 6., 7., 8., 9., 10., 11.]
+        );
     }
 
     #[test]

@@ -9,7 +9,6 @@
 use super::checkpoint::{self, Meta};
 use super::progress::{Reporter, Snapshot};
 use super::stats::RunStats;
-use anyhow::Context;
 use solution::format::Solution;
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -83,8 +82,7 @@ impl Session<'_> {
         checkpoint::write(&self.checkpoint_path, &meta, |w| shooter.write_state(w))?;
         let mut partial = shooter.solution(true);
         partial.header.stats.seconds = seconds;
-        solution::format::write_solution(self.out, &partial)
-            .with_context(|| format!("writing partial solution {}", self.out.display()))
+        super::files::write_solution(self.out, &mut partial, "partial solution")
     }
 
     /// Shoots until done or interrupted. `seconds_before` is the time spent by the
