@@ -108,60 +108,23 @@ mod tests {
         assert!(format!("{err:#}").contains("not a file name"), "{err:#}");
     }
 
-    /// The solve command writes every file through the cut: a quad of two
-    /// triangles (4 vertices of 12 bytes) under a limit of 3 vertices is read
-    /// back as two batches, each within the limit, drawing both triangles.
+    /// The solve command writes every file through the cut: the shared box
+    /// room (`solution::view::fixture`, one batch) under a limit of 40
+    /// vertices (12 bytes each) reads back as several batches, each within
+    /// the limit, drawing every triangle it had.
     #[test]
     fn solution_files_are_written_with_batches_cut_to_the_limit() {
-        use solution::format::{
-            read_solution, Batch, Header, Representation, ScalarType, SolveMode, Vertex,
-        };
-        let vertex = |x: f32, y: f32| Vertex {
-            position: [x, y, 0.0],
-            normal: [0.0, 0.0, 1.0],
-            tangent: [1.0, 0.0, 0.0],
-        };
-        let mut solution = Solution {
-            header: Header {
-                units_per_metre: 1.0,
-                up_axis: Default::default(),
-                recentre_offset: [0.0; 3],
-                camera: Default::default(),
-                bounds_min: [0.0; 3],
-                bounds_max: [1.0, 1.0, 0.0],
-                partial: false,
-                mode: SolveMode::Diffuse,
-                stats: Default::default(),
-                settings_json: "{}".into(),
-            },
-            batches: vec![Batch {
-                representation: Representation::Sh { order: 0 },
-                scalar: ScalarType::F32,
-                vertices: vec![
-                    vertex(0.0, 0.0),
-                    vertex(1.0, 0.0),
-                    vertex(1.0, 1.0),
-                    vertex(0.0, 1.0),
-                ],
-                coefficients: (0..12).map(|k| k as f32).collect(),
-                indices: vec![0, 1, 2, 0, 2, 3],
-                texturing: None,
-            }],
-            textures: Vec::new(),
-        };
+        let mut room = solution::view::fixture::box_room();
+        let triangles = room.batches[0].indices.len() / 3;
+        assert!(room.batches[0].vertices.len() > 40);
         let dir = tempfile::tempdir().unwrap();
-        let path = dir.path().join("quad.sol");
-        write_solution_within(&path, &mut solution, "solution", 36).unwrap();
-        let read = read_solution(&path).unwrap();
-        assert_eq!(read.batches.len(), 2);
-        for b in &read.batches {
-            assert!(b.coefficients.len() * 4 <= 36 && b.indices.len() == 3);
-        }
-        // The second triangle's corners 0, 2, 3, with their coefficients.
-        assert_eq!(
-            read.batches[1].coefficients,
-            [0., 1., 2., 6., 7., 8., 9., 10., 11.]
-        );
+        let path = dir.path().join("room.sol");
+        write_solution_within(&path, &mut room, "solution", 40 * 12).unwrap();
+        let read = solution::format::read_solution(&path).unwrap();
+        assert!(read.batches.len() > 1);
+        assert!(read.batches.iter().all(|b| b.vertices.len() <= 40));
+        let read_triangles: usize = read.batches.iter().map(|b| b.indices.len() / 3).sum();
+        assert_eq!(read_triangles, triangles);
     }
 
     #[test]
