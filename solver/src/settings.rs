@@ -232,6 +232,13 @@ pub struct SolverSettings {
     /// uniformly.
     #[serde(default)]
     pub uniform_shooters: bool,
+    /// Give a split's new glossy vertex the light of earlier, unrecorded
+    /// shots as its parents' average, as Remington 1992 does, instead of
+    /// gathering its near patches' shot light again
+    /// (`solve::directional::near_gather`). Off by default; for measuring
+    /// what the gather changes.
+    #[serde(default)]
+    pub interpolated_glossy_splits: bool,
     /// Receive a shot at every vertex of a small flat surface (one patch
     /// already at its smallest element size) instead of once at its centroid
     /// for all its vertices (`solve::small`). Off by default; for measuring
@@ -325,6 +332,8 @@ pub struct SettingsPatch {
     pub memory_budget: Option<u64>,
     /// `true` shoots every patch's mean unshot radiance uniformly (`solve::regions`).
     pub uniform_shooters: Option<bool>,
+    /// `true` interpolates split glossy vertices (`solve::directional::near_gather`).
+    pub interpolated_glossy_splits: Option<bool>,
     /// `true` receives at every vertex of a small flat surface (`solve::small`).
     pub per_vertex_small: Option<bool>,
     /// `true` receives at every copy of a smooth surface's shared vertex (`solve::twins`).
@@ -385,6 +394,7 @@ impl SolverSettings {
             memory_budget: None,
             resident_before_meshing: None,
             uniform_shooters: false,
+            interpolated_glossy_splits: false,
             per_vertex_small: false,
             per_copy_vertices: false,
             site_angle: DEFAULT_SITE_ANGLE,
@@ -448,6 +458,7 @@ impl SolverSettings {
             strict,
             crease_angle,
             uniform_shooters,
+            interpolated_glossy_splits,
             per_vertex_small,
             per_copy_vertices,
             site_angle,

@@ -428,11 +428,12 @@ pub fn estimate(c: &Counts) -> MemoryEstimate {
             + size_of::<bool>() as u64
             + size_of::<f32>() as u64);
     // Radiance, ΔL and recorded-shot radiance per vertex coefficient; an
-    // offset per vertex and per patch; the patches' unshot coefficients.
+    // offset per vertex and per patch; the patches' unshot coefficients and
+    // the sums they have shot (`directional/near_gather.rs`).
     let sh = if c.directional {
         3 * c.vertex_coefficients * f64_
             + (c.vertices + c.patches) * size_of::<usize>() as u64
-            + c.patch_coefficients * f64_
+            + 2 * c.patch_coefficients * f64_
     } else {
         0
     };

@@ -36,7 +36,9 @@
 //! of the coefficient's recorded-shot part), `SHUN` (packed, one per patch
 //! coefficient; a patch's bits XOR the kept bits of a prediction where `SHUM`
 //! flags it), `SHUM` (u32 per patch: 1 where masked), `SHRL` (u32 coefficient count
-//! per recorded shot) and `SHRU` (their f64s). The masks turn bits that agree
+//! per recorded shot), `SHRU` (their f64s) and `SHSS` (packed, one per patch
+//! coefficient: the SH each patch has shot in unrecorded shots, which a
+//! split's new glossy vertex gathers, `directional/near_gather.rs`). The masks turn bits that agree
 //! into zero bytes for deflate; a resume recomputes what masked them, exactly,
 //! and unmasks (`directional/state.rs`). Directional mode keeps its radiance
 //! and unshot coefficients at 40 mantissa bits ([`precision`]), so their 12
@@ -55,8 +57,8 @@ pub(super) use packed::CHUNK_VALUES;
 pub(super) mod precision;
 
 /// Bump when the meaning of the fields changes (3: the f64 arrays packed;
-/// 4: directional masks use only the kept bits, [`precision`]).
-pub const CHECKPOINT_VERSION: u32 = 4;
+/// 4: directional masks use only the kept bits, [`precision`]; 5: `SHSS`).
+pub const CHECKPOINT_VERSION: u32 = 5;
 
 /// Everything [`Solver::resume`] needs, as read back from a checkpoint. See the
 /// module documentation. (Writing streams from the solver itself:
@@ -420,6 +422,7 @@ fn read_directional<R: Read>(
     let unshot_masked = r.u32s("SHUM")?;
     let lengths = r.u32s("SHRL")?;
     let flat = r.f64s("SHRU")?;
+    let shot_sum = r.packed("SHSS")?.into_iter().map(f64::to_bits).collect();
     let total: u64 = lengths.iter().map(|&n| n as u64).sum();
     if total != flat.len() as u64 {
         return Err(StateError::Bad {
@@ -449,6 +452,7 @@ fn read_directional<R: Read>(
             patch_unshot,
             direct: Vec::new(),
             recorded_unshot,
+            shot_sum,
             brdf_normalization,
         },
         unshot_masked,
@@ -534,6 +538,11 @@ impl Solver {
             for u in sections.recorded_unshot {
                 u.iter().try_for_each(|&x| s.f64(x))?;
             }
+            s.packed(
+                b"SHSS",
+                sections.shot_sum.len(),
+                sections.shot_sum.iter().copied(),
+            )?;
         }
         Ok(())
     }

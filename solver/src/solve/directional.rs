@@ -78,7 +78,11 @@
 //! this module's `DirField`): the same candidates, splits, interpolation
 //! of the smooth part and exact replay of every recorded emitter shot to new
 //! vertices, per SH coefficient (the recorded shots' unshot SH are kept, and
-//! checkpointed, beside the diffuse solver's list). L = 0 surfaces use the
+//! checkpointed, beside the diffuse solver's list). A new vertex on a glossy
+//! surface also gathers what the patches near it have shot so far, instead of
+//! taking that part from its parents' average (`directional/near_gather.rs`:
+//! the average of two reflected images is not the image between them; each
+//! patch's shot SH are summed, and checkpointed). L = 0 surfaces use the
 //! diffuse split test on the c₀₀ proxies, so with Ks = 0 the two modes mesh
 //! and solve alike; glossy surfaces split on the Parseval L2 norm of the
 //! coefficient difference across an edge, down to [`min_glossy_edge`].
@@ -90,7 +94,7 @@ use super::refine::{Criteria, Field};
 use super::regions::{self, QuadrantScale};
 use super::shoot::RecordedShot;
 use super::shoot::{visible_samples, SampleBy, SamplePool, SampleScratch, Shot};
-use super::{ShotReport, SolveError, Solver};
+use super::{ShapeView, ShotReport, SolveError, Solver};
 use crate::brdf::normalization::funk_hecke_d;
 use crate::brdf::GlossyLobe;
 use crate::mesh::{Mesh, NewVertex};
@@ -108,6 +112,7 @@ use std::sync::Arc;
 use std::time::Instant;
 
 mod hidden_fill;
+mod near_gather;
 mod seams;
 mod split;
 mod state;
@@ -147,6 +152,10 @@ pub struct Directional {
     direct: Vec<f64>,
     /// The unshot SH of each of the solver's recorded shots, in order.
     recorded_unshot: Vec<Vec<f64>>,
+    /// Per patch (laid out as `patch_unshot`): the sum of the unshot SH it
+    /// has shot in unrecorded shots, which a split's new glossy vertex
+    /// gathers from the patches near it (`directional/near_gather.rs`).
+    shot_sum: Vec<f64>,
     /// Per surface: the smallest element edge glossy refinement may create
     /// (see [`min_glossy_edge`]); 0 for L = 0 surfaces.
     min_edge: Vec<f64>,
@@ -202,6 +211,9 @@ pub struct DirectionalCheckpoint {
     /// The unshot SH of each recorded shot.
     #[serde(default)]
     pub recorded_unshot: Vec<Vec<u64>>,
+    /// Per patch coefficient: the SH it has shot in unrecorded shots.
+    #[serde(default)]
+    pub shot_sum: Vec<u64>,
     /// The lobe normalization the coefficients were computed with.
     #[serde(default)]
     pub brdf_normalization: crate::settings::BrdfNormalization,
@@ -336,6 +348,7 @@ impl Directional {
             choice: SourceChoice::default(),
             direct: Vec::new(),
             recorded_unshot: Vec::new(),
+            shot_sum: Vec::new(),
             min_edge: Vec::new(),
             view_distance: 0.0,
             textured: textured::textured_surfaces(scene, mesh),
@@ -367,6 +380,7 @@ impl Directional {
             at += 3 * coefficient_count(d.surface_order[p.surface as usize]);
         }
         d.patch_unshot = vec![0.0; at];
+        d.shot_sum = vec![0.0; at];
         let scale = (4.0 * PI).sqrt();
         for (v, mv) in mesh.vertices.iter().enumerate() {
             let e = emission[mv.surface as usize];
@@ -424,6 +438,16 @@ impl Directional {
     fn patch_range(&self, mesh: &Mesh, p: usize) -> std::ops::Range<usize> {
         let o = self.patch_offset[p];
         o..o + 3 * coefficient_count(self.surface_order[mesh.patches[p].surface as usize])
+    }
+
+    /// The unshot SH patch `p` has shot in unrecorded shots so far.
+    fn shot_sum(&self, mesh: &Mesh, p: usize) -> &[f64] {
+        &self.shot_sum[self.patch_range(mesh, p)]
+    }
+
+    /// Whether patch `p` has shot light in an unrecorded shot.
+    fn has_shot(&self, mesh: &Mesh, p: usize) -> bool {
+        self.shot_sum(mesh, p).iter().any(|&c| c != 0.0)
     }
 
     /// Unshot radiance equivalent to the upper-hemisphere power of
@@ -742,32 +766,6 @@ impl Solver {
         Some(report)
     }
 
-    /// The quadrant scales of quad patch `source` lit unevenly
-    /// ([`Solver::source_regions`] with a unit mean), each shaped inside by
-    /// [`FineShape`] where subdivision split it; `None` for a triangle, or a
-    /// patch lit evenly and not split inside a quadrant.
-    fn quadrant_scale(&self, source: u32, shot: &Shot) -> Option<QuadrantScale> {
-        let patch = &self.mesh.patches[source as usize];
-        if patch.corner_count != 4 {
-            return None;
-        }
-        let fine = FineShape::new(&patch.corners, self.shape_samples(source));
-        // A patch lit evenly quadrant by quadrant may still hold a step
-        // inside one (a shadow's edge): its quadrants shoot at their mean,
-        // each shaped inside.
-        let regions = self
-            .source_regions(source, DVec3::ONE)
-            .or_else(|| fine.as_ref().map(|_| regions::uniform(&patch.corners)))?;
-        Some(QuadrantScale {
-            corners: patch.corners,
-            normal: shot.normal,
-            centre: shot.centre,
-            diameter: shot.diameter,
-            regions,
-            fine,
-        })
-    }
-
     fn choose_directional_source(&self, d: &Directional) -> u32 {
         match d.choice {
             SourceChoice::Hemisphere => self.choose_source(),
@@ -834,7 +832,7 @@ impl Solver {
         let quadrants = if recorded || self.settings.uniform_shooters {
             None
         } else {
-            self.quadrant_scale(source, &shot)
+            quadrant_scale(self.shape_view(), source, &shot)
         };
         let mut rays = 0u64;
         let dir_shot = DirShot {
@@ -919,6 +917,19 @@ impl Solver {
                     shot: &dir_shot,
                     replay: &replay,
                     current_recorded: recorded,
+                    near: near_gather::NearGather {
+                        patch_weights: &self.patch_weights,
+                        hidden: &self.hidden,
+                        emission: &self.emission,
+                        settings: &self.settings,
+                        occluder: &self.occluder,
+                        kd: &self.kd,
+                        reach: if self.settings.interpolated_glossy_splits {
+                            0.0
+                        } else {
+                            near_gather::NEAR_REACH
+                        },
+                    },
                 },
                 // The diffuse step's criteria (see `Solver::step`).
                 &Criteria {
@@ -932,6 +943,14 @@ impl Solver {
             d.recorded_unshot = recorded_unshot;
             self.after_refinement(&split_budget, Some(d));
             rays += refined.rays;
+        }
+        // This shot's light joins its patch's sum for the gathers of later
+        // splits (`directional/near_gather.rs`); recorded shots replay.
+        if !recorded {
+            let range = d.patch_range(&self.mesh, source as usize);
+            for (s, u) in d.shot_sum[range].iter_mut().zip(&unshot) {
+                *s = round_to_kept(*s + u);
+            }
         }
         let splits = refined.splits;
         self.leaf_count += 3 * splits;
@@ -1025,6 +1044,13 @@ impl Solver {
                         d.patch_unshot.len()
                     ));
                 }
+                if s.shot_sum.len() != d.shot_sum.len() {
+                    return Err(format!(
+                        "it has {} shot-sum coefficients, this mesh needs {}",
+                        s.shot_sum.len(),
+                        d.shot_sum.len()
+                    ));
+                }
                 if s.brdf_normalization != self.settings.brdf_normalization {
                     return Err(format!(
                         "it was solved with brdf_normalization {:?}, this solve uses {:?}",
@@ -1058,6 +1084,7 @@ impl Solver {
                 } else {
                     s.direct.into_iter().map(f64::from_bits).collect()
                 };
+                d.shot_sum = s.shot_sum.into_iter().map(f64::from_bits).collect();
                 d.recorded_unshot = s
                     .recorded_unshot
                     .into_iter()
@@ -1069,6 +1096,7 @@ impl Solver {
                     .direct
                     .iter()
                     .chain(d.recorded_unshot.iter().flatten())
+                    .chain(&d.shot_sum)
                     .all(|x| x.is_finite())
                 {
                     return Err("it holds non-finite coefficients".into());
@@ -1164,6 +1192,32 @@ impl Solver {
     }
 }
 
+/// The quadrant scales of quad patch `source` lit unevenly
+/// ([`ShapeView::source_regions`] with a unit mean), each shaped inside by
+/// [`FineShape`] where subdivision split it; `None` for a triangle, or a
+/// patch lit evenly and not split inside a quadrant.
+fn quadrant_scale(view: ShapeView, source: u32, shot: &Shot) -> Option<QuadrantScale> {
+    let patch = &view.mesh.patches[source as usize];
+    if patch.corner_count != 4 {
+        return None;
+    }
+    let fine = FineShape::new(&patch.corners, view.shape_samples(source));
+    // A patch lit evenly quadrant by quadrant may still hold a step
+    // inside one (a shadow's edge): its quadrants shoot at their mean,
+    // each shaped inside.
+    let regions = view
+        .source_regions(source, DVec3::ONE)
+        .or_else(|| fine.as_ref().map(|_| regions::uniform(&patch.corners)))?;
+    Some(QuadrantScale {
+        corners: patch.corners,
+        normal: shot.normal,
+        centre: shot.centre,
+        diameter: shot.diameter,
+        regions,
+        fine,
+    })
+}
+
 /// Directional mode's [`Field`] for adaptive subdivision: the same driver,
 /// candidates, splits and replay of recorded (emitter) shots as the diffuse
 /// solver (`refine.rs`), on SH coefficients. The diffuse proxies (c₀₀ Y₀₀,
@@ -1183,6 +1237,8 @@ struct DirField<'s, 'a> {
     replay: &'s [DirShot<'a>],
     /// Whether the current shot is the last of `replay`.
     current_recorded: bool,
+    /// New glossy vertices gather their near patches' shot light.
+    near: near_gather::NearGather<'s>,
 }
 
 impl Field for DirField<'_, '_> {
@@ -1293,11 +1349,19 @@ impl Field for DirField<'_, '_> {
                 (exact, current, rays)
             })
             .collect();
+        let near = self
+            .near
+            .corrections(mesh, self.radiance, self.d, shot.tables, created);
         let d = &mut *self.d;
-        let mut total = 0;
-        for (nv, (exact, current, rays)) in created.iter().zip(results) {
+        let mut total = near.rays;
+        for ((nv, (exact, current, rays)), correction) in
+            created.iter().zip(results).zip(near.per_vertex)
+        {
             let v = nv.id as usize;
             let o = d.vertex_offset[v];
+            for (k, c) in correction.iter().flatten().enumerate() {
+                d.radiance[o + k] += c;
+            }
             for (k, e) in exact.iter().enumerate() {
                 d.radiance[o + k] += e;
                 d.direct[o + k] = *e;

@@ -393,7 +393,10 @@ fn sh_bits(solver: &Solver) -> Vec<u64> {
 #[test]
 fn resumed_directional_solve_equals_an_uninterrupted_one() {
     let (scene, mut settings) = glossy_floor();
-    settings.max_shots = 6;
+    // A finer glossy floor than draft's, so that shots after the light's
+    // split the glossy floor too (the sixth does), gathering shot sums.
+    settings.max_shots = 8;
+    settings.glossy_edge = 0.125;
     settings.adaptive = true;
     let whole = run(&scene, &settings);
     assert!(
@@ -412,6 +415,12 @@ fn resumed_directional_solve_equals_an_uninterrupted_one() {
     let low = (1u64 << crate::solve::checkpoint::precision::DROPPED_BITS) - 1;
     assert!(sections.radiance.iter().all(|x| x.to_bits() & low == 0));
     assert!(sections.patch_unshot.iter().all(|x| x.to_bits() & low == 0));
+    // The patches' shot sums, which later splits gather (`near_gather.rs`),
+    // are part of the state.
+    assert!(
+        sections.shot_sum.iter().any(|&x| x != 0.0),
+        "the test should checkpoint after an unrecorded shot"
+    );
     let state = Checkpoint::round_trip(&first);
     assert!(state.directional.is_some());
     let mut resumed = Solver::resume(&scene, &settings, state.clone()).unwrap();
@@ -430,10 +439,20 @@ fn resumed_directional_solve_equals_an_uninterrupted_one() {
     );
     drop(first);
     let splits_at_checkpoint = resumed.mesh().split_log.len();
+    let vertices_at_checkpoint = resumed.mesh().vertices.len();
     while resumed.step().is_some() {}
     assert!(
         resumed.mesh().split_log.len() > splits_at_checkpoint,
         "the resumed part should split (and so read the recomputed part)"
+    );
+    let glossy = |v: &crate::mesh::MeshVertex| {
+        resumed.directional().unwrap().surface_orders()[v.surface as usize] > 0
+    };
+    assert!(
+        resumed.mesh().vertices[vertices_at_checkpoint..]
+            .iter()
+            .any(glossy),
+        "the resumed part should split the glossy floor (and so gather shot sums)"
     );
     assert_eq!(resumed.mesh().split_log, whole.mesh().split_log);
     assert_eq!(sh_bits(&resumed), sh_bits(&whole));
@@ -480,10 +499,11 @@ fn directional_checkpoint_is_at_most_twice_the_solution_plus_the_patches() {
     // its length, 4 bytes a MiB). What else the checkpoint stores per vertex
     // (~1 B of split log; the diffuse proxies and the recorded-shot part are
     // recomputed on resume) is less than twice what the solution adds per
-    // vertex (36 B of position, normal, tangent; 12 B per triangle). The one
-    // part without a counterpart in the solution is each patch's unshot SH,
-    // at most 8 B per patch coefficient: so checkpoint ≤ 2 × solution + 8 ×
-    // patch coefficients + the header sections and framing (< 1 kB here).
+    // vertex (36 B of position, normal, tangent; 12 B per triangle). The
+    // parts without a counterpart in the solution are each patch's unshot SH
+    // and the SH it has shot (`near_gather.rs`), at most 8 B each per patch
+    // coefficient: so checkpoint ≤ 2 × solution + 16 × patch coefficients +
+    // the header sections and framing (< 1 kB here).
     // Packed, this scene is well below 2× (docs/benchmarks.md, "Checkpoints
     // at scale", has the glossy Cornell box too).
     let (scene, mut settings) = glossy_floor();
@@ -511,8 +531,8 @@ fn directional_checkpoint_is_at_most_twice_the_solution_plus_the_patches() {
         checkpoint.0
     );
     assert!(
-        checkpoint.0 <= 2 * solution + 8 * patch_coefficients + 1024,
-        "checkpoint {} B > 2 × solution {solution} B + 8 × {patch_coefficients} + 1 kB",
+        checkpoint.0 <= 2 * solution + 16 * patch_coefficients + 1024,
+        "checkpoint {} B > 2 × solution {solution} B + 16 × {patch_coefficients} + 1 kB",
         checkpoint.0
     );
     // This scene's patch coefficients are few enough: below 2× overall.

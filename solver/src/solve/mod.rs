@@ -945,27 +945,18 @@ impl Solver {
     /// visible vertices' received radiance ([`regions`]); `None` for a
     /// triangle or a patch lit evenly.
     fn source_regions(&self, source: u32, unshot: DVec3) -> Option<regions::Regions> {
-        let patch = &self.mesh.patches[source as usize];
-        if patch.corner_count != 4 || unshot == DVec3::ZERO {
-            return None;
-        }
-        let normal = self.mesh.surfaces[patch.surface as usize].normal;
-        regions::regions(&patch.corners, normal, unshot, self.shape_samples(source))
+        self.shape_view().source_regions(source, unshot)
     }
 
-    /// The shape of patch `source`'s light: each visible vertex's position,
-    /// gather weight and displayed received radiance (L − emission).
-    fn shape_samples(&self, source: u32) -> impl Iterator<Item = (DVec3, f64, DVec3)> + '_ {
-        let patch = &self.mesh.patches[source as usize];
-        let emission = self.emission[patch.surface as usize];
-        self.patch_weights[source as usize]
-            .iter()
-            .filter(|(v, _)| !self.hidden[*v as usize])
-            .map(move |&(v, w)| {
-                let position = self.mesh.vertices[v as usize].position;
-                let received = (self.radiance[v as usize] - emission).max(DVec3::ZERO);
-                (position, w, received)
-            })
+    /// The fields a patch's light shape is read from, borrowed.
+    fn shape_view(&self) -> ShapeView<'_> {
+        ShapeView {
+            mesh: &self.mesh,
+            patch_weights: &self.patch_weights,
+            hidden: &self.hidden,
+            radiance: &self.radiance,
+            emission: &self.emission,
+        }
     }
 
     /// How many small flat surfaces receive once per shot ([`small`]).
@@ -997,6 +988,48 @@ impl Solver {
     /// Per vertex, whether it is hidden ([`hidden`]).
     pub fn hidden_vertices(&self) -> &[bool] {
         &self.hidden
+    }
+}
+
+/// The solver's fields that give the shape of a patch's light, borrowed apart
+/// from the rest, so that refinement, which holds the others mutably, can
+/// read it too (`directional/near_gather.rs`).
+#[derive(Clone, Copy)]
+pub(crate) struct ShapeView<'a> {
+    mesh: &'a Mesh,
+    patch_weights: &'a [Vec<(u32, f64)>],
+    hidden: &'a [bool],
+    radiance: &'a [DVec3],
+    emission: &'a [DVec3],
+}
+
+impl<'a> ShapeView<'a> {
+    /// The quadrants of quad patch `source` with unshot `unshot`, shaped by
+    /// its visible vertices' received radiance ([`regions`]); `None` for a
+    /// triangle or a patch lit evenly.
+    fn source_regions(self, source: u32, unshot: DVec3) -> Option<regions::Regions> {
+        let patch = &self.mesh.patches[source as usize];
+        if patch.corner_count != 4 || unshot == DVec3::ZERO {
+            return None;
+        }
+        let normal = self.mesh.surfaces[patch.surface as usize].normal;
+        regions::regions(&patch.corners, normal, unshot, self.shape_samples(source))
+    }
+
+    /// The shape of patch `source`'s light: each visible vertex's position,
+    /// gather weight and displayed received radiance (L − emission). A vertex
+    /// created since the weights were last updated is not among them.
+    fn shape_samples(self, source: u32) -> impl Iterator<Item = (DVec3, f64, DVec3)> + 'a {
+        let patch = &self.mesh.patches[source as usize];
+        let emission = self.emission[patch.surface as usize];
+        self.patch_weights[source as usize]
+            .iter()
+            .filter(move |(v, _)| !self.hidden[*v as usize])
+            .map(move |&(v, w)| {
+                let position = self.mesh.vertices[v as usize].position;
+                let received = (self.radiance[v as usize] - emission).max(DVec3::ZERO);
+                (position, w, received)
+            })
     }
 }
 

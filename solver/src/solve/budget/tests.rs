@@ -53,10 +53,10 @@ fn allocated(solver: &mut Solver) -> u64 {
             let (_, c) = solver.vertex_sh(v).unwrap();
             total += 3 * size_of_val(c) as u64 + size_of::<usize>() as u64;
         }
-        // Unshot coefficients and the offset, per patch.
+        // Unshot and shot-sum coefficients and the offset, per patch.
         for p in &m.patches {
             let k = coefficients(d.surface_orders()[p.surface as usize]);
-            total += k * 8 + size_of::<usize>() as u64;
+            total += 2 * k * 8 + size_of::<usize>() as u64;
         }
     }
     total

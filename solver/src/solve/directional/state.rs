@@ -27,6 +27,7 @@ pub(in crate::solve) struct CheckpointSections<'a> {
     pub direct: &'a [f64],
     pub patch_unshot: &'a [f64],
     pub recorded_unshot: &'a [Vec<f64>],
+    pub shot_sum: &'a [f64],
 }
 
 impl Directional {
@@ -37,6 +38,7 @@ impl Directional {
             direct: &self.direct,
             patch_unshot: &self.patch_unshot,
             recorded_unshot: &self.recorded_unshot,
+            shot_sum: &self.shot_sum,
         }
     }
 }
