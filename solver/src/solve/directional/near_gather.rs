@@ -298,6 +298,18 @@ mod tests {
         v as u32
     }
 
+    /// Three floor vertices in a line toward the back wall, 0.25 m apart, as
+    /// if a split had created the middle one between the other two.
+    fn midpoint_toward_back_wall(solver: &Solver, d: &Directional) -> NewVertex {
+        let [a, m, b] = [-1.75, -1.5, -1.25].map(|z| floor_vertex(solver, d, 0.0, z));
+        NewVertex {
+            id: m,
+            parents: [a, b, 0, 0],
+            parent_count: 2,
+            uv: [0, 0],
+        }
+    }
+
     /// Vertex `v`'s light from unrecorded shots: its radiance less the
     /// recorded (emitter) shots' part (the floor emits nothing, and between
     /// shots nothing is received).
@@ -326,13 +338,8 @@ mod tests {
         let solver = solved_room(40);
         let d = solver.directional.as_deref().unwrap();
         let mesh = &solver.mesh;
-        let [a, m, b] = [-1.75, -1.5, -1.25].map(|z| floor_vertex(&solver, d, 0.0, z));
-        let nv = NewVertex {
-            id: m,
-            parents: [a, b, 0, 0],
-            parent_count: 2,
-            uv: [0, 0],
-        };
+        let nv = midpoint_toward_back_wall(&solver, d);
+        let (m, [a, b]) = (nv.id, [nv.parents[0], nv.parents[1]]);
         let tables = Tables::new(d, mesh);
         // A reach past the room: every patch that has shot is near.
         let got = gather_of(&solver, 1e3).corrections(mesh, &solver.radiance, d, &tables, &[nv]);
@@ -366,13 +373,8 @@ mod tests {
         let solver = solved_room(40);
         let d = solver.directional.as_deref().unwrap();
         let mesh = &solver.mesh;
-        let [a, m, b] = [-1.75, -1.5, -1.25].map(|z| floor_vertex(&solver, d, 0.0, z));
-        let nv = NewVertex {
-            id: m,
-            parents: [a, b, 0, 0],
-            parent_count: 2,
-            uv: [0, 0],
-        };
+        let nv = midpoint_toward_back_wall(&solver, d);
+        let m = nv.id;
         // Reach 0.3 spans of 0.5 m over α = 0.1: 1.5 m.
         let near = gather_of(&solver, 0.3).near_patches(mesh, d, &nv);
         let shot = (0..mesh.patches.len())
