@@ -100,9 +100,18 @@ impl<'a> NearGather<'a> {
         tables: &Tables,
         created: &[NewVertex],
     ) -> Corrections {
+        let glossy =
+            |nv: &NewVertex| d.lobes[mesh.vertices[nv.id as usize].surface as usize].is_some();
+        if self.reach <= 0.0 || !created.iter().any(glossy) {
+            return Corrections {
+                per_vertex: vec![None; created.len()],
+                rays: 0,
+            };
+        }
+        let candidates = candidates(mesh, d);
         let near: Vec<Vec<u32>> = created
             .iter()
-            .map(|nv| self.near_patches(mesh, d, nv))
+            .map(|nv| self.near_patches(mesh, d, &candidates, nv))
             .collect();
         let mut wanted: Vec<u32> = near.iter().flatten().copied().collect();
         wanted.sort_unstable();
@@ -157,9 +166,16 @@ impl<'a> NearGather<'a> {
         }
     }
 
-    /// The patches new vertex `nv` gathers: on another surface, holding shot
-    /// light, and nearer than the reach; none unless its surface is glossy.
-    fn near_patches(&self, mesh: &Mesh, d: &Directional, nv: &NewVertex) -> Vec<u32> {
+    /// The patches new vertex `nv` gathers: those of `candidates` (holding
+    /// shot light) on another surface and nearer than the reach; none unless
+    /// its surface is glossy. In ascending patch order.
+    fn near_patches(
+        &self,
+        mesh: &Mesh,
+        d: &Directional,
+        candidates: &[Candidate],
+        nv: &NewVertex,
+    ) -> Vec<u32> {
         let x = mesh.vertices[nv.id as usize].position;
         let surface = mesh.vertices[nv.id as usize].surface;
         let Some(lobe) = d.lobes[surface as usize].as_deref() else {
@@ -174,20 +190,10 @@ impl<'a> NearGather<'a> {
                 .map(|&p| (mesh.vertices[p as usize].position - x).length())
                 .fold(0.0, f64::max);
         let reach = self.reach * span / lobe.alpha;
-        (0..mesh.patches.len() as u32)
-            .filter(|&p| {
-                let patch = &mesh.patches[p as usize];
-                if patch.surface == surface || !d.has_shot(mesh, p as usize) {
-                    return false;
-                }
-                let corners = patch.polygon();
-                let centre = corners.iter().copied().sum::<DVec3>() / corners.len() as f64;
-                let radius = corners
-                    .iter()
-                    .map(|c| (*c - centre).length())
-                    .fold(0.0, f64::max);
-                (centre - x).length() - radius < reach
-            })
+        candidates
+            .iter()
+            .filter(|c| c.surface != surface && (c.centre - x).length() - c.radius < reach)
+            .map(|c| c.patch)
             .collect()
     }
 
@@ -224,6 +230,37 @@ impl<'a> NearGather<'a> {
             quadrants,
         }
     }
+}
+
+/// A patch that has shot light in an unrecorded shot, with the bounds the
+/// reach test reads (found once per refinement level, not per vertex).
+struct Candidate {
+    patch: u32,
+    surface: u32,
+    centre: DVec3,
+    /// The largest distance from the centre to a corner.
+    radius: f64,
+}
+
+fn candidates(mesh: &Mesh, d: &Directional) -> Vec<Candidate> {
+    (0..mesh.patches.len())
+        .filter(|&p| d.has_shot(mesh, p))
+        .map(|p| {
+            let patch = &mesh.patches[p];
+            let corners = patch.polygon();
+            let centre = corners.iter().copied().sum::<DVec3>() / corners.len() as f64;
+            let radius = corners
+                .iter()
+                .map(|c| (*c - centre).length())
+                .fold(0.0, f64::max);
+            Candidate {
+                patch: p as u32,
+                surface: patch.surface,
+                centre,
+                radius,
+            }
+        })
+        .collect()
 }
 
 fn dir_shot<'s>(
@@ -376,7 +413,7 @@ mod tests {
         let nv = midpoint_toward_back_wall(&solver, d);
         let m = nv.id;
         // Reach 0.3 spans of 0.5 m over α = 0.1: 1.5 m.
-        let near = gather_of(&solver, 0.3).near_patches(mesh, d, &nv);
+        let near = gather_of(&solver, 0.3).near_patches(mesh, d, &candidates(mesh, d), &nv);
         let shot = (0..mesh.patches.len())
             .filter(|&p| d.has_shot(mesh, p))
             .count();
@@ -403,14 +440,14 @@ mod tests {
         }
         // Switched off, or on a diffuse wall, nothing gathers.
         assert!(gather_of(&solver, 0.0)
-            .near_patches(mesh, d, &nv)
+            .near_patches(mesh, d, &candidates(mesh, d), &nv)
             .is_empty());
         let wall = (0..mesh.vertices.len() as u32)
             .find(|&v| d.lobes[mesh.vertices[v as usize].surface as usize].is_none())
             .unwrap();
         let on_wall = NewVertex { id: wall, ..nv };
         assert!(gather_of(&solver, 1e3)
-            .near_patches(mesh, d, &on_wall)
+            .near_patches(mesh, d, &candidates(mesh, d), &on_wall)
             .is_empty());
     }
 }
