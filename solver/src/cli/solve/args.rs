@@ -216,8 +216,11 @@ pub struct SolveArgs {
             and the source's distances over two; K = 0.25 puts four vertices across it. \
             Smaller K: sharper highlights and reflections, at the cost of more \
             elements, each with (L+1)² coefficients per channel. Default: the preset's \
-            (0.5 for draft and medium, 0.25 for final; docs/accuracy.md, \"Glossy: the \
-            view term\", has the cost and error of each)."
+            (0.5 for draft and medium, 0.125 for final: on the glossy Cornell box it \
+            meets HDR-FLIP 0.06 from both cameras, where 0.25 misses it from the floor \
+            camera, at twice the solve time; docs/accuracy.md, \"Glossy: `final` at \
+            glossy_edge 0.125\" and \"Glossy: the view term\", have the cost and error \
+            of each)."
     )]
     pub glossy_edge: Option<f64>,
 
