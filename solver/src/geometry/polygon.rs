@@ -24,6 +24,19 @@ pub fn area(polygon: &[DVec3]) -> f64 {
     0.5 * newell_normal(polygon).length()
 }
 
+/// A sphere holding every corner: the corners' mean and the largest distance
+/// from it to a corner. Not the smallest such sphere; exact for regular
+/// polygons and within 2× of the smallest for any. An empty polygon gives
+/// the origin and 0.
+pub fn bounding_sphere(polygon: &[DVec3]) -> (DVec3, f64) {
+    let centre = polygon.iter().copied().sum::<DVec3>() / polygon.len().max(1) as f64;
+    let radius = polygon
+        .iter()
+        .map(|&c| (c - centre).length())
+        .fold(0.0, f64::max);
+    (centre, radius)
+}
+
 /// Clips `polygon` to the closed half-space `normal · (x − origin) ≥ 0`
 /// (Sutherland–Hodgman against one plane) and writes the result into `out`
 /// (cleared first). `normal` need not be unit length.
@@ -253,6 +266,25 @@ pub fn inverse_bilinear(q: &[DVec3], p: DVec3) -> (f64, f64) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn bounding_sphere_of_a_square_and_a_triangle() {
+        // A 2 × 2 square about (1, 1, 0): its half-diagonal, √2.
+        let (c, r) = bounding_sphere(&[
+            DVec3::new(0.0, 0.0, 0.0),
+            DVec3::new(2.0, 0.0, 0.0),
+            DVec3::new(2.0, 2.0, 0.0),
+            DVec3::new(0.0, 2.0, 0.0),
+        ]);
+        assert!((c - DVec3::new(1.0, 1.0, 0.0)).length() < 1e-15);
+        assert!((r - 2f64.sqrt()).abs() < 1e-15);
+        // A right triangle: centroid (1/3, 1/3), farthest corner (1, 0) or
+        // (0, 1), at √(4/9 + 1/9) = √5 / 3.
+        let (c, r) = bounding_sphere(&[DVec3::ZERO, DVec3::X, DVec3::Y]);
+        assert!((c - DVec3::new(1.0 / 3.0, 1.0 / 3.0, 0.0)).length() < 1e-15);
+        assert!((r - 5f64.sqrt() / 3.0).abs() < 1e-15);
+        assert_eq!(bounding_sphere(&[]), (DVec3::ZERO, 0.0));
+    }
 
     fn square() -> Vec<DVec3> {
         vec![

@@ -43,6 +43,7 @@
 //! uniform amount below τ.
 
 use super::shoot::{SamplePool, Shot};
+use crate::geometry::polygon::bounding_sphere;
 use crate::mesh::Mesh;
 use crate::settings::FormFactorMethod;
 use glam::DVec3;
@@ -109,16 +110,12 @@ pub struct SourceBounds<'a> {
 
 impl<'a> SourceBounds<'a> {
     pub fn new(corners: &'a [DVec3], normal: DVec3, area: f64) -> SourceBounds<'a> {
-        let centre = corners.iter().copied().sum::<DVec3>() / corners.len().max(1) as f64;
+        let (centre, radius) = bounding_sphere(corners);
         let lo = corners.iter().copied().fold(DVec3::INFINITY, DVec3::min);
         let hi = corners
             .iter()
             .copied()
             .fold(DVec3::NEG_INFINITY, DVec3::max);
-        let radius = corners
-            .iter()
-            .map(|&c| (c - centre).length())
-            .fold(0.0, f64::max);
         let diameter = corners
             .iter()
             .flat_map(|a| corners.iter().map(move |b| (*a - *b).length()))

@@ -42,6 +42,7 @@
 //! which are most of them, see few patches.
 
 use super::{quadrant_scale, DirScratch, DirShot, Directional, Tables};
+use crate::geometry::polygon::bounding_sphere;
 use crate::geometry::visibility::Occluder;
 use crate::mesh::{Mesh, NewVertex};
 use crate::settings::SolverSettings;
@@ -247,12 +248,7 @@ fn candidates(mesh: &Mesh, d: &Directional) -> Vec<Candidate> {
         .filter(|&p| d.has_shot(mesh, p))
         .map(|p| {
             let patch = &mesh.patches[p];
-            let corners = patch.polygon();
-            let centre = corners.iter().copied().sum::<DVec3>() / corners.len() as f64;
-            let radius = corners
-                .iter()
-                .map(|c| (*c - centre).length())
-                .fold(0.0, f64::max);
+            let (centre, radius) = bounding_sphere(patch.polygon());
             Candidate {
                 patch: p as u32,
                 surface: patch.surface,
@@ -429,14 +425,20 @@ mod tests {
             assert_ne!(patch.surface, floor);
             assert!(d.has_shot(mesh, p as usize));
             // Its centre within the reach plus its circumradius.
-            let corners = patch.polygon();
-            let centre = corners.iter().copied().sum::<DVec3>() / corners.len() as f64;
-            let radius = corners
-                .iter()
-                .map(|c| (*c - centre).length())
-                .fold(0.0, f64::max);
+            let (centre, radius) = bounding_sphere(patch.polygon());
             let from = (centre - x).length();
             assert!(from < 1.5 + radius, "patch {p}: centre {from} m away");
+        }
+        // And every other patch of another surface that has shot is out of
+        // reach: the near set is exactly the rule's.
+        for p in (0..mesh.patches.len()).filter(|&p| d.has_shot(mesh, p)) {
+            let patch = &mesh.patches[p];
+            if patch.surface == floor || near.contains(&(p as u32)) {
+                continue;
+            }
+            let (centre, radius) = bounding_sphere(patch.polygon());
+            let from = (centre - x).length();
+            assert!(from >= 1.5 + radius, "patch {p} left out at {from} m");
         }
         // Switched off, or on a diffuse wall, nothing gathers.
         assert!(gather_of(&solver, 0.0)
