@@ -33,11 +33,16 @@ fn enclosure_mean(solver: &Solver) -> f64 {
         enclosure::enclosure(occluder, centroid, normal)
     };
     if mesh.patches.len() <= MEAN_PROBES {
-        let (area, weighted) = mesh
+        // Probed in parallel, summed in patch order: a parallel reduce would
+        // add in an order set by work stealing, and the bits would depend on
+        // the threads.
+        let probes: Vec<f64> = mesh
             .patches
             .par_iter()
-            .map(|p| (p.area, at_centroid(p) * p.area))
-            .reduce(|| (0.0, 0.0), |x, y| (x.0 + y.0, x.1 + y.1));
+            .map(|p| at_centroid(p) * p.area)
+            .collect();
+        let area: f64 = mesh.patches.iter().map(|p| p.area).sum();
+        let weighted: f64 = probes.iter().sum();
         return weighted / area;
     }
     let draws = systematic_draws(
@@ -335,6 +340,39 @@ pub(crate) fn default_camera(lo: DVec3, hi: DVec3, up: UpAxis) -> Camera {
 
 #[cfg(test)]
 mod tests {
+    use crate::solve::tests::{closed_room, settings};
+    use crate::solve::Solver;
+
+    #[test]
+    fn enclosure_mean_has_the_same_bits_on_any_number_of_threads() {
+        // ε̄ feeds the ambient term of every vertex, so solution files are
+        // reproducible only if its sum does not depend on how rayon splits
+        // the work. Each patch's probe is deterministic; the sum must be too.
+        // The room without its ceiling, so that ε varies from patch to patch
+        // and the order of the sum shows in its last bits.
+        let mut room = closed_room(None);
+        room.polygons.remove(1);
+        for polygon in &mut room.polygons {
+            polygon.patches = 7;
+        }
+        let solver = Solver::new(&room, &settings()).unwrap();
+        let mean_on = |threads: usize| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            pool.install(|| super::enclosure_mean(&solver)).to_bits()
+        };
+        let one = mean_on(1);
+        for threads in [2, 3, 4, 7] {
+            assert_eq!(mean_on(threads), one, "{threads} threads");
+        }
+        // Open above, every patch sees some sky and the floor sees walls: ε̄
+        // lies strictly between 0 and 1.
+        let mean = f64::from_bits(one);
+        assert!(mean > 0.0 && mean < 1.0, "{mean}");
+    }
+
     #[test]
     fn systematic_draws_follow_area() {
         // Areas 1, 2, 3, 4 and ten draws one unit apart: each item is drawn

@@ -51,7 +51,7 @@ fn quad(a: [f64; 3], b: [f64; 3], c: [f64; 3], d: [f64; 3]) -> Vec<DVec3> {
     [a, b, c, d].map(DVec3::from_array).to_vec()
 }
 
-fn settings() -> SolverSettings {
+pub(crate) fn settings() -> SolverSettings {
     let mut s = SolverSettings::preset(Preset::Draft);
     s.adaptive = false;
     s.samples = 4;
@@ -404,7 +404,7 @@ fn ambient_term_matches_cohen_et_al_for_uniform_unshot() {
 
 /// A closed 4 × 2.5 × 6 room (walls facing in, Kd 0.5) with a 1 m² ceiling
 /// light facing down, re-centred by (100, 0, 0).
-fn closed_room(camera: Option<Camera>) -> Scene {
+pub(crate) fn closed_room(camera: Option<Camera>) -> Scene {
     let face = |c: DVec3, e1: DVec3, e2: DVec3| vec![c, c + e1, c + e1 + e2, c + e2];
     let lo = DVec3::new(-2.0, 0.0, -3.0);
     let (x, y, z) = (DVec3::X * 4.0, DVec3::Y * 2.5, DVec3::Z * 6.0);
