@@ -478,7 +478,7 @@ pub struct SolveArgs {
             biased where a patch is half in shadow: its dark half lights its \
             neighbours as brightly as its lit half (the Cornell box's final MARE \
             against the path-traced truth is 2.9% uniform against 2.0% by quadrants, \
-            docs/lab/non-uniform-shooters.md). Directional solves shoot by quadrants too (each source sample \
+            docs/accuracy.md). Directional solves shoot by quadrants too (each source sample \
             weighted by its quadrant's share); cube solves always shoot uniformly."
     )]
     pub uniform_shooters: bool,
