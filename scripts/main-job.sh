@@ -19,7 +19,7 @@ sol=out/cornell_box.sol
 mkdir -p out
 # Medium with 512 rays per grouped shot (the preset's 64 suit 100k-box scenes):
 # 1.68% / 1.64% MARE against the path-traced truth, two seeds' images 0.47%
-# apart (no visible noise), 4.4 s on two cores (docs/accuracy.md, "Grouped
+# apart (no visible noise), 4.4 s on two cores (docs/lab/grouped-shooters.md, "Grouped
 # shooters by default").
 solve_args=(solve "$scene" -o "$sol" --preset medium --group-samples 512)
 if [ -e "$sol.checkpoint" ]; then

@@ -20,12 +20,12 @@ use solver::compare::metrics::reference_noise;
 mod common;
 use common::cornell_against_truth;
 
-/// Bound on the draft preset's MARE against the truth. Measured (docs/accuracy.md,
+/// Bound on the draft preset's MARE against the truth. Measured (docs/lab/first-accuracy-study.md,
 /// release build): 9.01% (seed 1) and 8.91% (seed 2) before hidden receivers
 /// were treated as hidden (`solver/src/solve/hidden.rs`), 8.49% and 8.01% after,
 /// 7.04% and 7.56% with the non-uniform shooters. The draft preset is now the
 /// truth-chosen one (8 rays, threshold 0.5%, the ambient term written at
-/// convergence; docs/accuracy.md, "Presets against the truth"): 5.57% (seed 1,
+/// convergence; docs/lab/presets.md, "Presets against the truth"): 5.57% (seed 1,
 /// release and this debug build alike) and 5.93% (seed 2). Tightened from 10%
 /// to 7%: the two seeds differ by 0.36 points, and the margin over the worse
 /// seed, 1.07 points, is three times that, which also covers the truth's noise
@@ -33,16 +33,16 @@ use common::cornell_against_truth;
 /// row (about 0.3 points, docs/benchmarks.md, "Time to accuracy"). A change
 /// that makes draft visibly less accurate fails. With receivers cut along
 /// contact lines (`solver/src/mesh/contact.rs`) draft measures 3.79%, 4.13%
-/// and 4.11% (seeds 1, 2, 3; docs/accuracy.md, "After the contact cuts"), so
+/// and 4.11% (seeds 1, 2, 3; docs/lab/contact-cuts.md, "After the contact cuts"), so
 /// the bound is tightened again, to 5.5%: the seeds spread over 0.34 points,
 /// and the margin over the worst, 1.37 points, is four times that, for the
 /// same truth noise and rasterization allowances as before. With the ambient
 /// term weighted by enclosure (`solver/src/solve/enclosure.rs`) draft
-/// measures 3.56%, 3.98% and 3.87% (docs/accuracy.md, "The ambient term
+/// measures 3.56%, 3.98% and 3.87% (docs/lab/ambient-term.md, "The ambient term
 /// weighted by enclosure"), and the bound is 5%: the margin over the worst
 /// seed, 1.02 points, still covers the seeds' spread (0.42 points) plus the
 /// truth noise and rasterization allowances (0.8 points). With grouped
-/// shooters in every preset (docs/accuracy.md, "Grouped shooters by
+/// shooters in every preset (docs/lab/grouped-shooters.md, "Grouped shooters by
 /// default") draft measures 3.19%, 3.25% and 3.66% (seeds 1, 2, 3, release):
 /// the bound stays at 5%, since the seeds now spread over 0.47 points and the
 /// margin over the worst, 1.34 points, is just that spread plus the same 0.8

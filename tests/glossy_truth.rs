@@ -153,7 +153,7 @@ const SOLVE_ARGS: [&str; 2] = ["--preset", "draft"];
 /// the release figures to the printed digits): front 6.52% (seed 1) and
 /// 6.31% (seed 2), side 4.51% and 3.66%. With equal shares of area samples
 /// they were 11.26% / 12.91% and 10.01% / 10.55%, under the bound of 15%
-/// this test had then (docs/accuracy.md, "Glossy: samples by solid angle").
+/// this test had then (docs/lab/glossy-solid-angle-samples.md, "Glossy: samples by solid angle").
 /// Two points over the worse seed cover the draft preset's seed-to-seed
 /// spread, the truths' 0.5% noise and other lavapipe versions'
 /// rasterization. Ignoring Ks (a diffuse solve) measures 56.7% / 43.9%; a

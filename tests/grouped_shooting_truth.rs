@@ -13,10 +13,10 @@ mod common;
 use common::cornell_against_truth;
 
 /// How much worse than the patch shooter's MARE grouped shooting may be, in
-/// absolute MARE. Measured at draft (seeds 1 and 2, docs/benchmarks.md,
+/// absolute MARE. Measured at draft (seeds 1 and 2, docs/lab/grouped-shooters.md,
 /// "Grouped shooters"): patch 3.79% / 4.13%, grouped 4.36% / 4.29%, a
 /// difference of +0.57 and +0.16 points, and the draft's own seed-to-seed
-/// spread is 0.34 points (docs/accuracy.md). The allowance is the larger
+/// spread is 0.34 points (docs/lab/grouped-shooters.md). The allowance is the larger
 /// measured difference plus that spread, 0.9 points: grouping trades some
 /// noise (a member gets its share of a receiver's rays, not all of them) for
 /// 20× fewer shots, and the test guards against more than that. Shooting the

@@ -1,6 +1,7 @@
 //! How many SH bands a glossy lobe costs: the order chosen per α and error target,
 //! the storage per vertex, the time per basis evaluation, and how each ringing
-//! remedy changes the lobe. Prints the figures recorded in `docs/sh-bands.md`.
+//! remedy changes the lobe. Prints the figures recorded in `docs/sh-bands.md` and
+//! `docs/lab/sh-ringing.md`.
 //!
 //! Run: `cargo bench -p solver --bench sh_bands`.
 

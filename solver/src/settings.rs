@@ -74,7 +74,7 @@ pub enum Shooters {
 
 /// Default of `group_samples` where no preset sets it (every preset does:
 /// 16, 64, 256): twice the base `samples`, since a group's rays are shared
-/// among its members (docs/accuracy.md, "Grouped shooters against the truth").
+/// among its members (docs/lab/grouped-shooters.md, "Grouped shooters against the truth").
 pub const DEFAULT_GROUP_SAMPLES: u32 = 32;
 
 fn default_group_samples() -> u32 {

@@ -5,7 +5,7 @@
 //! only 2²⁷ bytes (Vulkan 1.3 specification, §"Limit Requirements", table
 //! "Required Limits"): lavapipe and many mobile GPUs, headsets among them, stop
 //! there. A glossy solve on a fine mesh can exceed it in one SH batch (46,899
-//! display vertices at L = 29 held 310 MiB; docs/accuracy.md), so the solver
+//! display vertices at L = 29 held 310 MiB; docs/lab/glossy-final-floor.md), so the solver
 //! cuts such a batch into batches of whole triangles that each fit, before it
 //! writes the file.
 

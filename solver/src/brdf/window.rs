@@ -6,7 +6,7 @@
 //! applied to `a_l` (σ-factors and friends smooth the truncation at the cost of a
 //! wider lobe), and the renderer may also clamp negative radiance at evaluation.
 //! [`ringing`] measures each remedy: minimum of the lobe, L2 and peak error against
-//! the exact lobe, and the negative mass; `docs/sh-bands.md` records the figures
+//! the exact lobe, and the negative mass; `docs/lab/sh-ringing.md` records the figures
 //! and the default chosen from them.
 
 use super::{lobe_of_angle, sanitize_alpha, LegendreFit};

@@ -9,7 +9,7 @@
 //! corners under the block; those are hidden (`solve::hidden`) and display
 //! their visible neighbours' radiance, one element away, so the visible floor
 //! next to the block shows a value extended over an element's width instead
-//! of its own (the dark rims round the blocks' bases in docs/accuracy.md).
+//! of its own (the dark rims round the blocks' bases in docs/lab/contact-cuts.md).
 //! Conformed, the floor's elements next to the block have their corners on
 //! the contact line, on the visible side, where they receive exactly.
 //!
@@ -105,7 +105,7 @@ impl Cuts {
     /// `medium`), while in diffuse mode they made the Cornell box's `final`
     /// worse (1.44% → 1.52%, past its 1.5% target; errors of 12–40% at the
     /// foot of the short block's front face) for a gain at `medium` (2.32% →
-    /// 2.20%): docs/accuracy.md, "Glossy: shadow lines at contact corners".
+    /// 2.20%): docs/lab/glossy-shadow-lines.md, "Glossy: shadow lines at contact corners".
     pub fn for_settings(settings: &crate::settings::SolverSettings) -> Cuts {
         if settings.whole_receivers {
             Cuts::None

@@ -108,7 +108,7 @@ impl Integrator<'_> {
     /// them ([`Integrator::intersect`]), so a point within about that
     /// distance of another surface (a corner) does not see that surface's
     /// nearest band: probe a solver's vertex a millimetre into its element,
-    /// not at its receiving point (docs/accuracy.md, "edges and corners").
+    /// not at its receiving point (docs/lab/glossy-edges-and-corners.md, "edges and corners").
     pub fn outgoing(&self, polygon: usize, point: DVec3, wo: DVec3, rng: &mut Rng) -> DVec3 {
         let hit = SurfaceHit {
             polygon,

@@ -413,7 +413,7 @@ pub fn estimate(c: &Counts) -> MemoryEstimate {
     // The measured resident set before meshing holds the process and the
     // scene, and also what import freed but the allocator kept: on the 1M
     // floor plan 254 MiB where these terms give 68 MiB, the estimate's whole
-    // shortfall (docs/scale.md, "What import leaves resident").
+    // shortfall (docs/lab/small-surfaces.md, "What import leaves resident").
     let before_meshing = (FIXED_BYTES + c.scene_bytes).max(c.resident_before_meshing);
     let fixed = before_meshing + c.surfaces * surface_bytes() + c.texture_bytes;
     let mesh = c.vertices * size_of::<MeshVertex>() as u64

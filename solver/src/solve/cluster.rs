@@ -36,7 +36,7 @@
 //! passes (the gather into patches, the ambient term, the source choice,
 //! refinement's candidate scan) visit only the surfaces the shot touched or
 //! the patches it changed (`footprint.rs`, `unshot_tree.rs`);
-//! docs/benchmarks.md, "Bounded shooting", has the measured split.
+//! docs/lab/bounded-shooting.md, "Bounded shooting", has the measured split.
 //!
 //! The deposit goes in after refinement has run on the visited surfaces, so a
 //! bounded surface is not scanned for splits by a shot that changed it by a

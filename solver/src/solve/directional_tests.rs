@@ -638,7 +638,7 @@ fn furnace_spread(solver: &Solver, exact: f64) -> (f64, f64, f64, f64, f64) {
 /// A glossy furnace: a closed cube whose faces all have Kd = 0, Ks = 0.5,
 /// α = 0.3 and emit Le = 1. A reciprocal BRDF whose albedo were Ks for every
 /// direction would give Le / (1 − Ks) = L∞ = 2 everywhere; the figures printed
-/// are each normalization's deviation from it (recorded in docs/sh-bands.md).
+/// are each normalization's deviation from it (recorded in docs/lab/brdf-normalization.md).
 /// Measured (3 × 3 patches per face, 16 rays, threshold 1%), with the
 /// samples of a glossy receiver spread by solid angle
 /// (`geometry/solid_angle.rs`): the thesis's L/L∞ spans 0.60..1.15 over

@@ -10,7 +10,7 @@
 //! each quadrant by its vertices moved the floor camera's error against the
 //! 0.5%-noise truth from 4.11% / HDR-FLIP 0.0811 to 3.90% / 0.0777 and left
 //! the standard camera as it was (2.03% / 0.0475 → 2.05% / 0.0481;
-//! docs/accuracy.md, "Glossy: shots shaped inside quadrants").
+//! docs/lab/glossy-quadrants.md, "Glossy: shots shaped inside quadrants").
 //!
 //! The shape is kept on a grid of (N + 1)² nodes in the quad's bilinear
 //! coordinates (u, v), N = [`FINE_CELLS`]: each visible vertex adds its

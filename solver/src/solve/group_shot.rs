@@ -53,10 +53,10 @@
 //! thousandth of a wall patch's power, so by power alone no face ever joined
 //! a wall's seed, the walls kept seeding groups of a few dozen patches, and
 //! each shot took 0.02% of the power while the faces held most of it
-//! (docs/scale.md, "Small surfaces receive once"; the spheres' facets, "Small
+//! (docs/lab/small-surfaces.md, "Small surfaces receive once"; the spheres' facets, "Small
 //! patches join by radiance"). Other patches keep the power rule: admitting every patch by
 //! radiance took the Cornell box at draft from 3.19% / 3.25% MARE to 3.76% /
-//! 3.54% against the truth (wider groups, docs/accuracy.md). Nearby members share most of their occluders, so a
+//! 3.54% against the truth (wider groups, docs/lab/small-surfaces.md). Nearby members share most of their occluders, so a
 //! receiver's rays to the group see one visibility, and the mixed estimate is
 //! little noisier than the seed's own. An emitter's patch joins (or seeds) a
 //! group only after it has shot once on its own: that first shot carries its
@@ -79,7 +79,7 @@
 //! lit quad member shoots as its four quadrants, each its own piece with its
 //! own unshot radiance (`regions.rs`, Σ_q U_q A_q = U_p A_p), as it would
 //! alone: shooting members uniformly cost 1.3 MARE points on the Cornell box
-//! at draft (docs/benchmarks.md, "Grouped shooters"). An emitter's patch
+//! at draft (docs/lab/grouped-shooters.md, "Grouped shooters"). An emitter's patch
 //! shoots uniformly, as alone its shots are recorded and so uniform: shaped
 //! by its vertices it took a furnace of emitting faces 2.2% off at ρ = 0.95.
 //!
@@ -88,7 +88,7 @@
 //! A receiver's `group_samples` rays are shared among the members, so a
 //! member gets fewer than a patch shot's `samples`; on the Cornell box
 //! against the truth a group needs about twice to eight times as many for
-//! the same accuracy (docs/accuracy.md, "Grouped shooters against the
+//! the same accuracy (docs/lab/grouped-shooters.md, "Grouped shooters against the
 //! truth").
 
 use super::group_tree::{Item, MemberTree, Receiver};
@@ -111,7 +111,7 @@ pub const FRACTION: f64 = 0.1;
 /// the seed's centre, so that the group is local and its members share
 /// occluders. On the Cornell box at draft against the truth, 0.1 and 0.2
 /// measure 3.69% / 3.70% MARE, 0.3 and the whole scene 4.33% / 4.89%
-/// (docs/scale.md, "Clustered group shots").
+/// (docs/lab/grouped-shooters.md, "Clustered group shots").
 pub const RADIUS: f64 = 0.2;
 
 /// The most patches one grouped shot carries. Receivers see the group
@@ -120,7 +120,7 @@ pub const RADIUS: f64 = 0.2;
 /// (`budget.rs`, `group_shot_bytes`: about 72 MiB at this cap, 4.4 KiB a
 /// member of four quadrant pieces). At 4,096 the 100k boxes took 202 s at
 /// medium and the 1M boxes stopped at 6.2% unshot at draft; at this cap
-/// 167 s and 5.6% in less time (docs/scale.md, "Clustered group shots").
+/// 167 s and 5.6% in less time (docs/lab/grouped-shooters.md, "Clustered group shots").
 pub const MAX_MEMBERS: usize = 16384;
 
 /// Members farther than this many of their own diameters use the

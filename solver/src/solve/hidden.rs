@@ -9,7 +9,7 @@
 //!
 //! * Gouraud interpolation across an element that straddles the contact line
 //!   spreads it into the visible floor next to the block (the dark rims of
-//!   docs/accuracy.md's heat maps);
+//!   docs/lab/hidden-receivers.md's heat maps);
 //! * the gather into patches averages it into the patch's unshot radiance, and
 //!   the shot that follows loses the hidden part a second time, since its
 //!   visibility rays to samples under the block are blocked as well. A floor

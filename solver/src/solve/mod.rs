@@ -664,7 +664,7 @@ impl Solver {
                 // judging it out of `group_samples` gave partly seen
                 // receivers a noise allowance that stopped their refinement
                 // (Cornell box, medium: 1.78% / 1.70% MARE → 2.21% / 1.81%;
-                // docs/accuracy.md, "Grouped shooters by default").
+                // docs/lab/grouped-shooters.md, "Grouped shooters by default").
                 &refine::Criteria {
                     dark_floor: refine::DARK_FLOOR * self.radiance_level,
                     ambient,

@@ -124,7 +124,7 @@ impl Solver {
     /// has `threshold` of its emitted power unshot, and without the term that
     /// light is simply missing: measured against the path-traced truth the
     /// Cornell box's ceiling, lit only by interreflection, was too dark by
-    /// about the unshot share (docs/accuracy.md, "The ambient term at
+    /// about the unshot share (docs/lab/ambient-term.md, "The ambient term at
     /// convergence"). A solver that has not shot (the Gauss–Seidel and cube
     /// gathers use it for their mesh and write their own radiance) has all of
     /// its emission unshot, so its final file gets none.

@@ -739,7 +739,7 @@ pub struct SampleScratch {
 /// estimate F times the source's mean over its *area*, so near a source they
 /// send a glossy receiver's light from the wrong directions, a bias no
 /// sample count removes; shares by solid angle follow dF
-/// (docs/accuracy.md, "Glossy: samples by solid angle").
+/// (docs/lab/glossy-solid-angle-samples.md, "Glossy: samples by solid angle").
 pub fn visible_samples(
     s: &Shot,
     mesh: &Mesh,

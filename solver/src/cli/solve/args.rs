@@ -197,7 +197,7 @@ pub struct SolveArgs {
             in all. Larger: fewer rays late in a solve of many small patches, where most \
             shots are dim. An emitting patch's own shots, which refinement replays, keep every ray. Every preset uses \
             0.01: the Cornell box's final solve takes 21 s instead of 37 s at the same \
-            error against the path-traced truth (1.44% against 1.43%, docs/accuracy.md)."
+            error against the path-traced truth (1.44% against 1.43%, docs/lab/ray-share.md)."
     )]
     pub full_rays_above: Option<f64>,
 
@@ -218,9 +218,8 @@ pub struct SolveArgs {
             elements, each with (L+1)² coefficients per channel. Default: the preset's \
             (0.5 for draft and medium, 0.125 for final: on the glossy Cornell box it \
             meets HDR-FLIP 0.06 from both cameras, where 0.25 misses it from the floor \
-            camera, at twice the solve time; docs/accuracy.md, \"Glossy: `final` at \
-            glossy_edge 0.125\" and \"Glossy: the view term\", have the cost and error \
-            of each)."
+            camera, at twice the solve time; docs/lab/glossy-final-floor.md and \
+            docs/lab/glossy-view-term.md have the cost and error of each)."
     )]
     pub glossy_edge: Option<f64>,
 
@@ -245,7 +244,7 @@ pub struct SolveArgs {
             box against the path-traced truth grouped is the more accurate at every \
             preset (final: 1.27% against 1.44% MARE, 19 s against 24 s when compared, 13 s \
             since; medium: 1.74% against 2.3%, 1.2 s against 4.8 s) but noisier between seeds at equal rays \
-            (--group-samples; docs/accuracy.md, \"Grouped shooters by default\"). \
+            (--group-samples; docs/lab/grouped-shooters.md, \"Grouped shooters by default\"). \
             Diffuse mode only (directional solves shoot patches)."
     )]
     pub shooters: Option<Shooters>,
@@ -262,7 +261,7 @@ pub struct SolveArgs {
             1.37% (12 s) and 256 1.27% (20 s); at medium 64 rays leave 0.89% image noise \
             between seeds and 512 0.47% (4.4 s, the main job). Time grows with N where shots are \
             bright: 100k boxes at medium took 167 s at 32 and 196 s at 64 \
-            (docs/accuracy.md, \"Grouped shooters against the truth\"). Ignored by patch \
+            (docs/lab/grouped-shooters.md, \"Grouped shooters against the truth\"). Ignored by patch \
             shots, which use --samples."
     )]
     pub group_samples: Option<u32>,
@@ -465,7 +464,7 @@ pub struct SolveArgs {
             threshold leaves unshot. In diffuse mode each vertex gets the term weighted by how \
             enclosed it is (the share of its hemisphere that meets a surface, over the scene's \
             mean), so a face looking out of an open scene is not over-brightened; a closed room \
-            gets Cohen's term unchanged (docs/accuracy.md)."
+            gets Cohen's term unchanged (docs/lab/ambient-term.md)."
     )]
     pub no_ambient: bool,
 
@@ -540,7 +539,7 @@ pub struct SolveArgs {
             and less blur of the shading across the normal; under a source the \
             interpolation misses by the normals' curvature across the sites, about \
             1 - cos(angle) of the peak (1.6% measured at 10 degrees). 0: every point \
-            receives on its own. Flat shooting in diffuse mode only (docs/scale.md, \
+            receives on its own. Flat shooting in diffuse mode only (docs/lab/sites.md, \
             \"Sites\")."
     )]
     pub site_angle: Option<f64>,

@@ -77,7 +77,7 @@ pub fn default_budget() -> (u64, String) {
 /// (`solve/budget.rs`), so that freed memory was the largest part of its
 /// error: on the 100k Cornell boxes at draft, 48 MiB of freed heap stayed
 /// resident after set-up, and the peak RSS fell from 262.5 MB to 227.3 MB
-/// with the trim (docs/benchmarks.md, "At scale: the freed heap, the
+/// with the trim (docs/lab/memory-at-scale.md, "At scale: the freed heap, the
 /// per-surface term and the view"). Called between phases, never during a shot; elsewhere than glibc
 /// it does nothing.
 pub fn return_freed_memory() {

@@ -11,7 +11,7 @@
 //! against α the mean of the two images puts a sharp reflected edge on the
 //! dark side of the new vertex. (Measured on the glossy Cornell box: the
 //! short block's face, reflecting the floor's penumbra 50 mm in front of it,
-//! 1.3–1.8× the truth from the floor camera, `docs/accuracy.md`, "Glossy:
+//! 1.3–1.8× the truth from the floor camera, `docs/lab/glossy-final-floor.md`, "Glossy:
 //! the short block's face".)
 //!
 //! So each patch keeps the sum of the unshot SH it has shot so far

@@ -37,7 +37,7 @@ pub(super) fn should_split_sh(
     // (the thin pieces a contact cut leaves along its lines) is refined
     // until its long side is short; tested on its shortest edge, it never
     // split, and its long elements spread the light's reflection on the
-    // glossy Cornell box's floor (docs/accuracy.md, "Glossy: contact cuts in
+    // glossy Cornell box's floor (docs/lab/contact-cuts.md, "Glossy: contact cuts in
     // directional mode").
     if 0.5 * longest_edge(mesh, e) < d.min_edge[surface_index] {
         return false;
@@ -97,7 +97,7 @@ pub(super) fn should_split_sh(
 ///
 /// Without it an edge whose ends hold the same lobe never splits, though an
 /// eye sees the highlight cross it: the L2 test sees a lobe move by the edge's
-/// angle to its source, not by its angle to the eye (docs/accuracy.md,
+/// angle to its source, not by its angle to the eye (docs/lab/glossy-view-term.md,
 /// "Glossy: the view term").
 fn view_turn(
     mesh: &Mesh,
