@@ -35,6 +35,7 @@
 #[path = "common/truth.rs"]
 mod truth;
 
+use bench_support::metrics::relative_l2;
 use solution::camera::Camera;
 use solution::format::Solution;
 use solution::raster::{render, RenderOptions};
@@ -128,18 +129,15 @@ fn images(solution: &Solution, cameras: &[Camera]) -> Vec<solution::raster::Imag
         .collect()
 }
 
-/// Relative RMS radiance difference over all pixels and channels of all views.
+/// Relative RMS radiance difference over all pixels and channels of all views
+/// (the L2 norm of the difference over the reference's).
 fn relative_rms(test: &[solution::raster::Image], reference: &[solution::raster::Image]) -> f64 {
-    let (mut diff, mut norm) = (0.0f64, 0.0f64);
-    for (t, r) in test.iter().zip(reference) {
-        for (a, b) in t.pixels.iter().zip(&r.pixels) {
-            for c in 0..3 {
-                diff += (a[c] as f64 - b[c] as f64).powi(2);
-                norm += (b[c] as f64).powi(2);
-            }
-        }
-    }
-    (diff / norm).sqrt()
+    relative_l2(test.iter().zip(reference).flat_map(|(t, r)| {
+        t.pixels
+            .iter()
+            .zip(&r.pixels)
+            .flat_map(|(a, b)| (0..3).map(move |c| (a[c] as f64, b[c] as f64)))
+    }))
 }
 
 fn cpu_model() -> String {
