@@ -35,6 +35,7 @@
 #[path = "common/truth.rs"]
 mod truth;
 
+use bench_support::host::{cpu_model, cpu_seconds};
 use bench_support::metrics::relative_l2;
 use solution::camera::Camera;
 use solution::format::Solution;
@@ -55,24 +56,6 @@ struct Run {
     /// User + system CPU seconds of the process during the solve (all threads).
     cpu_seconds: f64,
     unshot_fraction: f64,
-}
-
-/// CPU seconds (user + system, all threads) of this process so far, from
-/// /proc/self/stat in clock ticks of 1/100 s (Linux's USER_HZ); NaN elsewhere. On a
-/// shared machine this, unlike wall time, does not grow with other people's load.
-fn cpu_seconds() -> f64 {
-    std::fs::read_to_string("/proc/self/stat")
-        .ok()
-        .and_then(|s| {
-            // Fields after the parenthesised command name; utime and stime are
-            // fields 14 and 15 of the whole line.
-            let rest = &s[s.rfind(')')? + 2..];
-            let fields: Vec<&str> = rest.split_whitespace().collect();
-            let ticks =
-                fields.get(11)?.parse::<f64>().ok()? + fields.get(12)?.parse::<f64>().ok()?;
-            Some(ticks / 100.0)
-        })
-        .unwrap_or(f64::NAN)
 }
 
 fn solve(scene: &Scene, settings: &SolverSettings) -> Run {
@@ -138,18 +121,6 @@ fn relative_rms(test: &[solution::raster::Image], reference: &[solution::raster:
             .zip(&r.pixels)
             .flat_map(|(a, b)| (0..3).map(move |c| (a[c] as f64, b[c] as f64)))
     }))
-}
-
-fn cpu_model() -> String {
-    std::fs::read_to_string("/proc/cpuinfo")
-        .ok()
-        .and_then(|s| {
-            s.lines()
-                .find(|l| l.starts_with("model name"))
-                .and_then(|l| l.split(':').nth(1))
-                .map(|m| m.trim().to_string())
-        })
-        .unwrap_or_else(|| "unknown CPU".into())
 }
 
 fn env_or<T: std::str::FromStr>(name: &str, default: T) -> T {

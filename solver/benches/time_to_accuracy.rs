@@ -31,6 +31,7 @@
 #[path = "common/truth.rs"]
 mod truth;
 
+use bench_support::host::cpu_seconds;
 use solution::camera::Camera;
 use solution::format::Solution;
 use solver::compare::image::Image;
@@ -54,24 +55,6 @@ struct Point {
     name: String,
     seconds: f64,
     mare: f64,
-}
-
-/// CPU seconds (user + system, all threads) of this process so far, from
-/// /proc/self/stat in clock ticks of 1/100 s (Linux's USER_HZ); NaN elsewhere. On a
-/// shared machine this, unlike wall time, does not grow with other people's load.
-fn cpu_seconds() -> f64 {
-    std::fs::read_to_string("/proc/self/stat")
-        .ok()
-        .and_then(|s| {
-            // Fields after the parenthesised command name; utime and stime are
-            // fields 14 and 15 of the whole line.
-            let rest = &s[s.rfind(')')? + 2..];
-            let fields: Vec<&str> = rest.split_whitespace().collect();
-            let ticks =
-                fields.get(11)?.parse::<f64>().ok()? + fields.get(12)?.parse::<f64>().ok()?;
-            Some(ticks / 100.0)
-        })
-        .unwrap_or(f64::NAN)
 }
 
 /// Solves the scene to convergence (or the preset's shot cap), as `solver solve`.

@@ -25,6 +25,7 @@ mod report;
 mod truth;
 
 use anyhow::{bail, Context};
+use bench_support::host::cpu_model;
 use clap::Parser;
 use glam::DVec3;
 use points::{Camera, Point, SceneSpec};
@@ -677,18 +678,6 @@ fn load_average() -> String {
     std::fs::read_to_string("/proc/loadavg")
         .map(|s| s.split_whitespace().take(3).collect::<Vec<_>>().join(" "))
         .unwrap_or_else(|_| "unknown".into())
-}
-
-fn cpu_model() -> String {
-    std::fs::read_to_string("/proc/cpuinfo")
-        .ok()
-        .and_then(|s| {
-            s.lines()
-                .find(|l| l.starts_with("model name"))
-                .and_then(|l| l.split(':').nth(1))
-                .map(|m| m.trim().to_string())
-        })
-        .unwrap_or_else(|| "unknown CPU".into())
 }
 
 #[cfg(test)]
