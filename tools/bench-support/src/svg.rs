@@ -214,32 +214,35 @@ impl Page {
 mod tests {
     use super::*;
 
+    // A 500 × 400 plot area from (100, 50) to (600, 450).
     const PAGE: Page = Page {
-        width: 760.0,
-        height: 480.0,
-        left: 70.0,
-        right: 190.0,
-        top: 40.0,
-        bottom: 55.0,
-        title_size: 15,
-        x_tick_gap: 18.0,
-        y_label_x: 18.0,
-        frame_stroke: "#444",
+        width: 800.0,
+        height: 500.0,
+        left: 100.0,
+        right: 200.0,
+        top: 50.0,
+        bottom: 50.0,
+        title_size: 12,
+        x_tick_gap: 20.0,
+        y_label_x: 20.0,
+        frame_stroke: "grey",
     };
 
     #[test]
     fn log_axes_put_each_decade_at_its_share_of_the_plot_area() {
-        // x spans 1e1..1e4 over pixels 70..570 (three decades of 500/3 px);
-        // y spans 1e-3..1e-1 over 425 (bottom) up to 40 (top).
+        // x spans 1e1..1e4 over pixels 100..600 (three decades of 500/3 px);
+        // y spans 1e-3..1e-1 over 450 (bottom) up to 50 (top).
         let (x, y) = PAGE.axes((1, 4), (-3, -1));
-        assert!((x.at(10.0) - 70.0).abs() < 1e-9);
-        assert!((x.at(1e4) - 570.0).abs() < 1e-9);
+        assert!((x.at(10.0) - 100.0).abs() < 1e-9);
+        assert!((x.at(1e4) - 600.0).abs() < 1e-9);
         // 10^2.5 is 1.5 decades in: half the width.
-        assert!((x.at(10f64.powf(2.5)) - 320.0).abs() < 1e-9);
-        assert!((y.at(1e-3) - 425.0).abs() < 1e-9);
-        assert!((y.at(1e-1) - 40.0).abs() < 1e-9);
-        // 1e-2 is one decade of two: half-way up, 425 − 385/2.
-        assert!((y.at(1e-2) - 232.5).abs() < 1e-9);
+        assert!((x.at(10f64.powf(2.5)) - 350.0).abs() < 1e-9);
+        // 10^2 is one decade in: a third of the width.
+        assert!((x.at(100.0) - (100.0 + 500.0 / 3.0)).abs() < 1e-9);
+        assert!((y.at(1e-3) - 450.0).abs() < 1e-9);
+        assert!((y.at(1e-1) - 50.0).abs() < 1e-9);
+        // 1e-2 is one decade of two: half-way up, 450 − 400/2.
+        assert!((y.at(1e-2) - 250.0).abs() < 1e-9);
     }
 
     #[test]
@@ -273,7 +276,7 @@ mod tests {
         assert_eq!(svg.matches("<line").count(), 5);
         assert!(svg.contains(">1e2</text>") && svg.contains(">1e-1</text>"));
         // The middle x decade, 1e1, is at the middle of the plot area.
-        assert!(svg.contains(r#"<line x1="320.0""#), "{svg}");
+        assert!(svg.contains(r#"<line x1="350.0""#), "{svg}");
         assert!(svg.contains("a&lt;b &amp; c"));
         let mut line = String::new();
         polyline(

@@ -301,6 +301,33 @@ fn cube_flag(help: &str) -> Option<&'static str> {
     .find(|flag| help.contains(flag))
 }
 
+/// One point per value of the integer setting `key`, on the axis of that name.
+fn int_axis(key: &str, values: &[i64]) -> Vec<Point> {
+    values
+        .iter()
+        .map(|&n| point(key, format!("{key}={n}"), vec![(key, i(n))]))
+        .collect()
+}
+
+/// The meshing axis: one point per (edge, shadow) threshold pair, with the
+/// subdivision depth capped at `max_depth`.
+fn mesh_axis(thresholds: &[(f64, f64)], max_depth: i64) -> Vec<Point> {
+    thresholds
+        .iter()
+        .map(|&(edge, shadow)| {
+            point(
+                "mesh",
+                format!("edge={edge} shadow={shadow}"),
+                vec![
+                    ("edge_threshold", f(edge)),
+                    ("shadow_threshold", f(shadow)),
+                    ("max_depth", i(max_depth)),
+                ],
+            )
+        })
+        .collect()
+}
+
 /// The sweep's points for `scene`: one knob at a time from the base, plus
 /// combined settings (the ladder) and the shipped presets.
 pub fn points(scene: &SceneSpec, quick: bool, has_cube: bool, help: &str) -> Vec<Point> {
@@ -348,27 +375,14 @@ fn cornell_points(quick: bool) -> Vec<Point> {
     } else {
         &[1, 2, 4, 8, 16, 32, 64]
     };
-    for &n in samples {
-        out.push(point(
-            "samples",
-            format!("samples={n}"),
-            vec![("samples", i(n))],
-        ));
-    }
+    out.extend(int_axis("samples", samples));
     if quick {
         return out;
     }
-    for (edge, shadow) in [(1.0, 0.5), (0.5, 0.2), (0.3, 0.1), (0.15, 0.05)] {
-        out.push(point(
-            "mesh",
-            format!("edge={edge} shadow={shadow}"),
-            vec![
-                ("edge_threshold", f(edge)),
-                ("shadow_threshold", f(shadow)),
-                ("max_depth", i(8)),
-            ],
-        ));
-    }
+    out.extend(mesh_axis(
+        &[(1.0, 0.5), (0.5, 0.2), (0.3, 0.1), (0.15, 0.05)],
+        8,
+    ));
     // The smallest element, with the depth cap lifted so that it binds
     // and the meshing thresholds tight enough to want small elements.
     for a in [2e-3, 5e-4, 1e-4, 2e-5] {
@@ -383,13 +397,7 @@ fn cornell_points(quick: bool) -> Vec<Point> {
             ],
         ));
     }
-    for n in [2, 4, 8] {
-        out.push(point(
-            "patches",
-            format!("patches={n}"),
-            vec![("patches", i(n))],
-        ));
-    }
+    out.extend(int_axis("patches", &[2, 4, 8]));
     for t in [0.05, 0.01, 0.002] {
         out.push(point(
             "threshold",
@@ -511,31 +519,9 @@ fn glossy_points(quick: bool, has_cube: bool, help: &str) -> Vec<Point> {
         p.render_max_order = Some(l);
         out.push(p);
     }
-    for n in [1, 4, 16] {
-        out.push(point(
-            "samples",
-            format!("samples={n}"),
-            vec![("samples", i(n))],
-        ));
-    }
-    for n in [1, 2, 4] {
-        out.push(point(
-            "patches",
-            format!("patches={n}"),
-            vec![("patches", i(n))],
-        ));
-    }
-    for (edge, shadow) in [(1.0, 0.5), (0.3, 0.1)] {
-        out.push(point(
-            "mesh",
-            format!("edge={edge} shadow={shadow}"),
-            vec![
-                ("edge_threshold", f(edge)),
-                ("shadow_threshold", f(shadow)),
-                ("max_depth", i(6)),
-            ],
-        ));
-    }
+    out.extend(int_axis("samples", &[1, 4, 16]));
+    out.extend(int_axis("patches", &[1, 2, 4]));
+    out.extend(mesh_axis(&[(1.0, 0.5), (0.3, 0.1)], 6));
     if has_cube {
         match cube_flag(help) {
             Some(flag) => out.extend(cube_points(flag)),
