@@ -13,6 +13,7 @@
 #[allow(dead_code)]
 mod common;
 
+use bench_support::child::Measuring;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 
@@ -97,29 +98,16 @@ pub struct Measured {
 }
 
 /// Runs `cmd` and reaps it with wait4(2), whose rusage is the child's own
-/// (ru_maxrss, KiB on Linux): not the test's, nor another child's.
-// Clippy cannot see that wait4 below reaps the child.
-#[allow(clippy::zombie_processes)]
+/// (ru_maxrss): not the test's, nor another child's.
 pub fn run_measured(cmd: &mut Command) -> Measured {
-    let mut child = cmd
-        .stdout(Stdio::null())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
+    let mut child = Measuring::spawn(cmd.stdout(Stdio::null()).stderr(Stdio::piped())).unwrap();
     let mut stderr = String::new();
-    std::io::Read::read_to_string(child.stderr.as_mut().unwrap(), &mut stderr).unwrap();
-    let mut status = 0;
-    // SAFETY: an all-zero rusage is a valid value of this plain C struct.
-    let mut usage: libc::rusage = unsafe { std::mem::zeroed() };
-    // SAFETY: the pid is our unreaped child; wait4 writes only through the two
-    // pointers, which point at live locals of the right types.
-    let pid = unsafe { libc::wait4(child.id() as libc::pid_t, &mut status, 0, &mut usage) };
-    assert_eq!(pid, child.id() as libc::pid_t, "wait4 failed");
-    // The child is reaped: `child` must not wait again (dropping it does not).
+    std::io::Read::read_to_string(&mut child.take_stderr().unwrap(), &mut stderr).unwrap();
+    let reaped = child.wait().expect("wait4 reaps the solve");
     Measured {
-        success: libc::WIFEXITED(status) && libc::WEXITSTATUS(status) == 0,
+        success: reaped.success(),
         stderr,
-        peak_rss: usage.ru_maxrss.max(0) as u64 * 1024,
+        peak_rss: reaped.peak_rss_bytes,
     }
 }
 

@@ -10,6 +10,7 @@
 //! Run: `cargo bench -p solver --bench cube`. The figures in docs/benchmarks.md,
 //! "Global cube", come from it.
 
+use bench_support::metrics::relative_l2;
 use glam::DVec3;
 use solver::scene::load_scene;
 use solver::settings::{DirectionalRepresentation, Preset, SolverSettings};
@@ -61,12 +62,6 @@ fn main() {
     println!("| --- | --- | --- | --- | --- | --- | --- | --- | --- |");
     for (k, r, wall, bytes) in &runs {
         let values = toward_eye(r);
-        let num: f64 = values
-            .iter()
-            .zip(&finest)
-            .map(|(a, b)| (a - b).powi(2))
-            .sum();
-        let den: f64 = finest.iter().map(|b| b * b).sum();
         println!(
             "| {k} | {} | {:.3} | {} | {:.3} | {:.3} | {:.1} | {:.1} | {:.3} |",
             6 * k * k,
@@ -76,7 +71,7 @@ fn main() {
             wall,
             r.memory_bytes as f64 / (1u64 << 20) as f64,
             *bytes as f64 / 1024.0,
-            (num / den).sqrt()
+            relative_l2(values.iter().copied().zip(finest.iter().copied()))
         );
     }
 }

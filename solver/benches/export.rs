@@ -6,6 +6,7 @@
 //! (default 708: 999,698 triangles), once diffuse (SH order 0, f32) and once
 //! glossy (SH order 2, f16), each exported as `.glb` and as `.gltf` + `.bin`.
 
+use bench_support::child::Measuring;
 use solution::camera::{Camera, UpAxis};
 use solution::format::{
     f16_scale_for, write_solution, Batch, Header, Representation, ScalarType, Solution, SolveMode,
@@ -13,7 +14,6 @@ use solution::format::{
 };
 use std::path::Path;
 use std::process::{Command, Stdio};
-use std::time::Instant;
 
 /// A flat grid of `side²` vertices one unit apart (units: centimetres, +z
 /// up), two triangles per cell, with smoothly varying coefficients.
@@ -84,30 +84,13 @@ fn grid(side: u32, order: u32) -> Solution {
 }
 
 /// Runs `cmd` and reaps it with wait4(2): (seconds, peak RSS in bytes).
-// Clippy cannot see that wait4 below reaps the child.
-#[allow(clippy::zombie_processes)]
 fn run_measured(cmd: &mut Command) -> (f64, u64) {
-    let start = Instant::now();
-    let child = cmd
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .spawn()
-        .unwrap();
-    let mut status = 0;
-    // SAFETY: an all-zero rusage is a valid value of this plain C struct.
-    let mut usage: libc::rusage = unsafe { std::mem::zeroed() };
-    // SAFETY: the pid is our unreaped child; wait4 writes only through the two
-    // pointers, which point at live locals of the right types.
-    let pid = unsafe { libc::wait4(child.id() as libc::pid_t, &mut status, 0, &mut usage) };
-    assert_eq!(pid, child.id() as libc::pid_t, "wait4 failed");
-    assert!(
-        libc::WIFEXITED(status) && libc::WEXITSTATUS(status) == 0,
-        "solver export failed"
-    );
-    (
-        start.elapsed().as_secs_f64(),
-        usage.ru_maxrss.max(0) as u64 * 1024,
-    )
+    let reaped = Measuring::spawn(cmd.stdout(Stdio::null()).stderr(Stdio::null()))
+        .unwrap()
+        .wait()
+        .expect("wait4 reaps the export");
+    assert!(reaped.success(), "solver export failed");
+    (reaped.wall_seconds, reaped.peak_rss_bytes)
 }
 
 fn size(path: &Path) -> u64 {

@@ -21,6 +21,7 @@
 //! Run: `cargo bench -p solver --bench glossy_bands` (about 2–4 minutes on the
 //! 2-core bench machine in release).
 
+use bench_support::svg::{frame, polyline, Axis, TAB10};
 use glam::DVec3;
 use solution::format::SolveMode;
 use solution::sh;
@@ -213,8 +214,8 @@ fn plot(rows: &[Row], references: &[Run]) -> String {
     let (w, h) = (900.0, 380.0);
     let (pw, ph) = (360.0, 260.0);
     let panels = [(70.0, 50.0), (520.0, 50.0)];
-    let colours = ["#1f77b4", "#ff7f0e", "#2ca02c", "#d62728"];
-    let x_of = |l: f64, x0: f64| x0 + pw * l / 70.0;
+    // The order L from 0 to 70 across a panel, in that panel's pixels.
+    let x_of = |l: f64, x0: f64| Axis::linear(0.0, 70.0, x0, x0 + pw).at(l);
     let mut s = String::new();
     let _ = writeln!(
         s,
@@ -223,13 +224,13 @@ fn plot(rows: &[Row], references: &[Run]) -> String {
     let _ = writeln!(s, r#"<rect width="{w}" height="{h}" fill="white"/>"#);
     // Error panel: log10 from 1e-6 to 1.
     let (x0, y0) = panels[0];
-    let y_err = |e: f64| y0 + ph * (-(e.max(1e-6)).log10() / 6.0);
+    let y_err = |e: f64| Axis::log(-6.0, 0.0, y0 + ph, y0).at(e.max(1e-6));
     let _ = writeln!(
         s,
         r#"<text x="{}" y="30" text-anchor="middle">Highlight error vs reference, L = 64 or fit at rounding (rel. to peak)</text>"#,
         x0 + pw / 2.0
     );
-    axes(&mut s, x0, y0, pw, ph);
+    frame(&mut s, x0, y0, pw, ph, "black");
     for k in 0..=6 {
         let y = y0 + ph * k as f64 / 6.0;
         let _ = writeln!(
@@ -248,13 +249,13 @@ fn plot(rows: &[Row], references: &[Run]) -> String {
         .chain(references.iter().map(|r| r.seconds))
         .fold(0.0, f64::max)
         .max(1e-3);
-    let y_sec = |t: f64| y1 + ph * (1.0 - t / max_s);
+    let y_sec = |t: f64| Axis::linear(0.0, max_s, y1 + ph, y1).at(t);
     let _ = writeln!(
         s,
         r#"<text x="{}" y="30" text-anchor="middle">Solve seconds vs L (labels: file KiB)</text>"#,
         x1 + pw / 2.0
     );
-    axes(&mut s, x1, y1, pw, ph);
+    frame(&mut s, x1, y1, pw, ph, "black");
     for k in 0..=4 {
         let t = max_s * k as f64 / 4.0;
         let y = y_sec(t);
@@ -283,17 +284,15 @@ fn plot(rows: &[Row], references: &[Run]) -> String {
         );
     }
     for (i, (alpha, reference)) in ALPHAS.iter().zip(references).enumerate() {
-        let c = colours[i % colours.len()];
+        let c = TAB10[i % TAB10.len()];
         let mine: Vec<&Row> = rows.iter().filter(|r| r.alpha == *alpha).collect();
         // Max error: filled circles joined; RMS: open squares.
-        let line: Vec<String> = mine
-            .iter()
-            .map(|r| format!("{:.1},{:.1}", x_of(r.run.order as f64, x0), y_err(r.max)))
-            .collect();
-        let _ = writeln!(
-            s,
-            r#"<polyline points="{}" fill="none" stroke="{c}"/>"#,
-            line.join(" ")
+        let stroke = format!(r#"stroke="{c}""#);
+        polyline(
+            &mut s,
+            mine.iter()
+                .map(|r| (x_of(r.run.order as f64, x0), y_err(r.max))),
+            &stroke,
         );
         for r in &mine {
             let x = x_of(r.run.order as f64, x0);
@@ -311,14 +310,10 @@ fn plot(rows: &[Row], references: &[Run]) -> String {
             .collect();
         all.push((reference.order, reference.seconds, reference.file_bytes));
         all.sort_by_key(|a| a.0);
-        let line: Vec<String> = all
-            .iter()
-            .map(|a| format!("{:.1},{:.1}", x_of(a.0 as f64, x1), y_sec(a.1)))
-            .collect();
-        let _ = writeln!(
-            s,
-            r#"<polyline points="{}" fill="none" stroke="{c}"/>"#,
-            line.join(" ")
+        polyline(
+            &mut s,
+            all.iter().map(|a| (x_of(a.0 as f64, x1), y_sec(a.1))),
+            &stroke,
         );
         for a in &all {
             let (x, y) = (x_of(a.0 as f64, x1), y_sec(a.1));
@@ -346,11 +341,4 @@ fn plot(rows: &[Row], references: &[Run]) -> String {
     );
     s.push_str("</svg>\n");
     s
-}
-
-fn axes(s: &mut String, x: f64, y: f64, w: f64, h: f64) {
-    let _ = writeln!(
-        s,
-        r#"<rect x="{x}" y="{y}" width="{w}" height="{h}" fill="none" stroke="black"/>"#
-    );
 }

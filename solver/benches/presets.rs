@@ -35,6 +35,8 @@
 #[path = "common/truth.rs"]
 mod truth;
 
+use bench_support::host::{cpu_model, cpu_seconds};
+use bench_support::metrics::relative_l2;
 use solution::camera::Camera;
 use solution::format::Solution;
 use solution::raster::{render, RenderOptions};
@@ -54,24 +56,6 @@ struct Run {
     /// User + system CPU seconds of the process during the solve (all threads).
     cpu_seconds: f64,
     unshot_fraction: f64,
-}
-
-/// CPU seconds (user + system, all threads) of this process so far, from
-/// /proc/self/stat in clock ticks of 1/100 s (Linux's USER_HZ); NaN elsewhere. On a
-/// shared machine this, unlike wall time, does not grow with other people's load.
-fn cpu_seconds() -> f64 {
-    std::fs::read_to_string("/proc/self/stat")
-        .ok()
-        .and_then(|s| {
-            // Fields after the parenthesised command name; utime and stime are
-            // fields 14 and 15 of the whole line.
-            let rest = &s[s.rfind(')')? + 2..];
-            let fields: Vec<&str> = rest.split_whitespace().collect();
-            let ticks =
-                fields.get(11)?.parse::<f64>().ok()? + fields.get(12)?.parse::<f64>().ok()?;
-            Some(ticks / 100.0)
-        })
-        .unwrap_or(f64::NAN)
 }
 
 fn solve(scene: &Scene, settings: &SolverSettings) -> Run {
@@ -128,30 +112,15 @@ fn images(solution: &Solution, cameras: &[Camera]) -> Vec<solution::raster::Imag
         .collect()
 }
 
-/// Relative RMS radiance difference over all pixels and channels of all views.
+/// Relative RMS radiance difference over all pixels and channels of all views
+/// (the L2 norm of the difference over the reference's).
 fn relative_rms(test: &[solution::raster::Image], reference: &[solution::raster::Image]) -> f64 {
-    let (mut diff, mut norm) = (0.0f64, 0.0f64);
-    for (t, r) in test.iter().zip(reference) {
-        for (a, b) in t.pixels.iter().zip(&r.pixels) {
-            for c in 0..3 {
-                diff += (a[c] as f64 - b[c] as f64).powi(2);
-                norm += (b[c] as f64).powi(2);
-            }
-        }
-    }
-    (diff / norm).sqrt()
-}
-
-fn cpu_model() -> String {
-    std::fs::read_to_string("/proc/cpuinfo")
-        .ok()
-        .and_then(|s| {
-            s.lines()
-                .find(|l| l.starts_with("model name"))
-                .and_then(|l| l.split(':').nth(1))
-                .map(|m| m.trim().to_string())
-        })
-        .unwrap_or_else(|| "unknown CPU".into())
+    relative_l2(test.iter().zip(reference).flat_map(|(t, r)| {
+        t.pixels
+            .iter()
+            .zip(&r.pixels)
+            .flat_map(|(a, b)| (0..3).map(move |c| (a[c] as f64, b[c] as f64)))
+    }))
 }
 
 fn env_or<T: std::str::FromStr>(name: &str, default: T) -> T {

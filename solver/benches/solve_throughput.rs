@@ -12,6 +12,7 @@
 //! column divides by the solve's CPU time instead: on a shared machine it is the
 //! steadier figure (wall time includes waiting for a core).
 
+use bench_support::host::live_threads_cpu_seconds;
 use solver::scene::{load_scene, ImportOptions};
 use solver::settings::{Preset, SolverSettings};
 use solver::solve::Solver;
@@ -60,7 +61,10 @@ fn main() {
         if settings.patch_size.is_none() {
             scene.fill_default_patches(settings.patches);
         }
-        let cpu_start = process_cpu_seconds();
+        // The solve runs on one rayon worker while the main thread sleeps, so
+        // the live threads' CPU time is the solve's own: unlike the wall time
+        // it leaves out time spent waiting for a core on a shared machine.
+        let cpu_start = live_threads_cpu_seconds();
         let start = Instant::now();
         let solver = pool.install(|| {
             let mut solver = Solver::new(&scene, &settings).expect("the Cornell box solves");
@@ -68,7 +72,7 @@ fn main() {
             solver
         });
         let wall = start.elapsed().as_secs_f64();
-        let cpu = match (cpu_start, process_cpu_seconds()) {
+        let cpu = match (cpu_start, live_threads_cpu_seconds()) {
             (Some(a), Some(b)) => b - a,
             _ => f64::NAN,
         };
@@ -95,22 +99,4 @@ fn main() {
             t.gather
         );
     }
-}
-
-/// CPU time of every thread of this process so far, from Linux's
-/// /proc/self/task/*/schedstat (nanoseconds). The solve runs on one rayon
-/// worker while the main thread sleeps, so this is the solve's own CPU time:
-/// unlike the wall time it leaves out time spent waiting for a core on a
-/// shared machine. `None` where /proc is not available.
-fn process_cpu_seconds() -> Option<f64> {
-    let mut total = 0.0;
-    for task in std::fs::read_dir("/proc/self/task").ok()? {
-        let path = task.ok()?.path().join("schedstat");
-        // A thread may exit between the listing and the read: skip it.
-        if let Ok(text) = std::fs::read_to_string(path) {
-            let ns: f64 = text.split_whitespace().next()?.parse().ok()?;
-            total += ns;
-        }
-    }
-    Some(total * 1e-9)
 }

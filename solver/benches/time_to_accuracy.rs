@@ -26,9 +26,14 @@
 //! picks presets). The figures in docs/benchmarks.md, "Time to accuracy", come
 //! from it.
 
+// Only the rasterization is used here; the truth's error serves the other benches.
+#[allow(dead_code)]
+#[path = "common/truth.rs"]
+mod truth;
+
+use bench_support::host::cpu_seconds;
 use solution::camera::Camera;
 use solution::format::Solution;
-use solution::raster::{render, RenderOptions};
 use solver::compare::image::Image;
 use solver::compare::metrics::summarize;
 use solver::compare::read::read_image;
@@ -38,37 +43,18 @@ use solver::settings::{Preset, SettingsPatch, SolverSettings};
 use solver::solve::Solver;
 use std::path::Path;
 use std::time::Instant;
+use truth::raster_at_truth;
 
 /// The accuracy targets, as MARE fractions.
 const TARGETS: [f64; 3] = [0.05, 0.03, 0.02];
 /// The truth's seed is 1; any other gives independent noise.
 const PATH_TRACER_SEED: u64 = 2;
-/// The rasterized image's side: 8× the truth's, box-filtered down.
-const RASTER_SIDE: u32 = 512;
 
 /// One point of a sweep: a name, the seconds to reach it, and its MARE.
 struct Point {
     name: String,
     seconds: f64,
     mare: f64,
-}
-
-/// CPU seconds (user + system, all threads) of this process so far, from
-/// /proc/self/stat in clock ticks of 1/100 s (Linux's USER_HZ); NaN elsewhere. On a
-/// shared machine this, unlike wall time, does not grow with other people's load.
-fn cpu_seconds() -> f64 {
-    std::fs::read_to_string("/proc/self/stat")
-        .ok()
-        .and_then(|s| {
-            // Fields after the parenthesised command name; utime and stime are
-            // fields 14 and 15 of the whole line.
-            let rest = &s[s.rfind(')')? + 2..];
-            let fields: Vec<&str> = rest.split_whitespace().collect();
-            let ticks =
-                fields.get(11)?.parse::<f64>().ok()? + fields.get(12)?.parse::<f64>().ok()?;
-            Some(ticks / 100.0)
-        })
-        .unwrap_or(f64::NAN)
 }
 
 /// Solves the scene to convergence (or the preset's shot cap), as `solver solve`.
@@ -87,28 +73,7 @@ fn solve(scene: &Scene, settings: &SolverSettings) -> Solution {
 /// The solution as the runtime shows it from its header camera, brought to the
 /// truth's pixel footprints.
 fn first_image(solution: &Solution, truth: &Image) -> Image {
-    let header = &solution.header;
-    let camera = Camera {
-        width: RASTER_SIDE,
-        height: RASTER_SIDE,
-        ..header.camera
-    };
-    let offset = glam::DVec3::from_array(header.recentre_offset);
-    let raster = render(
-        solution,
-        &camera.mono_view(offset),
-        &RenderOptions::default(),
-    )
-    .expect("the solution renders");
-    let image = Image {
-        width: raster.width as usize,
-        height: raster.height as usize,
-        rgb: raster.pixels.iter().flatten().copied().collect(),
-    };
-    let factor = image
-        .supersampling_factor(truth.width, truth.height)
-        .expect("the raster is a whole multiple of the truth's size");
-    image.box_downsample(factor)
+    raster_at_truth(solution, &solution.header.camera, truth)
 }
 
 /// Each preset: solve, first image, MARE; prints a row per preset.

@@ -63,9 +63,7 @@ impl CornellTruth {
         )
     }
 
-    /// `solution` drawn by the CPU rasterizer (`solution::raster`, what the
-    /// runtime shows) from the standard camera, brought to the truth's pixel
-    /// footprints, against the truth.
+    /// `solution` drawn from the standard camera, against the truth.
     pub fn error(&self, solution: &Solution) -> TruthError {
         let camera = Camera {
             eye: [278.0, 273.0, -800.0],
@@ -75,22 +73,7 @@ impl CornellTruth {
             width: RASTER_SIDE,
             height: RASTER_SIDE,
         };
-        let offset = glam::DVec3::from_array(solution.header.recentre_offset);
-        let raster = render(
-            solution,
-            &camera.mono_view(offset),
-            &RenderOptions::default(),
-        )
-        .expect("the solution renders");
-        let image = Image {
-            width: raster.width as usize,
-            height: raster.height as usize,
-            rgb: raster.pixels.iter().flatten().copied().collect(),
-        };
-        let factor = image
-            .supersampling_factor(self.image.width, self.image.height)
-            .expect("the raster is a whole multiple of the truth's size");
-        let image = image.box_downsample(factor);
+        let image = raster_at_truth(solution, &camera, &self.image);
         TruthError {
             mare: summarize(&image, &self.image).mare,
             flip: flip(
@@ -103,4 +86,31 @@ impl CornellTruth {
             .mean,
         }
     }
+}
+
+/// `solution` drawn by the CPU rasterizer (`solution::raster`, what the runtime
+/// shows) from `camera` at RASTER_SIDE², box-filtered to the pixel footprints
+/// of `truth` (whose sides must divide RASTER_SIDE).
+pub fn raster_at_truth(solution: &Solution, camera: &Camera, truth: &Image) -> Image {
+    let camera = Camera {
+        width: RASTER_SIDE,
+        height: RASTER_SIDE,
+        ..*camera
+    };
+    let offset = glam::DVec3::from_array(solution.header.recentre_offset);
+    let raster = render(
+        solution,
+        &camera.mono_view(offset),
+        &RenderOptions::default(),
+    )
+    .expect("the solution renders");
+    let image = Image {
+        width: raster.width as usize,
+        height: raster.height as usize,
+        rgb: raster.pixels.iter().flatten().copied().collect(),
+    };
+    let factor = image
+        .supersampling_factor(truth.width, truth.height)
+        .expect("the raster is a whole multiple of the truth's size");
+    image.box_downsample(factor)
 }

@@ -4,13 +4,14 @@
 //! waited-for child so far, so after a big reference solve every later point
 //! would report the reference's peak. `wait4(2)` returns the resource usage of
 //! exactly the child it reaps, which is what each sweep point needs: its own
-//! peak resident set and its own CPU time.
+//! peak resident set and its own CPU time. The measurement itself is
+//! `bench_support::child`; this adds the log file and the error that quotes it.
 
-use anyhow::{bail, Context};
+use anyhow::{anyhow, bail, Context};
+use bench_support::child::Measuring;
 use std::fs::File;
 use std::path::Path;
 use std::process::{Command, Stdio};
-use std::time::Instant;
 
 /// What one finished child cost.
 #[derive(Clone, Copy, Debug)]
@@ -30,44 +31,17 @@ pub fn run_measured(command: &mut Command, log: &Path) -> anyhow::Result<Measure
     let err = out
         .try_clone()
         .with_context(|| format!("duplicating {}", log.display()))?;
-    let start = Instant::now();
-    let child = command
-        .stdin(Stdio::null())
-        .stdout(out)
-        .stderr(err)
-        .spawn()
+    let child = Measuring::spawn(command.stdin(Stdio::null()).stdout(out).stderr(err))
         .with_context(|| format!("starting {command:?}"))?;
-    let pid = child.id() as libc::pid_t;
-    let mut status: libc::c_int = 0;
-    // SAFETY: `rusage` is a plain C struct for which all-zero bytes are a valid
-    // value; wait4 only writes through the two pointers, which point at live
-    // locals; `pid` is our own child, not yet reaped (std's `Child` is dropped
-    // below without waiting, so nothing else reaps it).
-    let mut usage: libc::rusage = unsafe { std::mem::zeroed() };
-    let reaped = loop {
-        // SAFETY: as above.
-        let r = unsafe { libc::wait4(pid, &mut status, 0, &mut usage) };
-        if r == -1 && std::io::Error::last_os_error().kind() == std::io::ErrorKind::Interrupted {
-            continue;
-        }
-        break r;
-    };
-    let wall_seconds = start.elapsed().as_secs_f64();
-    drop(child);
-    if reaped != pid {
-        bail!(
-            "waiting for {command:?}: {}",
-            std::io::Error::last_os_error()
-        );
-    }
-    let seconds = |t: libc::timeval| t.tv_sec as f64 + t.tv_usec as f64 * 1e-6;
+    let reaped = child
+        .wait()
+        .map_err(|e| anyhow!("waiting for {command:?}: {e}"))?;
     let measured = Measured {
-        wall_seconds,
-        cpu_seconds: seconds(usage.ru_utime) + seconds(usage.ru_stime),
-        peak_rss_bytes: (usage.ru_maxrss.max(0) as u64) * 1024,
+        wall_seconds: reaped.wall_seconds,
+        cpu_seconds: reaped.cpu_seconds,
+        peak_rss_bytes: reaped.peak_rss_bytes,
     };
-    let exited_ok = libc::WIFEXITED(status) && libc::WEXITSTATUS(status) == 0;
-    if !exited_ok {
+    if !reaped.success() {
         let text = std::fs::read_to_string(log).unwrap_or_default();
         let tail: String = text
             .lines()
@@ -79,7 +53,8 @@ pub fn run_measured(command: &mut Command, log: &Path) -> anyhow::Result<Measure
             .collect::<Vec<_>>()
             .join("\n");
         bail!(
-            "{command:?} failed (wait status {status}); log {}:\n{tail}",
+            "{command:?} failed (wait status {}); log {}:\n{tail}",
+            reaped.status,
             log.display()
         );
     }
@@ -91,24 +66,31 @@ mod tests {
     use super::*;
 
     #[test]
-    fn measures_only_the_child_it_reaps() {
+    fn a_failed_child_is_an_error_that_quotes_its_log() {
+        // The measurement itself is tested in bench_support::child; here, what
+        // this wrapper adds: both streams go to the log, and a non-zero exit
+        // quotes the log's last lines.
         let dir = std::env::temp_dir().join(format!("sweep-child-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let log = dir.join("log");
-        // A child that touches ~64 MiB reports a peak of at least that; the
-        // next, tiny child must not inherit it (what RUSAGE_CHILDREN would do).
-        let big = run_measured(
-            // dd reads one 64 MiB block into its buffer, touching every page.
-            Command::new("dd").args(["if=/dev/zero", "of=/dev/null", "bs=64M", "count=1"]),
+        let ok = run_measured(
+            Command::new("sh").args(["-c", "echo out; echo err >&2"]),
             &log,
         )
         .unwrap();
-        assert!(big.peak_rss_bytes >= 64 << 20, "{big:?}");
-        let small = run_measured(&mut Command::new("true"), &log).unwrap();
-        assert!(small.peak_rss_bytes < 32 << 20, "{small:?}");
-        assert!(small.wall_seconds >= 0.0 && small.cpu_seconds >= 0.0);
-        let failed = run_measured(&mut Command::new("false"), &log).unwrap_err();
-        assert!(failed.to_string().contains("failed"), "{failed}");
+        assert!(ok.wall_seconds >= 0.0 && ok.cpu_seconds >= 0.0);
+        let text = std::fs::read_to_string(&log).unwrap();
+        assert!(text.contains("out") && text.contains("err"), "{text}");
+        let failed = run_measured(
+            Command::new("sh").args(["-c", "echo the last words >&2; exit 3"]),
+            &log,
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            failed.contains("failed") && failed.contains("the last words"),
+            "{failed}"
+        );
         std::fs::remove_dir_all(&dir).ok();
     }
 }

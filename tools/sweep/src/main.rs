@@ -25,6 +25,7 @@ mod report;
 mod truth;
 
 use anyhow::{bail, Context};
+use bench_support::host::cpu_model;
 use clap::Parser;
 use glam::DVec3;
 use points::{Camera, Point, SceneSpec};
@@ -34,7 +35,7 @@ use std::process::Command;
 use sweep::child::run_measured;
 use sweep::image::{read_exr, RgbImage};
 use sweep::lookup::ReferenceLookup;
-use sweep::metrics::relative_error;
+use sweep::metrics::{relative_error, ErrorStats, MetricError};
 
 #[derive(Parser, Debug)]
 #[command(about = "Speed/accuracy sweep of the solver; writes docs/tradeoffs.md")]
@@ -134,6 +135,35 @@ pub struct PointResult {
     /// the truth's noise); filled after the point is measured or loaded.
     #[serde(default)]
     pub truth: Option<truth::TruthError>,
+}
+
+impl PointResult {
+    /// The row of `point` before anything is measured: costs NaN or zero, no
+    /// errors, no note.
+    fn unmeasured(scene: &SceneSpec, point: &Point) -> PointResult {
+        PointResult {
+            scene: scene.key.to_string(),
+            axis: point.axis.clone(),
+            label: point.label.clone(),
+            settings: point.settings_text(),
+            cpu_seconds: f64::NAN,
+            wall_seconds: f64::NAN,
+            peak_rss_bytes: 0,
+            file_bytes: 0,
+            elements: 0,
+            vertices: 0,
+            shots: 0,
+            rays: 0,
+            unshot_fraction: f64::NAN,
+            vertex_error: None,
+            vertex_unmatched: None,
+            image_error: None,
+            image_rmse: None,
+            note: None,
+            representation: None,
+            truth: None,
+        }
+    }
 }
 
 /// The distinct representations of a solution's batches, in file order.
@@ -438,29 +468,10 @@ fn measure(
         // A refused point (e.g. a memory bound) is a row that says so, not the
         // end of the sweep; the reference must solve.
         Err(e) if reference.is_some() => {
-            let failed = PointResult {
-                scene: scene.key.to_string(),
-                axis: point.axis.clone(),
-                label: point.label.clone(),
-                settings: point.settings_text(),
-                cpu_seconds: f64::NAN,
-                wall_seconds: f64::NAN,
-                peak_rss_bytes: 0,
-                file_bytes: 0,
-                elements: 0,
-                vertices: 0,
-                shots: 0,
-                rays: 0,
-                unshot_fraction: f64::NAN,
-                vertex_error: None,
-                vertex_unmatched: None,
-                image_error: None,
-                image_rmse: None,
+            return Ok(PointResult {
                 note: Some(format!("solve failed: {}", last_line(&e))),
-                representation: None,
-                truth: None,
-            };
-            return Ok(failed);
+                ..PointResult::unmeasured(scene, point)
+            });
         }
         Err(e) => return Err(e),
     };
@@ -471,10 +482,6 @@ fn measure(
     .with_context(|| format!("parsing {}", stats_path.display()))?;
     let file_bytes = std::fs::metadata(&solution_path)?.len();
     let mut result = PointResult {
-        scene: scene.key.to_string(),
-        axis: point.axis.clone(),
-        label: point.label.clone(),
-        settings: point.settings_text(),
         cpu_seconds: measured.cpu_seconds,
         wall_seconds: measured.wall_seconds,
         peak_rss_bytes: measured.peak_rss_bytes,
@@ -484,13 +491,7 @@ fn measure(
         shots: stats.shots,
         rays: stats.rays,
         unshot_fraction: stats.unshot_fraction,
-        vertex_error: None,
-        vertex_unmatched: None,
-        image_error: None,
-        image_rmse: None,
-        note: None,
-        representation: None,
-        truth: None,
+        ..PointResult::unmeasured(scene, point)
     };
     let mut notes = Vec::new();
     // Images from the fixed cameras.
@@ -506,18 +507,7 @@ fn measure(
     }
     if let Some(reference) = reference {
         if images.len() == reference.images.len() {
-            let (r, t): (Vec<f64>, Vec<f64>) = (
-                reference
-                    .images
-                    .iter()
-                    .flat_map(|i| i.values.iter().copied())
-                    .collect(),
-                images
-                    .iter()
-                    .flat_map(|i| i.values.iter().copied())
-                    .collect(),
-            );
-            match relative_error(&r, &t) {
+            match image_error(reference, &images) {
                 Ok(e) => {
                     result.image_error = Some(e.rel_l1);
                     result.image_rmse = Some(e.rel_rmse);
@@ -581,18 +571,7 @@ fn truncated(
             Some(order),
         )?);
     }
-    let (r, t): (Vec<f64>, Vec<f64>) = (
-        reference
-            .images
-            .iter()
-            .flat_map(|i| i.values.iter().copied())
-            .collect(),
-        images
-            .iter()
-            .flat_map(|i| i.values.iter().copied())
-            .collect(),
-    );
-    let e = relative_error(&r, &t)?;
+    let e = image_error(reference, &images)?;
     result.image_error = Some(e.rel_l1);
     result.image_rmse = Some(e.rel_rmse);
     let solution = solution::format::read_solution(&solution_path)?;
@@ -607,6 +586,18 @@ fn truncated(
     result.vertex_unmatched = Some(v.unmatched as f64 / v.vertices.max(1) as f64);
     result.note = None;
     Ok(result)
+}
+
+/// The relative error of `images` against the reference's, over every pixel
+/// and channel of every camera in order.
+fn image_error(reference: &Reference, images: &[RgbImage]) -> Result<ErrorStats, MetricError> {
+    let flat = |images: &[RgbImage]| -> Vec<f64> {
+        images
+            .iter()
+            .flat_map(|i| i.values.iter().copied())
+            .collect()
+    };
+    relative_error(&flat(&reference.images), &flat(images))
 }
 
 fn last_line(e: &anyhow::Error) -> String {
@@ -687,18 +678,6 @@ fn load_average() -> String {
     std::fs::read_to_string("/proc/loadavg")
         .map(|s| s.split_whitespace().take(3).collect::<Vec<_>>().join(" "))
         .unwrap_or_else(|_| "unknown".into())
-}
-
-fn cpu_model() -> String {
-    std::fs::read_to_string("/proc/cpuinfo")
-        .ok()
-        .and_then(|s| {
-            s.lines()
-                .find(|l| l.starts_with("model name"))
-                .and_then(|l| l.split(':').nth(1))
-                .map(|m| m.trim().to_string())
-        })
-        .unwrap_or_else(|| "unknown CPU".into())
 }
 
 #[cfg(test)]

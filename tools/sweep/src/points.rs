@@ -301,232 +301,45 @@ fn cube_flag(help: &str) -> Option<&'static str> {
     .find(|flag| help.contains(flag))
 }
 
+/// One point per value of the integer setting `key`, on the axis of that name.
+fn int_axis(key: &str, values: &[i64]) -> Vec<Point> {
+    values
+        .iter()
+        .map(|&n| point(key, format!("{key}={n}"), vec![(key, i(n))]))
+        .collect()
+}
+
+/// The meshing axis: one point per (edge, shadow) threshold pair, with the
+/// subdivision depth capped at `max_depth`.
+fn mesh_axis(thresholds: &[(f64, f64)], max_depth: i64) -> Vec<Point> {
+    thresholds
+        .iter()
+        .map(|&(edge, shadow)| {
+            point(
+                "mesh",
+                format!("edge={edge} shadow={shadow}"),
+                vec![
+                    ("edge_threshold", f(edge)),
+                    ("shadow_threshold", f(shadow)),
+                    ("max_depth", i(max_depth)),
+                ],
+            )
+        })
+        .collect()
+}
+
 /// The sweep's points for `scene`: one knob at a time from the base, plus
 /// combined settings (the ladder) and the shipped presets.
 pub fn points(scene: &SceneSpec, quick: bool, has_cube: bool, help: &str) -> Vec<Point> {
-    let mut out = Vec::new();
-    match scene.key {
-        "cornell" => {
-            let samples: &[i64] = if quick {
-                &[2, 8, 32]
-            } else {
-                &[1, 2, 4, 8, 16, 32, 64]
-            };
-            for &n in samples {
-                out.push(point(
-                    "samples",
-                    format!("samples={n}"),
-                    vec![("samples", i(n))],
-                ));
-            }
-            if quick {
-                return out;
-            }
-            for (edge, shadow) in [(1.0, 0.5), (0.5, 0.2), (0.3, 0.1), (0.15, 0.05)] {
-                out.push(point(
-                    "mesh",
-                    format!("edge={edge} shadow={shadow}"),
-                    vec![
-                        ("edge_threshold", f(edge)),
-                        ("shadow_threshold", f(shadow)),
-                        ("max_depth", i(8)),
-                    ],
-                ));
-            }
-            // The smallest element, with the depth cap lifted so that it binds
-            // and the meshing thresholds tight enough to want small elements.
-            for a in [2e-3, 5e-4, 1e-4, 2e-5] {
-                out.push(point(
-                    "min_area",
-                    format!("min_area={a:e}"),
-                    vec![
-                        ("min_element_area", f(a)),
-                        ("max_depth", i(10)),
-                        ("edge_threshold", f(0.3)),
-                        ("shadow_threshold", f(0.1)),
-                    ],
-                ));
-            }
-            for n in [2, 4, 8] {
-                out.push(point(
-                    "patches",
-                    format!("patches={n}"),
-                    vec![("patches", i(n))],
-                ));
-            }
-            for t in [0.05, 0.01, 0.002] {
-                out.push(point(
-                    "threshold",
-                    format!("threshold={t}"),
-                    vec![("threshold", f(t))],
-                ));
-            }
-            for m in ["analytic", "wallace", "hemicube"] {
-                out.push(point("form_factors", m, vec![("form_factors", s(m))]));
-            }
-            for r in [16, 32, 64, 128, 256] {
-                out.push(point(
-                    "hemicube",
-                    format!("hemicube R={r}"),
-                    vec![
-                        ("form_factors", s("hemicube")),
-                        ("hemicube_resolution", i(r)),
-                    ],
-                ));
-            }
-            // The radiosity lecture notes' full-matrix gather: no adaptive meshing, so the patches are
-            // the mesh.
-            for (n, r) in [(4, 64), (8, 128), (12, 128)] {
-                out.push(with_flags(
-                    point(
-                        "gauss_seidel",
-                        format!("GS patches={n} R={r}"),
-                        vec![("patches", i(n)), ("hemicube_resolution", i(r))],
-                    ),
-                    &["--solver", "gauss-seidel"],
-                ));
-            }
-            let ladder: [(&str, Ladder); 6] = [
-                ("L0", (2, 1.0, 0.5, 1e-3, 3, 2, 0.05)),
-                ("L1", (4, 0.5, 0.2, 2e-4, 4, 2, 0.02)),
-                ("L2", (8, 0.4, 0.15, 1e-4, 5, 3, 0.01)),
-                ("L3", (16, 0.3, 0.1, 5e-5, 6, 4, 0.005)),
-                ("L4", (16, 0.2, 0.07, 2e-5, 7, 4, 0.003)),
-                ("L5", (32, 0.2, 0.07, 2e-5, 7, 4, 0.002)),
-            ];
-            // Combinations suggested by the one-knob axes: tight meshing
-            // thresholds with a *coarse* smallest element (min_area 2e-3 was
-            // the cheapest way down in image error), finer patches, and few
-            // rays (more rays lower the vertex error but hardly the image's).
-            let combos: [(&str, Ladder); 7] = [
-                ("C1", (2, 0.5, 0.2, 2e-3, 10, 4, 0.02)),
-                ("C2", (4, 0.3, 0.1, 2e-3, 10, 4, 0.01)),
-                ("C3", (4, 0.5, 0.2, 2e-3, 10, 8, 0.01)),
-                ("C4", (8, 0.3, 0.1, 2e-3, 10, 8, 0.005)),
-                ("C5", (8, 0.15, 0.05, 5e-4, 10, 8, 0.005)),
-                ("C6", (16, 0.15, 0.05, 1e-4, 10, 8, 0.002)),
-                ("C7", (16, 0.1, 0.03, 1e-4, 10, 12, 0.002)),
-            ];
-            let named = ladder
-                .iter()
-                .map(|&(n, l)| ("ladder", n, l))
-                .chain(combos.iter().map(|&(n, l)| ("combo", n, l)));
-            for (axis, name, l) in named {
-                out.push(Point {
-                    axis: axis.into(),
-                    label: format!(
-                        "{name}: n={} e={} s={} a={:e} d={} p={} t={}",
-                        l.0, l.1, l.2, l.3, l.4, l.5, l.6
-                    ),
-                    overrides: ladder_overrides(l),
-                    flags: Vec::new(),
-                    render_max_order: None,
-                });
-            }
-        }
-        "glossy" => {
-            let targets: &[f64] = if quick {
-                &[1e-1, 1e-2]
-            } else {
-                &[1e-1, 3e-2, 1e-2, 3e-3]
-            };
-            for &t in targets {
-                out.push(point(
-                    "sh_target",
-                    format!("sh_error_target={t:e}"),
-                    vec![("sh_error_target", f(t))],
-                ));
-            }
-            if quick {
-                return out;
-            }
-            // The order cap at a target that would ask for more (α = 0.1 needs
-            // L ≈ 25 at 1e-3).
-            for l in [2, 4, 8, 16] {
-                out.push(point(
-                    "sh_order",
-                    format!("max_sh_order={l}"),
-                    vec![("sh_error_target", f(1e-3)), ("max_sh_order", i(l))],
-                ));
-            }
-            // The same orders as plain truncation of the reference (windowed at
-            // its own L ≈ 25) when it is displayed: what `runtime --max-order`
-            // costs, against the solver's cap above (lobe windowed at L).
-            for l in [2, 4, 8, 16] {
-                let mut p = point(
-                    "truncation",
-                    format!("reference at --max-order {l}"),
-                    vec![],
-                );
-                p.render_max_order = Some(l);
-                out.push(p);
-            }
-            for n in [1, 4, 16] {
-                out.push(point(
-                    "samples",
-                    format!("samples={n}"),
-                    vec![("samples", i(n))],
-                ));
-            }
-            for n in [1, 2, 4] {
-                out.push(point(
-                    "patches",
-                    format!("patches={n}"),
-                    vec![("patches", i(n))],
-                ));
-            }
-            for (edge, shadow) in [(1.0, 0.5), (0.3, 0.1)] {
-                out.push(point(
-                    "mesh",
-                    format!("edge={edge} shadow={shadow}"),
-                    vec![
-                        ("edge_threshold", f(edge)),
-                        ("shadow_threshold", f(shadow)),
-                        ("max_depth", i(6)),
-                    ],
-                ));
-            }
-            if has_cube {
-                match cube_flag(help) {
-                    Some(flag) => {
-                        // The cube is gathered on the fixed patch mesh (no
-                        // adaptive meshing), so it gets a finer one: 16×16
-                        // patches per polygon. The SH row beside it solves the
-                        // same fixed mesh (adaptive off, L ≈ 25) for a
-                        // like-for-like comparison of the representations.
-                        let fixed = || {
-                            vec![
-                                ("patches", i(CUBE_PATCHES)),
-                                ("adaptive", Value::Boolean(false)),
-                            ]
-                        };
-                        for d in cube_values(flag) {
-                            let label = if flag == "--cube-resolution" {
-                                // Immel, Cohen and Greenberg's (1986) global cube: D = 6k² directions.
-                                format!("cube k={d} (D={}) patches={CUBE_PATCHES}", 6 * d * d)
-                            } else {
-                                format!("cube {flag} {d} patches={CUBE_PATCHES}")
-                            };
-                            out.push(with_flags(
-                                point("cube", label, fixed()),
-                                &["--directional", "cube", flag, &d.to_string()],
-                            ));
-                        }
-                        let mut sh = fixed();
-                        sh.push(("sh_error_target", f(1e-3)));
-                        out.push(point(
-                            "cube",
-                            format!("SH target 1e-3, fixed mesh patches={CUBE_PATCHES}"),
-                            sh,
-                        ));
-                    }
-                    None => println!(
-                        "note: --directional is listed but no flag for D was recognised; cube points skipped"
-                    ),
-                }
-            }
-        }
-        _ => {}
+    let mut out = match scene.key {
+        "cornell" => cornell_points(quick),
+        "glossy" => glossy_points(quick, has_cube, help),
+        _ => Vec::new(),
+    };
+    // A quick run of these two scenes measures only their first axis (rays
+    // per receiver, the SH target): no noise floor and no presets.
+    if quick && matches!(scene.key, "cornell" | "glossy") {
+        return out;
     }
     if !quick {
         // The reference's settings with the points' seed: how far two
@@ -550,6 +363,210 @@ pub fn points(scene: &SceneSpec, quick: bool, has_cube: bool, help: &str) -> Vec
             .push(("__preset_only".into(), Value::Boolean(true)));
         out.push(p);
     }
+    out
+}
+
+/// The Cornell box's one-knob axes, then its ladder and combinations; only
+/// the samples axis when `quick`.
+fn cornell_points(quick: bool) -> Vec<Point> {
+    let mut out = Vec::new();
+    let samples: &[i64] = if quick {
+        &[2, 8, 32]
+    } else {
+        &[1, 2, 4, 8, 16, 32, 64]
+    };
+    out.extend(int_axis("samples", samples));
+    if quick {
+        return out;
+    }
+    out.extend(mesh_axis(
+        &[(1.0, 0.5), (0.5, 0.2), (0.3, 0.1), (0.15, 0.05)],
+        8,
+    ));
+    // The smallest element, with the depth cap lifted so that it binds
+    // and the meshing thresholds tight enough to want small elements.
+    for a in [2e-3, 5e-4, 1e-4, 2e-5] {
+        out.push(point(
+            "min_area",
+            format!("min_area={a:e}"),
+            vec![
+                ("min_element_area", f(a)),
+                ("max_depth", i(10)),
+                ("edge_threshold", f(0.3)),
+                ("shadow_threshold", f(0.1)),
+            ],
+        ));
+    }
+    out.extend(int_axis("patches", &[2, 4, 8]));
+    for t in [0.05, 0.01, 0.002] {
+        out.push(point(
+            "threshold",
+            format!("threshold={t}"),
+            vec![("threshold", f(t))],
+        ));
+    }
+    for m in ["analytic", "wallace", "hemicube"] {
+        out.push(point("form_factors", m, vec![("form_factors", s(m))]));
+    }
+    for r in [16, 32, 64, 128, 256] {
+        out.push(point(
+            "hemicube",
+            format!("hemicube R={r}"),
+            vec![
+                ("form_factors", s("hemicube")),
+                ("hemicube_resolution", i(r)),
+            ],
+        ));
+    }
+    // The radiosity lecture notes' full-matrix gather: no adaptive meshing, so the patches are
+    // the mesh.
+    for (n, r) in [(4, 64), (8, 128), (12, 128)] {
+        out.push(with_flags(
+            point(
+                "gauss_seidel",
+                format!("GS patches={n} R={r}"),
+                vec![("patches", i(n)), ("hemicube_resolution", i(r))],
+            ),
+            &["--solver", "gauss-seidel"],
+        ));
+    }
+    out.extend(cornell_ladder());
+    out
+}
+
+/// Combined settings on the Cornell box: the ladder, from coarse to fine, and
+/// the combinations the one-knob axes suggested.
+fn cornell_ladder() -> Vec<Point> {
+    let mut out = Vec::new();
+    let ladder: [(&str, Ladder); 6] = [
+        ("L0", (2, 1.0, 0.5, 1e-3, 3, 2, 0.05)),
+        ("L1", (4, 0.5, 0.2, 2e-4, 4, 2, 0.02)),
+        ("L2", (8, 0.4, 0.15, 1e-4, 5, 3, 0.01)),
+        ("L3", (16, 0.3, 0.1, 5e-5, 6, 4, 0.005)),
+        ("L4", (16, 0.2, 0.07, 2e-5, 7, 4, 0.003)),
+        ("L5", (32, 0.2, 0.07, 2e-5, 7, 4, 0.002)),
+    ];
+    // Combinations suggested by the one-knob axes: tight meshing
+    // thresholds with a *coarse* smallest element (min_area 2e-3 was
+    // the cheapest way down in image error), finer patches, and few
+    // rays (more rays lower the vertex error but hardly the image's).
+    let combos: [(&str, Ladder); 7] = [
+        ("C1", (2, 0.5, 0.2, 2e-3, 10, 4, 0.02)),
+        ("C2", (4, 0.3, 0.1, 2e-3, 10, 4, 0.01)),
+        ("C3", (4, 0.5, 0.2, 2e-3, 10, 8, 0.01)),
+        ("C4", (8, 0.3, 0.1, 2e-3, 10, 8, 0.005)),
+        ("C5", (8, 0.15, 0.05, 5e-4, 10, 8, 0.005)),
+        ("C6", (16, 0.15, 0.05, 1e-4, 10, 8, 0.002)),
+        ("C7", (16, 0.1, 0.03, 1e-4, 10, 12, 0.002)),
+    ];
+    let named = ladder
+        .iter()
+        .map(|&(n, l)| ("ladder", n, l))
+        .chain(combos.iter().map(|&(n, l)| ("combo", n, l)));
+    for (axis, name, l) in named {
+        out.push(Point {
+            axis: axis.into(),
+            label: format!(
+                "{name}: n={} e={} s={} a={:e} d={} p={} t={}",
+                l.0, l.1, l.2, l.3, l.4, l.5, l.6
+            ),
+            overrides: ladder_overrides(l),
+            flags: Vec::new(),
+            render_max_order: None,
+        });
+    }
+    out
+}
+
+/// The glossy room's axes: the SH target, the order cap, truncation, rays,
+/// patches, meshing and (when the solver has it) the global cube; only the SH
+/// target when `quick`.
+fn glossy_points(quick: bool, has_cube: bool, help: &str) -> Vec<Point> {
+    let mut out = Vec::new();
+    let targets: &[f64] = if quick {
+        &[1e-1, 1e-2]
+    } else {
+        &[1e-1, 3e-2, 1e-2, 3e-3]
+    };
+    for &t in targets {
+        out.push(point(
+            "sh_target",
+            format!("sh_error_target={t:e}"),
+            vec![("sh_error_target", f(t))],
+        ));
+    }
+    if quick {
+        return out;
+    }
+    // The order cap at a target that would ask for more (α = 0.1 needs
+    // L ≈ 25 at 1e-3).
+    for l in [2, 4, 8, 16] {
+        out.push(point(
+            "sh_order",
+            format!("max_sh_order={l}"),
+            vec![("sh_error_target", f(1e-3)), ("max_sh_order", i(l))],
+        ));
+    }
+    // The same orders as plain truncation of the reference (windowed at
+    // its own L ≈ 25) when it is displayed: what `runtime --max-order`
+    // costs, against the solver's cap above (lobe windowed at L).
+    for l in [2, 4, 8, 16] {
+        let mut p = point(
+            "truncation",
+            format!("reference at --max-order {l}"),
+            vec![],
+        );
+        p.render_max_order = Some(l);
+        out.push(p);
+    }
+    out.extend(int_axis("samples", &[1, 4, 16]));
+    out.extend(int_axis("patches", &[1, 2, 4]));
+    out.extend(mesh_axis(&[(1.0, 0.5), (0.3, 0.1)], 6));
+    if has_cube {
+        match cube_flag(help) {
+            Some(flag) => out.extend(cube_points(flag)),
+            None => println!(
+                "note: --directional is listed but no flag for D was recognised; cube points skipped"
+            ),
+        }
+    }
+    out
+}
+
+/// The global cube at each of its sizes on a fixed mesh, and an SH row on the
+/// same mesh.
+fn cube_points(flag: &str) -> Vec<Point> {
+    let mut out = Vec::new();
+    // The cube is gathered on the fixed patch mesh (no
+    // adaptive meshing), so it gets a finer one: 16×16
+    // patches per polygon. The SH row beside it solves the
+    // same fixed mesh (adaptive off, L ≈ 25) for a
+    // like-for-like comparison of the representations.
+    let fixed = || {
+        vec![
+            ("patches", i(CUBE_PATCHES)),
+            ("adaptive", Value::Boolean(false)),
+        ]
+    };
+    for d in cube_values(flag) {
+        let label = if flag == "--cube-resolution" {
+            // Immel, Cohen and Greenberg's (1986) global cube: D = 6k² directions.
+            format!("cube k={d} (D={}) patches={CUBE_PATCHES}", 6 * d * d)
+        } else {
+            format!("cube {flag} {d} patches={CUBE_PATCHES}")
+        };
+        out.push(with_flags(
+            point("cube", label, fixed()),
+            &["--directional", "cube", flag, &d.to_string()],
+        ));
+    }
+    let mut sh = fixed();
+    sh.push(("sh_error_target", f(1e-3)));
+    out.push(point(
+        "cube",
+        format!("SH target 1e-3, fixed mesh patches={CUBE_PATCHES}"),
+        sh,
+    ));
     out
 }
 

@@ -151,6 +151,78 @@ pub fn write(
 ) -> anyhow::Result<()> {
     std::fs::create_dir_all(docs).with_context(|| format!("creating {}", docs.display()))?;
     let mut md = String::new();
+    header(&mut md, all, machine);
+    if !notes.trim().is_empty() {
+        md.push_str(notes.trim_end());
+        md.push_str("\n\n");
+    }
+    for SceneResults {
+        scene,
+        results,
+        reference,
+        truths,
+    } in all
+    {
+        scene_intro(&mut md, scene, reference, truths);
+        let plots = [
+            (
+                ErrorKind::Truth,
+                "truth",
+                "MARE against the path-traced truth (log)",
+            ),
+            (
+                ErrorKind::Image,
+                "image",
+                "relative L1 image error against the converged solution (log)",
+            ),
+            (
+                ErrorKind::Vertex,
+                "vertex",
+                "relative L1 vertex error against the converged solution (log)",
+            ),
+        ];
+        for (error, kind, y_label) in plots {
+            if error == ErrorKind::Truth && truths.is_empty() {
+                continue;
+            }
+            let front_idx = front(results, error);
+            let points: Vec<PlotPoint> = results
+                .iter()
+                .map(|r| PlotPoint {
+                    // NaN leaves a truncation row off the plot, keeping the
+                    // indices of `front_idx` valid.
+                    x: if r.axis == TRUNCATION_AXIS {
+                        f64::NAN
+                    } else {
+                        r.cpu_seconds
+                    },
+                    y: error.of(r).unwrap_or(f64::NAN),
+                    group: r.axis.clone(),
+                    label: format!("{}: {}", r.axis, r.label),
+                })
+                .collect();
+            let name = format!("tradeoffs-{}-{kind}.svg", scene.key);
+            let svg = plot(
+                &format!("{}: {kind} error against CPU seconds", scene.title),
+                "solver CPU seconds (log)",
+                y_label,
+                &points,
+                &front_idx,
+            );
+            write_atomic(&docs.join(&name), &svg)?;
+            let _ = writeln!(md, "![{kind} error against CPU seconds]({name})\n");
+        }
+        axis_tables(&mut md, scene, results);
+        if scene.key == "cornell" {
+            preset_section(&mut md, results);
+        }
+    }
+    write_atomic(&docs.join("tradeoffs.md"), &md)
+}
+
+/// The page's title and the run's paragraphs: how it was generated, the
+/// machine and its load, the programs, the truths and what each column means.
+fn header(md: &mut String, all: &[SceneResults], machine: &Machine) {
     let _ = writeln!(md, "# Speed/accuracy trade-offs\n");
     let _ = writeln!(
         md,
@@ -240,147 +312,93 @@ pub fn write(
          marks the Pareto front of (CPU s, MARE vs truth). No point can measure below \
          about 0.8 × the truth's own noise (stated per scene).\n"
     );
-    if !notes.trim().is_empty() {
-        md.push_str(notes.trim_end());
-        md.push_str("\n\n");
-    }
-    for SceneResults {
-        scene,
-        results,
-        reference,
-        truths,
-    } in all
-    {
-        let _ = writeln!(md, "## {}\n", scene.title);
-        let _ = writeln!(
-            md,
-            "Scene `{}`. Reference (`{}`): {} elements, {} vertices, {} Mrays, {:.1} CPU s, \
-             {:.1} wall s, peak {} MB, file {} KB. Fixed cameras: {}. Vertex-error eye: {:?}.\n",
-            scene.config,
-            reference.settings,
-            reference.elements,
-            reference.vertices,
-            mrays(reference.rays),
-            reference.cpu_seconds,
-            reference.wall_seconds,
-            mb(reference.peak_rss_bytes),
-            kb(reference.file_bytes),
-            scene
-                .cameras
-                .iter()
-                .map(|c| format!(
-                    "`{}` eye {:?} → {:?}, {}° × {}×{}",
-                    c.name, c.eye, c.target, c.fov_y_deg, c.width, c.height
-                ))
-                .collect::<Vec<_>>()
-                .join("; "),
-            scene.vertex_eye
-        );
-        truth_paragraph(&mut md, truths, reference);
-        let base: Vec<String> = scene.base.iter().map(|(k, v)| format!("{k}={v}")).collect();
-        let _ = writeln!(
-            md,
-            "Every point but the presets starts from `{}` and changes what its row says.\n",
-            base.join(" ")
-        );
-        let plots = [
-            (
-                ErrorKind::Truth,
-                "truth",
-                "MARE against the path-traced truth (log)",
-            ),
-            (
-                ErrorKind::Image,
-                "image",
-                "relative L1 image error against the converged solution (log)",
-            ),
-            (
-                ErrorKind::Vertex,
-                "vertex",
-                "relative L1 vertex error against the converged solution (log)",
-            ),
-        ];
-        for (error, kind, y_label) in plots {
-            if error == ErrorKind::Truth && truths.is_empty() {
-                continue;
-            }
-            let front_idx = front(results, error);
-            let points: Vec<PlotPoint> = results
-                .iter()
-                .map(|r| PlotPoint {
-                    // NaN leaves a truncation row off the plot, keeping the
-                    // indices of `front_idx` valid.
-                    x: if r.axis == TRUNCATION_AXIS {
-                        f64::NAN
-                    } else {
-                        r.cpu_seconds
-                    },
-                    y: error.of(r).unwrap_or(f64::NAN),
-                    group: r.axis.clone(),
-                    label: format!("{}: {}", r.axis, r.label),
-                })
-                .collect();
-            let name = format!("tradeoffs-{}-{kind}.svg", scene.key);
-            let svg = plot(
-                &format!("{}: {kind} error against CPU seconds", scene.title),
-                "solver CPU seconds (log)",
-                y_label,
-                &points,
-                &front_idx,
-            );
-            write_atomic(&docs.join(&name), &svg)?;
-            let _ = writeln!(md, "![{kind} error against CPU seconds]({name})\n");
-        }
-        let front_idx = front(results, ErrorKind::Image);
-        let truth_front = front(results, ErrorKind::Truth);
-        let mut axes: Vec<&str> = Vec::new();
-        for r in results {
-            if !axes.contains(&r.axis.as_str()) {
-                axes.push(&r.axis);
-            }
-        }
-        for axis in axes {
-            let _ = writeln!(md, "### {} — {axis}\n", scene.key);
-            let _ = writeln!(
-                md,
-                "| point | CPU s | wall s | Mrays | elements | peak MB | file KB | stored as | vertex err | image err | image RMSE | front | MARE vs truth | FLIP vs truth | truth front |"
-            );
-            let _ = writeln!(
-                md,
-                "|---|--:|--:|--:|--:|--:|--:|---|--:|--:|--:|:-:|--:|--:|:-:|"
-            );
-            for (k, r) in results.iter().enumerate().filter(|(_, r)| r.axis == axis) {
-                let _ = writeln!(
-                    md,
-                    "| {}{} | {:.2} | {:.2} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
-                    r.label,
-                    r.note
-                        .as_deref()
-                        .map(|n| format!(" ({n})"))
-                        .unwrap_or_default(),
-                    r.cpu_seconds,
-                    r.wall_seconds,
-                    mrays(r.rays),
-                    r.elements,
-                    mb(r.peak_rss_bytes),
-                    kb(r.file_bytes),
-                    r.representation.as_deref().unwrap_or(""),
-                    fmt_err(r.vertex_error),
-                    fmt_err(r.image_error),
-                    fmt_err(r.image_rmse),
-                    if front_idx.contains(&k) { "●" } else { "" },
-                    fmt_err(r.truth.as_ref().map(|t| t.mare)),
-                    fmt_flip(r.truth.as_ref().and_then(|t| t.flip)),
-                    if truth_front.contains(&k) { "●" } else { "" }
-                );
-            }
-            md.push('\n');
-        }
-        if scene.key == "cornell" {
-            preset_section(&mut md, results);
+}
+
+/// A scene's heading, its reference and cameras, its truths and the base
+/// settings every point starts from.
+fn scene_intro(md: &mut String, scene: &SceneSpec, reference: &PointResult, truths: &[Truth]) {
+    let _ = writeln!(md, "## {}\n", scene.title);
+    let _ = writeln!(
+        md,
+        "Scene `{}`. Reference (`{}`): {} elements, {} vertices, {} Mrays, {:.1} CPU s, \
+         {:.1} wall s, peak {} MB, file {} KB. Fixed cameras: {}. Vertex-error eye: {:?}.\n",
+        scene.config,
+        reference.settings,
+        reference.elements,
+        reference.vertices,
+        mrays(reference.rays),
+        reference.cpu_seconds,
+        reference.wall_seconds,
+        mb(reference.peak_rss_bytes),
+        kb(reference.file_bytes),
+        scene
+            .cameras
+            .iter()
+            .map(|c| format!(
+                "`{}` eye {:?} → {:?}, {}° × {}×{}",
+                c.name, c.eye, c.target, c.fov_y_deg, c.width, c.height
+            ))
+            .collect::<Vec<_>>()
+            .join("; "),
+        scene.vertex_eye
+    );
+    truth_paragraph(md, truths, reference);
+    let base: Vec<String> = scene.base.iter().map(|(k, v)| format!("{k}={v}")).collect();
+    let _ = writeln!(
+        md,
+        "Every point but the presets starts from `{}` and changes what its row says.\n",
+        base.join(" ")
+    );
+}
+
+/// One table per axis of a scene's points, in order of first appearance, with
+/// the image-error and truth fronts marked.
+fn axis_tables(md: &mut String, scene: &SceneSpec, results: &[PointResult]) {
+    let front_idx = front(results, ErrorKind::Image);
+    let truth_front = front(results, ErrorKind::Truth);
+    let mut axes: Vec<&str> = Vec::new();
+    for r in results {
+        if !axes.contains(&r.axis.as_str()) {
+            axes.push(&r.axis);
         }
     }
-    write_atomic(&docs.join("tradeoffs.md"), &md)
+    for axis in axes {
+        let _ = writeln!(md, "### {} — {axis}\n", scene.key);
+        let _ = writeln!(
+            md,
+            "| point | CPU s | wall s | Mrays | elements | peak MB | file KB | stored as | vertex err | image err | image RMSE | front | MARE vs truth | FLIP vs truth | truth front |"
+        );
+        let _ = writeln!(
+            md,
+            "|---|--:|--:|--:|--:|--:|--:|---|--:|--:|--:|:-:|--:|--:|:-:|"
+        );
+        for (k, r) in results.iter().enumerate().filter(|(_, r)| r.axis == axis) {
+            let _ = writeln!(
+                md,
+                "| {}{} | {:.2} | {:.2} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
+                r.label,
+                r.note
+                    .as_deref()
+                    .map(|n| format!(" ({n})"))
+                    .unwrap_or_default(),
+                r.cpu_seconds,
+                r.wall_seconds,
+                mrays(r.rays),
+                r.elements,
+                mb(r.peak_rss_bytes),
+                kb(r.file_bytes),
+                r.representation.as_deref().unwrap_or(""),
+                fmt_err(r.vertex_error),
+                fmt_err(r.image_error),
+                fmt_err(r.image_rmse),
+                if front_idx.contains(&k) { "●" } else { "" },
+                fmt_err(r.truth.as_ref().map(|t| t.mare)),
+                fmt_flip(r.truth.as_ref().and_then(|t| t.flip)),
+                if truth_front.contains(&k) { "●" } else { "" }
+            );
+        }
+        md.push('\n');
+    }
 }
 
 /// Axes whose points a preset can express: `config/presets.toml` keeps its keys

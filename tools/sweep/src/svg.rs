@@ -2,6 +2,7 @@
 //! Pareto front drawn as a line through ringed points. No plotting dependency:
 //! the plot is a few dozen elements.
 
+use bench_support::svg::{decades, escape, polyline, Page, TAB10};
 use std::fmt::Write;
 
 /// One plotted point.
@@ -15,32 +16,18 @@ pub struct PlotPoint {
     pub label: String,
 }
 
-const WIDTH: f64 = 760.0;
-const HEIGHT: f64 = 480.0;
-const LEFT: f64 = 70.0;
-const RIGHT: f64 = 190.0;
-const TOP: f64 = 40.0;
-const BOTTOM: f64 = 55.0;
-const COLOURS: [&str; 10] = [
-    "#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b", "#e377c2", "#7f7f7f",
-    "#bcbd22", "#17becf",
-];
-
-/// Powers of ten covering `[lo, hi]` (both > 0), widened to whole decades.
-fn decades(lo: f64, hi: f64) -> (i32, i32) {
-    let a = lo.log10().floor() as i32;
-    let mut b = hi.log10().ceil() as i32;
-    if b <= a {
-        b = a + 1;
-    }
-    (a, b)
-}
-
-fn escape(text: &str) -> String {
-    text.replace('&', "&amp;")
-        .replace('<', "&lt;")
-        .replace('>', "&gt;")
-}
+const PAGE: Page = Page {
+    width: 760.0,
+    height: 480.0,
+    left: 70.0,
+    right: 190.0,
+    top: 40.0,
+    bottom: 55.0,
+    title_size: 15,
+    x_tick_gap: 18.0,
+    y_label_x: 18.0,
+    frame_stroke: "#444",
+};
 
 /// Renders the plot. `front` indexes `points` (in increasing x). Points with a
 /// non-positive or non-finite coordinate cannot be drawn on log axes and are
@@ -55,74 +42,22 @@ pub fn plot(
     let drawable = |p: &PlotPoint| p.x > 0.0 && p.y > 0.0 && p.x.is_finite() && p.y.is_finite();
     let shown: Vec<&PlotPoint> = points.iter().filter(|p| drawable(p)).collect();
     let mut svg = String::new();
-    let _ = writeln!(
-        svg,
-        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{WIDTH}" height="{HEIGHT}" viewBox="0 0 {WIDTH} {HEIGHT}" font-family="sans-serif" font-size="12">"#
-    );
-    let _ = writeln!(svg, r#"<rect width="100%" height="100%" fill="white"/>"#);
-    let _ = writeln!(
-        svg,
-        r#"<text x="{}" y="22" text-anchor="middle" font-size="15">{}</text>"#,
-        (LEFT + WIDTH - RIGHT) / 2.0,
-        escape(title)
-    );
+    PAGE.open(&mut svg, title);
     if shown.is_empty() {
         let _ = writeln!(
             svg,
-            r#"<text x="{LEFT}" y="80">no drawable points</text></svg>"#
+            r#"<text x="{}" y="80">no drawable points</text></svg>"#,
+            PAGE.left
         );
         return svg;
     }
-    let (xa, xb) = decades(
-        shown.iter().map(|p| p.x).fold(f64::INFINITY, f64::min),
-        shown.iter().map(|p| p.x).fold(0.0, f64::max),
-    );
-    let (ya, yb) = decades(
-        shown.iter().map(|p| p.y).fold(f64::INFINITY, f64::min),
-        shown.iter().map(|p| p.y).fold(0.0, f64::max),
-    );
-    let plot_w = WIDTH - LEFT - RIGHT;
-    let plot_h = HEIGHT - TOP - BOTTOM;
-    let sx = |x: f64| LEFT + (x.log10() - xa as f64) / (xb - xa) as f64 * plot_w;
-    let sy = |y: f64| TOP + plot_h - (y.log10() - ya as f64) / (yb - ya) as f64 * plot_h;
-    // Grid and decade labels.
-    for d in xa..=xb {
-        let x = sx(10f64.powi(d));
-        let _ = writeln!(
-            svg,
-            r##"<line x1="{x:.1}" y1="{TOP}" x2="{x:.1}" y2="{:.1}" stroke="#ddd"/><text x="{x:.1}" y="{:.1}" text-anchor="middle">1e{d}</text>"##,
-            TOP + plot_h,
-            TOP + plot_h + 18.0
-        );
-    }
-    for d in ya..=yb {
-        let y = sy(10f64.powi(d));
-        let _ = writeln!(
-            svg,
-            r##"<line x1="{LEFT}" y1="{y:.1}" x2="{:.1}" y2="{y:.1}" stroke="#ddd"/><text x="{:.1}" y="{:.1}" text-anchor="end">1e{d}</text>"##,
-            LEFT + plot_w,
-            LEFT - 6.0,
-            y + 4.0
-        );
-    }
-    let _ = writeln!(
-        svg,
-        r##"<rect x="{LEFT}" y="{TOP}" width="{plot_w}" height="{plot_h}" fill="none" stroke="#444"/>"##
-    );
-    let _ = writeln!(
-        svg,
-        r#"<text x="{:.1}" y="{:.1}" text-anchor="middle">{}</text>"#,
-        LEFT + plot_w / 2.0,
-        HEIGHT - 12.0,
-        escape(x_label)
-    );
-    let _ = writeln!(
-        svg,
-        r#"<text x="18" y="{:.1}" text-anchor="middle" transform="rotate(-90 18 {:.1})">{}</text>"#,
-        TOP + plot_h / 2.0,
-        TOP + plot_h / 2.0,
-        escape(y_label)
-    );
+    // `shown` is not empty and holds only positive finite values.
+    let x_decades = decades(shown.iter().map(|p| p.x)).unwrap_or((0, 1));
+    let y_decades = decades(shown.iter().map(|p| p.y)).unwrap_or((0, 1));
+    let (x_axis, y_axis) = PAGE.axes(x_decades, y_decades);
+    let sx = |x: f64| x_axis.at(x);
+    let sy = |y: f64| y_axis.at(y);
+    PAGE.decade_grid(&mut svg, (x_axis, y_axis), x_label, y_label);
     // Groups in order of first appearance, one colour each.
     let mut groups: Vec<&str> = Vec::new();
     for p in &shown {
@@ -132,7 +67,7 @@ pub fn plot(
     }
     let colour = |g: &str| {
         let k = groups.iter().position(|&x| x == g).unwrap_or(0);
-        COLOURS[k % COLOURS.len()]
+        TAB10[k % TAB10.len()]
     };
     // The front: a staircase would suggest points that do not exist, so it is a
     // plain polyline through the front's points.
@@ -142,14 +77,10 @@ pub fn plot(
         .filter(|p| drawable(p))
         .collect();
     if front_points.len() > 1 {
-        let path: Vec<String> = front_points
-            .iter()
-            .map(|p| format!("{:.1},{:.1}", sx(p.x), sy(p.y)))
-            .collect();
-        let _ = writeln!(
-            svg,
-            r##"<polyline points="{}" fill="none" stroke="#000" stroke-width="1.5" stroke-dasharray="5,3"/>"##,
-            path.join(" ")
+        polyline(
+            &mut svg,
+            front_points.iter().map(|p| (sx(p.x), sy(p.y))),
+            r##"stroke="#000" stroke-width="1.5" stroke-dasharray="5,3""##,
         );
     }
     for p in &shown {
@@ -171,9 +102,9 @@ pub fn plot(
         );
     }
     // Legend.
-    let lx = LEFT + plot_w + 15.0;
+    let lx = PAGE.left + PAGE.plot_width() + 15.0;
     for (k, g) in groups.iter().enumerate() {
-        let y = TOP + 10.0 + 18.0 * k as f64;
+        let y = PAGE.top + 10.0 + 18.0 * k as f64;
         let _ = writeln!(
             svg,
             r#"<circle cx="{lx}" cy="{y}" r="4" fill="{}"/><text x="{}" y="{}">{}</text>"#,
@@ -183,7 +114,7 @@ pub fn plot(
             escape(g)
         );
     }
-    let y = TOP + 10.0 + 18.0 * groups.len() as f64 + 6.0;
+    let y = PAGE.top + 10.0 + 18.0 * groups.len() as f64 + 6.0;
     let _ = writeln!(
         svg,
         r##"<circle cx="{lx}" cy="{y}" r="7" fill="none" stroke="#000" stroke-width="1.5"/><text x="{}" y="{}">Pareto front</text>"##,
@@ -218,7 +149,7 @@ mod tests {
         assert!(svg.contains("<polyline"));
         // x from 1e0 to 1e1 spans the plot width: the point at x = 1 sits on the
         // left edge, x = 10 on the right edge.
-        assert!(svg.contains(&format!(r#"cx="{LEFT:.1}""#)));
-        assert!(svg.contains(&format!(r#"cx="{:.1}""#, WIDTH - RIGHT)));
+        assert!(svg.contains(&format!(r#"cx="{:.1}""#, PAGE.left)));
+        assert!(svg.contains(&format!(r#"cx="{:.1}""#, PAGE.width - PAGE.right)));
     }
 }

@@ -2,6 +2,7 @@
 //! series through its finished runs, hollow markers for runs stopped at the
 //! limit (their value is a lower bound).
 
+use bench_support::svg::{decades, escape, polyline, Page, TAB10};
 use std::fmt::Write as _;
 
 #[derive(Clone, Debug)]
@@ -18,95 +19,34 @@ pub struct Series {
     pub points: Vec<Point>,
 }
 
-const WIDTH: f64 = 760.0;
-const HEIGHT: f64 = 480.0;
-const LEFT: f64 = 70.0;
-const RIGHT: f64 = 220.0;
-const TOP: f64 = 40.0;
-const BOTTOM: f64 = 55.0;
+const PAGE: Page = Page {
+    width: 760.0,
+    height: 480.0,
+    left: 70.0,
+    right: 220.0,
+    top: 40.0,
+    bottom: 55.0,
+    title_size: 14,
+    x_tick_gap: 16.0,
+    y_label_x: 16.0,
+    frame_stroke: "black",
+};
+/// The scale plots' nine colours, as first drawn: tab10 without its olive.
 const COLOURS: [&str; 9] = [
-    "#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b", "#e377c2", "#7f7f7f",
-    "#17becf",
+    TAB10[0], TAB10[1], TAB10[2], TAB10[3], TAB10[4], TAB10[5], TAB10[6], TAB10[7], TAB10[9],
 ];
-
-/// Whole decades covering the positive values.
-fn decades(values: impl Iterator<Item = f64>) -> (i32, i32) {
-    let (lo, hi) = values
-        .filter(|v| *v > 0.0 && v.is_finite())
-        .fold((f64::INFINITY, 0.0f64), |(lo, hi), v| {
-            (lo.min(v), hi.max(v))
-        });
-    if !lo.is_finite() {
-        return (0, 1);
-    }
-    let a = lo.log10().floor() as i32;
-    let b = (hi.log10().ceil() as i32).max(a + 1);
-    (a, b)
-}
-
-fn escape(text: &str) -> String {
-    text.replace('&', "&amp;")
-        .replace('<', "&lt;")
-        .replace('>', "&gt;")
-}
 
 pub fn plot(title: &str, x_label: &str, y_label: &str, series: &[Series]) -> String {
     let all = || series.iter().flat_map(|s| s.points.iter());
-    let (x0, x1) = decades(all().map(|p| p.x));
-    let (y0, y1) = decades(all().map(|p| p.y));
-    let plot_w = WIDTH - LEFT - RIGHT;
-    let plot_h = HEIGHT - TOP - BOTTOM;
-    let sx = |x: f64| LEFT + (x.log10() - x0 as f64) / (x1 - x0) as f64 * plot_w;
-    let sy = |y: f64| TOP + plot_h - (y.log10() - y0 as f64) / (y1 - y0) as f64 * plot_h;
+    let (x_axis, y_axis) = PAGE.axes(
+        decades(all().map(|p| p.x)).unwrap_or((0, 1)),
+        decades(all().map(|p| p.y)).unwrap_or((0, 1)),
+    );
+    let sx = |x: f64| x_axis.at(x);
+    let sy = |y: f64| y_axis.at(y);
     let mut s = String::new();
-    let _ = writeln!(
-        s,
-        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{WIDTH}" height="{HEIGHT}" viewBox="0 0 {WIDTH} {HEIGHT}" font-family="sans-serif" font-size="12">"#
-    );
-    let _ = writeln!(s, r#"<rect width="100%" height="100%" fill="white"/>"#);
-    let _ = writeln!(
-        s,
-        r#"<text x="{}" y="22" text-anchor="middle" font-size="14">{}</text>"#,
-        LEFT + plot_w / 2.0,
-        escape(title)
-    );
-    for d in x0..=x1 {
-        let x = sx(10f64.powi(d));
-        let _ = writeln!(
-            s,
-            r##"<line x1="{x:.1}" y1="{TOP}" x2="{x:.1}" y2="{:.1}" stroke="#ddd"/><text x="{x:.1}" y="{:.1}" text-anchor="middle">1e{d}</text>"##,
-            TOP + plot_h,
-            TOP + plot_h + 16.0
-        );
-    }
-    for d in y0..=y1 {
-        let y = sy(10f64.powi(d));
-        let _ = writeln!(
-            s,
-            r##"<line x1="{LEFT}" y1="{y:.1}" x2="{:.1}" y2="{y:.1}" stroke="#ddd"/><text x="{:.1}" y="{:.1}" text-anchor="end">1e{d}</text>"##,
-            LEFT + plot_w,
-            LEFT - 6.0,
-            y + 4.0
-        );
-    }
-    let _ = writeln!(
-        s,
-        r#"<rect x="{LEFT}" y="{TOP}" width="{plot_w}" height="{plot_h}" fill="none" stroke="black"/>"#
-    );
-    let _ = writeln!(
-        s,
-        r#"<text x="{:.1}" y="{:.1}" text-anchor="middle">{}</text>"#,
-        LEFT + plot_w / 2.0,
-        HEIGHT - 12.0,
-        escape(x_label)
-    );
-    let _ = writeln!(
-        s,
-        r#"<text x="16" y="{:.1}" text-anchor="middle" transform="rotate(-90 16 {:.1})">{}</text>"#,
-        TOP + plot_h / 2.0,
-        TOP + plot_h / 2.0,
-        escape(y_label)
-    );
+    PAGE.open(&mut s, title);
+    PAGE.decade_grid(&mut s, (x_axis, y_axis), x_label, y_label);
     for (i, series) in series.iter().enumerate() {
         let colour = COLOURS[i % COLOURS.len()];
         let mut finished: Vec<&Point> = series
@@ -116,14 +56,10 @@ pub fn plot(title: &str, x_label: &str, y_label: &str, series: &[Series]) -> Str
             .collect();
         finished.sort_by(|a, b| a.x.total_cmp(&b.x));
         if finished.len() >= 2 {
-            let path: Vec<String> = finished
-                .iter()
-                .map(|p| format!("{:.1},{:.1}", sx(p.x), sy(p.y)))
-                .collect();
-            let _ = writeln!(
-                s,
-                r#"<polyline points="{}" fill="none" stroke="{colour}" stroke-width="1.5"/>"#,
-                path.join(" ")
+            polyline(
+                &mut s,
+                finished.iter().map(|p| (sx(p.x), sy(p.y))),
+                &format!(r#"stroke="{colour}" stroke-width="1.5""#),
             );
         }
         for p in series.points.iter().filter(|p| p.x > 0.0 && p.y > 0.0) {
@@ -138,8 +74,8 @@ pub fn plot(title: &str, x_label: &str, y_label: &str, series: &[Series]) -> Str
                 p.y
             );
         }
-        let ly = TOP + 10.0 + 18.0 * i as f64;
-        let lx = WIDTH - RIGHT + 14.0;
+        let ly = PAGE.top + 10.0 + 18.0 * i as f64;
+        let lx = PAGE.width - PAGE.right + 14.0;
         let _ = writeln!(
             s,
             r#"<circle cx="{lx:.1}" cy="{ly:.1}" r="4" fill="{colour}"/><text x="{:.1}" y="{:.1}">{}</text>"#,
@@ -151,8 +87,8 @@ pub fn plot(title: &str, x_label: &str, y_label: &str, series: &[Series]) -> Str
     let _ = writeln!(
         s,
         r#"<text x="{:.1}" y="{:.1}" font-size="11">hollow: stopped at the limit</text>"#,
-        WIDTH - RIGHT + 8.0,
-        TOP + 10.0 + 18.0 * series.len() as f64 + 6.0
+        PAGE.width - PAGE.right + 8.0,
+        PAGE.top + 10.0 + 18.0 * series.len() as f64 + 6.0
     );
     s.push_str("</svg>\n");
     s
@@ -187,7 +123,7 @@ mod tests {
             ],
         }];
         let svg = plot("t", "x", "y", &series);
-        let middle = LEFT + (WIDTH - LEFT - RIGHT) / 2.0;
+        let middle = PAGE.left + PAGE.plot_width() / 2.0;
         assert!(svg.contains(&format!(r#"cx="{middle:.1}""#)), "{svg}");
         assert!(svg.contains("a&lt;b") && svg.contains(r#"fill="white" stroke"#));
         assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
