@@ -14,8 +14,9 @@
 //!   `--preview` and the runtime's GPU-versus-CPU tests share;
 //! * [`texture`]: mip chains and Vulkan's trilinear filter for textured batches
 //!   (the runtime uploads these levels; the reference renderer samples them);
-//! * [`view`]: the default view of a scene that names no camera (an eye inside
-//!   the enclosed space that sees lit surfaces, standing on the floor).
+//! * [`view`]: what the solver's default-view chooser and the runtime share: the
+//!   standing eye height and the chooser's figures, the triangle BVH, and the
+//!   test room.
 //!
 //! **Architecture Invariant:** this crate depends on neither the solver nor the
 //! runtime, nor on `ash`, `openxr` or `winit`; the runtime depends on it and never on

@@ -14,6 +14,8 @@
 //! * [`reference`]: the unbiased path tracer of `solver reference`, the ground truth;
 //! * [`export`]: glTF 2.0 export of a solution (`solver export`);
 //! * [`compare`]: `solver compare`'s image metrics (relative RMSE, MARE, HDR-FLIP);
+//! * [`view`]: the default view of a scene that names no camera, stored as the
+//!   header camera;
 //! * [`settings`] and the command line in [`cli`].
 //!
 //! The file format, SH and cube evaluation, the camera and the CPU rasterizer are the
@@ -32,3 +34,4 @@ pub mod scene;
 pub mod settings;
 pub mod solve;
 pub mod texture;
+pub mod view;

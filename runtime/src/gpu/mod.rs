@@ -14,6 +14,7 @@
 //! ([`ValidationLog`]); the tests assert that the count stays zero.
 
 pub mod barrier;
+pub mod pipeline;
 mod resources;
 pub mod shaders;
 

@@ -10,7 +10,8 @@
 //! (screenshots, XR) pays nothing.
 
 use super::passes::{self, Layouts, PassSet};
-use crate::gpu::{shaders, Buffer, Gpu, GpuError, VkContext};
+use crate::gpu::pipeline::{pipeline_layout, GraphicsPipeline};
+use crate::gpu::{shaders, Buffer, Gpu, GpuError};
 use crate::render::ToneSettings;
 use ash::vk;
 use solution::format::MappedSolution;
@@ -212,21 +213,13 @@ impl InspectGpu {
             normal_length: NORMAL_LENGTH_FRACTION * diagonal,
             shared: gpu.shared.clone(),
         };
-        let push = [vk::PushConstantRange::default()
-            .stage_flags(vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT)
-            .size(24)];
-        let sets = [layouts.scene_set];
-        // SAFETY: the create info points to locals; the layout is stored at once
-        // so Drop destroys it on a later error.
-        inspect.layout = unsafe {
-            gpu.device().create_pipeline_layout(
-                &vk::PipelineLayoutCreateInfo::default()
-                    .set_layouts(&sets)
-                    .push_constant_ranges(&push),
-                None,
-            )
-        }
-        .ctx("vkCreatePipelineLayout")?;
+        // Stored at once, so Drop destroys it on a later error.
+        inspect.layout = pipeline_layout(
+            gpu,
+            &[layouts.scene_set],
+            vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT,
+            24,
+        )?;
         let vert = shaders::create_module(gpu, shaders::INSPECT_VERT)?;
         let frag = match shaders::create_module(gpu, shaders::INSPECT_FRAG) {
             Ok(f) => f,
@@ -380,63 +373,21 @@ fn line_pipeline(
     frag: vk::ShaderModule,
     per_instance: bool,
 ) -> Result<vk::Pipeline, GpuError> {
-    let stages = [
-        vk::PipelineShaderStageCreateInfo::default()
-            .stage(vk::ShaderStageFlags::VERTEX)
-            .module(vert)
-            .name(c"main"),
-        vk::PipelineShaderStageCreateInfo::default()
-            .stage(vk::ShaderStageFlags::FRAGMENT)
-            .module(frag)
-            .name(c"main"),
-    ];
-    let bindings = [vk::VertexInputBindingDescription::default()
-        .binding(0)
-        .stride(std::mem::size_of::<solution::format::Vertex>() as u32)
-        .input_rate(if per_instance {
-            vk::VertexInputRate::INSTANCE
-        } else {
-            vk::VertexInputRate::VERTEX
-        })];
     // solution::format::Vertex: position at 0, normal at 12.
-    let attributes = [0u32, 1].map(|i| {
-        vk::VertexInputAttributeDescription::default()
-            .location(i)
-            .binding(0)
-            .format(vk::Format::R32G32B32_SFLOAT)
-            .offset(12 * i)
+    let (bindings, attributes) = passes::vertex_layout::<2>(if per_instance {
+        vk::VertexInputRate::INSTANCE
+    } else {
+        vk::VertexInputRate::VERTEX
     });
-    let vertex_input = vk::PipelineVertexInputStateCreateInfo::default()
-        .vertex_binding_descriptions(&bindings)
-        .vertex_attribute_descriptions(&attributes);
-    let assembly = vk::PipelineInputAssemblyStateCreateInfo::default()
-        .topology(vk::PrimitiveTopology::LINE_LIST);
-    let raster = vk::PipelineRasterizationStateCreateInfo::default()
-        .polygon_mode(vk::PolygonMode::FILL)
-        .cull_mode(vk::CullModeFlags::NONE)
-        .line_width(1.0);
-    let multisample =
-        vk::PipelineMultisampleStateCreateInfo::default().rasterization_samples(set.desc.samples);
-    let depth = vk::PipelineDepthStencilStateCreateInfo::default()
-        .depth_test_enable(true)
-        .depth_write_enable(true)
-        .depth_compare_op(vk::CompareOp::LESS_OR_EQUAL);
-    let blend_attachments = [vk::PipelineColorBlendAttachmentState::default()
-        .color_write_mask(vk::ColorComponentFlags::RGBA)];
-    let blend = vk::PipelineColorBlendStateCreateInfo::default().attachments(&blend_attachments);
-    passes::graphics_pipeline(
-        gpu,
-        set.render_pass,
-        0,
-        layout,
-        &stages,
-        &vertex_input,
-        &assembly,
-        &raster,
-        &multisample,
-        &depth,
-        &blend,
-    )
+    GraphicsPipeline {
+        bindings: &bindings,
+        attributes: &attributes,
+        topology: vk::PrimitiveTopology::LINE_LIST,
+        samples: set.desc.samples,
+        depth_compare: Some(vk::CompareOp::LESS_OR_EQUAL),
+        ..GraphicsPipeline::new(set.render_pass, 0, layout, vert, frag)
+    }
+    .build(gpu)
 }
 
 #[cfg(test)]

@@ -13,6 +13,7 @@
 //! `UNDEFINED` into those layouts.
 
 use super::scene::CoefficientStorage;
+use crate::gpu::pipeline::{pipeline_layout, set_layout, GraphicsPipeline, ShaderModules};
 use crate::gpu::{shaders, Gpu, GpuError, VkContext};
 use ash::vk;
 use std::sync::Arc;
@@ -91,44 +92,7 @@ pub struct Layouts {
 
 impl Layouts {
     pub fn new(gpu: &Gpu) -> Result<Layouts, GpuError> {
-        let device = gpu.device();
-        let scene_bindings = [
-            vk::DescriptorSetLayoutBinding::default()
-                .binding(0)
-                .descriptor_type(vk::DescriptorType::UNIFORM_BUFFER)
-                .descriptor_count(1)
-                .stage_flags(vk::ShaderStageFlags::VERTEX),
-            vk::DescriptorSetLayoutBinding::default()
-                .binding(1)
-                .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
-                .descriptor_count(1)
-                .stage_flags(vk::ShaderStageFlags::VERTEX),
-        ];
-        // Textured batches' second set: their UV + E/π, their texture and
-        // their emission texture (the first texture again, with a zero
-        // factor, for a batch without format 3's second slot).
-        let textured_bindings = [
-            vk::DescriptorSetLayoutBinding::default()
-                .binding(0)
-                .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
-                .descriptor_count(1)
-                .stage_flags(vk::ShaderStageFlags::VERTEX),
-            vk::DescriptorSetLayoutBinding::default()
-                .binding(1)
-                .descriptor_type(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
-                .descriptor_count(1)
-                .stage_flags(vk::ShaderStageFlags::FRAGMENT),
-            vk::DescriptorSetLayoutBinding::default()
-                .binding(2)
-                .descriptor_type(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
-                .descriptor_count(1)
-                .stage_flags(vk::ShaderStageFlags::FRAGMENT),
-        ];
-        let tonemap_bindings = [vk::DescriptorSetLayoutBinding::default()
-            .binding(0)
-            .descriptor_type(vk::DescriptorType::INPUT_ATTACHMENT)
-            .descriptor_count(1)
-            .stage_flags(vk::ShaderStageFlags::FRAGMENT)];
+        use vk::{DescriptorType as D, ShaderStageFlags as S};
         let mut layouts = Layouts {
             textured_pipeline: vk::PipelineLayout::null(),
             textured_set: vk::DescriptorSetLayout::null(),
@@ -140,52 +104,34 @@ impl Layouts {
         };
         // Every handle is stored in `layouts` as soon as it exists, so its Drop
         // destroys it on any later error.
-        let scene_set_info = vk::DescriptorSetLayoutCreateInfo::default().bindings(&scene_bindings);
-        // SAFETY: the create info points to locals alive for the call.
-        layouts.scene_set = unsafe { device.create_descriptor_set_layout(&scene_set_info, None) }
-            .ctx("vkCreateDescriptorSetLayout")?;
-        let tonemap_set_info =
-            vk::DescriptorSetLayoutCreateInfo::default().bindings(&tonemap_bindings);
-        // SAFETY: as above.
-        layouts.tonemap_set =
-            unsafe { device.create_descriptor_set_layout(&tonemap_set_info, None) }
-                .ctx("vkCreateDescriptorSetLayout")?;
-        let scene_push = [vk::PushConstantRange::default()
-            .stage_flags(vk::ShaderStageFlags::VERTEX)
-            .size(BatchConstants::SIZE)];
-        let sets = [layouts.scene_set];
-        let scene_info = vk::PipelineLayoutCreateInfo::default()
-            .set_layouts(&sets)
-            .push_constant_ranges(&scene_push);
-        // SAFETY: the create info points to locals and to the live set layout.
-        layouts.scene_pipeline = unsafe { device.create_pipeline_layout(&scene_info, None) }
-            .ctx("vkCreatePipelineLayout")?;
-        let tonemap_push = [vk::PushConstantRange::default()
-            .stage_flags(vk::ShaderStageFlags::FRAGMENT)
-            .size(8)];
-        let sets = [layouts.tonemap_set];
-        let tonemap_info = vk::PipelineLayoutCreateInfo::default()
-            .set_layouts(&sets)
-            .push_constant_ranges(&tonemap_push);
-        // SAFETY: as above.
-        layouts.tonemap_pipeline = unsafe { device.create_pipeline_layout(&tonemap_info, None) }
-            .ctx("vkCreatePipelineLayout")?;
-        let textured_set_info =
-            vk::DescriptorSetLayoutCreateInfo::default().bindings(&textured_bindings);
-        // SAFETY: as above.
-        layouts.textured_set =
-            unsafe { device.create_descriptor_set_layout(&textured_set_info, None) }
-                .ctx("vkCreateDescriptorSetLayout")?;
-        let textured_push = [vk::PushConstantRange::default()
-            .stage_flags(vk::ShaderStageFlags::VERTEX)
-            .size(BatchConstants::TEXTURED_SIZE)];
-        let sets = [layouts.scene_set, layouts.textured_set];
-        let textured_info = vk::PipelineLayoutCreateInfo::default()
-            .set_layouts(&sets)
-            .push_constant_ranges(&textured_push);
-        // SAFETY: as above.
-        layouts.textured_pipeline = unsafe { device.create_pipeline_layout(&textured_info, None) }
-            .ctx("vkCreatePipelineLayout")?;
+        layouts.scene_set = set_layout(
+            gpu,
+            &[
+                (D::UNIFORM_BUFFER, S::VERTEX),
+                (D::STORAGE_BUFFER, S::VERTEX),
+            ],
+        )?;
+        layouts.tonemap_set = set_layout(gpu, &[(D::INPUT_ATTACHMENT, S::FRAGMENT)])?;
+        layouts.scene_pipeline =
+            pipeline_layout(gpu, &[layouts.scene_set], S::VERTEX, BatchConstants::SIZE)?;
+        layouts.tonemap_pipeline = pipeline_layout(gpu, &[layouts.tonemap_set], S::FRAGMENT, 8)?;
+        // Textured batches' second set: their UV + E/π, their texture and
+        // their emission texture (the first texture again, with a zero
+        // factor, for a batch without format 3's second slot).
+        layouts.textured_set = set_layout(
+            gpu,
+            &[
+                (D::STORAGE_BUFFER, S::VERTEX),
+                (D::COMBINED_IMAGE_SAMPLER, S::FRAGMENT),
+                (D::COMBINED_IMAGE_SAMPLER, S::FRAGMENT),
+            ],
+        )?;
+        layouts.textured_pipeline = pipeline_layout(
+            gpu,
+            &[layouts.scene_set, layouts.textured_set],
+            S::VERTEX,
+            BatchConstants::TEXTURED_SIZE,
+        )?;
         Ok(layouts)
     }
 }
@@ -248,29 +194,6 @@ impl Drop for PassSet {
     }
 }
 
-/// Shader modules, destroyed once the pipelines exist.
-struct Modules<'a> {
-    device: &'a ash::Device,
-    handles: Vec<vk::ShaderModule>,
-}
-
-impl Modules<'_> {
-    fn load(&mut self, gpu: &Gpu, spirv: &[u8]) -> Result<vk::ShaderModule, GpuError> {
-        let m = shaders::create_module(gpu, spirv)?;
-        self.handles.push(m);
-        Ok(m)
-    }
-}
-
-impl Drop for Modules<'_> {
-    fn drop(&mut self) {
-        for &m in &self.handles {
-            // SAFETY: modules may be destroyed once pipelines using them exist.
-            unsafe { self.device.destroy_shader_module(m, None) };
-        }
-    }
-}
-
 impl PassSet {
     pub fn new(gpu: &Gpu, layouts: &Layouts, desc: PassDesc) -> Result<PassSet, GpuError> {
         let mut set = PassSet {
@@ -284,10 +207,7 @@ impl PassSet {
             device: gpu.shared.clone(),
         };
         set.render_pass = create_render_pass(gpu, &desc)?;
-        let mut modules = Modules {
-            device: gpu.device(),
-            handles: Vec::new(),
-        };
+        let mut modules = ShaderModules::new(gpu);
         let (l0_spv, sh_spv, cube_spv, textured_spv) = match desc.storage {
             CoefficientStorage::F32 => (
                 shaders::SCENE_L0_F32_VERT,
@@ -477,66 +397,44 @@ fn scene_pipeline(
     vert: vk::ShaderModule,
     frag: vk::ShaderModule,
 ) -> Result<vk::Pipeline, GpuError> {
-    let stages = [
-        vk::PipelineShaderStageCreateInfo::default()
-            .stage(vk::ShaderStageFlags::VERTEX)
-            .module(vert)
-            .name(c"main"),
-        vk::PipelineShaderStageCreateInfo::default()
-            .stage(vk::ShaderStageFlags::FRAGMENT)
-            .module(frag)
-            .name(c"main"),
-    ];
     // solution::format::Vertex: position, normal, tangent, 3 × f32 each, 36 bytes.
-    let bindings = [vk::VertexInputBindingDescription::default()
-        .binding(0)
-        .stride(std::mem::size_of::<solution::format::Vertex>() as u32)
-        .input_rate(vk::VertexInputRate::VERTEX)];
-    let attributes: Vec<_> = (0..3)
-        .map(|i| {
-            vk::VertexInputAttributeDescription::default()
-                .location(i)
-                .binding(0)
-                .format(vk::Format::R32G32B32_SFLOAT)
-                .offset(12 * i)
-        })
-        .collect();
-    let vertex_input = vk::PipelineVertexInputStateCreateInfo::default()
-        .vertex_binding_descriptions(&bindings)
-        .vertex_attribute_descriptions(&attributes);
-    let assembly = vk::PipelineInputAssemblyStateCreateInfo::default()
-        .topology(vk::PrimitiveTopology::TRIANGLE_LIST);
+    let (bindings, attributes) = vertex_layout::<3>(vk::VertexInputRate::VERTEX);
     // Front faces are counter-clockwise seen from the normal's side; after the
     // projection's y flip they stay counter-clockwise in Vulkan's framebuffer
     // convention (solution/src/camera.rs), so back faces are culled as in the CPU
     // rasterizer.
-    let raster = vk::PipelineRasterizationStateCreateInfo::default()
-        .polygon_mode(vk::PolygonMode::FILL)
-        .cull_mode(vk::CullModeFlags::BACK)
-        .front_face(vk::FrontFace::COUNTER_CLOCKWISE)
-        .line_width(1.0);
-    let multisample =
-        vk::PipelineMultisampleStateCreateInfo::default().rasterization_samples(set.desc.samples);
-    let depth = vk::PipelineDepthStencilStateCreateInfo::default()
-        .depth_test_enable(true)
-        .depth_write_enable(true)
-        .depth_compare_op(vk::CompareOp::LESS);
-    let blend_attachments = [vk::PipelineColorBlendAttachmentState::default()
-        .color_write_mask(vk::ColorComponentFlags::RGBA)];
-    let blend = vk::PipelineColorBlendStateCreateInfo::default().attachments(&blend_attachments);
-    graphics_pipeline(
-        gpu,
-        set.render_pass,
-        0,
-        layout,
-        &stages,
-        &vertex_input,
-        &assembly,
-        &raster,
-        &multisample,
-        &depth,
-        &blend,
-    )
+    GraphicsPipeline {
+        bindings: &bindings,
+        attributes: &attributes,
+        cull_mode: vk::CullModeFlags::BACK,
+        samples: set.desc.samples,
+        depth_compare: Some(vk::CompareOp::LESS),
+        ..GraphicsPipeline::new(set.render_pass, 0, layout, vert, frag)
+    }
+    .build(gpu)
+}
+
+/// The vertex buffer of the scene subpass's pipelines: one binding of
+/// [`solution::format::Vertex`] (36 bytes) at `rate`, and its first `N`
+/// attributes (position at 0, normal at 12, tangent at 24), each 3 × f32.
+pub(super) fn vertex_layout<const N: usize>(
+    rate: vk::VertexInputRate,
+) -> (
+    [vk::VertexInputBindingDescription; 1],
+    [vk::VertexInputAttributeDescription; N],
+) {
+    let bindings = [vk::VertexInputBindingDescription::default()
+        .binding(0)
+        .stride(std::mem::size_of::<solution::format::Vertex>() as u32)
+        .input_rate(rate)];
+    let attributes = std::array::from_fn(|i| {
+        vk::VertexInputAttributeDescription::default()
+            .location(i as u32)
+            .binding(0)
+            .format(vk::Format::R32G32B32_SFLOAT)
+            .offset(12 * i as u32)
+    });
+    (bindings, attributes)
 }
 
 fn tonemap_pipeline(
@@ -546,86 +444,5 @@ fn tonemap_pipeline(
     vert: vk::ShaderModule,
     frag: vk::ShaderModule,
 ) -> Result<vk::Pipeline, GpuError> {
-    let stages = [
-        vk::PipelineShaderStageCreateInfo::default()
-            .stage(vk::ShaderStageFlags::VERTEX)
-            .module(vert)
-            .name(c"main"),
-        vk::PipelineShaderStageCreateInfo::default()
-            .stage(vk::ShaderStageFlags::FRAGMENT)
-            .module(frag)
-            .name(c"main"),
-    ];
-    let vertex_input = vk::PipelineVertexInputStateCreateInfo::default();
-    let assembly = vk::PipelineInputAssemblyStateCreateInfo::default()
-        .topology(vk::PrimitiveTopology::TRIANGLE_LIST);
-    let raster = vk::PipelineRasterizationStateCreateInfo::default()
-        .polygon_mode(vk::PolygonMode::FILL)
-        .cull_mode(vk::CullModeFlags::NONE)
-        .line_width(1.0);
-    let multisample = vk::PipelineMultisampleStateCreateInfo::default()
-        .rasterization_samples(vk::SampleCountFlags::TYPE_1);
-    let depth = vk::PipelineDepthStencilStateCreateInfo::default();
-    let blend_attachments = [vk::PipelineColorBlendAttachmentState::default()
-        .color_write_mask(vk::ColorComponentFlags::RGBA)];
-    let blend = vk::PipelineColorBlendStateCreateInfo::default().attachments(&blend_attachments);
-    graphics_pipeline(
-        gpu,
-        set.render_pass,
-        1,
-        layouts.tonemap_pipeline,
-        &stages,
-        &vertex_input,
-        &assembly,
-        &raster,
-        &multisample,
-        &depth,
-        &blend,
-    )
-}
-
-#[allow(clippy::too_many_arguments)]
-pub(super) fn graphics_pipeline(
-    gpu: &Gpu,
-    render_pass: vk::RenderPass,
-    subpass: u32,
-    layout: vk::PipelineLayout,
-    stages: &[vk::PipelineShaderStageCreateInfo<'_>],
-    vertex_input: &vk::PipelineVertexInputStateCreateInfo<'_>,
-    assembly: &vk::PipelineInputAssemblyStateCreateInfo<'_>,
-    raster: &vk::PipelineRasterizationStateCreateInfo<'_>,
-    multisample: &vk::PipelineMultisampleStateCreateInfo<'_>,
-    depth: &vk::PipelineDepthStencilStateCreateInfo<'_>,
-    blend: &vk::PipelineColorBlendStateCreateInfo<'_>,
-) -> Result<vk::Pipeline, GpuError> {
-    // Viewport and scissor are dynamic: one pipeline serves every image size.
-    let viewport = vk::PipelineViewportStateCreateInfo::default()
-        .viewport_count(1)
-        .scissor_count(1);
-    let dynamic_states = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
-    let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic_states);
-    let info = [vk::GraphicsPipelineCreateInfo::default()
-        .stages(stages)
-        .vertex_input_state(vertex_input)
-        .input_assembly_state(assembly)
-        .viewport_state(&viewport)
-        .rasterization_state(raster)
-        .multisample_state(multisample)
-        .depth_stencil_state(depth)
-        .color_blend_state(blend)
-        .dynamic_state(&dynamic)
-        .layout(layout)
-        .render_pass(render_pass)
-        .subpass(subpass)];
-    // SAFETY: every state struct points to locals alive for the call; the render
-    // pass and layout are live handles of this device.
-    let pipelines = unsafe {
-        gpu.device()
-            .create_graphics_pipelines(vk::PipelineCache::null(), &info, None)
-    }
-    .map_err(|(_, result)| GpuError::Vulkan {
-        call: "vkCreateGraphicsPipelines",
-        result,
-    })?;
-    Ok(pipelines[0])
+    GraphicsPipeline::new(set.render_pass, 1, layouts.tonemap_pipeline, vert, frag).build(gpu)
 }

@@ -451,18 +451,34 @@ mod tests {
         ));
     }
 
-    /// The XR start pose of a scene without a camera: the solver stores the
-    /// default view of `solution::view` as the header camera, and STAGE space
-    /// with the default eye height puts the user's feet on the floor that a
-    /// downward ray from that eye meets, looking where the view looks.
+    /// The XR start pose of a scene without a camera: the solver stores its
+    /// default view as the header camera, an eye [`EYE_HEIGHT_M`] above a
+    /// floor (the chooser's own tests, in the solver, check that it stands
+    /// so), and STAGE space with the default eye height puts the user's feet on
+    /// the floor that a downward ray from that eye meets (through the
+    /// contract crate's triangle BVH), looking where the view looks.
+    ///
+    /// [`EYE_HEIGHT_M`]: solution::view::EYE_HEIGHT_M
     #[test]
     fn the_default_view_start_pose_stands_on_the_floor_below_its_eye() {
-        use solution::view::{default_camera, fixture, ViewScene, EYE_HEIGHT_M};
+        use glam::Vec3;
+        use solution::view::{bvh::Bvh, fixture, EYE_HEIGHT_M};
         let solution = fixture::box_room();
         let header = &solution.header;
-        let camera = default_camera(&solution, solution::camera::Camera::default());
-        // As `XrSession` does: the home eye in file coordinates and its yaw.
         let offset = DVec3::from(header.recentre_offset);
+        // A view as the chooser stands one: in the room, clear of its block,
+        // EYE_HEIGHT_M above the floor, looking level across the room.
+        let standing = DVec3::new(
+            1.2,
+            f64::from(fixture::ROOM_LO.y) + EYE_HEIGHT_M * header.units_per_metre,
+            -1.8,
+        );
+        let camera = solution::camera::Camera {
+            eye: (standing + offset).to_array(),
+            target: (standing + DVec3::new(-1.0, 0.0, 2.0) + offset).to_array(),
+            ..solution::camera::Camera::default()
+        };
+        // As `XrSession` does: the home eye in file coordinates and its yaw.
         let home_eye = DVec3::from(camera.eye) - offset;
         let home_yaw = scene_yaw_deg(
             DVec3::from(camera.target) - DVec3::from(camera.eye),
@@ -475,8 +491,14 @@ mod tests {
         let head = pose(DVec3::new(0.2, 1.75, -0.1), 25.0);
         loco.recentre(&head, home_eye, home_yaw, Placement::Floor { eye_height_m });
         let feet = loco.to_scene(&pose(DVec3::new(0.2, 0.0, -0.1), 25.0));
-        let down = ViewScene::from_solution(&solution)
-            .cast(home_eye, DVec3::NEG_Y)
+        let batch = &solution.batches[0];
+        let triangles = batch
+            .indices
+            .chunks_exact(3)
+            .map(|t| [0, 1, 2].map(|k| Vec3::from(batch.vertices[t[k] as usize].position)))
+            .collect();
+        let down = Bvh::build(triangles)
+            .closest(home_eye.as_vec3(), Vec3::NEG_Y, f32::INFINITY)
             .expect("a floor below the eye");
         assert!(down.front, "the floor's upper side");
         let floor = home_eye - DVec3::Y * down.t as f64;

@@ -1,5 +1,6 @@
 //! A small bounding-volume hierarchy over a solution's triangles, for the few
-//! thousand closest-hit rays of the default-view chooser ([`super`]).
+//! thousand closest-hit rays of the default-view chooser (in the solver,
+//! `solver/src/view/`) and, later, the runtime's collision and teleport.
 //!
 //! Binary, median split on the longest axis of the centroids' box, at most
 //! [`LEAF_SIZE`] triangles a leaf, nodes in depth-first order (the left child
@@ -54,7 +55,7 @@ impl Bvh {
     /// [`LEAF_SIZE`] triangles, about `LEAF_SIZE − 1` on average, and a
     /// binary tree has two nodes a leaf: 2 / (LEAF_SIZE − 1) nodes a
     /// triangle (measured 0.51–0.77, test `bytes_per_triangle_matches_a_build`).
-    pub(super) fn bytes_per_triangle() -> u64 {
+    pub fn bytes_per_triangle() -> u64 {
         (std::mem::size_of::<[Vec3; 3]>()
             + std::mem::size_of::<u32>()
             + std::mem::size_of::<Vec3>()

@@ -66,7 +66,7 @@
 //!   replace, alive while they are built, and the f64 coefficients shown
 //!   (hidden vertices filled, contact cuts averaged), and when the scene names
 //!   no camera the default view's hierarchy over the solution's triangles
-//!   (`solution::view::transient_bytes`, about 85 bytes a triangle);
+//!   (`crate::view::transient_bytes`, about 85 bytes a triangle);
 //! * **gather** (diffuse mode): the touched patches' list and its copy, and
 //!   the larger of the per-patch sums and the unshot tree rebuilt beside the
 //!   old one (`UnshotTree::update_many` when a shot changed more than 1/8 of
@@ -245,7 +245,7 @@ pub struct Counts {
     /// vertex's own bytes even where every point of a scene interpolates).
     pub site_tables: Option<(u64, u64, u64)>,
     /// The scene names no camera, so the output chooses a view over the
-    /// solution's triangles ([`solution::view::transient_bytes`]).
+    /// solution's triangles ([`crate::view::transient_bytes`]).
     pub chooses_view: bool,
 }
 
@@ -520,7 +520,7 @@ fn output_bytes(c: &Counts) -> u64 {
         0
     };
     let view = if c.chooses_view {
-        solution::view::transient_bytes(triangles)
+        crate::view::transient_bytes(triangles)
     } else {
         0
     };

@@ -302,11 +302,11 @@ impl Solver {
         self.directional_batches(&mut solution, ambient);
         if self.scene_camera.is_none() {
             // No authored camera: an eye inside the enclosed space that sees lit
-            // surfaces, standing on the floor (`solution::view`, whose notes say
+            // surfaces, standing on the floor (`crate::view`, whose notes say
             // why the choice is made here, at solve time); the framing camera
             // when no candidate passes.
             let framing = solution.header.camera;
-            solution.header.camera = ::solution::view::default_camera(&solution, framing);
+            solution.header.camera = crate::view::default_camera(&solution, framing);
         }
         solution
     }
@@ -314,7 +314,7 @@ impl Solver {
 
 /// A camera that frames the scene's bounds (scene coordinates) from outside
 /// them: the fallback when the scene names no camera and
-/// `solution::view::default_camera` finds no eye inside it, and the default of
+/// `crate::view::default_camera` finds no eye inside it, and the default of
 /// `solver reference`. 45° vertical field of view, looking horizontally along the axis
 /// perpendicular to `up` that OpenGL would use (−z for a y-up scene, +y for a
 /// z-up one), from far enough that the bounding sphere fits.

@@ -2,8 +2,8 @@
 //! and a ceiling light, a model seen from outside, and a room in z-up units of
 //! millimetres.
 
-use super::fixture::*;
 use super::*;
+use solution::view::fixture::*;
 
 /// The solver's old framing camera: the bounding sphere seen under 45° from +z.
 fn framing_eye_z(lo: Vec3, hi: Vec3) -> f64 {

@@ -2,10 +2,11 @@
 //! closed box room of `solution::view::fixture` at growing triangle counts, or
 //! the solution files named on the command line.
 //!
-//! Usage: `cargo run --release -p solution --example default_view_cost [FILE.sol ...]`
+//! Usage: `cargo run --release -p solver --example default_view_cost [FILE.sol ...]`
 
 use solution::format::{MappedSolution, Solution};
-use solution::view::{choose_view, fixture, ViewScene};
+use solution::view::fixture;
+use solver::view::{choose_view, ViewScene};
 use std::time::Instant;
 
 fn measure(name: &str, solution: &Solution) {
