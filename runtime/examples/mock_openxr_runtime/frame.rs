@@ -114,72 +114,17 @@ pub(crate) unsafe extern "system" fn end_frame(
                 let layer =
                     // SAFETY: the header's `ty`, checked above, says which layer structure it begins; `layers[i]` is valid for reading (crate notes).
                     unsafe { &*(header as *const _ as *const xr::CompositionLayerProjection) };
-                if layer.view_count != 2 {
-                    problems.push(format!("{} projection views", layer.view_count));
-                    continue;
-                }
-                for v in 0..2usize {
-                    // SAFETY: `v < view_count`, and `views` holds that many views (the loader's pointer contract: crate notes).
-                    let view = unsafe { &*layer.views.add(v) };
-                    let (p, o, f) = (view.pose.position, view.pose.orientation, view.fov);
-                    submitted_eyes[v] = [
-                        p.x,
-                        p.y,
-                        p.z,
-                        o.x,
-                        o.y,
-                        o.z,
-                        o.w,
-                        f.angle_left,
-                        f.angle_right,
-                        f.angle_up,
-                        f.angle_down,
-                    ];
-                    let sub = &view.sub_image;
-                    match s.swapchains.get(&sub.swapchain.into_raw()) {
-                        None => problems.push("projection view without a swapchain".into()),
-                        Some(c) => {
-                            match c.last_released {
-                                None => problems.push("projection image never released".into()),
-                                Some(i) => {
-                                    shown_image = Some((c.images[i as usize].0, c.width, c.height))
-                                }
-                            }
-                            if sub.image_array_index != v as u32
-                                || sub.image_array_index >= c.layers
-                            {
-                                problems
-                                    .push(format!("view {v} in layer {}", sub.image_array_index));
-                            }
-                            let r = sub.image_rect;
-                            if r.offset.x != 0
-                                || r.offset.y != 0
-                                || r.extent.width != c.width as i32
-                                || r.extent.height != c.height as i32
-                            {
-                                problems.push(format!("view {v} rect {r:?}"));
-                            }
-                        }
-                    }
-                    match &located {
-                        None => {
-                            problems.push("projection for a time no views were located at".into())
-                        }
-                        Some(eyes) => {
-                            let (pose, fov) = &eyes[v];
-                            let f = (view.fov, *fov);
-                            if !same_pose(&view.pose, pose)
-                                || !close(f.0.angle_left, f.1.angle_left)
-                                || !close(f.0.angle_right, f.1.angle_right)
-                                || !close(f.0.angle_up, f.1.angle_up)
-                                || !close(f.0.angle_down, f.1.angle_down)
-                            {
-                                problems
-                                    .push(format!("view {v} pose/fov differ from the located eye"));
-                            }
-                        }
-                    }
-                }
+                // SAFETY: `layer` came through the loader's pointer contract (crate notes).
+                unsafe {
+                    check_projection(
+                        s,
+                        layer,
+                        located.as_ref(),
+                        &mut problems,
+                        &mut shown_image,
+                        &mut submitted_eyes,
+                    )
+                };
             } else if header.ty == xr::CompositionLayerQuad::TYPE {
                 quad = true;
                 // SAFETY: the header's `ty`, checked above, says which layer structure it begins; `layers[i]` is valid for reading (crate notes).
@@ -249,4 +194,81 @@ pub(crate) unsafe extern "system" fn end_frame(
         }
         xr::Result::SUCCESS
     })
+}
+
+/// Checks a projection layer's two views against their swapchains (an image
+/// released, the view's own array layer, the whole image) and against the eyes
+/// located for the frame's time, pushing what is wrong to `problems`; notes the
+/// image shown and the submitted poses and fields of view.
+///
+/// # Safety
+///
+/// `layer.views` holds `layer.view_count` valid views (the loader's pointer
+/// contract: crate notes).
+unsafe fn check_projection(
+    s: &State,
+    layer: &xr::CompositionLayerProjection,
+    located: Option<&[(xr::Posef, xr::Fovf); 2]>,
+    problems: &mut Vec<String>,
+    shown_image: &mut Option<(vk::Image, u32, u32)>,
+    submitted_eyes: &mut [[f32; 11]; 2],
+) {
+    if layer.view_count != 2 {
+        problems.push(format!("{} projection views", layer.view_count));
+        return;
+    }
+    for v in 0..2usize {
+        // SAFETY: `v < view_count`, and `views` holds that many views (the loader's pointer contract: crate notes).
+        let view = unsafe { &*layer.views.add(v) };
+        let (p, o, f) = (view.pose.position, view.pose.orientation, view.fov);
+        submitted_eyes[v] = [
+            p.x,
+            p.y,
+            p.z,
+            o.x,
+            o.y,
+            o.z,
+            o.w,
+            f.angle_left,
+            f.angle_right,
+            f.angle_up,
+            f.angle_down,
+        ];
+        let sub = &view.sub_image;
+        match s.swapchains.get(&sub.swapchain.into_raw()) {
+            None => problems.push("projection view without a swapchain".into()),
+            Some(c) => {
+                match c.last_released {
+                    None => problems.push("projection image never released".into()),
+                    Some(i) => *shown_image = Some((c.images[i as usize].0, c.width, c.height)),
+                }
+                if sub.image_array_index != v as u32 || sub.image_array_index >= c.layers {
+                    problems.push(format!("view {v} in layer {}", sub.image_array_index));
+                }
+                let r = sub.image_rect;
+                if r.offset.x != 0
+                    || r.offset.y != 0
+                    || r.extent.width != c.width as i32
+                    || r.extent.height != c.height as i32
+                {
+                    problems.push(format!("view {v} rect {r:?}"));
+                }
+            }
+        }
+        match located {
+            None => problems.push("projection for a time no views were located at".into()),
+            Some(eyes) => {
+                let (pose, fov) = &eyes[v];
+                let f = (view.fov, *fov);
+                if !same_pose(&view.pose, pose)
+                    || !close(f.0.angle_left, f.1.angle_left)
+                    || !close(f.0.angle_right, f.1.angle_right)
+                    || !close(f.0.angle_up, f.1.angle_up)
+                    || !close(f.0.angle_down, f.1.angle_down)
+                {
+                    problems.push(format!("view {v} pose/fov differ from the located eye"));
+                }
+            }
+        }
+    }
 }

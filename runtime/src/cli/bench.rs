@@ -3,7 +3,7 @@
 use super::{
     open_gpu, open_solution, parse_size, report_truncation_mapped, RenderOptions, Timings,
 };
-use crate::render::{DrawKind, RendererDesc, StereoRenderer, ToneSettings};
+use crate::render::{CullStats, DrawKind, GpuScene, RendererDesc, StereoRenderer, ToneSettings};
 use crate::session::{run_frame, HeadPath, MockDesc, MockSession, Session};
 use anyhow::Result;
 use glam::DVec3;
@@ -94,22 +94,7 @@ pub fn run(args: &BenchArgs) -> Result<BenchReport> {
     report_truncation_mapped(&file, args.render.max_order);
     let header = file.header();
     let offset = DVec3::from(header.recentre_offset);
-    let path = match &args.walk {
-        Some(file) => HeadPath::load(file)?,
-        None => {
-            let lo = DVec3::from(header.bounds_min.map(f64::from)) + offset;
-            let hi = DVec3::from(header.bounds_max.map(f64::from)) + offset;
-            let centre = 0.5 * (lo + hi);
-            let eye = DVec3::from(header.camera.eye);
-            let up = DVec3::from(header.up_axis.vector());
-            let flat = |v: DVec3| v - up * v.dot(up);
-            let mut radius = flat(eye - centre).length();
-            if !(radius > 0.0 && radius.is_finite()) {
-                radius = 0.5 * (hi - lo).length().max(1e-3);
-            }
-            HeadPath::orbit(centre, eye, radius, 10.0, header.up_axis)
-        }
-    };
+    let path = head_path(args, header)?;
     let (width, height) = args.size;
     let gpu = open_gpu(args.render.validation)?;
     let total = u64::from(args.warmup + args.frames);
@@ -144,22 +129,7 @@ pub fn run(args: &BenchArgs) -> Result<BenchReport> {
     let mut renderer = StereoRenderer::from_mapped(&gpu, &file, desc, &session.swapchain())?;
     timings.stage("vulkan and renderer");
     timings.upload(renderer.upload_time(), renderer.upload_stats());
-    let mut times = Vec::new();
-    let mut kept = crate::render::CullStats::default();
-    while !session.should_exit() {
-        let start = Instant::now();
-        let report = run_frame(&mut session, &mut renderer)?;
-        let ms = start.elapsed().as_secs_f64() * 1e3;
-        if report.timing.index >= u64::from(args.warmup) {
-            times.push(ms);
-            let frame = renderer.cull_stats();
-            kept.chunks = frame.chunks;
-            kept.triangles = frame.triangles;
-            kept.chunks_drawn += frame.chunks_drawn;
-            kept.triangles_drawn += frame.triangles_drawn;
-            kept.draws += frame.draws;
-        }
-    }
+    let (mut times, kept) = time_frames(&mut session, &mut renderer, args.warmup)?;
     let timed = times.len().max(1) as f64;
     if args.render.timings {
         eprintln!("{}", timings.line(renderer.first_submit()));
@@ -169,22 +139,7 @@ pub fn run(args: &BenchArgs) -> Result<BenchReport> {
     let p95_ms = percentile(&times, 95.0);
     let p99_ms = percentile(&times, 99.0);
     let scene = renderer.scene();
-    let evals: u64 = scene
-        .draws
-        .iter()
-        .map(|d| u64::from(d.vertex_count) * 2)
-        .sum();
-    let terms: u64 = scene
-        .draws
-        .iter()
-        .map(|d| {
-            let per_vertex = match d.kind {
-                DrawKind::Sh => (u64::from(d.order) + 1).pow(2),
-                DrawKind::Cube { .. } => 4,
-            };
-            u64::from(d.vertex_count) * 2 * per_vertex
-        })
-        .sum();
+    let (evals, terms) = evaluations_per_frame(scene);
     let per_second = |count: u64| {
         if median_ms > 0.0 {
             count as f64 / (median_ms / 1e3)
@@ -219,32 +174,7 @@ pub fn run(args: &BenchArgs) -> Result<BenchReport> {
     if args.json {
         println!("{}", serde_json::to_string(&report)?);
     } else {
-        println!(
-            "{} stereo frames of {}x{} per eye on {} ({:?} multiview, {}x MSAA, {:?} coefficients)",
-            report.frames,
-            width,
-            height,
-            report.device,
-            renderer.multiview_path(),
-            report.samples,
-            scene.storage
-        );
-        println!(
-            "median {:.2} ms, p95 {:.2} ms, p99 {:.2} ms per stereo frame; {} vertices, {} triangles; {:.3e} SH evaluations/s ({:.3e} basis terms/s)",
-            median_ms, p95_ms, p99_ms, report.vertices, report.triangles, report.sh_evals_per_second,
-            report.sh_terms_per_second
-        );
-        println!(
-            "culling {} (chunks of ≤ {} triangles): {:.1} of {} chunks, {:.0} of {} triangles ({:.1}%) and {:.1} draws per stereo frame",
-            if report.culling { "on" } else { "off" },
-            report.chunk_triangles,
-            report.chunks_drawn,
-            report.chunks,
-            report.triangles_drawn,
-            report.triangles_per_frame,
-            100.0 * report.triangles_drawn / (report.triangles_per_frame.max(1) as f64),
-            report.draws
-        );
+        print_report(&report);
     }
     let log = gpu.validation_log();
     anyhow::ensure!(
@@ -253,4 +183,104 @@ pub fn run(args: &BenchArgs) -> Result<BenchReport> {
         log.count()
     );
     Ok(report)
+}
+
+/// The head path: `--walk`'s file, or an orbit around the scene's centre at the
+/// header camera's eye height and horizontal distance (half the bounds'
+/// diagonal when the eye stands at the centre).
+fn head_path(args: &BenchArgs, header: &solution::format::Header) -> Result<HeadPath> {
+    if let Some(file) = &args.walk {
+        return Ok(HeadPath::load(file)?);
+    }
+    let offset = DVec3::from(header.recentre_offset);
+    let lo = DVec3::from(header.bounds_min.map(f64::from)) + offset;
+    let hi = DVec3::from(header.bounds_max.map(f64::from)) + offset;
+    let centre = 0.5 * (lo + hi);
+    let eye = DVec3::from(header.camera.eye);
+    let up = DVec3::from(header.up_axis.vector());
+    let flat = |v: DVec3| v - up * v.dot(up);
+    let mut radius = flat(eye - centre).length();
+    if !(radius > 0.0 && radius.is_finite()) {
+        radius = 0.5 * (hi - lo).length().max(1e-3);
+    }
+    Ok(HeadPath::orbit(centre, eye, radius, 10.0, header.up_axis))
+}
+
+/// Runs the session's frames: the wall time of each frame after the first
+/// `warmup` (milliseconds), and what culling kept over those frames (chunk and
+/// triangle totals of the last, drawn counts summed).
+fn time_frames(
+    session: &mut MockSession,
+    renderer: &mut StereoRenderer,
+    warmup: u32,
+) -> Result<(Vec<f64>, CullStats)> {
+    let mut times = Vec::new();
+    let mut kept = CullStats::default();
+    while !session.should_exit() {
+        let start = Instant::now();
+        let report = run_frame(session, renderer)?;
+        let ms = start.elapsed().as_secs_f64() * 1e3;
+        if report.timing.index >= u64::from(warmup) {
+            times.push(ms);
+            let frame = renderer.cull_stats();
+            kept.chunks = frame.chunks;
+            kept.triangles = frame.triangles;
+            kept.chunks_drawn += frame.chunks_drawn;
+            kept.triangles_drawn += frame.triangles_drawn;
+            kept.draws += frame.draws;
+        }
+    }
+    Ok((times, kept))
+}
+
+/// Vertex evaluations and basis terms per stereo frame: each vertex once per
+/// eye, with `(L+1)²` terms for SH and the 4 bilinear taps for a global cube.
+fn evaluations_per_frame(scene: &GpuScene) -> (u64, u64) {
+    let evals: u64 = scene
+        .draws
+        .iter()
+        .map(|d| u64::from(d.vertex_count) * 2)
+        .sum();
+    let terms: u64 = scene
+        .draws
+        .iter()
+        .map(|d| {
+            let per_vertex = match d.kind {
+                DrawKind::Sh => (u64::from(d.order) + 1).pow(2),
+                DrawKind::Cube { .. } => 4,
+            };
+            u64::from(d.vertex_count) * 2 * per_vertex
+        })
+        .sum();
+    (evals, terms)
+}
+
+/// The report as text: frames and device, frame times and throughput, culling.
+fn print_report(report: &BenchReport) {
+    println!(
+        "{} stereo frames of {}x{} per eye on {} ({} multiview, {}x MSAA, {} coefficients)",
+        report.frames,
+        report.width,
+        report.height,
+        report.device,
+        report.multiview,
+        report.samples,
+        report.coefficients
+    );
+    println!(
+        "median {:.2} ms, p95 {:.2} ms, p99 {:.2} ms per stereo frame; {} vertices, {} triangles; {:.3e} SH evaluations/s ({:.3e} basis terms/s)",
+        report.median_ms, report.p95_ms, report.p99_ms, report.vertices, report.triangles, report.sh_evals_per_second,
+        report.sh_terms_per_second
+    );
+    println!(
+        "culling {} (chunks of ≤ {} triangles): {:.1} of {} chunks, {:.0} of {} triangles ({:.1}%) and {:.1} draws per stereo frame",
+        if report.culling { "on" } else { "off" },
+        report.chunk_triangles,
+        report.chunks_drawn,
+        report.chunks,
+        report.triangles_drawn,
+        report.triangles_per_frame,
+        100.0 * report.triangles_drawn / (report.triangles_per_frame.max(1) as f64),
+        report.draws
+    );
 }

@@ -52,7 +52,7 @@ pub const DEFAULT_VIEW_HELP: &str = "\
 The view: the solution header's camera (screenshot and mirror: unless --eye, --target,
 --up or --fov-y are given).
 When the scene named no camera, the solver chose that camera when it solved
-(solution::view): 49 candidate eyes (a jittered 4x4x3 grid over the bounds and its
+(solver::view): 49 candidate eyes (a jittered 4x4x3 grid over the bounds and its
 centre), each stood 1.6 m (x units_per_metre; at most 0.7 of the floor-to-ceiling
 height) above the floor a downward ray meets; of those whose 128 survey rays meet
 at least 75% front faces, at most 10% back faces and nothing within 0.3 m, the one
