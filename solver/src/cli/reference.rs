@@ -353,6 +353,7 @@ fn render_passes(
     let pixels = view.width as u64 * view.height as u64;
     let budget = args.budget();
     let bar = progress_bar(pixels * budget);
+    #[allow(clippy::disallowed_methods)] // An edge: the terminal belongs to cli/.
     let plain = !std::io::stderr().is_terminal();
     let mut image = Accumulator::new(view.width, view.height);
     let mut last_line = Instant::now();
@@ -506,6 +507,7 @@ fn write_reference_exr(
         AnyChannels::sort(SmallVec::from_vec(channels)),
     );
     // `to_unbuffered` is what exr's own `to_file` does with the file it creates.
+    #[allow(clippy::disallowed_methods)] // An edge: `solver reference` writes its image.
     solution::atomic::write_atomically(path, |file| {
         Image::from_layer(layer)
             .write()
