@@ -9,6 +9,9 @@
 //!   mock session (scripted head poses, offscreen swapchain).
 //! * [`cli`]: `runtime screenshot` and `runtime bench`.
 
+// Shipped code: Clippy checks clippy.toml's lists here (ARCHITECTURE.md's invariants).
+#![cfg_attr(not(test), warn(clippy::disallowed_methods, clippy::disallowed_macros))]
+
 pub mod cli;
 pub mod gpu;
 pub mod mirror;

@@ -11,6 +11,9 @@
 //! stays as it was until the rename, and a reader that has the old file mapped
 //! keeps its (unchanged) inode. On any error the temporary file is removed.
 
+// The one writer that may create and rename files: every other goes through it.
+#![allow(clippy::disallowed_methods)]
+
 use std::fs::File;
 use std::io::{self, BufWriter, Write};
 use std::path::{Path, PathBuf};

@@ -22,6 +22,9 @@
 //! runtime, nor on `ash`, `openxr` or `winit`; the runtime depends on it and never on
 //! the solver (checked by `scripts/test.sh` with `cargo tree -p runtime`).
 
+// Shipped code: Clippy checks clippy.toml's lists here (ARCHITECTURE.md's invariants).
+#![cfg_attr(not(test), warn(clippy::disallowed_methods, clippy::disallowed_macros))]
+
 pub mod atomic;
 pub mod camera;
 pub mod cube;

@@ -1,3 +1,6 @@
+// Shipped code: Clippy checks clippy.toml's lists here (ARCHITECTURE.md's invariants).
+#![cfg_attr(not(test), warn(clippy::disallowed_methods, clippy::disallowed_macros))]
+
 fn main() -> std::process::ExitCode {
     solver::cli::main()
 }

@@ -171,6 +171,7 @@ pub fn run(args: CompareArgs) -> anyhow::Result<ExitCode> {
                 Variant::Ldr
             };
             // HDR-FLIP of a large image takes seconds: show the exposures on a terminal.
+            #[allow(clippy::disallowed_methods)] // An edge: the terminal belongs to cli/.
             let show = std::io::stderr().is_terminal();
             let mut progress = |done: usize, total: usize| {
                 if show {

@@ -102,6 +102,7 @@ pub fn run(args: ExportArgs) -> Result<ExitCode> {
     };
     // Every check but the bulk sections' checksums and the coefficients' finite
     // check, which are made batch by batch below as each batch is read.
+    #[allow(clippy::disallowed_methods)] // An edge: `solver export` reads the solution.
     let file = MappedSolution::open_deferring_checksums(&args.solution)?;
     let mut exporter = Exporter::new(file.header(), file.batches(), file.textures(), options)
         .with_context(|| format!("cannot export {}", args.solution.display()))?;
@@ -142,6 +143,7 @@ pub fn run(args: ExportArgs) -> Result<ExitCode> {
         )),
     };
     let exported = exporter.finish(bin_uri.as_deref())?;
+    #[allow(clippy::disallowed_methods)] // An edge: `solver export` writes the glTF.
     match &container {
         Container::Glb => write_atomically(&args.out, |f| {
             let mut out = std::io::BufWriter::new(f);

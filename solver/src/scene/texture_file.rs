@@ -57,6 +57,7 @@ pub(crate) fn load_texture(
     }
 }
 
+#[allow(clippy::disallowed_methods)] // An edge: an importer reads the textures its scene names.
 fn read(path: &Path) -> Result<SceneTexture, String> {
     let length = std::fs::metadata(path)
         .map_err(|e| format!("cannot be read ({e})"))?

@@ -7,6 +7,9 @@
 //! OBJ + MTL + a TOML scene config ([`scene`]). [`bench`] drives the release
 //! `solver` over families × sizes × presets and reports cost and growth.
 
+// Shipped code: Clippy checks clippy.toml's lists here (ARCHITECTURE.md's invariants).
+#![cfg_attr(not(test), warn(clippy::disallowed_methods, clippy::disallowed_macros))]
+
 pub mod bench;
 pub mod cornell;
 pub mod floorplan;

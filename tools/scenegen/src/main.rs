@@ -1,5 +1,8 @@
 //! `scenegen`: writes one scale scene (OBJ + MTL + TOML scene config).
 
+// Shipped code: Clippy checks clippy.toml's lists here (ARCHITECTURE.md's invariants).
+#![cfg_attr(not(test), warn(clippy::disallowed_methods, clippy::disallowed_macros))]
+
 use anyhow::Context;
 use clap::Parser;
 use scenegen::{generate, scene::write_scene, Family};

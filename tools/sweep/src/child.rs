@@ -27,6 +27,7 @@ pub struct Measured {
 /// Runs `command` with stdout and stderr appended to `log`, waits for it and
 /// returns its cost; a non-zero exit is an error that quotes the log's tail.
 pub fn run_measured(command: &mut Command, log: &Path) -> anyhow::Result<Measured> {
+    #[allow(clippy::disallowed_methods)] // A log the child streams into as it runs, not an output.
     let out = File::create(log).with_context(|| format!("creating {}", log.display()))?;
     let err = out
         .try_clone()

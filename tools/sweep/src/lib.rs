@@ -4,6 +4,9 @@
 //! ([`image`]) and the SVG plot ([`svg`]). The binary (`src/main.rs`) holds the
 //! sweep's points and writes `docs/tradeoffs.md`.
 
+// Shipped code: Clippy checks clippy.toml's lists here (ARCHITECTURE.md's invariants).
+#![cfg_attr(not(test), warn(clippy::disallowed_methods, clippy::disallowed_macros))]
+
 pub mod child;
 pub mod image;
 pub mod lookup;

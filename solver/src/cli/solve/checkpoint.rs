@@ -218,6 +218,7 @@ pub fn write(
     payload: impl FnOnce(&mut dyn Write) -> io::Result<()>,
 ) -> anyhow::Result<()> {
     let meta_bytes = serde_json::to_vec(meta)?;
+    #[allow(clippy::disallowed_methods)] // An edge: writes the checkpoint.
     solution::atomic::write_atomically_buffered(path, |file| {
         file.write_all(&[0u8; PREFIX])?;
         let mut summing = Summing {
@@ -271,6 +272,7 @@ pub fn read<T: Payload>(
         path: name.clone(),
         source,
     };
+    #[allow(clippy::disallowed_methods)] // An edge: `--resume` reads the checkpoint.
     let file = File::open(path).map_err(io_error)?;
     let file_len = file.metadata().map_err(io_error)?.len();
     let mut reader = BufReader::with_capacity(1 << 20, file);

@@ -45,6 +45,7 @@ pub struct Reporter {
 impl Reporter {
     /// A bar when stderr is a terminal, else plain lines.
     pub fn new(threshold: f64, max_shots: u64, seconds_before: f64, start: Snapshot) -> Self {
+        #[allow(clippy::disallowed_methods)] // An edge: the terminal belongs to cli/.
         let output = if std::io::stderr().is_terminal() {
             let bar = ProgressBar::with_draw_target(Some(BAR_TICKS), ProgressDrawTarget::stderr());
             let style = ProgressStyle::with_template(

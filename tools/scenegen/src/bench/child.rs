@@ -48,6 +48,7 @@ pub fn run_limited(
     grace: Duration,
     watched: &Path,
 ) -> anyhow::Result<Measured> {
+    #[allow(clippy::disallowed_methods)] // A log the child streams into as it runs, not an output.
     let out = File::create(log).with_context(|| format!("creating {}", log.display()))?;
     let err = out
         .try_clone()

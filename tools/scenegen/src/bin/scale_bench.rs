@@ -1,6 +1,9 @@
 //! `scale-bench`: solves the scale scenes (families × sizes × presets) with
 //! the release solver and records cost and growth (issue 13).
 
+// Shipped code: Clippy checks clippy.toml's lists here (ARCHITECTURE.md's invariants).
+#![cfg_attr(not(test), warn(clippy::disallowed_methods, clippy::disallowed_macros))]
+
 use anyhow::{bail, Context};
 use clap::Parser;
 use scenegen::bench::{report, run, write_reports, Config};
