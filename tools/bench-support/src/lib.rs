@@ -11,6 +11,9 @@
 //! It depends on nothing of the project's, so that the solver's benches can use
 //! it without a dependency cycle.
 
+// Shipped code: Clippy checks clippy.toml's lists here (ARCHITECTURE.md's invariants).
+#![cfg_attr(not(test), warn(clippy::disallowed_methods, clippy::disallowed_macros))]
+
 pub mod child;
 pub mod host;
 pub mod metrics;
