@@ -23,14 +23,13 @@
 //! the title are skipped. Every malformed line is an error naming the file, the
 //! line and what is wrong.
 
+use super::obj::too_many_vertices;
 use super::raw::{RawMaterial, RawPolygon, RawScene};
 use super::text::{numbered_lines, parse_count, parse_real, parse_vec3, read_text};
-use super::{SceneError, SourceRef};
+use super::{SceneError, SourceRef, MAX_POLYGON_VERTICES};
 use glam::DVec3;
 use std::path::Path;
 
-/// The largest polygon-line vertex count accepted (Remington 1992 uses 4).
-const MAX_POLYGON_VERTICES: u64 = 1024;
 /// The largest `patch p` accepted (as the solver's `patches` setting).
 pub(crate) const MAX_PATCHES: u32 = 256;
 
@@ -167,9 +166,14 @@ pub(crate) fn parse_legacy_text(path: &Path, text: &str) -> Result<RawScene, Sce
         let item = format!("polygon {}", k + 1);
         let e = |m: String| err(no, item.clone(), m);
         let n = parse_count(tokens[0], "vertex count").map_err(&e)?;
-        if !(3..=MAX_POLYGON_VERTICES).contains(&n) {
+        if n < 3 {
             return Err(e(format!(
-                "vertex count {n} is out of range (3 to {MAX_POLYGON_VERTICES}; Remington 1992 writes 4)"
+                "vertex count {n} is out of range (at least 3; Remington 1992 writes 4)"
+            )));
+        }
+        if n > MAX_POLYGON_VERTICES as u64 {
+            return Err(e(too_many_vertices(
+                usize::try_from(n).unwrap_or(usize::MAX),
             )));
         }
         let n = n as usize;

@@ -25,7 +25,7 @@
 use super::mtl::parse_mtl;
 use super::raw::{RawMaterial, RawPolygon, RawScene};
 use super::text::{numbered_lines, parse_real, parse_real_lazy, read_text};
-use super::{SceneError, SourceRef, Warning};
+use super::{SceneError, SourceRef, Warning, MAX_POLYGON_VERTICES};
 use glam::{DVec2, DVec3};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -220,6 +220,15 @@ fn resolve_libraries(dir: &Path, argument: &str) -> Vec<PathBuf> {
         .collect()
 }
 
+/// The refusal of a face with more than [`MAX_POLYGON_VERTICES`] corners.
+pub(crate) fn too_many_vertices(count: usize) -> String {
+    format!(
+        "{count} vertices, more than the {MAX_POLYGON_VERTICES} one polygon may have (checking \
+         and meshing a polygon take time quadratic in its vertex count); split the face or \
+         triangulate it in the modelling tool"
+    )
+}
+
 /// Parses one index of a face corner: 1-based, or negative relative to the
 /// `count` elements defined so far. Returns the 0-based index.
 fn resolve_index(token: &str, count: usize, what: &str) -> Result<usize, String> {
@@ -387,7 +396,11 @@ fn prepass(path: &Path, text: &str) -> Result<Prepass, SceneError> {
                     Some(o) => format!("face {face_number} of object {o}"),
                     None => format!("face {face_number}"),
                 };
-                let mut corners = Vec::new();
+                let corner_count = tokens.len() - 1;
+                if corner_count > MAX_POLYGON_VERTICES {
+                    return Err(err(item, too_many_vertices(corner_count)));
+                }
+                let mut corners = Vec::with_capacity(corner_count);
                 let mut with_normals = 0usize;
                 let mut uvs = Vec::new();
                 for corner in &tokens[1..] {

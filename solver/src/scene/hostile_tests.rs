@@ -1,0 +1,100 @@
+//! Hostile inputs that must be refused at import, fast and with an error naming
+//! the file, the line and the value, rather than stall or fail after a solve.
+
+use super::*;
+use std::fmt::Write as _;
+use std::fs;
+
+/// An OBJ whose face 1 (on the returned line) is a unit disc sampled at `n`
+/// vertices, convex and counter-clockwise seen from +y, under a square lamp.
+fn disc_obj(dir: &Path, n: usize) -> (PathBuf, usize) {
+    fs::write(
+        dir.join("disc.mtl"),
+        "newmtl floor\nKd 0.5 0.5 0.5\nnewmtl lamp\nKe 10 10 10\n",
+    )
+    .unwrap();
+    let mut text = String::from("mtllib disc.mtl\nusemtl floor\n");
+    for k in 0..n {
+        let t = std::f64::consts::TAU * k as f64 / n as f64;
+        writeln!(text, "v {} 0 {}", t.cos(), -t.sin()).unwrap();
+    }
+    let face_line = 2 + n + 1;
+    text.push('f');
+    for k in 1..=n {
+        write!(text, " {k}").unwrap();
+    }
+    text.push_str(
+        "\nusemtl lamp\nv -0.2 1 -0.2\nv -0.2 1 0.2\nv 0.2 1 0.2\nv 0.2 1 -0.2\nf -4 -3 -2 -1\n",
+    );
+    let path = dir.join("disc.obj");
+    fs::write(&path, text).unwrap();
+    (path, face_line)
+}
+
+#[test]
+fn an_obj_face_over_the_vertex_cap_is_refused_naming_file_line_and_count() {
+    let dir = tempfile::tempdir().unwrap();
+    let n = MAX_POLYGON_VERTICES + 1;
+    let (path, line) = disc_obj(dir.path(), n);
+    let e = load_scene(&path, &ImportOptions::default()).unwrap_err();
+    assert_eq!(
+        e.source_ref(),
+        Some(&SourceRef {
+            file: path.clone(),
+            line: Some(line),
+            item: "face 1".to_owned(),
+        })
+    );
+    let text = e.to_string();
+    assert!(
+        text.contains(&format!(
+            "{n} vertices, more than the {MAX_POLYGON_VERTICES} one polygon may have"
+        )),
+        "{text}"
+    );
+}
+
+#[test]
+fn an_obj_face_at_the_vertex_cap_imports_whole() {
+    let dir = tempfile::tempdir().unwrap();
+    let (path, _) = disc_obj(dir.path(), MAX_POLYGON_VERTICES);
+    let started = std::time::Instant::now();
+    let scene = load_scene(&path, &ImportOptions::default()).unwrap().scene;
+    // The dev profile imports it in well under a second; a quadratic step
+    // gone cubic, or the cap raised past what the checks afford, shows here.
+    assert!(started.elapsed().as_secs_f64() < 20.0);
+    let disc = scene
+        .polygons
+        .iter()
+        .max_by_key(|p| p.vertices.len())
+        .unwrap();
+    assert_eq!(disc.vertices.len(), MAX_POLYGON_VERTICES);
+    // The inscribed regular n-gon's area, (n/2)·sin(2π/n), to f64 rounding.
+    let n = MAX_POLYGON_VERTICES as f64;
+    let exact = 0.5 * n * (std::f64::consts::TAU / n).sin();
+    assert!((disc.area() - exact).abs() < 1e-12, "{}", disc.area());
+}
+
+#[test]
+fn a_legacy_polygon_over_the_vertex_cap_is_refused_before_its_indices_are_read() {
+    let dir = tempfile::tempdir().unwrap();
+    let n = MAX_POLYGON_VERTICES + 1;
+    let mut text =
+        String::from("big polygon\nccw\npoints 3 patches 1 attributes 1\n0 0 0\n1 0 0\n0 0 -1\n");
+    write!(text, "{n}").unwrap();
+    for k in 0..n {
+        write!(text, " {}", k % 3 + 1).unwrap();
+    }
+    text.push_str(" attribute 1\ncolor 0.5 0.5 0.5 emit 1 1 1\n");
+    let path = dir.path().join("big.geom");
+    fs::write(&path, text).unwrap();
+    let e = load_scene(&path, &ImportOptions::default()).unwrap_err();
+    let at = e.source_ref().unwrap();
+    assert_eq!((at.line, at.item.as_str()), (Some(7), "polygon 1"));
+    assert!(
+        e.to_string().contains(&format!(
+            "{n} vertices, more than the {MAX_POLYGON_VERTICES}"
+        )),
+        "{e}"
+    );
+}
