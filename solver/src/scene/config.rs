@@ -46,6 +46,7 @@
 //! settings and the preset. Lengths in metres are converted with the scene's
 //! final `units_per_metre` (the command line's, else this file's).
 
+use super::clean::emission_problem;
 use super::display::{load_display_file, DisplayParams};
 use super::legacy::{parse_legacy, MAX_PATCHES};
 use super::obj::parse_obj;
@@ -84,10 +85,10 @@ struct ConfigFile {
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct MaterialOverride {
-    kd: Option<Rgb>,
-    ks: Option<Rgb>,
+    kd: Option<Spanned<Rgb>>,
+    ks: Option<Spanned<Rgb>>,
     alpha: Option<f64>,
-    emission: Option<Rgb>,
+    emission: Option<Spanned<Rgb>>,
     patches: Option<u32>,
     patch_size: Option<Spanned<RawLength>>,
     min_element_size: Option<Spanned<RawLength>>,
@@ -371,15 +372,22 @@ pub(crate) fn load_config(path: &Path) -> Result<ConfigScene, SceneError> {
                 ),
             ));
         }
-        for (what, v) in [("kd", o.kd), ("ks", o.ks), ("emission", o.emission)] {
-            if let Some(Rgb(v)) = v {
+        // Each colour is checked at its own line.
+        for (what, value) in [("kd", &o.kd), ("ks", &o.ks)] {
+            if let Some(value) = value {
+                let Rgb(v) = *value.get_ref();
                 if !v.is_finite() || v.min_element() < 0.0 {
                     return Err(err(
-                        span.clone(),
+                        value.span(),
                         &item,
                         format!("{what} must be finite and non-negative, is {}", rgb(v)),
                     ));
                 }
+            }
+        }
+        if let Some(value) = &o.emission {
+            if let Some(problem) = emission_problem(value.get_ref().0) {
+                return Err(err(value.span(), &item, format!("emission {problem}")));
             }
         }
         if let Some(alpha) = o.alpha {
@@ -402,17 +410,17 @@ pub(crate) fn load_config(path: &Path) -> Result<ConfigScene, SceneError> {
         };
         for i in targets {
             let m = &mut raw.materials[i];
-            if let Some(Rgb(kd)) = o.kd {
-                m.kd = kd;
+            if let Some(kd) = &o.kd {
+                m.kd = kd.get_ref().0;
             }
-            if let Some(Rgb(ks)) = o.ks {
-                m.ks = ks;
+            if let Some(ks) = &o.ks {
+                m.ks = ks.get_ref().0;
             }
             if let Some(alpha) = o.alpha {
                 m.alpha = alpha;
             }
-            if let Some(Rgb(e)) = o.emission {
-                m.emission = e;
+            if let Some(emission) = &o.emission {
+                m.emission = emission.get_ref().0;
             }
             m.overridden_at = Some(at.clone());
             m.undefined = None;

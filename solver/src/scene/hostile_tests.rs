@@ -98,3 +98,102 @@ fn a_legacy_polygon_over_the_vertex_cap_is_refused_before_its_indices_are_read()
         "{e}"
     );
 }
+
+/// The error a scene gives, with the location it names.
+fn refusal(path: &Path) -> (SourceRef, String) {
+    let e = load_scene(path, &ImportOptions::default()).unwrap_err();
+    (e.source_ref().cloned().unwrap(), e.to_string())
+}
+
+const ABOVE_F32: &str = "exceeds 1e30 W·sr⁻¹·m⁻², the largest emitted radiance accepted";
+
+#[test]
+fn an_mtl_emission_beyond_f32_is_refused_at_its_ke_line() {
+    let dir = tempfile::tempdir().unwrap();
+    fs::write(
+        dir.path().join("l.mtl"),
+        "newmtl floor\nKd 0.5 0.5 0.5\n\nnewmtl lamp\nKd 0 0 0\nKe 1 1e39 1\n",
+    )
+    .unwrap();
+    let obj = dir.path().join("l.obj");
+    fs::write(
+        &obj,
+        "mtllib l.mtl\nusemtl lamp\nv 0 0 0\nv 1 0 0\nv 1 0 -1\nf 1 2 3\n",
+    )
+    .unwrap();
+    let (at, text) = refusal(&obj);
+    let mtl = dir.path().join("l.mtl");
+    assert_eq!((&at.file, at.line), (&mtl, Some(6)));
+    assert_eq!(at.item, "material lamp");
+    assert!(
+        text.ends_with(&format!(
+            "Ke (emitted radiance) (1e0, 1e39, 1e0) {ABOVE_F32} (the solution's radiance is \
+             f32, at most 3.4e38, and light reflected between surfaces adds to the emission)"
+        )),
+        "{text}"
+    );
+    // Just under the bound is accepted: a bright but representable source.
+    fs::write(
+        &mtl,
+        "newmtl floor\nKd 0.5 0.5 0.5\n\nnewmtl lamp\nKd 0 0 0\nKe 1e30 1e30 1e30\n",
+    )
+    .unwrap();
+    let scene = load_scene(&obj, &ImportOptions::default()).unwrap().scene;
+    assert_eq!(scene.materials[0].emission, DVec3::splat(MAX_EMISSION));
+}
+
+#[test]
+fn a_legacy_emit_beyond_the_bound_is_refused_at_its_attribute_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("e.geom");
+    fs::write(
+        &path,
+        "bright\nccw\npoints 3 patches 1 attributes 1\n0 0 0\n1 0 0\n0 0 -1\n\
+         3 1 2 3 attribute 1\ncolor 0.5 0.5 0.5 emit 2e30 0 0\n",
+    )
+    .unwrap();
+    let (at, text) = refusal(&path);
+    assert_eq!((at.line, at.item.as_str()), (Some(8), "attribute 1"));
+    assert!(
+        text.contains(&format!(
+            "emit (emitted radiance) (2e30, 0e0, 0e0) {ABOVE_F32}"
+        )),
+        "{text}"
+    );
+}
+
+#[test]
+fn a_toml_emission_override_is_refused_at_its_own_line() {
+    let dir = tempfile::tempdir().unwrap();
+    fs::write(
+        dir.path().join("t.mtl"),
+        "newmtl lamp\nKd 0.5 0.5 0.5\nKe 1 1 1\n",
+    )
+    .unwrap();
+    fs::write(
+        dir.path().join("t.obj"),
+        "mtllib t.mtl\nusemtl lamp\nv 0 0 0\nv 1 0 0\nv 1 0 -1\nf 1 2 3\n",
+    )
+    .unwrap();
+    let config = dir.path().join("t.toml");
+    for (value, shown) in [
+        ("1e39", format!("(1e39, 1e39, 1e39) {ABOVE_F32}")),
+        ("inf", "must be finite, is (inf, inf, inf)".to_owned()),
+        (
+            "[1, nan, 1]",
+            "must be finite, is (1e0, NaN, 1e0)".to_owned(),
+        ),
+    ] {
+        fs::write(
+            &config,
+            format!("geometry = [\"t.obj\"]\n\n[materials.lamp]\nkd = 0.5\nemission = {value}\n"),
+        )
+        .unwrap();
+        let (at, text) = refusal(&config);
+        assert_eq!(
+            (&at.file, at.line, at.item.as_str()),
+            (&config, Some(5), "materials.lamp")
+        );
+        assert!(text.contains(&format!(": emission {shown}")), "{text}");
+    }
+}

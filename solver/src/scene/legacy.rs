@@ -23,6 +23,7 @@
 //! the title are skipped. Every malformed line is an error naming the file, the
 //! line and what is wrong.
 
+use super::clean::emission_problem;
 use super::obj::too_many_vertices;
 use super::raw::{RawMaterial, RawPolygon, RawScene};
 use super::text::{numbered_lines, parse_count, parse_real, parse_vec3, read_text};
@@ -272,6 +273,9 @@ pub(crate) fn parse_legacy_text(path: &Path, text: &str) -> Result<RawScene, Sce
                         return Err(e(format!("{what} must not be negative")));
                     }
                     if tokens[i] == "emit" {
+                        if let Some(problem) = emission_problem(v) {
+                            return Err(e(format!("{what} {problem}")));
+                        }
                         emit = v;
                     } else {
                         colour = Some(v);

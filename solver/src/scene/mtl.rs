@@ -22,6 +22,7 @@
 //! `illum` 0–2, the diffuse and Phong models the solver follows) stay silent, as
 //! do opaque `d 1` and `Tr 0`, which say what the solver does anyway.
 
+use super::clean::emission_problem;
 use super::raw::{RawMaterial, DEFAULT_KD};
 use super::text::{numbered_lines, parse_real};
 use super::{SceneError, SourceRef, Warning};
@@ -156,6 +157,11 @@ pub(crate) fn parse_mtl(path: &Path, text: &str) -> Result<Vec<RawMaterial>, Sce
                         &item,
                         format!("{what} must not be negative: {}", tokens[1..].join(" ")),
                     ));
+                }
+                if key == "Ke" {
+                    if let Some(problem) = emission_problem(value) {
+                        return Err(err(&item, format!("{what} {problem}")));
+                    }
                 }
                 match key {
                     "Kd" => current.kd = value,
