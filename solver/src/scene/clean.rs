@@ -602,6 +602,12 @@ fn finish_materials(
         if !(m.alpha.is_finite() && m.alpha > 0.0) {
             return bad("alpha", format!("must be finite and > 0, is {}", m.alpha));
         }
+        if let Some((at, message)) = &m.unread_reflectance_file {
+            return Err(SceneError::Input {
+                at: at.clone(),
+                message: message.clone(),
+            });
+        }
         if let Some(w) = &m.undefined {
             warnings.push(w.clone());
         }

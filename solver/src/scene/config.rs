@@ -424,6 +424,7 @@ pub(crate) fn load_config(path: &Path) -> Result<ConfigScene, SceneError> {
             }
             m.overridden_at = Some(at.clone());
             m.undefined = None;
+            m.unread_reflectance_file = None;
             material_patches[i] = o.patches.or(material_patches[i]);
             let m = &mut material_sizes[i];
             m.patch_size = sizes.patch_size.or(m.patch_size);

@@ -1136,6 +1136,7 @@ fn convert_material(
         source: ctx.source(item.clone()),
         overridden_at: None,
         undefined: None,
+        unread_reflectance_file: None,
         // This importer's warnings about unmodelled features are returned
         // beside the material (the MTL reader's per-statement list is not used).
         unmodelled: Vec::new(),

@@ -197,3 +197,50 @@ fn a_toml_emission_override_is_refused_at_its_own_line() {
         assert!(text.contains(&format!(": emission {shown}")), "{text}");
     }
 }
+
+/// A legacy file whose attribute 2 (line 9) names reflectance file 9.
+const LEGACY_WITH_MATERIAL_FILE: &str = "glossy\nccw\npoints 3 patches 1 attributes 2\n\
+     0 0 0\n1 0 0\n0 0 -1\n3 1 2 3 attribute 2\n\
+     color 0.5 0.5 0.5 emit 1 1 1\ncolor 0.2 0.2 0.2 material 9\n";
+
+#[test]
+fn a_legacy_material_file_is_refused_unless_a_toml_override_replaces_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let geom = dir.path().join("m.geom");
+    fs::write(&geom, LEGACY_WITH_MATERIAL_FILE).unwrap();
+    let (at, text) = refusal(&geom);
+    assert_eq!(
+        (&at.file, at.line, at.item.as_str()),
+        (&geom, Some(9), "attribute 2")
+    );
+    assert!(
+        text.contains(
+            "`material 9` names reflectance file 9 (Remington 1992, appendix F), which is not read"
+        ),
+        "{text}"
+    );
+    // Unused, the attribute is no error: polygon 1 uses attribute 1 only.
+    fs::write(
+        &geom,
+        LEGACY_WITH_MATERIAL_FILE.replace("attribute 2\n", "attribute 1\n"),
+    )
+    .unwrap();
+    assert!(load_scene(&geom, &ImportOptions::default()).is_ok());
+    // A TOML override of `material 9` gives what the file would have.
+    fs::write(&geom, LEGACY_WITH_MATERIAL_FILE).unwrap();
+    let config = dir.path().join("m.toml");
+    fs::write(
+        &config,
+        "geometry = [\"m.geom\"]\n\n[materials.\"material 9\"]\nkd = 0.3\nks = 0.4\nalpha = 0.2\n\
+         emission = 1\n",
+    )
+    .unwrap();
+    let scene = load_scene(&config, &ImportOptions::default())
+        .unwrap()
+        .scene;
+    let m = &scene.materials[0];
+    assert_eq!(
+        (m.name.as_str(), m.kd, m.ks, m.alpha),
+        ("attribute 2", DVec3::splat(0.3), DVec3::splat(0.4), 0.2)
+    );
+}

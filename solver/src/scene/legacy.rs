@@ -17,9 +17,13 @@
 //! means polygons are listed clockwise seen from their front, and they are
 //! reversed on import; `purge`/`nopurge` are accepted and have no effect (import
 //! merges coincident vertices when welding anyway). An attribute line becomes the
-//! material `attribute K`; with `material m` it also answers to `material m` in the
-//! TOML config's `[materials]` (where Ks and α can be given: appendix F's
-//! reflectance files are not read). Blank lines and lines starting with `#` after
+//! material `attribute K`. Appendix B's `material m` names reflectance file m
+//! (appendix F: Ks, Kd and a Legendre series of the glossy lobe), which is not
+//! read, since the path-traced reference evaluates only the analytic lobe and
+//! could not check a solve that used the file. An attribute with `material m`
+//! that a polygon uses is therefore refused, naming the file, the line and m,
+//! unless a TOML scene config overrides it under `[materials."material m"]`
+//! (where kd, ks and α are given instead). Blank lines and lines starting with `#` after
 //! the title are skipped. Every malformed line is an error naming the file, the
 //! line and what is wrong.
 
@@ -33,6 +37,18 @@ use std::path::Path;
 
 /// The largest `patch p` accepted (as the solver's `patches` setting).
 pub(crate) const MAX_PATCHES: u32 = 256;
+
+/// Why a used attribute's `material m` is refused: the reflectance file it
+/// names is not read (see the module comment).
+fn unread_reflectance_file(m: u64) -> String {
+    format!(
+        "`material {m}` names reflectance file {m} (Remington 1992, appendix F), which is not \
+         read: the path-traced reference that checks a solve evaluates the analytic lobe, not \
+         a file's Legendre series. Remove `material {m}` to make the attribute diffuse with its \
+         `color`, or give its kd, ks and alpha under [materials.\"material {m}\"] in a TOML \
+         scene config that names this file"
+    )
+}
 
 /// Parses a legacy geometry file.
 pub(crate) fn parse_legacy(path: &Path) -> Result<RawScene, SceneError> {
@@ -298,6 +314,14 @@ pub(crate) fn parse_legacy_text(path: &Path, text: &str) -> Result<RawScene, Sce
         }
         let kd = colour.ok_or_else(|| e("missing `color r g b`".to_owned()))?;
         let name = format!("attribute {}", k + 1);
+        let unread_reflectance_file = number.map(|m| {
+            let at = SourceRef {
+                file: path.to_path_buf(),
+                line: Some(no),
+                item: item.clone(),
+            };
+            (at, unread_reflectance_file(m))
+        });
         materials.push(RawMaterial {
             name: name.clone(),
             aliases: number
@@ -315,6 +339,7 @@ pub(crate) fn parse_legacy_text(path: &Path, text: &str) -> Result<RawScene, Sce
             },
             overridden_at: None,
             undefined: None,
+            unread_reflectance_file,
             unmodelled: Vec::new(),
             diffuse_map: None,
             diffuse_bytes: None,

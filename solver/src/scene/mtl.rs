@@ -72,6 +72,7 @@ pub(crate) fn parse_mtl(path: &Path, text: &str) -> Result<Vec<RawMaterial>, Sce
                 },
                 overridden_at: None,
                 undefined: None,
+                unread_reflectance_file: None,
                 unmodelled: Vec::new(),
                 diffuse_map: None,
                 diffuse_bytes: None,
