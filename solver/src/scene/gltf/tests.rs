@@ -2,9 +2,16 @@
 //! `serde_json`, binary buffers packed by hand, as `.gltf` + `.bin`, `.glb` and
 //! data-URI buffers in a temporary folder.
 
+use super::materials::metallic_roughness;
+use super::nodes::{assemble, camera_from_node};
 use super::*;
+use crate::brdf::MIN_ALPHA;
 use crate::scene::{load_scene, ImportOptions, LoadedScene};
+use base64::Engine as _;
+use glam::{DMat4, DQuat, DVec3};
+use gltf::mesh::Mode;
 use serde_json::{json, Value};
+use std::path::PathBuf;
 
 /// A glTF document and its one binary buffer, before it is written.
 struct Fixture {
