@@ -76,15 +76,9 @@ pub(super) fn read_vec3(
         return Err(ctx.err(
             item,
             format!(
-                "{what} accessor {} is {:?} {:?}{}; expected VEC3 of FLOAT",
+                "{what} accessor {} is {}; expected VEC3 of FLOAT",
                 accessor.index(),
-                accessor.dimensions(),
-                accessor.data_type(),
-                if accessor.normalized() {
-                    " normalized"
-                } else {
-                    ""
-                }
+                layout(accessor)
             ),
         ));
     }
@@ -102,13 +96,7 @@ pub(super) fn read_vec3(
         };
         let v = DVec3::new(c(0), c(1), c(2));
         if !v.is_finite() {
-            return Err(ctx.err(
-                item,
-                format!(
-                    "{what} accessor {}: element {k} is not finite",
-                    accessor.index()
-                ),
-            ));
+            return Err(not_finite(ctx, accessor, what, item, k));
         }
         out.push(v);
     }
@@ -135,16 +123,10 @@ pub(super) fn read_vec2(
         return Err(ctx.err(
             item,
             format!(
-                "{what} accessor {} is {:?} {:?}{}; expected VEC2 of FLOAT, or of normalized \
+                "{what} accessor {} is {}; expected VEC2 of FLOAT, or of normalized \
                  UNSIGNED_BYTE or UNSIGNED_SHORT",
                 accessor.index(),
-                accessor.dimensions(),
-                accessor.data_type(),
-                if accessor.normalized() {
-                    " normalized"
-                } else {
-                    ""
-                }
+                layout(accessor)
             ),
         ));
     }
@@ -162,13 +144,7 @@ pub(super) fn read_vec2(
         };
         let v = DVec2::new(c(0), c(1));
         if !v.is_finite() {
-            return Err(ctx.err(
-                item,
-                format!(
-                    "{what} accessor {}: element {k} is not finite",
-                    accessor.index()
-                ),
-            ));
+            return Err(not_finite(ctx, accessor, what, item, k));
         }
         out.push(v);
     }
@@ -219,4 +195,36 @@ pub(super) fn read_indices(
             }
         })
         .collect())
+}
+
+/// An accessor's element layout for messages: dimensions, component type,
+/// and whether it is normalized (`Vec3 F32`, `Vec2 U8 normalized`).
+fn layout(accessor: &gltf::Accessor) -> String {
+    format!(
+        "{:?} {:?}{}",
+        accessor.dimensions(),
+        accessor.data_type(),
+        if accessor.normalized() {
+            " normalized"
+        } else {
+            ""
+        }
+    )
+}
+
+/// The error for element `k` of an accessor that is not finite.
+fn not_finite(
+    ctx: &Context,
+    accessor: &gltf::Accessor,
+    what: &str,
+    item: &str,
+    k: usize,
+) -> SceneError {
+    ctx.err(
+        item,
+        format!(
+            "{what} accessor {}: element {k} is not finite",
+            accessor.index()
+        ),
+    )
 }
