@@ -14,16 +14,12 @@
 //!
 //! Submodules: [`normalization`] (`D_l`, `C_R`, its table and an independent 2-D
 //! quadrature of the exact lobe), [`window`] (ringing remedies and their
-//! measurement), [`file`] (Remington 1992, App. F reflectance files).
+//! measurement).
 
-#[allow(clippy::disallowed_methods)]
-// Reads and writes reflectance files: removed by issue 40's scene branch.
-pub mod file;
 pub mod normalization;
 pub mod reciprocity;
 pub mod window;
 
-pub use file::{read_reflectance_file, write_reflectance_file, ReflectanceFile};
 pub use normalization::{
     exact_hemisphere_integral, funk_hecke_d, funk_hecke_d_all, normalization, NormalizationTable,
 };
@@ -36,24 +32,12 @@ pub use crate::settings::BrdfNormalization as Normalization;
 use glam::DVec3;
 use solution::sh;
 use std::f64::consts::PI;
-use std::path::PathBuf;
 
-/// Errors of this module: bad glossiness, unreadable or malformed reflectance files.
+/// Errors of this module: bad glossiness.
 #[derive(Debug, thiserror::Error)]
 pub enum BrdfError {
     #[error("glossiness alpha = {0} is out of range: expected a finite value ≥ {MIN_ALPHA}")]
     InvalidAlpha(f64),
-    #[error("{}: {source}", path.display())]
-    Io {
-        path: PathBuf,
-        source: std::io::Error,
-    },
-    #[error("{}:{line}: {message}", path.display())]
-    Parse {
-        path: PathBuf,
-        line: usize,
-        message: String,
-    },
 }
 
 /// Smallest α this module accepts. At α = 0.001 the lobe is 0.1° wide and needs

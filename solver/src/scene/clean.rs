@@ -52,6 +52,50 @@ pub const ZERO_AREA_TOLERANCE: f64 = 1e-10;
 /// would have to span under 0.2°, some 1800 segments around, to come under it).
 pub const SMOOTH_NORMAL_DEGREES: f64 = 0.1;
 
+/// The most vertices one input polygon (an OBJ face, a legacy polygon line)
+/// may have. Importing checks that a polygon is simple by testing every pair
+/// of its edges, and meshing ear-clips a non-convex one: both are O(n²) in the
+/// vertex count. At 8,192 vertices the worst shapes measured (a 4,096-tooth
+/// comb, a star, a spiral band, each one face under a lamp) import, mesh and
+/// solve at the draft preset in 1 to 3 s in the dev profile on two cores; a
+/// 200,000-vertex disc, (200,000 / 8,192)² ≈ 600 times that work, gave no
+/// output in 120 s. A face this large is a finely sampled curve: splitting or
+/// triangulating it in the modelling tool loses nothing radiosity sees.
+pub const MAX_POLYGON_VERTICES: usize = 8192;
+
+/// The largest emitted radiance accepted, W·sr⁻¹·m⁻² in any channel. The
+/// solution stores radiance (and its SH coefficients) as f32, whose largest
+/// value is 3.4e38; the solve sums power as radiance × area × π in f64, which
+/// does not bind. A surface's radiance is its emission plus what it reflects,
+/// at most Le / (1 − ρ) for reflectance ρ (Kd + Ks ≤ 1, enforced below), so
+/// 1e30 leaves a factor 3.4e8 for interreflection, the SH projection's
+/// constant factors (√(4π) ≈ 3.5 for the mean) and sums over vertices before
+/// anything overflows f32. The brightest natural source, the Sun's disc, is
+/// about 2e7 W·sr⁻¹·m⁻²: no physical scene comes near the bound, and an
+/// `Ke 1e39` (above f32's range) is a typing slip refused at import rather
+/// than when the solution is written, after the whole solve.
+pub const MAX_EMISSION: f64 = 1e30;
+
+/// What is wrong with an emitted radiance, if anything: non-finite, negative
+/// or above [`MAX_EMISSION`] in some channel.
+pub(crate) fn emission_problem(value: DVec3) -> Option<String> {
+    let shown = || format!("({:e}, {:e}, {:e})", value.x, value.y, value.z);
+    if !value.is_finite() {
+        Some(format!("must be finite, is {}", shown()))
+    } else if value.min_element() < 0.0 {
+        Some(format!("must not be negative, is {}", shown()))
+    } else if value.max_element() > MAX_EMISSION {
+        Some(format!(
+            "{} exceeds {MAX_EMISSION:e} W·sr⁻¹·m⁻², the largest emitted radiance accepted \
+             (the solution's radiance is f32, at most 3.4e38, and light reflected between \
+             surfaces adds to the emission)",
+            shown()
+        ))
+    } else {
+        None
+    }
+}
+
 /// Scene-wide inputs that do not come from the geometry files.
 pub(crate) struct BuildOptions {
     pub strict: bool,
@@ -544,7 +588,7 @@ fn finish_materials(
                 message: format!("material `{}`: {what} {v}", m.name),
             })
         };
-        for (what, v) in [("Kd", m.kd), ("Ks", m.ks), ("emission", m.emission)] {
+        for (what, v) in [("Kd", m.kd), ("Ks", m.ks)] {
             if !v.is_finite() || v.min_element() < 0.0 {
                 return bad(
                     what,
@@ -552,8 +596,17 @@ fn finish_materials(
                 );
             }
         }
+        if let Some(problem) = emission_problem(m.emission) {
+            return bad("emission", problem);
+        }
         if !(m.alpha.is_finite() && m.alpha > 0.0) {
             return bad("alpha", format!("must be finite and > 0, is {}", m.alpha));
+        }
+        if let Some((at, message)) = &m.unread_reflectance_file {
+            return Err(SceneError::Input {
+                at: at.clone(),
+                message: message.clone(),
+            });
         }
         if let Some(w) = &m.undefined {
             warnings.push(w.clone());

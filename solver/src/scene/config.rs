@@ -46,10 +46,11 @@
 //! settings and the preset. Lengths in metres are converted with the scene's
 //! final `units_per_metre` (the command line's, else this file's).
 
+use super::clean::emission_problem;
 use super::display::{load_display_file, DisplayParams};
 use super::legacy::{parse_legacy, MAX_PATCHES};
 use super::obj::parse_obj;
-use super::raw::{RawPolygon, RawScene};
+use super::raw::{RawMaterial, RawPolygon, RawScene};
 use super::text::{line_of_offset, read_text, rgb};
 use super::{SceneError, SourceRef};
 use crate::settings::SettingsPatch;
@@ -84,10 +85,10 @@ struct ConfigFile {
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct MaterialOverride {
-    kd: Option<Rgb>,
-    ks: Option<Rgb>,
+    kd: Option<Spanned<Rgb>>,
+    ks: Option<Spanned<Rgb>>,
     alpha: Option<f64>,
-    emission: Option<Rgb>,
+    emission: Option<Spanned<Rgb>>,
     patches: Option<u32>,
     patch_size: Option<Spanned<RawLength>>,
     min_element_size: Option<Spanned<RawLength>>,
@@ -260,43 +261,116 @@ pub(crate) struct ConfigScene {
 /// Reads a TOML scene config and every file it names.
 pub(crate) fn load_config(path: &Path) -> Result<ConfigScene, SceneError> {
     let text = read_text(path)?;
-    let line = |span: std::ops::Range<usize>| Some(line_of_offset(&text, span.start));
-    let err = |span: std::ops::Range<usize>, item: &str, message: String| {
-        SceneError::at(path, line(span), item.to_owned(), message)
+    let at = ConfigSource { path, text: &text };
+    let config = parse_config(&at)?;
+    let dir = path.parent().unwrap_or(Path::new(""));
+    let mut raw = read_geometry(&at, &config, dir)?;
+    apply_material_overrides(&at, &config, &mut raw)?;
+    apply_object_overrides(&at, &config, &mut raw)?;
+    let (settings, units_per_metre) = solver_settings(&at, &config)?;
+    let up_axis = config.up.unwrap_or_default();
+    let display = match &config.display {
+        Some(name) => {
+            let file = dir.join(name.get_ref());
+            let d = load_display_file(&file).map_err(|e| at.reread(name, "display", &file, e))?;
+            raw.warnings.extend(d.warnings.iter().cloned());
+            Some(d)
+        }
+        None => None,
     };
-    let config: ConfigFile = toml::from_str(&text).map_err(|e| {
+    let camera = match &config.camera {
+        Some(spanned) => Some(config_camera(&at, spanned, display.as_ref(), up_axis)?),
+        None => display.as_ref().map(|d| d.camera),
+    };
+    Ok(ConfigScene {
+        raw,
+        settings,
+        display,
+        camera,
+        units_per_metre,
+        up_axis,
+    })
+}
+
+/// The config file being read, for errors at the line of a TOML span.
+struct ConfigSource<'a> {
+    path: &'a Path,
+    text: &'a str,
+}
+
+impl ConfigSource<'_> {
+    fn line(&self, span: std::ops::Range<usize>) -> Option<usize> {
+        Some(line_of_offset(self.text, span.start))
+    }
+
+    fn err(&self, span: std::ops::Range<usize>, item: &str, message: String) -> SceneError {
+        SceneError::at(self.path, self.line(span), item.to_owned(), message)
+    }
+
+    /// A file named by this config that cannot be read, reported at its line here.
+    fn reread(&self, name: &Spanned<String>, key: &str, file: &Path, e: SceneError) -> SceneError {
+        match e {
+            SceneError::Io { path: p, source } if p == file => self.err(
+                name.span(),
+                "",
+                format!(
+                    "{key} `{}`: cannot read {}: {source}",
+                    name.get_ref(),
+                    p.display()
+                ),
+            ),
+            other => other,
+        }
+    }
+
+    /// A per-object or per-material size, checked at the value's own line.
+    fn sizes(
+        &self,
+        patch_size: &Option<Spanned<RawLength>>,
+        min_element_size: &Option<Spanned<RawLength>>,
+        item: &str,
+    ) -> Result<MeshSizes, SceneError> {
+        let one = |key: &str, value: &Option<Spanned<RawLength>>| {
+            value
+                .as_ref()
+                .map(|v| parse_length(key, v.get_ref()).map_err(|m| self.err(v.span(), item, m)))
+                .transpose()
+        };
+        Ok(MeshSizes {
+            patch_size: one("patch_size", patch_size)?,
+            min_element_size: one("min_element_size", min_element_size)?,
+        })
+    }
+}
+
+/// The TOML document, with its `[solver]` settings range-checked before any
+/// geometry is read.
+fn parse_config(at: &ConfigSource) -> Result<ConfigFile, SceneError> {
+    let config: ConfigFile = toml::from_str(at.text).map_err(|e| {
         SceneError::at(
-            path,
-            e.span().map(|s| line_of_offset(&text, s.start)),
+            at.path,
+            e.span().map(|s| line_of_offset(at.text, s.start)),
             "",
             e.message().trim().replace('\n', "; "),
         )
     })?;
-    // Out-of-range solver settings are refused now, before any geometry is read.
     // Every range check is per setting and every preset is in range, so a value
     // the check refuses on top of the default preset is refused on top of any.
     if let Some(solver) = &config.solver {
         crate::settings::SolverSettings::resolve(Default::default(), &[solver.get_ref()])
-            .map_err(|e| err(solver.span(), "[solver]", e.to_string()))?;
+            .map_err(|e| at.err(solver.span(), "[solver]", e.to_string()))?;
     }
-    let dir = path.parent().unwrap_or(Path::new(""));
-    // A file named by this config that cannot be read is reported at its line here.
-    let reread = |name: &Spanned<String>, key: &str, file: &Path, e: SceneError| match e {
-        SceneError::Io { path: p, source } if p == file => err(
-            name.span(),
-            "",
-            format!(
-                "{key} `{}`: cannot read {}: {source}",
-                name.get_ref(),
-                p.display()
-            ),
-        ),
-        other => other,
-    };
+    Ok(config)
+}
 
-    // Geometry.
+/// Every geometry file the config names, in order, as one raw scene.
+fn read_geometry(
+    at: &ConfigSource,
+    config: &ConfigFile,
+    dir: &Path,
+) -> Result<RawScene, SceneError> {
     if config.geometry.get_ref().is_empty() {
-        return Err(err(
+        return Err(at.err(
             config.geometry.span(),
             "",
             "`geometry` names no file: give at least one OBJ, glTF or legacy geometry file"
@@ -317,7 +391,7 @@ pub(crate) fn load_config(path: &Path) -> Result<ConfigScene, SceneError> {
             // and `camera` apply, not the glTF file's camera.
             Some("gltf") | Some("glb") => super::gltf::parse_gltf(&file).map(|g| g.raw),
             Some("toml") => {
-                return Err(err(
+                return Err(at.err(
                     name.span(),
                     "",
                     format!(
@@ -328,28 +402,58 @@ pub(crate) fn load_config(path: &Path) -> Result<ConfigScene, SceneError> {
             }
             _ => parse_legacy(&file),
         }
-        .map_err(|e| reread(name, "geometry", &file, e))?;
+        .map_err(|e| at.reread(name, "geometry", &file, e))?;
         raw.append(part);
     }
+    Ok(raw)
+}
 
-    // A per-object or per-material size, checked at the value's own line.
-    let sizes_of = |patch_size: &Option<Spanned<RawLength>>,
-                    min_element_size: &Option<Spanned<RawLength>>,
-                    item: &str|
-     -> Result<MeshSizes, SceneError> {
-        let one = |key: &str, value: &Option<Spanned<RawLength>>| {
-            value
-                .as_ref()
-                .map(|v| parse_length(key, v.get_ref()).map_err(|m| err(v.span(), item, m)))
-                .transpose()
-        };
-        Ok(MeshSizes {
-            patch_size: one("patch_size", patch_size)?,
-            min_element_size: one("min_element_size", min_element_size)?,
-        })
-    };
+/// Checks one `[materials.KEY]` table's values, each at its own line.
+fn check_material_override(
+    at: &ConfigSource,
+    spanned: &Spanned<MaterialOverride>,
+    item: &str,
+) -> Result<(), SceneError> {
+    let o = spanned.get_ref();
+    for (what, value) in [("kd", &o.kd), ("ks", &o.ks)] {
+        if let Some(value) = value {
+            let Rgb(v) = *value.get_ref();
+            if !v.is_finite() || v.min_element() < 0.0 {
+                return Err(at.err(
+                    value.span(),
+                    item,
+                    format!("{what} must be finite and non-negative, is {}", rgb(v)),
+                ));
+            }
+        }
+    }
+    if let Some(value) = &o.emission {
+        if let Some(problem) = emission_problem(value.get_ref().0) {
+            return Err(at.err(value.span(), item, format!("emission {problem}")));
+        }
+    }
+    if let Some(alpha) = o.alpha {
+        if !(alpha.is_finite() && alpha > 0.0) {
+            return Err(at.err(
+                spanned.span(),
+                item,
+                format!("alpha must be finite and > 0, is {alpha}"),
+            ));
+        }
+    }
+    if let Some(p) = o.patches {
+        check_patches(p).map_err(|m| at.err(spanned.span(), item, m))?;
+    }
+    Ok(())
+}
 
-    // Material overrides.
+/// Applies the `[materials]` tables to every material that answers to their
+/// key, then their patch counts and sizes to the polygons that use them.
+fn apply_material_overrides(
+    at: &ConfigSource,
+    config: &ConfigFile,
+    raw: &mut RawScene,
+) -> Result<(), SceneError> {
     let mut material_patches: Vec<Option<u32>> = vec![None; raw.materials.len()];
     let mut material_sizes: Vec<MeshSizes> = vec![MeshSizes::default(); raw.materials.len()];
     for (key, spanned) in &config.materials {
@@ -362,7 +466,7 @@ pub(crate) fn load_config(path: &Path) -> Result<ConfigScene, SceneError> {
         if targets.is_empty() {
             let mut names: Vec<&str> = raw.materials.iter().map(|m| m.name.as_str()).collect();
             names.dedup();
-            return Err(err(
+            return Err(at.err(
                 span,
                 &item,
                 format!(
@@ -371,51 +475,15 @@ pub(crate) fn load_config(path: &Path) -> Result<ConfigScene, SceneError> {
                 ),
             ));
         }
-        for (what, v) in [("kd", o.kd), ("ks", o.ks), ("emission", o.emission)] {
-            if let Some(Rgb(v)) = v {
-                if !v.is_finite() || v.min_element() < 0.0 {
-                    return Err(err(
-                        span.clone(),
-                        &item,
-                        format!("{what} must be finite and non-negative, is {}", rgb(v)),
-                    ));
-                }
-            }
-        }
-        if let Some(alpha) = o.alpha {
-            if !(alpha.is_finite() && alpha > 0.0) {
-                return Err(err(
-                    span,
-                    &item,
-                    format!("alpha must be finite and > 0, is {alpha}"),
-                ));
-            }
-        }
-        if let Some(p) = o.patches {
-            check_patches(p).map_err(|m| err(span.clone(), &item, m))?;
-        }
-        let sizes = sizes_of(&o.patch_size, &o.min_element_size, &item)?;
-        let at = SourceRef {
-            file: path.to_path_buf(),
-            line: line(span.clone()),
+        check_material_override(at, spanned, &item)?;
+        let sizes = at.sizes(&o.patch_size, &o.min_element_size, &item)?;
+        let source = SourceRef {
+            file: at.path.to_path_buf(),
+            line: at.line(span.clone()),
             item: item.clone(),
         };
         for i in targets {
-            let m = &mut raw.materials[i];
-            if let Some(Rgb(kd)) = o.kd {
-                m.kd = kd;
-            }
-            if let Some(Rgb(ks)) = o.ks {
-                m.ks = ks;
-            }
-            if let Some(alpha) = o.alpha {
-                m.alpha = alpha;
-            }
-            if let Some(Rgb(e)) = o.emission {
-                m.emission = e;
-            }
-            m.overridden_at = Some(at.clone());
-            m.undefined = None;
+            override_material(&mut raw.materials[i], o, &source);
             material_patches[i] = o.patches.or(material_patches[i]);
             let m = &mut material_sizes[i];
             m.patch_size = sizes.patch_size.or(m.patch_size);
@@ -429,15 +497,43 @@ pub(crate) fn load_config(path: &Path) -> Result<ConfigScene, SceneError> {
         }
         apply_sizes(p, material_sizes[p.material], patches.is_some());
     }
+    Ok(())
+}
 
-    // Object overrides win over material ones.
+/// Gives material `m` an override's values; it is then defined by the config
+/// (no warning for a missing definition, no refusal of an unread file).
+fn override_material(m: &mut RawMaterial, o: &MaterialOverride, source: &SourceRef) {
+    if let Some(kd) = &o.kd {
+        m.kd = kd.get_ref().0;
+    }
+    if let Some(ks) = &o.ks {
+        m.ks = ks.get_ref().0;
+    }
+    if let Some(alpha) = o.alpha {
+        m.alpha = alpha;
+    }
+    if let Some(emission) = &o.emission {
+        m.emission = emission.get_ref().0;
+    }
+    m.overridden_at = Some(source.clone());
+    m.undefined = None;
+    m.unread_reflectance_file = None;
+}
+
+/// Applies the `[objects]` tables to the polygons of each OBJ object or group;
+/// they win over material overrides.
+fn apply_object_overrides(
+    at: &ConfigSource,
+    config: &ConfigFile,
+    raw: &mut RawScene,
+) -> Result<(), SceneError> {
     for (key, spanned) in &config.objects {
         let item = format!("objects.{key}");
         let o = spanned.get_ref();
         if let Some(patches) = o.patches {
-            check_patches(patches).map_err(|m| err(spanned.span(), &item, m))?;
+            check_patches(patches).map_err(|m| at.err(spanned.span(), &item, m))?;
         }
-        let sizes = sizes_of(&o.patch_size, &o.min_element_size, &item)?;
+        let sizes = at.sizes(&o.patch_size, &o.min_element_size, &item)?;
         let mut found = false;
         for p in raw
             .polygons
@@ -457,7 +553,7 @@ pub(crate) fn load_config(path: &Path) -> Result<ConfigScene, SceneError> {
                 .filter_map(|p| p.object.as_deref())
                 .collect();
             names.dedup();
-            return Err(err(
+            return Err(at.err(
                 spanned.span(),
                 &item,
                 format!(
@@ -471,15 +567,23 @@ pub(crate) fn load_config(path: &Path) -> Result<ConfigScene, SceneError> {
             ));
         }
     }
+    Ok(())
+}
 
-    // Solver settings, with the top-level `mode` and `units_per_metre`.
+/// The `[solver]` settings with the top-level `mode` and `units_per_metre`
+/// folded in (a conflict between the two places is an error), and the scene's
+/// `units_per_metre` if either gives one.
+fn solver_settings(
+    at: &ConfigSource,
+    config: &ConfigFile,
+) -> Result<(SettingsPatch, Option<f64>), SceneError> {
     let mut settings = SettingsPatch::default();
     if let Some(s) = &config.solver {
         settings = s.get_ref().clone();
     }
     if let Some(mode) = &config.mode {
         if let Some(other) = settings.mode.filter(|m| m != mode.get_ref()) {
-            return Err(err(
+            return Err(at.err(
                 mode.span(),
                 "",
                 format!(
@@ -494,14 +598,14 @@ pub(crate) fn load_config(path: &Path) -> Result<ConfigScene, SceneError> {
     if let Some(u) = &config.units_per_metre {
         let value = *u.get_ref();
         if !(value.is_finite() && value > 0.0) {
-            return Err(err(
+            return Err(at.err(
                 u.span(),
                 "",
                 format!("units_per_metre must be finite and > 0, is {value}"),
             ));
         }
         if let Some(other) = settings.units_per_metre.filter(|o| *o != value) {
-            return Err(err(
+            return Err(at.err(
                 u.span(),
                 "",
                 format!("`units_per_metre = {value}` conflicts with `[solver] units_per_metre = {other}`"),
@@ -512,7 +616,7 @@ pub(crate) fn load_config(path: &Path) -> Result<ConfigScene, SceneError> {
     if let Some(u) = settings.units_per_metre {
         let span = config.solver.as_ref().map(|s| s.span()).unwrap_or(0..0);
         if !(u.is_finite() && u > 0.0) {
-            return Err(err(
+            return Err(at.err(
                 span,
                 "solver",
                 format!("units_per_metre must be finite and > 0, is {u}"),
@@ -521,62 +625,46 @@ pub(crate) fn load_config(path: &Path) -> Result<ConfigScene, SceneError> {
         units_per_metre = Some(u);
     }
     settings.units_per_metre = units_per_metre;
+    Ok((settings, units_per_metre))
+}
 
-    // Display file and camera.
-    let up_axis = config.up.unwrap_or_default();
-    let display = match &config.display {
-        Some(name) => {
-            let file = dir.join(name.get_ref());
-            let d = load_display_file(&file).map_err(|e| reread(name, "display", &file, e))?;
-            raw.warnings.extend(d.warnings.iter().cloned());
-            Some(d)
-        }
-        None => None,
+/// The `[camera]` table over the display file's camera (each value the
+/// table leaves out comes from the display file, else the default camera).
+fn config_camera(
+    at: &ConfigSource,
+    spanned: &Spanned<CameraConfig>,
+    display: Option<&DisplayParams>,
+    up_axis: UpAxis,
+) -> Result<Camera, SceneError> {
+    let c = spanned.get_ref();
+    let base = display.map(|d| d.camera);
+    let (Some(eye), Some(target)) = (
+        c.eye.or(base.map(|b| b.eye)),
+        c.target.or(base.map(|b| b.target)),
+    ) else {
+        return Err(at.err(
+            spanned.span(),
+            "camera",
+            "[camera] needs `eye` and `target` (or a `display` file that gives them)".to_owned(),
+        ));
     };
-    let camera = match &config.camera {
-        Some(spanned) => {
-            let c = spanned.get_ref();
-            let base = display.as_ref().map(|d| d.camera);
-            let (Some(eye), Some(target)) = (
-                c.eye.or(base.map(|b| b.eye)),
-                c.target.or(base.map(|b| b.target)),
-            ) else {
-                return Err(err(
-                    spanned.span(),
-                    "camera",
-                    "[camera] needs `eye` and `target` (or a `display` file that gives them)"
-                        .to_owned(),
-                ));
-            };
-            let default = Camera::default();
-            let camera = Camera {
-                eye,
-                target,
-                up: c.up.or(base.map(|b| b.up)).unwrap_or(up_axis.vector()),
-                fov_y_deg: c
-                    .fov_y_deg
-                    .or(base.map(|b| b.fov_y_deg))
-                    .unwrap_or(default.fov_y_deg),
-                width: c.width.or(base.map(|b| b.width)).unwrap_or(default.width),
-                height: c
-                    .height
-                    .or(base.map(|b| b.height))
-                    .unwrap_or(default.height),
-            };
-            validate_camera(&camera).map_err(|m| err(spanned.span(), "camera", m))?;
-            Some(camera)
-        }
-        None => display.as_ref().map(|d| d.camera),
+    let default = Camera::default();
+    let camera = Camera {
+        eye,
+        target,
+        up: c.up.or(base.map(|b| b.up)).unwrap_or(up_axis.vector()),
+        fov_y_deg: c
+            .fov_y_deg
+            .or(base.map(|b| b.fov_y_deg))
+            .unwrap_or(default.fov_y_deg),
+        width: c.width.or(base.map(|b| b.width)).unwrap_or(default.width),
+        height: c
+            .height
+            .or(base.map(|b| b.height))
+            .unwrap_or(default.height),
     };
-
-    Ok(ConfigScene {
-        raw,
-        settings,
-        display,
-        camera,
-        units_per_metre,
-        up_axis,
-    })
+    validate_camera(&camera).map_err(|m| at.err(spanned.span(), "camera", m))?;
+    Ok(camera)
 }
 
 /// Gives polygon `p` an override's sizes. A `patch_size` replaces the patch

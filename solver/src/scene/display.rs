@@ -60,7 +60,9 @@ pub fn load_display_file(path: &Path) -> Result<DisplayParams, SceneError> {
     parse_display(path, &text)
 }
 
-pub(crate) fn parse_display(path: &Path, text: &str) -> Result<DisplayParams, SceneError> {
+/// The numbers of lines 2 to 9, each line checked against its layout, and
+/// nothing but blank lines after line 9.
+fn read_values(path: &Path, text: &str) -> Result<Vec<Vec<f64>>, SceneError> {
     const LAYOUT: [&str; 8] = [
         "eye x y z lookat x y z",
         "up x y z",
@@ -120,7 +122,11 @@ pub(crate) fn parse_display(path: &Path, text: &str) -> Result<DisplayParams, Sc
             ));
         }
     }
+    Ok(values)
+}
 
+pub(crate) fn parse_display(path: &Path, text: &str) -> Result<DisplayParams, SceneError> {
+    let values = read_values(path, text)?;
     let check = |ok: bool, line: usize, m: String| {
         if ok {
             Ok(())
@@ -190,26 +196,9 @@ pub(crate) fn parse_display(path: &Path, text: &str) -> Result<DisplayParams, Sc
         ),
     )?;
 
-    let mut warnings = Vec::new();
-    // tan(fovx / 2) = aspect · tan(fovy / 2) for square pixels.
-    let aspect = f64::from(resolution[0]) / f64::from(resolution[1]);
-    let implied_x = 2.0
-        * (aspect * (fov_y.to_radians() / 2.0).tan())
-            .atan()
-            .to_degrees();
-    if (implied_x - fov_x).abs() > 0.01 * fov_x {
-        warnings.push(Warning {
-            source: SourceRef {
-                file: path.to_path_buf(),
-                line: Some(4),
-                item: String::new(),
-            },
-            message: format!(
-                "fovx {fov_x} disagrees with fovy {fov_y} and the {}×{} image (which imply fovx {:.3}); the camera uses fovy and the image aspect",
-                resolution[0], resolution[1], implied_x
-            ),
-        });
-    }
+    let warnings = fov_warning(path, fov_x, fov_y, resolution)
+        .into_iter()
+        .collect();
     Ok(DisplayParams {
         camera: Camera {
             eye,
@@ -230,6 +219,28 @@ pub(crate) fn parse_display(path: &Path, text: &str) -> Result<DisplayParams, Sc
         },
         file: path.to_path_buf(),
         warnings,
+    })
+}
+
+/// A warning when line 4's `fovx` disagrees by more than 1% with the `fovx`
+/// that `fovy` and the image's aspect imply (square pixels).
+fn fov_warning(path: &Path, fov_x: f64, fov_y: f64, resolution: [u32; 2]) -> Option<Warning> {
+    // tan(fovx / 2) = aspect · tan(fovy / 2) for square pixels.
+    let aspect = f64::from(resolution[0]) / f64::from(resolution[1]);
+    let implied_x = 2.0
+        * (aspect * (fov_y.to_radians() / 2.0).tan())
+            .atan()
+            .to_degrees();
+    ((implied_x - fov_x).abs() > 0.01 * fov_x).then(|| Warning {
+        source: SourceRef {
+            file: path.to_path_buf(),
+            line: Some(4),
+            item: String::new(),
+        },
+        message: format!(
+            "fovx {fov_x} disagrees with fovy {fov_y} and the {}×{} image (which imply fovx {:.3}); the camera uses fovy and the image aspect",
+            resolution[0], resolution[1], implied_x
+        ),
     })
 }
 

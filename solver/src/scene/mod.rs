@@ -32,11 +32,13 @@ mod weld;
 pub(crate) use weld::IntMap;
 
 #[cfg(test)]
+mod hostile_tests;
+#[cfg(test)]
 mod tests;
 
 pub use clean::{
-    COLLINEAR_TOLERANCE, PLANARITY_TOLERANCE, REPEATED_VERTEX_TOLERANCE, SMOOTH_NORMAL_DEGREES,
-    ZERO_AREA_TOLERANCE,
+    COLLINEAR_TOLERANCE, MAX_EMISSION, MAX_POLYGON_VERTICES, PLANARITY_TOLERANCE,
+    REPEATED_VERTEX_TOLERANCE, SMOOTH_NORMAL_DEGREES, ZERO_AREA_TOLERANCE,
 };
 pub use config::{Length, MeshSizes};
 pub use display::{load_display_file, DisplayParams};

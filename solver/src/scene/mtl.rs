@@ -22,6 +22,7 @@
 //! `illum` 0–2, the diffuse and Phong models the solver follows) stay silent, as
 //! do opaque `d 1` and `Tr 0`, which say what the solver does anyway.
 
+use super::clean::emission_problem;
 use super::raw::{RawMaterial, DEFAULT_KD};
 use super::text::{numbered_lines, parse_real};
 use super::{SceneError, SourceRef, Warning};
@@ -71,6 +72,7 @@ pub(crate) fn parse_mtl(path: &Path, text: &str) -> Result<Vec<RawMaterial>, Sce
                 },
                 overridden_at: None,
                 undefined: None,
+                unread_reflectance_file: None,
                 unmodelled: Vec::new(),
                 diffuse_map: None,
                 diffuse_bytes: None,
@@ -143,51 +145,61 @@ pub(crate) fn parse_mtl(path: &Path, text: &str) -> Result<Vec<RawMaterial>, Sce
             }
             continue;
         }
-        match key {
-            "Kd" | "Ks" | "Ke" => {
-                let what = match key {
-                    "Kd" => "Kd (diffuse reflectance)",
-                    "Ks" => "Ks (glossy reflectance)",
-                    _ => "Ke (emitted radiance)",
-                };
-                let value = parse_colour(&tokens[1..], what).map_err(|m| err(&item, m))?;
-                if value.min_element() < 0.0 {
-                    return Err(err(
-                        &item,
-                        format!("{what} must not be negative: {}", tokens[1..].join(" ")),
-                    ));
-                }
-                match key {
-                    "Kd" => current.kd = value,
-                    "Ks" => current.ks = value,
-                    _ => {
-                        current.emission = value;
-                        if let Some(given) = ke_given.last_mut() {
-                            *given = true;
-                        }
-                    }
-                }
+        let ke_line = set_value(current, key, &tokens[1..]).map_err(|m| err(&item, m))?;
+        if ke_line {
+            if let Some(given) = ke_given.last_mut() {
+                *given = true;
             }
-            "Ns" => {
-                let [token] = tokens[1..] else {
-                    return Err(err(
-                        &item,
-                        format!("Ns takes one number, found {} values", tokens.len() - 1),
-                    ));
-                };
-                let ns = parse_real(token, "Ns (Phong exponent)").map_err(|m| err(&item, m))?;
-                if ns < 0.0 {
-                    return Err(err(&item, format!("Ns must not be negative: {token}")));
-                }
-                current.alpha = alpha_from_ns(ns);
-            }
-            _ => {}
         }
     }
     for (material, &given) in materials.iter_mut().zip(&ke_given) {
         emission_map_convention(material, given);
     }
     Ok(materials)
+}
+
+/// Applies a `Kd`, `Ks`, `Ke` or `Ns` statement (arguments `args`) to the
+/// current material; other keys change nothing. Returns whether it was a `Ke`
+/// line, which decides what a `map_Ke` multiplies.
+fn set_value(current: &mut RawMaterial, key: &str, args: &[&str]) -> Result<bool, String> {
+    match key {
+        "Kd" | "Ks" | "Ke" => {
+            let what = match key {
+                "Kd" => "Kd (diffuse reflectance)",
+                "Ks" => "Ks (glossy reflectance)",
+                _ => "Ke (emitted radiance)",
+            };
+            let value = parse_colour(args, what)?;
+            if value.min_element() < 0.0 {
+                return Err(format!("{what} must not be negative: {}", args.join(" ")));
+            }
+            if key == "Ke" {
+                if let Some(problem) = emission_problem(value) {
+                    return Err(format!("{what} {problem}"));
+                }
+            }
+            match key {
+                "Kd" => current.kd = value,
+                "Ks" => current.ks = value,
+                _ => {
+                    current.emission = value;
+                    return Ok(true);
+                }
+            }
+        }
+        "Ns" => {
+            let [token] = args else {
+                return Err(format!("Ns takes one number, found {} values", args.len()));
+            };
+            let ns = parse_real(token, "Ns (Phong exponent)")?;
+            if ns < 0.0 {
+                return Err(format!("Ns must not be negative: {token}"));
+            }
+            current.alpha = alpha_from_ns(ns);
+        }
+        _ => {}
+    }
+    Ok(false)
 }
 
 /// The emission a `map_Ke` multiplies (docs/textures.md, "Emissive

@@ -25,7 +25,7 @@
 use super::mtl::parse_mtl;
 use super::raw::{RawMaterial, RawPolygon, RawScene};
 use super::text::{numbered_lines, parse_real, parse_real_lazy, read_text};
-use super::{SceneError, SourceRef, Warning};
+use super::{SceneError, SourceRef, Warning, MAX_POLYGON_VERTICES};
 use glam::{DVec2, DVec3};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -220,6 +220,15 @@ fn resolve_libraries(dir: &Path, argument: &str) -> Vec<PathBuf> {
         .collect()
 }
 
+/// The refusal of a face with more than [`MAX_POLYGON_VERTICES`] corners.
+pub(crate) fn too_many_vertices(count: usize) -> String {
+    format!(
+        "{count} vertices, more than the {MAX_POLYGON_VERTICES} one polygon may have (checking \
+         and meshing a polygon take time quadratic in its vertex count); split the face or \
+         triangulate it in the modelling tool"
+    )
+}
+
 /// Parses one index of a face corner: 1-based, or negative relative to the
 /// `count` elements defined so far. Returns the 0-based index.
 fn resolve_index(token: &str, count: usize, what: &str) -> Result<usize, String> {
@@ -253,18 +262,40 @@ fn resolve_index(token: &str, count: usize, what: &str) -> Result<usize, String>
 
 /// The line-preserving check and normalisation described in the module comment.
 fn prepass(path: &Path, text: &str) -> Result<Prepass, SceneError> {
-    let mut out = String::with_capacity(text.len());
-    let mut faces = Vec::new();
-    let mut libraries = Vec::new();
-    let mut warnings = Vec::new();
-    let (mut positions, mut normals) = (0usize, 0usize);
-    let mut texcoords: Vec<DVec2> = Vec::new();
-    let mut object: Option<String> = None;
-    let mut material: Option<String> = None;
-    let mut warned_freeform = false;
+    let mut pass = Pass {
+        path,
+        result: Prepass {
+            normalised: String::with_capacity(text.len()),
+            faces: Vec::new(),
+            libraries: Vec::new(),
+            warnings: Vec::new(),
+        },
+        positions: 0,
+        normals: 0,
+        texcoords: Vec::new(),
+        object: None,
+        material: None,
+        warned_freeform: false,
+    };
+    for (line_no, line, swallowed) in logical_lines(text) {
+        let content = line.split('#').next().unwrap_or("");
+        let tokens: Vec<&str> = content.split_whitespace().collect();
+        let keep = pass.line(line_no, &tokens)?;
+        let out = &mut pass.result.normalised;
+        out.push_str(&keep);
+        out.push('\n');
+        for _ in 0..swallowed {
+            out.push('\n');
+        }
+    }
+    Ok(pass.result)
+}
 
-    // Joined continuation lines (`\` at the end) keep the first line's number;
-    // the lines they swallowed become empty so that numbering stays one-to-one.
+/// The file's logical lines as (first line's number, text, lines swallowed):
+/// continuation lines (`\` at the end) are joined and keep the first line's
+/// number; the lines they swallowed become empty in the normalised text, so
+/// that numbering stays one-to-one.
+fn logical_lines(text: &str) -> Vec<(usize, String, usize)> {
     let mut pending: Option<(usize, String, usize)> = None;
     let mut logical: Vec<(usize, String, usize)> = Vec::new();
     for (no, line) in numbered_lines(text) {
@@ -289,212 +320,235 @@ fn prepass(path: &Path, text: &str) -> Result<Prepass, SceneError> {
     if let Some(rest) = pending {
         logical.push(rest);
     }
+    logical
+}
 
-    for (line_no, line, swallowed) in logical {
-        let content = line.split('#').next().unwrap_or("");
-        let tokens: Vec<&str> = content.split_whitespace().collect();
-        let err =
-            |item: String, message: String| SceneError::at(path, Some(line_no), item, message);
+/// The pre-pass's state between lines: what it has produced, the counts of
+/// elements defined so far (for index checks), and the current object and
+/// material.
+struct Pass<'a> {
+    path: &'a Path,
+    result: Prepass,
+    positions: usize,
+    normals: usize,
+    texcoords: Vec<DVec2>,
+    object: Option<String>,
+    material: Option<String>,
+    warned_freeform: bool,
+}
+
+impl Pass<'_> {
+    fn err(&self, line_no: usize, item: String, message: String) -> SceneError {
+        SceneError::at(self.path, Some(line_no), item, message)
+    }
+
+    fn warn(&mut self, line_no: usize, item: String, message: String) {
+        self.result.warnings.push(Warning {
+            source: SourceRef {
+                file: self.path.to_path_buf(),
+                line: Some(line_no),
+                item,
+            },
+            message,
+        });
+    }
+
+    /// Checks and records one logical line; returns what `tobj` reads in its
+    /// place (empty for the lines it must not see).
+    fn line(&mut self, line_no: usize, tokens: &[&str]) -> Result<String, SceneError> {
         let mut keep = String::new();
         match tokens.first().copied() {
-            Some("v") => {
-                let values = &tokens[1..];
-                if !matches!(values.len(), 3 | 4 | 6 | 7) {
-                    return Err(err(
-                        format!("vertex {}", positions + 1),
-                        format!(
-                            "`v` needs x y z (optionally w, or r g b), found {} values",
-                            values.len()
-                        ),
-                    ));
-                }
-                let mut xyz = [0.0; 3];
-                for (k, slot) in xyz.iter_mut().enumerate() {
-                    *slot = parse_real_lazy(values[k], || {
-                        format!("vertex {} {}", positions + 1, ["x", "y", "z"][k])
-                    })
-                    .map_err(|m| err(String::new(), m))?;
-                }
-                if values.len() == 4 || values.len() == 7 {
-                    // The rational weight w divides the coordinates.
-                    let w = parse_real(values[3], &format!("vertex {} w", positions + 1))
-                        .map_err(|m| err(String::new(), m))?;
-                    if w == 0.0 {
-                        return Err(err(
-                            String::new(),
-                            format!("vertex {} has weight w = 0", positions + 1),
-                        ));
-                    }
-                    xyz = xyz.map(|c| c / w);
-                    if !xyz.iter().all(|c| c.is_finite()) {
-                        return Err(err(
-                            String::new(),
-                            format!("vertex {} / w is not finite", positions + 1),
-                        ));
-                    }
-                    // `{:?}` prints the shortest string that reads back to the same f64.
-                    keep = format!("v {:?} {:?} {:?}", xyz[0], xyz[1], xyz[2]);
-                } else {
-                    // tobj parses the same tokens to the same f64s checked above.
-                    keep = ["v", values[0], values[1], values[2]].join(" ");
-                }
-                positions += 1;
-            }
-            Some("vn") => {
-                if tokens.len() != 4 {
-                    return Err(err(
-                        format!("normal {}", normals + 1),
-                        format!("`vn` needs 3 numbers, found {}", tokens.len() - 1),
-                    ));
-                }
-                for (k, token) in tokens[1..].iter().enumerate() {
-                    parse_real_lazy(token, || {
-                        format!("normal {} {}", normals + 1, ["x", "y", "z"][k])
-                    })
-                    .map_err(|m| err(String::new(), m))?;
-                }
-                keep = tokens.join(" ");
-                normals += 1;
-            }
-            Some("vt") => {
-                // `vt u [v [w]]`: v defaults to 0, w (3-D textures) is ignored.
-                let values = &tokens[1..];
-                if values.is_empty() || values.len() > 3 {
-                    return Err(err(
-                        format!("texture coordinate {}", texcoords.len() + 1),
-                        format!(
-                            "`vt` needs u (optionally v, w), found {} values",
-                            values.len()
-                        ),
-                    ));
-                }
-                let mut uv = DVec2::ZERO;
-                for (k, token) in values.iter().take(2).enumerate() {
-                    uv[k] = parse_real_lazy(token, || {
-                        format!(
-                            "texture coordinate {} {}",
-                            texcoords.len() + 1,
-                            ["u", "v"][k]
-                        )
-                    })
-                    .map_err(|m| err(String::new(), m))?;
-                }
-                texcoords.push(uv);
-            }
-            Some("f") | Some("fo") => {
-                let face_number = faces.len() + 1;
-                let item = match &object {
-                    Some(o) => format!("face {face_number} of object {o}"),
-                    None => format!("face {face_number}"),
-                };
-                let mut corners = Vec::new();
-                let mut with_normals = 0usize;
-                let mut uvs = Vec::new();
-                for corner in &tokens[1..] {
-                    let parts: Vec<&str> = corner.split('/').collect();
-                    if parts.len() > 3 || parts[0].is_empty() {
-                        return Err(err(
-                            item,
-                            format!("face corner `{corner}`: expected v, v/vt, v//vn or v/vt/vn"),
-                        ));
-                    }
-                    let v = resolve_index(parts[0], positions, "vertex")
-                        .map_err(|m| err(item.clone(), m))?;
-                    if let Some(vt) = parts.get(1).filter(|s| !s.is_empty()) {
-                        let t = resolve_index(vt, texcoords.len(), "texture")
-                            .map_err(|m| err(item.clone(), m))?;
-                        uvs.push(texcoords[t]);
-                    }
-                    let mut corner_text = (v + 1).to_string();
-                    if let Some(vn) = parts.get(2).filter(|s| !s.is_empty()) {
-                        let n = resolve_index(vn, normals, "normal")
-                            .map_err(|m| err(item.clone(), m))?;
-                        corner_text = format!("{}//{}", v + 1, n + 1);
-                        with_normals += 1;
-                    }
-                    corners.push(corner_text);
-                }
-                if corners.len() < 3 {
-                    warnings.push(Warning {
-                        source: SourceRef {
-                            file: path.to_path_buf(),
-                            line: Some(line_no),
-                            item,
-                        },
-                        message: format!(
-                            "degenerate polygon: a face needs at least 3 vertices, this one has {}; skipped",
-                            corners.len()
-                        ),
-                    });
-                } else {
-                    // A face with normals on only some corners is treated as flat.
-                    let has_normals = with_normals == corners.len();
-                    if !has_normals {
-                        for c in &mut corners {
-                            if let Some((v, _)) = c.split_once("//") {
-                                *c = v.to_owned();
-                            }
-                        }
-                    }
-                    keep = format!("f {}", corners.join(" "));
-                    faces.push(FaceLine {
-                        line: line_no,
-                        object: object.clone(),
-                        material: material.clone(),
-                        has_normals,
-                        uvs: (uvs.len() == corners.len()).then_some(uvs),
-                    });
-                }
-            }
+            Some("v") => keep = self.vertex(line_no, &tokens[1..])?,
+            Some("vn") => keep = self.normal(line_no, tokens)?,
+            Some("vt") => self.texcoord(line_no, &tokens[1..])?,
+            Some("f") | Some("fo") => keep = self.face(line_no, &tokens[1..])?,
             Some("o") | Some("g") => {
                 let name = tokens[1..].join(" ");
-                object = (!name.is_empty()).then_some(name);
+                self.object = (!name.is_empty()).then_some(name);
                 // Model boundaries for tobj; names are tracked here.
                 keep = "o".to_owned();
             }
             Some("usemtl") => {
                 let name = tokens[1..].join(" ");
                 if name.is_empty() {
-                    return Err(err(
+                    return Err(self.err(
+                        line_no,
                         String::new(),
                         "`usemtl` without a material name".to_owned(),
                     ));
                 }
-                material = Some(name);
+                self.material = Some(name);
             }
             Some("mtllib") => {
                 let argument = tokens[1..].join(" ");
                 if argument.is_empty() {
-                    return Err(err(
+                    return Err(self.err(
+                        line_no,
                         String::new(),
                         "`mtllib` without a file name".to_owned(),
                     ));
                 }
-                libraries.push((argument, line_no));
+                self.result.libraries.push((argument, line_no));
             }
-            Some("curv") | Some("curv2") | Some("surf") if !warned_freeform => {
-                warned_freeform = true;
-                warnings.push(Warning {
-                    source: SourceRef {
-                        file: path.to_path_buf(),
-                        line: Some(line_no),
-                        item: String::new(),
-                    },
-                    message: "free-form curves and surfaces are not supported; ignored".to_owned(),
-                });
+            Some("curv") | Some("curv2") | Some("surf") if !self.warned_freeform => {
+                self.warned_freeform = true;
+                self.warn(
+                    line_no,
+                    String::new(),
+                    "free-form curves and surfaces are not supported; ignored".to_owned(),
+                );
             }
             _ => {}
         }
-        out.push_str(&keep);
-        out.push('\n');
-        for _ in 0..swallowed {
-            out.push('\n');
-        }
+        Ok(keep)
     }
-    Ok(Prepass {
-        normalised: out,
-        faces,
-        libraries,
-        warnings,
-    })
+
+    /// `v x y z [w]` or `v x y z r g b`: the position, divided by a rational
+    /// weight w when there is one.
+    fn vertex(&mut self, line_no: usize, values: &[&str]) -> Result<String, SceneError> {
+        let number = self.positions + 1;
+        let err = |message: String| self.err(line_no, String::new(), message);
+        if !matches!(values.len(), 3 | 4 | 6 | 7) {
+            return Err(self.err(
+                line_no,
+                format!("vertex {number}"),
+                format!(
+                    "`v` needs x y z (optionally w, or r g b), found {} values",
+                    values.len()
+                ),
+            ));
+        }
+        let mut xyz = [0.0; 3];
+        for (k, slot) in xyz.iter_mut().enumerate() {
+            *slot = parse_real_lazy(values[k], || {
+                format!("vertex {number} {}", ["x", "y", "z"][k])
+            })
+            .map_err(err)?;
+        }
+        let keep = if values.len() == 4 || values.len() == 7 {
+            // The rational weight w divides the coordinates.
+            let w = parse_real(values[3], &format!("vertex {number} w")).map_err(err)?;
+            if w == 0.0 {
+                return Err(err(format!("vertex {number} has weight w = 0")));
+            }
+            xyz = xyz.map(|c| c / w);
+            if !xyz.iter().all(|c| c.is_finite()) {
+                return Err(err(format!("vertex {number} / w is not finite")));
+            }
+            // `{:?}` prints the shortest string that reads back to the same f64.
+            format!("v {:?} {:?} {:?}", xyz[0], xyz[1], xyz[2])
+        } else {
+            // tobj parses the same tokens to the same f64s checked above.
+            ["v", values[0], values[1], values[2]].join(" ")
+        };
+        self.positions += 1;
+        Ok(keep)
+    }
+
+    /// `vn x y z`, checked and passed on as it is.
+    fn normal(&mut self, line_no: usize, tokens: &[&str]) -> Result<String, SceneError> {
+        let number = self.normals + 1;
+        if tokens.len() != 4 {
+            return Err(self.err(
+                line_no,
+                format!("normal {number}"),
+                format!("`vn` needs 3 numbers, found {}", tokens.len() - 1),
+            ));
+        }
+        for (k, token) in tokens[1..].iter().enumerate() {
+            parse_real_lazy(token, || format!("normal {number} {}", ["x", "y", "z"][k]))
+                .map_err(|m| self.err(line_no, String::new(), m))?;
+        }
+        self.normals += 1;
+        Ok(tokens.join(" "))
+    }
+
+    /// `vt u [v [w]]`: v defaults to 0, w (3-D textures) is ignored. Kept
+    /// here, not passed to `tobj`.
+    fn texcoord(&mut self, line_no: usize, values: &[&str]) -> Result<(), SceneError> {
+        let number = self.texcoords.len() + 1;
+        if values.is_empty() || values.len() > 3 {
+            return Err(self.err(
+                line_no,
+                format!("texture coordinate {number}"),
+                format!(
+                    "`vt` needs u (optionally v, w), found {} values",
+                    values.len()
+                ),
+            ));
+        }
+        let mut uv = DVec2::ZERO;
+        for (k, token) in values.iter().take(2).enumerate() {
+            uv[k] = parse_real_lazy(token, || {
+                format!("texture coordinate {number} {}", ["u", "v"][k])
+            })
+            .map_err(|m| self.err(line_no, String::new(), m))?;
+        }
+        self.texcoords.push(uv);
+        Ok(())
+    }
+
+    /// `f` (or `fo`) with corners `v`, `v/vt`, `v//vn` or `v/vt/vn`: indices
+    /// checked and resolved, the face recorded with its object, material,
+    /// normals and UVs, and written for `tobj` with absolute indices. A face
+    /// of fewer than 3 corners is dropped with a warning.
+    fn face(&mut self, line_no: usize, corners_text: &[&str]) -> Result<String, SceneError> {
+        let face_number = self.result.faces.len() + 1;
+        let item = match &self.object {
+            Some(o) => format!("face {face_number} of object {o}"),
+            None => format!("face {face_number}"),
+        };
+        if corners_text.len() > MAX_POLYGON_VERTICES {
+            return Err(self.err(line_no, item, too_many_vertices(corners_text.len())));
+        }
+        let err = |m: String| self.err(line_no, item.clone(), m);
+        let mut corners = Vec::with_capacity(corners_text.len());
+        let mut with_normals = 0usize;
+        let mut uvs = Vec::new();
+        for corner in corners_text {
+            let parts: Vec<&str> = corner.split('/').collect();
+            if parts.len() > 3 || parts[0].is_empty() {
+                return Err(err(format!(
+                    "face corner `{corner}`: expected v, v/vt, v//vn or v/vt/vn"
+                )));
+            }
+            let v = resolve_index(parts[0], self.positions, "vertex").map_err(err)?;
+            if let Some(vt) = parts.get(1).filter(|s| !s.is_empty()) {
+                let t = resolve_index(vt, self.texcoords.len(), "texture").map_err(err)?;
+                uvs.push(self.texcoords[t]);
+            }
+            let mut corner_text = (v + 1).to_string();
+            if let Some(vn) = parts.get(2).filter(|s| !s.is_empty()) {
+                let n = resolve_index(vn, self.normals, "normal").map_err(err)?;
+                corner_text = format!("{}//{}", v + 1, n + 1);
+                with_normals += 1;
+            }
+            corners.push(corner_text);
+        }
+        if corners.len() < 3 {
+            let message = format!(
+                "degenerate polygon: a face needs at least 3 vertices, this one has {}; skipped",
+                corners.len()
+            );
+            self.warn(line_no, item, message);
+            return Ok(String::new());
+        }
+        // A face with normals on only some corners is treated as flat.
+        let has_normals = with_normals == corners.len();
+        if !has_normals {
+            for c in &mut corners {
+                if let Some((v, _)) = c.split_once("//") {
+                    *c = v.to_owned();
+                }
+            }
+        }
+        self.result.faces.push(FaceLine {
+            line: line_no,
+            object: self.object.clone(),
+            material: self.material.clone(),
+            has_normals,
+            uvs: (uvs.len() == corners.len()).then_some(uvs),
+        });
+        Ok(format!("f {}", corners.join(" ")))
+    }
 }

@@ -28,6 +28,10 @@ pub(crate) struct RawMaterial {
     /// A warning to give if nothing defines this material (a `usemtl` name missing
     /// from every MTL file, or faces with no `usemtl`); a TOML override clears it.
     pub undefined: Option<Warning>,
+    /// An error to give if a polygon uses this material and no TOML override
+    /// replaces it: a legacy attribute's `material m` names a reflectance file
+    /// (Remington 1992, appendix F) that is not read ([`super::legacy`]).
+    pub unread_reflectance_file: Option<(SourceRef, String)>,
     /// Warnings for statements the input gives but the solver does not model
     /// (MTL textures, transparency, `illum` 3–9, ...), one per statement kind,
     /// given by [`super::clean`] only if a polygon uses the material.
@@ -60,6 +64,7 @@ impl RawMaterial {
             source: source.clone(),
             overridden_at: None,
             undefined: Some(Warning { source, message }),
+            unread_reflectance_file: None,
             unmodelled: Vec::new(),
             diffuse_map: None,
             diffuse_bytes: None,

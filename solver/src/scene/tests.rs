@@ -819,7 +819,7 @@ fn every_malformed_toml_line_names_file_line_and_what() {
         ),
         (
             format!("{ok}\n[materials.lamp]\nkd = -0.5\n"),
-            3,
+            4,
             "kd must be finite and non-negative",
         ),
         (

@@ -2,9 +2,16 @@
 //! `serde_json`, binary buffers packed by hand, as `.gltf` + `.bin`, `.glb` and
 //! data-URI buffers in a temporary folder.
 
+use super::materials::metallic_roughness;
+use super::nodes::{assemble, camera_from_node};
 use super::*;
+use crate::brdf::MIN_ALPHA;
 use crate::scene::{load_scene, ImportOptions, LoadedScene};
+use base64::Engine as _;
+use glam::{DMat4, DQuat, DVec3};
+use gltf::mesh::Mode;
 use serde_json::{json, Value};
+use std::path::PathBuf;
 
 /// A glTF document and its one binary buffer, before it is written.
 struct Fixture {
@@ -965,5 +972,29 @@ fn base_colour_texture_on_another_uv_set_is_warned_and_flat() {
             .any(|w| w.message.contains("uses TEXCOORD_1")),
         "{:?}",
         loaded.scene.warnings
+    );
+}
+
+#[test]
+fn an_emission_beyond_the_bound_is_refused_naming_the_material() {
+    let dir = tempfile::tempdir().unwrap();
+    // emissiveFactor (1, 2, 3) × strength 1e30: each number fits f32, the
+    // product's blue channel is 3e30, above `MAX_EMISSION`.
+    let mut f = triangle();
+    f.json["materials"][0]["extensions"] =
+        json!({"KHR_materials_emissive_strength": {"emissiveStrength": 1e30}});
+    let path = write_gltf(dir.path(), "bright", &f);
+    let e = load_scene(&path, &ImportOptions::default()).unwrap_err();
+    let at = e.source_ref().unwrap();
+    assert_eq!(
+        (&at.file, at.item.as_str()),
+        (&path, "material `lamp` (materials[0])")
+    );
+    let text = e.to_string();
+    assert!(
+        text.contains("emission (")
+            && text.contains("3.0000000") // the f32 strength widened to f64
+            && text.contains("e30) exceeds 1e30 W·sr⁻¹·m⁻²"),
+        "{text}"
     );
 }
