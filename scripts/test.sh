@@ -31,3 +31,5 @@ echo "== cargo clippy"
 cargo clippy --workspace --all-targets --locked -- -D warnings
 echo "== cargo test"
 cargo test --workspace --locked
+echo "== same results as before issue 40's refactor"
+bash scripts/same-results.sh

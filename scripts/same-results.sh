@@ -1,0 +1,58 @@
+#!/usr/bin/env bash
+# Same results before and after issue 40's refactor, without stored hashes:
+# builds the solver of the base commit (the last one before the refactor)
+# beside this tree's, generates the scenegen scenes, and runs
+# tests/same_results.rs, which solves each scene with both and compares the
+# files section by section (docs/lab/refactor-same-results.md says which).
+#
+# Usage: bash scripts/same-results.sh [BASE]   (BASE defaults to the commit
+# below). Needs the repository's history: a shallow clone cannot build BASE.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+# 3f4b4d1: main before the refactor, with the enclosure mean summed in patch
+# order (the one change the refactor's comparison must already contain: the
+# parallel sum before it was not reproducible run to run).
+base=${1:-${SAME_RESULTS_BASE:-3f4b4d1}}
+
+# Settings keys the refactor removed or renamed; they may differ or be missing.
+ignore_keys=shooting,shooting_tolerance,uniform_shooters,interpolated_glossy_splits
+ignore_keys+=,per_vertex_small,per_copy_vertices,patches,min_element_area
+ignore_keys+=,brdf_normalization,solver,directional,form_factors,method
+
+if ! git cat-file -e "$base^{commit}" 2>/dev/null; then
+    echo "same-results: commit $base is not in this clone (a shallow clone?); fetch the history first" >&2
+    exit 1
+fi
+
+work=${SAME_RESULTS_DIR:-target/same-results}
+mkdir -p "$work"
+work=$(cd "$work" && pwd)
+src="$work/base-src"
+rm -rf "$src"
+mkdir -p "$src"
+git archive "$base" | tar -x -C "$src"
+
+# Both solvers and scenegen in the release profile, since the solves dominate,
+# and in one target folder, so that the third-party crates are built once. Both
+# binaries are named solver: the base's is copied out before this tree's
+# replaces it.
+target=$(pwd)/target
+echo "== same-results: building the base solver ($base)"
+(cd "$src" && CARGO_TARGET_DIR="$target" cargo build --release --locked -p solver)
+cp "$target/release/solver" "$work/base-solver"
+echo "== same-results: building this tree's solver and scenegen"
+cargo build --release --locked -p solver -p scenegen
+
+scenes="$work/scenes"
+mkdir -p "$scenes"
+for family in spheres-room floor-plan; do
+    target/release/scenegen "$family" --triangles 10000 -o "$scenes" >/dev/null
+done
+
+echo "== same-results: solving with both"
+SAME_RESULTS_BASE_SOLVER="$work/base-solver" \
+SAME_RESULTS_NEW_SOLVER="$(pwd)/target/release/solver" \
+SAME_RESULTS_SCENES="$scenes" \
+SAME_RESULTS_IGNORE_KEYS="$ignore_keys" \
+    cargo test --locked --test same_results -- --ignored --nocapture
