@@ -33,12 +33,15 @@ fn enclosure_mean(solver: &Solver) -> f64 {
         enclosure::enclosure(occluder, centroid, normal)
     };
     if mesh.patches.len() <= MEAN_PROBES {
-        let (area, weighted) = mesh
+        // Probed in parallel, summed in patch order, so the bits do not
+        // depend on how the threads split the work.
+        let weighted: Vec<f64> = mesh
             .patches
             .par_iter()
-            .map(|p| (p.area, at_centroid(p) * p.area))
-            .reduce(|| (0.0, 0.0), |x, y| (x.0 + y.0, x.1 + y.1));
-        return weighted / area;
+            .map(|p| at_centroid(p) * p.area)
+            .collect();
+        let area: f64 = mesh.patches.iter().map(|p| p.area).sum();
+        return weighted.iter().sum::<f64>() / area;
     }
     let draws = systematic_draws(
         &mesh.patches.iter().map(|p| p.area).collect::<Vec<_>>(),
