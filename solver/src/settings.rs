@@ -48,18 +48,6 @@ pub enum FormFactorMethod {
     Hemicube,
 }
 
-/// Which receivers a shot visits ray by ray (`--shooting`; `solve/cluster.rs`).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
-#[serde(rename_all = "lowercase")]
-#[derive(clap::ValueEnum)]
-pub enum Shooting {
-    /// Every vertex, every shot: Remington's (1992) flat progressive refinement.
-    #[default]
-    Flat,
-    /// Only surfaces the shot can change by more than `shooting_tolerance`; the rest get a bounded estimate, no rays.
-    Bounded,
-}
-
 /// What shoots in one pass (`--shooters`; `solve/group_shot.rs`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
 #[serde(rename_all = "lowercase")]
@@ -79,15 +67,6 @@ pub const DEFAULT_GROUP_SAMPLES: u32 = 32;
 
 fn default_group_samples() -> u32 {
     DEFAULT_GROUP_SAMPLES
-}
-
-/// Default of `shooting_tolerance`: the largest that kept the Cornell box's
-/// medium-preset MARE within 0.15 points of flat shooting's (1e-3 cost 2.5
-/// points); `docs/benchmarks.md`, "Bounded shooting".
-pub const DEFAULT_SHOOTING_TOLERANCE: f64 = 1e-4;
-
-fn default_shooting_tolerance() -> f64 {
-    DEFAULT_SHOOTING_TOLERANCE
 }
 
 /// How a glossy lobe is normalized (design notes, "Directional mode"; see
@@ -190,12 +169,6 @@ pub struct SolverSettings {
     /// Cells per face edge k of the global cube (D = 6k² directions per vertex).
     #[serde(default = "default_cube_resolution")]
     pub cube_resolution: u32,
-    /// Which receivers a shot visits ray by ray: all (flat) or those it can change visibly (bounded).
-    #[serde(default)]
-    pub shooting: Shooting,
-    /// Bounded shooting skips a surface whose bound on a shot's ΔL is below this fraction of the scene's radiance level.
-    #[serde(default = "default_shooting_tolerance")]
-    pub shooting_tolerance: f64,
     /// One patch per shot, or groups of nearby reflecting patches shot together.
     #[serde(default)]
     pub shooters: Shooters,
@@ -321,8 +294,6 @@ pub struct SettingsPatch {
     pub brdf_normalization: Option<BrdfNormalization>,
     pub directional: Option<DirectionalRepresentation>,
     pub cube_resolution: Option<u32>,
-    pub shooting: Option<Shooting>,
-    pub shooting_tolerance: Option<f64>,
     pub shooters: Option<Shooters>,
     pub group_samples: Option<u32>,
     pub units_per_metre: Option<f64>,
@@ -384,8 +355,6 @@ impl SolverSettings {
             brdf_normalization: BrdfNormalization::Thesis,
             directional: DirectionalRepresentation::Sh,
             cube_resolution: DEFAULT_CUBE_RESOLUTION,
-            shooting: Shooting::Flat,
-            shooting_tolerance: DEFAULT_SHOOTING_TOLERANCE,
             shooters: Shooters::Patch,
             group_samples: DEFAULT_GROUP_SAMPLES,
             units_per_metre: 1.0,
@@ -450,8 +419,6 @@ impl SolverSettings {
             brdf_normalization,
             directional,
             cube_resolution,
-            shooting,
-            shooting_tolerance,
             shooters,
             group_samples,
             units_per_metre,
@@ -628,14 +595,6 @@ impl SolverSettings {
             "cube_resolution",
             self.cube_resolution,
             "2 to 256 cells per cube face edge",
-        )?;
-        check(
-            self.shooting_tolerance.is_finite()
-                && self.shooting_tolerance >= 0.0
-                && self.shooting_tolerance <= 1.0,
-            "shooting_tolerance",
-            self.shooting_tolerance,
-            "0 to 1 (a fraction of the scene's radiance level; 0 visits every receiver)",
         )?;
         check(
             self.full_rays_above.is_finite()

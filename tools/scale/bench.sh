@@ -9,7 +9,7 @@
 # Arguments are passed to scale-bench (see `scale-bench --help`): --families,
 # --sizes, --presets, --limit-s, --grace-s, --threads, --seed, --out (default
 # target/scale), --work, --keep, --solver-arg (repeatable: one more argument
-# for every solve, e.g. --solver-arg=--shooting --solver-arg=bounded, or
+# for every solve, e.g. --solver-arg=--shooters --solver-arg=patch, or
 # --solver-arg=--max-shots --solver-arg=100 for the cost of the first shots of
 # scenes too large to solve in full; the table does not show them, so record
 # them with the figures). Results: OUT/scale.csv, OUT/scale.md,

@@ -112,7 +112,7 @@ fn group_estimate_matches_the_members_shots() {
     assert!((g / s - 1.0).abs() < 1e-2, "{g} {s}");
 }
 
-/// Energy bookkeeping with grouped shots, as `bounded_shooting_loses_no_energy`
+/// Energy bookkeeping with grouped shots, as `progressive_shooting_loses_no_energy`
 /// checks it for single ones: emitted + reflected = shot + unshot within
 /// 1e-9 relative (rounding over ~10⁴ f64 terms), where the power shot is
 /// summed over every member of every group (`Timings::shot_power`, counted

@@ -153,11 +153,6 @@ pub struct Timings {
     pub gather: f64,
     /// Rays traced by the shooting part (the rest were traced by refinement).
     pub shoot_rays: u64,
-    /// Receiving vertices visited ray by ray by bounded shooting, summed over
-    /// shots (flat shooting visits every vertex and leaves these 0).
-    pub visited_receivers: u64,
-    /// Vertices that bounded shooting gave a bounded estimate instead.
-    pub bounded_receivers: u64,
     /// Patches shot by grouped shots, summed over them (`group_shot.rs`;
     /// 0 with `--shooters patch`).
     pub grouped_patches: u64,
@@ -254,7 +249,7 @@ pub struct Solver {
     scene_bytes: u64,
     /// Whether the memory budget has refused a split (warned once).
     refinement_capped: bool,
-    /// The surfaces under a bounding-volume hierarchy, for bounded shooting.
+    /// The surfaces under a bounding-volume hierarchy, for grouped shots.
     receivers: cluster::ReceiverTree,
     /// The most patches a grouped shot can rank ([`budget::Counts`]).
     group_candidates: Option<u64>,
@@ -400,7 +395,7 @@ impl Solver {
         }
         let vertex_count = mesh.vertices.len();
         let patch_count = mesh.patches.len();
-        let receivers = cluster::ReceiverTree::new(&mesh, &kd);
+        let receivers = cluster::ReceiverTree::new(&mesh);
         let per_surface: Vec<u64> = surface_patches.iter().map(|r| r.len() as u64).collect();
         let group_candidates = Some(
             receivers.most_patches_near(group_shot::RADIUS * receivers.diagonal(), &per_surface),
@@ -469,8 +464,7 @@ impl Solver {
         let all: Vec<u32> = (0..solver.mesh.surfaces.len() as u32).collect();
         solver.update_weights(&all);
         // After `update_weights`, which classifies the vertices as hidden.
-        let flat =
-            solver.directional.is_none() && settings.shooting == crate::settings::Shooting::Flat;
+        let flat = solver.directional.is_none();
         if flat && !settings.per_copy_vertices {
             solver.twins = twins::Twins::new(&solver.mesh, &solver.hidden);
         }
@@ -603,11 +597,6 @@ impl Solver {
                 pool: &pool,
             },
         };
-        // Bounded shooting plans for one patch; a group visits every vertex.
-        let plan = match group {
-            Some(_) => None,
-            None => self.plan_receivers(&shot, &pool),
-        };
         let mut rays = footprint::shoot_receivers(
             &self.mesh,
             &mut self.footprint,
@@ -623,7 +612,6 @@ impl Solver {
                 direct: &mut self.direct,
             },
             &shooter,
-            plan.as_ref(),
             recorded,
         );
         let shot_done = Instant::now();
@@ -682,10 +670,6 @@ impl Solver {
         rays += refined.rays;
         self.leaf_count += 3 * splits;
         let refine_done = Instant::now();
-        if let Some(plan) = &plan {
-            rays += plan.rays;
-            self.deposit_bounded(plan, recorded);
-        }
         self.update_patch_weights(&refined.dirty_patches);
         self.unshot_changed(&refined.dirty_patches);
         self.gather();
@@ -1101,11 +1085,11 @@ pub(crate) fn human_bytes(bytes: u128) -> String {
 }
 
 #[cfg(test)]
-mod cluster_tests;
-#[cfg(test)]
 mod directional_tests;
 #[cfg(test)]
 mod emissive_tests;
+#[cfg(test)]
+mod footprint_tests;
 #[cfg(test)]
 mod group_shot_tests;
 #[cfg(test)]

@@ -275,7 +275,7 @@ mod tests {
     #[test]
     fn small_surfaces_lose_no_energy() {
         // Emitted + reflected = shot + unshot (the bookkeeping of
-        // `bounded_shooting_loses_no_energy`), to 1e-9 of the emitted power:
+        // `progressive_shooting_loses_no_energy`), to 1e-9 of the emitted power:
         // one sample's ΔL on all of a face's vertices is gathered into its
         // patch like any vertex's.
         let scene = room_with_small_boxes();

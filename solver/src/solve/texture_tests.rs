@@ -295,9 +295,7 @@ fn directional_e_over_pi_is_counted_in_the_memory_budget() {
     assert_eq!(d.vertex_values(s), 6);
     // Five vertices × three more values in the radiance, ΔL and recorded
     // arrays (f64) at least.
-    assert!(
-        budget::split_cost(6, true, false) >= budget::split_cost(3, true, false) + 5 * 3 * 3 * 8
-    );
+    assert!(budget::split_cost(6, true) >= budget::split_cost(3, true) + 5 * 3 * 3 * 8);
 }
 
 #[test]
@@ -427,7 +425,6 @@ fn directional_with_ks_zero_a_checkerboard_solves_as_in_diffuse_mode() {
         diffuse.adaptive = adaptive;
         diffuse.uniform_shooters = true;
         diffuse.full_rays_above = 0.0;
-        diffuse.shooting = crate::settings::Shooting::Flat;
         diffuse.shooters = crate::settings::Shooters::Patch;
         let mut directional = diffuse.clone();
         directional.mode = SolveMode::Directional;

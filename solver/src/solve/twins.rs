@@ -24,10 +24,8 @@
 //! which of them agree to the bit is an accident of rounding (the Cornell
 //! box's solves are unchanged, and stay the same when the scene is moved).
 //!
-//! `per_copy_vertices` turns it off; so do directional mode, whose
-//! coefficients live in each polygon's frame (`directional.rs`), and
-//! bounded shooting, whose sparse plans visit surfaces, not points, and
-//! which with a zero tolerance stays flat shooting to the bit.
+//! `per_copy_vertices` turns it off; so does directional mode, whose
+//! coefficients live in each polygon's frame (`directional.rs`).
 
 use crate::mesh::Mesh;
 

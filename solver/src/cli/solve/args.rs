@@ -14,8 +14,7 @@ pub(crate) fn solve_mode_parser() -> impl clap::builder::TypedValueParser<Value 
     })
 }
 use crate::settings::{
-    BrdfNormalization, DirectionalRepresentation, FormFactorMethod, Preset, SettingsPatch,
-    Shooters, Shooting,
+    BrdfNormalization, DirectionalRepresentation, FormFactorMethod, Preset, SettingsPatch, Shooters,
 };
 use std::path::PathBuf;
 
@@ -154,35 +153,6 @@ pub struct SolveArgs {
             shadows as seen from the source's centre (directional mode uses analytic)."
     )]
     pub form_factors: Option<FormFactorMethod>,
-
-    /// Receivers a shot visits ray by ray: flat (default) or bounded.
-    #[arg(
-        long,
-        value_enum,
-        value_name = "HOW",
-        long_help = "Which receivers a shot visits with a form factor and visibility rays. \
-            flat (default): every vertex every shot, Remington 1992's progressive \
-            refinement. bounded: a surface the shot cannot change by more than \
-            --shooting-tolerance (a conservative bound on the form factor times the \
-            source's unshot radiance and the surface's reflectance) is not visited; its \
-            vertices all get one estimate, the factor at its centroid, so its energy is \
-            kept; fewer rays on scenes with many weak or distant receivers, a flatter \
-            indirect field on skipped surfaces. Diffuse mode only."
-    )]
-    pub shooting: Option<Shooting>,
-
-    /// Bounded shooting's tolerance, a fraction of the scene's radiance level.
-    #[arg(
-        long,
-        value_name = "FRACTION",
-        long_help = "Bounded shooting skips a surface whose largest possible ΔL from a \
-            shot is below this fraction of the scene's radiance level (the ambient \
-            term's brightest channel before any shot; default 0.0001, 0 to 1). Larger: \
-            fewer receivers visited per shot (faster on large scenes), and weak \
-            indirect light spread flat over skipped surfaces, each shot's error at \
-            any vertex below this fraction. 0 visits every receiver, as --shooting flat."
-    )]
-    pub shooting_tolerance: Option<f64>,
 
     /// Visibility rays in proportion to what a shot adds, below this fraction of a receiver's light.
     #[arg(
@@ -616,8 +586,6 @@ impl SolveArgs {
             directional: self.directional,
             cube_resolution: self.cube_resolution,
             form_factors: self.form_factors,
-            shooting: self.shooting,
-            shooting_tolerance: self.shooting_tolerance,
             full_rays_above: self.full_rays_above,
             glossy_edge: self.glossy_edge,
             shooters: self.shooters,
