@@ -198,31 +198,13 @@ pub struct SolverSettings {
     /// stored, like `memory_budget`.
     #[serde(skip)]
     pub resident_before_meshing: Option<u64>,
-    /// Shoot every patch's mean unshot radiance uniformly, as Remington 1992
-    /// does, instead of from the quadrants of an unevenly lit patch
-    /// (`solve::regions`). Off by default; directional shots read it too (each
-    /// source sample weighted by its quadrant); the cube gather always shoots
-    /// uniformly.
-    #[serde(default)]
+    /// Tests only, not a setting: shoot every patch's mean unshot radiance
+    /// uniformly (Remington 1992), as the global cube gathers it, instead of
+    /// from the quadrants of an unevenly lit patch (`solve::regions`), so
+    /// that a test can hold two methods to the same linear system.
+    #[cfg(test)]
+    #[serde(skip)]
     pub uniform_shooters: bool,
-    /// Give a split's new glossy vertex the light of earlier, unrecorded
-    /// shots as its parents' average, as Remington 1992 does, instead of
-    /// gathering its near patches' shot light again
-    /// (`solve::directional::near_gather`). Off by default; for measuring
-    /// what the gather changes.
-    #[serde(default)]
-    pub interpolated_glossy_splits: bool,
-    /// Receive a shot at every vertex of a small flat surface (one patch
-    /// already at its smallest element size) instead of once at its centroid
-    /// for all its vertices (`solve::small`). Off by default; for measuring
-    /// what the single sample changes.
-    #[serde(default)]
-    pub per_vertex_small: bool,
-    /// Receive a shot at every polygon's copy of a smooth surface's shared
-    /// vertex instead of once per point (`solve::twins`). Off by default;
-    /// for measuring what the single sample changes.
-    #[serde(default)]
-    pub per_copy_vertices: bool,
     /// The points of a finely tessellated smooth surface receive at sites
     /// spread so that each point has one within its smallest element size
     /// and within this many degrees of its shading normal, and take a
@@ -301,14 +283,6 @@ pub struct SettingsPatch {
     pub crease_angle: Option<f64>,
     /// Bytes.
     pub memory_budget: Option<u64>,
-    /// `true` shoots every patch's mean unshot radiance uniformly (`solve::regions`).
-    pub uniform_shooters: Option<bool>,
-    /// `true` interpolates split glossy vertices (`solve::directional::near_gather`).
-    pub interpolated_glossy_splits: Option<bool>,
-    /// `true` receives at every vertex of a small flat surface (`solve::small`).
-    pub per_vertex_small: Option<bool>,
-    /// `true` receives at every copy of a smooth surface's shared vertex (`solve::twins`).
-    pub per_copy_vertices: Option<bool>,
     /// Degrees; 0: every point of a smooth surface receives (`solve::sites`).
     pub site_angle: Option<f64>,
     /// Fraction of a receiver's level above which a shot traces every ray (`solve::ray_share`).
@@ -362,10 +336,8 @@ impl SolverSettings {
             crease_angle: default_crease_angle(),
             memory_budget: None,
             resident_before_meshing: None,
+            #[cfg(test)]
             uniform_shooters: false,
-            interpolated_glossy_splits: false,
-            per_vertex_small: false,
-            per_copy_vertices: false,
             site_angle: DEFAULT_SITE_ANGLE,
             whole_receivers: false,
             full_rays_above: 0.0,
@@ -424,10 +396,6 @@ impl SolverSettings {
             units_per_metre,
             strict,
             crease_angle,
-            uniform_shooters,
-            interpolated_glossy_splits,
-            per_vertex_small,
-            per_copy_vertices,
             site_angle,
             full_rays_above,
             glossy_edge
@@ -444,6 +412,16 @@ impl SolverSettings {
         if patch.min_element_size.is_some() {
             self.min_element_size = patch.min_element_size;
         }
+    }
+
+    /// Whether every patch shoots its mean unshot radiance uniformly: only
+    /// when a test asks (`uniform_shooters`); emitters' recorded shots always
+    /// do.
+    pub(crate) fn shoots_uniformly(&self) -> bool {
+        #[cfg(test)]
+        return self.uniform_shooters;
+        #[cfg(not(test))]
+        false
     }
 
     /// Preset defaults, then each patch from lowest to highest precedence:

@@ -342,14 +342,14 @@ fn solve(
         if small > 0 {
             eprintln!(
                 "solver: {small} small flat surfaces (one patch within the smallest element) \
-                 receive once per shot, at their centroid (--per-vertex-small: at every vertex)"
+                 receive once per shot, at their centroid"
             );
         }
         let copies = solver.twin_copy_count();
         if copies > 0 {
             eprintln!(
                 "solver: {copies} vertices copy a coincident vertex of their smooth surface \
-                 and take its sample (--per-copy-vertices: each receives on its own)"
+                 and take its sample"
             );
         }
         let (interpolated, sites) = solver.site_counts();

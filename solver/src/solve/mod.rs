@@ -400,11 +400,7 @@ impl Solver {
         let group_candidates = Some(
             receivers.most_patches_near(group_shot::RADIUS * receivers.diagonal(), &per_surface),
         );
-        let small = if settings.per_vertex_small {
-            small::SmallSurfaces::default()
-        } else {
-            small::SmallSurfaces::new(&mesh, &surface_patches)
-        };
+        let small = small::SmallSurfaces::new(&mesh, &surface_patches);
         let texturing_any = texturing.any();
         let mut solver = Solver {
             settings: settings.clone(),
@@ -463,12 +459,11 @@ impl Solver {
         solver.init_directional(scene)?;
         let all: Vec<u32> = (0..solver.mesh.surfaces.len() as u32).collect();
         solver.update_weights(&all);
-        // After `update_weights`, which classifies the vertices as hidden.
-        let flat = solver.directional.is_none();
-        if flat && !settings.per_copy_vertices {
+        // After `update_weights`, which classifies the vertices as hidden;
+        // diffuse mode only (directional coefficients live in each polygon's
+        // frame).
+        if solver.directional.is_none() {
             solver.twins = twins::Twins::new(&solver.mesh, &solver.hidden);
-        }
-        if flat {
             solver.sites = sites::Sites::new(
                 &solver.mesh,
                 &solver.hidden,
@@ -563,9 +558,8 @@ impl Solver {
                 .push(SamplePool::with_sets(&shot, shoot::REPLAY_POOL_SETS));
         }
         // Recorded (emitter) shots stay uniform: their replay to new vertices
-        // rebuilds them from the patch and its mean unshot alone. So do all
-        // shots when the settings ask for uniform shooters.
-        if !recorded && !self.settings.uniform_shooters && members.is_none() {
+        // rebuilds them from the patch and its mean unshot alone.
+        if !recorded && !self.settings.shoots_uniformly() && members.is_none() {
             shot.regions = self.source_regions(source, unshot).map(Box::new);
         }
         // Recorded shots keep every ray: later splits replay them exactly.

@@ -439,64 +439,6 @@ pub struct SolveArgs {
     )]
     pub no_ambient: bool,
 
-    /// Shoot each patch's mean unshot light uniformly (Remington 1992), not from its quadrants.
-    #[arg(
-        long,
-        long_help = "Shoot every patch's mean unshot radiance as if it were uniform over \
-            the patch, as Remington (1992) does, instead of splitting an unevenly lit \
-            quad patch into four quadrants that each shoot their own share (the \
-            default). Uniform shooting is 10-25% cheaper at the medium preset but \
-            biased where a patch is half in shadow: its dark half lights its \
-            neighbours as brightly as its lit half (the Cornell box's final MARE \
-            against the path-traced truth is 2.9% uniform against 2.0% by quadrants, \
-            docs/accuracy.md). Directional solves shoot by quadrants too (each source sample \
-            weighted by its quadrant's share); cube solves always shoot uniformly."
-    )]
-    pub uniform_shooters: bool,
-
-    /// Directional mode: interpolate a split's new glossy vertex from its parents.
-    #[arg(
-        long,
-        long_help = "Directional mode: give a vertex that refinement creates on a glossy \
-            surface the light of earlier shots as the average of the two vertices it \
-            splits between, as Remington (1992) does, instead of gathering the light \
-            that the patches near it have shot so far (the default). The average of two \
-            reflected images puts a sharp reflection's edge where it is not; the gather \
-            costs three receives of each near patch per new glossy vertex (the glossy \
-            Cornell box's draft with final's mesh floors: 16% more time, floor camera \
-            HDR-FLIP 0.096 interpolated against 0.088 gathered, docs/accuracy.md)."
-    )]
-    pub interpolated_glossy_splits: bool,
-
-    /// Receive at every vertex of a small flat surface instead of once per surface.
-    #[arg(
-        long,
-        long_help = "Receive each shot at every vertex of a small flat surface (one patch \
-            whose longest edge is within the smallest element size, which refinement \
-            never splits) instead of once at its centroid for all its vertices (the \
-            default). The mesh resolves nothing inside such a face, so one sample \
-            gives it its light from a quarter of the receivers' work: 100k triangles \
-            of small boxes solve at draft in 43 s instead of 97 s, each face \
-            flat-shaded shot by shot (docs/scale.md, \"Small surfaces receive once\"). No surface of the Cornell box is that small. \
-            Diffuse mode only: directional shots receive at every vertex."
-    )]
-    pub per_vertex_small: bool,
-
-    /// Receive at every polygon's copy of a shared smooth vertex.
-    #[arg(
-        long,
-        long_help = "Receive each shot at every polygon's copy of a smooth surface's shared \
-            vertex instead of once per point (the default). The solver keeps each \
-            polygon's vertices apart, so a point that six triangles of a smooth mesh \
-            share is six receivers with one position and one shading normal; by \
-            default the first takes the sample and the others copy it, a third of the \
-            receivers on a tessellated sphere. The expected radiance is the same; the \
-            shot noise per point is one receiver's instead of the mean of its copies' \
-            (docs/scale.md, \"Small patches join by radiance; shared points receive once\"). Diffuse mode only: \
-            directional shots receive at every vertex."
-    )]
-    pub per_copy_vertices: bool,
-
     /// Degrees of shading-normal change a finely tessellated smooth surface's sites span (0: every point receives).
     #[arg(
         long,
@@ -607,10 +549,6 @@ impl SolveArgs {
             patches: self.patches,
             min_element_size: self.min_element_size,
             min_element_area: self.min_element_area,
-            uniform_shooters: self.uniform_shooters.then_some(true),
-            interpolated_glossy_splits: self.interpolated_glossy_splits.then_some(true),
-            per_vertex_small: self.per_vertex_small.then_some(true),
-            per_copy_vertices: self.per_copy_vertices.then_some(true),
             site_angle: self.site_angle,
             ..SettingsPatch::default()
         }
@@ -745,25 +683,6 @@ mod tests {
     }
 
     #[test]
-    fn per_vertex_small_flag_and_toml_key_reach_the_settings() {
-        // Off unless asked for: small flat surfaces receive once by default.
-        let default = SolverSettings::resolve(Preset::Draft, &[&parse(&[]).patch()]).unwrap();
-        assert!(!default.per_vertex_small);
-        let flag = parse(&["--per-vertex-small"]).patch();
-        assert!(
-            SolverSettings::resolve(Preset::Draft, &[&flag])
-                .unwrap()
-                .per_vertex_small
-        );
-        let config: SettingsPatch = toml::from_str("per_vertex_small = true").unwrap();
-        assert!(
-            SolverSettings::resolve(Preset::Draft, &[&config])
-                .unwrap()
-                .per_vertex_small
-        );
-    }
-
-    #[test]
     fn site_angle_flag_and_toml_key_reach_the_settings() {
         // 10° unless asked for; 0 turns the sites off; above 30° is refused.
         let default = SolverSettings::resolve(Preset::Draft, &[&parse(&[]).patch()]).unwrap();
@@ -785,62 +704,6 @@ mod tests {
         let wide = parse(&["--site-angle", "45"]).patch();
         let error = SolverSettings::resolve(Preset::Draft, &[&wide]).unwrap_err();
         assert!(error.to_string().contains("site_angle"), "{error}");
-    }
-
-    #[test]
-    fn per_copy_vertices_flag_and_toml_key_reach_the_settings() {
-        // Off unless asked for: a shared smooth vertex receives once by default.
-        let default = SolverSettings::resolve(Preset::Draft, &[&parse(&[]).patch()]).unwrap();
-        assert!(!default.per_copy_vertices);
-        let flag = parse(&["--per-copy-vertices"]).patch();
-        assert!(
-            SolverSettings::resolve(Preset::Draft, &[&flag])
-                .unwrap()
-                .per_copy_vertices
-        );
-        let config: SettingsPatch = toml::from_str("per_copy_vertices = true").unwrap();
-        assert!(
-            SolverSettings::resolve(Preset::Draft, &[&config])
-                .unwrap()
-                .per_copy_vertices
-        );
-    }
-
-    #[test]
-    fn uniform_shooters_flag_and_toml_key_reach_the_settings() {
-        // Off unless asked for: the preset's quadrant shooters stay the default.
-        let default = SolverSettings::resolve(Preset::Medium, &[&parse(&[]).patch()]).unwrap();
-        assert!(!default.uniform_shooters);
-        let flag = parse(&["--uniform-shooters"]).patch();
-        assert_eq!(flag.uniform_shooters, Some(true));
-        assert!(
-            SolverSettings::resolve(Preset::Final, &[&flag])
-                .unwrap()
-                .uniform_shooters
-        );
-        // The scene config's `[solver]` table takes the same key (SettingsPatch's
-        // TOML form), and the flag's absence leaves it alone.
-        let config: SettingsPatch = toml::from_str("uniform_shooters = true").unwrap();
-        let resolved =
-            SolverSettings::resolve(Preset::Draft, &[&config, &parse(&[]).patch()]).unwrap();
-        assert!(resolved.uniform_shooters);
-    }
-
-    #[test]
-    fn interpolated_glossy_splits_flag_and_toml_key_reach_the_settings() {
-        // Off unless asked for: new glossy vertices gather their near patches.
-        let default = SolverSettings::resolve(Preset::Final, &[&parse(&[]).patch()]).unwrap();
-        assert!(!default.interpolated_glossy_splits);
-        let flag = parse(&["--interpolated-glossy-splits"]).patch();
-        assert!(
-            SolverSettings::resolve(Preset::Medium, &[&flag])
-                .unwrap()
-                .interpolated_glossy_splits
-        );
-        let config: SettingsPatch = toml::from_str("interpolated_glossy_splits = true").unwrap();
-        let resolved =
-            SolverSettings::resolve(Preset::Draft, &[&config, &parse(&[]).patch()]).unwrap();
-        assert!(resolved.interpolated_glossy_splits);
     }
 
     #[test]

@@ -213,7 +213,7 @@ impl<'a> NearGather<'a> {
             self.kd,
         );
         let pool = SamplePool::with_sets(&shot, GATHER_POOL_SETS);
-        let quadrants = if self.settings.uniform_shooters {
+        let quadrants = if self.settings.shoots_uniformly() {
             None
         } else {
             let view = ShapeView {
