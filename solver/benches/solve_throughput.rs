@@ -47,18 +47,13 @@ fn main() {
         "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"
     );
     for preset in presets {
-        let mut scene = load_scene(&path, &ImportOptions::default())
+        let scene = load_scene(&path, &ImportOptions::default())
             .expect("config/cornell_box.obj imports")
             .scene;
         let mut settings = SolverSettings::preset(preset);
         settings.max_shots = shots;
         if let Some(samples) = samples {
             settings.samples = samples;
-        }
-        // Size-driven unless the settings chose the flat rule (the solver meshes unset
-        // polygons by `crate::mesh::Sizing`, as `solver solve` does).
-        if settings.patch_size.is_none() {
-            scene.fill_default_patches(settings.patches);
         }
         let cpu_start = process_cpu_seconds();
         let start = Instant::now();

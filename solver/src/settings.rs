@@ -129,27 +129,19 @@ pub struct SolverSettings {
     pub seed: u64,
     /// Worker threads; `None` uses every core. Results do not depend on it.
     pub threads: Option<usize>,
-    /// Flat rule: N × N patches per polygon when the scene does not set it. Used
-    /// only when `patch_size` is `None`.
-    pub patches: u32,
     /// Target patch size as a fraction of the scene's bounding-box diagonal
-    /// (`crate::mesh::sizing`); `None` (an explicit `patches` was given): the
-    /// flat rule.
-    #[serde(default)]
-    pub patch_size: Option<f64>,
+    /// (`crate::mesh::sizing`), for every polygon whose input (a legacy
+    /// geometry file's count, a TOML object's `patches` or `patch_size`) does
+    /// not size it.
+    pub patch_size: f64,
     /// Adaptive subdivision after each shot (Remington 1992, §3.3).
     pub adaptive: bool,
     /// Split an ordinary edge when |ΔL| exceeds this fraction of the local radiance.
     pub edge_threshold: f64,
     /// The same on shadow-boundary edges (tighter).
     pub shadow_threshold: f64,
-    /// Flat rule: smallest element, as a fraction of its polygon's area. Used
-    /// only when `min_element_size` is `None`.
-    pub min_element_area: f64,
-    /// Smallest element's longest edge as a fraction of the scene's diagonal;
-    /// `None` (an explicit `min_element_area` was given): the flat rule.
-    #[serde(default)]
-    pub min_element_size: Option<f64>,
+    /// Smallest element's longest edge as a fraction of the scene's diagonal.
+    pub min_element_size: f64,
     /// Deepest quadtree level below a patch.
     pub max_depth: u32,
     /// Write a checkpoint (and a `partial` solution) every this many shots.
@@ -261,12 +253,10 @@ pub struct SettingsPatch {
     pub max_shots: Option<u64>,
     pub seed: Option<u64>,
     pub threads: Option<usize>,
-    pub patches: Option<u32>,
     pub patch_size: Option<f64>,
     pub adaptive: Option<bool>,
     pub edge_threshold: Option<f64>,
     pub shadow_threshold: Option<f64>,
-    pub min_element_area: Option<f64>,
     pub min_element_size: Option<f64>,
     pub max_depth: Option<u32>,
     pub checkpoint_every: Option<u64>,
@@ -314,13 +304,11 @@ impl SolverSettings {
             max_shots: 20_000,
             seed: 1,
             threads: None,
-            patches: 4,
-            patch_size: None,
+            patch_size: 0.075,
             adaptive: true,
             edge_threshold: 0.3,
             shadow_threshold: 0.1,
-            min_element_area: 5e-5,
-            min_element_size: None,
+            min_element_size: 0.026,
             max_depth: 6,
             checkpoint_every: 500,
             ambient: true,
@@ -378,11 +366,11 @@ impl SolverSettings {
             threshold,
             max_shots,
             seed,
-            patches,
+            patch_size,
             adaptive,
             edge_threshold,
             shadow_threshold,
-            min_element_area,
+            min_element_size,
             max_depth,
             checkpoint_every,
             ambient,
@@ -406,12 +394,6 @@ impl SolverSettings {
         if patch.memory_budget.is_some() {
             self.memory_budget = patch.memory_budget;
         }
-        if patch.patch_size.is_some() {
-            self.patch_size = patch.patch_size;
-        }
-        if patch.min_element_size.is_some() {
-            self.min_element_size = patch.min_element_size;
-        }
     }
 
     /// Whether every patch shoots its mean unshot radiance uniformly: only
@@ -426,11 +408,6 @@ impl SolverSettings {
 
     /// Preset defaults, then each patch from lowest to highest precedence:
     /// `[display_file, scene_config, flags]`.
-    ///
-    /// The flat meshing rules stay selectable: an explicit `patches` in any of
-    /// the patches selects N × N patches per polygon and turns `patch_size` off,
-    /// and an explicit `min_element_area` turns `min_element_size` off, whatever
-    /// the sources of either (the count or the fraction wins when both are set).
     pub fn resolve(
         preset: Preset,
         patches_low_to_high: &[&SettingsPatch],
@@ -438,15 +415,6 @@ impl SolverSettings {
         let mut settings = Self::preset(preset);
         for patch in patches_low_to_high {
             settings.apply(patch);
-        }
-        if patches_low_to_high.iter().any(|p| p.patches.is_some()) {
-            settings.patch_size = None;
-        }
-        if patches_low_to_high
-            .iter()
-            .any(|p| p.min_element_area.is_some())
-        {
-            settings.min_element_size = None;
         }
         settings.validate()?;
         Ok(settings)
@@ -508,12 +476,6 @@ impl SolverSettings {
             "0 to 90 degrees",
         )?;
         check(
-            self.patches >= 1 && self.patches <= 256,
-            "patches",
-            self.patches,
-            "1 to 256",
-        )?;
-        check(
             self.edge_threshold.is_finite() && self.edge_threshold > 0.0,
             "edge_threshold",
             self.edge_threshold,
@@ -525,26 +487,16 @@ impl SolverSettings {
             self.shadow_threshold,
             "> 0",
         )?;
-        check(
-            self.min_element_area.is_finite()
-                && self.min_element_area > 0.0
-                && self.min_element_area <= 1.0,
-            "min_element_area",
-            self.min_element_area,
-            "0 < fraction <= 1",
-        )?;
-        for (name, value) in [
+        for (name, v) in [
             ("patch_size", self.patch_size),
             ("min_element_size", self.min_element_size),
         ] {
-            if let Some(v) = value {
-                check(
-                    v.is_finite() && v > 0.0 && v <= 1.0,
-                    name,
-                    v,
-                    "0 < fraction of the scene diagonal <= 1",
-                )?;
-            }
+            check(
+                v.is_finite() && v > 0.0 && v <= 1.0,
+                name,
+                v,
+                "0 < fraction of the scene diagonal <= 1",
+            )?;
         }
         check(self.max_depth <= 16, "max_depth", self.max_depth, "0 to 16")?;
         check(
@@ -662,61 +614,32 @@ mod tests {
         assert_eq!(s.samples, 9);
         assert_eq!(s.threshold, 0.2);
         assert_eq!(s.seed, 7);
-        assert_eq!(s.patches, SolverSettings::preset(Preset::Draft).patches);
+        assert_eq!(
+            s.patch_size,
+            SolverSettings::preset(Preset::Draft).patch_size
+        );
     }
 
     #[test]
-    fn presets_are_size_driven_and_an_explicit_count_or_fraction_selects_the_flat_rule() {
-        let table: std::collections::BTreeMap<String, SettingsPatch> =
-            toml::from_str(PRESETS_TOML).unwrap();
-        for (name, patch) in &table {
-            // A preset that set the flat knobs would turn size-driven meshing off
-            // for every scene; resolve() only honours them from the other sources.
-            assert!(
-                patch.patches.is_none() && patch.min_element_area.is_none(),
-                "preset {name} sets a flat meshing knob"
-            );
-        }
-        for preset in [Preset::Draft, Preset::Medium, Preset::Final] {
-            let s = SolverSettings::resolve(preset, &[]).unwrap();
-            assert!(s.patch_size.is_some() && s.min_element_size.is_some());
-        }
+    fn finer_presets_mesh_finer_and_flags_override_the_sizes() {
         // Finer presets: patches no larger, elements no larger.
-        let size = |p| SolverSettings::preset(p).patch_size.unwrap();
-        let floor = |p| SolverSettings::preset(p).min_element_size.unwrap();
+        let size = |p| SolverSettings::preset(p).patch_size;
+        let floor = |p| SolverSettings::preset(p).min_element_size;
         assert!(size(Preset::Draft) >= size(Preset::Medium));
         assert!(size(Preset::Medium) >= size(Preset::Final));
         assert!(floor(Preset::Draft) >= floor(Preset::Medium));
         assert!(floor(Preset::Medium) > floor(Preset::Final));
-
-        // An explicit `patches` (here the config's) wins over a `patch_size`
-        // given anywhere, even above it (the flags); likewise the area fraction.
-        let config = SettingsPatch {
-            patches: Some(6),
-            min_element_area: Some(2e-3),
-            ..Default::default()
-        };
+        // A size from the flags replaces the preset's.
         let flags = SettingsPatch {
             patch_size: Some(0.05),
             ..Default::default()
         };
-        let s = SolverSettings::resolve(Preset::Medium, &[&config, &flags]).unwrap();
-        assert_eq!((s.patches, s.patch_size), (6, None));
-        assert_eq!((s.min_element_area, s.min_element_size), (2e-3, None));
-        // Each half is independent: a flat count keeps the absolute floor.
-        let only_count = SettingsPatch {
-            patches: Some(6),
-            ..Default::default()
-        };
-        let s = SolverSettings::resolve(Preset::Medium, &[&only_count]).unwrap();
-        assert_eq!(s.patch_size, None);
-        assert_eq!(
-            s.min_element_size,
-            SolverSettings::preset(Preset::Medium).min_element_size
-        );
-        // A size from the flags replaces the preset's.
         let s = SolverSettings::resolve(Preset::Medium, &[&flags]).unwrap();
-        assert_eq!(s.patch_size, Some(0.05));
+        assert_eq!(s.patch_size, 0.05);
+        // The global flat rule is gone: its keys are unknown in a config.
+        for key in ["patches = 4", "min_element_area = 0.002"] {
+            assert!(toml::from_str::<SettingsPatch>(key).is_err(), "{key}");
+        }
     }
 
     #[test]

@@ -29,16 +29,12 @@ mod emissive_box_scene;
 use emissive_box_scene::{camera, screen_camera, write_lit_screen_scene, write_scene, DARK};
 use solution::camera::Camera;
 
-fn scene(path: &Path, settings: &SolverSettings) -> Scene {
+fn scene(path: &Path) -> Scene {
     let options = ImportOptions {
         units_per_metre: Some(1.0),
         ..Default::default()
     };
-    let mut scene = load_scene(path, &options).unwrap().scene;
-    if settings.patch_size.is_none() {
-        scene.fill_default_patches(settings.patches);
-    }
-    scene
+    load_scene(path, &options).unwrap().scene
 }
 
 fn solve(scene: &Scene, settings: &SolverSettings) -> (Solution, f64) {
@@ -100,9 +96,9 @@ fn path_trace_from(scene: &Scene, spp: u32, camera: fn(u32) -> Camera) -> Image 
 fn a_textured_emitter_matches_the_path_tracer_reading_the_same_texture() {
     let settings = SolverSettings::preset(Preset::Draft);
     let dir = tempfile::tempdir().unwrap();
-    let textured = scene(&write_scene(dir.path(), true), &settings);
+    let textured = scene(&write_scene(dir.path(), true));
     let flat_dir = tempfile::tempdir().unwrap();
-    let flat = scene(&write_scene(flat_dir.path(), false), &settings);
+    let flat = scene(&write_scene(flat_dir.path(), false));
     let screen = textured.materials.iter().find(|m| m.name == "screen");
     assert!(
         screen.unwrap().emission_texture.is_some(),
@@ -203,9 +199,9 @@ fn a_textured_emitter_in_directional_and_cube_modes_matches_the_path_tracer() {
     let mut settings = SolverSettings::preset(Preset::Draft);
     settings.mode = solution::format::SolveMode::Directional;
     let dir = tempfile::tempdir().unwrap();
-    let textured = scene(&write_scene(dir.path(), true), &settings);
+    let textured = scene(&write_scene(dir.path(), true));
     let flat_dir = tempfile::tempdir().unwrap();
-    let flat = scene(&write_scene(flat_dir.path(), false), &settings);
+    let flat = scene(&write_scene(flat_dir.path(), false));
     let truths = Truths::new(&textured, &flat);
 
     let (sh, watts) = solve(&textured, &settings);
@@ -234,7 +230,7 @@ fn a_textured_emitter_round_trips_through_the_solution_file() {
     let mut settings = SolverSettings::preset(Preset::Draft);
     settings.max_shots = 30;
     let dir = tempfile::tempdir().unwrap();
-    let textured = scene(&write_scene(dir.path(), true), &settings);
+    let textured = scene(&write_scene(dir.path(), true));
     let (solution, _) = solve(&textured, &settings);
     let path = dir.path().join("box.sol");
     solution::format::write_solution(&path, &solution).unwrap();
@@ -265,7 +261,7 @@ fn a_screen_with_both_textures_matches_the_path_tracer() {
     let load = |diffuse: bool, emission: bool| {
         let dir = tempfile::tempdir().unwrap();
         let path = write_lit_screen_scene(dir.path(), diffuse, emission);
-        (scene(&path, &settings), dir)
+        (scene(&path), dir)
     };
     let (both, _dir) = load(true, true);
     let screen = both.materials.iter().find(|m| m.name == "screen").unwrap();

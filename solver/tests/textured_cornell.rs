@@ -304,7 +304,7 @@ fn cube_transport_follows_the_texture_per_patch() {
     // image, so its noise moves both alike; the solves and the path tracer
     // are seeded, so the figures are reproducible.
     let mut settings = cube_settings();
-    settings.patch_size = Some(0.075);
+    settings.patch_size = 0.075;
     let dir = tempfile::tempdir().unwrap();
     let scene = two_tone_back_wall(&self::scene(&write_scene(dir.path(), true), &settings));
     let truth = path_trace(&scene, 1024);

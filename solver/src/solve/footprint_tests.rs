@@ -17,7 +17,6 @@ fn settings(adaptive: bool) -> SolverSettings {
     let mut s = SolverSettings::preset(Preset::Draft);
     s.samples = 4;
     s.max_shots = 120;
-    s.patches = 3;
     s.adaptive = adaptive;
     s.shooters = crate::settings::Shooters::Patch;
     s

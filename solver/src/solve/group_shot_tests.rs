@@ -20,7 +20,6 @@ fn settings(shooters: Shooters, adaptive: bool) -> SolverSettings {
     let mut s = SolverSettings::preset(Preset::Draft);
     s.samples = 4;
     s.max_shots = 120;
-    s.patches = 3;
     s.adaptive = adaptive;
     s.shooters = shooters;
     s
@@ -244,8 +243,7 @@ fn the_far_field_cut_keeps_the_members_shots() {
         .unwrap()
         .scene;
     scene.fill_default_patches(PATCHES);
-    let mut s = settings(Shooters::Grouped, false);
-    s.patches = PATCHES;
+    let s = settings(Shooters::Grouped, false);
     let solver = Solver::new(&scene, &s).unwrap();
     let members: Vec<(u32, DVec3)> = (0..solver.mesh.patches.len() as u32)
         .filter(|&p| {

@@ -132,8 +132,6 @@ fn cornell_settings() -> SolverSettings {
     let mut s = SolverSettings::preset(Preset::Draft);
     s.samples = 4;
     s.max_shots = 40;
-    s.patches = 2;
-    s.patch_size = None;
     s
 }
 

@@ -39,8 +39,8 @@ Settings come from four places; a higher one overrides a lower one key by key:
   3. the legacy display file (--display, Remington 1992, appendix A)
   4. the preset (--preset, default medium; config/presets.toml)
 Meshing is size-driven (--patch-size, --min-element-size, fractions of the scene
-diagonal) unless --patches or --min-element-area is set in 1-3: each of those
-selects the flat per-polygon rule for its half and wins whatever its source.
+diagonal); a TOML config's objects and a legacy geometry file may give a polygon
+its own patch count.
 
 No lost work: every --checkpoint-every shots the solver saves OUT.checkpoint and
 rewrites OUT as a valid solution marked partial, which a viewer can watch. Ctrl-C
@@ -335,21 +335,9 @@ pub struct SolveArgs {
             was tessellated (at most 1024 per side, with a warning). Smaller F: more \
             patches to shoot from and receive at, so more time and memory, and less \
             meshing bias in the light the patches shoot. A TOML scene config can set \
-            `patch_size` per object or material, in scene units or metres. An explicit \
-            --patches (or `patches` in the config's [solver]) wins over this."
+            `patch_size` or `patches` per object or material, in scene units or metres."
     )]
     pub patch_size: Option<f64>,
-
-    /// Flat rule: N × N patches per polygon, whatever its size (turns --patch-size off).
-    #[arg(
-        long,
-        value_name = "N",
-        long_help = "The flat rule: N × N patches on every polygon whose input sets \
-            none (1 to 256), whatever its size, as before size-driven meshing. Setting \
-            it here or in a scene config's [solver] table turns --patch-size off; kept \
-            to measure against (tools/sweep uses it)."
-    )]
-    pub patches: Option<u32>,
 
     /// Smallest element's longest edge, as a fraction of the scene's diagonal.
     #[arg(
@@ -361,20 +349,9 @@ pub struct SolveArgs {
             large or small. Smaller F: shadow boundaries and gradients are followed more \
             closely (less meshing bias), at the cost of more elements, vertices, rays \
             and memory. A TOML scene config can set `min_element_size` per object or \
-            material. An explicit --min-element-area wins over this."
+            material."
     )]
     pub min_element_size: Option<f64>,
-
-    /// Flat rule: smallest element as a fraction of its polygon's area (turns --min-element-size off).
-    #[arg(
-        long,
-        value_name = "A",
-        long_help = "The flat rule: adaptive subdivision stops at elements whose area is \
-            at most A × their polygon's area (0 < A <= 1), so every polygon, however \
-            small, may refine as deep. Setting it here or in a scene config's [solver] \
-            table turns --min-element-size off; kept to measure against."
-    )]
-    pub min_element_area: Option<f64>,
 
     /// Scene units per metre (e.g. 1000 for millimetres).
     #[arg(
@@ -546,9 +523,7 @@ impl SolveArgs {
             crease_angle: self.crease_angle,
             memory_budget: self.memory_budget,
             patch_size: self.patch_size,
-            patches: self.patches,
             min_element_size: self.min_element_size,
-            min_element_area: self.min_element_area,
             site_angle: self.site_angle,
             ..SettingsPatch::default()
         }
@@ -658,10 +633,11 @@ mod tests {
         assert_eq!(p.brdf_normalization, Some(BrdfNormalization::Reciprocal));
         assert_eq!(p.patch_size, Some(0.05));
         assert_eq!(p.min_element_size, Some(0.01));
-        assert_eq!(p.patches, None);
-        let flat = parse(&["--patches", "8", "--min-element-area", "0.002"]).patch();
-        assert_eq!(flat.patches, Some(8));
-        assert_eq!(flat.min_element_area, Some(0.002));
+        // The global flat rule is gone.
+        for flag in ["--patches", "--min-element-area"] {
+            let argv = ["solver", "scene.obj", "-o", "out.sol", flag, "4"];
+            assert!(Wrapper::try_parse_from(argv).is_err(), "{flag}");
+        }
     }
 
     #[test]

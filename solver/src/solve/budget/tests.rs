@@ -15,10 +15,9 @@ fn bundled(file: &str, preset: Preset, mode: SolveMode, patches: u32) -> (Scene,
     let mut settings = SolverSettings::preset(preset);
     settings.apply(&loaded.settings);
     settings.mode = mode;
-    settings.patches = patches;
     settings.samples = 2;
     let mut scene = loaded.scene;
-    scene.fill_default_patches(settings.patches);
+    scene.fill_default_patches(patches);
     (scene, settings)
 }
 

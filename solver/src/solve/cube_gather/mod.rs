@@ -169,7 +169,7 @@ pub enum CubeError {
     #[error(
         "the global cube at k = {k} (D = {directions} directions) needs about {bytes} bytes \
          ({}) for {vertices} vertices ({glossy} glossy) and {patches} patches, above the limit \
-         of {limit} bytes ({}); use a smaller --cube-resolution, fewer --patches or --samples, \
+         of {limit} bytes ({}); use a smaller --cube-resolution, a larger --patch-size, fewer --samples, \
          or --directional sh",
         human_bytes(*bytes),
         human_bytes(*limit as u128)
