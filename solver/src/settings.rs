@@ -6,6 +6,7 @@
 //! applies them in order. The presets live in `config/presets.toml`, embedded at
 //! build time so the binary never depends on the working directory.
 
+use crate::method::Method;
 use serde::{Deserialize, Serialize};
 use solution::format::{SolveMode, MAX_SH_ORDER};
 
@@ -33,10 +34,10 @@ impl Preset {
     }
 }
 
-/// How the point-to-source form factor is computed (design notes, "Form factors").
+/// How the point-to-source form factor is computed (design notes, "Form
+/// factors"); chosen by [`Method`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
 #[serde(rename_all = "lowercase")]
-#[derive(clap::ValueEnum)]
 pub enum FormFactorMethod {
     /// Exact unoccluded point-to-polygon factor × visible fraction of the rays.
     #[default]
@@ -82,10 +83,10 @@ pub enum BrdfNormalization {
     Reciprocal,
 }
 
-/// How directional mode stores a glossy vertex's outgoing radiance (`--directional`).
+/// How directional mode stores a glossy vertex's outgoing radiance; chosen
+/// by [`Method`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
 #[serde(rename_all = "lowercase")]
-#[derive(clap::ValueEnum)]
 pub enum DirectionalRepresentation {
     /// Spherical harmonics of an order chosen per material (Remington 1992, ch. 4), shot progressively.
     #[default]
@@ -113,6 +114,11 @@ fn default_hemicube_resolution() -> u32 {
 pub struct SolverSettings {
     pub preset: Preset,
     pub mode: SolveMode,
+    /// The solution method (`crate::method`). Not stored: the file records
+    /// the form factor and the directional representation it implies.
+    #[serde(skip)]
+    pub method: Method,
+    /// The form factor of progressive shots, as `method` implies.
     pub form_factors: FormFactorMethod,
     /// Visibility rays per (receiving vertex, source patch).
     pub samples: u32,
@@ -155,7 +161,8 @@ pub struct SolverSettings {
     /// Normalization of glossy lobes: the thesis's per-incidence one or a reciprocal one.
     #[serde(default)]
     pub brdf_normalization: BrdfNormalization,
-    /// Directional mode's representation: SH (default) or Immel, Cohen and Greenberg's (1986) global cube.
+    /// Directional mode's representation, as `method` implies: SH, or Immel,
+    /// Cohen and Greenberg's (1986) global cube.
     #[serde(default)]
     pub directional: DirectionalRepresentation,
     /// Cells per face edge k of the global cube (D = 6k² directions per vertex).
@@ -245,7 +252,7 @@ fn default_crease_angle() -> f64 {
 #[serde(deny_unknown_fields)]
 pub struct SettingsPatch {
     pub mode: Option<SolveMode>,
-    pub form_factors: Option<FormFactorMethod>,
+    pub method: Option<Method>,
     pub samples: Option<u32>,
     pub hemicube_resolution: Option<u32>,
     pub shadows: Option<bool>,
@@ -264,7 +271,6 @@ pub struct SettingsPatch {
     pub sh_error_target: Option<f64>,
     pub max_sh_order: Option<u32>,
     pub brdf_normalization: Option<BrdfNormalization>,
-    pub directional: Option<DirectionalRepresentation>,
     pub cube_resolution: Option<u32>,
     pub shooters: Option<Shooters>,
     pub group_samples: Option<u32>,
@@ -296,6 +302,7 @@ impl SolverSettings {
         SolverSettings {
             preset: Preset::Medium,
             mode: SolveMode::Diffuse,
+            method: Method::Progressive,
             form_factors: FormFactorMethod::Analytic,
             samples: 16,
             hemicube_resolution: DEFAULT_HEMICUBE_RESOLUTION,
@@ -359,7 +366,6 @@ impl SolverSettings {
         }
         take!(
             mode,
-            form_factors,
             samples,
             hemicube_resolution,
             shadows,
@@ -377,7 +383,6 @@ impl SolverSettings {
             sh_error_target,
             max_sh_order,
             brdf_normalization,
-            directional,
             cube_resolution,
             shooters,
             group_samples,
@@ -388,6 +393,11 @@ impl SolverSettings {
             full_rays_above,
             glossy_edge
         );
+        if let Some(method) = patch.method {
+            self.method = method;
+            self.form_factors = method.form_factors();
+            self.directional = method.directional();
+        }
         if patch.threads.is_some() {
             self.threads = patch.threads;
         }
@@ -437,6 +447,13 @@ impl SolverSettings {
                     expected: expected.into(),
                 })
             }
+        }
+        if let Err(conflict) = self.method.check_mode(self.mode) {
+            return Err(SettingsError {
+                name: "method",
+                value: self.method.name().to_string(),
+                expected: conflict,
+            });
         }
         check(
             self.samples >= 1 && self.samples <= 4096,
@@ -669,6 +686,44 @@ mod tests {
         ] {
             let err = SolverSettings::resolve(Preset::Draft, &[&patch]).unwrap_err();
             assert_eq!(err.name, name);
+        }
+    }
+
+    #[test]
+    fn the_method_sets_its_form_factor_and_representation_and_refuses_a_mode_it_cannot_solve() {
+        use crate::method::Method;
+        let config: SettingsPatch = toml::from_str("method = \"hemicube\"").unwrap();
+        let s = SolverSettings::resolve(Preset::Draft, &[&config]).unwrap();
+        assert_eq!(
+            (s.method, s.form_factors, s.directional),
+            (
+                Method::Hemicube,
+                FormFactorMethod::Hemicube,
+                DirectionalRepresentation::Sh
+            )
+        );
+        let cube = SettingsPatch {
+            method: Some(Method::Cube),
+            mode: Some(SolveMode::Directional),
+            ..Default::default()
+        };
+        let s = SolverSettings::resolve(Preset::Draft, &[&cube]).unwrap();
+        assert_eq!(s.directional, DirectionalRepresentation::Cube);
+        // The issue's example: the mode from the config, the method from the flags.
+        let config = SettingsPatch {
+            mode: Some(SolveMode::Directional),
+            ..Default::default()
+        };
+        let flags = SettingsPatch {
+            method: Some(Method::GaussSeidel),
+            ..Default::default()
+        };
+        let err = SolverSettings::resolve(Preset::Draft, &[&config, &flags]).unwrap_err();
+        assert_eq!((err.name, err.value.as_str()), ("method", "gauss-seidel"));
+        assert!(err.to_string().contains("directional"), "{err}");
+        // The keys the method replaced are gone.
+        for key in ["form_factors = \"hemicube\"", "directional = \"cube\""] {
+            assert!(toml::from_str::<SettingsPatch>(key).is_err(), "{key}");
         }
     }
 

@@ -182,7 +182,7 @@ impl Truths {
 }
 
 /// The same box in directional (SH) mode and on global cubes
-/// (`--directional cube`), which honour the emission texture as the diffuse
+/// (`--method cube`), which honour the emission texture as the diffuse
 /// mode does: each patch emits its texels' mean Le, and the emitter is shown
 /// as a textured batch (factor Ke, "E/π" 1). Every surface has Ks = 0, so
 /// both solve the diffuse problem by their own transport; the bound is each

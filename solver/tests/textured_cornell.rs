@@ -184,7 +184,7 @@ fn textured_cornell_box_matches_the_path_tracer() {
     );
     common::assert_texture_shown("directional", sh.mare, sh_plain.mare, Some(sh_mean.mare));
 
-    // Global cubes (`--directional cube`, all diffuse here) against the same
+    // Global cubes (`--method cube`, all diffuse here) against the same
     // truths, with the same bound: the untextured box's MARE in that method
     // + 0.03. The cube's fixed draft mesh has 4 × 4 patches on the back
     // wall, each covering 2 × 2 squares, so here each patch's ∫ρ equals the
@@ -210,7 +210,7 @@ fn cube_settings() -> SolverSettings {
     settings
 }
 
-/// `scene` solved on global cubes (`solver solve --directional cube`).
+/// `scene` solved on global cubes (`solver solve --method cube`).
 fn solve_cube(scene: &Scene) -> Solution {
     solve_cube_with(scene, &cube_settings())
 }

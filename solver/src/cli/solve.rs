@@ -17,9 +17,10 @@ mod progress;
 mod session;
 mod stats;
 
-pub use args::{SolveArgs, SolverKind, EXIT_INTERRUPTED};
+pub use args::{SolveArgs, EXIT_INTERRUPTED};
 pub use stats::RunStats;
 
+use crate::method::Dispatch;
 use crate::scene::{DisplayParams, ImportOptions, Scene};
 use crate::settings::{SettingsPatch, SolverSettings};
 use crate::solve::{Checkpoint, Solver};
@@ -63,7 +64,13 @@ pub fn run(args: SolveArgs) -> anyhow::Result<ExitCode> {
     // final settings. The scene config's own values are checked as it is read,
     // before its geometry; all are checked again once combined.
     let no_patch = SettingsPatch::default();
-    resolve_settings(&args, &no_patch, &no_patch, &args.patch())?;
+    let mut early = args.patch();
+    if early.mode.is_none() {
+        // The mode may come from the scene config: the method is checked
+        // against it once the config is read, before meshing.
+        early.method = None;
+    }
+    resolve_settings(&args, &no_patch, &no_patch, &early)?;
     let options = ImportOptions {
         strict: args.strict,
         units_per_metre: args.units_per_metre,
@@ -138,14 +145,13 @@ pub fn run(args: SolveArgs) -> anyhow::Result<ExitCode> {
         threads,
         interrupted: &interrupted,
     };
-    let cube = settings.mode == solution::format::SolveMode::Directional
-        && settings.directional == crate::settings::DirectionalRepresentation::Cube;
-    let outcome = match args.solver {
-        _ if cube => pool.install(|| cube_solve(&args, &scene, &settings, threads))?,
-        SolverKind::Progressive => pool.install(|| solve(&args, &scene, &settings, &session))?,
-        SolverKind::GaussSeidel => {
+    // The method was checked against the mode when the settings resolved.
+    let outcome = match settings.method.dispatch() {
+        Dispatch::Progressive => pool.install(|| solve(&args, &scene, &settings, &session))?,
+        Dispatch::GaussSeidel => {
             pool.install(|| gauss_seidel(&args, &scene, &settings, threads))?
         }
+        Dispatch::Cube => pool.install(|| cube_solve(&args, &scene, &settings, threads))?,
     };
     finish(&args, &settings, &checkpoint_path, outcome, scene.camera)
 }
@@ -382,7 +388,7 @@ fn one_call_outcome(solution: solution::format::Solution, stats: RunStats) -> Ou
     }
 }
 
-/// `--solver gauss-seidel`: one call, no checkpoints (nothing to resume).
+/// `--method gauss-seidel`: one call, no checkpoints (nothing to resume).
 fn gauss_seidel(
     args: &SolveArgs,
     scene: &Scene,
@@ -423,7 +429,7 @@ fn gauss_seidel(
     Ok(one_call_outcome(result.solution, stats))
 }
 
-/// `--mode directional --directional cube`: Immel, Cohen and Greenberg's (1986) global cubes gathered by
+/// `--method cube`: Immel, Cohen and Greenberg's (1986) global cubes gathered by
 /// Gauss-Seidel; one call, no checkpoints (nothing to resume).
 fn cube_solve(
     args: &SolveArgs,

@@ -107,7 +107,7 @@ pub enum GaussSeidelError {
     #[error(
         "the Gauss-Seidel solver stores the full n x n form-factor matrix: {patches} patches \
          need {patches}² × {BYTES_PER_FACTOR} = {bytes} bytes ({}), above the limit of {limit} \
-         bytes ({}); use larger patches (--patch-size) or the progressive solver",
+         bytes ({}); use larger patches (--patch-size) or --method progressive",
         human_bytes(*bytes),
         human_bytes(*limit as u128)
     )]

@@ -303,7 +303,7 @@ fn with_flags(mut p: Point, flags: &[&str]) -> Point {
     p
 }
 
-/// The flag that sets the global cube's D (`--directional cube
+/// The flag that sets the global cube's D (`--method cube
 /// --cube-resolution k`, D = 6k²), when the solver has one.
 fn cube_flag(help: &str) -> Option<&'static str> {
     [
@@ -376,17 +376,14 @@ pub fn points(scene: &SceneSpec, quick: bool, has_cube: bool, help: &str) -> Vec
                     vec![("threshold", f(t))],
                 ));
             }
-            for m in ["analytic", "wallace", "hemicube"] {
-                out.push(point("form_factors", m, vec![("form_factors", s(m))]));
+            for m in ["progressive", "wallace", "hemicube"] {
+                out.push(point("form_factors", m, vec![("method", s(m))]));
             }
             for r in [16, 32, 64, 128, 256] {
                 out.push(point(
                     "hemicube",
                     format!("hemicube R={r}"),
-                    vec![
-                        ("form_factors", s("hemicube")),
-                        ("hemicube_resolution", i(r)),
-                    ],
+                    vec![("method", s("hemicube")), ("hemicube_resolution", i(r))],
                 ));
             }
             // The radiosity lecture notes' full-matrix gather: no adaptive meshing, so the patches are
@@ -398,7 +395,7 @@ pub fn points(scene: &SceneSpec, quick: bool, has_cube: bool, help: &str) -> Vec
                         format!("GS patches={n} R={r}"),
                         vec![("patch_size", per_side(n)), ("hemicube_resolution", i(r))],
                     ),
-                    &["--solver", "gauss-seidel"],
+                    &["--method", "gauss-seidel"],
                 ));
             }
             let ladder: [(&str, Ladder); 6] = [
@@ -524,7 +521,7 @@ pub fn points(scene: &SceneSpec, quick: bool, has_cube: bool, help: &str) -> Vec
                             };
                             out.push(with_flags(
                                 point("cube", label, fixed()),
-                                &["--directional", "cube", flag, &d.to_string()],
+                                &["--method", "cube", flag, &d.to_string()],
                             ));
                         }
                         let mut sh = fixed();
@@ -536,7 +533,7 @@ pub fn points(scene: &SceneSpec, quick: bool, has_cube: bool, help: &str) -> Vec
                         ));
                     }
                     None => println!(
-                        "note: --directional is listed but no flag for D was recognised; cube points skipped"
+                        "note: --method cube is listed but no flag for D was recognised; cube points skipped"
                     ),
                 }
             }

@@ -13,20 +13,9 @@ pub(crate) fn solve_mode_parser() -> impl clap::builder::TypedValueParser<Value 
         }
     })
 }
-use crate::settings::{
-    BrdfNormalization, DirectionalRepresentation, FormFactorMethod, Preset, SettingsPatch, Shooters,
-};
+use crate::method::Method;
+use crate::settings::{BrdfNormalization, Preset, SettingsPatch, Shooters};
 use std::path::PathBuf;
-
-/// Which solver `--solver` runs.
-#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq, Default)]
-pub enum SolverKind {
-    /// Progressive refinement (Remington 1992, §3.7).
-    #[default]
-    Progressive,
-    /// The full matrix solved by Gauss-Seidel (radiosity lecture notes, Immel, Cohen and Greenberg 1986).
-    GaussSeidel,
-}
 
 /// Exit code of a solve stopped by Ctrl-C after saving its checkpoint (128 + SIGINT,
 /// as shells report an interrupted program).
@@ -139,21 +128,6 @@ pub struct SolveArgs {
     )]
     pub no_shadows: bool,
 
-    /// Point-to-source form factor: analytic (default), wallace or hemicube.
-    #[arg(
-        long,
-        value_enum,
-        value_name = "METHOD",
-        long_help = "How the point-to-source form factor is computed. analytic \
-            (default): the exact point-to-polygon factor times the visible fraction of \
-            the rays; correct near the source and in corners. wallace: Remington 1992, eq. 3.1's \
-            disc approximation per sample, slightly cheaper, dark near shared edges \
-            (kept to measure against). hemicube: the exact factor times the visibility \
-            read from a hemicube on the shooting patch's centre (radiosity lecture notes), no rays; hard \
-            shadows as seen from the source's centre (directional mode uses analytic)."
-    )]
-    pub form_factors: Option<FormFactorMethod>,
-
     /// Visibility rays in proportion to what a shot adds, below this fraction of a receiver's light.
     #[arg(
         long,
@@ -242,27 +216,27 @@ pub struct SolveArgs {
         long,
         value_name = "R",
         long_help = "Cells per side of a hemicube's top face (even, 2 to 2048; default \
-            128): 3R² cells in all. Used by --form-factors hemicube and --solver \
+            128): 3R² cells in all. Used by --method hemicube and --method \
             gauss-seidel. The error of a hemicube factor falls like 1/R where polygon \
             edges line up with the cells and faster otherwise; time grows like R²."
     )]
     pub hemicube_resolution: Option<u32>,
 
-    /// progressive (default) or gauss-seidel.
+    /// progressive (default), or a seed baseline: hemicube, wallace, gauss-seidel, cube.
     #[arg(
         long,
         value_enum,
-        value_name = "SOLVER",
-        default_value_t = SolverKind::Progressive,
-        long_help = "progressive (default): progressive refinement, shooting the \
-            brightest patch each step, with adaptive meshing, checkpoints and --resume. \
-            gauss-seidel: the radiosity lecture notes' full matrix B = E + ρFB with form factors from a \
-            hemicube on each receiving patch, solved by Gauss-Seidel sweeps; no \
-            adaptive meshing, checkpoints or --resume; refused when the n × n f32 \
-            matrix would exceed 2 GiB (about 23 000 patches). A baseline to measure \
-            the progressive solver against."
+        value_name = "METHOD",
+        long_help = "The solution method. progressive (default): progressive refinement \
+            with the exact form factor, adaptive meshing, checkpoints and --resume, in \
+            either mode. The seed papers' baselines, kept to measure against: hemicube \
+            and wallace (progressive refinement with a hemicube's visibility or \
+            Wallace's disc factor) and gauss-seidel (the full form-factor matrix) solve \
+            diffuse mode only; cube (Immel, Cohen and Greenberg's global cube) solves \
+            directional mode only. A method that cannot solve the mode is refused \
+            before any work (docs/accuracy.md compares them)."
     )]
-    pub solver: SolverKind,
+    pub method: Option<Method>,
 
     /// diffuse (default) or directional (glossy, spherical harmonics).
     #[arg(
@@ -290,31 +264,11 @@ pub struct SolveArgs {
     )]
     pub brdf_normalization: Option<BrdfNormalization>,
 
-    /// Directional representation: sh (default) or cube (Immel, Cohen and Greenberg's (1986) global cube).
-    #[arg(
-        long,
-        value_enum,
-        value_name = "REPR",
-        long_help = "How --mode directional stores glossy radiance. sh (default): \
-            spherical harmonics of an order chosen per material, shot progressively with \
-            adaptive meshing. cube: Immel, Cohen and Greenberg's (1986) global cube, radiance on D = 6k² directions \
-            per glossy vertex (k = --cube-resolution), gathered by Gauss-Seidel sweeps in \
-            light-propagation order on the fixed patch mesh (no adaptive meshing, \
-            checkpoints or --resume); the BRDF is evaluated exactly at each direction, \
-            with no Legendre truncation or ringing. Diffuse textures (map_Kd): both \
-            integrate them per patch (each patch reflects its own texels); sh shows \
-            every textured surface textured, cube shows diffuse ones textured and \
-            glossy ones with the texture averaged around each vertex, since a cube \
-            batch cannot be textured (warned; docs/textures.md). Only meaningful with \
-            --mode directional."
-    )]
-    pub directional: Option<DirectionalRepresentation>,
-
     /// Global-cube cells per face edge k (2 to 256): D = 6k² directions.
     #[arg(
         long,
         value_name = "K",
-        long_help = "Cells per cube face edge for --directional cube (2 to 256; default \
+        long_help = "Cells per cube face edge for --method cube (2 to 256; default \
             8): D = 6k² directions per glossy vertex. Memory and time grow like k² \
             (values) to k⁴ (each glossy material's direction-to-direction BRDF matrix \
             and the reflection per sweep); in return highlights are sharper and placed \
@@ -502,9 +456,8 @@ impl SolveArgs {
         SettingsPatch {
             mode: self.mode,
             brdf_normalization: self.brdf_normalization,
-            directional: self.directional,
             cube_resolution: self.cube_resolution,
-            form_factors: self.form_factors,
+            method: self.method,
             full_rays_above: self.full_rays_above,
             glossy_edge: self.glossy_edge,
             shooters: self.shooters,
@@ -608,7 +561,7 @@ mod tests {
             "--no-shadows",
             "--no-ambient",
             "--strict",
-            "--form-factors",
+            "--method",
             "wallace",
             "--mode",
             "directional",
@@ -627,7 +580,7 @@ mod tests {
         assert_eq!(p.shadows, Some(false));
         assert_eq!(p.ambient, Some(false));
         assert_eq!(p.strict, Some(true));
-        assert_eq!(p.form_factors, Some(FormFactorMethod::Wallace));
+        assert_eq!(p.method, Some(Method::Wallace));
         assert_eq!(p.mode, Some(SolveMode::Directional));
         assert_eq!(p.threads, Some(3));
         assert_eq!(p.brdf_normalization, Some(BrdfNormalization::Reciprocal));

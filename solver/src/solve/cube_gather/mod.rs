@@ -170,7 +170,7 @@ pub enum CubeError {
         "the global cube at k = {k} (D = {directions} directions) needs about {bytes} bytes \
          ({}) for {vertices} vertices ({glossy} glossy) and {patches} patches, above the limit \
          of {limit} bytes ({}); use a smaller --cube-resolution, a larger --patch-size, fewer --samples, \
-         or --directional sh",
+         or --method progressive",
         human_bytes(*bytes),
         human_bytes(*limit as u128)
     )]
@@ -400,8 +400,10 @@ pub fn solve_cube(
 ) -> Result<CubeResult, CubeError> {
     check_inputs(settings, limits)?;
     let k = settings.cube_resolution;
+    // The patches and the diffuse transport are the progressive solver's.
     let mut base = settings.clone();
     base.mode = SolveMode::Diffuse;
+    base.method = crate::method::Method::Progressive;
     base.adaptive = false;
     let solver = Solver::new(scene, &base)?;
     let mesh = solver.mesh();
