@@ -437,15 +437,11 @@ fn cube_solve(
     settings: &SolverSettings,
     threads: usize,
 ) -> anyhow::Result<Outcome> {
-    use crate::solve::cube_gather::CubeLimits;
-    use crate::solve::cube_textured::solve_cube_textured;
+    use crate::solve::cube_gather::{solve_cube, CubeLimits};
     refuse_resume(args, "global-cube solve")?;
-    let (result, warnings) = solve_cube_textured(scene, settings, &CubeLimits::default())
+    let result = solve_cube(scene, settings, &CubeLimits::default())
         .map_err(plain)
         .with_context(|| format!("solving {} on global cubes", args.scene.display()))?;
-    for warning in &warnings {
-        eprintln!("solver: warning: {warning}");
-    }
     eprintln!(
         "solver: global cube k = {} (D = {}): {:.1} MiB, transport {:.2} s, {} sweeps {:.2} s, \
          last change {:.1e}, γ = {:.3}, error bound {:.1e} (power {:.1e}){}",

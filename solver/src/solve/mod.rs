@@ -55,7 +55,6 @@ pub mod budget;
 mod checkpoint;
 pub mod cluster;
 pub mod cube_gather;
-pub mod cube_textured;
 pub mod directional;
 pub mod enclosure;
 pub mod gauss_seidel;
