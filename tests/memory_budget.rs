@@ -209,12 +209,12 @@ fn a_scene_too_large_for_its_budget_is_refused_before_allocating() {
             "directional",
             "--preset",
             "medium",
-            // The flat rule at medium's former 8 per side: each of the sphere's
-            // small triangles gets 64 patches, an unrefined mesh that cannot
-            // fit. (The size-driven rule keeps each as one patch, and the
-            // same scene then fits in 40 MiB at L = 3.)
-            "--patches",
-            "8",
+            // Patches of 0.002 of the diagonal (2 mm): each of the sphere's small
+            // triangles (18 mm) gets ten a side, an unrefined mesh that cannot
+            // fit. (Medium's own size keeps each as one patch, and the same
+            // scene then fits in 40 MiB at L = 3.)
+            "--patch-size",
+            "0.002",
             "--memory-budget",
             "40MiB",
         ],

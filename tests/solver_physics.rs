@@ -43,12 +43,13 @@ fn meshing_refines_along_shadow_boundaries_and_leaves_smooth_light_coarse() {
     settings.max_shots = 30;
     // The meshing this test's thresholds were derived from (the medium preset
     // before docs/tradeoffs.md re-chose it): 4×4 patches per wall, refinement
-    // down to 5e-5 of a polygon in at most 6 levels.
-    settings.patches = 4;
+    // in at most 6 levels (a size floor of 0.5 mm, below a wall's sixth
+    // level, 2.2 mm, so the depth decides, as the area floor 5e-5 of a
+    // polygon these thresholds were first derived with let it).
+    let patches = 4;
     settings.edge_threshold = 0.3;
     settings.shadow_threshold = 0.1;
-    settings.min_element_area = 5e-5;
-    settings.min_element_size = None; // the flat area floor these thresholds assume
+    settings.min_element_size = 0.5 / 960.0;
     settings.max_depth = 6;
     // Whole receivers: the floor as one surface of 4×4 patches, as these
     // thresholds assume (cutting it along the blocks' bases, `mesh::contact`,
@@ -59,7 +60,7 @@ fn meshing_refines_along_shadow_boundaries_and_leaves_smooth_light_coarse() {
     // convergence either shooter refines the open back wall one level
     // deeper than asserted below (the interreflected light varies there).
     settings.shooters = Shooters::Patch;
-    scene.fill_default_patches(settings.patches);
+    scene.fill_default_patches(patches);
     let mut solver = Solver::new(&scene, &settings).unwrap();
     while solver.step().is_some() {}
     let mesh = solver.mesh();
@@ -79,8 +80,7 @@ fn meshing_refines_along_shadow_boundaries_and_leaves_smooth_light_coarse() {
         .find(|p| scene.materials[p.material].is_emitter())
         .unwrap();
     let occluder = Occluder::from_polygons(&scene.polygons);
-    let patch_area =
-        |s: usize| mesh.surfaces[s].area / (settings.patches * settings.patches) as f64;
+    let patch_area = |s: usize| mesh.surfaces[s].area / (patches * patches) as f64;
 
     // Leaves of a surface with their centroid in original coordinates (mm).
     let leaves = |s: usize| {

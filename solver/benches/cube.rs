@@ -24,18 +24,13 @@ fn main() {
     let mut settings = SolverSettings::preset(Preset::Medium);
     settings.apply(&loaded.settings);
     settings.directional = DirectionalRepresentation::Cube;
-    let mut scene = loaded.scene;
-    // Size-driven unless the settings chose the flat rule (the solver meshes unset
-    // polygons by `crate::mesh::Sizing`, as `solver solve` does).
-    if settings.patch_size.is_none() {
-        scene.fill_default_patches(settings.patches);
-    }
+    let scene = loaded.scene;
     let eye = DVec3::from_array(scene.camera.expect("the config names a camera").eye);
     let limits = CubeLimits::default();
     let threads = rayon::current_num_threads();
     println!(
-        "## Global cube: glossy_floor.toml, medium preset ({} patches/side, {} samples), {threads} threads",
-        settings.patches, settings.samples
+        "## Global cube: glossy_floor.toml, medium preset (patch size {} of the diagonal, {} samples), {threads} threads",
+        settings.patch_size, settings.samples
     );
     let mut runs: Vec<(u32, CubeResult, f64, usize)> = Vec::new();
     for k in [2u32, 4, 8, 16, 32] {

@@ -47,10 +47,9 @@ fn cornell(patches: u32) -> Scene {
     scene
 }
 
-fn settings(patches: u32) -> SolverSettings {
+/// The scenes give every polygon its patch count.
+fn settings() -> SolverSettings {
     let mut s = SolverSettings::preset(Preset::Draft);
-    s.patches = patches;
-    s.patch_size = None;
     s.adaptive = false;
     s.ambient = false;
     s.threshold = 1e-3;
@@ -67,7 +66,7 @@ fn is_emitter(scene: &Scene, solver: &Solver, surface: usize) -> bool {
 
 fn form_factors(scene: &Scene) {
     println!("## Form factors: vertex factors from one source patch, 4 x 4 patches");
-    let base = settings(4);
+    let base = settings();
     let probe = Solver::new(scene, &base).expect("the box solves");
     let mesh = probe.mesh();
     // The light's patch nearest its centre, and the back wall's central patch
@@ -221,7 +220,7 @@ fn reference_means() -> Vec<f64> {
         return v;
     }
     let scene = cornell(8);
-    let mut s = settings(8);
+    let mut s = settings();
     s.samples = 32;
     s.threshold = 2e-4;
     s.seed = 99;
@@ -261,7 +260,7 @@ fn solvers() {
         (6, FormFactorMethod::Hemicube, 1, 256),
     ] {
         let scene = cornell(patches);
-        let mut s = settings(patches);
+        let mut s = settings();
         s.form_factors = method;
         s.samples = samples;
         s.hemicube_resolution = r;
@@ -286,7 +285,7 @@ fn solvers() {
     }
     for (patches, r) in [(3, 64), (6, 64), (6, 128), (8, 128), (12, 128)] {
         let scene = cornell(patches);
-        let mut s = settings(patches);
+        let mut s = settings();
         s.hemicube_resolution = r;
         let limits = GaussSeidelLimits {
             tolerance: 1e-6,

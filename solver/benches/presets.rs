@@ -59,15 +59,9 @@ struct Run {
 }
 
 fn solve(scene: &Scene, settings: &SolverSettings) -> Run {
-    let mut scene = scene.clone();
-    // Size-driven unless the settings chose the flat rule (the solver meshes unset
-    // polygons by `crate::mesh::Sizing`, as `solver solve` does).
-    if settings.patch_size.is_none() {
-        scene.fill_default_patches(settings.patches);
-    }
     let start = Instant::now();
     let cpu_start = cpu_seconds();
-    let mut solver = Solver::new(&scene, settings).expect("the Cornell box solves");
+    let mut solver = Solver::new(scene, settings).expect("the Cornell box solves");
     while solver.step().is_some() {}
     let seconds = start.elapsed().as_secs_f64();
     let cpu_seconds = cpu_seconds() - cpu_start;

@@ -48,18 +48,13 @@ fn main() {
         "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"
     );
     for preset in presets {
-        let mut scene = load_scene(&path, &ImportOptions::default())
+        let scene = load_scene(&path, &ImportOptions::default())
             .expect("config/cornell_box.obj imports")
             .scene;
         let mut settings = SolverSettings::preset(preset);
         settings.max_shots = shots;
         if let Some(samples) = samples {
             settings.samples = samples;
-        }
-        // Size-driven unless the settings chose the flat rule (the solver meshes unset
-        // polygons by `crate::mesh::Sizing`, as `solver solve` does).
-        if settings.patch_size.is_none() {
-            scene.fill_default_patches(settings.patches);
         }
         // The solve runs on one rayon worker while the main thread sleeps, so
         // the live threads' CPU time is the solve's own: unlike the wall time

@@ -59,12 +59,7 @@ struct Point {
 
 /// Solves the scene to convergence (or the preset's shot cap), as `solver solve`.
 fn solve(scene: &Scene, settings: &SolverSettings) -> Solution {
-    let mut scene = scene.clone();
-    // Size-driven unless the settings chose the flat rule (the solver meshes unset
-    // polygons by `crate::mesh::Sizing`, as `solver solve` does).
-    if settings.patch_size.is_none() {
-        scene.fill_default_patches(settings.patches);
-    }
+    let scene = scene.clone();
     let mut solver = Solver::new(&scene, settings).expect("the Cornell box solves");
     while solver.step().is_some() {}
     solver.to_solution(false)

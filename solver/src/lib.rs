@@ -32,6 +32,7 @@ pub mod compare;
 pub mod export;
 pub mod geometry;
 pub mod mesh;
+pub mod method;
 pub mod reference;
 pub mod scene;
 pub mod settings;

@@ -6,6 +6,7 @@
 //! applies them in order. The presets live in `config/presets.toml`, embedded at
 //! build time so the binary never depends on the working directory.
 
+use crate::method::Method;
 use serde::{Deserialize, Serialize};
 use solution::format::{SolveMode, MAX_SH_ORDER};
 
@@ -33,10 +34,10 @@ impl Preset {
     }
 }
 
-/// How the point-to-source form factor is computed (design notes, "Form factors").
+/// How the point-to-source form factor is computed (design notes, "Form
+/// factors"); chosen by [`Method`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
 #[serde(rename_all = "lowercase")]
-#[derive(clap::ValueEnum)]
 pub enum FormFactorMethod {
     /// Exact unoccluded point-to-polygon factor × visible fraction of the rays.
     #[default]
@@ -46,18 +47,6 @@ pub enum FormFactorMethod {
     /// The exact unoccluded factor × visibility read from a hemicube item
     /// buffer on the shooting patch (radiosity lecture notes; `hemicube_resolution`).
     Hemicube,
-}
-
-/// Which receivers a shot visits ray by ray (`--shooting`; `solve/cluster.rs`).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
-#[serde(rename_all = "lowercase")]
-#[derive(clap::ValueEnum)]
-pub enum Shooting {
-    /// Every vertex, every shot: Remington's (1992) flat progressive refinement.
-    #[default]
-    Flat,
-    /// Only surfaces the shot can change by more than `shooting_tolerance`; the rest get a bounded estimate, no rays.
-    Bounded,
 }
 
 /// What shoots in one pass (`--shooters`; `solve/group_shot.rs`).
@@ -81,15 +70,6 @@ fn default_group_samples() -> u32 {
     DEFAULT_GROUP_SAMPLES
 }
 
-/// Default of `shooting_tolerance`: the largest that kept the Cornell box's
-/// medium-preset MARE within 0.15 points of flat shooting's (1e-3 cost 2.5
-/// points); `docs/benchmarks.md`, "Bounded shooting".
-pub const DEFAULT_SHOOTING_TOLERANCE: f64 = 1e-4;
-
-fn default_shooting_tolerance() -> f64 {
-    DEFAULT_SHOOTING_TOLERANCE
-}
-
 /// How a glossy lobe is normalized (design notes, "Directional mode"; see
 /// `crate::brdf::Normalization` for the measured difference).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
@@ -103,10 +83,10 @@ pub enum BrdfNormalization {
     Reciprocal,
 }
 
-/// How directional mode stores a glossy vertex's outgoing radiance (`--directional`).
+/// How directional mode stores a glossy vertex's outgoing radiance; chosen
+/// by [`Method`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
 #[serde(rename_all = "lowercase")]
-#[derive(clap::ValueEnum)]
 pub enum DirectionalRepresentation {
     /// Spherical harmonics of an order chosen per material (Remington 1992, ch. 4), shot progressively.
     #[default]
@@ -134,6 +114,11 @@ fn default_hemicube_resolution() -> u32 {
 pub struct SolverSettings {
     pub preset: Preset,
     pub mode: SolveMode,
+    /// The solution method (`crate::method`). Not stored: the file records
+    /// the form factor and the directional representation it implies.
+    #[serde(skip)]
+    pub method: Method,
+    /// The form factor of progressive shots, as `method` implies.
     pub form_factors: FormFactorMethod,
     /// Visibility rays per (receiving vertex, source patch).
     pub samples: u32,
@@ -150,27 +135,19 @@ pub struct SolverSettings {
     pub seed: u64,
     /// Worker threads; `None` uses every core. Results do not depend on it.
     pub threads: Option<usize>,
-    /// Flat rule: N × N patches per polygon when the scene does not set it. Used
-    /// only when `patch_size` is `None`.
-    pub patches: u32,
     /// Target patch size as a fraction of the scene's bounding-box diagonal
-    /// (`crate::mesh::sizing`); `None` (an explicit `patches` was given): the
-    /// flat rule.
-    #[serde(default)]
-    pub patch_size: Option<f64>,
+    /// (`crate::mesh::sizing`), for every polygon whose input (a legacy
+    /// geometry file's count, a TOML object's `patches` or `patch_size`) does
+    /// not size it.
+    pub patch_size: f64,
     /// Adaptive subdivision after each shot (Remington 1992, §3.3).
     pub adaptive: bool,
     /// Split an ordinary edge when |ΔL| exceeds this fraction of the local radiance.
     pub edge_threshold: f64,
     /// The same on shadow-boundary edges (tighter).
     pub shadow_threshold: f64,
-    /// Flat rule: smallest element, as a fraction of its polygon's area. Used
-    /// only when `min_element_size` is `None`.
-    pub min_element_area: f64,
-    /// Smallest element's longest edge as a fraction of the scene's diagonal;
-    /// `None` (an explicit `min_element_area` was given): the flat rule.
-    #[serde(default)]
-    pub min_element_size: Option<f64>,
+    /// Smallest element's longest edge as a fraction of the scene's diagonal.
+    pub min_element_size: f64,
     /// Deepest quadtree level below a patch.
     pub max_depth: u32,
     /// Write a checkpoint (and a `partial` solution) every this many shots.
@@ -184,18 +161,13 @@ pub struct SolverSettings {
     /// Normalization of glossy lobes: the thesis's per-incidence one or a reciprocal one.
     #[serde(default)]
     pub brdf_normalization: BrdfNormalization,
-    /// Directional mode's representation: SH (default) or Immel, Cohen and Greenberg's (1986) global cube.
+    /// Directional mode's representation, as `method` implies: SH, or Immel,
+    /// Cohen and Greenberg's (1986) global cube.
     #[serde(default)]
     pub directional: DirectionalRepresentation,
     /// Cells per face edge k of the global cube (D = 6k² directions per vertex).
     #[serde(default = "default_cube_resolution")]
     pub cube_resolution: u32,
-    /// Which receivers a shot visits ray by ray: all (flat) or those it can change visibly (bounded).
-    #[serde(default)]
-    pub shooting: Shooting,
-    /// Bounded shooting skips a surface whose bound on a shot's ΔL is below this fraction of the scene's radiance level.
-    #[serde(default = "default_shooting_tolerance")]
-    pub shooting_tolerance: f64,
     /// One patch per shot, or groups of nearby reflecting patches shot together.
     #[serde(default)]
     pub shooters: Shooters,
@@ -225,31 +197,13 @@ pub struct SolverSettings {
     /// stored, like `memory_budget`.
     #[serde(skip)]
     pub resident_before_meshing: Option<u64>,
-    /// Shoot every patch's mean unshot radiance uniformly, as Remington 1992
-    /// does, instead of from the quadrants of an unevenly lit patch
-    /// (`solve::regions`). Off by default; directional shots read it too (each
-    /// source sample weighted by its quadrant); the cube gather always shoots
-    /// uniformly.
-    #[serde(default)]
+    /// Tests only, not a setting: shoot every patch's mean unshot radiance
+    /// uniformly (Remington 1992), as the global cube gathers it, instead of
+    /// from the quadrants of an unevenly lit patch (`solve::regions`), so
+    /// that a test can hold two methods to the same linear system.
+    #[cfg(test)]
+    #[serde(skip)]
     pub uniform_shooters: bool,
-    /// Give a split's new glossy vertex the light of earlier, unrecorded
-    /// shots as its parents' average, as Remington 1992 does, instead of
-    /// gathering its near patches' shot light again
-    /// (`solve::directional::near_gather`). Off by default; for measuring
-    /// what the gather changes.
-    #[serde(default)]
-    pub interpolated_glossy_splits: bool,
-    /// Receive a shot at every vertex of a small flat surface (one patch
-    /// already at its smallest element size) instead of once at its centroid
-    /// for all its vertices (`solve::small`). Off by default; for measuring
-    /// what the single sample changes.
-    #[serde(default)]
-    pub per_vertex_small: bool,
-    /// Receive a shot at every polygon's copy of a smooth surface's shared
-    /// vertex instead of once per point (`solve::twins`). Off by default;
-    /// for measuring what the single sample changes.
-    #[serde(default)]
-    pub per_copy_vertices: bool,
     /// The points of a finely tessellated smooth surface receive at sites
     /// spread so that each point has one within its smallest element size
     /// and within this many degrees of its shading normal, and take a
@@ -298,7 +252,7 @@ fn default_crease_angle() -> f64 {
 #[serde(deny_unknown_fields)]
 pub struct SettingsPatch {
     pub mode: Option<SolveMode>,
-    pub form_factors: Option<FormFactorMethod>,
+    pub method: Option<Method>,
     pub samples: Option<u32>,
     pub hemicube_resolution: Option<u32>,
     pub shadows: Option<bool>,
@@ -306,12 +260,10 @@ pub struct SettingsPatch {
     pub max_shots: Option<u64>,
     pub seed: Option<u64>,
     pub threads: Option<usize>,
-    pub patches: Option<u32>,
     pub patch_size: Option<f64>,
     pub adaptive: Option<bool>,
     pub edge_threshold: Option<f64>,
     pub shadow_threshold: Option<f64>,
-    pub min_element_area: Option<f64>,
     pub min_element_size: Option<f64>,
     pub max_depth: Option<u32>,
     pub checkpoint_every: Option<u64>,
@@ -319,10 +271,7 @@ pub struct SettingsPatch {
     pub sh_error_target: Option<f64>,
     pub max_sh_order: Option<u32>,
     pub brdf_normalization: Option<BrdfNormalization>,
-    pub directional: Option<DirectionalRepresentation>,
     pub cube_resolution: Option<u32>,
-    pub shooting: Option<Shooting>,
-    pub shooting_tolerance: Option<f64>,
     pub shooters: Option<Shooters>,
     pub group_samples: Option<u32>,
     pub units_per_metre: Option<f64>,
@@ -330,14 +279,6 @@ pub struct SettingsPatch {
     pub crease_angle: Option<f64>,
     /// Bytes.
     pub memory_budget: Option<u64>,
-    /// `true` shoots every patch's mean unshot radiance uniformly (`solve::regions`).
-    pub uniform_shooters: Option<bool>,
-    /// `true` interpolates split glossy vertices (`solve::directional::near_gather`).
-    pub interpolated_glossy_splits: Option<bool>,
-    /// `true` receives at every vertex of a small flat surface (`solve::small`).
-    pub per_vertex_small: Option<bool>,
-    /// `true` receives at every copy of a smooth surface's shared vertex (`solve::twins`).
-    pub per_copy_vertices: Option<bool>,
     /// Degrees; 0: every point of a smooth surface receives (`solve::sites`).
     pub site_angle: Option<f64>,
     /// Fraction of a receiver's level above which a shot traces every ray (`solve::ray_share`).
@@ -361,6 +302,7 @@ impl SolverSettings {
         SolverSettings {
             preset: Preset::Medium,
             mode: SolveMode::Diffuse,
+            method: Method::Progressive,
             form_factors: FormFactorMethod::Analytic,
             samples: 16,
             hemicube_resolution: DEFAULT_HEMICUBE_RESOLUTION,
@@ -369,13 +311,11 @@ impl SolverSettings {
             max_shots: 20_000,
             seed: 1,
             threads: None,
-            patches: 4,
-            patch_size: None,
+            patch_size: 0.075,
             adaptive: true,
             edge_threshold: 0.3,
             shadow_threshold: 0.1,
-            min_element_area: 5e-5,
-            min_element_size: None,
+            min_element_size: 0.026,
             max_depth: 6,
             checkpoint_every: 500,
             ambient: true,
@@ -384,8 +324,6 @@ impl SolverSettings {
             brdf_normalization: BrdfNormalization::Thesis,
             directional: DirectionalRepresentation::Sh,
             cube_resolution: DEFAULT_CUBE_RESOLUTION,
-            shooting: Shooting::Flat,
-            shooting_tolerance: DEFAULT_SHOOTING_TOLERANCE,
             shooters: Shooters::Patch,
             group_samples: DEFAULT_GROUP_SAMPLES,
             units_per_metre: 1.0,
@@ -393,10 +331,8 @@ impl SolverSettings {
             crease_angle: default_crease_angle(),
             memory_budget: None,
             resident_before_meshing: None,
+            #[cfg(test)]
             uniform_shooters: false,
-            interpolated_glossy_splits: false,
-            per_vertex_small: false,
-            per_copy_vertices: false,
             site_angle: DEFAULT_SITE_ANGLE,
             whole_receivers: false,
             full_rays_above: 0.0,
@@ -430,62 +366,58 @@ impl SolverSettings {
         }
         take!(
             mode,
-            form_factors,
             samples,
             hemicube_resolution,
             shadows,
             threshold,
             max_shots,
             seed,
-            patches,
+            patch_size,
             adaptive,
             edge_threshold,
             shadow_threshold,
-            min_element_area,
+            min_element_size,
             max_depth,
             checkpoint_every,
             ambient,
             sh_error_target,
             max_sh_order,
             brdf_normalization,
-            directional,
             cube_resolution,
-            shooting,
-            shooting_tolerance,
             shooters,
             group_samples,
             units_per_metre,
             strict,
             crease_angle,
-            uniform_shooters,
-            interpolated_glossy_splits,
-            per_vertex_small,
-            per_copy_vertices,
             site_angle,
             full_rays_above,
             glossy_edge
         );
+        if let Some(method) = patch.method {
+            self.method = method;
+            self.form_factors = method.form_factors();
+            self.directional = method.directional();
+        }
         if patch.threads.is_some() {
             self.threads = patch.threads;
         }
         if patch.memory_budget.is_some() {
             self.memory_budget = patch.memory_budget;
         }
-        if patch.patch_size.is_some() {
-            self.patch_size = patch.patch_size;
-        }
-        if patch.min_element_size.is_some() {
-            self.min_element_size = patch.min_element_size;
-        }
+    }
+
+    /// Whether every patch shoots its mean unshot radiance uniformly: only
+    /// when a test asks (`uniform_shooters`); emitters' recorded shots always
+    /// do.
+    pub(crate) fn shoots_uniformly(&self) -> bool {
+        #[cfg(test)]
+        return self.uniform_shooters;
+        #[cfg(not(test))]
+        false
     }
 
     /// Preset defaults, then each patch from lowest to highest precedence:
     /// `[display_file, scene_config, flags]`.
-    ///
-    /// The flat meshing rules stay selectable: an explicit `patches` in any of
-    /// the patches selects N × N patches per polygon and turns `patch_size` off,
-    /// and an explicit `min_element_area` turns `min_element_size` off, whatever
-    /// the sources of either (the count or the fraction wins when both are set).
     pub fn resolve(
         preset: Preset,
         patches_low_to_high: &[&SettingsPatch],
@@ -493,15 +425,6 @@ impl SolverSettings {
         let mut settings = Self::preset(preset);
         for patch in patches_low_to_high {
             settings.apply(patch);
-        }
-        if patches_low_to_high.iter().any(|p| p.patches.is_some()) {
-            settings.patch_size = None;
-        }
-        if patches_low_to_high
-            .iter()
-            .any(|p| p.min_element_area.is_some())
-        {
-            settings.min_element_size = None;
         }
         settings.validate()?;
         Ok(settings)
@@ -524,6 +447,13 @@ impl SolverSettings {
                     expected: expected.into(),
                 })
             }
+        }
+        if let Err(conflict) = self.method.check_mode(self.mode) {
+            return Err(SettingsError {
+                name: "method",
+                value: self.method.name().to_string(),
+                expected: conflict,
+            });
         }
         check(
             self.samples >= 1 && self.samples <= 4096,
@@ -563,12 +493,6 @@ impl SolverSettings {
             "0 to 90 degrees",
         )?;
         check(
-            self.patches >= 1 && self.patches <= 256,
-            "patches",
-            self.patches,
-            "1 to 256",
-        )?;
-        check(
             self.edge_threshold.is_finite() && self.edge_threshold > 0.0,
             "edge_threshold",
             self.edge_threshold,
@@ -580,26 +504,16 @@ impl SolverSettings {
             self.shadow_threshold,
             "> 0",
         )?;
-        check(
-            self.min_element_area.is_finite()
-                && self.min_element_area > 0.0
-                && self.min_element_area <= 1.0,
-            "min_element_area",
-            self.min_element_area,
-            "0 < fraction <= 1",
-        )?;
-        for (name, value) in [
+        for (name, v) in [
             ("patch_size", self.patch_size),
             ("min_element_size", self.min_element_size),
         ] {
-            if let Some(v) = value {
-                check(
-                    v.is_finite() && v > 0.0 && v <= 1.0,
-                    name,
-                    v,
-                    "0 < fraction of the scene diagonal <= 1",
-                )?;
-            }
+            check(
+                v.is_finite() && v > 0.0 && v <= 1.0,
+                name,
+                v,
+                "0 < fraction of the scene diagonal <= 1",
+            )?;
         }
         check(self.max_depth <= 16, "max_depth", self.max_depth, "0 to 16")?;
         check(
@@ -628,14 +542,6 @@ impl SolverSettings {
             "cube_resolution",
             self.cube_resolution,
             "2 to 256 cells per cube face edge",
-        )?;
-        check(
-            self.shooting_tolerance.is_finite()
-                && self.shooting_tolerance >= 0.0
-                && self.shooting_tolerance <= 1.0,
-            "shooting_tolerance",
-            self.shooting_tolerance,
-            "0 to 1 (a fraction of the scene's radiance level; 0 visits every receiver)",
         )?;
         check(
             self.full_rays_above.is_finite()
@@ -725,61 +631,32 @@ mod tests {
         assert_eq!(s.samples, 9);
         assert_eq!(s.threshold, 0.2);
         assert_eq!(s.seed, 7);
-        assert_eq!(s.patches, SolverSettings::preset(Preset::Draft).patches);
+        assert_eq!(
+            s.patch_size,
+            SolverSettings::preset(Preset::Draft).patch_size
+        );
     }
 
     #[test]
-    fn presets_are_size_driven_and_an_explicit_count_or_fraction_selects_the_flat_rule() {
-        let table: std::collections::BTreeMap<String, SettingsPatch> =
-            toml::from_str(PRESETS_TOML).unwrap();
-        for (name, patch) in &table {
-            // A preset that set the flat knobs would turn size-driven meshing off
-            // for every scene; resolve() only honours them from the other sources.
-            assert!(
-                patch.patches.is_none() && patch.min_element_area.is_none(),
-                "preset {name} sets a flat meshing knob"
-            );
-        }
-        for preset in [Preset::Draft, Preset::Medium, Preset::Final] {
-            let s = SolverSettings::resolve(preset, &[]).unwrap();
-            assert!(s.patch_size.is_some() && s.min_element_size.is_some());
-        }
+    fn finer_presets_mesh_finer_and_flags_override_the_sizes() {
         // Finer presets: patches no larger, elements no larger.
-        let size = |p| SolverSettings::preset(p).patch_size.unwrap();
-        let floor = |p| SolverSettings::preset(p).min_element_size.unwrap();
+        let size = |p| SolverSettings::preset(p).patch_size;
+        let floor = |p| SolverSettings::preset(p).min_element_size;
         assert!(size(Preset::Draft) >= size(Preset::Medium));
         assert!(size(Preset::Medium) >= size(Preset::Final));
         assert!(floor(Preset::Draft) >= floor(Preset::Medium));
         assert!(floor(Preset::Medium) > floor(Preset::Final));
-
-        // An explicit `patches` (here the config's) wins over a `patch_size`
-        // given anywhere, even above it (the flags); likewise the area fraction.
-        let config = SettingsPatch {
-            patches: Some(6),
-            min_element_area: Some(2e-3),
-            ..Default::default()
-        };
+        // A size from the flags replaces the preset's.
         let flags = SettingsPatch {
             patch_size: Some(0.05),
             ..Default::default()
         };
-        let s = SolverSettings::resolve(Preset::Medium, &[&config, &flags]).unwrap();
-        assert_eq!((s.patches, s.patch_size), (6, None));
-        assert_eq!((s.min_element_area, s.min_element_size), (2e-3, None));
-        // Each half is independent: a flat count keeps the absolute floor.
-        let only_count = SettingsPatch {
-            patches: Some(6),
-            ..Default::default()
-        };
-        let s = SolverSettings::resolve(Preset::Medium, &[&only_count]).unwrap();
-        assert_eq!(s.patch_size, None);
-        assert_eq!(
-            s.min_element_size,
-            SolverSettings::preset(Preset::Medium).min_element_size
-        );
-        // A size from the flags replaces the preset's.
         let s = SolverSettings::resolve(Preset::Medium, &[&flags]).unwrap();
-        assert_eq!(s.patch_size, Some(0.05));
+        assert_eq!(s.patch_size, 0.05);
+        // The global flat rule is gone: its keys are unknown in a config.
+        for key in ["patches = 4", "min_element_area = 0.002"] {
+            assert!(toml::from_str::<SettingsPatch>(key).is_err(), "{key}");
+        }
     }
 
     #[test]
@@ -809,6 +686,44 @@ mod tests {
         ] {
             let err = SolverSettings::resolve(Preset::Draft, &[&patch]).unwrap_err();
             assert_eq!(err.name, name);
+        }
+    }
+
+    #[test]
+    fn the_method_sets_its_form_factor_and_representation_and_refuses_a_mode_it_cannot_solve() {
+        use crate::method::Method;
+        let config: SettingsPatch = toml::from_str("method = \"hemicube\"").unwrap();
+        let s = SolverSettings::resolve(Preset::Draft, &[&config]).unwrap();
+        assert_eq!(
+            (s.method, s.form_factors, s.directional),
+            (
+                Method::Hemicube,
+                FormFactorMethod::Hemicube,
+                DirectionalRepresentation::Sh
+            )
+        );
+        let cube = SettingsPatch {
+            method: Some(Method::Cube),
+            mode: Some(SolveMode::Directional),
+            ..Default::default()
+        };
+        let s = SolverSettings::resolve(Preset::Draft, &[&cube]).unwrap();
+        assert_eq!(s.directional, DirectionalRepresentation::Cube);
+        // The issue's example: the mode from the config, the method from the flags.
+        let config = SettingsPatch {
+            mode: Some(SolveMode::Directional),
+            ..Default::default()
+        };
+        let flags = SettingsPatch {
+            method: Some(Method::GaussSeidel),
+            ..Default::default()
+        };
+        let err = SolverSettings::resolve(Preset::Draft, &[&config, &flags]).unwrap_err();
+        assert_eq!((err.name, err.value.as_str()), ("method", "gauss-seidel"));
+        assert!(err.to_string().contains("directional"), "{err}");
+        // The keys the method replaced are gone.
+        for key in ["form_factors = \"hemicube\"", "directional = \"cube\""] {
+            assert!(toml::from_str::<SettingsPatch>(key).is_err(), "{key}");
         }
     }
 

@@ -1,4 +1,4 @@
-//! `solver solve --mode directional --directional cube` end to end: flags
+//! `solver solve --mode directional --method cube` end to end: flags
 //! parsed, the global-cube solve run, a valid solution with a cube batch
 //! written; bad resolutions and over-large cubes refused with clear messages.
 
@@ -31,9 +31,9 @@ fn solve(out: &PathBuf, extra: &[&str]) -> Output {
 
 #[test]
 fn directional_cube_writes_a_cube_batch_for_the_glossy_floor() {
-    // The scene config sets mode = directional; --directional cube picks Immel, Cohen and Greenberg's (1986) cubes.
+    // The scene config sets mode = directional; --method cube picks Immel, Cohen and Greenberg's (1986) cubes.
     let out = scratch("k4.sol");
-    let run = solve(&out, &["--directional", "cube", "--cube-resolution", "4"]);
+    let run = solve(&out, &["--method", "cube", "--cube-resolution", "4"]);
     let stderr = String::from_utf8_lossy(&run.stderr);
     assert!(run.status.success(), "{stderr}");
     assert!(stderr.contains("global cube k = 4 (D = 96)"), "{stderr}");
@@ -63,7 +63,7 @@ fn directional_cube_writes_a_cube_batch_for_the_glossy_floor() {
 #[test]
 fn bad_and_oversized_cubes_are_refused() {
     let out = scratch("bad.sol");
-    let run = solve(&out, &["--directional", "cube", "--cube-resolution", "1"]);
+    let run = solve(&out, &["--method", "cube", "--cube-resolution", "1"]);
     let stderr = String::from_utf8_lossy(&run.stderr);
     assert!(!run.status.success());
     assert!(
@@ -71,7 +71,7 @@ fn bad_and_oversized_cubes_are_refused() {
         "{stderr}"
     );
     // k = 256 would need hundreds of GiB: refused before allocating.
-    let run = solve(&out, &["--directional", "cube", "--cube-resolution", "256"]);
+    let run = solve(&out, &["--method", "cube", "--cube-resolution", "256"]);
     let stderr = String::from_utf8_lossy(&run.stderr);
     assert!(!run.status.success());
     assert!(
@@ -88,7 +88,7 @@ fn help_says_what_the_cube_resolution_trades() {
         .output()
         .unwrap();
     let help = String::from_utf8_lossy(&run.stdout);
-    assert!(help.contains("--directional") && help.contains("--cube-resolution"));
+    assert!(help.contains("--method") && help.contains("--cube-resolution"));
     assert!(
         help.contains("D = 6k²") && help.contains("highlights"),
         "{help}"

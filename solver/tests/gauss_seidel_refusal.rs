@@ -116,11 +116,9 @@ fn facing_pair(outline: &[[f64; 2]]) -> Vec<Vec<DVec3>> {
     vec![low, high]
 }
 
-fn settings(patches: u32) -> SolverSettings {
+/// The scenes below give every polygon its patch count.
+fn settings() -> SolverSettings {
     let mut s = SolverSettings::preset(Preset::Draft);
-    s.patches = patches;
-    // The flat rule: `patches` per polygon, as the counts below assume.
-    s.patch_size = None;
     s.hemicube_resolution = 16;
     s
 }
@@ -142,7 +140,7 @@ fn a_huge_scene_is_refused_before_meshing_with_almost_no_allocation() {
         facing_pair(&[[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]]),
         256,
     );
-    let (settings, limits) = (settings(256), GaussSeidelLimits::default());
+    let (settings, limits) = (settings(), GaussSeidelLimits::default());
     let (result, largest, total) = tracked(|| solve_gauss_seidel(&s, &settings, &limits));
     match result {
         Err(GaussSeidelError::MatrixTooLarge { patches, bytes, .. }) => {
@@ -172,7 +170,7 @@ fn the_exact_count_after_meshing_refuses_before_the_matrix_is_allocated() {
         max_matrix_bytes: 2_000_000,
         ..Default::default()
     };
-    let settings = settings(16);
+    let settings = settings();
     let (result, largest, _) = tracked(|| solve_gauss_seidel(&s, &settings, &limits));
     match result {
         Err(GaussSeidelError::MatrixTooLarge {

@@ -1,4 +1,4 @@
-//! `solver solve --solver gauss-seidel` and `--form-factors hemicube` end to end:
+//! `solver solve --method gauss-seidel` and `--method hemicube` end to end:
 //! flags parsed, the solve run, a valid solution file written.
 
 use solution::format::{read_solution, Representation};
@@ -43,7 +43,7 @@ fn mean_coefficient(path: &Path) -> f64 {
 fn gauss_seidel_and_hemicube_flags_solve_the_cornell_box() {
     let gs = scratch("gs.sol");
     let status = Command::new(env!("CARGO_BIN_EXE_solver"))
-        .args(["solve", "--preset", "draft", "--solver", "gauss-seidel"])
+        .args(["solve", "--preset", "draft", "--method", "gauss-seidel"])
         .args(["--hemicube-resolution", "32", "--threads", "2"])
         .arg(cornell())
         .arg("-o")
@@ -65,7 +65,7 @@ fn gauss_seidel_and_hemicube_flags_solve_the_cornell_box() {
 
     let hc = scratch("hc.sol");
     let status = Command::new(env!("CARGO_BIN_EXE_solver"))
-        .args(["solve", "--preset", "draft", "--form-factors", "hemicube"])
+        .args(["solve", "--preset", "draft", "--method", "hemicube"])
         .args(["--hemicube-resolution", "64", "--threads", "2"])
         .arg(cornell())
         .arg("-o")
@@ -96,17 +96,66 @@ fn bad_method_flags_are_refused_with_their_names() {
             .output()
             .unwrap()
     };
-    let odd = run(&["--solver", "gauss-seidel", "--hemicube-resolution", "33"]);
+    let odd = run(&["--method", "gauss-seidel", "--hemicube-resolution", "33"]);
     let stderr = String::from_utf8_lossy(&odd.stderr);
     assert_eq!(odd.status.code(), Some(1), "{stderr}");
     assert!(
         stderr.contains("--hemicube-resolution") && stderr.contains("33"),
         "{stderr}"
     );
-    let unknown = run(&["--solver", "jacobi"]);
+    let unknown = run(&["--method", "jacobi"]);
     assert_eq!(unknown.status.code(), Some(2));
-    let resume = run(&["--solver", "gauss-seidel", "--resume"]);
+    let resume = run(&["--method", "gauss-seidel", "--resume"]);
     let stderr = String::from_utf8_lossy(&resume.stderr);
     assert_ne!(resume.status.code(), Some(0), "{stderr}");
     assert!(!out.exists());
+}
+
+/// A method that cannot solve the mode is refused before any work, naming
+/// the method and the mode (Gauss–Seidel in directional mode used to run the
+/// global cube silently).
+#[test]
+fn a_method_that_cannot_solve_the_mode_is_refused_naming_both() {
+    let out = scratch("refused.sol");
+    let run = |args: &[&str]| {
+        Command::new(env!("CARGO_BIN_EXE_solver"))
+            .args(["solve", "--preset", "draft"])
+            .args(args)
+            .arg(cornell())
+            .arg("-o")
+            .arg(&out)
+            .output()
+            .unwrap()
+    };
+    for (args, method, mode) in [
+        (
+            &["--method", "gauss-seidel", "--mode", "directional"][..],
+            "gauss-seidel",
+            "directional",
+        ),
+        (
+            &["--method", "hemicube", "--mode", "directional"][..],
+            "hemicube",
+            "directional",
+        ),
+        (
+            &["--method", "wallace", "--mode", "directional"][..],
+            "wallace",
+            "directional",
+        ),
+        // The Cornell box's config sets diffuse mode.
+        (&["--method", "cube"][..], "cube", "diffuse"),
+    ] {
+        let result = run(args);
+        let stderr = String::from_utf8_lossy(&result.stderr);
+        assert_eq!(result.status.code(), Some(1), "{args:?}: {stderr}");
+        assert!(
+            stderr.contains(&format!("--method {method} solves"))
+                && stderr.contains(&format!("the mode is {mode}")),
+            "{args:?}: {stderr}"
+        );
+        // Refused before any work: nothing was meshed or written.
+        assert!(!stderr.contains("memory budget"), "{stderr}");
+        assert!(!out.exists());
+    }
 }

@@ -323,7 +323,7 @@ fn help_explains_every_flag() {
         "--seed",
         "--threads",
         "--no-shadows",
-        "--form-factors",
+        "--method",
         "--mode",
         "--units-per-metre",
         "--strict",

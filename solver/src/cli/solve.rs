@@ -17,9 +17,10 @@ mod progress;
 mod session;
 mod stats;
 
-pub use args::{SolveArgs, SolverKind, EXIT_INTERRUPTED};
+pub use args::{SolveArgs, EXIT_INTERRUPTED};
 pub use stats::RunStats;
 
+use crate::method::Dispatch;
 use crate::scene::{DisplayParams, ImportOptions, Scene};
 use crate::settings::{SettingsPatch, SolverSettings};
 use crate::solve::{Checkpoint, Solver};
@@ -63,7 +64,13 @@ pub fn run(args: SolveArgs) -> anyhow::Result<ExitCode> {
     // final settings. The scene config's own values are checked as it is read,
     // before its geometry; all are checked again once combined.
     let no_patch = SettingsPatch::default();
-    resolve_settings(&args, &no_patch, &no_patch, &args.patch())?;
+    let mut early = args.patch();
+    if early.mode.is_none() {
+        // The mode may come from the scene config: the method is checked
+        // against it once the config is read, before meshing.
+        early.method = None;
+    }
+    resolve_settings(&args, &no_patch, &no_patch, &early)?;
     let options = ImportOptions {
         strict: args.strict,
         units_per_metre: args.units_per_metre,
@@ -83,9 +90,6 @@ pub fn run(args: SolveArgs) -> anyhow::Result<ExitCode> {
         .map(|d| d.settings.clone())
         .unwrap_or_default();
     let mut settings = resolve_settings(&args, &display_patch, &loaded.settings, &args.patch())?;
-    if settings.patch_size.is_none() {
-        scene.fill_default_patches(settings.patches);
-    }
     warn_clamped_patches(&scene, &settings);
     apply_smoothing(&mut scene, settings.crease_angle);
     // The import's text and parse tables are freed; give their pages back
@@ -141,14 +145,13 @@ pub fn run(args: SolveArgs) -> anyhow::Result<ExitCode> {
         threads,
         interrupted: &interrupted,
     };
-    let cube = settings.mode == solution::format::SolveMode::Directional
-        && settings.directional == crate::settings::DirectionalRepresentation::Cube;
-    let outcome = match args.solver {
-        _ if cube => pool.install(|| cube_solve(&args, &scene, &settings, threads))?,
-        SolverKind::Progressive => pool.install(|| solve(&args, &scene, &settings, &session))?,
-        SolverKind::GaussSeidel => {
+    // The method was checked against the mode when the settings resolved.
+    let outcome = match settings.method.dispatch() {
+        Dispatch::Progressive => pool.install(|| solve(&args, &scene, &settings, &session))?,
+        Dispatch::GaussSeidel => {
             pool.install(|| gauss_seidel(&args, &scene, &settings, threads))?
         }
+        Dispatch::Cube => pool.install(|| cube_solve(&args, &scene, &settings, threads))?,
     };
     finish(&args, &settings, &checkpoint_path, outcome, scene.camera)
 }
@@ -343,14 +346,14 @@ fn solve(
         if small > 0 {
             eprintln!(
                 "solver: {small} small flat surfaces (one patch within the smallest element) \
-                 receive once per shot, at their centroid (--per-vertex-small: at every vertex)"
+                 receive once per shot, at their centroid"
             );
         }
         let copies = solver.twin_copy_count();
         if copies > 0 {
             eprintln!(
                 "solver: {copies} vertices copy a coincident vertex of their smooth surface \
-                 and take its sample (--per-copy-vertices: each receives on its own)"
+                 and take its sample"
             );
         }
         let (interpolated, sites) = solver.site_counts();
@@ -386,7 +389,7 @@ fn one_call_outcome(solution: solution::format::Solution, stats: RunStats) -> Ou
     }
 }
 
-/// `--solver gauss-seidel`: one call, no checkpoints (nothing to resume).
+/// `--method gauss-seidel`: one call, no checkpoints (nothing to resume).
 fn gauss_seidel(
     args: &SolveArgs,
     scene: &Scene,
@@ -427,7 +430,7 @@ fn gauss_seidel(
     Ok(one_call_outcome(result.solution, stats))
 }
 
-/// `--mode directional --directional cube`: Immel, Cohen and Greenberg's (1986) global cubes gathered by
+/// `--method cube`: Immel, Cohen and Greenberg's (1986) global cubes gathered by
 /// Gauss-Seidel; one call, no checkpoints (nothing to resume).
 fn cube_solve(
     args: &SolveArgs,
@@ -435,15 +438,11 @@ fn cube_solve(
     settings: &SolverSettings,
     threads: usize,
 ) -> anyhow::Result<Outcome> {
-    use crate::solve::cube_gather::CubeLimits;
-    use crate::solve::cube_textured::solve_cube_textured;
+    use crate::solve::cube_gather::{solve_cube, CubeLimits};
     refuse_resume(args, "global-cube solve")?;
-    let (result, warnings) = solve_cube_textured(scene, settings, &CubeLimits::default())
+    let result = solve_cube(scene, settings, &CubeLimits::default())
         .map_err(plain)
         .with_context(|| format!("solving {} on global cubes", args.scene.display()))?;
-    for warning in &warnings {
-        eprintln!("solver: warning: {warning}");
-    }
     eprintln!(
         "solver: global cube k = {} (D = {}): {:.1} MiB, transport {:.2} s, {} sweeps {:.2} s, \
          last change {:.1e}, γ = {:.3}, error bound {:.1e} (power {:.1e}){}",

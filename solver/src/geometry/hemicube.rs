@@ -49,7 +49,7 @@
 //! edge-on) are skipped.
 //!
 //! The same buffer answers visibility for shooting (the solver's
-//! `--form-factors hemicube`): [`ItemBuffer::segment_visible`] takes the
+//! `--method hemicube`): [`ItemBuffer::segment_visible`] takes the
 //! polygons the cells around a point's direction hold as candidate occluders
 //! and tests each exactly against the segment to the point, as Haines and
 //! Greenberg's light buffer does (1986).

@@ -24,7 +24,7 @@ use glam::DVec3;
 /// How a polygon whose input sets no patch count gets one.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum PatchRule {
-    /// N × N patches whatever the polygon's size (the flat rule, `patches`).
+    /// N × N patches whatever the polygon's size ([`Sizing::flat`]).
     PerPolygon(u32),
     /// N = ⌈longest edge / size⌉, `size` in scene units.
     Size(f64),
@@ -52,17 +52,12 @@ impl Sizing {
         }
     }
 
-    /// The sizes `settings` ask for, scaled by `scene`'s diagonal. An explicit
-    /// `patches` or `min_element_area` has already turned the matching fraction
-    /// off ([`SolverSettings::resolve`]).
+    /// The sizes `settings` ask for, scaled by `scene`'s diagonal.
     pub fn from_settings(settings: &SolverSettings, scene: &Scene) -> Self {
         let diagonal = scene_diagonal(scene);
         Sizing {
-            patches: match settings.patch_size {
-                Some(f) => PatchRule::Size(f * diagonal),
-                None => PatchRule::PerPolygon(settings.patches.max(1)),
-            },
-            min_element_size: settings.min_element_size.map(|f| f * diagonal),
+            patches: PatchRule::Size(settings.patch_size * diagonal),
+            min_element_size: Some(settings.min_element_size * diagonal),
             units_per_metre: scene.units_per_metre,
         }
     }

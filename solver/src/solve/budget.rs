@@ -32,8 +32,7 @@
 //! * **indexes** (diffuse mode, which alone uses them): the footprint's
 //!   per-surface vertex lists (`footprint.rs`: a `u32` per vertex in a list
 //!   per surface, each list's capacity as `Vec::push` grows it, see
-//!   [`list_slots`]), its per-surface marks, and under bounded shooting the
-//!   last shot's visited vertices (at most one `u32` per vertex); the small
+//!   [`list_slots`]) and its per-surface marks; the small
 //!   surfaces' index (`u32` per surface) and receiving points (`small.rs`);
 //!   the table of coincident smooth vertices (`u32` per vertex of the
 //!   unrefined mesh, `twins.rs`); the sites' tables (a `bool` per vertex
@@ -222,9 +221,6 @@ pub struct Counts {
     pub index_slots: u64,
     /// Surfaces with at least one vertex (one heap block each in the index).
     pub index_lists: u64,
-    /// Bounded shooting (`--shooting bounded`), which keeps the last shot's
-    /// visited vertices.
-    pub bounded: bool,
     /// Grouped shooters (`--shooters grouped`), whose shot holds its members
     /// and their tree ([`group_shot_bytes`]).
     pub grouped: bool,
@@ -357,8 +353,8 @@ pub fn unshot_tree_bytes(patches: u64) -> u64 {
 
 /// The indexes of a diffuse solve (see the module documentation): the
 /// footprint's lists (their slots, a heap block and a header each) and its
-/// per-surface mark (`bool`) and touched list (`u32`, by length), bounded
-/// shooting's visited list (at most every vertex), and the unshot tree.
+/// per-surface mark (`bool`) and touched list (`u32`, by length), and the
+/// unshot tree.
 fn index_bytes(c: &Counts) -> u64 {
     if c.directional {
         return 0;
@@ -366,16 +362,11 @@ fn index_bytes(c: &Counts) -> u64 {
     let lists = c.index_slots * size_of::<u32>() as u64
         + c.index_lists * HEAP_BLOCK_OVERHEAD
         + c.surfaces * (size_of::<Vec<u32>>() + size_of::<bool>() + size_of::<u32>()) as u64;
-    let visited = if c.bounded {
-        c.vertices * size_of::<u32>() as u64
-    } else {
-        0
-    };
     let small = super::small::SmallSurfaces::bytes(c.surfaces, small_surfaces(c));
     let twins = super::twins::Twins::bytes(c.twin_table.unwrap_or(c.vertices));
     let (covered, targets, sources) = c.site_tables.unwrap_or_default();
     let sites = super::sites::Sites::bytes(covered, targets, sources);
-    lists + visited + small + twins + sites + unshot_tree_bytes(c.patches)
+    lists + small + twins + sites + unshot_tree_bytes(c.patches)
 }
 
 /// The surfaces that receive once per shot, at most every surface.
@@ -544,7 +535,6 @@ pub fn counts_before_meshing(scene: &Scene, settings: &SolverSettings) -> Counts
     let mut c = Counts {
         samples: settings.samples as u64,
         directional: settings.mode == solution::format::SolveMode::Directional,
-        bounded: settings.shooting == crate::settings::Shooting::Bounded,
         grouped: groups_shots(settings),
         scene_bytes: scene_bytes(scene),
         chooses_view: scene.camera.is_none(),
@@ -639,7 +629,6 @@ pub fn counts_for_mesh(
         directional,
         index_slots: per_surface_vertices.iter().map(|&n| list_slots(n)).sum(),
         index_lists: per_surface_vertices.iter().filter(|&&n| n > 0).count() as u64,
-        bounded: settings.shooting == crate::settings::Shooting::Bounded,
         grouped: groups_shots(settings),
         resident_before_meshing: settings.resident_before_meshing.unwrap_or(0),
         ..Counts::default()
@@ -768,14 +757,13 @@ pub fn group_shot_bytes(candidates: u64) -> u64 {
 /// SH, charged at their persistent size plus their share of the largest
 /// transient, a doubling vertex table and, in diffuse mode, a doubling
 /// footprint list (two `u32` slots a vertex).
-pub fn split_cost(coefficients: u64, directional: bool, bounded: bool) -> u64 {
+pub fn split_cost(coefficients: u64, directional: bool) -> u64 {
     let delta = Counts {
         elements: 4,
         vertices: 5,
         splits: 1,
         weight_entries: 10,
         directional,
-        bounded,
         vertex_coefficients: if directional { 5 * coefficients } else { 0 },
         ..Counts::default()
     };
@@ -863,7 +851,6 @@ impl Solver {
             directional: false,
             texture_bytes: self.texture_bytes(),
             scene_bytes: self.scene_bytes,
-            bounded: self.settings.shooting == crate::settings::Shooting::Bounded,
             grouped: groups_shots(&self.settings),
             group_candidates: self.group_candidates,
             small_surfaces: Some(self.small.len() as u64),
@@ -917,7 +904,7 @@ impl Solver {
         let cost = (0..self.mesh.surfaces.len())
             .map(|s| {
                 let values = directional.map_or(0, |d| d.vertex_values(s));
-                split_cost(values, directional.is_some(), counts.bounded)
+                split_cost(values, directional.is_some())
             })
             .collect();
         // The vertex table grows by doubling, all at once: plan as if this

@@ -829,7 +829,7 @@ impl Solver {
         let tables = Tables::new(d, &self.mesh);
         // Recorded (emitter) shots stay uniform: refinement replays them from
         // the patch's mean alone (as in `Solver::step`).
-        let quadrants = if recorded || self.settings.uniform_shooters {
+        let quadrants = if recorded || self.settings.shoots_uniformly() {
             None
         } else {
             quadrant_scale(self.shape_view(), source, &shot)
@@ -924,11 +924,7 @@ impl Solver {
                         settings: &self.settings,
                         occluder: &self.occluder,
                         kd: &self.kd,
-                        reach: if self.settings.interpolated_glossy_splits {
-                            0.0
-                        } else {
-                            near_gather::NEAR_REACH
-                        },
+                        reach: near_gather::NEAR_REACH,
                     },
                 },
                 // The diffuse step's criteria (see `Solver::step`).

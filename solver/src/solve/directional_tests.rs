@@ -12,9 +12,8 @@ fn glossy_floor() -> (Scene, SolverSettings) {
     let mut settings = SolverSettings::preset(Preset::Draft);
     settings.apply(&loaded.settings);
     settings.samples = 2;
-    settings.patches = 2;
     let mut scene = loaded.scene;
-    scene.fill_default_patches(settings.patches);
+    scene.fill_default_patches(2);
     (scene, settings)
 }
 
@@ -719,8 +718,9 @@ fn glossy_elements_stop_at_the_alpha_floor() {
     // Depth 5 would allow floor edges of 1.5 m / 2⁵ = 0.047 m, a third of the
     // floor's h_min (0.14 m), so the α floor is what stops the floor.
     settings.max_depth = 5;
-    settings.min_element_area = 1e-6;
-    settings.min_element_size = None; // the flat area floor, so the α floor decides
+    // A size floor far below the α floor (a millimetre or so), so the α
+    // floor decides.
+    settings.min_element_size = 1e-3;
     settings.edge_threshold = 0.05;
     let solver = run(&scene, &settings);
     let mesh = solver.mesh();

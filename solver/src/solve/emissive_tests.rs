@@ -1,7 +1,7 @@
 //! Emission textures (`textured.rs`): each patch of a `map_Ke` emitter
 //! shoots its mean Le, the texture's exact integral over it, in the diffuse
-//! solve, in directional (SH) mode (`directional/textured.rs`) and in the
-//! global-cube method (`cube_gather/emission.rs`, `cube_textured.rs`).
+//! solve and in directional (SH) mode (`directional/textured.rs`); the
+//! global-cube method refuses them (`cube_gather`).
 
 use super::tests::{material, scene_of};
 use super::*;
@@ -171,15 +171,6 @@ fn directional() -> SolverSettings {
     s
 }
 
-/// Settings for the global-cube method at k = 2 (the screen and floor are
-/// diffuse, so no cube is stored and k only sizes the memory estimate).
-fn cube() -> SolverSettings {
-    let mut s = directional();
-    s.directional = crate::settings::DirectionalRepresentation::Cube;
-    s.cube_resolution = 2;
-    s
-}
-
 #[test]
 fn directional_mode_shoots_each_patchs_texel_mean_and_emits_pi_times_the_integral() {
     // As the diffuse test above, in SH: Ke 3 × (grey 128 | white), 3 × 3
@@ -240,70 +231,6 @@ fn an_emitters_display_in_directional_mode_carries_le_of_uv_and_its_reflected_li
         solver.step();
     }
     assert_emitter_display(&solver.to_solution(false));
-}
-
-#[test]
-fn the_global_cube_emits_each_patchs_texel_mean() {
-    // Ke 3 × (grey 128 | white) on 2 × 2 patches, Kd 0 (it reflects
-    // nothing), over a Kd 0.5 floor, on global cubes. The emitted power must
-    // be π ∫ Le dA (1e-9 relative, as above). And the transport must use it:
-    // nothing is between the screen and the floor and the screen reflects
-    // nothing, so each floor vertex's radiance is 0.5 · Σ_p F_p m_p with F_p
-    // the exact point-to-patch factor at its receiving point and m_p the
-    // patch's mean. The patches' edges lie on the texture's edge, so that is
-    // 0.5 · E/π of the two halves (grey and white) computed exactly
-    // ([`irradiance`]), to rounding: 1e-9 relative is asserted. The flat Ke,
-    // or the surface's mean Le on every patch, misses it by far more (the
-    // halves differ 4.6×).
-    let g = f64::from(crate::texture::srgb_to_linear(128));
-    let mut screen = material("screen", 0.0, 3.0);
-    screen.emission_texture = Some(halves(128, 255));
-    let scene = screen_over_floor(screen, 1.0, 2);
-    let limits = super::cube_gather::CubeLimits::default();
-    let (result, warnings) =
-        super::cube_textured::solve_cube_textured(&scene, &cube(), &limits).unwrap();
-    assert!(warnings.is_empty(), "{warnings:?}");
-    let want = 3.0 * PI * 3.0 * (g + 1.0) / 2.0;
-    let got = result.emitted_power;
-    assert!((got - want).abs() <= 1e-9 * want, "{got} vs {want}");
-    let half = |x0: f64| {
-        let c = DVec3::new(x0, 1.0, -0.5);
-        vec![
-            c,
-            c + DVec3::X * 0.5,
-            c + DVec3::new(0.5, 0.0, 1.0),
-            c + DVec3::Z,
-        ]
-    };
-    let regions = [(half(-0.5), 3.0 * g), (half(0.0), 3.0)];
-    let mut floor = 0;
-    for v in 0..result.vertex_count() {
-        let x = result.receiving_points[v] + result.offset;
-        if x.y > 0.5 {
-            continue;
-        }
-        floor += 1;
-        let truth = 0.5 * irradiance(x, &regions) / PI;
-        let ours = result.radiance_toward(v as u32, DVec3::Y);
-        assert!(
-            (ours - DVec3::splat(truth)).abs().max_element() <= 1e-9 * truth,
-            "{x}: {ours} vs {truth}"
-        );
-    }
-    assert!(floor >= 4, "{floor} floor vertices");
-}
-
-#[test]
-fn an_emitters_display_on_global_cubes_carries_le_of_uv_and_its_reflected_light() {
-    // The diffuse mode's batch convention, as a textured order-0 batch.
-    let mut screen = material("screen", 0.5, 3.0);
-    screen.emission_texture = Some(halves(128, 255));
-    let scene = screen_over_floor(screen, 1.0, 2);
-    let limits = super::cube_gather::CubeLimits::default();
-    let (result, warnings) =
-        super::cube_textured::solve_cube_textured(&scene, &cube(), &limits).unwrap();
-    assert!(warnings.is_empty(), "{warnings:?}");
-    assert_emitter_display(&result.solution);
 }
 
 /// Irradiance at `x` (normal +y) from `screen` regions of uniform radiance:
@@ -411,32 +338,6 @@ fn the_uniform_patch_error_shrinks_as_patch_size_squared_and_stays_within_its_bo
             "d {d}: ratio {ratio}"
         );
     }
-}
-
-#[test]
-fn a_glossy_emitter_on_global_cubes_emits_per_patch_and_is_said_to_show_its_mean() {
-    // A glossy screen (Ks 0.3) is a cube batch, which format 2 cannot
-    // texture: it still emits π ∫ Le dA (1e-9, as above), is warned about,
-    // and no batch is textured.
-    let g = f64::from(crate::texture::srgb_to_linear(128));
-    let mut screen = material("screen", 0.0, 3.0);
-    screen.ks = DVec3::splat(0.3);
-    screen.alpha = 0.2;
-    screen.emission_texture = Some(halves(128, 255));
-    let scene = screen_over_floor(screen, 1.0, 2);
-    let limits = super::cube_gather::CubeLimits::default();
-    let (result, warnings) =
-        super::cube_textured::solve_cube_textured(&scene, &cube(), &limits).unwrap();
-    let want = 3.0 * PI * 3.0 * (g + 1.0) / 2.0;
-    let got = result.emitted_power;
-    assert!((got - want).abs() <= 1e-9 * want, "{got} vs {want}");
-    assert_eq!(warnings.len(), 1, "{warnings:?}");
-    assert!(warnings[0].contains("screen") && warnings[0].contains("mean emitted radiance"));
-    assert!(result
-        .solution
-        .batches
-        .iter()
-        .all(|b| b.texturing.is_none()));
 }
 
 #[test]

@@ -1,8 +1,8 @@
 //! A shot's footprint: the surfaces it changed, so that the passes of a
-//! diffuse step after the shooting (refinement's candidate scan, the bounded
-//! surfaces' deposits, the gather into patches and the reset of the vertices'
-//! ΔL) visit those surfaces only, not the whole scene (issue 13: a shot whose
-//! cost does not grow with the whole scene).
+//! diffuse step after the shooting (refinement's candidate scan, the gather
+//! into patches and the reset of the vertices' ΔL) visit those surfaces only,
+//! not the whole scene (issue 13: a shot whose cost does not grow with the
+//! whole scene).
 //!
 //! Every per-vertex quantity a shot changes lives on one surface: a vertex
 //! belongs to one surface (`MeshVertex::surface`), an element's corners and
@@ -10,23 +10,19 @@
 //! name the surface), and so are the vertices a patch's gather weights name.
 //! A surface none of whose vertices received anything therefore has no leaf
 //! with a changed corner and no patch whose unshot radiance changes: skipping
-//! it changes no bit of the solve. The passes below visit the surfaces
-//! *touched* by the shot (where a vertex received something: among bounded
-//! shooting's visited surfaces, and its bounded surfaces once their deposit
-//! is made), in increasing order of patch
-//! and element, and add exactly what the whole-scene passes added, in the
-//! same order. Flat shooting (Remington 1992) still visits every vertex (that
-//! is its definition), and its touched surfaces are those where a vertex
-//! received something: the passes after it shrink too where walls keep a
-//! shot in one room. When a shot touched more than half of the patches, one
-//! pass in order over everything is cheaper than the per-surface lists and
-//! is taken instead. Either way the bits are the same (tests
-//! `zero_tolerance_is_flat_to_the_bit`, `sparse_passes_match_whole_scene`).
+//! it changes no bit of the solve. The shot itself visits every vertex
+//! (Remington 1992's progressive refinement); the passes after it visit the
+//! surfaces *touched* by the shot (where a vertex received something), in
+//! increasing order of patch and element, and add exactly what the
+//! whole-scene passes added, in the same order, so they shrink where walls
+//! keep a shot in one room. When a shot touched more than half of the
+//! patches, one pass in order over everything is cheaper than the
+//! per-surface lists and is taken instead. Either way the bits are the same
+//! (test `sparse_passes_match_whole_scene`).
 //!
 //! The index costs 4 bytes per vertex (one `u32` in its surface's list) plus a
 //! list header per surface.
 
-use super::cluster::{Plan, Receipt};
 use super::group_shot::Shooter;
 use super::refine::VertexState;
 use super::shoot::{Received, Scratch};
@@ -101,10 +97,6 @@ pub(super) struct Footprint {
     marked: Vec<bool>,
     /// The touched surfaces, in the order they were marked.
     touched: Vec<u32>,
-    /// The vertices the last bounded shot visited: their `visible` is reset
-    /// before the next shot, so that, as with flat shooting, `visible` holds
-    /// the current shot's counts and 0 elsewhere.
-    last_visited: Vec<u32>,
     /// Tests only: run every pass over the whole scene, as before the
     /// footprint, to check that the sparse passes change nothing.
     #[cfg(test)]
@@ -130,15 +122,11 @@ impl Footprint {
         false
     }
 
-    /// The lengths of the per-surface marks, the touched list and bounded
-    /// shooting's visited list (tests of the memory estimate).
+    /// The lengths of the per-surface marks and the touched list (tests of
+    /// the memory estimate).
     #[cfg(test)]
-    pub fn set_lengths(&self) -> (usize, usize, usize) {
-        (
-            self.marked.len(),
-            self.touched.len(),
-            self.last_visited.len(),
-        )
+    pub fn set_lengths(&self) -> (usize, usize) {
+        (self.marked.len(), self.touched.len())
     }
 
     fn begin_shot(&mut self, surfaces: usize) {
@@ -167,14 +155,12 @@ pub(super) struct SampleSharing<'a> {
     pub sites: &'a Sites,
 }
 
-/// Shoots `shooter` to its receivers and adds each one's ΔL to its radiance
-/// (and to its recorded-shot part when `recorded`): flat shooting (`plan`
-/// `None`) to every vertex, bounded shooting to the vertices of the surfaces
-/// its plan visits; a small surface's vertices all get the one sample at
-/// its centroid (`small.rs`), and under flat shooting a point that
-/// interpolates sites takes their weighted mean (`sites.rs`) and a vertex
-/// that the twins name a copy takes the sample of the vertex it copies
-/// (`twins.rs`). Marks the surfaces touched; returns the rays.
+/// Shoots `shooter` to every vertex and adds each one's ΔL to its radiance
+/// (and to its recorded-shot part when `recorded`); a small surface's
+/// vertices all get the one sample at its centroid (`small.rs`), a point
+/// that interpolates sites takes their weighted mean (`sites.rs`) and a
+/// vertex that the twins name a copy takes the sample of the vertex it
+/// copies (`twins.rs`). Marks the surfaces touched; returns the rays.
 /// (A free function: the shot borrows the solver's occluder and
 /// reflectances.)
 pub(super) fn shoot_receivers(
@@ -183,7 +169,6 @@ pub(super) fn shoot_receivers(
     sharing: SampleSharing<'_>,
     mut state: VertexState<'_>,
     shooter: &Shooter,
-    plan: Option<&Plan>,
     recorded: bool,
 ) -> u64 {
     let SampleSharing {
@@ -196,15 +181,7 @@ pub(super) fn shoot_receivers(
     // Radiance before the shot, for the ray share (`ray_share.rs`): results
     // are added only after every receiver has been shot.
     let prior: &[DVec3] = state.radiance;
-    let visits_surface = |s: u32| plan.is_none_or(|p| p.receipts[s as usize] == Receipt::Visit);
-    let small_results = receive_small(
-        mesh,
-        &footprint.surface_vertices,
-        small,
-        shooter,
-        prior,
-        visits_surface,
-    );
+    let small_results = receive_small(mesh, &footprint.surface_vertices, small, shooter, prior);
     let small_rays: u64 = small_results.iter().map(|r| r.rays as u64).sum();
     // A small surface's vertices copy its sample; its rays count once.
     let receive = |scratch: &mut Scratch, v: u32| match small.of(mesh.vertices[v as usize].surface)
@@ -215,85 +192,27 @@ pub(super) fn shoot_receivers(
         },
         None => shooter.receive(mesh, v, scratch, Some(prior)),
     };
-    let Some(plan) = plan else {
-        let mut results: Vec<Received> = (0..mesh.vertices.len() as u32)
-            .into_par_iter()
-            .map_init(Scratch::default, |scratch, v| {
-                if twins.of(v).is_some() || sites.interpolates(v) {
-                    Received::default()
-                } else {
-                    receive(scratch, v)
-                }
-            })
-            .collect();
-        interpolate_sites(&mut results, sites);
-        copy_twins(&mut results, twins);
-        // Flat shooting visits every vertex; the surfaces it touched are
-        // those where one received something (read in vertex order, so the
-        // surface ids stream from memory).
-        for (vertex, r) in mesh.vertices.iter().zip(&results) {
-            if r.radiance != DVec3::ZERO {
-                footprint.mark(vertex.surface);
-            }
-        }
-        return add_received(&mut state, 0.., &results, recorded) + small_rays;
-    };
-    for v in std::mem::take(&mut footprint.last_visited) {
-        state.visible[v as usize] = 0;
-    }
-    let index = &footprint.surface_vertices;
-    let visited: Vec<u32> = plan
-        .receipts
-        .iter()
-        .enumerate()
-        .filter(|(_, r)| **r == Receipt::Visit)
-        .map(|(s, _)| s as u32)
-        .collect();
-    let visit: Vec<u32> = if footprint.whole_scene() {
-        (0..mesh.vertices.len() as u32).collect()
-    } else {
-        visited
-            .iter()
-            .flat_map(|&s| index.of(s).iter().copied())
-            .collect()
-    };
-    let visits =
-        |v: u32| plan.receipts[mesh.vertices[v as usize].surface as usize] == Receipt::Visit;
-    // Bounded shooting builds no twins (`twins.rs`): each vertex receives.
-    let results: Vec<Received> = visit
-        .par_iter()
-        .map_init(Scratch::default, |scratch, &v| {
-            if visits(v) {
-                receive(scratch, v)
-            } else {
+    let mut results: Vec<Received> = (0..mesh.vertices.len() as u32)
+        .into_par_iter()
+        .map_init(Scratch::default, |scratch, v| {
+            if twins.of(v).is_some() || sites.interpolates(v) {
                 Received::default()
+            } else {
+                receive(scratch, v)
             }
         })
         .collect();
-    // The touched surfaces: those where a visited vertex received something.
-    // A visited surface can get nothing (the bound knows no occluders: the
-    // rooms behind a wall are visited and receive 0), and leaving it out
-    // keeps the passes after the shot to where the light went.
-    let nothing = |r: &Received| r.radiance == DVec3::ZERO;
-    if footprint.whole_scene() {
-        for (v, r) in visit.iter().zip(&results) {
-            if !nothing(r) {
-                footprint.mark(mesh.vertices[*v as usize].surface);
-            }
-        }
-    } else {
-        let mut start = 0;
-        for &s in &visited {
-            let end = start + footprint.surface_vertices.of(s).len();
-            if !results[start..end].iter().all(nothing) {
-                footprint.mark(s);
-            }
-            start = end;
+    interpolate_sites(&mut results, sites);
+    copy_twins(&mut results, twins);
+    // Flat shooting visits every vertex; the surfaces it touched are
+    // those where one received something (read in vertex order, so the
+    // surface ids stream from memory).
+    for (vertex, r) in mesh.vertices.iter().zip(&results) {
+        if r.radiance != DVec3::ZERO {
+            footprint.mark(vertex.surface);
         }
     }
-    let rays = add_received(&mut state, visit.iter().copied(), &results, recorded);
-    footprint.last_visited = visit;
-    rays + small_rays
+    add_received(&mut state, 0.., &results, recorded) + small_rays
 }
 
 /// Gives each point that interpolates sites the weighted mean of their
@@ -327,9 +246,9 @@ fn copy_twins(results: &mut [Received], twins: &Twins) {
     }
 }
 
-/// One sample per small surface the shot visits, at its centroid (see
-/// `small.rs`), in the order of `small.points()`; a surface not visited, or
-/// with no vertex, gets nothing and traces nothing. Its level for the ray
+/// One sample per small surface, at its centroid (see `small.rs`), in the
+/// order of `small.points()`; a surface with no vertex gets nothing and
+/// traces nothing. Its level for the ray
 /// share is its vertices' mean radiance before the shot.
 fn receive_small(
     mesh: &Mesh,
@@ -337,14 +256,13 @@ fn receive_small(
     small: &SmallSurfaces,
     shooter: &Shooter,
     prior: &[DVec3],
-    visits: impl Fn(u32) -> bool + Sync,
 ) -> Vec<Received> {
     small
         .points()
         .par_iter()
         .map_init(Scratch::default, |scratch, at| {
             let vertices = index.of(at.surface);
-            if vertices.is_empty() || !visits(at.surface) {
+            if vertices.is_empty() {
                 return Received::default();
             }
             let level =
@@ -403,39 +321,6 @@ impl Solver {
                 .flat_map(|&s| self.surface_patches[s as usize].clone())
                 .collect(),
         )
-    }
-
-    /// Gives every vertex of each bounded surface its surface's ΔL, as
-    /// received by this shot (so the gather puts it into the patches), marks
-    /// those surfaces, and counts the vertices visited and bounded. Run after
-    /// refinement, before the gather.
-    pub(super) fn deposit_bounded(&mut self, plan: &Plan, recorded: bool) {
-        self.footprint.surface_vertices.catch_up(&self.mesh);
-        let mut bounded = 0u64;
-        let mut visited = 0u64;
-        for (s, receipt) in plan.receipts.iter().enumerate() {
-            let count = self.footprint.surface_vertices.of(s as u32).len() as u64;
-            match *receipt {
-                Receipt::Uniform(delta) => {
-                    for &v in self.footprint.surface_vertices.of(s as u32) {
-                        let v = v as usize;
-                        self.radiance[v] += delta;
-                        self.received[v] = delta;
-                        if recorded {
-                            self.direct[v] += delta;
-                        }
-                    }
-                    if delta != DVec3::ZERO && count > 0 {
-                        self.footprint.mark(s as u32);
-                    }
-                    bounded += count;
-                }
-                Receipt::Visit => visited += count,
-                Receipt::Nothing => {}
-            }
-        }
-        self.timings.bounded_receivers += bounded;
-        self.timings.visited_receivers += visited;
     }
 
     /// Adds each touched patch's share of the shot's ΔL to its unshot

@@ -107,7 +107,7 @@ pub enum GaussSeidelError {
     #[error(
         "the Gauss-Seidel solver stores the full n x n form-factor matrix: {patches} patches \
          need {patches}² × {BYTES_PER_FACTOR} = {bytes} bytes ({}), above the limit of {limit} \
-         bytes ({}); use fewer patches per polygon (--patches) or the progressive solver",
+         bytes ({}); use larger patches (--patch-size) or --method progressive",
         human_bytes(*bytes),
         human_bytes(*limit as u128)
     )]
@@ -205,7 +205,7 @@ pub struct GaussSeidelResult {
 
 /// Solves `scene` by Gauss–Seidel on the full form-factor matrix from
 /// hemicubes of `settings.hemicube_resolution` on the receiving patches (see
-/// the module documentation). Uses `settings.patches`, `mode` (diffuse only),
+/// the module documentation). Uses `settings.patch_size`, `mode` (diffuse only),
 /// the material checks and the scene checks of [`Solver::new`]; the
 /// progressive settings (samples, threshold, adaptive meshing, …) play no
 /// part.

@@ -665,8 +665,7 @@ impl Solver {
     /// patch as its four quadrants with their own unshot radiance, as the
     /// patch shooter shoots it alone (`regions.rs`; Σ_q U_q A_q = U_p A_p, so
     /// the power is the same), the others whole; an emitter's patch whole,
-    /// as the patch shooter's recorded shots are; all whole with
-    /// `uniform_shooters`.
+    /// as the patch shooter's recorded shots are.
     pub(super) fn group_pieces(&self, members: &[(u32, DVec3)]) -> Vec<Piece> {
         let mut pieces = Vec::with_capacity(members.len());
         for &(p, u) in members {
@@ -679,7 +678,7 @@ impl Solver {
             // 2.2% off at ρ = 0.95 (test
             // `grouped_furnace_converges_to_le_over_one_minus_rho`).
             let emits = self.emission[whole.surface as usize] != DVec3::ZERO;
-            let regions = if self.settings.uniform_shooters || emits {
+            let regions = if self.settings.shoots_uniformly() || emits {
                 None
             } else {
                 self.source_regions(p, u)

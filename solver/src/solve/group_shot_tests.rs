@@ -20,7 +20,6 @@ fn settings(shooters: Shooters, adaptive: bool) -> SolverSettings {
     let mut s = SolverSettings::preset(Preset::Draft);
     s.samples = 4;
     s.max_shots = 120;
-    s.patches = 3;
     s.adaptive = adaptive;
     s.shooters = shooters;
     s
@@ -112,7 +111,7 @@ fn group_estimate_matches_the_members_shots() {
     assert!((g / s - 1.0).abs() < 1e-2, "{g} {s}");
 }
 
-/// Energy bookkeeping with grouped shots, as `bounded_shooting_loses_no_energy`
+/// Energy bookkeeping with grouped shots, as `progressive_shooting_loses_no_energy`
 /// checks it for single ones: emitted + reflected = shot + unshot within
 /// 1e-9 relative (rounding over ~10⁴ f64 terms), where the power shot is
 /// summed over every member of every group (`Timings::shot_power`, counted
@@ -244,8 +243,7 @@ fn the_far_field_cut_keeps_the_members_shots() {
         .unwrap()
         .scene;
     scene.fill_default_patches(PATCHES);
-    let mut s = settings(Shooters::Grouped, false);
-    s.patches = PATCHES;
+    let s = settings(Shooters::Grouped, false);
     let solver = Solver::new(&scene, &s).unwrap();
     let members: Vec<(u32, DVec3)> = (0..solver.mesh.patches.len() as u32)
         .filter(|&p| {

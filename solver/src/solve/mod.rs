@@ -55,7 +55,6 @@ pub mod budget;
 mod checkpoint;
 pub mod cluster;
 pub mod cube_gather;
-pub mod cube_textured;
 pub mod directional;
 pub mod enclosure;
 pub mod gauss_seidel;
@@ -153,11 +152,6 @@ pub struct Timings {
     pub gather: f64,
     /// Rays traced by the shooting part (the rest were traced by refinement).
     pub shoot_rays: u64,
-    /// Receiving vertices visited ray by ray by bounded shooting, summed over
-    /// shots (flat shooting visits every vertex and leaves these 0).
-    pub visited_receivers: u64,
-    /// Vertices that bounded shooting gave a bounded estimate instead.
-    pub bounded_receivers: u64,
     /// Patches shot by grouped shots, summed over them (`group_shot.rs`;
     /// 0 with `--shooters patch`).
     pub grouped_patches: u64,
@@ -254,7 +248,7 @@ pub struct Solver {
     scene_bytes: u64,
     /// Whether the memory budget has refused a split (warned once).
     refinement_capped: bool,
-    /// The surfaces under a bounding-volume hierarchy, for bounded shooting.
+    /// The surfaces under a bounding-volume hierarchy, for grouped shots.
     receivers: cluster::ReceiverTree,
     /// The most patches a grouped shot can rank ([`budget::Counts`]).
     group_candidates: Option<u64>,
@@ -400,16 +394,12 @@ impl Solver {
         }
         let vertex_count = mesh.vertices.len();
         let patch_count = mesh.patches.len();
-        let receivers = cluster::ReceiverTree::new(&mesh, &kd);
+        let receivers = cluster::ReceiverTree::new(&mesh);
         let per_surface: Vec<u64> = surface_patches.iter().map(|r| r.len() as u64).collect();
         let group_candidates = Some(
             receivers.most_patches_near(group_shot::RADIUS * receivers.diagonal(), &per_surface),
         );
-        let small = if settings.per_vertex_small {
-            small::SmallSurfaces::default()
-        } else {
-            small::SmallSurfaces::new(&mesh, &surface_patches)
-        };
+        let small = small::SmallSurfaces::new(&mesh, &surface_patches);
         let texturing_any = texturing.any();
         let mut solver = Solver {
             settings: settings.clone(),
@@ -468,13 +458,11 @@ impl Solver {
         solver.init_directional(scene)?;
         let all: Vec<u32> = (0..solver.mesh.surfaces.len() as u32).collect();
         solver.update_weights(&all);
-        // After `update_weights`, which classifies the vertices as hidden.
-        let flat =
-            solver.directional.is_none() && settings.shooting == crate::settings::Shooting::Flat;
-        if flat && !settings.per_copy_vertices {
+        // After `update_weights`, which classifies the vertices as hidden;
+        // diffuse mode only (directional coefficients live in each polygon's
+        // frame).
+        if solver.directional.is_none() {
             solver.twins = twins::Twins::new(&solver.mesh, &solver.hidden);
-        }
-        if flat {
             solver.sites = sites::Sites::new(
                 &solver.mesh,
                 &solver.hidden,
@@ -569,9 +557,8 @@ impl Solver {
                 .push(SamplePool::with_sets(&shot, shoot::REPLAY_POOL_SETS));
         }
         // Recorded (emitter) shots stay uniform: their replay to new vertices
-        // rebuilds them from the patch and its mean unshot alone. So do all
-        // shots when the settings ask for uniform shooters.
-        if !recorded && !self.settings.uniform_shooters && members.is_none() {
+        // rebuilds them from the patch and its mean unshot alone.
+        if !recorded && !self.settings.shoots_uniformly() && members.is_none() {
             shot.regions = self.source_regions(source, unshot).map(Box::new);
         }
         // Recorded shots keep every ray: later splits replay them exactly.
@@ -603,11 +590,6 @@ impl Solver {
                 pool: &pool,
             },
         };
-        // Bounded shooting plans for one patch; a group visits every vertex.
-        let plan = match group {
-            Some(_) => None,
-            None => self.plan_receivers(&shot, &pool),
-        };
         let mut rays = footprint::shoot_receivers(
             &self.mesh,
             &mut self.footprint,
@@ -623,7 +605,6 @@ impl Solver {
                 direct: &mut self.direct,
             },
             &shooter,
-            plan.as_ref(),
             recorded,
         );
         let shot_done = Instant::now();
@@ -682,10 +663,6 @@ impl Solver {
         rays += refined.rays;
         self.leaf_count += 3 * splits;
         let refine_done = Instant::now();
-        if let Some(plan) = &plan {
-            rays += plan.rays;
-            self.deposit_bounded(plan, recorded);
-        }
         self.update_patch_weights(&refined.dirty_patches);
         self.unshot_changed(&refined.dirty_patches);
         self.gather();
@@ -1101,11 +1078,11 @@ pub(crate) fn human_bytes(bytes: u128) -> String {
 }
 
 #[cfg(test)]
-mod cluster_tests;
-#[cfg(test)]
 mod directional_tests;
 #[cfg(test)]
 mod emissive_tests;
+#[cfg(test)]
+mod footprint_tests;
 #[cfg(test)]
 mod group_shot_tests;
 #[cfg(test)]

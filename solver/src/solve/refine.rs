@@ -59,8 +59,11 @@ pub struct Criteria {
     pub edge_threshold: f64,
     pub shadow_threshold: f64,
     pub max_depth: u32,
-    /// Fraction of the polygon's area: the flat floor, for surfaces without an
-    /// absolute `min_element_size` ([`crate::mesh::Surface::min_element_size`]).
+    /// Fraction of the polygon's area: the floor of a mesh built by count
+    /// alone ([`crate::mesh::Sizing::flat`], which tests use), whose surfaces
+    /// have no absolute `min_element_size`
+    /// ([`crate::mesh::Surface::min_element_size`]); a solve's mesh always
+    /// has one.
     pub min_element_area: f64,
     /// Visibility rays per receiver (the n of the noise allowance).
     pub samples: u32,
@@ -85,13 +88,17 @@ pub struct Criteria {
 /// level, so the mesh still does not depend on units or emitter strength.
 pub const DARK_FLOOR: f64 = 0.1;
 
+/// [`Criteria::min_element_area`] of a solve: Remington's (1992) flat floor,
+/// which only a mesh built by count alone reaches.
+pub const FLAT_MIN_ELEMENT_AREA: f64 = 5e-5;
+
 impl Criteria {
     pub fn from_settings(s: &SolverSettings) -> Self {
         Criteria {
             edge_threshold: s.edge_threshold,
             shadow_threshold: s.shadow_threshold,
             max_depth: s.max_depth,
-            min_element_area: s.min_element_area,
+            min_element_area: FLAT_MIN_ELEMENT_AREA,
             samples: if s.shadows { s.samples } else { 0 },
             dark_floor: 0.0,
             ambient: DVec3::ZERO,

@@ -44,8 +44,8 @@
 //! flat surface's is to its smallest element. The shot noise of a point is
 //! a weighted mean of up to six sites' instead of its own.
 //!
-//! Only flat shooting in diffuse mode builds sites (as twins: directional
-//! shots keep SH per vertex, bounded shooting's plans visit surfaces), only
+//! Only diffuse mode builds sites (as twins: directional shots keep SH per
+//! vertex), only
 //! on points none of whose copies lies on a patch that refinement may
 //! split (an interpolated vertex must never be an edge's end that
 //! refinement tests), and only on points that are not hidden. Points that

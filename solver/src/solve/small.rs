@@ -24,8 +24,7 @@
 //! bookkeeping is untouched: the vertices' ΔL is gathered into the patch
 //! as any receiver's (test `small_surfaces_lose_no_energy`). Smooth
 //! surfaces keep per-vertex receiving, since their vertices' shading normals
-//! differ; so does every surface under `per_vertex_small`, and every
-//! surface in directional mode, whose shots receive SH per vertex
+//! differ; so does every surface in directional mode, whose shots receive SH per vertex
 //! (`directional.rs`).
 
 use super::shoot::ReceivingPoint;
@@ -136,11 +135,10 @@ mod tests {
         (x / sx * (y / sx).atan() + y / sy * (x / sy).atan()) / (2.0 * PI)
     }
 
-    fn settings(per_vertex_small: bool) -> SolverSettings {
+    fn settings() -> SolverSettings {
         let mut s = SolverSettings::preset(Preset::Draft);
         s.ambient = false;
         s.adaptive = false;
-        s.per_vertex_small = per_vertex_small;
         s
     }
 
@@ -185,7 +183,7 @@ mod tests {
                 + under_corner(a + x0, a + z0, h));
         let scene = square_under_light(x0, z0);
         for shooters in [Shooters::Patch, Shooters::Grouped] {
-            let mut s = settings(false);
+            let mut s = settings();
             s.shooters = shooters;
             let mut solver = Solver::new(&scene, &s).unwrap();
             assert_eq!(solver.small_surface_count(), 1, "the 1 mm receiver only");
@@ -201,19 +199,6 @@ mod tests {
                 assert!(error < 1e-9, "{shooters:?}: {} against {exact}", l.x);
             }
         }
-        // Received at each vertex instead, the corners see the emitter from
-        // 0.5 mm apart and differ by far more than the tolerance above: the
-        // equality is the single sample's doing.
-        let mut solver = Solver::new(&scene, &settings(true)).unwrap();
-        assert_eq!(solver.small_surface_count(), 0);
-        while solver.step().is_some() {}
-        let receiver: Vec<f64> = (0..solver.mesh().vertices.len())
-            .filter(|&v| solver.mesh().vertices[v].surface == 0)
-            .map(|v| solver.vertex_radiance()[v].x)
-            .collect();
-        let spread = receiver.iter().copied().fold(f64::MIN, f64::max)
-            - receiver.iter().copied().fold(f64::MAX, f64::min);
-        assert!(spread > 1e-6 * exact, "spread {spread}");
     }
 
     /// A closed 1 m room (Kd 0.5) lit by a ceiling panel, with 16 boxes of
@@ -241,13 +226,10 @@ mod tests {
         // (the walls' groups of a few dozen patches at 1M boxes); as small
         // faces a tenth as bright as the seed, those within the group radius
         // do. The control: faces at 0.09, under a tenth of the seed's
-        // radiance, do not. How the faces receive (`per_vertex_small`) does
-        // not change which join.
+        // radiance, do not.
         let scene = room_with_small_boxes();
-        for (per_vertex_small, face_unshot, joins) in
-            [(false, 0.5, true), (true, 0.5, true), (false, 0.09, false)]
-        {
-            let mut s = settings(per_vertex_small);
+        for (face_unshot, joins) in [(0.5, true), (0.09, false)] {
+            let mut s = settings();
             s.shooters = Shooters::Grouped;
             let mut solver = Solver::new(&scene, &s).unwrap();
             let faces: Vec<u32> = (0..solver.mesh.patches.len() as u32)
@@ -275,12 +257,12 @@ mod tests {
     #[test]
     fn small_surfaces_lose_no_energy() {
         // Emitted + reflected = shot + unshot (the bookkeeping of
-        // `bounded_shooting_loses_no_energy`), to 1e-9 of the emitted power:
+        // `progressive_shooting_loses_no_energy`), to 1e-9 of the emitted power:
         // one sample's ΔL on all of a face's vertices is gathered into its
         // patch like any vertex's.
         let scene = room_with_small_boxes();
         for shooters in [Shooters::Patch, Shooters::Grouped] {
-            let mut s = settings(false);
+            let mut s = settings();
             s.shooters = shooters;
             s.threshold = 0.01;
             let mut solver = Solver::new(&scene, &s).unwrap();

@@ -552,7 +552,6 @@ fn flat_cornell_box_is_unchanged_by_smoothing() {
     let mut settings = SolverSettings::preset(Preset::Draft);
     settings.samples = 4;
     settings.max_shots = 40;
-    settings.patches = 2;
     // Receivers whole: the floor and ceiling cut along the blocks' and the
     // light's contact lines share their cuts' seams as a smooth surface
     // does (`mesh::contact`), which this test is not about.

@@ -295,9 +295,7 @@ fn directional_e_over_pi_is_counted_in_the_memory_budget() {
     assert_eq!(d.vertex_values(s), 6);
     // Five vertices × three more values in the radiance, ΔL and recorded
     // arrays (f64) at least.
-    assert!(
-        budget::split_cost(6, true, false) >= budget::split_cost(3, true, false) + 5 * 3 * 3 * 8
-    );
+    assert!(budget::split_cost(6, true) >= budget::split_cost(3, true) + 5 * 3 * 3 * 8);
 }
 
 #[test]
@@ -427,7 +425,6 @@ fn directional_with_ks_zero_a_checkerboard_solves_as_in_diffuse_mode() {
         diffuse.adaptive = adaptive;
         diffuse.uniform_shooters = true;
         diffuse.full_rays_above = 0.0;
-        diffuse.shooting = crate::settings::Shooting::Flat;
         diffuse.shooters = crate::settings::Shooters::Patch;
         let mut directional = diffuse.clone();
         directional.mode = SolveMode::Directional;
@@ -577,130 +574,27 @@ fn directional_textured_sh_batches_round_trip_and_render_the_checkerboard() {
     assert!(shown >= 0.8 * ideal, "contrast {shown} vs {ideal}");
 }
 
-// Global cubes (`cube_textured.rs`).
+// Global cubes: a seed baseline, refused on textured scenes.
 
 #[test]
-fn cube_mode_solves_a_uniform_texture_as_its_flat_reflectance() {
-    // In cube mode a textured vertex stores E/π and a patch reflects
-    // ∫ ρ E/π dA / A through its RGB weights (`cube_gather/textured.rs`).
-    // For a uniform texture (sRGB 180, linear 0.4564, Kd 0.8) that is the
-    // untextured solve with Kd = 0.8 · 0.4564, so the file's textured batch
-    // must show what the untextured file shows: factor · ρ · E/π = L per
-    // vertex. Both solve to a change of 1e-10 (the two measure convergence
-    // in different norms, so they may stop a sweep apart); the rest is the
-    // order of rounding and the f32 file, 1e-6 relative asserted. The
-    // untextured light stays in an order-0 batch, and the two files have
-    // the same vertices. No warning: the transport is the texture's own.
-    let rho = f64::from(crate::texture::srgb_to_linear(180));
+fn cube_mode_refuses_a_textured_scene_naming_the_method_and_the_material() {
+    // Immel, Cohen and Greenberg (1986) solved untextured scenes; the
+    // progressive method solves textures, so the cube refuses them before any
+    // work rather than keep a third copy of the texture transport.
     let s = directional_settings();
-    let limits = cube_gather::CubeLimits {
-        tolerance: 1e-10,
-        ..Default::default()
-    };
+    let limits = cube_gather::CubeLimits::default();
     let mut wall = material("wall", 0.8, 0.0);
     wall.diffuse_texture = Some(texture(8, |_, _| 180));
-    let (textured, warnings) =
-        cube_textured::solve_cube_textured(&room(wall), &s, &limits).unwrap();
-    assert!(warnings.is_empty(), "{warnings:?}");
-    let (flat, none) =
-        cube_textured::solve_cube_textured(&room(material("wall", 0.8 * rho, 0.0)), &s, &limits)
-            .unwrap();
-    assert!(none.is_empty());
-    let (a, b) = (&textured.solution, &flat.solution);
-    assert_eq!(a.textures.len(), 1);
-    let walls = a.batches.iter().find(|b| b.texturing.is_some()).unwrap();
-    let texturing = walls.texturing.as_ref().unwrap();
-    assert_eq!(texturing.factor, [0.8; 3]);
-    let shown: Vec<[f32; 3]> = texturing
-        .vertices
-        .iter()
-        .map(|tv| tv.irradiance_over_pi.map(|e| e * 0.8 * rho as f32))
-        .collect();
-    // The flat file's order-0 batch, in mesh order, holds the light's
-    // vertices and the walls'; the walls' are those at the textured batch's
-    // positions.
-    let flat_batch = &b.batches[0];
-    let scale = (4.0 * PI).sqrt() as f32;
-    let mut matched = 0;
-    for (k, v) in walls.vertices.iter().enumerate() {
-        let j = flat_batch
-            .vertices
-            .iter()
-            .position(|w| w.position == v.position && w.normal == v.normal)
-            .unwrap();
-        for (c, &e) in shown[k].iter().enumerate() {
-            let l = flat_batch.coefficients[3 * j + c] / scale;
-            assert!(
-                (e - l).abs() <= 1e-6 * l.abs().max(1e-3),
-                "vertex {k}: {e} vs {l}"
-            );
-        }
-        matched += 1;
-    }
-    let total: usize = a.batches.iter().map(|b| b.vertices.len()).sum();
-    assert_eq!(total, flat_batch.vertices.len());
-    assert!(matched > 0);
-    let bytes = solution::format::encode(a).unwrap();
-    assert_eq!(&solution::format::decode(&bytes).unwrap(), a);
-}
-
-#[test]
-fn cube_mode_solves_a_uniform_texture_on_glossy_walls_as_its_flat_reflectance() {
-    // Glossy walls (Ks 0.3, α 0.25) with Kd 0.8 × a uniform texture (sRGB
-    // 180) against flat Kd 0.8 · 0.4564: a glossy textured vertex keeps its
-    // E/π after its cube, the cube holds its glossy light, and a patch adds
-    // its RGB-weighted E/π to its vertices' cubes; the cube batch shows the
-    // cube plus the texels' mean around the vertex times E/π. For a uniform
-    // texture all of that is the flat solve, so every cell of every glossy
-    // vertex must agree: a consistency check of the two paths through the
-    // gather, to 1e-6 of the vertex's largest cell (f32 file, a change of
-    // 1e-10 left by each solve). The display limitation is warned.
-    let rho = f64::from(crate::texture::srgb_to_linear(180));
-    let mut s = directional_settings();
-    s.cube_resolution = 4;
-    let limits = cube_gather::CubeLimits {
-        tolerance: 1e-10,
-        ..Default::default()
+    let err = match cube_gather::solve_cube(&room(wall), &s, &limits) {
+        Err(err) => err.to_string(),
+        Ok(_) => panic!("a textured scene must be refused"),
     };
-    let mut wall = glossy_wall(0.8);
-    wall.diffuse_texture = Some(texture(8, |_, _| 180));
-    let (textured, warnings) =
-        cube_textured::solve_cube_textured(&room(wall), &s, &limits).unwrap();
     assert!(
-        warnings
-            .iter()
-            .any(|w| w.contains("cannot texture a cube batch")),
-        "{warnings:?}"
+        err.contains("--method cube") && err.contains("`wall`") && err.contains("diffuse texture"),
+        "{err}"
     );
-    let (flat, _) =
-        cube_textured::solve_cube_textured(&room(glossy_wall(0.8 * rho)), &s, &limits).unwrap();
-    let cube_batch = |solution: &solution::format::Solution| {
-        solution
-            .batches
-            .iter()
-            .find(|b| {
-                matches!(
-                    b.representation,
-                    solution::format::Representation::Cube { .. }
-                )
-            })
-            .cloned()
-            .expect("a cube batch")
-    };
-    let (a, b) = (cube_batch(&textured.solution), cube_batch(&flat.solution));
-    assert_eq!(a.vertices, b.vertices);
-    let d = a.coefficients.len() / a.vertices.len();
-    for (k, (x, y)) in a
-        .coefficients
-        .chunks_exact(d)
-        .zip(b.coefficients.chunks_exact(d))
-        .enumerate()
-    {
-        let peak = y.iter().fold(0f32, |m, &c| m.max(c.abs())).max(1e-3);
-        for (&p, &q) in x.iter().zip(y) {
-            assert!((p - q).abs() <= 1e-6 * peak, "vertex {k}: {p} vs {q}");
-        }
-    }
+    // Untextured, the same room solves.
+    assert!(cube_gather::solve_cube(&room(material("wall", 0.8, 0.0)), &s, &limits).is_ok());
 }
 
 #[test]

@@ -24,10 +24,8 @@
 //! which of them agree to the bit is an accident of rounding (the Cornell
 //! box's solves are unchanged, and stay the same when the scene is moved).
 //!
-//! `per_copy_vertices` turns it off; so do directional mode, whose
-//! coefficients live in each polygon's frame (`directional.rs`), and
-//! bounded shooting, whose sparse plans visit surfaces, not points, and
-//! which with a zero tolerance stays flat shooting to the bit.
+//! Directional mode builds none: its coefficients live in each polygon's
+//! frame (`directional.rs`).
 
 use crate::mesh::Mesh;
 
@@ -164,12 +162,11 @@ mod tests {
         scene
     }
 
-    fn settings(per_copy_vertices: bool) -> SolverSettings {
+    fn settings() -> SolverSettings {
         let mut s = SolverSettings::preset(Preset::Draft);
         s.adaptive = false;
         s.ambient = false;
         s.max_shots = 20;
-        s.per_copy_vertices = per_copy_vertices;
         s
     }
 
@@ -180,7 +177,7 @@ mod tests {
         // but one vertex per point copies. The walls are flat and copy none.
         let m = 8;
         let scene = room_with_a_bump(m);
-        let solver = Solver::new(&scene, &settings(false)).unwrap();
+        let solver = Solver::new(&scene, &settings()).unwrap();
         let on_bump = |v: &crate::mesh::MeshVertex| solver.kd[v.surface as usize].x == 0.7;
         assert_eq!(
             solver.mesh.vertices.iter().filter(|v| on_bump(v)).count(),
@@ -194,26 +191,18 @@ mod tests {
             );
             assert!(twin < v && on_bump(a) && a.position == b.position && a.normal == b.normal);
         }
-        let off = Solver::new(&scene, &settings(true)).unwrap();
-        assert_eq!(off.twin_copy_count(), 0);
     }
 
     #[test]
     fn copies_carry_their_twins_radiance_and_trace_no_rays() {
         // After 20 shots every copy holds its twin's radiance to the bit (it
-        // takes each ΔL whole), and the solve traced fewer rays than with
-        // every copy receiving: the copies' share, less what the ray share
-        // (`ray_share.rs`) would have cut anyway.
+        // takes each ΔL whole).
         let scene = room_with_a_bump(8);
-        let mut solver = Solver::new(&scene, &settings(false)).unwrap();
+        let mut solver = Solver::new(&scene, &settings()).unwrap();
         while solver.step().is_some() {}
         let radiance = solver.vertex_radiance();
         for (v, twin) in solver.twins.pairs() {
             assert_eq!(radiance[v as usize], radiance[twin as usize], "vertex {v}");
         }
-        let mut each = Solver::new(&scene, &settings(true)).unwrap();
-        while each.step().is_some() {}
-        assert!(solver.progress().rays < each.progress().rays);
-        assert!(solver.progress().shots == each.progress().shots);
     }
 }

@@ -59,8 +59,6 @@ fn the_gauss_seidel_method_writes_the_same_two_slot_furnace() {
     use super::gauss_seidel::{solve_gauss_seidel, GaussSeidelLimits};
     let (scene, m, m_e) = furnace();
     let mut settings = SolverSettings::preset(Preset::Draft);
-    settings.patches = 2;
-    settings.patch_size = None;
     settings.hemicube_resolution = 16;
     let limits = GaussSeidelLimits {
         tolerance: 1e-9,

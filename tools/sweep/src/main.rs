@@ -245,10 +245,10 @@ fn main() -> anyhow::Result<()> {
         .output()
         .context("running solver solve --help")?;
     let help = String::from_utf8_lossy(&help.stdout).into_owned();
-    let has_cube = help.contains("--directional");
+    let has_cube = help.contains("--cube-resolution");
     if !has_cube {
         println!(
-            "note: `solver solve --help` lists no --directional flag: the global-cube (D) points are skipped"
+            "note: `solver solve --help` lists no cube method: the global-cube (D) points are skipped"
         );
     }
     let load_before = load_average();

@@ -108,8 +108,23 @@ fn s(x: &str) -> Value {
     Value::String(x.to_string())
 }
 
+/// The patch size (a fraction of the scene's diagonal, `--patch-size`) that
+/// gives the Cornell box's 555 mm walls `n` patches a side: its diagonal is
+/// 960.7 mm, so 0.6 / n (0.15 gives 4, 0.075 gives 8, as the presets say).
+fn per_side(n: i64) -> Value {
+    f(0.6 / n as f64)
+}
+
+/// The smallest element (`--min-element-size`, a fraction of the scene's
+/// diagonal) whose square has `area` of a Cornell box wall's: 555 mm ×
+/// √area over the 960.7 mm diagonal (2e-3 gives 0.026, the draft preset's).
+fn floor_of(area: f64) -> Value {
+    f(0.578 * area.sqrt())
+}
+
 /// The diffuse knobs as one tuple, for the ladder of combined settings:
-/// (samples, edge, shadow, min area, max depth, patches, threshold).
+/// (samples, edge, shadow, smallest element as an area fraction of a wall,
+/// max depth, patches a wall side, threshold).
 type Ladder = (i64, f64, f64, f64, i64, i64, f64);
 
 fn ladder_overrides(l: Ladder) -> Vec<(String, Value)> {
@@ -117,9 +132,9 @@ fn ladder_overrides(l: Ladder) -> Vec<(String, Value)> {
         ("samples".into(), i(l.0)),
         ("edge_threshold".into(), f(l.1)),
         ("shadow_threshold".into(), f(l.2)),
-        ("min_element_area".into(), f(l.3)),
+        ("min_element_size".into(), floor_of(l.3)),
         ("max_depth".into(), i(l.4)),
-        ("patches".into(), i(l.5)),
+        ("patch_size".into(), per_side(l.5)),
         ("threshold".into(), f(l.6)),
     ]
 }
@@ -135,11 +150,11 @@ pub fn scenes() -> Vec<SceneSpec> {
                 ("samples", i(8)),
                 ("threshold", f(0.01)),
                 ("max_shots", i(100_000)),
-                ("patches", i(4)),
+                ("patch_size", per_side(4)),
                 ("adaptive", Value::Boolean(true)),
                 ("edge_threshold", f(0.5)),
                 ("shadow_threshold", f(0.2)),
-                ("min_element_area", f(2e-4)),
+                ("min_element_size", floor_of(2e-4)),
                 ("max_depth", i(5)),
                 ("checkpoint_every", i(1_000_000)),
                 ("seed", i(1)),
@@ -151,10 +166,10 @@ pub fn scenes() -> Vec<SceneSpec> {
             reference: vec![
                 ("samples", i(64)),
                 ("threshold", f(0.001)),
-                ("patches", i(6)),
+                ("patch_size", per_side(6)),
                 ("edge_threshold", f(0.15)),
                 ("shadow_threshold", f(0.05)),
-                ("min_element_area", f(1e-5)),
+                ("min_element_size", floor_of(1e-5)),
                 ("max_depth", i(8)),
                 ("seed", i(7)),
             ],
@@ -196,11 +211,11 @@ pub fn scenes() -> Vec<SceneSpec> {
                 ("samples", i(4)),
                 ("threshold", f(0.02)),
                 ("max_shots", i(100_000)),
-                ("patches", i(2)),
+                ("patch_size", per_side(2)),
                 ("adaptive", Value::Boolean(true)),
                 ("edge_threshold", f(0.5)),
                 ("shadow_threshold", f(0.2)),
-                ("min_element_area", f(2e-4)),
+                ("min_element_size", floor_of(2e-4)),
                 ("max_depth", i(4)),
                 ("checkpoint_every", i(1_000_000)),
                 ("sh_error_target", f(1e-2)),
@@ -214,10 +229,10 @@ pub fn scenes() -> Vec<SceneSpec> {
             reference: vec![
                 ("samples", i(16)),
                 ("threshold", f(0.005)),
-                ("patches", i(4)),
+                ("patch_size", per_side(4)),
                 ("edge_threshold", f(0.4)),
                 ("shadow_threshold", f(0.15)),
-                ("min_element_area", f(1e-4)),
+                ("min_element_size", floor_of(1e-4)),
                 ("max_depth", i(5)),
                 ("sh_error_target", f(1e-3)),
                 ("seed", i(7)),
@@ -288,7 +303,7 @@ fn with_flags(mut p: Point, flags: &[&str]) -> Point {
     p
 }
 
-/// The flag that sets the global cube's D (`--directional cube
+/// The flag that sets the global cube's D (`--method cube
 /// --cube-resolution k`, D = 6k²), when the solver has one.
 fn cube_flag(help: &str) -> Option<&'static str> {
     [
@@ -306,6 +321,15 @@ fn int_axis(key: &str, values: &[i64]) -> Vec<Point> {
     values
         .iter()
         .map(|&n| point(key, format!("{key}={n}"), vec![(key, i(n))]))
+        .collect()
+}
+
+/// The patch axis: `n` patches a Cornell box wall side each, set by
+/// `--patch-size` (the label keeps the count, which the report compares).
+fn patch_axis(values: &[i64]) -> Vec<Point> {
+    values
+        .iter()
+        .map(|&n| point("patches", format!("patches={n}"), vec![("patch_size", per_side(n))]))
         .collect()
 }
 
@@ -388,16 +412,16 @@ fn cornell_points(quick: bool) -> Vec<Point> {
     for a in [2e-3, 5e-4, 1e-4, 2e-5] {
         out.push(point(
             "min_area",
-            format!("min_area={a:e}"),
+            format!("min_size~{a:e} of a wall"),
             vec![
-                ("min_element_area", f(a)),
+                ("min_element_size", floor_of(a)),
                 ("max_depth", i(10)),
                 ("edge_threshold", f(0.3)),
                 ("shadow_threshold", f(0.1)),
             ],
         ));
     }
-    out.extend(int_axis("patches", &[2, 4, 8]));
+    out.extend(patch_axis(&[2, 4, 8]));
     for t in [0.05, 0.01, 0.002] {
         out.push(point(
             "threshold",
@@ -425,9 +449,9 @@ fn cornell_points(quick: bool) -> Vec<Point> {
             point(
                 "gauss_seidel",
                 format!("GS patches={n} R={r}"),
-                vec![("patches", i(n)), ("hemicube_resolution", i(r))],
+                vec![("patch_size", per_side(n)), ("hemicube_resolution", i(r))],
             ),
-            &["--solver", "gauss-seidel"],
+            &["--method", "gauss-seidel"],
         ));
     }
     out.extend(cornell_ladder());
@@ -520,13 +544,13 @@ fn glossy_points(quick: bool, has_cube: bool, help: &str) -> Vec<Point> {
         out.push(p);
     }
     out.extend(int_axis("samples", &[1, 4, 16]));
-    out.extend(int_axis("patches", &[1, 2, 4]));
+    out.extend(patch_axis(&[1, 2, 4]));
     out.extend(mesh_axis(&[(1.0, 0.5), (0.3, 0.1)], 6));
     if has_cube {
         match cube_flag(help) {
             Some(flag) => out.extend(cube_points(flag)),
             None => println!(
-                "note: --directional is listed but no flag for D was recognised; cube points skipped"
+                "note: --method cube is listed but no flag for D was recognised; cube points skipped"
             ),
         }
     }
@@ -544,7 +568,7 @@ fn cube_points(flag: &str) -> Vec<Point> {
     // like-for-like comparison of the representations.
     let fixed = || {
         vec![
-            ("patches", i(CUBE_PATCHES)),
+            ("patch_size", per_side(CUBE_PATCHES)),
             ("adaptive", Value::Boolean(false)),
         ]
     };
@@ -557,7 +581,7 @@ fn cube_points(flag: &str) -> Vec<Point> {
         };
         out.push(with_flags(
             point("cube", label, fixed()),
-            &["--directional", "cube", flag, &d.to_string()],
+            &["--method", "cube", flag, &d.to_string()],
         ));
     }
     let mut sh = fixed();

@@ -13,21 +13,9 @@ pub(crate) fn solve_mode_parser() -> impl clap::builder::TypedValueParser<Value 
         }
     })
 }
-use crate::settings::{
-    BrdfNormalization, DirectionalRepresentation, FormFactorMethod, Preset, SettingsPatch,
-    Shooters, Shooting,
-};
+use crate::method::Method;
+use crate::settings::{BrdfNormalization, Preset, SettingsPatch, Shooters};
 use std::path::PathBuf;
-
-/// Which solver `--solver` runs.
-#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq, Default)]
-pub enum SolverKind {
-    /// Progressive refinement (Remington 1992, §3.7).
-    #[default]
-    Progressive,
-    /// The full matrix solved by Gauss-Seidel (radiosity lecture notes, Immel, Cohen and Greenberg 1986).
-    GaussSeidel,
-}
 
 /// Exit code of a solve stopped by Ctrl-C after saving its checkpoint (128 + SIGINT,
 /// as shells report an interrupted program).
@@ -40,8 +28,8 @@ Settings come from four places; a higher one overrides a lower one key by key:
   3. the legacy display file (--display, Remington 1992, appendix A)
   4. the preset (--preset, default medium; config/presets.toml)
 Meshing is size-driven (--patch-size, --min-element-size, fractions of the scene
-diagonal) unless --patches or --min-element-area is set in 1-3: each of those
-selects the flat per-polygon rule for its half and wins whatever its source.
+diagonal); a TOML config's objects and a legacy geometry file may give a polygon
+its own patch count.
 
 No lost work: every --checkpoint-every shots the solver saves OUT.checkpoint and
 rewrites OUT as a valid solution marked partial, which a viewer can watch. Ctrl-C
@@ -140,50 +128,6 @@ pub struct SolveArgs {
     )]
     pub no_shadows: bool,
 
-    /// Point-to-source form factor: analytic (default), wallace or hemicube.
-    #[arg(
-        long,
-        value_enum,
-        value_name = "METHOD",
-        long_help = "How the point-to-source form factor is computed. analytic \
-            (default): the exact point-to-polygon factor times the visible fraction of \
-            the rays; correct near the source and in corners. wallace: Remington 1992, eq. 3.1's \
-            disc approximation per sample, slightly cheaper, dark near shared edges \
-            (kept to measure against). hemicube: the exact factor times the visibility \
-            read from a hemicube on the shooting patch's centre (radiosity lecture notes), no rays; hard \
-            shadows as seen from the source's centre (directional mode uses analytic)."
-    )]
-    pub form_factors: Option<FormFactorMethod>,
-
-    /// Receivers a shot visits ray by ray: flat (default) or bounded.
-    #[arg(
-        long,
-        value_enum,
-        value_name = "HOW",
-        long_help = "Which receivers a shot visits with a form factor and visibility rays. \
-            flat (default): every vertex every shot, Remington 1992's progressive \
-            refinement. bounded: a surface the shot cannot change by more than \
-            --shooting-tolerance (a conservative bound on the form factor times the \
-            source's unshot radiance and the surface's reflectance) is not visited; its \
-            vertices all get one estimate, the factor at its centroid, so its energy is \
-            kept; fewer rays on scenes with many weak or distant receivers, a flatter \
-            indirect field on skipped surfaces. Diffuse mode only."
-    )]
-    pub shooting: Option<Shooting>,
-
-    /// Bounded shooting's tolerance, a fraction of the scene's radiance level.
-    #[arg(
-        long,
-        value_name = "FRACTION",
-        long_help = "Bounded shooting skips a surface whose largest possible ΔL from a \
-            shot is below this fraction of the scene's radiance level (the ambient \
-            term's brightest channel before any shot; default 0.0001, 0 to 1). Larger: \
-            fewer receivers visited per shot (faster on large scenes), and weak \
-            indirect light spread flat over skipped surfaces, each shot's error at \
-            any vertex below this fraction. 0 visits every receiver, as --shooting flat."
-    )]
-    pub shooting_tolerance: Option<f64>,
-
     /// Visibility rays in proportion to what a shot adds, below this fraction of a receiver's light.
     #[arg(
         long,
@@ -271,27 +215,27 @@ pub struct SolveArgs {
         long,
         value_name = "R",
         long_help = "Cells per side of a hemicube's top face (even, 2 to 2048; default \
-            128): 3R² cells in all. Used by --form-factors hemicube and --solver \
+            128): 3R² cells in all. Used by --method hemicube and --method \
             gauss-seidel. The error of a hemicube factor falls like 1/R where polygon \
             edges line up with the cells and faster otherwise; time grows like R²."
     )]
     pub hemicube_resolution: Option<u32>,
 
-    /// progressive (default) or gauss-seidel.
+    /// progressive (default), or a seed baseline: hemicube, wallace, gauss-seidel, cube.
     #[arg(
         long,
         value_enum,
-        value_name = "SOLVER",
-        default_value_t = SolverKind::Progressive,
-        long_help = "progressive (default): progressive refinement, shooting the \
-            brightest patch each step, with adaptive meshing, checkpoints and --resume. \
-            gauss-seidel: the radiosity lecture notes' full matrix B = E + ρFB with form factors from a \
-            hemicube on each receiving patch, solved by Gauss-Seidel sweeps; no \
-            adaptive meshing, checkpoints or --resume; refused when the n × n f32 \
-            matrix would exceed 2 GiB (about 23 000 patches). A baseline to measure \
-            the progressive solver against."
+        value_name = "METHOD",
+        long_help = "The solution method. progressive (default): progressive refinement \
+            with the exact form factor, adaptive meshing, checkpoints and --resume, in \
+            either mode. The seed papers' baselines, kept to measure against: hemicube \
+            and wallace (progressive refinement with a hemicube's visibility or \
+            Wallace's disc factor) and gauss-seidel (the full form-factor matrix) solve \
+            diffuse mode only; cube (Immel, Cohen and Greenberg's global cube) solves \
+            directional mode only. A method that cannot solve the mode is refused \
+            before any work (docs/accuracy.md compares them)."
     )]
-    pub solver: SolverKind,
+    pub method: Option<Method>,
 
     /// diffuse (default) or directional (glossy, spherical harmonics).
     #[arg(
@@ -319,31 +263,11 @@ pub struct SolveArgs {
     )]
     pub brdf_normalization: Option<BrdfNormalization>,
 
-    /// Directional representation: sh (default) or cube (Immel, Cohen and Greenberg's (1986) global cube).
-    #[arg(
-        long,
-        value_enum,
-        value_name = "REPR",
-        long_help = "How --mode directional stores glossy radiance. sh (default): \
-            spherical harmonics of an order chosen per material, shot progressively with \
-            adaptive meshing. cube: Immel, Cohen and Greenberg's (1986) global cube, radiance on D = 6k² directions \
-            per glossy vertex (k = --cube-resolution), gathered by Gauss-Seidel sweeps in \
-            light-propagation order on the fixed patch mesh (no adaptive meshing, \
-            checkpoints or --resume); the BRDF is evaluated exactly at each direction, \
-            with no Legendre truncation or ringing. Diffuse textures (map_Kd): both \
-            integrate them per patch (each patch reflects its own texels); sh shows \
-            every textured surface textured, cube shows diffuse ones textured and \
-            glossy ones with the texture averaged around each vertex, since a cube \
-            batch cannot be textured (warned; docs/textures.md). Only meaningful with \
-            --mode directional."
-    )]
-    pub directional: Option<DirectionalRepresentation>,
-
     /// Global-cube cells per face edge k (2 to 256): D = 6k² directions.
     #[arg(
         long,
         value_name = "K",
-        long_help = "Cells per cube face edge for --directional cube (2 to 256; default \
+        long_help = "Cells per cube face edge for --method cube (2 to 256; default \
             8): D = 6k² directions per glossy vertex. Memory and time grow like k² \
             (values) to k⁴ (each glossy material's direction-to-direction BRDF matrix \
             and the reflection per sweep); in return highlights are sharper and placed \
@@ -364,21 +288,9 @@ pub struct SolveArgs {
             was tessellated (at most 1024 per side, with a warning). Smaller F: more \
             patches to shoot from and receive at, so more time and memory, and less \
             meshing bias in the light the patches shoot. A TOML scene config can set \
-            `patch_size` per object or material, in scene units or metres. An explicit \
-            --patches (or `patches` in the config's [solver]) wins over this."
+            `patch_size` or `patches` per object or material, in scene units or metres."
     )]
     pub patch_size: Option<f64>,
-
-    /// Flat rule: N × N patches per polygon, whatever its size (turns --patch-size off).
-    #[arg(
-        long,
-        value_name = "N",
-        long_help = "The flat rule: N × N patches on every polygon whose input sets \
-            none (1 to 256), whatever its size, as before size-driven meshing. Setting \
-            it here or in a scene config's [solver] table turns --patch-size off; kept \
-            to measure against (tools/sweep uses it)."
-    )]
-    pub patches: Option<u32>,
 
     /// Smallest element's longest edge, as a fraction of the scene's diagonal.
     #[arg(
@@ -390,20 +302,9 @@ pub struct SolveArgs {
             large or small. Smaller F: shadow boundaries and gradients are followed more \
             closely (less meshing bias), at the cost of more elements, vertices, rays \
             and memory. A TOML scene config can set `min_element_size` per object or \
-            material. An explicit --min-element-area wins over this."
+            material."
     )]
     pub min_element_size: Option<f64>,
-
-    /// Flat rule: smallest element as a fraction of its polygon's area (turns --min-element-size off).
-    #[arg(
-        long,
-        value_name = "A",
-        long_help = "The flat rule: adaptive subdivision stops at elements whose area is \
-            at most A × their polygon's area (0 < A <= 1), so every polygon, however \
-            small, may refine as deep. Setting it here or in a scene config's [solver] \
-            table turns --min-element-size off; kept to measure against."
-    )]
-    pub min_element_area: Option<f64>,
 
     /// Scene units per metre (e.g. 1000 for millimetres).
     #[arg(
@@ -467,64 +368,6 @@ pub struct SolveArgs {
             gets Cohen's term unchanged (docs/lab/ambient-term.md)."
     )]
     pub no_ambient: bool,
-
-    /// Shoot each patch's mean unshot light uniformly (Remington 1992), not from its quadrants.
-    #[arg(
-        long,
-        long_help = "Shoot every patch's mean unshot radiance as if it were uniform over \
-            the patch, as Remington (1992) does, instead of splitting an unevenly lit \
-            quad patch into four quadrants that each shoot their own share (the \
-            default). Uniform shooting is 10-25% cheaper at the medium preset but \
-            biased where a patch is half in shadow: its dark half lights its \
-            neighbours as brightly as its lit half (the Cornell box's final MARE \
-            against the path-traced truth is 2.9% uniform against 2.0% by quadrants, \
-            docs/accuracy.md). Directional solves shoot by quadrants too (each source sample \
-            weighted by its quadrant's share); cube solves always shoot uniformly."
-    )]
-    pub uniform_shooters: bool,
-
-    /// Directional mode: interpolate a split's new glossy vertex from its parents.
-    #[arg(
-        long,
-        long_help = "Directional mode: give a vertex that refinement creates on a glossy \
-            surface the light of earlier shots as the average of the two vertices it \
-            splits between, as Remington (1992) does, instead of gathering the light \
-            that the patches near it have shot so far (the default). The average of two \
-            reflected images puts a sharp reflection's edge where it is not; the gather \
-            costs three receives of each near patch per new glossy vertex (the glossy \
-            Cornell box's draft with final's mesh floors: 16% more time, floor camera \
-            HDR-FLIP 0.096 interpolated against 0.088 gathered, docs/accuracy.md)."
-    )]
-    pub interpolated_glossy_splits: bool,
-
-    /// Receive at every vertex of a small flat surface instead of once per surface.
-    #[arg(
-        long,
-        long_help = "Receive each shot at every vertex of a small flat surface (one patch \
-            whose longest edge is within the smallest element size, which refinement \
-            never splits) instead of once at its centroid for all its vertices (the \
-            default). The mesh resolves nothing inside such a face, so one sample \
-            gives it its light from a quarter of the receivers' work: 100k triangles \
-            of small boxes solve at draft in 43 s instead of 97 s, each face \
-            flat-shaded shot by shot (docs/scale.md, \"Small surfaces receive once\"). No surface of the Cornell box is that small. \
-            Diffuse mode only: directional shots receive at every vertex."
-    )]
-    pub per_vertex_small: bool,
-
-    /// Receive at every polygon's copy of a shared smooth vertex.
-    #[arg(
-        long,
-        long_help = "Receive each shot at every polygon's copy of a smooth surface's shared \
-            vertex instead of once per point (the default). The solver keeps each \
-            polygon's vertices apart, so a point that six triangles of a smooth mesh \
-            share is six receivers with one position and one shading normal; by \
-            default the first takes the sample and the others copy it, a third of the \
-            receivers on a tessellated sphere. The expected radiance is the same; the \
-            shot noise per point is one receiver's instead of the mean of its copies' \
-            (docs/scale.md, \"Small patches join by radiance; shared points receive once\"). Diffuse mode only: \
-            directional shots receive at every vertex."
-    )]
-    pub per_copy_vertices: bool,
 
     /// Degrees of shading-normal change a finely tessellated smooth surface's sites span (0: every point receives).
     #[arg(
@@ -612,11 +455,8 @@ impl SolveArgs {
         SettingsPatch {
             mode: self.mode,
             brdf_normalization: self.brdf_normalization,
-            directional: self.directional,
             cube_resolution: self.cube_resolution,
-            form_factors: self.form_factors,
-            shooting: self.shooting,
-            shooting_tolerance: self.shooting_tolerance,
+            method: self.method,
             full_rays_above: self.full_rays_above,
             glossy_edge: self.glossy_edge,
             shooters: self.shooters,
@@ -635,13 +475,7 @@ impl SolveArgs {
             crease_angle: self.crease_angle,
             memory_budget: self.memory_budget,
             patch_size: self.patch_size,
-            patches: self.patches,
             min_element_size: self.min_element_size,
-            min_element_area: self.min_element_area,
-            uniform_shooters: self.uniform_shooters.then_some(true),
-            interpolated_glossy_splits: self.interpolated_glossy_splits.then_some(true),
-            per_vertex_small: self.per_vertex_small.then_some(true),
-            per_copy_vertices: self.per_copy_vertices.then_some(true),
             site_angle: self.site_angle,
             ..SettingsPatch::default()
         }
@@ -726,7 +560,7 @@ mod tests {
             "--no-shadows",
             "--no-ambient",
             "--strict",
-            "--form-factors",
+            "--method",
             "wallace",
             "--mode",
             "directional",
@@ -745,16 +579,17 @@ mod tests {
         assert_eq!(p.shadows, Some(false));
         assert_eq!(p.ambient, Some(false));
         assert_eq!(p.strict, Some(true));
-        assert_eq!(p.form_factors, Some(FormFactorMethod::Wallace));
+        assert_eq!(p.method, Some(Method::Wallace));
         assert_eq!(p.mode, Some(SolveMode::Directional));
         assert_eq!(p.threads, Some(3));
         assert_eq!(p.brdf_normalization, Some(BrdfNormalization::Reciprocal));
         assert_eq!(p.patch_size, Some(0.05));
         assert_eq!(p.min_element_size, Some(0.01));
-        assert_eq!(p.patches, None);
-        let flat = parse(&["--patches", "8", "--min-element-area", "0.002"]).patch();
-        assert_eq!(flat.patches, Some(8));
-        assert_eq!(flat.min_element_area, Some(0.002));
+        // The global flat rule is gone.
+        for flag in ["--patches", "--min-element-area"] {
+            let argv = ["solver", "scene.obj", "-o", "out.sol", flag, "4"];
+            assert!(Wrapper::try_parse_from(argv).is_err(), "{flag}");
+        }
     }
 
     #[test]
@@ -772,25 +607,6 @@ mod tests {
         assert_eq!(
             parse(&["--memory-budget", "2GiB"]).patch().memory_budget,
             Some(2 << 30)
-        );
-    }
-
-    #[test]
-    fn per_vertex_small_flag_and_toml_key_reach_the_settings() {
-        // Off unless asked for: small flat surfaces receive once by default.
-        let default = SolverSettings::resolve(Preset::Draft, &[&parse(&[]).patch()]).unwrap();
-        assert!(!default.per_vertex_small);
-        let flag = parse(&["--per-vertex-small"]).patch();
-        assert!(
-            SolverSettings::resolve(Preset::Draft, &[&flag])
-                .unwrap()
-                .per_vertex_small
-        );
-        let config: SettingsPatch = toml::from_str("per_vertex_small = true").unwrap();
-        assert!(
-            SolverSettings::resolve(Preset::Draft, &[&config])
-                .unwrap()
-                .per_vertex_small
         );
     }
 
@@ -816,62 +632,6 @@ mod tests {
         let wide = parse(&["--site-angle", "45"]).patch();
         let error = SolverSettings::resolve(Preset::Draft, &[&wide]).unwrap_err();
         assert!(error.to_string().contains("site_angle"), "{error}");
-    }
-
-    #[test]
-    fn per_copy_vertices_flag_and_toml_key_reach_the_settings() {
-        // Off unless asked for: a shared smooth vertex receives once by default.
-        let default = SolverSettings::resolve(Preset::Draft, &[&parse(&[]).patch()]).unwrap();
-        assert!(!default.per_copy_vertices);
-        let flag = parse(&["--per-copy-vertices"]).patch();
-        assert!(
-            SolverSettings::resolve(Preset::Draft, &[&flag])
-                .unwrap()
-                .per_copy_vertices
-        );
-        let config: SettingsPatch = toml::from_str("per_copy_vertices = true").unwrap();
-        assert!(
-            SolverSettings::resolve(Preset::Draft, &[&config])
-                .unwrap()
-                .per_copy_vertices
-        );
-    }
-
-    #[test]
-    fn uniform_shooters_flag_and_toml_key_reach_the_settings() {
-        // Off unless asked for: the preset's quadrant shooters stay the default.
-        let default = SolverSettings::resolve(Preset::Medium, &[&parse(&[]).patch()]).unwrap();
-        assert!(!default.uniform_shooters);
-        let flag = parse(&["--uniform-shooters"]).patch();
-        assert_eq!(flag.uniform_shooters, Some(true));
-        assert!(
-            SolverSettings::resolve(Preset::Final, &[&flag])
-                .unwrap()
-                .uniform_shooters
-        );
-        // The scene config's `[solver]` table takes the same key (SettingsPatch's
-        // TOML form), and the flag's absence leaves it alone.
-        let config: SettingsPatch = toml::from_str("uniform_shooters = true").unwrap();
-        let resolved =
-            SolverSettings::resolve(Preset::Draft, &[&config, &parse(&[]).patch()]).unwrap();
-        assert!(resolved.uniform_shooters);
-    }
-
-    #[test]
-    fn interpolated_glossy_splits_flag_and_toml_key_reach_the_settings() {
-        // Off unless asked for: new glossy vertices gather their near patches.
-        let default = SolverSettings::resolve(Preset::Final, &[&parse(&[]).patch()]).unwrap();
-        assert!(!default.interpolated_glossy_splits);
-        let flag = parse(&["--interpolated-glossy-splits"]).patch();
-        assert!(
-            SolverSettings::resolve(Preset::Medium, &[&flag])
-                .unwrap()
-                .interpolated_glossy_splits
-        );
-        let config: SettingsPatch = toml::from_str("interpolated_glossy_splits = true").unwrap();
-        let resolved =
-            SolverSettings::resolve(Preset::Draft, &[&config, &parse(&[]).patch()]).unwrap();
-        assert!(resolved.interpolated_glossy_splits);
     }
 
     #[test]

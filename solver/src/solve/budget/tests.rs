@@ -15,10 +15,9 @@ fn bundled(file: &str, preset: Preset, mode: SolveMode, patches: u32) -> (Scene,
     let mut settings = SolverSettings::preset(preset);
     settings.apply(&loaded.settings);
     settings.mode = mode;
-    settings.patches = patches;
     settings.samples = 2;
     let mut scene = loaded.scene;
-    scene.fill_default_patches(settings.patches);
+    scene.fill_default_patches(patches);
     (scene, settings)
 }
 
@@ -72,11 +71,11 @@ fn modelled(solver: &Solver) -> u64 {
 /// The diffuse indexes as allocated, against the estimate's index term.
 /// The footprint's per-surface lists and the unshot tree are summed from
 /// their capacities (the lists are small heap blocks, whose spare capacity is
-/// resident): the estimate must give them exactly. The per-surface marks, the
-/// touched list and bounded shooting's visited list change length from shot
-/// to shot, and the estimate charges their largest (one `bool` and one `u32`
-/// per surface, one `u32` per vertex): their lengths are checked against
-/// those bounds, and the bounds make up the rest of the term. The small
+/// resident): the estimate must give them exactly. The per-surface marks and
+/// the touched list change length from shot to shot, and the estimate
+/// charges their largest (one `bool` and one `u32` per surface): their
+/// lengths are checked against those bounds, and the bounds make up the rest
+/// of the term. The small
 /// surfaces' index and points (`small.rs`), the twins' table (`twins.rs`)
 /// and the sites' tables (`sites.rs`) are summed from their capacities.
 fn check_index_term(solver: &Solver) {
@@ -86,14 +85,10 @@ fn check_index_term(solver: &Solver) {
     let tree = solver
         .unshot_tree_allocated()
         .expect("built on the first step");
-    let (marked, touched, visited) = solver.footprint.set_lengths();
+    let (marked, touched) = solver.footprint.set_lengths();
     let surfaces = solver.mesh.surfaces.len();
-    let vertices = solver.mesh.vertices.len();
-    assert!(marked <= surfaces && touched <= surfaces && visited <= vertices);
-    if !c.bounded {
-        assert_eq!(visited, 0);
-    }
-    let bounds = (surfaces * (1 + 4)) as u64 + if c.bounded { 4 * vertices as u64 } else { 0 };
+    assert!(marked <= surfaces && touched <= surfaces);
+    let bounds = (surfaces * (1 + 4)) as u64;
     let small = solver.small.allocated_bytes()
         + solver.twins.allocated_bytes()
         + solver.sites.allocated_bytes();
@@ -144,31 +139,19 @@ fn estimate_matches_the_allocated_state_of_a_diffuse_solve() {
     assert!(off(before.vertices, real.vertices) < 0.2);
 }
 
-/// The footprint index and the unshot tree (diffuse mode), with flat and
-/// with bounded shooting, after every shot of a refining solve.
+/// The footprint index and the unshot tree (diffuse mode) after every shot
+/// of a refining solve.
 #[test]
 fn estimate_matches_the_allocated_indexes_of_a_diffuse_solve() {
-    for shooting in [
-        crate::settings::Shooting::Flat,
-        crate::settings::Shooting::Bounded,
-    ] {
-        let (scene, mut settings) =
-            bundled("cornell_box.obj", Preset::Draft, SolveMode::Diffuse, 4);
-        settings.max_shots = 12;
-        settings.shooting = shooting;
-        let mut solver = Solver::new(&scene, &settings).unwrap();
-        let before = solver.memory_estimate();
-        assert!(before.index > 0 && before.gather > 0);
-        let mut visited = 0;
-        while solver.step().is_some() {
-            check_index_term(&solver);
-            visited = visited.max(solver.footprint.set_lengths().2);
-        }
-        assert!(solver.mesh.split_log.len() > 10, "the test must refine");
-        if shooting == crate::settings::Shooting::Bounded {
-            assert!(visited > 0, "bounded shooting keeps its visited list");
-        }
+    let (scene, mut settings) = bundled("cornell_box.obj", Preset::Draft, SolveMode::Diffuse, 4);
+    settings.max_shots = 12;
+    let mut solver = Solver::new(&scene, &settings).unwrap();
+    let before = solver.memory_estimate();
+    assert!(before.index > 0 && before.gather > 0);
+    while solver.step().is_some() {
+        check_index_term(&solver);
     }
+    assert!(solver.mesh.split_log.len() > 10, "the test must refine");
 }
 
 /// A directional solve holds neither index: its estimate charges none.
@@ -349,7 +332,7 @@ fn refinement_stays_within_the_planned_budget() {
     let free = Solver::new(&scene, &settings).unwrap();
     let start = free.memory_estimate().peak();
     // Room for a few dozen splits past the unrefined mesh.
-    let limit = ((start + 30 * split_cost(0, false, false)) as f64 / PLANNING_FRACTION) as u64;
+    let limit = ((start + 30 * split_cost(0, false)) as f64 / PLANNING_FRACTION) as u64;
     settings.memory_budget = Some(limit);
     let mut solver = Solver::new(&scene, &settings).unwrap();
     let mut warnings = Vec::new();

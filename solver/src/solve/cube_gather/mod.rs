@@ -17,8 +17,7 @@
 //!   area-weighted average of its vertices' radiance (the progressive solver's
 //!   gather weights, [`Solver::patch_weights`]), each glossy vertex looked up
 //!   bilinearly in its cube toward the direction from the patch's centre to the
-//!   receiver (in the polygon's frame, or in the vertex's own frame on a
-//!   smooth surface: below).
+//!   receiver (in the polygon's frame).
 //! * Transport ([`transport`]): for receiver v and source s, the factor
 //!   F(v←s) of the progressive solver (exact point-to-polygon factor × visible
 //!   fraction of `samples` rays); a glossy receiver splats each visible
@@ -33,36 +32,13 @@
 //!   directions ([`lobe`]; no Legendre truncation). A diffuse receiver gets
 //!   L_v = Le_v + Kd · Σ_s F(v←s) L_s, the diffuse solvers' equation.
 //!
-//! ## Textured surfaces
+//! ## Scope: untextured flat facets
 //!
-//! A surface with a diffuse texture and UVs stores per vertex its incident
-//! E/π instead of its diffuse radiance, and each of its patches reflects the
-//! integral of ρ(uv) · E/π over its own area through the progressive
-//! solver's RGB gather weights, the texture integrated exactly over each
-//! display triangle's UV triangle at its mip level ([`textured`]; the same
-//! model as the diffuse, SH and Gauss–Seidel solves). The ∞-norm bound
-//! below is then taken in a norm that weights E/π by the reflectance of the
-//! texels beside it. The mesh is fixed, so nothing refines on E.
-//!
-//! ## Smooth surfaces: cubes about the shading normal
-//!
-//! On a smooth surface (`crease_angle`, docs/smooth-surfaces.md) a glossy
-//! vertex reflects about its shading normal n_s, as the SH mode's lobes do. Its
-//! cube is written in a frame of its own, z = n_s ([`vertex_frame`]), and the
-//! solution file carries that frame per vertex, which the runtime already reads
-//! per vertex. In that frame the material is the same as on a flat facet, so
-//! the same cell BRDF applies unchanged (its normalization, reciprocity and
-//! power bound included): incoming light is binned into the cells of this
-//! frame, reflected by the material's matrix, and a patch looks each such
-//! vertex up in its own frame toward the receiver (computed per sweep, not
-//! stored in the pair). Flat facets, and vertices of coplanar smooth groups,
-//! keep the polygon's frame, so they solve bit for bit as before.
-//!
-//! The cube holds the hemisphere above n_s. Directions above the facet's plane
-//! but below the shading horizon (within the facet-to-shading angle, a few
-//! degrees at a silhouette) get nothing from that vertex, not even its diffuse
-//! part, where the SH mode still evaluates its series: a thin darker band at
-//! grazing views, and a slight loss toward such receivers.
+//! The global cube is a seed baseline, kept at the scope Immel, Cohen and
+//! Greenberg (1986) measured: it refuses, before any work, a scene with a
+//! texture (diffuse or emission) or a smooth surface whose shading normals
+//! turn ([`check_scene`]); the progressive method solves both, in both modes.
+//! Each cube is written in its polygon's frame ([`vertex_frame`]).
 //!
 //! ## Solution: Gauss–Seidel in light-propagation order
 //!
@@ -107,9 +83,7 @@
 //! min(4 × samples, H) incoming cells per pair); the solve is refused above
 //! [`CubeLimits::max_bytes`] (default 2 GiB).
 
-mod emission;
 mod lobe;
-mod textured;
 mod transport;
 
 pub use lobe::{CellBrdf, ExactLobe};
@@ -126,7 +100,6 @@ use solution::cube;
 use solution::format::{Batch, Representation, ScalarType, Solution, SolveMode, Vertex};
 use std::f64::consts::PI;
 use std::time::Instant;
-use textured::CubeTexturing;
 use transport::{PairInput, Receiver};
 
 /// Vertices updated together (in parallel) within a Gauss–Seidel sweep.
@@ -169,8 +142,8 @@ pub enum CubeError {
     #[error(
         "the global cube at k = {k} (D = {directions} directions) needs about {bytes} bytes \
          ({}) for {vertices} vertices ({glossy} glossy) and {patches} patches, above the limit \
-         of {limit} bytes ({}); use a smaller --cube-resolution, fewer --patches or --samples, \
-         or --directional sh",
+         of {limit} bytes ({}); use a smaller --cube-resolution, a larger --patch-size, fewer --samples, \
+         or --method progressive",
         human_bytes(*bytes),
         human_bytes(*limit as u128)
     )]
@@ -187,6 +160,21 @@ pub enum CubeError {
     OutOfMemory { bytes: u128 },
     #[error("tolerance {0} is out of range: 0 < tolerance < 1")]
     BadTolerance(f64),
+    #[error(
+        "--method cube solves untextured scenes, the scope of Immel, Cohen and Greenberg \
+         (1986): material `{material}` has {what} on {item}; use --method progressive"
+    )]
+    Textured {
+        material: String,
+        what: &'static str,
+        item: String,
+    },
+    #[error(
+        "--method cube solves flat facets, the scope of Immel, Cohen and Greenberg (1986): \
+         {item} is part of a smooth surface (its shading normals turn across it); use \
+         --method progressive, or --crease-angle 0 to keep every polygon a flat facet"
+    )]
+    Smooth { item: String },
 }
 
 /// The cells of a cube of resolution k above a surface (local z > 0), with
@@ -301,8 +289,6 @@ pub struct CubeResult {
     /// Per mesh vertex: its frame (n, t).
     frames: Vec<(DVec3, DVec3)>,
     cells: UpperCells,
-    /// The textured patches and vertices ([`textured`]).
-    texturing: CubeTexturing,
     /// Per mesh vertex: the receiving point the factors were computed at
     /// (re-centred coordinates) — the solver's `offset` was subtracted.
     pub receiving_points: Vec<DVec3>,
@@ -317,8 +303,7 @@ pub struct CubeResult {
     pub error_bound: f64,
     /// ρ_max/(1 − ρ_max) × (power the last sweep added / emitted power).
     pub power_bound: f64,
-    /// The power the sources emit, W: Σ_p π A_p Σ_rgb Le_p, with an emission
-    /// texture's per-patch mean (π ∫ Le dA; `emission.rs`).
+    /// The power the sources emit, W: Σ_p π A_p Σ_rgb Le_p.
     pub emitted_power: f64,
     pub converged: bool,
     pub rays: u64,
@@ -331,17 +316,11 @@ pub struct CubeResult {
 impl CubeResult {
     /// Outgoing radiance (RGB) of mesh vertex `v` toward the world direction
     /// `dir`: bilinear in its cube for a glossy vertex (0 below its surface),
-    /// its one value for a diffuse vertex. On a textured surface the diffuse
-    /// part is the texels' mean around the vertex times its E/π, what its
-    /// untextured display shows ([`textured::VertexTexture::reflectance`]).
+    /// its one value for a diffuse vertex.
     pub fn radiance_toward(&self, v: u32, dir: DVec3) -> DVec3 {
         let values = &self.values[v as usize];
-        let texture = self.texturing.vertex(v);
         if values.len() == 3 {
-            return match texture {
-                Some(t) => t.emission + t.reflectance * DVec3::from_slice(values),
-                None => DVec3::from_slice(values),
-            };
+            return DVec3::from_slice(values);
         }
         let (n, t) = self.frames[v as usize];
         let local = solution::sh::to_local(dir.normalize_or_zero(), n, t);
@@ -352,17 +331,7 @@ impl CubeResult {
                 sum += DVec3::from_slice(&values[3 * s as usize..3 * s as usize + 3]) * w;
             }
         }
-        match texture {
-            Some(t) if local.z > 0.0 => sum + t.reflectance * textured::irradiance_over_pi(values),
-            _ => sum,
-        }
-    }
-
-    /// E/π (incident irradiance over π) of mesh vertex `v` on a textured
-    /// surface ([`textured`]); `None` elsewhere.
-    pub fn irradiance_over_pi(&self, v: u32) -> Option<DVec3> {
-        self.texturing.vertex(v)?;
-        Some(textured::irradiance_over_pi(&self.values[v as usize]))
+        sum
     }
 
     /// Whether mesh vertex `v` is stored as a cube (its surface is glossy).
@@ -399,34 +368,20 @@ pub fn solve_cube(
     limits: &CubeLimits,
 ) -> Result<CubeResult, CubeError> {
     check_inputs(settings, limits)?;
+    check_scene(scene)?;
     let k = settings.cube_resolution;
+    // The patches and the diffuse transport are the progressive solver's.
     let mut base = settings.clone();
     base.mode = SolveMode::Diffuse;
+    base.method = crate::method::Method::Progressive;
     base.adaptive = false;
     let solver = Solver::new(scene, &base)?;
     let mesh = solver.mesh();
-    let (mut surfaces, glossy_alphas) = surface_materials(scene, mesh)?;
-    // Emission textures: per-patch means on top of the vertices' (`emission.rs`).
-    let emission_offsets = emission::patch_offsets(&solver, &mut surfaces);
-    let rgb_entries = solver
-        .patch_rgb_weights
-        .iter()
-        .map(|w| w.len() as u64)
-        .sum();
-    let textured_bytes = CubeTexturing::bytes(mesh, rgb_entries);
+    let (surfaces, glossy_alphas) = surface_materials(scene, mesh)?;
     let materials = (&surfaces[..], glossy_alphas.len());
-    let bytes = check_memory(k, mesh, materials, textured_bytes, settings, limits)?;
+    let bytes = check_memory(k, mesh, materials, settings, limits)?;
     let cells = UpperCells::new(k);
     let brdfs = cell_brdfs(&glossy_alphas, settings, &cells, bytes)?;
-    let texturing = CubeTexturing::new(
-        &solver,
-        &surfaces
-            .iter()
-            .map(|s| s.brdf.is_some())
-            .collect::<Vec<_>>(),
-        &surfaces.iter().map(|s| s.emission).collect::<Vec<_>>(),
-    );
-
     let start = Instant::now();
     let occluder = mesh_occluder(mesh);
     let kd: Vec<DVec3> = surfaces.iter().map(|s| s.kd).collect();
@@ -444,13 +399,6 @@ pub fn solve_cube(
         solver: &solver,
         cells: &cells,
         weights: normalized_patch_weights(&solver),
-        own_frames: (0..mesh.vertices.len())
-            .map(|v| shading_frame(mesh, v))
-            .collect(),
-        receiving: &receiving_points,
-        sources: &transport.sources,
-        emission_offsets,
-        texturing: &texturing,
     };
     let sweep = run_sweeps(&state, mesh, limits);
     let bounds = Bounds::new(&state, &sweep);
@@ -462,7 +410,6 @@ pub fn solve_cube(
         frames: &frames,
         cells: &cells,
         k,
-        texturing: &texturing,
     };
     fill_batches(&solver, &sweep.values, &layout, &mut solution);
     let report = CubeReport {
@@ -485,7 +432,6 @@ pub fn solve_cube(
         values: sweep.values,
         frames,
         cells,
-        texturing,
         receiving_points,
         offset: solver.offset(),
         vertex_areas: sweep.area,
@@ -521,36 +467,11 @@ fn vertex_frames(mesh: &Mesh) -> Vec<(DVec3, DVec3)> {
         .collect()
 }
 
-/// The frame vertex `v`'s cube is written in (module documentation, "Smooth
-/// surfaces"): its own [`shading_frame`] on a smooth surface, else its
-/// polygon's (n, t).
+/// The frame vertex `v`'s cube is written in: its polygon's (n, t) (the
+/// method refuses smooth surfaces, [`check_scene`]).
 pub(super) fn vertex_frame(mesh: &Mesh, v: usize) -> (DVec3, DVec3) {
-    shading_frame(mesh, v).unwrap_or_else(|| {
-        let s = &mesh.surfaces[mesh.vertices[v].surface as usize];
-        (s.normal, s.tangent)
-    })
-}
-
-/// Vertex `v`'s frame about its shading normal, when that differs from its
-/// polygon's normal by more than rounding (1 − n_s · n > 1e-12, an angle
-/// above 1.4e-6 rad: a coplanar smooth group's normals, interpolated and
-/// renormalised, differ from the polygon's only in their last bits, and such
-/// a vertex keeps the polygon's frame, so a flat scene solves bit for bit as
-/// before). The tangent is a function of n_s alone (Duff et al. 2017,
-/// "Building an orthonormal basis, revisited", glam's `any_orthonormal_pair`),
-/// so the vertices of two polygons that meet at a smooth seam, with one
-/// position and one shading normal, get the same frame and the same cube.
-/// Its discontinuities do not matter: no cube value is ever combined with
-/// another vertex's cell by cell, only radiance looked up in each vertex's
-/// own frame.
-fn shading_frame(mesh: &Mesh, v: usize) -> Option<(DVec3, DVec3)> {
-    let mv = &mesh.vertices[v];
-    let n = mesh.surfaces[mv.surface as usize].normal;
-    if 1.0 - mv.normal.dot(n) <= 1e-12 {
-        return None;
-    }
-    let (t, _) = mv.normal.any_orthonormal_pair();
-    Some((mv.normal, t))
+    let s = &mesh.surfaces[mesh.vertices[v].surface as usize];
+    (s.normal, s.tangent)
 }
 
 /// Each vertex's receiving point, which depends only on the vertex and the
@@ -568,6 +489,45 @@ fn receiving_points(
 }
 
 /// Settings in range, directional mode, a usable tolerance.
+/// Refuses what the global cube does not model, before any work: a texture
+/// (diffuse or emission) on a polygon with UVs, and a smooth surface whose
+/// shading normals turn (more than 1.4e-6 rad from the facet's normal: a
+/// coplanar smooth group's interpolated normals are the facet's to rounding).
+/// The progressive method solves both.
+fn check_scene(scene: &Scene) -> Result<(), CubeError> {
+    for p in &scene.polygons {
+        let m = &scene.materials[p.material];
+        if p.uv_map.is_some() {
+            let what = if m.diffuse_texture.is_some() {
+                Some("a diffuse texture")
+            } else if m.emission_texture.is_some() {
+                Some("an emission texture")
+            } else {
+                None
+            };
+            if let Some(what) = what {
+                return Err(CubeError::Textured {
+                    material: m.name.clone(),
+                    what,
+                    item: p.source.to_string(),
+                });
+            }
+        }
+        if let Some(normals) = &p.vertex_normals {
+            let facet = crate::geometry::polygon::newell_normal(&p.vertices).normalize_or_zero();
+            if normals
+                .iter()
+                .any(|n| n.normalize_or_zero().angle_between(facet) > 1.4e-6)
+            {
+                return Err(CubeError::Smooth {
+                    item: p.source.to_string(),
+                });
+            }
+        }
+    }
+    Ok(())
+}
+
 fn check_inputs(settings: &SolverSettings, limits: &CubeLimits) -> Result<(), CubeError> {
     settings.validate().map_err(SolveError::from)?;
     if settings.mode != SolveMode::Directional {
@@ -640,7 +600,6 @@ fn check_memory(
     k: u32,
     mesh: &Mesh,
     (surfaces, glossy_materials): (&[SurfaceData], usize),
-    textured_bytes: u128,
     settings: &SolverSettings,
     limits: &CubeLimits,
 ) -> Result<u128, CubeError> {
@@ -653,7 +612,7 @@ fn check_memory(
         mesh.patches.len() as u64,
         glossy_materials as u64,
         settings.samples,
-    ) + textured_bytes;
+    );
     if bytes > limits.max_bytes as u128 {
         return Err(CubeError::TooLarge {
             k,
@@ -695,11 +654,9 @@ fn cell_brdfs(
     Ok(brdfs)
 }
 
-/// What the transport leaves: every receiver's pairs, and each source patch's
-/// (centre, normal) as its shot saw them.
+/// What the transport leaves: every receiver's pairs.
 struct Transport {
     receivers: Vec<Receiver>,
-    sources: Vec<(DVec3, DVec3)>,
 }
 
 /// Transport, source by source (one sample pool alive at a time), each source's
@@ -716,7 +673,6 @@ fn transport_pairs(
 ) -> Transport {
     let n = mesh.vertices.len();
     let mut receivers: Vec<Receiver> = vec![Receiver::default(); n];
-    let mut sources = Vec::with_capacity(mesh.patches.len());
     for source in 0..mesh.patches.len() as u32 {
         let shot = Shot::for_patch(
             mesh,
@@ -728,7 +684,6 @@ fn transport_pairs(
             kd,
         );
         let pool = SamplePool::new(&shot);
-        sources.push((shot.centre, shot.normal));
         let source_glossy = surfaces[shot.source_surface as usize].brdf.is_some();
         let results: Vec<_> = (0..n as u32)
             .into_par_iter()
@@ -753,7 +708,7 @@ fn transport_pairs(
             }
         }
     }
-    Transport { receivers, sources }
+    Transport { receivers }
 }
 
 /// Each patch's gather weights, normalized to sum to 1 (empty for a patch with
@@ -800,17 +755,14 @@ fn run_sweeps(state: &State<'_>, mesh: &Mesh, limits: &CubeLimits) -> SweepOutco
     let n = mesh.vertices.len();
     let h = state.cells.len();
     let surfaces = state.surfaces;
-    // Emitted radiance; a textured vertex's E/π (its one value when diffuse,
-    // three more after its cube when glossy) starts at 0.
+    // Emitted radiance.
     let mut values: Vec<Vec<f64>> = (0..n)
         .map(|v| {
             let e = surfaces[mesh.vertices[v].surface as usize].emission;
-            let textured = state.texturing.vertex(v as u32).is_some();
-            match (is_glossy(mesh, surfaces, v), textured) {
-                (true, false) => e.to_array().repeat(h),
-                (true, true) => [e.to_array().repeat(h), vec![0.0; 3]].concat(),
-                (false, false) => e.to_array().to_vec(),
-                (false, true) => vec![0.0; 3],
+            if is_glossy(mesh, surfaces, v) {
+                e.to_array().repeat(h)
+            } else {
+                e.to_array().to_vec()
             }
         })
         .collect();
@@ -830,7 +782,11 @@ fn run_sweeps(state: &State<'_>, mesh: &Mesh, limits: &CubeLimits) -> SweepOutco
         .zip(&state.cells.directions)
         .map(|(&solid, d)| d.z * solid)
         .collect();
-    let emitted = emission::emitted_power(mesh, surfaces, &state.emission_offsets);
+    let emitted: f64 = mesh
+        .patches
+        .iter()
+        .map(|p| PI * p.area * surfaces[p.surface as usize].emission.element_sum())
+        .sum();
     let mut sweeps = 0;
     let mut change = f64::INFINITY;
     let mut added_power = 0.0;
@@ -846,21 +802,7 @@ fn run_sweeps(state: &State<'_>, mesh: &Mesh, limits: &CubeLimits) -> SweepOutco
             for (&v, new) in block.iter().zip(updated) {
                 let old = &values[v as usize];
                 let mut power = 0.0;
-                if let Some(t) = state.texturing.vertex(v) {
-                    // E/π: its change in the weighted norm ([`textured`]),
-                    // its power through the texels' mean around it.
-                    let len = new.len();
-                    let (a, b) = (&new[len - 3..], &old[len - 3..]);
-                    let d = (DVec3::from_slice(a) - DVec3::from_slice(b)).abs();
-                    largest = largest.max(t.scale * d.max_element());
-                    power += PI * t.reflectance.dot(d);
-                }
-                let cells = if state.texturing.vertex(v).is_some() {
-                    new.len() - 3
-                } else {
-                    new.len()
-                };
-                for (c, (a, b)) in new[..cells].iter().zip(old).enumerate() {
+                for (c, (a, b)) in new.iter().zip(old).enumerate() {
                     let d = (a - b).abs();
                     largest = largest.max(d);
                     power += d * if new.len() == 3 {
@@ -875,8 +817,7 @@ fn run_sweeps(state: &State<'_>, mesh: &Mesh, limits: &CubeLimits) -> SweepOutco
         }
         let scale = values
             .iter()
-            .enumerate()
-            .map(|(v, x)| state.texturing.largest(v as u32, x))
+            .map(|x| x.iter().fold(0.0f64, |m, &x| m.max(x.abs())))
             .fold(0.0f64, f64::max);
         change = if scale > 0.0 { largest / scale } else { 0.0 };
         if change < limits.tolerance {
@@ -915,16 +856,11 @@ impl Bounds {
         } else {
             f64::INFINITY
         };
-        // The largest reflectance of any beam: Kd + Ks, or on a textured
-        // surface Ks + the largest texel reflectance next to a vertex (its
-        // scale c_v, [`textured`]).
+        // The largest reflectance of any beam: Kd + Ks.
         let rho_max = (0..n as u32)
             .map(|v| {
                 let s = state.surface_of(v);
-                match state.texturing.vertex(v) {
-                    Some(t) => t.scale + s.ks.max_element(),
-                    None => (s.kd + s.ks).max_element(),
-                }
+                (s.kd + s.ks).max_element()
             })
             .fold(0.0, f64::max);
         let power_bound = if rho_max < 1.0 && sweep.emitted > 0.0 {
@@ -1005,17 +941,6 @@ struct State<'a> {
     cells: &'a UpperCells,
     /// Per patch: (vertex, weight) with weights summing to 1.
     weights: Vec<Vec<(u32, f64)>>,
-    /// Per vertex: its [`shading_frame`], where its cube has one of its own.
-    own_frames: Vec<Option<(DVec3, DVec3)>>,
-    /// Per vertex: its receiving point (where its pairs' factors were taken).
-    receiving: &'a [DVec3],
-    /// Per patch: (centre, normal), as its shot saw them.
-    sources: &'a [(DVec3, DVec3)],
-    /// Per patch of an emission-textured surface: its mean Le less its
-    /// vertices' ([`emission::patch_offsets`]); empty when none emits a texture.
-    emission_offsets: Vec<DVec3>,
-    /// The (diffuse-)textured patches and vertices ([`textured`]).
-    texturing: &'a CubeTexturing,
 }
 
 impl State<'_> {
@@ -1023,42 +948,15 @@ impl State<'_> {
         &self.surfaces[self.solver.mesh().vertices[v as usize].surface as usize]
     }
 
-    /// Radiance of source patch `p` toward receiver `v` of `pair`: the
+    /// Radiance of source patch `p` toward the receiver of `pair`: the
     /// weighted average of its vertices', each glossy one looked up at the
-    /// pair's taps, or in its own frame toward `v` (a smooth surface's vertex;
-    /// nothing when `v` is below its shading horizon), plus its emission
-    /// offset on an emission-textured surface (`emission.rs`). A textured
-    /// patch adds ∫ ρ E/π dA / A through its RGB weights; a diffuse one's
-    /// vertices hold only E/π, so its emission is added instead of their
-    /// values ([`textured`]).
-    fn source_radiance(&self, values: &[Vec<f64>], pair: &transport::Pair, v: u32) -> DVec3 {
+    /// pair's taps.
+    fn source_radiance(&self, values: &[Vec<f64>], pair: &transport::Pair) -> DVec3 {
         let mut sum = DVec3::ZERO;
-        let mut vertices = self.weights[pair.source as usize].as_slice();
-        if let Some(rgb) = self.texturing.patch(pair.source) {
-            for &(u, w) in rgb {
-                sum += w * textured::irradiance_over_pi(&values[u as usize]);
-            }
-            let surface =
-                &self.surfaces[self.solver.mesh().patches[pair.source as usize].surface as usize];
-            if surface.brdf.is_none() {
-                sum += surface.emission;
-                vertices = &[];
-            }
-        }
-        for &(u, w) in vertices {
+        for &(u, w) in &self.weights[pair.source as usize] {
             let x = &values[u as usize];
             if x.len() == 3 {
                 sum += DVec3::from_slice(x) * w;
-            } else if let Some((n, t)) = self.own_frames[u as usize] {
-                let (centre, normal) = self.sources[pair.source as usize];
-                let toward = transport::toward_receiver(centre, normal, self.receiving[v as usize]);
-                let local = solution::sh::to_local(toward, n, t);
-                for (slot, t) in self.cells.taps(local).into_iter().flatten() {
-                    if t > 0.0 {
-                        let o = 3 * slot as usize;
-                        sum += DVec3::from_slice(&x[o..o + 3]) * (w * t);
-                    }
-                }
             } else {
                 for &(slot, t) in &pair.taps {
                     if t > 0.0 {
@@ -1068,9 +966,6 @@ impl State<'_> {
                 }
             }
         }
-        if let Some(offset) = self.emission_offsets.get(pair.source as usize) {
-            sum += *offset;
-        }
         sum
     }
 
@@ -1078,16 +973,11 @@ impl State<'_> {
     fn update(&self, v: u32, values: &[Vec<f64>], incoming: &mut Vec<f64>) -> Vec<f64> {
         let s = self.surface_of(v);
         let receiver = &self.receivers[v as usize];
-        let textured = self.texturing.vertex(v).is_some();
         let Some(b) = s.brdf else {
-            // Diffuse: L = Le + Kd Σ_s F(v←s) L_s (the diffuse solvers' equation),
-            // or on a textured surface its E/π, Σ_s F(v←s) L_s.
+            // Diffuse: L = Le + Kd Σ_s F(v←s) L_s (the diffuse solvers' equation).
             let mut gathered = DVec3::ZERO;
             for pair in &receiver.pairs {
-                gathered += self.source_radiance(values, pair, v) * pair.factor;
-            }
-            if textured {
-                return gathered.to_array().to_vec();
+                gathered += self.source_radiance(values, pair) * pair.factor;
             }
             return (s.emission + s.kd * gathered).to_array().to_vec();
         };
@@ -1097,7 +987,7 @@ impl State<'_> {
         let mut irradiance = DVec3::ZERO;
         let mut start = 0;
         for pair in &receiver.pairs {
-            let e = self.source_radiance(values, pair, v) * PI;
+            let e = self.source_radiance(values, pair) * PI;
             irradiance += e * pair.factor;
             for &(slot, w) in &receiver.entries[start..pair.entries_end as usize] {
                 let o = 3 * slot as usize;
@@ -1107,13 +997,8 @@ impl State<'_> {
             }
             start = pair.entries_end as usize;
         }
-        // Emission and the diffuse part are the same in every upper cell; on
-        // a textured surface the diffuse part is its E/π, kept after the cube.
-        let base = if textured {
-            s.emission
-        } else {
-            s.emission + s.kd * irradiance / PI
-        };
+        // Emission and the diffuse part are the same in every upper cell.
+        let base = s.emission + s.kd * irradiance / PI;
         let mut out = base.to_array().repeat(h);
         let matrix = &self.brdfs[b].matrix;
         for (i, e) in incoming.chunks_exact(3).enumerate() {
@@ -1127,29 +1012,18 @@ impl State<'_> {
                 o[2] += f * e.z;
             }
         }
-        if textured {
-            out.extend((irradiance / PI).to_array());
-        }
         out
     }
 
     /// The largest row sum of vertex `v`'s reflection operator (see the module
     /// documentation's convergence paragraph).
-    /// Each source counts with its gain in the weighted norm, and a textured
-    /// receiver's E/π row with its scale c_v ([`textured`]); both are 1
-    /// without textures.
     fn row_sum(&self, v: u32) -> f64 {
         let s = self.surface_of(v);
         let receiver = &self.receivers[v as usize];
-        let gain = |p: &transport::Pair| self.texturing.gain(p.source);
-        let total: f64 = receiver.pairs.iter().map(|p| p.factor * gain(p)).sum();
-        let texture = self.texturing.vertex(v);
-        let (diffuse, own) = match texture {
-            Some(t) => (DVec3::ZERO, t.scale * total),
-            None => (s.kd * total, 0.0),
-        };
+        let total: f64 = receiver.pairs.iter().map(|p| p.factor).sum();
+        let diffuse = s.kd * total;
         let Some(b) = s.brdf else {
-            return diffuse.max_element().max(own);
+            return diffuse.max_element().max(0.0);
         };
         let h = self.cells.len();
         let mut weight = vec![0.0; h];
@@ -1157,7 +1031,7 @@ impl State<'_> {
         for pair in &receiver.pairs {
             let end = pair.entries_end as usize;
             for &(slot, w) in &receiver.entries[start..end] {
-                weight[slot as usize] += PI * w * gain(pair);
+                weight[slot as usize] += PI * w;
             }
             start = end;
         }
@@ -1171,7 +1045,7 @@ impl State<'_> {
             }
         }
         let glossy = rows.iter().copied().fold(0.0, f64::max);
-        (diffuse + s.ks * glossy).max_element().max(own)
+        (diffuse + s.ks * glossy).max_element().max(0.0)
     }
 
     /// Immel, Cohen and Greenberg 1986, Fig. 10: emitters' vertices first, then the vertices that gather
@@ -1229,26 +1103,19 @@ struct BatchLayout<'a> {
     frames: &'a [(DVec3, DVec3)],
     cells: &'a UpperCells,
     k: u32,
-    texturing: &'a CubeTexturing,
 }
 
 /// Replaces `solution`'s order-0 batch by a diffuse batch (order-0 SH,
 /// c₀₀ = L·√(4π)) and a cube batch of the glossy vertices (D × 3 values, 0
 /// below the surface), each with the display triangles of its vertices, and
-/// no textures. A textured vertex shows the texels' mean around it times its E/π (the
-/// display `cube_textured.rs` textures where the format allows).
+/// no textures.
 fn fill_batches(
     solver: &Solver,
     values: &[Vec<f64>],
     layout: &BatchLayout<'_>,
     solution: &mut Solution,
 ) {
-    let BatchLayout {
-        frames,
-        cells,
-        k,
-        texturing,
-    } = *layout;
+    let BatchLayout { frames, cells, k } = *layout;
     let mesh = solver.mesh();
     let d = cube::direction_count(k) as usize;
     let scale = (4.0 * PI).sqrt();
@@ -1282,29 +1149,21 @@ fn fill_batches(
             normal: f(normal),
             tangent: f(tangent),
         };
-        let texture = texturing.vertex(v as u32);
         if x.len() == 3 {
             local[v] = (false, diffuse.vertices.len() as u32);
             diffuse.vertices.push(vertex);
-            let l = match texture {
-                Some(t) => t.emission + t.reflectance * textured::irradiance_over_pi(x),
-                None => DVec3::from_slice(x),
-            };
+            let l = DVec3::from_slice(x);
             diffuse
                 .coefficients
                 .extend(l.to_array().map(|l| (l * scale) as f32));
         } else {
             local[v] = (true, glossy.vertices.len() as u32);
             glossy.vertices.push(vertex);
-            let reflected = texture.map_or(DVec3::ZERO, |t| {
-                t.reflectance * textured::irradiance_over_pi(x)
-            });
             let start = glossy.coefficients.len();
             glossy.coefficients.resize(start + 3 * d, 0.0);
             for (slot, &cell) in cells.cells.iter().enumerate() {
                 for c in 0..3 {
-                    glossy.coefficients[start + 3 * cell as usize + c] =
-                        (x[3 * slot + c] + reflected[c]) as f32;
+                    glossy.coefficients[start + 3 * cell as usize + c] = x[3 * slot + c] as f32;
                 }
             }
         }
@@ -1318,16 +1177,9 @@ fn fill_batches(
         .into_iter()
         .filter(|b| !b.vertices.is_empty())
         .collect();
-    // No batch here is textured: the progressive solver's textures, if it
-    // wrote any, are unused (`cube_textured.rs` adds those it shows).
+    // No batch here is textured (the method refuses textured scenes).
     solution.textures.clear();
 }
 
 #[cfg(test)]
 mod tests;
-
-#[cfg(test)]
-mod smooth_tests;
-
-#[cfg(test)]
-mod textured_tests;

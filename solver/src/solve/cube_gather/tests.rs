@@ -729,4 +729,21 @@ fn refusals_are_clear() {
         solve_cube(&scene, &cube_settings(4), &bad),
         Err(CubeError::BadTolerance(_))
     ));
+    // A smooth surface whose shading normals turn is outside the seed
+    // paper's scope: refused, naming the method and the polygon. Normals
+    // equal to the facet's (a coplanar smooth group) solve as before.
+    let mut smooth = scene.clone();
+    let facet = crate::geometry::polygon::newell_normal(&smooth.polygons[0].vertices).normalize();
+    let n = smooth.polygons[0].vertices.len();
+    smooth.polygons[0].vertex_normals = Some(vec![facet; n]);
+    assert!(solve_cube(&smooth, &cube_settings(4), &CubeLimits::default()).is_ok());
+    let tilted = (facet + facet.any_orthonormal_vector() * 0.1).normalize();
+    smooth.polygons[0].vertex_normals = Some(vec![tilted; n]);
+    let err = solve_cube(&smooth, &cube_settings(4), &CubeLimits::default()).unwrap_err();
+    let text = err.to_string();
+    assert!(matches!(err, CubeError::Smooth { .. }), "{text}");
+    assert!(
+        text.contains("--method cube") && text.contains("polygon 0"),
+        "{text}"
+    );
 }

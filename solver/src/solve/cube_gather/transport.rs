@@ -35,9 +35,7 @@ pub(super) struct Pair {
     /// Where a glossy source is looked up: the upper cells of the source's
     /// cube nearest the direction from its centre toward the receiver, with
     /// bilinear weights summing to 1 (unused for diffuse sources), in the
-    /// source polygon's frame. A source vertex with a frame of its own (a
-    /// smooth surface's shading normal) is looked up in that frame instead
-    /// ([`super::State::source_radiance`]).
+    /// source polygon's frame.
     pub taps: [(u32, f32); 4],
 }
 
@@ -71,7 +69,7 @@ pub(super) struct PairInput<'a> {
     /// The receiver's cube cells (None: a diffuse receiver).
     pub receiver_cells: Option<&'a UpperCells>,
     /// The frame (n, t) the receiver's cube is written in
-    /// ([`super::vertex_frame`]: its shading normal on a smooth surface).
+    /// ([`super::vertex_frame`]).
     pub receiver_frame: (DVec3, DVec3),
     /// The source's cube cells (None: a diffuse source).
     pub source_cells: Option<&'a UpperCells>,

@@ -213,7 +213,7 @@ impl<'a> NearGather<'a> {
             self.kd,
         );
         let pool = SamplePool::with_sets(&shot, GATHER_POOL_SETS);
-        let quadrants = if self.settings.uniform_shooters {
+        let quadrants = if self.settings.shoots_uniformly() {
             None
         } else {
             let view = ShapeView {
@@ -295,14 +295,13 @@ mod tests {
         let loaded = crate::scene::load_scene(&path, &Default::default()).unwrap();
         let mut settings = SolverSettings::preset(Preset::Draft);
         settings.apply(&loaded.settings);
-        settings.patches = 16;
         settings.samples = 64;
         settings.adaptive = false;
         settings.uniform_shooters = true;
         settings.full_rays_above = 0.0;
         settings.max_shots = shots;
         let mut scene = loaded.scene;
-        scene.fill_default_patches(settings.patches);
+        scene.fill_default_patches(16);
         let mut solver = Solver::new(&scene, &settings).unwrap();
         while solver.step().is_some() {}
         solver

@@ -27,11 +27,9 @@ fn cube() -> Vec<(Vec<DVec3>, usize)> {
         .collect()
 }
 
-fn settings(patches: u32, resolution: u32) -> SolverSettings {
+/// The scenes below give every polygon its patch count.
+fn settings(resolution: u32) -> SolverSettings {
     let mut s = SolverSettings::preset(Preset::Draft);
-    s.patches = patches;
-    // The flat rule: `patches` per polygon, as these tests were derived for.
-    s.patch_size = None;
     s.hemicube_resolution = resolution;
     s
 }
@@ -53,7 +51,7 @@ fn furnace_gives_le_over_one_minus_rho() {
             max_sweeps: 20_000,
             ..Default::default()
         };
-        let result = solve_gauss_seidel(&scene, &settings(3, 16), &limits).unwrap();
+        let result = solve_gauss_seidel(&scene, &settings(16), &limits).unwrap();
         let exact = 1.0 / (1.0 - rho);
         assert!(result.converged, "ρ = {rho}: {} sweeps", result.sweeps);
         for s in &result.row_sums {
@@ -113,7 +111,7 @@ fn a_scene_too_large_is_refused_before_meshing() {
     // integration test `gauss_seidel_refusal` checks that it allocates nothing
     // of that size.
     let scene = scene_of(cube(), vec![material("furnace", 0.5, 1.0)], 256);
-    let s = settings(256, 16);
+    let s = settings(16);
     assert_eq!(patch_count_lower_bound(&scene, &s), 6 * 256 * 256);
     match solve_gauss_seidel(&scene, &s, &GaussSeidelLimits::default()) {
         Err(GaussSeidelError::MatrixTooLarge {
@@ -134,7 +132,7 @@ fn a_scene_too_large_is_refused_before_meshing() {
         ..Default::default()
     };
     assert!(matches!(
-        solve_gauss_seidel(&scene, &settings(2, 16), &limits),
+        solve_gauss_seidel(&scene, &settings(16), &limits),
         Err(GaussSeidelError::MatrixTooLarge { patches: 24, .. })
     ));
 }
@@ -143,16 +141,16 @@ fn a_scene_too_large_is_refused_before_meshing() {
 fn bad_input_is_refused_with_clear_errors() {
     let one = scene_of(vec![cube().remove(0)], vec![material("lamp", 0.5, 1.0)], 2);
     assert!(matches!(
-        solve_gauss_seidel(&one, &settings(2, 16), &GaussSeidelLimits::default()),
+        solve_gauss_seidel(&one, &settings(16), &GaussSeidelLimits::default()),
         Err(GaussSeidelError::Solve(SolveError::SinglePolygon))
     ));
     let dark = scene_of(cube(), vec![material("grey", 0.5, 0.0)], 2);
     assert!(matches!(
-        solve_gauss_seidel(&dark, &settings(2, 16), &GaussSeidelLimits::default()),
+        solve_gauss_seidel(&dark, &settings(16), &GaussSeidelLimits::default()),
         Err(GaussSeidelError::Solve(SolveError::NoEmitter))
     ));
     let scene = scene_of(cube(), vec![material("furnace", 0.5, 1.0)], 2);
-    let err = solve_gauss_seidel(&scene, &settings(2, 15), &GaussSeidelLimits::default())
+    let err = solve_gauss_seidel(&scene, &settings(15), &GaussSeidelLimits::default())
         .unwrap_err()
         .to_string();
     assert!(
@@ -164,7 +162,7 @@ fn bad_input_is_refused_with_clear_errors() {
         ..Default::default()
     };
     assert!(matches!(
-        solve_gauss_seidel(&scene, &settings(2, 16), &limits),
+        solve_gauss_seidel(&scene, &settings(16), &limits),
         Err(GaussSeidelError::BadTolerance(_))
     ));
 }
@@ -178,7 +176,7 @@ fn cornell_surface_means(patches: u32) -> (Vec<DVec3>, Vec<DVec3>) {
         .unwrap()
         .scene;
     scene.fill_default_patches(patches);
-    let mut s = settings(patches, 64);
+    let mut s = settings(64);
     // Gauss–Seidel meshes receivers whole; the progressive solve must too
     // for the two to share their patches.
     s.whole_receivers = true;
@@ -316,9 +314,9 @@ fn hemicube_shooting_sees_every_vertex_of_a_convex_room() {
     // lets it through): the factors equal the exact unoccluded ones bit for
     // bit.
     let scene = scene_of(cube(), vec![material("furnace", 0.5, 1.0)], 3);
-    let mut hemicube = settings(3, 64);
+    let mut hemicube = settings(64);
     hemicube.form_factors = FormFactorMethod::Hemicube;
-    let mut unoccluded = settings(3, 64);
+    let mut unoccluded = settings(64);
     unoccluded.shadows = false;
     let (a, b) = (
         Solver::new(&scene, &hemicube).unwrap(),
@@ -375,9 +373,9 @@ fn hemicube_shooting_casts_the_shadow_seen_from_the_source_centre() {
         s.polygons[0].patches = 16;
         s
     };
-    let mut hemicube = settings(1, r);
+    let mut hemicube = settings(r);
     hemicube.form_factors = FormFactorMethod::Hemicube;
-    let mut unoccluded = settings(1, r);
+    let mut unoccluded = settings(r);
     unoccluded.shadows = false;
     let (a, b) = (
         Solver::new(&scene, &hemicube).unwrap(),
@@ -474,7 +472,7 @@ fn textured_furnace_gives_le_over_one_minus_the_textures_mean() {
         max_sweeps: 20_000,
         ..Default::default()
     };
-    let result = solve_gauss_seidel(&scene, &settings(2, 16), &limits).unwrap();
+    let result = solve_gauss_seidel(&scene, &settings(16), &limits).unwrap();
     assert!(result.converged);
     let exact = 1.0 / (1.0 - m);
     let worst = |values: &[DVec3]| {
@@ -566,7 +564,7 @@ fn textured_cornell_means(patches: u32) -> (Vec<DVec3>, Vec<DVec3>, usize) {
     };
     map_once(&mut one, 0.0);
     scene.polygons[back_polygon].uv_map = one.polygons[0].uv_map;
-    let mut s = settings(patches, 64);
+    let mut s = settings(64);
     s.adaptive = false;
     s.samples = 8;
     s.threshold = 2e-3;

@@ -39,7 +39,7 @@ pub struct Config {
     /// Keep each run's folder (scene, solution, log) instead of deleting it.
     pub keep: bool,
     /// More arguments for every `solver solve` (after the preset, so they
-    /// override it): `--shooting bounded`, `--max-shots 200`.
+    /// override it): `--shooters patch`, `--max-shots 200`.
     pub solver_args: Vec<String>,
 }
 

@@ -59,7 +59,7 @@ struct Args {
     #[arg(long)]
     keep: bool,
     /// One more argument for every `solver solve`, repeatable and passed in
-    /// order after the preset: `--solver-arg=--shooting --solver-arg=bounded`
+    /// order after the preset: `--solver-arg=--shooters --solver-arg=patch`
     /// compares the shooting methods, `--solver-arg=--max-shots
     /// --solver-arg=200` measures the cost per shot of scenes too large to
     /// solve in full. Record them with the figures: the table does not show
