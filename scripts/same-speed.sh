@@ -4,9 +4,9 @@
 # profile, and solves the same scenes with both. For each scene it measures
 #   - instructions retired (user space), which hold under load: `perf stat -e
 #     instructions:u` where the machine has hardware counters, else callgrind
-#     (Cornell presets only: callgrind runs 50-100 times slower, too slow for
-#     the 100k scenes); one solve each on one thread, so that the count is the
-#     work itself and not the spinning of idle worker threads;
+#     (Cornell presets only: callgrind runs about 20 times slower than the
+#     solve, hours for a 100k scene); one solve each on one thread, so that the
+#     count is the work itself and not the spinning of idle worker threads;
 #   - the median of N interleaved wall-clock solves (base, new, base, new, ...)
 #     on every core, which does not hold under load: the 1-minute load average
 #     is printed beside it.
@@ -15,7 +15,8 @@
 # figures and says how to read them.
 #
 # NOT run by CI: the full set (three Cornell presets and three 100k scenes at
-# medium, 2 x (1 + N) solves each) takes hours on a 2-core machine.
+# medium, 2 x (1 + N) solves each) takes about an hour on a quiet 2-core
+# machine and hours on a loaded one.
 #
 # Usage: bash scripts/same-speed.sh [BASE]   (BASE defaults to the commit
 # below). Needs the repository's history: a shallow clone cannot build BASE.
@@ -69,6 +70,13 @@ if [ -z "$counter" ]; then
         echo "same-speed: neither a hardware counter nor valgrind: wall clock only" >&2
     fi
 fi
+case $counter in
+    perf | callgrind | none) ;;
+    *)
+        echo "same-speed: SAME_SPEED_COUNTER=$counter: expected perf, callgrind or none" >&2
+        exit 1
+        ;;
+esac
 
 src="$work/base-src"
 rm -rf "$src"
@@ -143,7 +151,9 @@ count() {
     run_solve "$solver" "$config" "$preset" --threads 1
     wrap=()
     case $counter in
-        perf) n=$(awk -F, '$3 ~ /^instructions/ { print $1 }' "$file") ;;
+        # A hybrid CPU counts its core kinds on separate lines: add them.
+        perf) n=$(awk -F, '$3 ~ /instructions/ && $1 ~ /^[0-9]+$/ { n += $1; f = 1 }
+                END { if (f) printf "%.0f\n", n }' "$file") ;;
         callgrind) n=$(sed -n 's/.*Collected : *\([0-9][0-9]*\).*/\1/p' "$file") ;;
     esac
     if ! [[ $n =~ ^[0-9]+$ ]]; then
