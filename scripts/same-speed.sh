@@ -97,6 +97,10 @@ echo "== same-speed: building this tree's solver and scenegen, release"
 cargo build --release --locked -p solver -p scenegen
 base_solver="$work/base-target/release/solver"
 new_solver="$(pwd)/target/release/solver"
+# What "new" is, named now: the tree may change while the solves run.
+new_label="$(git rev-parse --short HEAD)$(git diff --quiet HEAD || echo ' + uncommitted changes')"
+count_label="$counter"
+[ "$counter" = none ] || count_label="$counter, one thread"
 
 # The scene config of SCENE (generated once for a scenegen family; both
 # solvers solve the same files).
@@ -219,8 +223,8 @@ for item in $scenes; do
 done
 
 echo
-echo "Base $base ($(git rev-parse --short "$base")), new $(git rev-parse --short HEAD)$(git diff --quiet HEAD || echo ' + uncommitted changes');" \
-    "instructions: $counter, one thread; wall: median of $runs interleaved solves, every core ($(nproc) here)"
+echo "Base $(git rev-parse --short "$base_hash"), new $new_label; instructions: $count_label;" \
+    "wall: median of $runs interleaved solves, every core ($(nproc) here)"
 echo
 echo "| scene | preset | base instructions | new instructions | ratio | base median wall s | new median wall s | load (1 min) start → end |"
 echo "| --- | --- | ---: | ---: | ---: | ---: | ---: | --- |"
