@@ -18,7 +18,7 @@
 # medium, 2 x (1 + N) solves each) takes about an hour on a quiet 2-core
 # machine and hours on a loaded one.
 #
-# Usage: bash scripts/same-speed.sh [BASE]   (BASE defaults to the commit
+# Usage: bash scripts/same-speed.sh [BASE]   (BASE, or SAME_SPEED_BASE, defaults to the commit
 # below). Needs the repository's history: a shallow clone cannot build BASE.
 # Environment:
 #   SAME_SPEED_SCENES     scenes to run, space-separated SCENE:PRESET (default:
