@@ -28,10 +28,18 @@ fi
 work=${SAME_RESULTS_DIR:-target/same-results}
 mkdir -p "$work"
 work=$(cd "$work" && pwd)
+# git archive stamps every file with the commit's time, older than any build:
+# when the base changes, its files are touched, or cargo would take the last
+# base's artifacts in the shared target folder as fresh.
 src="$work/base-src"
-rm -rf "$src"
-mkdir -p "$src"
-git archive "$base" | tar -x -C "$src"
+commit=$(git rev-parse "$base^{commit}")
+if [ "$(cat "$work/base-commit" 2>/dev/null)" != "$commit" ]; then
+    rm -rf "$src"
+    mkdir -p "$src"
+    git archive "$commit" | tar -x -C "$src"
+    find "$src" -type f -exec touch {} +
+    echo "$commit" > "$work/base-commit"
+fi
 
 # Both solvers and scenegen in the release profile, since the solves dominate,
 # and in one target folder, so that the third-party crates are built once. Both
