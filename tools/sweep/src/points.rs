@@ -329,7 +329,13 @@ fn int_axis(key: &str, values: &[i64]) -> Vec<Point> {
 fn patch_axis(values: &[i64]) -> Vec<Point> {
     values
         .iter()
-        .map(|&n| point("patches", format!("patches={n}"), vec![("patch_size", per_side(n))]))
+        .map(|&n| {
+            point(
+                "patches",
+                format!("patches={n}"),
+                vec![("patch_size", per_side(n))],
+            )
+        })
         .collect()
 }
 
