@@ -503,7 +503,7 @@ fn output_bytes(c: &Counts) -> u64 {
         // The per-order batches, the vertex map and a second triangle list,
         // and the f64 coefficients shown (`Solver::displayed_coefficients`:
         // the solver's with hidden vertices filled, then averaged across
-        // contact cuts in place by `directional/seams.rs`).
+        // contact cuts in place by `seams.rs`).
         c.vertices * (stored_vertex + size_of::<u32>() as u64)
             + c.vertex_coefficients * (f32_ + size_of::<f64>() as u64)
             + triangles * 2 * index_triple

@@ -90,8 +90,10 @@
 use super::budget;
 use super::checkpoint::precision::round_to_kept;
 use super::fine_shape::FineShape;
+use super::hidden::fill_hidden;
 use super::refine::{Criteria, Field};
 use super::regions::{self, QuadrantScale};
+use super::seams::{share_vertices, Lone, Merge};
 use super::shoot::RecordedShot;
 use super::shoot::{visible_samples, SampleBy, SamplePool, SampleScratch, Shot};
 use super::{ShapeView, ShotReport, SolveError, Solver};
@@ -111,9 +113,7 @@ use std::f64::consts::PI;
 use std::sync::Arc;
 use std::time::Instant;
 
-mod hidden_fill;
 mod near_gather;
-mod seams;
 mod split;
 mod state;
 mod textured;
@@ -1115,17 +1115,22 @@ impl Solver {
         solution.header.mode = solution::format::SolveMode::Directional;
         let scale = (4.0 * PI).sqrt();
         let triangles = self.mesh.triangles();
-        let radiance = self.displayed_coefficients(d, &triangles);
-        // The pieces of a receiver cut along contact lines share their
-        // seams (`directional/seams.rs`); every other vertex maps to itself.
-        let (shared, radiance) =
-            seams::share_coefficients(&self.mesh, |v| d.vertex_range(&self.mesh, v), radiance);
+        let mut radiance = self.displayed_coefficients(d, &triangles);
+        // The pieces of a receiver cut along contact lines share their seams
+        // (`seams.rs`): their SH are in their polygon's frame, so vertices of
+        // different polygons never merge, even on one smooth surface (see
+        // "Frames on smooth surfaces"); every other vertex maps to itself.
+        let shared = share_vertices(&self.mesh, &|_, _| None, Merge::WithinPolygons);
+        let range = |v| d.vertex_range(&self.mesh, v);
+        shared.merge_values(&self.mesh, range, &mut radiance, Lone::Kept);
         // Per order: the batch and the map from output vertex to batch vertex.
         let mut batches: BTreeMap<u32, Batch> = BTreeMap::new();
         let mut local = vec![u32::MAX; shared.representative.len()];
-        for (o, &v) in shared.representative.iter().enumerate() {
-            let v = v as usize;
-            let mv = &self.mesh.vertices[v];
+        for (o, &r) in shared.representative.iter().enumerate() {
+            let mv = &self.mesh.vertices[r as usize];
+            // The block that holds the output vertex's merged value (the
+            // representative's: without UVs, lighting groups are outputs).
+            let v = shared.value_vertex(o);
             // Textured surfaces (diffuse or emission textures) have batches
             // of their own (below).
             if self.directional_shown(d, mv.surface as usize).is_some() {
@@ -1176,15 +1181,13 @@ impl Solver {
     /// The radiance coefficients to display: the solver's, with each hidden
     /// vertex (`solve/hidden.rs`) shown as its visible neighbours' functions
     /// extended ring by ring along the display `triangles`
-    /// ([`hidden_fill::fill_hidden_coefficients`]), as the diffuse output does.
+    /// ([`fill_hidden`]), as the diffuse output does.
     fn displayed_coefficients(&self, d: &Directional, triangles: &[[u32; 3]]) -> Vec<f64> {
-        hidden_fill::fill_hidden_coefficients(
-            triangles,
-            &self.hidden,
-            self.mesh.vertices.len(),
-            |v| d.vertex_range(&self.mesh, v),
-            &d.radiance,
-        )
+        let mut values = d.radiance.clone();
+        let count = self.mesh.vertices.len();
+        let range = |v| d.vertex_range(&self.mesh, v);
+        fill_hidden(triangles, &self.hidden, count, range, &mut values);
+        values
     }
 }
 

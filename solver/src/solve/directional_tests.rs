@@ -186,7 +186,7 @@ fn with_ks_zero_directional_mode_equals_the_diffuse_solver() {
         assert_eq!(sb.batches.len(), 1);
         // Both outputs show a hidden vertex (`solve/hidden.rs`: the floor
         // under the blocks, the ceiling above the light) with its visible
-        // neighbours' radiance (`directional/hidden_fill.rs`), so every
+        // neighbours' radiance (`hidden::fill_hidden`), so every
         // vertex is compared, hidden ones included.
         assert!(a.hidden_vertices().iter().any(|&h| h));
         let peak_coefficient = sa.batches[0]
@@ -1059,7 +1059,7 @@ fn conformed_glossy_floor_on_the_contact_line_receives_exactly() {
 }
 
 /// The glossy floor's cut pieces share their seams in the SH output
-/// (`directional/seams.rs`): after adaptive subdivision every edge of the
+/// (`seams.rs`, `Merge::WithinPolygons`): after adaptive subdivision every edge of the
 /// displayed floor is shared by two triangles (one output vertex per
 /// position, no T-junction across the cuts), except on the floor's outline,
 /// round the box's base, where the covered piece meets the visible ones, and

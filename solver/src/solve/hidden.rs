@@ -30,6 +30,7 @@
 
 use crate::geometry::visibility::Occluder;
 use glam::DVec3;
+use std::ops::Range;
 
 /// Probe directions: rings of (polar angle from the normal in degrees, rays).
 /// Three rings reach 75° from the normal: a point under the light's back,
@@ -59,49 +60,84 @@ pub fn is_hidden(occluder: &Occluder, q: DVec3, n: DVec3) -> bool {
     true
 }
 
-/// The radiance to display: `radiance`, except at hidden vertices, which take
-/// the mean of their already-known neighbours along the display `triangles`,
-/// ring by ring outward from the visible ones (a vertex with no path to a
-/// visible one keeps its own value). An element that straddles a contact line
-/// then interpolates between visible radiance and its extension, not toward
-/// the dark inside; the extension is constant across one element, so the
-/// error left on the visible side is the radiance's change over one element
-/// there, which adaptive subdivision keeps small.
-pub fn fill_hidden(triangles: &[[u32; 3]], hidden: &[bool], radiance: &[DVec3]) -> Vec<DVec3> {
-    let mut value = radiance.to_vec();
+/// Per vertex `v`, the block `3v..3v + 3` of a flat array: one RGB value a
+/// vertex (the diffuse output's radiance, the E/π of textured surfaces), the
+/// layout [`fill_hidden`] and `seams.rs` take for those.
+pub(crate) fn rgb(v: usize) -> Range<usize> {
+    3 * v..3 * v + 3
+}
+
+/// The values to display, in place: per vertex `v` the block `range(v)` of
+/// `values` (an RGB radiance, or a vector of SH coefficients per channel),
+/// unchanged except at hidden vertices, which take the mean of their
+/// already-known neighbours' blocks along the display `triangles`, ring by
+/// ring outward from the visible ones (a vertex with no path to a visible one
+/// keeps its own value). An element that straddles a contact line then
+/// interpolates between visible values and their extension, not toward the
+/// dark inside; the extension is constant across one element, so the error
+/// left on the visible side is the value's change over one element there,
+/// which adaptive subdivision keeps small.
+///
+/// Averaging SH coefficient vectors averages the radiance functions they
+/// stand for (SH evaluation is linear), which is meaningful only within one
+/// frame: a display triangle lies in one polygon, and every vertex of a
+/// polygon shares its surface's order and frame (`directional.rs`, "Frames
+/// on smooth surfaces"), so neighbours along the display triangles always
+/// agree; a neighbour whose block has another length is skipped all the
+/// same, so that no two frames are ever mixed.
+pub fn fill_hidden(
+    triangles: &[[u32; 3]],
+    hidden: &[bool],
+    vertex_count: usize,
+    range: impl Fn(usize) -> Range<usize>,
+    values: &mut [f64],
+) {
     if !hidden.iter().any(|&h| h) {
-        return value;
+        return;
     }
-    let mut known: Vec<bool> = hidden.iter().map(|&h| !h).collect();
-    known.resize(radiance.len(), true);
-    let mut sum = vec![DVec3::ZERO; radiance.len()];
-    let mut count = vec![0u32; radiance.len()];
+    let mut known: Vec<bool> = (0..vertex_count)
+        .map(|v| !hidden.get(v).copied().unwrap_or(false))
+        .collect();
+    let mut sum = vec![0.0; values.len()];
+    let mut count = vec![0u32; vertex_count];
     loop {
         for t in triangles {
             for (i, &a) in t.iter().enumerate() {
-                if known[a as usize] {
+                let a = a as usize;
+                if known[a] {
                     continue;
                 }
+                let into = range(a);
                 for &b in [t[(i + 1) % 3], t[(i + 2) % 3]].iter() {
-                    if known[b as usize] {
-                        sum[a as usize] += value[b as usize];
-                        count[a as usize] += 1;
+                    let b = b as usize;
+                    let from = range(b);
+                    if !known[b] || from.len() != into.len() {
+                        continue;
                     }
+                    for (s, x) in sum[into.clone()].iter_mut().zip(&values[from]) {
+                        *s += x;
+                    }
+                    count[a] += 1;
                 }
             }
         }
         let mut filled = false;
-        for v in 0..value.len() {
-            if count[v] > 0 {
-                value[v] = sum[v] / count[v] as f64;
-                known[v] = true;
-                sum[v] = DVec3::ZERO;
-                count[v] = 0;
-                filled = true;
+        for v in 0..vertex_count {
+            if count[v] == 0 {
+                continue;
             }
+            let n = count[v] as f64;
+            let block = range(v);
+            for (x, s) in values[block.clone()].iter_mut().zip(&mut sum[block]) {
+                *x = *s / n;
+                *s = 0.0;
+            }
+            known[v] = true;
+            count[v] = 0;
+            filled = true;
         }
         if !filled {
-            return value;
+            return;
         }
     }
 }
@@ -207,52 +243,91 @@ mod tests {
         }
     }
 
+    /// A strip of vertices as two triangles a square:
+    ///   0 - 1 - 2 - 3
+    ///   |   |   |   |
+    ///   4 - 5 - 6 - 7   (0 and 4 visible, the rest hidden)
+    const TRIS: [[u32; 3]; 6] = [
+        [0, 4, 5],
+        [0, 5, 1],
+        [1, 5, 6],
+        [1, 6, 2],
+        [2, 6, 7],
+        [2, 7, 3],
+    ];
+    const HIDDEN: [bool; 8] = [false, true, true, true, false, true, true, true];
+
+    /// `values` with the hidden vertices of [`TRIS`] filled, per vertex `v` the
+    /// block `range(v)`.
+    fn filled(hidden: &[bool], range: impl Fn(usize) -> Range<usize>, values: &[f64]) -> Vec<f64> {
+        let mut shown = values.to_vec();
+        fill_hidden(&TRIS, hidden, 8, range, &mut shown);
+        shown
+    }
+
     #[test]
     fn fill_extends_visible_radiance_ring_by_ring() {
-        // A strip of vertices 0–1–2–3 (0 visible, the rest hidden) as two
-        // triangles each: the hidden ones take their known neighbours' mean,
-        // outward from the visible one.
-        //   0 - 1 - 2 - 3
-        //   |   |   |   |
-        //   4 - 5 - 6 - 7   (4 visible at 2, 5 hidden)
-        let tris = [
-            [0, 4, 5],
-            [0, 5, 1],
-            [1, 5, 6],
-            [1, 6, 2],
-            [2, 6, 7],
-            [2, 7, 3],
-        ];
-        let hidden = [false, true, true, true, false, true, true, true];
-        let l = |x: f64| DVec3::splat(x);
-        let radiance = [
-            l(1.0),
-            l(0.0),
-            l(0.0),
-            l(0.0),
-            l(2.0),
-            l(0.0),
-            l(0.0),
-            l(0.0),
-        ];
-        let shown = fill_hidden(&tris, &hidden, &radiance);
-        assert_eq!(shown[0], l(1.0));
-        assert_eq!(shown[4], l(2.0));
+        // RGB radiance (the diffuse output): vertex 0 at 1, vertex 4 at 2,
+        // the hidden ones at 0; the hidden ones take their known neighbours'
+        // mean, outward from the visible ones.
+        let mut radiance = [0.0; 24];
+        radiance[rgb(0)].fill(1.0);
+        radiance[rgb(4)].fill(2.0);
+        let shown = filled(&HIDDEN, rgb, &radiance);
+        let at = |v: usize| DVec3::from_slice(&shown[rgb(v)]);
+        assert_eq!(at(0), DVec3::splat(1.0));
+        assert_eq!(at(4), DVec3::splat(2.0));
         // Ring 1: vertex 1 sees 0 once; vertex 5 sees 0 twice and 4 once.
-        assert_eq!(shown[1], l(1.0));
-        assert!((shown[5].x - 4.0 / 3.0).abs() < 1e-12);
+        assert_eq!(at(1), DVec3::splat(1.0));
+        assert!((at(5) - DVec3::splat(4.0 / 3.0)).abs().max_element() < 1e-12);
         // Later rings average what the earlier ones filled.
         for v in [2, 3, 6, 7] {
-            assert!(
-                shown[v].x >= 1.0 && shown[v].x <= 4.0 / 3.0,
-                "{v}: {}",
-                shown[v]
-            );
+            assert!(at(v).x >= 1.0 && at(v).x <= 4.0 / 3.0, "{v}: {}", at(v));
         }
         // Nothing hidden: unchanged.
-        assert_eq!(
-            fill_hidden(&tris, &[false; 8], &radiance),
-            radiance.to_vec()
-        );
+        assert_eq!(filled(&[false; 8], rgb, &radiance), radiance.to_vec());
+    }
+
+    #[test]
+    fn higher_order_blocks_average_every_coefficient() {
+        // Blocks of 12 values (order 1, RGB; the directional output): the
+        // visible vertices carry distinct functions; each hidden vertex's
+        // block is the same mean of them for every coefficient, so evaluating
+        // it in any direction gives the mean of the neighbours' radiance in
+        // that direction.
+        let block = |v: usize| 12 * v..12 * v + 12;
+        let mut values = vec![0.0; 96];
+        for k in 0..12 {
+            values[k] = 1.0 + k as f64; // vertex 0
+            values[48 + k] = 2.0 * k as f64 - 3.0; // vertex 4
+        }
+        let shown = filled(&HIDDEN, block, &values);
+        for k in 0..12 {
+            let (a, b) = (values[k], values[48 + k]);
+            // Ring 1: vertex 1 sees only 0; vertex 5 sees 0 twice and 4 once.
+            assert_eq!(shown[12 + k], a);
+            assert!((shown[60 + k] - (2.0 * a + b) / 3.0).abs() < 1e-12);
+            // Visible blocks are untouched.
+            assert_eq!(shown[k], a);
+            assert_eq!(shown[48 + k], b);
+        }
+    }
+
+    #[test]
+    fn neighbours_of_another_order_are_skipped() {
+        // Vertex 1 (hidden, order 1) touches 0 (order 0) and 5 (hidden,
+        // order 1), which touches 4 (order 1, visible): it must take 4's
+        // block through 5, never a 3-value block read as 12.
+        let ranges = [0..3, 3..15, 15..18, 18..21, 21..33, 33..45, 45..48, 48..51];
+        let mut values = vec![7.0; 51];
+        values[3..15].fill(0.0);
+        values[33..45].fill(0.0);
+        for (k, x) in values[21..33].iter_mut().enumerate() {
+            *x = k as f64;
+        }
+        let hidden = [false, true, false, false, false, true, false, false];
+        let shown = filled(&hidden, |v| ranges[v].clone(), &values);
+        assert_eq!(&shown[33..45], &values[21..33]);
+        assert_eq!(&shown[3..15], &values[21..33]);
     }
 }

@@ -305,8 +305,8 @@ impl Solver {
         let sizing = crate::mesh::Sizing::from_settings(settings, scene);
         // Receivers are cut along contact lines (`mesh::contact`) in both
         // modes, and along shadow lines in directional mode; each output
-        // shares the cuts' seams (diffuse: `seams.rs`, directional:
-        // `directional/seams.rs`).
+        // shares the cuts' seams (`seams.rs`; directional output only
+        // within each cut polygon).
         let cuts = crate::mesh::contact::Cuts::for_settings(settings);
         let mesh = Mesh::with_contacts(scene, offset, &sizing, cuts)?;
         match mesh.surfaces.len() {

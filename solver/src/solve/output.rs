@@ -1,6 +1,8 @@
 //! The solution the solver hands to the file writer (Remington 1992, Fig. 3.6 steps 5d and
 //! 6), and the ambient term of the light not yet shot.
 
+use super::hidden::{fill_hidden, rgb};
+use super::seams::{share_vertices, Lone, Merge, SharedVertices};
 use super::{enclosure, Solver};
 use glam::DVec3;
 use rayon::prelude::*;
@@ -198,6 +200,24 @@ impl Solver {
             .collect()
     }
 
+    /// The output vertices (`seams.rs`) and, per output vertex, the radiance
+    /// to display: hidden vertices filled from their visible neighbours
+    /// (`hidden.rs`), then the area-weighted mean over the vertices at its
+    /// position. Textured smooth surfaces keep their UV seams.
+    fn shared_radiance(&self, triangles: &[[u32; 3]]) -> (SharedVertices, Vec<DVec3>) {
+        let mut radiance: Vec<f64> = self.radiance.iter().flat_map(|l| l.to_array()).collect();
+        let count = self.radiance.len();
+        fill_hidden(triangles, &self.hidden, count, rgb, &mut radiance);
+        let texturing = &self.texturing;
+        let uv = |s, p| texturing.shown(s).map(|t| texturing.uv(t, p));
+        let shared = share_vertices(&self.mesh, &uv, Merge::AcrossPolygons);
+        shared.merge_values(&self.mesh, rgb, &mut radiance, Lone::Reweighted);
+        let shown = (0..shared.representative.len())
+            .map(|o| DVec3::from_slice(&radiance[rgb(shared.value_vertex(o))]))
+            .collect();
+        (shared, shown)
+    }
+
     /// The solution: one batch of order-0 SH (the diffuse mode), one vertex per
     /// mesh vertex of a flat facet and one per position of a smooth surface,
     /// with its shading normal; the display triangles with T-vertices resolved,
@@ -215,23 +235,13 @@ impl Solver {
         // Hidden vertices show their visible neighbours' radiance, so no
         // visible element interpolates toward the dark inside of an object.
         let triangles = self.mesh.triangles();
-        let radiance = super::hidden::fill_hidden(&triangles, &self.hidden, &self.radiance);
-        // Textured smooth surfaces keep their UV seams (`seams.rs`).
-        let texturing = &self.texturing;
-        let shared = super::seams::share_vertices_with_uvs(&self.mesh, &radiance, &|s, p| {
-            texturing.shown(s).map(|t| texturing.uv(t, p))
-        });
+        let (shared, radiance) = self.shared_radiance(&triangles);
         let ambient_at = self.enclosed_ambient(&shared.representative, ambient);
         let mut vertices = Vec::with_capacity(shared.representative.len());
         let mut coefficients = Vec::with_capacity(3 * shared.representative.len());
         let mut lo = DVec3::splat(f64::INFINITY);
         let mut hi = DVec3::splat(f64::NEG_INFINITY);
-        for ((&r, l), a) in shared
-            .representative
-            .iter()
-            .zip(&shared.radiance)
-            .zip(&ambient_at)
-        {
+        for ((&r, l), a) in shared.representative.iter().zip(&radiance).zip(&ambient_at) {
             let v = &self.mesh.vertices[r as usize];
             let s = &self.mesh.surfaces[v.surface as usize];
             let shown = *l + self.kd[v.surface as usize] * *a;
@@ -297,7 +307,7 @@ impl Solver {
             textures: Vec::new(),
         };
         // Textured surfaces: batches of UV and E/π (`output_textured.rs`).
-        self.split_textured(&shared, &mut solution, &ambient_at);
+        self.split_textured(&shared, &radiance, &mut solution, &ambient_at);
         // Directional mode: one batch per SH order instead.
         self.directional_batches(&mut solution, ambient);
         if self.scene_camera.is_none() {

@@ -24,12 +24,14 @@ use std::sync::Arc;
 
 impl Solver {
     /// Splits `solution.batches[0]` (every output vertex of `shared`, in
-    /// order) into the untextured batch and the textured ones; `ambient_at`
-    /// is, per output vertex, the ambient term added to E/π, as the
+    /// order) into the untextured batch and the textured ones; `radiance`
+    /// is, per output vertex, its displayed radiance, and `ambient_at` the
+    /// ambient term added to E/π, as the
     /// untextured vertices add Kd · ambient. Nothing changes when no surface is textured.
     pub(super) fn split_textured(
         &self,
         shared: &SharedVertices,
+        radiance: &[DVec3],
         solution: &mut Solution,
         ambient_at: &[DVec3],
     ) {
@@ -102,11 +104,11 @@ impl Solver {
                 };
                 let c00 = untextured * (4.0 * std::f64::consts::PI).sqrt();
                 b.coefficients.extend(c00.as_vec3().to_array());
-                (shared.radiance[o] - emission + ambient).max(DVec3::ZERO)
+                (radiance[o] - emission + ambient).max(DVec3::ZERO)
             } else {
                 // As `to_solution` computes the coefficients, less Le.
                 let s = v.surface as usize;
-                let reflected = shared.radiance[o] - self.emission[s] + self.kd[s] * ambient;
+                let reflected = radiance[o] - self.emission[s] + self.kd[s] * ambient;
                 let scale = (4.0 * std::f64::consts::PI).sqrt();
                 let c = reflected.max(DVec3::ZERO) * scale;
                 b.coefficients.extend(c.as_vec3().to_array());

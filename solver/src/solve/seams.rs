@@ -34,6 +34,18 @@
 //!   have different output vertices), so an adaptive split on one side only
 //!   can leave a value step there.
 //!
+//! * **Both outputs.** The pass is generic over the per-vertex value: the
+//!   diffuse output's RGB radiance and the directional output's SH
+//!   coefficient vectors, as blocks of one flat array
+//!   ([`SharedVertices::merge_values`]). Averaging coefficient vectors
+//!   averages the radiance functions they stand for, but only within one
+//!   frame: the directional output writes its SH in each polygon's frame, so
+//!   it merges only the pieces that `mesh::contact` cuts one polygon into
+//!   (they share its normal, tangent, material and SH order), and vertices of
+//!   different polygons keep their own output vertices even on one smooth
+//!   surface ([`Merge::WithinPolygons`]; `directional.rs`, "Frames on smooth
+//!   surfaces").
+//!
 //! Flat facets (no corner normals) are left exactly as the mesh has them, so a
 //! scene without smooth surfaces gives the same vertices, in the same order,
 //! and the same triangles as before.
@@ -42,22 +54,30 @@ use crate::mesh::Mesh;
 use crate::scene::IntMap;
 use crate::scene::SMOOTH_TOLERANCE;
 use glam::DVec3;
+use std::ops::Range;
 
 /// Two shading normals are the same when their dot product is at least this:
 /// far above the rounding of normalising the same interpolation (1e-15), far
 /// below the smallest crease (a 0.1° difference is 1.5e-6).
 const SAME_NORMAL: f64 = 1.0 - 1e-9;
 
-/// The output vertices: which mesh vertex each comes from, and where each mesh
-/// vertex went.
+/// The output vertices: which mesh vertex each comes from, where each mesh
+/// vertex went, and which vertices share their lighting (the vertices at one
+/// position: across a UV seam they are several output vertices).
 pub(crate) struct SharedVertices {
     /// Per mesh vertex, its output vertex.
     pub output_of: Vec<u32>,
     /// Per output vertex, the first mesh vertex merged into it (its position,
     /// normal and surface frame).
     pub representative: Vec<u32>,
-    /// Per output vertex, the area-weighted mean radiance.
-    pub radiance: Vec<DVec3>,
+    /// Per mesh vertex, its lighting group (the vertices whose values are
+    /// averaged, [`SharedVertices::merge_values`]).
+    light_group: Vec<u32>,
+    /// Per lighting group, its first mesh vertex, whose block receives the
+    /// group's mean.
+    light_first: Vec<u32>,
+    /// Per output vertex, its lighting group.
+    light_of: Vec<u32>,
     /// Per output vertex on a smooth polygon's boundary: the polygon edges it
     /// lies on, as (edge, parameter along it from the edge's first end).
     on_edges: IntMap<u32, Vec<(EdgeKey, f64)>>,
@@ -123,38 +143,10 @@ impl Grid {
 /// at one position from two polygons' fits).
 const SAME_UV: f64 = 1e-7;
 
-/// Merges the coincident vertices of smooth surfaces (see the module
-/// comment), given texture coordinates `uv(surface, position)` (solver
-/// coordinates; `None` where untextured): vertices
-/// that would merge but whose UVs differ (a UV seam) stay separate display
-/// vertices, each with the lighting (the area-weighted mean radiance) of all
-/// the vertices at that position, so a seam splits the texture but not the
-/// light.
-pub(crate) fn share_vertices_with_uvs(
-    mesh: &Mesh,
-    radiance: &[DVec3],
-    uv: &dyn Fn(u32, DVec3) -> Option<glam::DVec2>,
-) -> SharedVertices {
-    share_vertices(mesh, radiance, uv, false)
-}
-
-/// [`share_vertices_with_uvs`] for outputs whose vertex values are written in
-/// their polygon's frame (directional mode's SH): only vertices of surfaces
-/// cut from one input polygon (`mesh::contact`'s pieces, which share its
-/// normal and tangent) merge, and T-junctions are resolved only across those
-/// pieces, so no value of one frame is ever averaged with, or interpolated
-/// as, a value of another. Untextured; the returned radiance is unused
-/// (zero): callers average their own values over [`SharedVertices::output_of`]
-/// with [`vertex_weights`].
-pub(crate) fn share_vertices_within_polygons(mesh: &Mesh) -> SharedVertices {
-    let zero = vec![DVec3::ZERO; mesh.vertices.len()];
-    share_vertices(mesh, &zero, &|_, _| None, true)
-}
-
 /// Each mesh vertex's share of the displayed area: a third or a quarter of
 /// every leaf element that has it as a corner (the weights of the merged
 /// vertices' mean).
-pub(crate) fn vertex_weights(mesh: &Mesh) -> Vec<f64> {
+fn vertex_weights(mesh: &Mesh) -> Vec<f64> {
     let mut weight = vec![0.0; mesh.vertices.len()];
     for e in mesh.elements.iter().filter(|e| e.is_leaf()) {
         for &c in e.corners() {
@@ -164,12 +156,47 @@ pub(crate) fn vertex_weights(mesh: &Mesh) -> Vec<f64> {
     weight
 }
 
-fn share_vertices(
+/// Which vertices of smooth surfaces may share an output vertex: the values
+/// they carry decide it.
+#[derive(Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Merge {
+    /// Any surfaces' (the diffuse output's RGB radiance, which has no frame).
+    AcrossPolygons,
+    /// Only those of surfaces cut from one input polygon (`mesh::contact`'s
+    /// pieces, which share its normal and tangent), and T-junctions are
+    /// resolved only across those pieces: the directional output writes its
+    /// SH in its polygon's frame, and no value of one frame may be averaged
+    /// with, or interpolated as, a value of another.
+    WithinPolygons,
+}
+
+/// What [`SharedVertices::merge_values`] writes for a vertex alone in its
+/// lighting group.
+#[derive(Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Lone {
+    /// Its own value, bit for bit (the directional output).
+    Kept,
+    /// Its value weighted and divided by its weight again, as for a merged
+    /// group: (0 + x·w)/w, which can differ from x in the last bit. The
+    /// diffuse output has always written this; kept so that its solution
+    /// files stay byte-identical (dropping it changes them, a commit of its
+    /// own).
+    Reweighted,
+}
+
+/// Merges the coincident vertices of smooth surfaces (see the module
+/// comment) that `merge` allows, given texture coordinates `uv(surface,
+/// position)` (solver coordinates; `None` where untextured): vertices that
+/// would merge but whose UVs differ (a UV seam) stay separate display
+/// vertices in one lighting group, so that each shows the lighting (the
+/// area-weighted mean, [`SharedVertices::merge_values`]) of all the vertices
+/// at that position: a seam splits the texture but not the light.
+pub(crate) fn share_vertices(
     mesh: &Mesh,
-    radiance: &[DVec3],
     uv: &dyn Fn(u32, DVec3) -> Option<glam::DVec2>,
-    within_polygon: bool,
+    merge: Merge,
 ) -> SharedVertices {
+    let within_polygon = merge == Merge::WithinPolygons;
     // Whether two surfaces' vertices may share an output vertex.
     let same_frame = |a: u32, b: u32| {
         !within_polygon || mesh.surfaces[a as usize].polygon == mesh.surfaces[b as usize].polygon
@@ -189,7 +216,6 @@ fn share_vertices(
             .corner_normals
             .is_some()
     };
-    let weight = vertex_weights(mesh);
     let tol = SMOOTH_TOLERANCE * mesh_diagonal(mesh);
     let pinned: Vec<bool> = mesh
         .vertices
@@ -207,9 +233,9 @@ fn share_vertices(
     };
     let mut light_first: Vec<u32> = Vec::new();
     let mut light_of: Vec<u32> = Vec::with_capacity(n);
+    let mut light_group: Vec<u32> = Vec::with_capacity(n);
     let mut output_of = Vec::with_capacity(n);
     let mut representative: Vec<u32> = Vec::with_capacity(n);
-    let mut sums: Vec<(DVec3, f64)> = Vec::with_capacity(n);
     for v in 0..n {
         let vertex = &mesh.vertices[v];
         let material = mesh.surfaces[vertex.surface as usize].material;
@@ -235,7 +261,6 @@ fn share_vertices(
         let light = light.unwrap_or_else(|| {
             let g = light_first.len() as u32;
             light_first.push(v as u32);
-            sums.push((DVec3::ZERO, 0.0));
             if smooth(v) {
                 light_grid.insert(vertex.position, g);
             }
@@ -254,20 +279,14 @@ fn share_vertices(
             }
         };
         output_of.push(o);
-        let (sum, w) = &mut sums[light as usize];
-        // A vertex no leaf has as a corner (none today) still counts, a little.
-        let wv = weight[v].max(f64::MIN_POSITIVE);
-        *sum += radiance[v] * wv;
-        *w += wv;
+        light_group.push(light);
     }
-    let radiance = light_of
-        .iter()
-        .map(|&g| sums[g as usize].0 / sums[g as usize].1)
-        .collect();
     let mut shared = SharedVertices {
         output_of,
         representative,
-        radiance,
+        light_group,
+        light_first,
+        light_of,
         on_edges: IntMap::default(),
         edge_points: IntMap::default(),
     };
@@ -491,6 +510,36 @@ fn record_on_edge(
 }
 
 impl SharedVertices {
+    /// The mesh vertex whose block holds output vertex `o`'s value once
+    /// [`SharedVertices::merge_values`] has run: its lighting group's first.
+    pub(crate) fn value_vertex(&self, o: usize) -> usize {
+        self.light_first[self.light_of[o] as usize] as usize
+    }
+
+    /// Averages the values of each lighting group in place: per mesh vertex
+    /// `v` the block `range(v)` of `values` (an RGB radiance, or a vector of
+    /// SH coefficients per channel); the group's first vertex's block becomes
+    /// the area-weighted mean of its members' blocks (weights: a third or a
+    /// quarter of each leaf element that has the vertex as a corner), the
+    /// other blocks are left as they were. Averaging coefficient vectors
+    /// averages the radiance functions they stand for. `values` is changed in
+    /// place: a copy of every coefficient would add 8 bytes a coefficient to
+    /// the output's peak (`budget.rs`, "output").
+    pub(crate) fn merge_values(
+        &self,
+        mesh: &Mesh,
+        range: impl Fn(usize) -> Range<usize>,
+        values: &mut [f64],
+        lone: Lone,
+    ) {
+        let weight = vertex_weights(mesh);
+        let groups = Groups {
+            of: &self.light_group,
+            first: &self.light_first,
+        };
+        mean_blocks(groups, &weight, range, values, lone);
+    }
+
     /// The mesh's display triangles in output vertices, with the triangles of
     /// smooth surfaces fanned to the vertices other polygons put inside their
     /// edges (see the module comment). Counter-clockwise order is kept.
@@ -589,6 +638,76 @@ impl SharedVertices {
             }
         }
         Vec::new()
+    }
+}
+
+/// Lighting groups: per mesh vertex its group, per group its first vertex.
+#[derive(Clone, Copy)]
+struct Groups<'a> {
+    of: &'a [u32],
+    first: &'a [u32],
+}
+
+/// `values` with each group's first block replaced by the weighted mean of
+/// the blocks of every vertex in the group (every mean is summed before any
+/// merged block is written, so changing `values` in place is safe), and each
+/// lone vertex's block as `lone` says. A block whose length differs from the
+/// first's is skipped (never the case for pieces of one polygon; kept so
+/// that no two layouts are ever mixed).
+fn mean_blocks(
+    groups: Groups,
+    weight: &[f64],
+    range: impl Fn(usize) -> Range<usize>,
+    values: &mut [f64],
+    lone: Lone,
+) {
+    let mut members = vec![0u32; groups.first.len()];
+    for &g in groups.of {
+        members[g as usize] += 1;
+    }
+    // Sums only for the groups of more than one vertex, one after another.
+    let mut start = vec![0usize; groups.first.len()];
+    let mut len = 0;
+    for (g, &first) in groups.first.iter().enumerate() {
+        if members[g] > 1 {
+            start[g] = len;
+            len += range(first as usize).len();
+        }
+    }
+    let mut sum = vec![0.0; len];
+    let mut total = vec![0.0; groups.first.len()];
+    for (v, &g) in groups.of.iter().enumerate() {
+        let g = g as usize;
+        // A vertex no leaf has as a corner (none today) still counts, a little.
+        let w = weight[v].max(f64::MIN_POSITIVE);
+        if members[g] <= 1 {
+            if lone == Lone::Reweighted {
+                for x in &mut values[range(v)] {
+                    *x = (0.0 + *x * w) / w;
+                }
+            }
+            continue;
+        }
+        let into = range(groups.first[g] as usize);
+        let from = range(v);
+        if from.len() != into.len() {
+            continue;
+        }
+        let s = &mut sum[start[g]..start[g] + into.len()];
+        for (acc, x) in s.iter_mut().zip(&values[from]) {
+            *acc += *x * w;
+        }
+        total[g] += w;
+    }
+    for (g, &first) in groups.first.iter().enumerate() {
+        if members[g] <= 1 {
+            continue;
+        }
+        let into = range(first as usize);
+        let s = &sum[start[g]..start[g] + into.len()];
+        for (x, acc) in values[into].iter_mut().zip(s) {
+            *x = acc / total[g];
+        }
     }
 }
 
@@ -723,7 +842,9 @@ mod tests {
         SharedVertices {
             output_of: (0..5).collect(),
             representative: (0..5).collect(),
-            radiance: vec![DVec3::ZERO; 5],
+            light_group: (0..5).collect(),
+            light_first: (0..5).collect(),
+            light_of: (0..5).collect(),
             on_edges: points.iter().map(|&(t, o)| (o, vec![(edge, t)])).collect(),
             edge_points: IntMap::from_iter([(edge, points)]),
         }
@@ -741,5 +862,55 @@ mod tests {
         // it became slivers with repeated corners, and on 100k triangles of
         // spheres such fans never ended. It is kept as it is.
         assert_eq!(shared.triangles(&[[0, 3, 1]]), vec![[0, 3, 1]]);
+    }
+
+    #[test]
+    fn merged_blocks_are_the_weighted_mean_of_every_coefficient() {
+        // Vertices 0 and 2 merge into group 0 (weights 1 and 3), vertex 1
+        // is alone; blocks of 4 values. The mean is taken per coefficient,
+        // so it is the mean of the radiance functions in every direction.
+        let block = |v: usize| 4 * v..4 * v + 4;
+        let values: Vec<f64> = (0..12).map(|k| k as f64).collect();
+        let groups = Groups {
+            of: &[0, 1, 0],
+            first: &[0, 1],
+        };
+        let weight = [1.0, 5.0, 3.0];
+        let mut merged = values.clone();
+        mean_blocks(groups, &weight, block, &mut merged, Lone::Kept);
+        for k in 0..4 {
+            let expected = (values[k] + 3.0 * values[8 + k]) / 4.0;
+            assert!((merged[k] - expected).abs() < 1e-12, "{k}");
+            // The lone vertex and the block merged away are untouched.
+            assert_eq!(merged[4 + k], values[4 + k]);
+            assert_eq!(merged[8 + k], values[8 + k]);
+        }
+        // Reweighted, the lone vertex's block is (0 + x·w)/w: within a
+        // rounding of x.
+        let mut reweighted = values.clone();
+        mean_blocks(groups, &weight, block, &mut reweighted, Lone::Reweighted);
+        assert_eq!(reweighted[..4], merged[..4]);
+        for k in 4..8 {
+            assert!(
+                (reweighted[k] - values[k]).abs() <= 1e-15 * values[k],
+                "{k}"
+            );
+        }
+    }
+
+    #[test]
+    fn blocks_of_another_length_are_never_mixed() {
+        // Vertex 1 (a 3-value block) is in the same group as vertex 0 (a
+        // 12-value block): it must be skipped, leaving vertex 0's block.
+        let ranges = [0..12, 12..15];
+        let values: Vec<f64> = (0..15).map(|k| 1.0 + k as f64).collect();
+        let mut merged = values.clone();
+        let groups = Groups {
+            of: &[0, 0],
+            first: &[0],
+        };
+        let range = |v: usize| ranges[v].clone();
+        mean_blocks(groups, &[1.0, 1.0], range, &mut merged, Lone::Kept);
+        assert_eq!(merged, values);
     }
 }

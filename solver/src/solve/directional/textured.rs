@@ -39,6 +39,7 @@
 use super::Directional;
 use crate::mesh::Mesh;
 use crate::scene::Scene;
+use crate::solve::hidden::{fill_hidden, rgb};
 use crate::solve::textured::{SurfaceTexturing, Textured};
 use crate::solve::Solver;
 use glam::DVec3;
@@ -167,17 +168,18 @@ impl Solver {
         let triangles = mesh.triangles();
         // E/π per vertex (zero off textured surfaces); hidden vertices show
         // their visible neighbours' light, as in diffuse mode.
-        let irradiance: Vec<DVec3> = (0..mesh.vertices.len())
-            .map(|v| {
+        let mut irradiance: Vec<f64> = (0..mesh.vertices.len())
+            .flat_map(|v| {
                 if d.textured[mesh.vertices[v].surface as usize] {
-                    d.irradiance_over_pi(mesh, &d.radiance, v)
+                    d.irradiance_over_pi(mesh, &d.radiance, v).to_array()
                 } else {
-                    DVec3::ZERO
+                    [0.0; 3]
                 }
             })
             .collect();
-        let irradiance = crate::solve::hidden::fill_hidden(&triangles, &self.hidden, &irradiance);
-        // The SH likewise (`directional/hidden_fill.rs`).
+        let count = mesh.vertices.len();
+        fill_hidden(&triangles, &self.hidden, count, rgb, &mut irradiance);
+        // The SH likewise.
         let coefficients = self.displayed_coefficients(d, &triangles);
         let mut sources = Vec::new();
         // Per textured batch, its material; per mesh vertex, (batch, index).
@@ -242,7 +244,7 @@ impl Solver {
                 batch.coefficients[start..start + 3].copy_from_slice(&f(c00.max(DVec3::ZERO)));
                 DVec3::ONE
             } else {
-                irradiance[v] + ambient
+                DVec3::from_slice(&irradiance[rgb(v)]) + ambient
             };
             if let Some(texturing) = &mut batch.texturing {
                 texturing.vertices.push(TexturedVertex {
