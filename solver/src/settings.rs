@@ -181,11 +181,11 @@ pub struct SolverSettings {
     /// stored, like `memory_budget`.
     #[serde(skip)]
     pub resident_before_meshing: Option<u64>,
-    /// Tests only, not a setting: shoot every patch's mean unshot radiance
-    /// uniformly (Remington 1992), as the global cube gathers it, instead of
-    /// from the quadrants of an unevenly lit patch (`solve::regions`), so
-    /// that a test can hold two methods to the same linear system.
-    #[cfg(test)]
+    /// Not a setting (no flag, key or file sets it; it is not stored): tests
+    /// set it to shoot every patch's mean unshot radiance uniformly
+    /// (Remington 1992), as the global cube gathers it, instead of from the
+    /// quadrants of an unevenly lit patch (`solve::regions`), so that a test
+    /// can hold two methods to the same linear system.
     #[serde(skip)]
     pub uniform_shooters: bool,
     /// The points of a finely tessellated smooth surface receive at sites
@@ -313,7 +313,6 @@ impl SolverSettings {
             crease_angle: default_crease_angle(),
             memory_budget: None,
             resident_before_meshing: None,
-            #[cfg(test)]
             uniform_shooters: false,
             site_angle: DEFAULT_SITE_ANGLE,
             whole_receivers: false,
@@ -391,10 +390,7 @@ impl SolverSettings {
     /// when a test asks (`uniform_shooters`); emitters' recorded shots always
     /// do.
     pub(crate) fn shoots_uniformly(&self) -> bool {
-        #[cfg(test)]
-        return self.uniform_shooters;
-        #[cfg(not(test))]
-        false
+        self.uniform_shooters
     }
 
     /// Preset defaults, then each patch from lowest to highest precedence:
