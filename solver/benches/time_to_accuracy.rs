@@ -202,12 +202,11 @@ fn main() {
     println!();
     let solver_points = solver_sweep(&loaded.scene, &loaded.settings, &truth);
     println!();
-    // The same mode and normalization as `solver reference` resolves.
+    // The same mode as `solver reference` resolves.
     let settings = SolverSettings::resolve(Preset::default(), &[&loaded.settings])
         .expect("the config resolves");
     let physics = Physics {
         mode: settings.mode,
-        normalization: settings.brdf_normalization,
     };
     let tracer_points = path_tracer_sweep(&loaded.scene, physics, &truth, cap);
     println!();

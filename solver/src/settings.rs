@@ -70,19 +70,6 @@ fn default_group_samples() -> u32 {
     DEFAULT_GROUP_SAMPLES
 }
 
-/// How a glossy lobe is normalized (design notes, "Directional mode"; see
-/// `crate::brdf::Normalization` for the measured difference).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
-#[serde(rename_all = "lowercase")]
-#[derive(clap::ValueEnum)]
-pub enum BrdfNormalization {
-    /// Remington's (1992) per-incidence C_R(μ_i): reflects exactly Ks of every beam, not reciprocal.
-    #[default]
-    Thesis,
-    /// One constant per material: reciprocal, albedo Ks at normal incidence, ≤ Ks elsewhere.
-    Reciprocal,
-}
-
 /// How directional mode stores a glossy vertex's outgoing radiance; chosen
 /// by [`Method`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
@@ -158,9 +145,6 @@ pub struct SolverSettings {
     pub sh_error_target: f64,
     /// Highest SH order a material may get; a lobe that needs more is capped with a warning.
     pub max_sh_order: u32,
-    /// Normalization of glossy lobes: the thesis's per-incidence one or a reciprocal one.
-    #[serde(default)]
-    pub brdf_normalization: BrdfNormalization,
     /// Directional mode's representation, as `method` implies: SH, or Immel,
     /// Cohen and Greenberg's (1986) global cube.
     #[serde(default)]
@@ -197,11 +181,11 @@ pub struct SolverSettings {
     /// stored, like `memory_budget`.
     #[serde(skip)]
     pub resident_before_meshing: Option<u64>,
-    /// Tests only, not a setting: shoot every patch's mean unshot radiance
-    /// uniformly (Remington 1992), as the global cube gathers it, instead of
-    /// from the quadrants of an unevenly lit patch (`solve::regions`), so
-    /// that a test can hold two methods to the same linear system.
-    #[cfg(test)]
+    /// Not a setting (no flag, key or file sets it; it is not stored): tests
+    /// set it to shoot every patch's mean unshot radiance uniformly
+    /// (Remington 1992), as the global cube gathers it, instead of from the
+    /// quadrants of an unevenly lit patch (`solve::regions`), so that a test
+    /// can hold two methods to the same linear system.
     #[serde(skip)]
     pub uniform_shooters: bool,
     /// The points of a finely tessellated smooth surface receive at sites
@@ -270,7 +254,6 @@ pub struct SettingsPatch {
     pub ambient: Option<bool>,
     pub sh_error_target: Option<f64>,
     pub max_sh_order: Option<u32>,
-    pub brdf_normalization: Option<BrdfNormalization>,
     pub cube_resolution: Option<u32>,
     pub shooters: Option<Shooters>,
     pub group_samples: Option<u32>,
@@ -321,7 +304,6 @@ impl SolverSettings {
             ambient: true,
             sh_error_target: 1e-3,
             max_sh_order: 64,
-            brdf_normalization: BrdfNormalization::Thesis,
             directional: DirectionalRepresentation::Sh,
             cube_resolution: DEFAULT_CUBE_RESOLUTION,
             shooters: Shooters::Patch,
@@ -331,7 +313,6 @@ impl SolverSettings {
             crease_angle: default_crease_angle(),
             memory_budget: None,
             resident_before_meshing: None,
-            #[cfg(test)]
             uniform_shooters: false,
             site_angle: DEFAULT_SITE_ANGLE,
             whole_receivers: false,
@@ -382,7 +363,6 @@ impl SolverSettings {
             ambient,
             sh_error_target,
             max_sh_order,
-            brdf_normalization,
             cube_resolution,
             shooters,
             group_samples,
@@ -410,10 +390,7 @@ impl SolverSettings {
     /// when a test asks (`uniform_shooters`); emitters' recorded shots always
     /// do.
     pub(crate) fn shoots_uniformly(&self) -> bool {
-        #[cfg(test)]
-        return self.uniform_shooters;
-        #[cfg(not(test))]
-        false
+        self.uniform_shooters
     }
 
     /// Preset defaults, then each patch from lowest to highest precedence:

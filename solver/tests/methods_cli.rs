@@ -83,19 +83,22 @@ fn gauss_seidel_and_hemicube_flags_solve_the_cornell_box() {
     assert!(a > 0.0 && b > 0.0 && (a / b - 1.0).abs() < 0.25, "{a} {b}");
 }
 
+/// `solver solve --preset draft ARGS CORNELL -o OUT`.
+fn draft_solve(args: &[&str], out: &std::path::Path) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_solver"))
+        .args(["solve", "--preset", "draft"])
+        .args(args)
+        .arg(cornell())
+        .arg("-o")
+        .arg(out)
+        .output()
+        .unwrap()
+}
+
 #[test]
 fn bad_method_flags_are_refused_with_their_names() {
     let out = scratch("bad.sol");
-    let run = |args: &[&str]| {
-        Command::new(env!("CARGO_BIN_EXE_solver"))
-            .args(["solve", "--preset", "draft"])
-            .args(args)
-            .arg(cornell())
-            .arg("-o")
-            .arg(&out)
-            .output()
-            .unwrap()
-    };
+    let run = |args: &[&str]| draft_solve(args, &out);
     let odd = run(&["--method", "gauss-seidel", "--hemicube-resolution", "33"]);
     let stderr = String::from_utf8_lossy(&odd.stderr);
     assert_eq!(odd.status.code(), Some(1), "{stderr}");
@@ -117,16 +120,7 @@ fn bad_method_flags_are_refused_with_their_names() {
 #[test]
 fn a_method_that_cannot_solve_the_mode_is_refused_naming_both() {
     let out = scratch("refused.sol");
-    let run = |args: &[&str]| {
-        Command::new(env!("CARGO_BIN_EXE_solver"))
-            .args(["solve", "--preset", "draft"])
-            .args(args)
-            .arg(cornell())
-            .arg("-o")
-            .arg(&out)
-            .output()
-            .unwrap()
-    };
+    let run = |args: &[&str]| draft_solve(args, &out);
     for (args, method, mode) in [
         (
             &["--method", "gauss-seidel", "--mode", "directional"][..],

@@ -17,17 +17,12 @@
 //! measurement).
 
 pub mod normalization;
-pub mod reciprocity;
 pub mod window;
 
 pub use normalization::{
     exact_hemisphere_integral, funk_hecke_d, funk_hecke_d_all, normalization, NormalizationTable,
 };
-pub use reciprocity::{reciprocity, ReciprocityStats};
 pub use window::{ringing, RingingStats, Window};
-
-/// The lobe normalizations the solver offers (setting `brdf_normalization`).
-pub use crate::settings::BrdfNormalization as Normalization;
 
 use glam::DVec3;
 use solution::sh;
@@ -290,13 +285,8 @@ pub struct GlossyLobe {
     pub coefficients: Vec<f64>,
     /// `w_l a_l · 4π/(2l+1)`: multiply by `Y_lm(r)` for the lobe's SH (addition theorem).
     pub sh_scale: Vec<f64>,
-    /// `C_R(μ_i)` of the thesis's normalization, tabulated (also kept for the
-    /// reciprocal variant, whose constant is derived from its denominators).
+    /// `C_R(μ_i)` of the thesis's normalization, tabulated.
     pub table: NormalizationTable,
-    pub normalization: Normalization,
-    /// The reciprocal variant's constant normalizer `Ks / max_μ S(μ)` (see
-    /// [`reciprocal_constant`]); unused by the thesis's normalization.
-    pub constant: f64,
 }
 
 /// Relative interpolation error the [`GlossyLobe`]'s normalization table is built to.
@@ -313,25 +303,6 @@ impl GlossyLobe {
         max_order: u32,
         window: Window,
     ) -> Result<Self, BrdfError> {
-        Self::with_normalization(
-            alpha,
-            ks,
-            error_target,
-            max_order,
-            window,
-            Normalization::Thesis,
-        )
-    }
-
-    /// [`GlossyLobe::new`] with a choice of normalization.
-    pub fn with_normalization(
-        alpha: f64,
-        ks: f64,
-        error_target: f64,
-        max_order: u32,
-        window: Window,
-        normalization: Normalization,
-    ) -> Result<Self, BrdfError> {
         let alpha = validate_alpha(alpha)?;
         let fit = LegendreFit::new(alpha, max_order);
         let choice = choose_from_fit(&fit, error_target, max_order, window);
@@ -347,7 +318,6 @@ impl GlossyLobe {
             .collect();
         let table =
             NormalizationTable::with_tolerance(ks, &coefficients, NORMALIZATION_TABLE_TOLERANCE);
-        let constant = reciprocal_constant(ks, &coefficients);
         Ok(GlossyLobe {
             alpha,
             ks,
@@ -356,8 +326,6 @@ impl GlossyLobe {
             coefficients,
             sh_scale,
             table,
-            normalization,
-            constant,
         })
     }
 
@@ -369,41 +337,20 @@ impl GlossyLobe {
         error_target: f64,
         max_order: u32,
     ) -> Result<Self, BrdfError> {
-        Self::with_default_window_and(alpha, ks, error_target, max_order, Normalization::Thesis)
-    }
-
-    /// [`GlossyLobe::with_default_window`] with a choice of normalization.
-    pub fn with_default_window_and(
-        alpha: f64,
-        ks: f64,
-        error_target: f64,
-        max_order: u32,
-        normalization: Normalization,
-    ) -> Result<Self, BrdfError> {
         let plain = choose_order(validate_alpha(alpha)?, error_target, max_order);
-        Self::with_normalization(
-            alpha,
-            ks,
-            error_target,
-            max_order,
-            default_window(&plain),
-            normalization,
-        )
+        Self::new(alpha, ks, error_target, max_order, default_window(&plain))
     }
 
     /// The normalizer for incidence μ_i (clamped to [0, 1]): the thesis's
-    /// `C_R(μ_i)` from the table, or the reciprocal variant's constant.
+    /// `C_R(μ_i)` from the table.
     pub fn c_r(&self, mu_i: f64) -> f64 {
-        match self.normalization {
-            Normalization::Thesis => self.table.c_r(mu_i),
-            Normalization::Reciprocal => self.constant,
-        }
+        self.table.c_r(mu_i)
     }
 
     /// The directional albedo `∫_H f_s(ω_i, ω_o) cosθ_o dω_o` for incidence μ_i,
     /// by Funk–Hecke from the expansion: `c_r(μ_i) · S(μ_i)`. Ks (to the table's
-    /// 1e-6) for the thesis's normalization; `Ks · S(μ_i)/max S ≤ Ks` for the
-    /// reciprocal one. (Ringing clamped at evaluation is not counted.)
+    /// 1e-6) for the thesis's normalization. (Ringing clamped at evaluation is
+    /// not counted.)
     pub fn albedo(&self, mu_i: f64) -> f64 {
         self.c_r(mu_i)
             * normalization::hemisphere_integral(&self.coefficients, mu_i.clamp(0.0, 1.0))
@@ -470,69 +417,6 @@ impl GlossyLobe {
                 *o += s * y;
             }
         }
-    }
-}
-
-/// The reciprocal variant's normalizer: `Ks / max_{μ∈[0,1]} S(μ)`, with
-/// `S(μ) = 2π Σ_l a_l D_l P_l(μ)` the cosine-weighted hemispherical integral of
-/// the (windowed, truncated) lobe `a` for incidence μ (Funk–Hecke, see
-/// [`normalization`]).
-///
-/// Why this variant (design notes, "Directional mode"; Immel, Cohen and Greenberg 1986 requires a BRDF to
-/// be reciprocal and to conserve energy, Immel, Cohen and Greenberg 1986, eqs. 13–16): the lobe
-/// `g(ω_o·r_i)` is already symmetric, since `ω_o·mirror(ω_i) =
-/// ω_i·mirror(ω_o)`; only the thesis's `C_R(μ_i)` breaks reciprocity. Any
-/// normalizer `c(μ_i, μ_o)` symmetric in its arguments restores it; of those:
-///
-/// * the geometric mean `Ks / √(S(μ_i) S(μ_o))` is reciprocal but not bounded:
-///   toward grazing S falls (the horizon clips the lobe and the cosine weights
-///   it down) so `1/√S(μ_o)` rises and the albedo exceeds Ks for some
-///   incidences, which breaks Immel, Cohen and Greenberg's (1986) other requirement (measured by quadrature
-///   of the expansion at target 1e-3: albedo up to 1.097 Ks at α = 1, 1.072 Ks
-///   at α = 0.3, 1.010 Ks at α = 0.1; a glossy furnace could then exceed
-///   Le/(1 − ρ));
-/// * a constant `c` makes the albedo `c · S(μ_i)`, so `c = Ks / max S` is the
-///   largest constant whose albedo never exceeds Ks. S is largest at normal
-///   incidence for every lobe measured (the whole lobe above the horizon, where
-///   the cosine is largest), so the albedo is Ks there and falls toward grazing,
-///   where real glossy surfaces also lose light to the shadowing of their
-///   microfacets. It costs nothing at run time (no table) and is exactly
-///   reciprocal in floating point (the same product for either argument order).
-///
-/// The maximum is found on a grid of 64·(L+1) + 1 points refined by golden
-/// section around the best one. Between grid points a degree-L polynomial can
-/// overshoot the refined maximum only by rounding; the result is divided by
-/// (1 + 1e-12) on top so that `albedo ≤ Ks` holds with margin (test
-/// `reciprocal_albedo_never_exceeds_ks`). Returns 0 when S is nowhere positive.
-pub fn reciprocal_constant(ks: f64, a: &[f64]) -> f64 {
-    let s = |mu: f64| normalization::hemisphere_integral(a, mu);
-    let n = 64 * a.len().max(1) + 1;
-    let (mut best_mu, mut best) = (1.0, s(1.0));
-    for j in 0..n {
-        let mu = j as f64 / (n - 1) as f64;
-        let v = s(mu);
-        if v > best {
-            best = v;
-            best_mu = mu;
-        }
-    }
-    // Golden section on the bracket around the best grid point.
-    let h = 1.0 / (n - 1) as f64;
-    let (mut lo, mut hi) = ((best_mu - h).max(0.0), (best_mu + h).min(1.0));
-    let g = 0.5 * (5f64.sqrt() - 1.0);
-    for _ in 0..80 {
-        let (x1, x2) = (hi - g * (hi - lo), lo + g * (hi - lo));
-        if s(x1) > s(x2) {
-            hi = x2;
-        } else {
-            lo = x1;
-        }
-    }
-    best = best.max(s(0.5 * (lo + hi)));
-    if best > 0.0 && best.is_finite() {
-        ks / (best * (1.0 + 1e-12))
-    } else {
-        0.0
     }
 }
 

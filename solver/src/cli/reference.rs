@@ -15,7 +15,7 @@
 
 use crate::reference::{id_buffers, Accumulator, Integrator, Physics, RenderScene};
 use crate::scene::ImportOptions;
-use crate::settings::{BrdfNormalization, Preset, SettingsPatch, SolverSettings};
+use crate::settings::{Preset, SettingsPatch, SolverSettings};
 use anyhow::{bail, Context};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use solution::camera::Camera;
@@ -144,17 +144,6 @@ pub struct ReferenceArgs {
     )]
     pub mode: Option<SolveMode>,
 
-    /// Glossy-lobe normalization: thesis (default) or reciprocal.
-    #[arg(
-        long,
-        value_enum,
-        value_name = "NORM",
-        long_help = "As `solver solve --brdf-normalization`: thesis C_R(μ_i) = Ks/S(μ_i) \
-            (every incident beam reflects Ks; not reciprocal), or reciprocal Ks/max S. \
-            Here S is a converged quadrature of the exact lobe, tabulated to 1e-6."
-    )]
-    pub brdf_normalization: Option<BrdfNormalization>,
-
     /// Scene units per metre (does not change the lighting).
     #[arg(long, value_name = "U")]
     pub units_per_metre: Option<f64>,
@@ -239,20 +228,18 @@ pub fn run(args: ReferenceArgs) -> anyhow::Result<ExitCode> {
     let display_patch = display.map(|d| d.settings).unwrap_or_default();
     let flags = SettingsPatch {
         mode: args.mode,
-        brdf_normalization: args.brdf_normalization,
         ..SettingsPatch::default()
     };
     let settings = SolverSettings::resolve(
         Preset::default(),
         &[&display_patch, &loaded.settings, &flags],
     )
-    .context("resolving the mode and normalization")?;
+    .context("resolving the mode")?;
     // The same smooth surfaces as `solver solve` at the same crease angle, so
     // truth and solver agree on the shading normals.
     super::solve::apply_smoothing(&mut scene, settings.crease_angle);
     let physics = Physics {
         mode: settings.mode,
-        normalization: settings.brdf_normalization,
     };
 
     let threads = args.threads.unwrap_or_else(|| {
@@ -494,7 +481,6 @@ fn write_reference_exr(
         "seed": args.seed,
         "mean_relative_error": error,
         "mode": physics.mode,
-        "brdf_normalization": physics.normalization,
         "max_depth": args.max_depth,
     });
     attributes

@@ -8,9 +8,9 @@
 //! "Directional mode"), with `S(μ) = ∫_H g(ω·r(μ)) cos θ dω` the cosine-weighted
 //! hemispherical integral of the lobe about the mirror direction of incidence μ:
 //!
-//! * thesis: `C_R(μ_i) = Ks / S(μ_i)`, so every incident beam reflects exactly Ks
-//!   (not reciprocal: evaluate with ω_i toward the light, ω_o toward the eye);
-//! * reciprocal: the constant `Ks / max_μ S(μ)`.
+//! `C_R(μ_i) = Ks / S(μ_i)` (the thesis's), so every incident beam reflects
+//! exactly Ks (not reciprocal: evaluate with ω_i toward the light, ω_o toward
+//! the eye).
 //!
 //! `S` comes from [`crate::brdf::exact_hemisphere_integral`] (2-D Gauss–Legendre,
 //! relative accuracy ~1e-12), interpolated at Chebyshev nodes doubled until the
@@ -19,7 +19,6 @@
 //! O(1) lookups (see [`ExactLobe::new`]).
 
 use crate::brdf::exact_hemisphere_integral;
-use crate::settings::BrdfNormalization;
 use glam::DVec3;
 use std::f64::consts::PI;
 
@@ -38,11 +37,8 @@ const MAX_CHEBYSHEV: usize = 1025;
 #[derive(Clone, Debug)]
 pub struct ExactLobe {
     pub alpha: f64,
-    normalization: BrdfNormalization,
     /// `S(μ_j)`, `μ_j = j / (n − 1)`.
     table: Vec<f64>,
-    /// `max_μ S(μ)` over the table's nodes (the reciprocal variant's divisor).
-    max_s: f64,
     /// Worst measured relative interpolation error of the table.
     pub interpolation_error: f64,
 }
@@ -77,7 +73,7 @@ impl ExactLobe {
     /// [`TABLE_SIZE`] points for O(1) cubic lookups, whose error is measured at
     /// every grid midpoint. The sum of both measured errors is
     /// [`ExactLobe::interpolation_error`].
-    pub fn new(alpha: f64, normalization: BrdfNormalization) -> ExactLobe {
+    pub fn new(alpha: f64) -> ExactLobe {
         let mut n = 17;
         let mut values: Vec<f64> = (0..n).map(|k| s_at(alpha, lobatto(k, n))).collect();
         let chebyshev_error = loop {
@@ -109,7 +105,7 @@ impl ExactLobe {
         let table: Vec<f64> = (0..TABLE_SIZE)
             .map(|j| barycentric(&values, j as f64 / (TABLE_SIZE - 1) as f64))
             .collect();
-        let mut lobe = ExactLobe::from_table(alpha, normalization, table, 0.0);
+        let mut lobe = ExactLobe::from_table(alpha, table, 0.0);
         let table_error = (0..TABLE_SIZE - 1)
             .map(|j| {
                 let mu = (j as f64 + 0.5) / (TABLE_SIZE - 1) as f64;
@@ -120,13 +116,10 @@ impl ExactLobe {
         lobe
     }
 
-    fn from_table(alpha: f64, normalization: BrdfNormalization, table: Vec<f64>, err: f64) -> Self {
-        let max_s = table.iter().cloned().fold(0.0, f64::max);
+    fn from_table(alpha: f64, table: Vec<f64>, err: f64) -> Self {
         ExactLobe {
             alpha,
-            normalization,
             table,
-            max_s,
             interpolation_error: err,
         }
     }
@@ -153,13 +146,10 @@ impl ExactLobe {
             + (3.0 * p1 - p0 - 3.0 * p2 + p3) * f3)
     }
 
-    /// `C_R / Ks` for incidence `μ_i`: `1 / S(μ_i)` (thesis) or `1 / max S`
-    /// (reciprocal). 0 where S is not positive (reflect nothing rather than ∞).
+    /// `C_R / Ks` for incidence `μ_i`: `1 / S(μ_i)` (the thesis's). 0 where
+    /// S is not positive (reflect nothing rather than ∞).
     pub fn c_r_per_ks(&self, mu_i: f64) -> f64 {
-        let s = match self.normalization {
-            BrdfNormalization::Thesis => self.s(mu_i),
-            BrdfNormalization::Reciprocal => self.max_s,
-        };
+        let s = self.s(mu_i);
         if s > 0.0 && s.is_finite() {
             1.0 / s
         } else {
@@ -263,7 +253,7 @@ mod tests {
     /// lobe (α = 0.3, ~15 cells per lobe width) is below 1e-4.
     #[test]
     fn thesis_lobe_reflects_ks_at_every_incidence() {
-        let lobe = ExactLobe::new(0.3, BrdfNormalization::Thesis);
+        let lobe = ExactLobe::new(0.3);
         assert!(lobe.interpolation_error <= TABLE_TOLERANCE);
         let n = DVec3::Z;
         for theta_i in [0.0f64, 0.5, 1.0, 1.3, 1.5] {
@@ -289,7 +279,7 @@ mod tests {
     /// is π (within 4 standard errors of the mean of 200 000 samples).
     #[test]
     fn sampler_matches_its_density() {
-        let lobe = ExactLobe::new(0.4, BrdfNormalization::Thesis);
+        let lobe = ExactLobe::new(0.4);
         let n = DVec3::Z;
         let wo = dir(0.7, 0.3);
         let mut rng = Rng::new(3, 4);
@@ -308,16 +298,5 @@ mod tests {
         let mean = sum / count as f64;
         let se = ((sum2 / count as f64 - mean * mean) / count as f64).sqrt();
         assert!((mean - PI).abs() < 4.0 * se, "{mean} ± {se}");
-    }
-
-    #[test]
-    fn reciprocal_lobe_is_symmetric_and_bounded() {
-        let lobe = ExactLobe::new(0.2, BrdfNormalization::Reciprocal);
-        let n = DVec3::Z;
-        let (a, b) = (dir(0.3, 0.1), dir(1.2, 2.9));
-        let (ab, ba) = (lobe.eval(a, b, n), lobe.eval(b, a, n));
-        assert!((ab - ba).abs() <= 1e-14 * ab.abs().max(1e-300));
-        // Albedo at normal incidence is S(1)/max S ≤ 1 (= 1 when the max is there).
-        assert!(lobe.s(1.0) * lobe.c_r_per_ks(1.0) <= 1.0 + 1e-12);
     }
 }

@@ -7,8 +7,8 @@
 //! "Directional mode"): one-sided polygons (back faces are black but block
 //! light); Lambertian emitters of radiance `emission` toward the front; Kd
 //! Lambertian reflection; in directional mode Ks times the exact glossy lobe of
-//! Remington (1992, eq. 4.2) with `C_R` from a converged quadrature under the
-//! thesis's or the reciprocal normalization ([`lobe`]); in diffuse mode Ks is
+//! Remington (1992, eq. 4.2) with `C_R` from a converged quadrature of the
+//! thesis's normalization ([`lobe`]); in diffuse mode Ks is
 //! ignored.
 //!
 //! Modules, one job each:

@@ -8,7 +8,6 @@ use super::emitters::Emitters;
 use super::lobe::ExactLobe;
 use crate::geometry::visibility::Occluder;
 use crate::scene::Scene;
-use crate::settings::BrdfNormalization;
 use glam::DVec3;
 use rayon::prelude::*;
 use solution::format::SolveMode;
@@ -42,12 +41,10 @@ impl Surface {
     }
 }
 
-/// How the scene's materials are reflected: `solver solve`'s `--mode` and
-/// `--brdf-normalization`.
+/// How the scene's materials are reflected: `solver solve`'s `--mode`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub struct Physics {
     pub mode: SolveMode,
-    pub normalization: BrdfNormalization,
 }
 
 /// Everything the integrator reads; `Send + Sync`, built once.
@@ -99,7 +96,7 @@ impl RenderScene {
         let lobes: BTreeMap<u64, Arc<ExactLobe>> = alphas
             .par_iter()
             .map(|&a| {
-                let lobe = ExactLobe::new(f64::from_bits(a), physics.normalization);
+                let lobe = ExactLobe::new(f64::from_bits(a));
                 (a, Arc::new(lobe))
             })
             .collect();

@@ -12,7 +12,6 @@ use super::*;
 use crate::geometry::formfactor::point_to_polygon;
 use crate::geometry::sampling::{stream_id, Rng};
 use crate::scene::{Material, Polygon, Scene, SourceRef};
-use crate::settings::BrdfNormalization;
 use glam::DVec3;
 use solution::camera::{Camera, UpAxis};
 use solution::format::SolveMode;
@@ -188,7 +187,6 @@ fn glossy_furnace_mean_exitance_is_pi_le_over_one_minus_ks() {
     );
     let physics = Physics {
         mode: SolveMode::Directional,
-        normalization: BrdfNormalization::Thesis,
     };
     let render = RenderScene::new(&s, physics);
     let integrator = Integrator {
@@ -318,7 +316,6 @@ fn grazing_glossy_bounce_matches_its_closed_form() {
     );
     let physics = Physics {
         mode: SolveMode::Directional,
-        normalization: BrdfNormalization::Thesis,
     };
     let render = RenderScene::new(&s, physics);
     let integrator = Integrator {
@@ -380,7 +377,6 @@ fn images_are_bit_identical_across_thread_counts() {
     );
     let physics = Physics {
         mode: SolveMode::Directional,
-        normalization: BrdfNormalization::Thesis,
     };
     let render = RenderScene::new(&s, physics);
     let integrator = Integrator {

@@ -48,7 +48,7 @@
 
 use super::{SolveError, Solver};
 use crate::scene::Scene;
-use crate::settings::{BrdfNormalization, SolverSettings};
+use crate::settings::SolverSettings;
 use glam::DVec3;
 use std::io::{self, Read, Write};
 
@@ -407,16 +407,16 @@ fn read_directional<R: Read>(
 ) -> Result<(super::DirectionalCheckpoint, Vec<u32>), StateError> {
     let surface_order = r.u32s("SHOR")?;
     let brdf = r.u32s("BRDF")?;
-    let brdf_normalization = match brdf.as_slice() {
-        [0] => BrdfNormalization::Thesis,
-        [1] => BrdfNormalization::Reciprocal,
-        other => {
-            return Err(StateError::Bad {
-                field: "BRDF",
-                detail: format!("unknown lobe normalization {other:?}"),
-            })
-        }
-    };
+    // The lobe normalization: 0, the thesis's, is the only one (1 was a
+    // reciprocal variant, since removed).
+    if brdf.as_slice() != [0] {
+        return Err(StateError::Bad {
+            field: "BRDF",
+            detail: format!(
+                "unknown lobe normalization {brdf:?} (0, the thesis's, is the only one)"
+            ),
+        });
+    }
     let radiance = r.packed("SHRA")?.into_iter().map(f64::to_bits).collect();
     let patch_unshot = r.packed("SHUN")?.into_iter().map(f64::to_bits).collect();
     let unshot_masked = r.u32s("SHUM")?;
@@ -453,7 +453,6 @@ fn read_directional<R: Read>(
             direct: Vec::new(),
             recorded_unshot,
             shot_sum,
-            brdf_normalization,
         },
         unshot_masked,
     ))
@@ -496,13 +495,8 @@ impl Solver {
         if let Some(d) = self.directional.as_deref() {
             let sections = d.checkpoint_sections();
             s.u32s(b"SHOR", sections.surface_order)?;
-            s.u32s(
-                b"BRDF",
-                &[match self.settings.brdf_normalization {
-                    BrdfNormalization::Thesis => 0,
-                    BrdfNormalization::Reciprocal => 1,
-                }],
-            )?;
+            // The lobe normalization's code, kept in the format: 0, the thesis's.
+            s.u32s(b"BRDF", &[0])?;
             // Masked: each coefficient's bits XOR those of its recorded-shot
             // part (recomputed exactly on resume before unmasking). Where the
             // light's direct reflection dominates, as in most high-order

@@ -68,9 +68,7 @@
 //! * diffuse: c₀₀ += Kd · ΔE_i / π · √(4π);
 //! * glossy: c_lm += ΔE_i · Ks · C_R(μ_i) · a_l · 4π/(2l+1) · Y_lm(r_i)
 //!   ([`GlossyLobe::add_lobe_sh`], built with Ks = 1 and scaled per channel,
-//!   since C_R is linear in Ks); C_R is the thesis's or, with the setting
-//!   `brdf_normalization = "reciprocal"`, the reciprocal variant's constant
-//!   ([`crate::brdf::reciprocal_constant`]).
+//!   since C_R is linear in Ks); C_R is the thesis's.
 //!
 //! ## Refinement
 //!
@@ -214,9 +212,6 @@ pub struct DirectionalCheckpoint {
     /// Per patch coefficient: the SH it has shot in unrecorded shots.
     #[serde(default)]
     pub shot_sum: Vec<u64>,
-    /// The lobe normalization the coefficients were computed with.
-    #[serde(default)]
-    pub brdf_normalization: crate::settings::BrdfNormalization,
 }
 
 /// The warning for a diffuse solve of a scene with glossy materials (design
@@ -280,12 +275,11 @@ impl Directional {
                 material_lobe.push(None);
                 continue;
             }
-            let lobe = GlossyLobe::with_default_window_and(
+            let lobe = GlossyLobe::with_default_window(
                 m.alpha,
                 1.0,
                 settings.sh_error_target,
                 settings.max_sh_order,
-                settings.brdf_normalization,
             )
             .map_err(|e| SolveError::BadMaterial {
                 name: m.name.clone(),
@@ -498,17 +492,12 @@ fn cap_orders(
             continue;
         }
         let material = &scene.materials[m];
-        let lobe = GlossyLobe::with_default_window_and(
-            material.alpha,
-            1.0,
-            settings.sh_error_target,
-            keep,
-            settings.brdf_normalization,
-        )
-        .map_err(|e| SolveError::BadMaterial {
-            name: material.name.clone(),
-            problem: e.to_string(),
-        })?;
+        let lobe =
+            GlossyLobe::with_default_window(material.alpha, 1.0, settings.sh_error_target, keep)
+                .map_err(|e| SolveError::BadMaterial {
+                    name: material.name.clone(),
+                    problem: e.to_string(),
+                })?;
         warnings.push(budget::order_cap_warning(
             &material.name,
             material.alpha,
@@ -1045,12 +1034,6 @@ impl Solver {
                         "it has {} shot-sum coefficients, this mesh needs {}",
                         s.shot_sum.len(),
                         d.shot_sum.len()
-                    ));
-                }
-                if s.brdf_normalization != self.settings.brdf_normalization {
-                    return Err(format!(
-                        "it was solved with brdf_normalization {:?}, this solve uses {:?}",
-                        s.brdf_normalization, self.settings.brdf_normalization
                     ));
                 }
                 if !(s.direct.is_empty() || s.direct.len() == d.radiance.len()) {

@@ -324,12 +324,11 @@ fn glossy_smooth_sphere_reflects_about_its_shading_normals() {
     settings.adaptive = false;
     settings.ambient = false;
     let solver = solve_to_end(&scene, &settings);
-    let lobe = crate::brdf::GlossyLobe::with_default_window_and(
+    let lobe = crate::brdf::GlossyLobe::with_default_window(
         alpha,
         1.0,
         settings.sh_error_target,
         settings.max_sh_order,
-        settings.brdf_normalization,
     )
     .unwrap();
     let centre = DVec3::new(0.0, d, 0.0);

@@ -14,7 +14,7 @@ pub(crate) fn solve_mode_parser() -> impl clap::builder::TypedValueParser<Value 
     })
 }
 use crate::method::Method;
-use crate::settings::{BrdfNormalization, Preset, SettingsPatch, Shooters};
+use crate::settings::{Preset, SettingsPatch, Shooters};
 use std::path::PathBuf;
 
 /// Exit code of a solve stopped by Ctrl-C after saving its checkpoint (128 + SIGINT,
@@ -250,19 +250,6 @@ pub struct SolveArgs {
     )]
     pub mode: Option<SolveMode>,
 
-    /// Glossy-lobe normalization: thesis (default) or reciprocal.
-    #[arg(
-        long,
-        value_enum,
-        value_name = "NORM",
-        long_help = "How glossy lobes are normalized (directional mode). thesis \
-            (default): Remington's (1992) C_R(μ_i), which reflects exactly Ks of every incident beam \
-            but is not reciprocal (f(ω_i, ω_o) ≠ f(ω_o, ω_i); a glossy furnace is not \
-            uniform). reciprocal: one constant per material, reciprocal, reflecting Ks \
-            at normal incidence and less toward grazing (docs/sh-bands.md)."
-    )]
-    pub brdf_normalization: Option<BrdfNormalization>,
-
     /// Global-cube cells per face edge k (2 to 256): D = 6k² directions.
     #[arg(
         long,
@@ -454,7 +441,6 @@ impl SolveArgs {
     pub fn patch(&self) -> SettingsPatch {
         SettingsPatch {
             mode: self.mode,
-            brdf_normalization: self.brdf_normalization,
             cube_resolution: self.cube_resolution,
             method: self.method,
             full_rays_above: self.full_rays_above,
@@ -566,8 +552,6 @@ mod tests {
             "directional",
             "--threads",
             "3",
-            "--brdf-normalization",
-            "reciprocal",
             "--patch-size",
             "0.05",
             "--min-element-size",
@@ -582,7 +566,6 @@ mod tests {
         assert_eq!(p.method, Some(Method::Wallace));
         assert_eq!(p.mode, Some(SolveMode::Directional));
         assert_eq!(p.threads, Some(3));
-        assert_eq!(p.brdf_normalization, Some(BrdfNormalization::Reciprocal));
         assert_eq!(p.patch_size, Some(0.05));
         assert_eq!(p.min_element_size, Some(0.01));
         // The global flat rule is gone.

@@ -11,11 +11,9 @@
 //! (Ω_o the exact cell solid angle, [`solution::cube::cell_solid_angle`]) — the
 //! cube's own quadrature of `S(μ_i) = ∫_H g(ω·r_i) cosθ dω`:
 //!
-//! * `thesis`: `C_i = 1 / Q_i`, so every incident beam reflects exactly `Ks`
-//!   in the cube's quadrature, however coarse the cube (not reciprocal);
-//! * `reciprocal`: one constant `C = 1 / max_i Q_i` per material, the choice of
-//!   [`brdf::reciprocal_constant`] on the sampled lobe: exactly reciprocal
-//!   (g(ω_o·r_i) = g(ω_i·r_o)) and never reflecting more than `Ks`.
+//! `C_i = 1 / Q_i` (the thesis's normalization), so every incident beam
+//! reflects exactly `Ks` in the cube's quadrature, however coarse the cube
+//! (not reciprocal).
 //!
 //! Normalizing by the exact `S(μ_i)` instead would keep point values exact but
 //! make a lobe narrower than a cell reflect several times the light it
@@ -29,31 +27,24 @@
 //! costs a few hundred terms per μ instead of ~10⁶ lobe evaluations.
 
 use crate::brdf;
-use crate::settings::BrdfNormalization;
 use glam::DVec3;
 
 /// The exact (untruncated) lobe of one glossiness and its exact normalizer.
 #[derive(Clone, Debug)]
 pub struct ExactLobe {
     pub alpha: f64,
-    pub normalization: BrdfNormalization,
     /// Legendre coefficients of g into the tail (see the module documentation).
     coefficients: Vec<f64>,
-    /// The reciprocal normalizer `1 / max_μ S(μ)`.
-    constant: f64,
 }
 
 impl ExactLobe {
     /// The lobe of glossiness `alpha` (validated by the caller with
     /// [`brdf::validate_alpha`]).
-    pub fn new(alpha: f64, normalization: BrdfNormalization) -> ExactLobe {
+    pub fn new(alpha: f64) -> ExactLobe {
         let coefficients = brdf::LegendreFit::new(alpha, 0).coefficients;
-        let constant = brdf::reciprocal_constant(1.0, &coefficients);
         ExactLobe {
             alpha,
-            normalization,
             coefficients,
-            constant,
         }
     }
 
@@ -62,19 +53,14 @@ impl ExactLobe {
         brdf::normalization::hemisphere_integral(&self.coefficients, mu.clamp(0.0, 1.0))
     }
 
-    /// The exact normalizer for Ks = 1: `1 / S(μ_i)` (thesis) or `1 / max S`
-    /// (reciprocal); 0 where `S` is not positive.
+    /// The exact normalizer for Ks = 1: `1 / S(μ_i)` (the thesis's C_R);
+    /// 0 where `S` is not positive.
     pub fn normalizer(&self, mu_i: f64) -> f64 {
-        match self.normalization {
-            BrdfNormalization::Thesis => {
-                let s = self.hemisphere_integral(mu_i);
-                if s > 0.0 && s.is_finite() {
-                    1.0 / s
-                } else {
-                    0.0
-                }
-            }
-            BrdfNormalization::Reciprocal => self.constant,
+        let s = self.hemisphere_integral(mu_i);
+        if s > 0.0 && s.is_finite() {
+            1.0 / s
+        } else {
+            0.0
         }
     }
 
@@ -95,7 +81,6 @@ impl ExactLobe {
 #[derive(Clone, Debug)]
 pub struct CellBrdf {
     pub alpha: f64,
-    pub normalization: BrdfNormalization,
     pub matrix: Vec<f64>,
     /// `Q_i`, the cube's quadrature of `S(μ_i)` per incoming cell.
     pub quadrature: Vec<f64>,
@@ -104,12 +89,7 @@ pub struct CellBrdf {
 impl CellBrdf {
     /// The matrix over the upper cells' unit local `directions` with their
     /// exact solid angles `solid_angles`.
-    pub fn new(
-        alpha: f64,
-        normalization: BrdfNormalization,
-        directions: &[DVec3],
-        solid_angles: &[f64],
-    ) -> CellBrdf {
+    pub fn new(alpha: f64, directions: &[DVec3], solid_angles: &[f64]) -> CellBrdf {
         let h = directions.len();
         let mut matrix = vec![0.0; h * h];
         let mut quadrature = vec![0.0; h];
@@ -124,21 +104,12 @@ impl CellBrdf {
                 *q += *m * omega_o.z * solid;
             }
         }
-        let constant = match quadrature.iter().copied().fold(0.0, f64::max) {
-            max if max > 0.0 => 1.0 / max,
-            _ => 0.0,
-        };
         for (row, &q) in matrix.chunks_exact_mut(h.max(1)).zip(&quadrature) {
-            let c = match normalization {
-                BrdfNormalization::Thesis if q > 0.0 => 1.0 / q,
-                BrdfNormalization::Thesis => 0.0,
-                BrdfNormalization::Reciprocal => constant,
-            };
+            let c = if q > 0.0 { 1.0 / q } else { 0.0 };
             row.iter_mut().for_each(|m| *m *= c);
         }
         CellBrdf {
             alpha,
-            normalization,
             matrix,
             quadrature,
         }

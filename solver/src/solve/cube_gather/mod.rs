@@ -356,7 +356,7 @@ struct SurfaceData {
 
 /// Solves `scene` on global cubes of `settings.cube_resolution` (see the module
 /// documentation). Uses `patches`, `samples`, `seed`, `form_factors`,
-/// `shadows` and `brdf_normalization`; `mode` must be directional.
+/// and `shadows`; `mode` must be directional.
 ///
 /// Stages: check the inputs; mesh the scene (the progressive solver's mesh,
 /// gather weights and scene checks; its diffuse state is not used); per-surface
@@ -381,7 +381,7 @@ pub fn solve_cube(
     let materials = (&surfaces[..], glossy_alphas.len());
     let bytes = check_memory(k, mesh, materials, settings, limits)?;
     let cells = UpperCells::new(k);
-    let brdfs = cell_brdfs(&glossy_alphas, settings, &cells, bytes)?;
+    let brdfs = cell_brdfs(&glossy_alphas, &cells, bytes)?;
     let start = Instant::now();
     let occluder = mesh_occluder(mesh);
     let kd: Vec<DVec3> = surfaces.iter().map(|s| s.kd).collect();
@@ -630,7 +630,6 @@ fn check_memory(
 /// One cell BRDF per glossy material, built in parallel.
 fn cell_brdfs(
     glossy_alphas: &[f64],
-    settings: &SolverSettings,
     cells: &UpperCells,
     bytes: u128,
 ) -> Result<Vec<CellBrdf>, CubeError> {
@@ -641,14 +640,7 @@ fn cell_brdfs(
     brdfs.extend(
         glossy_alphas
             .par_iter()
-            .map(|&a| {
-                CellBrdf::new(
-                    a,
-                    settings.brdf_normalization,
-                    &cells.directions,
-                    &cells.solid_angles,
-                )
-            })
+            .map(|&a| CellBrdf::new(a, &cells.directions, &cells.solid_angles))
             .collect::<Vec<_>>(),
     );
     Ok(brdfs)
