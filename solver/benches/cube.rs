@@ -1,4 +1,4 @@
-//! The global-cube representation (Immel, Cohen and Greenberg 1986; `solve --directional cube`) on the
+//! The global-cube representation (Immel, Cohen and Greenberg 1986; `solve --method cube`) on the
 //! bundled glossy scene, `config/glossy_floor.toml` with the `medium` preset's
 //! patches and samples: for k = 2, 4, 8, 16, 32 (D = 6k²), the transport and
 //! sweep seconds on every core, the solve's memory estimate (what it refuses
