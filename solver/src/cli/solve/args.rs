@@ -22,23 +22,7 @@ use std::path::PathBuf;
 pub const EXIT_INTERRUPTED: u8 = 130;
 
 const AFTER_LONG_HELP: &str = "\
-Settings come from four places; a higher one overrides a lower one key by key:
-  1. these flags
-  2. the TOML scene config (when SCENE is a .toml file)
-  3. the legacy display file (--display, Remington 1992, appendix A)
-  4. the preset (--preset, default medium; config/presets.toml)
-Meshing is size-driven (--patch-size, --min-element-size, fractions of the scene
-diagonal); a TOML config's objects and a legacy geometry file may give a polygon
-its own patch count.
-
-No lost work: every --checkpoint-every shots the solver saves OUT.checkpoint and
-rewrites OUT as a valid solution marked partial, which a viewer can watch. Ctrl-C
-stops after the current shot, saves both and exits with code 130; run the same
-command again with --resume to continue. A solve that ends at its shot budget
-before reaching the threshold keeps its checkpoint too, so --resume with a larger
---max-shots carries on. The checkpoint is removed once the solve converges.
-
-Exit codes: 0 done, 1 error, 2 bad command line, 130 interrupted (resumable).";
+Exit codes: 0 done, 1 error, 2 bad command line, 130 Ctrl-C (saved; --resume goes on).";
 
 /// `solver solve SCENE -o OUT …`: flags map one to one onto [`SettingsPatch`].
 #[derive(clap::Args, Debug, Clone)]
@@ -57,13 +41,11 @@ pub struct SolveArgs {
         long,
         value_enum,
         value_name = "PRESET",
-        long_help = "Quality preset: a full set of defaults from config/presets.toml, \
-            chosen against a path-traced truth (docs/accuracy.md). draft: a coarse mesh \
-            and a loose threshold, under a second for the Cornell box, with visible \
-            noise in penumbrae (about 4% error). medium (default): enough rays that \
-            two seeds look alike, about 3 s for the Cornell box on two cores (about 2.3% \
-            error). final: a fine mesh, about 7 times slower than medium (about 1.4% \
-            error, about 21 s). Any other flag overrides the preset's value."
+        long_help = "A full set of defaults from config/presets.toml: draft is fastest and \
+            noisiest, medium (default) shows no noise, final is the most accurate and \
+            about 7 times slower than medium. The scene config, a display file and the \
+            flags override its values, in that order (docs/guide.md, \"Presets\").",
+        hide_possible_values = true
     )]
     pub preset: Option<Preset>,
 
@@ -72,10 +54,8 @@ pub struct SolveArgs {
         long,
         value_name = "N",
         long_help = "Visibility rays per receiving vertex and source patch (1 to 4096). \
-            More rays give smoother penumbrae and less shadow noise. Time grows about \
-            linearly with N where shots are bright; with --full-rays-above (every preset: \
-            0.01) a receiver gets all N only from shots that add at least that share of \
-            its light, so late, dim shots cost far less than N rays each."
+            More rays give smoother penumbrae, at a cost that grows about linearly \
+            with N."
     )]
     pub samples: Option<u32>,
 
@@ -83,10 +63,8 @@ pub struct SolveArgs {
     #[arg(
         long,
         value_name = "X",
-        long_help = "Stop when the total unshot power falls below X times the total \
-            emitted power (0 < X < 1). Smaller is more accurate (more interreflected \
-            light is accounted for) and costs more shots; halving X costs roughly a \
-            constant number of extra shots per halving."
+        long_help = "Stop when the unshot power falls below X times the emitted power (0 < \
+            X < 1). Smaller is more accurate and costs more shots."
     )]
     pub threshold: Option<f64>,
 
@@ -94,9 +72,8 @@ pub struct SolveArgs {
     #[arg(
         long,
         value_name = "N",
-        long_help = "Stop after N shots whatever the unshot power: a time budget. The \
-            result is then less converged than the threshold asks; the checkpoint is \
-            kept so that --resume with a larger N continues."
+        long_help = "Stop after N shots, converged or not: a time budget, whose checkpoint \
+            --resume continues."
     )]
     pub max_shots: Option<u64>,
 
@@ -104,9 +81,8 @@ pub struct SolveArgs {
     #[arg(
         long,
         value_name = "S",
-        long_help = "Seed of the stratified, jittered visibility samples. The same seed \
-            and settings give the same solution bit for bit, with any thread count; \
-            another seed gives other (equally valid) shadow noise."
+        long_help = "Seed of the jittered visibility samples. The same seed and settings \
+            give the same file bit for bit, on any thread count."
     )]
     pub seed: Option<u64>,
 
@@ -114,17 +90,16 @@ pub struct SolveArgs {
     #[arg(
         long,
         value_name = "N",
-        long_help = "Worker threads (1 to 1024; default every core). Speed only: the \
-            result does not depend on it."
+        long_help = "Worker threads (1 to 1024; default every core). Speed only: the result \
+            does not depend on it."
     )]
     pub threads: Option<usize>,
 
     /// Trace no visibility rays: no shadows, much faster.
     #[arg(
         long,
-        long_help = "Trace no visibility rays (Remington 1992, appendix D `-t`): every vertex sees \
-            every source, so there are no shadows. Much faster; for checking a scene, \
-            not for results."
+        long_help = "Trace no visibility rays, so nothing casts a shadow (Remington 1992, \
+            appendix D `-t`). Much faster; for checking a scene, not for results."
     )]
     pub no_shadows: bool,
 
@@ -132,16 +107,11 @@ pub struct SolveArgs {
     #[arg(
         long,
         value_name = "FRACTION",
-        long_help = "A receiver gets every one of --samples visibility rays from a shot \
-            whose unoccluded contribution is at least this fraction of the light it \
-            already holds (its radiance plus the reflected ambient term); below, it gets \
-            rays in proportion, at least one (0 to 1; 0 traces every ray, the thesis's \
-            method). The estimate stays unbiased; only its noise grows, where the shot's \
-            share is small: at most sqrt(FRACTION / (4 x samples)) of a vertex's radiance \
-            in all. Larger: fewer rays late in a solve of many small patches, where most \
-            shots are dim. An emitting patch's own shots, which refinement replays, keep every ray. Every preset uses \
-            0.01: the Cornell box's final solve takes 21 s instead of 37 s at the same \
-            error against the path-traced truth (1.44% against 1.43%, docs/lab/ray-share.md)."
+        long_help = "A receiver gets all --samples rays only from shots that add at least \
+            this fraction of its light, fewer in proportion below (0 to 1; 0 \
+            traces every ray). The estimate stays unbiased and only its noise \
+            grows; every preset's 0.01 halves the Cornell box's final time at the \
+            same error (docs/lab/ray-share.md)."
     )]
     pub full_rays_above: Option<f64>,
 
@@ -149,21 +119,10 @@ pub struct SolveArgs {
     #[arg(
         long,
         value_name = "K",
-        long_help = "Directional mode: adaptive subdivision of a glossy surface stops at \
-            elements whose longest edge is K × α × D, with α the lobe's RMS slope and D \
-            half the scene's diagonal (the distance its surfaces are seen from). The \
-            preset's --min-element-size floors every surface as well. Where a lobe \
-            varies, the split test refines toward this floor: an edge splits when the \
-            radiance an eye at distance D sees can turn by more than the edge threshold \
-            along it. A highlight's \
-            width on a surface is about 2α·D_e, with D_e the harmonic mean of the eye's \
-            and the source's distances over two; K = 0.25 puts four vertices across it. \
-            Smaller K: sharper highlights and reflections, at the cost of more \
-            elements, each with (L+1)² coefficients per channel. Default: the preset's \
-            (0.5 for draft and medium, 0.125 for final: on the glossy Cornell box it \
-            meets HDR-FLIP 0.06 from both cameras, where 0.25 misses it from the floor \
-            camera, at twice the solve time; docs/lab/glossy-final-floor.md and \
-            docs/lab/glossy-view-term.md have the cost and error of each)."
+        long_help = "Directional mode: glossy elements stop splitting at an edge of K × α × \
+            half the scene's diagonal, α the lobe's RMS slope. Smaller K gives \
+            sharper highlights for more elements and time (final's 0.125 takes \
+            twice 0.25's time; docs/lab/glossy-final-floor.md)."
     )]
     pub glossy_edge: Option<f64>,
 
@@ -172,24 +131,12 @@ pub struct SolveArgs {
         long,
         value_enum,
         value_name = "WHO",
-        long_help = "What shoots in one pass. grouped (every preset): the patch with the \
-            most unshot power and up to 16,383 patches within a fifth of the scene \
-            diagonal with at least a tenth of its unshot power (a small face: of its \
-            unshot radiance) shoot together (the \
-            shooter side of Smits, Arvo and Greenberg's 1994 clustering): each receiver \
-            sees the group through a cluster tree (near patches by their exact form \
-            factor, far clusters as one item each) and shares its rays among them by \
-            importance, an estimate of the sum of their shots. Far fewer shots, and \
-            passes over the receivers, where many small patches are lit (thousands of \
-            boxes on a floor): 100k boxes at medium converge in 40 s on 2 cores and 1M at \
-            draft in 5 minutes, which the patch shooter does not in 5 and 10 minutes. An emitter's patch shoots its \
-            emission alone first (recorded for refinement's replay). patch: the patch \
-            with the most unshot power, one per shot (Remington 1992). On the Cornell \
-            box against the path-traced truth grouped is the more accurate at every \
-            preset (final: 1.27% against 1.44% MARE, 19 s against 24 s when compared, 13 s \
-            since; medium: 1.74% against 2.3%, 1.2 s against 4.8 s) but noisier between seeds at equal rays \
-            (--group-samples; docs/lab/grouped-shooters.md, \"Grouped shooters by default\"). \
-            Diffuse mode only (directional solves shoot patches)."
+        long_help = "What shoots in one pass. grouped (every preset): a bright patch and \
+            its bright neighbours together, each receiver's rays shared among them \
+            by importance, far fewer passes where many small patches are lit; \
+            patch: one patch per shot, as Remington (1992). Diffuse mode only \
+            (docs/lab/grouped-shooters.md).",
+        hide_possible_values = true
     )]
     pub shooters: Option<Shooters>,
 
@@ -198,15 +145,9 @@ pub struct SolveArgs {
         long,
         value_name = "N",
         long_help = "Visibility rays per receiving vertex for a grouped shot (1 to 4096), \
-            shared among the group's members in proportion to what each adds (--shooters \
-            grouped; the presets: draft 16, medium 64, final 256). A group carries many \
-            patches' light in one pass, so it needs more rays than one patch shot: on the \
-            Cornell box at final, 32 measured 1.54% MARE against the path-traced truth, 64 \
-            1.37% (12 s) and 256 1.27% (20 s); at medium 64 rays leave 0.89% image noise \
-            between seeds and 512 0.47% (4.4 s, the main job). Time grows with N where shots are \
-            bright: 100k boxes at medium took 167 s at 32 and 196 s at 64 \
-            (docs/lab/grouped-shooters.md, \"Grouped shooters against the truth\"). Ignored by patch \
-            shots, which use --samples."
+            shared among its members by what each adds. More rays lower the noise \
+            between seeds; time grows with N where shots are bright \
+            (docs/lab/grouped-shooters.md)."
     )]
     pub group_samples: Option<u32>,
 
@@ -214,10 +155,9 @@ pub struct SolveArgs {
     #[arg(
         long,
         value_name = "R",
-        long_help = "Cells per side of a hemicube's top face (even, 2 to 2048; default \
-            128): 3R² cells in all. Used by --method hemicube and --method \
-            gauss-seidel. The error of a hemicube factor falls like 1/R where polygon \
-            edges line up with the cells and faster otherwise; time grows like R²."
+        long_help = "Cells per side of a hemicube's top face for --method hemicube and \
+            gauss-seidel (even, 2 to 2048; default 128). The factor's error falls \
+            like 1/R; time grows like R²."
     )]
     pub hemicube_resolution: Option<u32>,
 
@@ -226,14 +166,13 @@ pub struct SolveArgs {
         long,
         value_enum,
         value_name = "METHOD",
-        long_help = "The solution method. progressive (default): progressive refinement \
-            with the exact form factor, adaptive meshing, checkpoints and --resume, in \
-            either mode. The seed papers' baselines, kept to measure against: hemicube \
-            and wallace (progressive refinement with a hemicube's visibility or \
-            Wallace's disc factor) and gauss-seidel (the full form-factor matrix) solve \
-            diffuse mode only; cube (Immel, Cohen and Greenberg's global cube) solves \
-            directional mode only. A method that cannot solve the mode is refused \
-            before any work (docs/accuracy.md compares them)."
+        long_help = "progressive (default): progressive refinement with exact form factors, \
+            adaptive meshing and checkpoints, in either mode. The seed papers' \
+            baselines, to measure against: hemicube, wallace and gauss-seidel \
+            (diffuse only) and cube (directional only; no textures or smooth \
+            surfaces). A method that cannot solve the scene is refused before any \
+            work (docs/guide.md, \"The method\").",
+        hide_possible_values = true
     )]
     pub method: Option<Method>,
 
@@ -242,11 +181,11 @@ pub struct SolveArgs {
         long,
         value_parser = solve_mode_parser(),
         value_name = "MODE",
-        long_help = "diffuse (default): one radiance per vertex; MTL Ks is ignored with \
-            a note. directional: glossy surfaces store outgoing radiance as spherical \
-            harmonics (order chosen per material from its glossiness); highlights \
-            follow the viewer, at a cost in time and file size that grows with the \
-            square of the order."
+        long_help = "diffuse (default): one radiance per vertex, MTL Ks ignored. \
+            directional: glossy surfaces store outgoing radiance as spherical \
+            harmonics, so highlights follow the viewer, at a cost in time and file \
+            size that grows with the square of the SH order.",
+        hide_possible_values = true
     )]
     pub mode: Option<SolveMode>,
 
@@ -254,13 +193,9 @@ pub struct SolveArgs {
     #[arg(
         long,
         value_name = "K",
-        long_help = "Cells per cube face edge for --method cube (2 to 256; default \
-            8): D = 6k² directions per glossy vertex. Memory and time grow like k² \
-            (values) to k⁴ (each glossy material's direction-to-direction BRDF matrix \
-            and the reflection per sweep); in return highlights are sharper and placed \
-            more accurately: a lobe narrower than a cell (about 90°/k) is aliased \
-            between cell centres. The solve refuses, before allocating, a k whose \
-            memory estimate exceeds its stated bound."
+        long_help = "Cells per cube face edge k for --method cube (2 to 256; default 8): D \
+            = 6k² directions per glossy vertex. Larger k gives sharper, better \
+            placed highlights; memory and time grow like k² to k⁴."
     )]
     pub cube_resolution: Option<u32>,
 
@@ -268,14 +203,10 @@ pub struct SolveArgs {
     #[arg(
         long,
         value_name = "F",
-        long_help = "Target patch size as a fraction of the scene's bounding-box diagonal \
-            (0 < F <= 1; presets: draft 0.15, medium 0.075, final 0.075). Each polygon \
-            gets N × N patches with N = ceil(longest edge / (F × diagonal)), so a polygon \
-            smaller than the target stays one patch as it is, however finely the model \
-            was tessellated (at most 1024 per side, with a warning). Smaller F: more \
-            patches to shoot from and receive at, so more time and memory, and less \
-            meshing bias in the light the patches shoot. A TOML scene config can set \
-            `patch_size` or `patches` per object or material, in scene units or metres."
+        long_help = "Target patch size as a fraction of the scene's diagonal (0 < F <= 1): \
+            a polygon gets N × N patches, N = ceil(longest edge / (F × diagonal)). \
+            Smaller F costs time and memory for less meshing bias; a TOML config \
+            may set it per object or material."
     )]
     pub patch_size: Option<f64>,
 
@@ -283,13 +214,10 @@ pub struct SolveArgs {
     #[arg(
         long,
         value_name = "F",
-        long_help = "Adaptive subdivision stops at elements whose longest edge is at \
-            most F × the scene's bounding-box diagonal (0 < F <= 1; presets: draft and \
-            medium 0.026, final 0.0065), the same absolute floor on every polygon, \
-            large or small. Smaller F: shadow boundaries and gradients are followed more \
-            closely (less meshing bias), at the cost of more elements, vertices, rays \
-            and memory. A TOML scene config can set `min_element_size` per object or \
-            material."
+        long_help = "Adaptive subdivision stops at elements of this fraction of the scene's \
+            diagonal (0 < F <= 1), on every polygon alike. Smaller F follows \
+            shadows and gradients more closely, at the cost of more elements, rays \
+            and memory."
     )]
     pub min_element_size: Option<f64>,
 
@@ -297,10 +225,9 @@ pub struct SolveArgs {
     #[arg(
         long,
         value_name = "U",
-        long_help = "How many scene units make a metre (default 1, or the scene \
-            config's). Stored in the solution so that the runtime scales head \
-            tracking, walking speed and eye separation; it does not change the \
-            lighting."
+        long_help = "How many scene units make a metre (default 1, or the scene config's). \
+            The runtime scales head tracking, walking and eye separation by it; \
+            the lighting does not change."
     )]
     pub units_per_metre: Option<f64>,
 
@@ -309,24 +236,17 @@ pub struct SolveArgs {
         long,
         value_name = "SIZE",
         value_parser = parse_bytes,
-        long_help = "Peak memory the progressive solve plans within: bytes, or a number \
-            with KB/MB/GB/TB (powers of 1000) or KiB/MiB/GiB/TiB (powers of 1024), e.g. \
-            8GiB or 500MB. Default: 80% of the machine's available memory \
-            (/proc/meminfo MemAvailable; 4 GiB when it cannot be read), printed at the \
-            start. The solve estimates its peak (mesh, vertex state, SH coefficients, \
-            recorded shots, checkpoint and output) before allocating and before each \
-            refinement, and plans against 90% of the budget. Near it, a directional solve \
-            caps glossy materials' SH orders (blurrier reflections) and refinement stops \
-            subdividing (coarser shadows), each with a warning; a scene whose unrefined \
-            mesh cannot fit even at SH order 0 is refused with the estimate. A larger \
-            budget trades memory for finer meshes and sharper highlights."
+        long_help = "Peak memory the solve plans within, e.g. 8GiB or 500MB (default: 80% \
+            of available memory). Near it glossy SH orders are capped and \
+            refinement stops, each with a warning; a scene that cannot fit is \
+            refused before allocating."
     )]
     pub memory_budget: Option<u64>,
 
     /// Make import warnings errors.
     #[arg(
         long,
-        long_help = "Turn import warnings (Kd + Ks > 1 scaled down, degenerate or \
+        long_help = "Turn import warnings (Kd + Ks above 1 scaled down, degenerate or \
             non-planar faces, …) into errors, for scenes that must import cleanly."
     )]
     pub strict: bool,
@@ -335,24 +255,19 @@ pub struct SolveArgs {
     #[arg(
         long,
         value_name = "K",
-        long_help = "Every K shots (K >= 1) save OUT.checkpoint and rewrite OUT as a \
-            partial solution. Smaller K loses less work on a crash and lets a viewer \
-            follow the solve more closely; each save costs the time to write the \
-            whole mesh."
+        long_help = "Every K shots, save OUT.checkpoint and rewrite OUT as a partial \
+            solution a viewer can watch. Smaller K loses less work on a crash; \
+            each save costs writing the whole mesh."
     )]
     pub checkpoint_every: Option<u64>,
 
     /// Do not add the ambient estimate of unshot light to partial solutions.
     #[arg(
         long,
-        long_help = "Do not add Cohen et al.'s ambient term (the estimated light not yet \
-            shot, Remington 1992, appendix A line 8) to partial solutions. With it, early partial \
-            solutions look about as bright as the converged one; without it they show \
-            only the light shot so far. A converged file carries it too, for the light its \
-            threshold leaves unshot. In diffuse mode each vertex gets the term weighted by how \
-            enclosed it is (the share of its hemisphere that meets a surface, over the scene's \
-            mean), so a face looking out of an open scene is not over-brightened; a closed room \
-            gets Cohen's term unchanged (docs/lab/ambient-term.md)."
+        long_help = "Leave out Cohen et al.'s (1988) ambient estimate of the light not yet \
+            shot, which files otherwise carry (in diffuse mode weighted by each \
+            vertex's enclosure). Partial solutions then look darker but hold only \
+            light actually shot (docs/lab/ambient-term.md)."
     )]
     pub no_ambient: bool,
 
@@ -360,17 +275,11 @@ pub struct SolveArgs {
     #[arg(
         long,
         value_name = "DEGREES",
-        long_help = "Points of a smooth surface exported finer than the preset's smallest \
-            element receive each shot at sites, spread so that every point has one within \
-            the smallest element size whose shading normal is within this angle of its \
-            own, and take a weighted mean of the sites around it (default 10). Cost \
-            follows the sites, not the triangles: the 1M spheres room has 14,737 \
-            sites for 574,051 points. Smaller angles add sites, more cost \
-            and less blur of the shading across the normal; under a source the \
-            interpolation misses by the normals' curvature across the sites, about \
-            1 - cos(angle) of the peak (1.6% measured at 10 degrees). 0: every point \
-            receives on its own. Flat shooting in diffuse mode only (docs/lab/sites.md, \
-            \"Sites\")."
+        long_help = "A smooth surface exported finer than the smallest element receives at \
+            sites, one within that size and this shading-normal angle of every \
+            point (default 10 degrees; 0: every point receives). Smaller angles \
+            add sites and cost, and blur the shading less; diffuse mode \
+            (docs/lab/sites.md)."
     )]
     pub site_angle: Option<f64>,
 
@@ -379,24 +288,18 @@ pub struct SolveArgs {
         long,
         value_name = "DEGREES",
         long_help = "Neighbouring polygons of one material whose normals differ by less \
-            than this angle (default 30) form a smooth surface: they share vertices in \
-            the solution (no cracks) and receive light with a shading normal \
-            interpolated from their corners (the OBJ's `vn` where given and \
-            consistent, else the angle-weighted mean of the face normals). A larger \
-            angle rounds off more edges that were meant to be sharp; a smaller one \
-            shows the facets of coarse tessellations. 0 keeps every polygon a flat \
-            facet (today's behaviour, to measure against)."
+            than this angle (default 30 degrees) shade as one smooth surface with \
+            shared vertices. A larger angle rounds off edges meant to be sharp; 0 \
+            keeps every polygon a flat facet."
     )]
     pub crease_angle: Option<f64>,
 
     /// Continue the solve saved in OUT.checkpoint.
     #[arg(
         long,
-        long_help = "Continue the solve saved in OUT.checkpoint (after Ctrl-C, a crash \
-            or a shot budget). The scene and the result-affecting settings must be the \
-            same as those of the saved solve, or the checkpoint is refused; \
-            --max-shots, --threshold, --threads and --checkpoint-every may change. The \
-            final solution equals that of an uninterrupted solve."
+        long_help = "Continue the solve saved in OUT.checkpoint after Ctrl-C, a crash or a \
+            shot budget; the scene and the result-affecting settings must be the \
+            same. The result equals an uninterrupted solve's."
     )]
     pub resume: bool,
 
@@ -404,9 +307,9 @@ pub struct SolveArgs {
     #[arg(
         long,
         value_name = "FILE",
-        long_help = "A legacy display parameter file (Remington 1992, appendix A): its camera is used \
-            by --preview and stored in the solution when the scene names none; its \
-            ambient and threshold lines become settings of the lowest precedence."
+        long_help = "A legacy display parameter file (Remington 1992, appendix A): its \
+            camera serves --preview and the solution when the scene names none; \
+            its ambient and threshold lines are the lowest-precedence settings."
     )]
     pub display: Option<PathBuf>,
 
@@ -414,9 +317,8 @@ pub struct SolveArgs {
     #[arg(
         long,
         value_name = "PNG",
-        long_help = "Also render the finished solution on the CPU from the scene \
-            config's camera (else the display file's, else the solution's default) and \
-            write it as a tone-mapped sRGB PNG of the camera's image size."
+        long_help = "Also render the finished solution on the CPU from the scene's camera \
+            and write it as a tone-mapped sRGB PNG."
     )]
     pub preview: Option<PathBuf>,
 
@@ -424,9 +326,8 @@ pub struct SolveArgs {
     #[arg(
         long,
         value_name = "FILE",
-        long_help = "Write the closing summary as one JSON object with the keys \
-            elements, vertices, shots, rays, seconds, rays_per_second, threads and \
-            unshot_fraction."
+        long_help = "Write the closing summary (elements, vertices, shots, rays, seconds, \
+            rays per second, threads, unshot fraction) as one JSON object."
     )]
     pub stats_json: Option<PathBuf>,
 }
