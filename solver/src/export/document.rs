@@ -67,106 +67,11 @@ pub(crate) fn document(
     options: &ExportOptions,
     glossy_eye: [f64; 3],
 ) -> Value {
-    let mut views = Vec::new();
-    let mut accessors = Vec::new();
-    let mut meshes = Vec::new();
-    let mut nodes = Vec::new();
-    let mut materials = vec![unlit_material(MATERIAL_NAME, [1.0; 3], None)];
-    let mut emissive_strength = false;
+    let mut parts = Parts::new();
     for p in placed {
-        let base = accessors.len();
-        for k in 0..4u64 {
-            let mut accessor = json!({
-                "bufferView": views.len(),
-                "componentType": FLOAT,
-                "count": p.vertices,
-                "type": "VEC3",
-            });
-            if k == 0 {
-                accessor["min"] = json!(p.min);
-                accessor["max"] = json!(p.max);
-            }
-            views.push(json!({
-                "buffer": 0,
-                "byteOffset": p.offset + k * 12 * p.vertices,
-                "byteLength": 12 * p.vertices,
-                "target": ARRAY_BUFFER,
-            }));
-            accessors.push(accessor);
-        }
-        let mut attributes = json!({
-            "POSITION": base,
-            "NORMAL": base + 1,
-            "COLOR_0": base + 2,
-            RADIANCE_ATTRIBUTE: base + 3,
-        });
-        let mut end = p.offset + 48 * p.vertices;
-        let mut material = 0;
-        if let Some((texture, factor)) = p.texture {
-            attributes["TEXCOORD_0"] = json!(accessors.len());
-            views.push(json!({
-                "buffer": 0,
-                "byteOffset": end,
-                "byteLength": 8 * p.vertices,
-                "target": ARRAY_BUFFER,
-            }));
-            accessors.push(json!({
-                "bufferView": views.len() - 1,
-                "componentType": FLOAT,
-                "count": p.vertices,
-                "type": "VEC2",
-            }));
-            end += 8 * p.vertices;
-            material = materials.len();
-            let name = format!("{} (textured)", p.name);
-            let mut material = unlit_material(&name, factor, Some(texture));
-            if let Some((emission, ke)) = p.emission {
-                add_emission(
-                    &mut material,
-                    emission,
-                    ke,
-                    f64::from(options.exposure_stops),
-                );
-                emissive_strength |= material["extensions"]
-                    .get("KHR_materials_emissive_strength")
-                    .is_some();
-            }
-            materials.push(material);
-        }
-        views.push(json!({
-            "buffer": 0,
-            "byteOffset": end,
-            "byteLength": 4 * p.indices,
-            "target": ELEMENT_ARRAY_BUFFER,
-        }));
-        let indices = accessors.len();
-        accessors.push(json!({
-            "bufferView": views.len() - 1,
-            "componentType": UNSIGNED_INT,
-            "count": p.indices,
-            "type": "SCALAR",
-        }));
-        nodes.push(json!({"name": p.name, "mesh": meshes.len()}));
-        meshes.push(json!({
-            "name": p.name,
-            "primitives": [{
-                "attributes": attributes,
-                "indices": indices,
-                "material": material,
-                "mode": TRIANGLES,
-                "extras": {"solution_batch": p.batch},
-            }],
-        }));
+        parts.add_batch(p, f64::from(options.exposure_stops));
     }
-    let mut perspective = json!({
-        "yfov": camera.yfov_rad,
-        "aspectRatio": camera.aspect,
-        "znear": camera.znear_m,
-    });
-    if let Some(zfar) = camera.zfar_m {
-        perspective["zfar"] = json!(zfar);
-    }
-    nodes.push(json!({
+    parts.nodes.push(json!({
         "name": "camera (solution header)",
         "camera": 0,
         "translation": camera.translation,
@@ -182,44 +87,167 @@ pub(crate) fn document(
             "generator": concat!("solver export ", env!("CARGO_PKG_VERSION")),
             "extras": asset_extras(options, glossy_eye),
         },
-        "extensionsUsed": if emissive_strength {
+        "extensionsUsed": if parts.emissive_strength {
             json!(["KHR_materials_unlit", "KHR_materials_emissive_strength"])
         } else {
             json!(["KHR_materials_unlit"])
         },
         "scene": 0,
-        "scenes": [{"name": "solution", "nodes": (0..nodes.len()).collect::<Vec<_>>()}],
-        "nodes": nodes,
-        "materials": materials,
-        "cameras": [{"name": "solution header", "type": "perspective", "perspective": perspective}],
+        "scenes": [{"name": "solution", "nodes": (0..parts.nodes.len()).collect::<Vec<_>>()}],
+        "nodes": parts.nodes,
+        "materials": parts.materials,
+        "cameras": [{"name": "solution header", "type": "perspective", "perspective": perspective(camera)}],
     });
     if !images.is_empty() {
-        let mut image_list = Vec::new();
-        for &(offset, length) in images {
-            image_list.push(json!({"bufferView": views.len(), "mimeType": "image/png"}));
-            views.push(json!({"buffer": 0, "byteOffset": offset, "byteLength": length}));
-        }
-        doc["images"] = json!(image_list);
-        doc["textures"] = json!((0..images.len())
-            .map(|k| json!({"sampler": 0, "source": k}))
-            .collect::<Vec<_>>());
-        // Trilinear and repeating, as the runtime samples (docs/solution-format.md).
-        doc["samplers"] = json!([{
-            "magFilter": LINEAR,
-            "minFilter": LINEAR_MIPMAP_LINEAR,
-            "wrapS": REPEAT,
-            "wrapT": REPEAT,
-        }]);
+        add_images(&mut doc, images, &mut parts.views);
     }
-    if !meshes.is_empty() {
-        doc["meshes"] = json!(meshes);
-        doc["accessors"] = json!(accessors);
+    if !parts.meshes.is_empty() {
+        doc["meshes"] = json!(parts.meshes);
+        doc["accessors"] = json!(parts.accessors);
     }
-    if !views.is_empty() {
-        doc["bufferViews"] = json!(views);
+    if !parts.views.is_empty() {
+        doc["bufferViews"] = json!(parts.views);
         doc["buffers"] = json!([buffer]);
     }
     doc
+}
+
+/// The document's arrays as the batches fill them, in glTF index order.
+struct Parts {
+    views: Vec<Value>,
+    accessors: Vec<Value>,
+    meshes: Vec<Value>,
+    nodes: Vec<Value>,
+    materials: Vec<Value>,
+    /// Whether some material needed `KHR_materials_emissive_strength`.
+    emissive_strength: bool,
+}
+
+impl Parts {
+    fn new() -> Self {
+        Parts {
+            views: Vec::new(),
+            accessors: Vec::new(),
+            meshes: Vec::new(),
+            nodes: Vec::new(),
+            materials: vec![unlit_material(MATERIAL_NAME, [1.0; 3], None)],
+            emissive_strength: false,
+        }
+    }
+
+    /// A buffer view of `length` bytes at `offset` and an accessor over it;
+    /// the accessor's index.
+    fn view_and_accessor(
+        &mut self,
+        offset: u64,
+        length: u64,
+        target: u32,
+        accessor: Value,
+    ) -> usize {
+        let mut accessor = accessor;
+        accessor["bufferView"] = json!(self.views.len());
+        self.views.push(json!({
+            "buffer": 0,
+            "byteOffset": offset,
+            "byteLength": length,
+            "target": target,
+        }));
+        self.accessors.push(accessor);
+        self.accessors.len() - 1
+    }
+
+    /// One exported batch: its four VEC3 attributes, a textured batch's UVs
+    /// and material, its indices, and its mesh and node.
+    fn add_batch(&mut self, p: &Placed, exposure_stops: f64) {
+        let mut base = None;
+        for k in 0..4u64 {
+            let mut accessor = json!({"componentType": FLOAT, "count": p.vertices, "type": "VEC3"});
+            if k == 0 {
+                accessor["min"] = json!(p.min);
+                accessor["max"] = json!(p.max);
+            }
+            let offset = p.offset + k * 12 * p.vertices;
+            let index = self.view_and_accessor(offset, 12 * p.vertices, ARRAY_BUFFER, accessor);
+            base.get_or_insert(index);
+        }
+        let base = base.unwrap_or_default();
+        let mut attributes = json!({
+            "POSITION": base,
+            "NORMAL": base + 1,
+            "COLOR_0": base + 2,
+            RADIANCE_ATTRIBUTE: base + 3,
+        });
+        let mut end = p.offset + 48 * p.vertices;
+        let mut material = 0;
+        if let Some((texture, factor)) = p.texture {
+            let accessor = json!({"componentType": FLOAT, "count": p.vertices, "type": "VEC2"});
+            attributes["TEXCOORD_0"] =
+                json!(self.view_and_accessor(end, 8 * p.vertices, ARRAY_BUFFER, accessor));
+            end += 8 * p.vertices;
+            material = self.materials.len();
+            self.add_textured_material(p, texture, factor, exposure_stops);
+        }
+        let accessor = json!({"componentType": UNSIGNED_INT, "count": p.indices, "type": "SCALAR"});
+        let indices = self.view_and_accessor(end, 4 * p.indices, ELEMENT_ARRAY_BUFFER, accessor);
+        self.nodes
+            .push(json!({"name": p.name, "mesh": self.meshes.len()}));
+        self.meshes.push(json!({
+            "name": p.name,
+            "primitives": [{
+                "attributes": attributes,
+                "indices": indices,
+                "material": material,
+                "mode": TRIANGLES,
+                "extras": {"solution_batch": p.batch},
+            }],
+        }));
+    }
+
+    /// A textured batch's own material, with its emission texture if any.
+    fn add_textured_material(&mut self, p: &Placed, texture: u32, factor: [f32; 3], stops: f64) {
+        let name = format!("{} (textured)", p.name);
+        let mut material = unlit_material(&name, factor, Some(texture));
+        if let Some((emission, ke)) = p.emission {
+            add_emission(&mut material, emission, ke, stops);
+            self.emissive_strength |= material["extensions"]
+                .get("KHR_materials_emissive_strength")
+                .is_some();
+        }
+        self.materials.push(material);
+    }
+}
+
+/// The header camera's perspective projection (§5.13).
+fn perspective(camera: &CameraJson) -> Value {
+    let mut perspective = json!({
+        "yfov": camera.yfov_rad,
+        "aspectRatio": camera.aspect,
+        "znear": camera.znear_m,
+    });
+    if let Some(zfar) = camera.zfar_m {
+        perspective["zfar"] = json!(zfar);
+    }
+    perspective
+}
+
+/// The PNG images (a buffer view each), their textures and the one sampler.
+fn add_images(doc: &mut Value, images: &[(u64, u64)], views: &mut Vec<Value>) {
+    let mut image_list = Vec::new();
+    for &(offset, length) in images {
+        image_list.push(json!({"bufferView": views.len(), "mimeType": "image/png"}));
+        views.push(json!({"buffer": 0, "byteOffset": offset, "byteLength": length}));
+    }
+    doc["images"] = json!(image_list);
+    doc["textures"] = json!((0..images.len())
+        .map(|k| json!({"sampler": 0, "source": k}))
+        .collect::<Vec<_>>());
+    // Trilinear and repeating, as the runtime samples (docs/solution-format.md).
+    doc["samplers"] = json!([{
+        "magFilter": LINEAR,
+        "minFilter": LINEAR_MIPMAP_LINEAR,
+        "wrapS": REPEAT,
+        "wrapT": REPEAT,
+    }]);
 }
 
 /// An unlit material: `factor` (linear) as the base colour, times the
