@@ -238,6 +238,85 @@ pub fn solve_gauss_seidel(
     let bytes = check_matrix_size(n as u64, limits)?;
 
     let start = Instant::now();
+    let (factors, row_sums) = form_factor_matrix(&solver, &hemicube, bytes)?;
+    let form_factor_seconds = start.elapsed().as_secs_f64();
+
+    let start = Instant::now();
+    let kd = patch_reflectance(&solver, scene);
+    // Each patch's emitted radiance as the progressive solve starts it: Ke,
+    // or on an emission-textured surface the texels' mean over the patch
+    // (`textured.rs`); before any shot that is its unshot radiance.
+    let emission: Vec<DVec3> = solver.patch_unshot().to_vec();
+    let swept = sweep(&solver, &factors, &kd, &emission, limits);
+    let converged = swept.change < limits.tolerance;
+    let gamma = kd.iter().map(|k| k.max_element()).fold(0.0, f64::max);
+    let error_bound = if gamma < 1.0 {
+        gamma / (1.0 - gamma) * swept.change
+    } else {
+        f64::INFINITY
+    };
+
+    // The radiosity lecture notes step 4: vertex radiance from the adjacent patches, area-weighted.
+    let vertex_radiance = vertex_average(&solver, &swept.radiance);
+    let vertex_irradiance_over_pi = vertex_average(&solver, &swept.gathered_light);
+    let solve_seconds = start.elapsed().as_secs_f64();
+
+    let emitted = solver.progress().emitted_power;
+    set_vertex_values(
+        &mut solver,
+        &swept,
+        &emission,
+        &vertex_radiance,
+        &vertex_irradiance_over_pi,
+    );
+    let mut solution = solver.to_solution(false);
+    let header = &mut solution.header;
+    header.partial = !converged;
+    header.stats.shots = swept.sweeps as u64;
+    header.stats.rays = 0;
+    header.stats.seconds = form_factor_seconds + solve_seconds;
+    header.stats.unshot_fraction = if emitted > 0.0 {
+        swept.added_power / emitted
+    } else {
+        0.0
+    };
+    header.stats.ambient = [0.0; 3];
+    let record = serde_json::json!({
+        "max_matrix_bytes": limits.max_matrix_bytes,
+        "max_sweeps": limits.max_sweeps,
+        "tolerance": limits.tolerance,
+        "sweeps": swept.sweeps,
+        "change": swept.change,
+        "error_bound": error_bound,
+    });
+    record_in_settings(&mut header.settings_json, record);
+    Ok(GaussSeidelResult {
+        solution,
+        patch_radiance: swept.radiance,
+        vertex_radiance,
+        patch_irradiance_over_pi: swept.gathered_light,
+        vertex_irradiance_over_pi,
+        row_sums,
+        sweeps: swept.sweeps,
+        change: swept.change,
+        error_bound,
+        converged,
+        form_factor_seconds,
+        solve_seconds,
+        matrix_bytes: bytes,
+    })
+}
+
+/// The n × n form factors F_ij (f32, row i from a hemicube on patch i) and
+/// each row's sum in f64; `bytes` is the matrix's size, for the refusal when
+/// it cannot be allocated.
+fn form_factor_matrix(
+    solver: &Solver,
+    hemicube: &Hemicube,
+    bytes: u64,
+) -> Result<(Vec<f32>, Vec<f64>), GaussSeidelError> {
+    let mesh = solver.mesh();
+    let n = mesh.patches.len();
     let mut factors: Vec<f32> = Vec::new();
     factors
         .try_reserve_exact(n * n)
@@ -253,7 +332,7 @@ pub fn solve_gauss_seidel(
         .map_init(
             || (hemicube.buffer(), vec![0.0f64; n]),
             |(buffer, row64), (i, row)| {
-                gather_row(&hemicube, buffer, row64, &solver, &targets, i);
+                gather_row(hemicube, buffer, row64, solver, &targets, i);
                 for (dst, &f) in row.iter_mut().zip(row64.iter()) {
                     *dst = f as f32;
                 }
@@ -261,18 +340,35 @@ pub fn solve_gauss_seidel(
             },
         )
         .collect();
-    let form_factor_seconds = start.elapsed().as_secs_f64();
+    Ok((factors, row_sums))
+}
 
-    let start = Instant::now();
-    let kd = patch_reflectance(&solver, scene);
-    // Each patch's emitted radiance as the progressive solve starts it: Ke,
-    // or on an emission-textured surface the texels' mean over the patch
-    // (`textured.rs`); before any shot that is its unshot radiance.
-    let emission: Vec<DVec3> = solver.patch_unshot().to_vec();
-    let order = propagation_order(&factors, &emission, n);
-    let mut radiance = emission.clone();
+/// What the Gauss–Seidel sweeps leave: per patch its radiance and the
+/// light it gathered (Σ_j F_ij L_j, its E/π), the sweeps done, the last
+/// sweep's largest change relative to the brightest patch, and the power
+/// that sweep added.
+struct Swept {
+    radiance: Vec<DVec3>,
+    gathered_light: Vec<DVec3>,
+    sweeps: u32,
+    change: f64,
+    added_power: f64,
+}
+
+/// Gauss–Seidel sweeps in light-propagation order until the relative change
+/// falls below the tolerance or the sweep limit is reached.
+fn sweep(
+    solver: &Solver,
+    factors: &[f32],
+    kd: &[DVec3],
+    emission: &[DVec3],
+    limits: &GaussSeidelLimits,
+) -> Swept {
+    let mesh = solver.mesh();
+    let n = mesh.patches.len();
+    let order = propagation_order(factors, emission, n);
+    let mut radiance = emission.to_vec();
     let mut gathered_light = vec![DVec3::ZERO; n];
-    let gamma = kd.iter().map(|k| k.max_element()).fold(0.0, f64::max);
     let mut sweeps = 0;
     let mut change = f64::INFINITY;
     let mut added_power = 0.0;
@@ -304,30 +400,34 @@ pub fn solve_gauss_seidel(
             break;
         }
     }
-    let converged = change < limits.tolerance;
-    let error_bound = if gamma < 1.0 {
-        gamma / (1.0 - gamma) * change
-    } else {
-        f64::INFINITY
-    };
+    Swept {
+        radiance,
+        gathered_light,
+        sweeps,
+        change,
+        added_power,
+    }
+}
 
-    // The radiosity lecture notes step 4: vertex radiance from the adjacent patches, area-weighted.
-    let vertex_radiance = vertex_average(&solver, &radiance);
-    let vertex_irradiance_over_pi = vertex_average(&solver, &gathered_light);
-    let solve_seconds = start.elapsed().as_secs_f64();
-
-    let emitted = solver.progress().emitted_power;
-    // The file through the progressive solver's output (smooth surfaces'
-    // shared vertices, hidden vertices, textured batches): its vertices hold
-    // radiance, or on a textured surface E/π plus its emission.
-    // An emission-textured vertex holds its surface's mean Le plus the light
-    // it reflects, which the output splits into the texture and the SH.
-    let reflected: Vec<DVec3> = radiance
+/// The solver's per-vertex values as the progressive output reads them
+/// (smooth surfaces' shared vertices, hidden vertices, textured batches):
+/// radiance, or on a textured surface E/π plus its emission, and on an
+/// emission-textured one its surface's mean Le plus the light it reflects,
+/// which the output splits into the texture and the SH.
+fn set_vertex_values(
+    solver: &mut Solver,
+    swept: &Swept,
+    emission: &[DVec3],
+    vertex_radiance: &[DVec3],
+    vertex_irradiance_over_pi: &[DVec3],
+) {
+    let reflected: Vec<DVec3> = swept
+        .radiance
         .iter()
-        .zip(&emission)
+        .zip(emission)
         .map(|(l, e)| *l - *e)
         .collect();
-    let vertex_reflected = vertex_average(&solver, &reflected);
+    let vertex_reflected = vertex_average(solver, &reflected);
     solver.radiance = solver
         .mesh
         .vertices
@@ -344,50 +444,17 @@ pub fn solve_gauss_seidel(
             }
         })
         .collect();
-    let mut solution = solver.to_solution(false);
-    let header = &mut solution.header;
-    header.partial = !converged;
-    header.stats.shots = sweeps as u64;
-    header.stats.rays = 0;
-    header.stats.seconds = form_factor_seconds + solve_seconds;
-    header.stats.unshot_fraction = if emitted > 0.0 {
-        added_power / emitted
-    } else {
-        0.0
-    };
-    header.stats.ambient = [0.0; 3];
+}
+
+/// Records the method and its sweep figures in the settings JSON.
+fn record_in_settings(settings_json: &mut String, record: serde_json::Value) {
     if let Ok(serde_json::Value::Object(mut map)) =
-        serde_json::from_str::<serde_json::Value>(&header.settings_json)
+        serde_json::from_str::<serde_json::Value>(settings_json)
     {
         map.insert("solver".into(), "gauss-seidel".into());
-        map.insert(
-            "gauss_seidel".into(),
-            serde_json::json!({
-                "max_matrix_bytes": limits.max_matrix_bytes,
-                "max_sweeps": limits.max_sweeps,
-                "tolerance": limits.tolerance,
-                "sweeps": sweeps,
-                "change": change,
-                "error_bound": error_bound,
-            }),
-        );
-        header.settings_json = serde_json::Value::Object(map).to_string();
+        map.insert("gauss_seidel".into(), record);
+        *settings_json = serde_json::Value::Object(map).to_string();
     }
-    Ok(GaussSeidelResult {
-        solution,
-        patch_radiance: radiance,
-        vertex_radiance,
-        patch_irradiance_over_pi: gathered_light,
-        vertex_irradiance_over_pi,
-        row_sums,
-        sweeps,
-        change,
-        error_bound,
-        converged,
-        form_factor_seconds,
-        solve_seconds,
-        matrix_bytes: bytes,
-    })
 }
 
 /// Per patch its reflectance: the material's Kd, or on a textured surface
