@@ -153,6 +153,14 @@ impl DrawBatch {
     }
 }
 
+/// The four buffers an upload fills, before they become a [`GpuScene`].
+struct SceneBuffers {
+    coefficients: Buffer,
+    indices: Buffer,
+    vertices: Buffer,
+    textured: Buffer,
+}
+
 /// The GPU copy of a solution.
 pub struct GpuScene {
     // Newest first.
@@ -291,18 +299,13 @@ impl GpuScene {
         let textures = SceneTextures::new(gpu, solution.textures.len(), |k| {
             Ok::<_, SceneError>(solution.textures[k].clone())
         })?;
-        Ok(GpuScene {
+        let buffers = SceneBuffers {
             coefficients,
             indices,
             vertices,
-            draws: plan.draws(),
-            radiance_scale: radiance_scale(bound),
-            storage: plan.storage,
-            vertex_count: plan.vertex_total,
-            triangle_count: plan.index_total / 3,
             textured,
-            textures,
-        })
+        };
+        Ok(plan.into_scene(buffers, textures, bound))
     }
 }
 

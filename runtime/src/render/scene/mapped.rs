@@ -6,7 +6,7 @@ use super::bound::{envelopes, half_magnitudes, stored_radiance_bound, textured_b
 use super::chunks::chunked_indices;
 use super::plan::{BatchShape, Plan};
 use super::staging::{device_buffer, Target, Uploader};
-use super::{radiance_scale, CoefficientStorage, DrawBatch, GpuScene, SceneError, STAGING_BYTES};
+use super::{CoefficientStorage, DrawBatch, GpuScene, SceneError, STAGING_BYTES};
 use crate::gpu::{Buffer, Gpu};
 use crate::render::cull::DEFAULT_CHUNK_TRIANGLES;
 use ash::vk;
@@ -144,21 +144,13 @@ impl GpuScene {
         let textures = super::SceneTextures::new(gpu, file.textures().len(), |k| {
             file.decode_texture(k).map_err(SceneError::from)
         })?;
-        Ok((
-            GpuScene {
-                coefficients,
-                indices,
-                vertices,
-                draws: plan.draws(),
-                radiance_scale: radiance_scale(bound),
-                storage: plan.storage,
-                vertex_count: plan.vertex_total,
-                triangle_count: plan.index_total / 3,
-                textured,
-                textures,
-            },
-            stats,
-        ))
+        let buffers = super::SceneBuffers {
+            coefficients,
+            indices,
+            vertices,
+            textured,
+        };
+        Ok((plan.into_scene(buffers, textures, bound), stats))
     }
 }
 

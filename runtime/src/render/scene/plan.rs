@@ -45,6 +45,30 @@ pub(super) struct Plan {
 }
 
 impl Plan {
+    /// The scene this plan describes, once its buffers and textures are
+    /// uploaded: the one place both uploads (in memory and streamed from a
+    /// mapped file) assemble a [`super::GpuScene`]. `bound` is the brightest
+    /// radiance any vertex can produce.
+    pub(super) fn into_scene(
+        self,
+        buffers: super::SceneBuffers,
+        textures: super::SceneTextures,
+        bound: f64,
+    ) -> super::GpuScene {
+        super::GpuScene {
+            coefficients: buffers.coefficients,
+            indices: buffers.indices,
+            vertices: buffers.vertices,
+            draws: self.draws(),
+            radiance_scale: super::radiance_scale(bound),
+            storage: self.storage,
+            vertex_count: self.vertex_total,
+            triangle_count: self.index_total / 3,
+            textured: buffers.textured,
+            textures,
+        }
+    }
+
     pub(super) fn new(
         shapes: &[BatchShape],
         max_order: Option<u32>,
