@@ -41,7 +41,8 @@
 //! with `samples` rays. The reach shrinks with the span, so the fine splits,
 //! which are most of them, see few patches.
 
-use super::{quadrant_scale, DirScratch, DirShot, Directional, Tables};
+use super::receive::{DirScratch, DirShot, Tables};
+use super::{quadrant_scale, Directional};
 use crate::geometry::polygon::bounding_sphere;
 use crate::geometry::visibility::Occluder;
 use crate::mesh::{Mesh, NewVertex};

@@ -13,11 +13,13 @@
 //! (shot, pool, vertex) — the samples come from stateless streams — so doing
 //! the same additions in the same order gives the same bits.
 
-use super::{DirScratch, DirShot, Directional, Tables};
+use super::receive::{DirScratch, DirShot, Tables};
+use super::{Directional, DirectionalCheckpoint};
 use crate::solve::checkpoint::precision::kept_bits;
 use crate::solve::shoot::{RecordedShot, SamplePool, Shot};
 use crate::solve::Solver;
 use rayon::prelude::*;
+use solution::sh::coefficient_count;
 
 /// The directional arrays a checkpoint stores, borrowed (`direct` is not
 /// stored: it masks `radiance`, see `checkpoint.rs`).
@@ -276,5 +278,99 @@ impl Solver {
             .as_deref()
             .map(|d| d.direct.iter().map(|x| x.to_bits()).collect())
             .unwrap_or_default()
+    }
+}
+
+impl Solver {
+    /// Restores the directional state after the mesh was replayed; an error
+    /// string when the checkpoint does not fit.
+    pub(in crate::solve) fn restore_directional(
+        &mut self,
+        state: Option<DirectionalCheckpoint>,
+    ) -> Result<(), String> {
+        let d = match (self.directional.as_deref_mut(), state) {
+            (None, None) => return Ok(()),
+            (Some(_), None) => {
+                return Err("it was written by a diffuse solve, this one is directional".into())
+            }
+            (None, Some(_)) => {
+                return Err("it was written by a directional solve, this one is diffuse".into())
+            }
+            (Some(d), Some(s)) => {
+                d.extend_vertices(&self.mesh);
+                if s.surface_order != d.surface_order {
+                    return Err(format!(
+                        "its SH orders per surface {:?} differ from this solve's {:?} (another \
+                         α, Ks, sh_error_target or max_sh_order)",
+                        s.surface_order, d.surface_order
+                    ));
+                }
+                if s.radiance.len() != d.radiance.len()
+                    || s.patch_unshot.len() != d.patch_unshot.len()
+                {
+                    return Err(format!(
+                        "it has {} radiance and {} unshot coefficients, this mesh needs {} and {}",
+                        s.radiance.len(),
+                        s.patch_unshot.len(),
+                        d.radiance.len(),
+                        d.patch_unshot.len()
+                    ));
+                }
+                if s.shot_sum.len() != d.shot_sum.len() {
+                    return Err(format!(
+                        "it has {} shot-sum coefficients, this mesh needs {}",
+                        s.shot_sum.len(),
+                        d.shot_sum.len()
+                    ));
+                }
+                if !(s.direct.is_empty() || s.direct.len() == d.radiance.len()) {
+                    return Err(format!(
+                        "it has {} recorded-shot coefficients, this mesh needs {}",
+                        s.direct.len(),
+                        d.radiance.len()
+                    ));
+                }
+                // One unshot SH per recorded shot, of its source surface's order.
+                let recorded_fits = s.recorded_unshot.len() == self.recorded.len()
+                    && s.recorded_unshot.iter().zip(&self.recorded).all(|(u, r)| {
+                        let surface = self.mesh.patches[r.patch as usize].surface as usize;
+                        u.len() == 3 * coefficient_count(d.surface_order[surface])
+                    });
+                if !recorded_fits {
+                    return Err(format!(
+                        "its {} recorded directional shots do not match its {} recorded shots",
+                        s.recorded_unshot.len(),
+                        self.recorded.len()
+                    ));
+                }
+                d.radiance = s.radiance.into_iter().map(f64::from_bits).collect();
+                d.patch_unshot = s.patch_unshot.into_iter().map(f64::from_bits).collect();
+                d.direct = if s.direct.is_empty() {
+                    vec![0.0; d.radiance.len()]
+                } else {
+                    s.direct.into_iter().map(f64::from_bits).collect()
+                };
+                d.shot_sum = s.shot_sum.into_iter().map(f64::from_bits).collect();
+                d.recorded_unshot = s
+                    .recorded_unshot
+                    .into_iter()
+                    .map(|u| u.into_iter().map(f64::from_bits).collect())
+                    .collect();
+                // The radiance and the unshot arrive masked (see
+                // `checkpoint.rs`), so they are checked once unmasked, by `resume`.
+                if !d
+                    .direct
+                    .iter()
+                    .chain(d.recorded_unshot.iter().flatten())
+                    .chain(&d.shot_sum)
+                    .all(|x| x.is_finite())
+                {
+                    return Err("it holds non-finite coefficients".into());
+                }
+                d
+            }
+        };
+        d.received.fill(0.0);
+        Ok(())
     }
 }
