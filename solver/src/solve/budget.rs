@@ -845,19 +845,19 @@ impl Solver {
             elements: self.mesh.elements.len() as u64,
             vertices: self.mesh.vertices.len() as u64,
             splits: self.mesh.split_log.len() as u64,
-            weight_entries: self.patch_weights.iter().map(|w| w.len() as u64).sum(),
-            recorded_shots: self.recorded.len() as u64,
+            weight_entries: self.patches.weights.iter().map(|w| w.len() as u64).sum(),
+            recorded_shots: self.record.shots.len() as u64,
             samples: self.settings.samples as u64,
             directional: false,
             texture_bytes: self.texture_bytes(),
-            scene_bytes: self.scene_bytes,
+            scene_bytes: self.memory.scene_bytes,
             grouped: groups_shots(&self.settings),
-            group_candidates: self.group_candidates,
-            small_surfaces: Some(self.small.len() as u64),
-            twin_table: Some(self.twins.table_len() as u64),
-            site_tables: Some(self.sites.counts()),
+            group_candidates: self.groups.candidates,
+            small_surfaces: Some(self.sharing.small.len() as u64),
+            twin_table: Some(self.sharing.twins.table_len() as u64),
+            site_tables: Some(self.sharing.sites.counts()),
             resident_before_meshing: self.settings.resident_before_meshing.unwrap_or(0),
-            chooses_view: self.scene_camera.is_none(),
+            chooses_view: self.scene.camera.is_none(),
             ..Counts::default()
         };
         if let Some(d) = d {
@@ -870,7 +870,7 @@ impl Solver {
         } else {
             // The footprint's lists as they are once they have caught up with
             // the mesh (they do at the next shot or gather).
-            for n in self.footprint.surface_vertices.lengths(&self.mesh) {
+            for n in self.sharing.footprint.surface_vertices.lengths(&self.mesh) {
                 c.index_slots += list_slots(n);
                 c.index_lists += u64::from(n > 0);
             }
@@ -887,7 +887,7 @@ impl Solver {
     /// The largest peak estimated so far (at set-up and before each
     /// refinement), for the closing summary.
     pub fn peak_memory_estimate(&self) -> u64 {
-        self.peak_estimate
+        self.memory.peak_estimate
     }
 
     /// What refinement may add this shot under the budget (`directional`: the
@@ -927,13 +927,13 @@ impl Solver {
         directional: Option<&Directional>,
     ) {
         let now = estimate(&self.memory_counts_with(directional)).peak();
-        self.peak_estimate = self.peak_estimate.max(now).max(budget.peak_before);
-        if budget.refused == 0 || self.refinement_capped {
+        self.memory.peak_estimate = self.memory.peak_estimate.max(now).max(budget.peak_before);
+        if budget.refused == 0 || self.memory.refinement_capped {
             return;
         }
-        self.refinement_capped = true;
+        self.memory.refinement_capped = true;
         let warning = self.refinement_stop_warning(now);
-        self.pending_warnings.push(warning);
+        self.warnings.pending.push(warning);
     }
 
     /// When recording one more emitter shot (of `source_coefficients` SH
@@ -965,7 +965,7 @@ impl Solver {
              shadows and highlights finer than the current elements stay coarse. Raise \
              --memory-budget or use a coarser preset to refine further",
             human_bytes(limit as u128),
-            self.leaf_count,
+            self.stats.leaf_count,
             self.mesh.vertices.len(),
             human_bytes(now as u128),
             100.0 * PLANNING_FRACTION
@@ -975,7 +975,7 @@ impl Solver {
     /// Warnings raised while solving (refinement stopped by the memory
     /// budget), each returned once; the command line prints them.
     pub fn take_warnings(&mut self) -> Vec<String> {
-        std::mem::take(&mut self.pending_warnings)
+        std::mem::take(&mut self.warnings.pending)
     }
 }
 

@@ -471,13 +471,13 @@ impl Solver {
             MODE_DIFFUSE
         })?;
         s.u64(self.fingerprint())?;
-        s.u64(self.shots)?;
-        s.u64(self.rays)?;
-        s.f64(self.seconds)?;
+        s.u64(self.stats.shots)?;
+        s.u64(self.stats.rays)?;
+        s.f64(self.stats.seconds)?;
         s.u64(0)?;
         s.u32s(b"SPLT", &self.mesh.split_log)?;
-        s.start(b"RECS", self.recorded.len())?;
-        for r in &self.recorded {
+        s.start(b"RECS", self.record.shots.len())?;
+        for r in &self.record.shots {
             s.u64(r.index)?;
             s.u32(r.patch)?;
             s.u32(r.receivers)?;
@@ -488,10 +488,17 @@ impl Solver {
         // step ends by recomputing them), and its recorded-shot part is per
         // coefficient, recomputed too.
         let diffuse = self.directional.is_none();
-        let keeps_direct = diffuse && self.direct.len() == self.radiance.len();
-        s.packed_dvec3s(b"RADI", if diffuse { &self.radiance } else { &[] })?;
-        s.packed_dvec3s(b"UNSH", if diffuse { &self.patch_unshot } else { &[] })?;
-        s.packed_dvec3s(b"DIRC", if keeps_direct { &self.direct } else { &[] })?;
+        let keeps_direct = diffuse && self.field.direct.len() == self.field.radiance.len();
+        s.packed_dvec3s(b"RADI", if diffuse { &self.field.radiance } else { &[] })?;
+        s.packed_dvec3s(b"UNSH", if diffuse { &self.patches.unshot } else { &[] })?;
+        s.packed_dvec3s(
+            b"DIRC",
+            if keeps_direct {
+                &self.field.direct
+            } else {
+                &[]
+            },
+        )?;
         if let Some(d) = self.directional.as_deref() {
             let sections = d.checkpoint_sections();
             s.u32s(b"SHOR", sections.surface_order)?;
@@ -586,6 +593,7 @@ impl Solver {
             && checkpoint.patch_unshot.is_empty();
         if proxies_derived {
             solver
+                .field
                 .radiance
                 .resize(solver.mesh.vertices.len(), DVec3::ZERO);
         } else if checkpoint.radiance.len() != solver.mesh.vertices.len()
@@ -602,10 +610,10 @@ impl Solver {
             ));
         }
         if !proxies_derived {
-            solver.radiance = checkpoint.radiance;
-            solver.patch_unshot = checkpoint.patch_unshot;
+            solver.field.radiance = checkpoint.radiance;
+            solver.patches.unshot = checkpoint.patch_unshot;
         }
-        solver.direct = if checkpoint.direct.is_empty() {
+        solver.field.direct = if checkpoint.direct.is_empty() {
             vec![DVec3::ZERO; solver.mesh.vertices.len()]
         } else {
             checkpoint.direct
@@ -627,9 +635,10 @@ impl Solver {
         }) {
             return mismatch(format!("its recorded shot {bad:?} does not fit the solve"));
         }
-        solver.recorded = checkpoint.recorded;
-        solver.recorded_pools = solver
-            .recorded
+        solver.record.shots = checkpoint.recorded;
+        solver.record.pools = solver
+            .record
+            .shots
             .iter()
             .map(|r| {
                 let shot = super::shoot::Shot::for_patch(
@@ -639,29 +648,30 @@ impl Solver {
                     r.unshot(),
                     &solver.settings,
                     &solver.occluder,
-                    &solver.kd,
+                    &solver.materials.kd,
                 );
                 super::shoot::SamplePool::with_sets(&shot, super::shoot::REPLAY_POOL_SETS)
             })
             .collect();
         if !solver
+            .field
             .radiance
             .iter()
-            .chain(&solver.patch_unshot)
-            .chain(&solver.direct)
+            .chain(&solver.patches.unshot)
+            .chain(&solver.field.direct)
             .all(|v| v.is_finite())
         {
             return mismatch("it holds non-finite radiance".into());
         }
         let count = solver.mesh.vertices.len();
-        solver.received = vec![DVec3::ZERO; count];
-        solver.visible = vec![0; count];
-        solver.leaf_count = solver.mesh.leaf_count();
+        solver.field.received = vec![DVec3::ZERO; count];
+        solver.field.visible = vec![0; count];
+        solver.stats.leaf_count = solver.mesh.leaf_count();
         let all: Vec<u32> = (0..solver.mesh.surfaces.len() as u32).collect();
         solver.update_weights(&all);
-        solver.shots = checkpoint.shots;
-        solver.rays = checkpoint.rays;
-        solver.seconds = checkpoint.seconds;
+        solver.stats.shots = checkpoint.shots;
+        solver.stats.rays = checkpoint.rays;
+        solver.stats.seconds = checkpoint.seconds;
         let directional = checkpoint.directional.is_some();
         solver
             .restore_directional(checkpoint.directional)
@@ -674,7 +684,7 @@ impl Solver {
                 .map_err(SolveError::CheckpointMismatch)?;
             solver.restore_diffuse_proxies();
         }
-        solver.unshot_power = solver.total_unshot_power();
+        solver.stats.unshot_power = solver.total_unshot_power();
         Ok(solver)
     }
 
@@ -701,10 +711,10 @@ impl Solver {
             for v in &s.vertices {
                 v.to_array().iter().for_each(|c| eat(c.to_bits()));
             }
-            for c in self.kd[i]
+            for c in self.materials.kd[i]
                 .to_array()
                 .iter()
-                .chain(&self.emission[i].to_array())
+                .chain(&self.materials.emission[i].to_array())
             {
                 eat(c.to_bits());
             }
@@ -716,8 +726,11 @@ impl Solver {
         let mut digests: Vec<(*const crate::scene::SceneTexture, u64)> = Vec::new();
         // Emission textures follow the diffuse ones (indices past the surface
         // count), so a changed `map_Ke`, Ke or UV map refuses it too.
-        let textures = self.texturing.per_surface.iter();
-        for (i, t) in textures.chain(&self.texturing.emissive).enumerate() {
+        let textures = self.materials.texturing.per_surface.iter();
+        for (i, t) in textures
+            .chain(&self.materials.texturing.emissive)
+            .enumerate()
+        {
             let Some(t) = t else { continue };
             eat(i as u64);
             let source = std::sync::Arc::as_ptr(&t.texture);

@@ -538,7 +538,7 @@ impl Solver {
     /// Warnings of the set-up: glossy materials treated as diffuse, SH orders
     /// capped. The command line prints them.
     pub fn warnings(&self) -> &[String] {
-        &self.warnings
+        &self.warnings.setup
     }
 
     /// Sets up directional mode (called by [`Solver::new`]) or, in diffuse mode,
@@ -546,6 +546,7 @@ impl Solver {
     pub(super) fn init_directional(&mut self, scene: &Scene) -> Result<(), SolveError> {
         if self.settings.mode != solution::format::SolveMode::Directional {
             self.warnings
+                .setup
                 .extend(diffuse_mode_warning(scene, &self.mesh));
             return Ok(());
         }
@@ -555,10 +556,10 @@ impl Solver {
             scene,
             &self.settings,
             &self.mesh,
-            &self.emission,
-            &self.patch_unshot,
+            &self.materials.emission,
+            &self.patches.unshot,
         )?;
-        self.warnings.extend(warnings);
+        self.warnings.setup.extend(warnings);
         self.directional = Some(Box::new(d));
         Ok(())
     }
@@ -597,35 +598,37 @@ impl Solver {
         let range = d.patch_range(&self.mesh, source as usize);
         let unshot: Vec<f64> = d.patch_unshot[range.clone()].to_vec();
         d.patch_unshot[range].fill(0.0);
-        let equivalent = std::mem::replace(&mut self.patch_unshot[source as usize], DVec3::ZERO);
+        let equivalent = std::mem::replace(&mut self.patches.unshot[source as usize], DVec3::ZERO);
         let shot = Shot::for_patch(
             &self.mesh,
             source,
-            self.shots,
+            self.stats.shots,
             equivalent,
             &self.settings,
             &self.occluder,
-            &self.kd,
+            &self.materials.kd,
         );
         let source_surface = shot.source_surface as usize;
         // Shots from emitters are remembered, as in `Solver::step`: vertices
         // that later splits create receive them exactly (see `refine.rs`).
-        let mut recorded = self.emission[source_surface] != DVec3::ZERO && !self.refinement_capped;
+        let mut recorded = self.materials.emission[source_surface] != DVec3::ZERO
+            && !self.memory.refinement_capped;
         if recorded {
             if let Some(warning) = self.recording_overflows(Some(d), unshot.len() as u64) {
                 recorded = false;
-                self.refinement_capped = true;
-                self.pending_warnings.push(warning);
+                self.memory.refinement_capped = true;
+                self.warnings.pending.push(warning);
             }
         }
         if recorded {
-            self.recorded.push(RecordedShot {
-                index: self.shots,
+            self.record.shots.push(RecordedShot {
+                index: self.stats.shots,
                 patch: source,
                 receivers: self.mesh.vertices.len() as u32,
                 unshot: equivalent.to_array().map(f64::to_bits),
             });
-            self.recorded_pools
+            self.record
+                .pools
                 .push(SamplePool::with_sets(&shot, super::shoot::REPLAY_POOL_SETS));
             d.recorded_unshot.push(unshot.clone());
         }
@@ -651,7 +654,7 @@ impl Solver {
         };
         {
             let mesh = &self.mesh;
-            let kd = &self.kd;
+            let kd = &self.materials.kd;
             let results: Vec<ReceivedSh> = (0..mesh.vertices.len() as u32)
                 .into_par_iter()
                 .map_init(DirScratch::default, |scratch, v| {
@@ -668,13 +671,13 @@ impl Solver {
                         d.direct[o + k] += c;
                     }
                 }
-                self.visible[v] = r.visible;
+                self.field.visible[v] = r.visible;
                 rays += r.rays as u64;
                 // The diffuse proxies (mean radiance c₀₀ Y₀₀, or E/π on a
                 // textured surface) the L = 0 refinement test reads.
                 let surface = mesh.vertices[v].surface as usize;
-                self.radiance[v] = d.diffuse_proxy(surface, &d.radiance[o..]);
-                self.received[v] = d.diffuse_proxy(surface, &r.coefficients);
+                self.field.radiance[v] = d.diffuse_proxy(surface, &d.radiance[o..]);
+                self.field.received[v] = d.diffuse_proxy(surface, &r.coefficients);
             }
         }
         // Coefficients of vertices refinement creates start here; they are
@@ -682,20 +685,20 @@ impl Solver {
         let created_from = d.radiance.len();
         let mut refined = super::refine::Refined::default();
         // A solve the memory budget stopped refining stays unrefined.
-        if self.settings.adaptive && !self.refinement_capped {
+        if self.settings.adaptive && !self.memory.refinement_capped {
             let mut split_budget = self.split_budget(Some(d));
             // The recorded shots, rebuilt (their unshot SH kept in `d`).
             let replay_shots = RecordedShot::rebuild_all(
-                &self.recorded,
+                &self.record.shots,
                 &self.mesh,
                 &self.settings,
                 &self.occluder,
-                &self.kd,
+                &self.materials.kd,
             );
             let recorded_unshot = std::mem::take(&mut d.recorded_unshot);
             let replay: Vec<DirShot> = replay_shots
                 .iter()
-                .zip(&self.recorded_pools)
+                .zip(&self.record.pools)
                 .zip(&recorded_unshot)
                 .map(|((shot, pool), unshot)| {
                     let surface = shot.source_surface as usize;
@@ -714,27 +717,27 @@ impl Solver {
                 &mut self.mesh,
                 &mut DirField {
                     d: &mut *d,
-                    radiance: &mut self.radiance,
-                    received: &mut self.received,
-                    visible: &mut self.visible,
-                    direct: &mut self.direct,
-                    kd: &self.kd,
+                    radiance: &mut self.field.radiance,
+                    received: &mut self.field.received,
+                    visible: &mut self.field.visible,
+                    direct: &mut self.field.direct,
+                    kd: &self.materials.kd,
                     shot: &dir_shot,
                     replay: &replay,
                     current_recorded: recorded,
                     near: near_gather::NearGather {
-                        patch_weights: &self.patch_weights,
-                        hidden: &self.hidden,
-                        emission: &self.emission,
+                        patch_weights: &self.patches.weights,
+                        hidden: &self.field.hidden,
+                        emission: &self.materials.emission,
                         settings: &self.settings,
                         occluder: &self.occluder,
-                        kd: &self.kd,
+                        kd: &self.materials.kd,
                         reach: near_gather::NEAR_REACH,
                     },
                 },
                 // The diffuse step's criteria (see `Solver::step`).
                 &Criteria {
-                    dark_floor: super::refine::DARK_FLOOR * self.radiance_level,
+                    dark_floor: super::refine::DARK_FLOOR * self.stats.radiance_level,
                     ambient,
                     ..Criteria::from_settings(&self.settings)
                 },
@@ -754,16 +757,16 @@ impl Solver {
             }
         }
         let splits = refined.splits;
-        self.leaf_count += 3 * splits;
+        self.stats.leaf_count += 3 * splits;
         self.update_patch_weights(&refined.dirty_patches);
         // Gather (see `Solver::gather`): U_p += Σ_v w_vp ΔL_v / A_p per coefficient.
         for p in 0..self.mesh.patches.len() {
             let range = d.patch_range(&self.mesh, p);
             // Hidden vertices are left out, as in `Solver::gather`.
-            let area = self.patch_shoot_area[p];
+            let area = self.patches.shoot_area[p];
             let mut sum = vec![0.0; range.len()];
-            for &(v, w) in &self.patch_weights[p] {
-                if self.hidden[v as usize] {
+            for &(v, w) in &self.patches.weights[p] {
+                if self.field.hidden[v as usize] {
                     continue;
                 }
                 let o = d.vertex_offset[v as usize];
@@ -781,10 +784,10 @@ impl Solver {
                 *u = round_to_kept(*u);
             }
             let order = d.surface_order[self.mesh.patches[p].surface as usize];
-            self.patch_unshot[p] = d.hemisphere_equivalent(order, &d.patch_unshot[range]);
+            self.patches.unshot[p] = d.hemisphere_equivalent(order, &d.patch_unshot[range]);
         }
         d.received.fill(0.0);
-        self.received.fill(DVec3::ZERO);
+        self.field.received.fill(DVec3::ZERO);
         // The new vertices' coefficients, before the proxies are taken from
         // them (`checkpoint/precision.rs`; the others were rounded as they
         // received).
@@ -794,18 +797,18 @@ impl Solver {
         for v in 0..self.mesh.vertices.len() {
             let o = d.vertex_offset[v];
             let surface = self.mesh.vertices[v].surface as usize;
-            self.radiance[v] = d.diffuse_proxy(surface, &d.radiance[o..]);
+            self.field.radiance[v] = d.diffuse_proxy(surface, &d.radiance[o..]);
         }
-        self.shots += 1;
-        self.rays += rays;
-        self.unshot_power = self.total_unshot_power();
-        self.seconds += start.elapsed().as_secs_f64();
+        self.stats.shots += 1;
+        self.stats.rays += rays;
+        self.stats.unshot_power = self.total_unshot_power();
+        self.stats.seconds += start.elapsed().as_secs_f64();
         ShotReport {
-            shot: self.shots,
+            shot: self.stats.shots,
             source,
             rays,
             unshot_fraction: self.unshot_fraction(),
-            elements: self.leaf_count,
+            elements: self.stats.leaf_count,
             vertices: self.mesh.vertices.len(),
             splits,
         }

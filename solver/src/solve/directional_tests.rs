@@ -427,7 +427,8 @@ fn resumed_directional_solve_equals_an_uninterrupted_one() {
     // recomputed bit for bit (for vertices shot directly and by replay).
     assert!(
         first
-            .recorded
+            .record
+            .shots
             .iter()
             .any(|r| (r.receivers as usize) < first.mesh().vertices.len()),
         "the test should create vertices after a recorded shot"
@@ -1261,7 +1262,7 @@ fn unevenly_lit_source_shoots_by_quadrants_against_exact_factors() {
         .iter()
         .position(|patch| patch.surface == 0)
         .unwrap() as u32;
-    let unshot = solver.patch_unshot[floor_patch as usize];
+    let unshot = solver.patches.unshot[floor_patch as usize];
     let regions = solver
         .source_regions(floor_patch, unshot)
         .expect("the floor is lit unevenly");

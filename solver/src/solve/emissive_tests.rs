@@ -112,7 +112,7 @@ fn a_half_grey_half_white_emitter_emits_pi_times_the_integral_of_its_radiance() 
     // The surface's vertices start at its mean Le (the display adds the
     // texture back: `output_textured.rs`).
     assert!(
-        (solver.emission[0] - DVec3::splat(1.5 * (g + 1.0)))
+        (solver.materials.emission[0] - DVec3::splat(1.5 * (g + 1.0)))
             .abs()
             .max_element()
             < 1e-12

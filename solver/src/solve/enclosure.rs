@@ -248,7 +248,7 @@ mod tests {
                     .mesh
                     .vertices
                     .iter()
-                    .position(|v| (v.position + solver.offset - p).length() < 1e-9)
+                    .position(|v| (v.position + solver.scene.offset - p).length() < 1e-9)
                     .unwrap();
                 shown[v].x / ambient.x
             };

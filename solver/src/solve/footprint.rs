@@ -301,24 +301,25 @@ impl Solver {
     /// than half of the patches, where one pass over the whole scene in
     /// order is cheaper than the lists (and gives the same bits).
     pub(super) fn touched_patches(&self) -> Option<Vec<u32>> {
-        if self.footprint.whole_scene() {
+        if self.sharing.footprint.whole_scene() {
             return None;
         }
         let count: usize = self
+            .sharing
             .footprint
             .touched
             .iter()
-            .map(|&s| self.surface_patches[s as usize].len())
+            .map(|&s| self.patches.of_surface[s as usize].len())
             .sum();
-        if 2 * count > self.mesh.patches.len() && !self.footprint.always_sparse() {
+        if 2 * count > self.mesh.patches.len() && !self.sharing.footprint.always_sparse() {
             return None;
         }
-        let mut surfaces = self.footprint.touched.clone();
+        let mut surfaces = self.sharing.footprint.touched.clone();
         surfaces.sort_unstable();
         Some(
             surfaces
                 .iter()
-                .flat_map(|&s| self.surface_patches[s as usize].clone())
+                .flat_map(|&s| self.patches.of_surface[s as usize].clone())
                 .collect(),
         )
     }
@@ -332,14 +333,14 @@ impl Solver {
     /// power. Untouched patches would add exactly 0 (see the module
     /// documentation).
     pub(super) fn gather(&mut self) {
-        self.footprint.surface_vertices.catch_up(&self.mesh);
+        self.sharing.footprint.surface_vertices.catch_up(&self.mesh);
         let touched = self.touched_patches();
         let patches: Vec<u32> = match &touched {
             Some(patches) => patches.clone(),
             None => (0..self.mesh.patches.len() as u32).collect(),
         };
-        let (received, hidden) = (&self.received, &self.hidden);
-        let (weights, rgb_weights) = (&self.patch_weights, &self.patch_rgb_weights);
+        let (received, hidden) = (&self.field.received, &self.field.hidden);
+        let (weights, rgb_weights) = (&self.patches.weights, &self.patches.rgb_weights);
         let sums: Vec<DVec3> = patches
             .par_iter()
             .map(|&p| {
@@ -361,19 +362,19 @@ impl Solver {
             })
             .collect();
         for (&p, sum) in patches.iter().zip(sums) {
-            let area = self.patch_shoot_area[p as usize];
+            let area = self.patches.shoot_area[p as usize];
             if area > 0.0 {
-                self.patch_unshot[p as usize] += sum / area;
+                self.patches.unshot[p as usize] += sum / area;
             }
         }
         self.unshot_changed(&patches);
         if touched.is_none() {
-            self.received.fill(DVec3::ZERO);
+            self.field.received.fill(DVec3::ZERO);
             return;
         }
-        for &s in &self.footprint.touched {
-            for &v in self.footprint.surface_vertices.of(s) {
-                self.received[v as usize] = DVec3::ZERO;
+        for &s in &self.sharing.footprint.touched {
+            for &v in self.sharing.footprint.surface_vertices.of(s) {
+                self.field.received[v as usize] = DVec3::ZERO;
             }
         }
     }

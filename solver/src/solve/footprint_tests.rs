@@ -44,13 +44,13 @@ fn progressive_shooting_loses_no_energy() {
     let scene = cornell();
     let s = settings(false);
     let mut solver = Solver::new(&scene, &s).unwrap();
-    let emitted = solver.emitted_power;
+    let emitted = solver.stats.emitted_power;
     let mut shot_power = 0.0;
     while !solver.is_done() {
         let source = solver.choose_source();
         shot_power += PI
-            * solver.patch_shoot_area[source as usize]
-            * solver.patch_unshot[source as usize].element_sum();
+            * solver.patches.shoot_area[source as usize]
+            * solver.patches.unshot[source as usize].element_sum();
         let report = solver.step().unwrap();
         assert_eq!(report.source, source);
     }
@@ -59,12 +59,15 @@ fn progressive_shooting_loses_no_energy() {
     let mut incident = 0.0;
     for (p, patch) in solver.mesh.patches.iter().enumerate() {
         let surface = patch.surface as usize;
-        let (kd, le) = (solver.kd[surface], solver.emission[surface]);
+        let (kd, le) = (
+            solver.materials.kd[surface],
+            solver.materials.emission[surface],
+        );
         for &(v, w) in solver.patch_weights(p as u32) {
             if solver.hidden_vertices()[v as usize] {
                 continue;
             }
-            let gained = solver.radiance[v as usize] - le;
+            let gained = solver.field.radiance[v as usize] - le;
             reflected += PI * w * gained.element_sum();
             incident += PI * w * (gained / kd.max(DVec3::splat(1e-300))).element_sum();
         }
@@ -83,7 +86,7 @@ fn progressive_shooting_loses_no_energy() {
     );
     eprintln!(
         "shots {}, absorbed {:.4}, escaped {:.4}, unshot {:.4} of emitted",
-        solver.shots,
+        solver.stats.shots,
         absorbed / emitted,
         escaped / emitted,
         left / emitted
@@ -104,8 +107,8 @@ fn sparse_passes_match_whole_scene() {
     let s = settings(true);
     let solve = |whole_scene: bool| {
         let mut solver = Solver::new(&scene, &s).unwrap();
-        solver.footprint.whole_scene = whole_scene;
-        solver.footprint.always_sparse = !whole_scene;
+        solver.sharing.footprint.whole_scene = whole_scene;
+        solver.sharing.footprint.always_sparse = !whole_scene;
         while solver.step().is_some() {}
         solver
     };
@@ -119,7 +122,7 @@ fn sparse_passes_match_whole_scene() {
         bits(sparse.vertex_radiance()),
         bits(whole.vertex_radiance())
     );
-    assert_eq!(bits(&sparse.direct), bits(&whole.direct));
+    assert_eq!(bits(&sparse.field.direct), bits(&whole.field.direct));
     assert_eq!(bits(sparse.patch_unshot()), bits(whole.patch_unshot()));
     assert_eq!(sparse.progress(), whole.progress());
 }

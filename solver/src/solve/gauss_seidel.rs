@@ -428,16 +428,16 @@ fn set_vertex_values(
         .map(|(l, e)| *l - *e)
         .collect();
     let vertex_reflected = vertex_average(solver, &reflected);
-    solver.radiance = solver
+    solver.field.radiance = solver
         .mesh
         .vertices
         .iter()
         .enumerate()
         .map(|(v, mv)| {
-            let own = solver.emission[mv.surface as usize];
-            if solver.texturing.get(mv.surface).is_some() {
+            let own = solver.materials.emission[mv.surface as usize];
+            if solver.materials.texturing.get(mv.surface).is_some() {
                 own + vertex_irradiance_over_pi[v]
-            } else if solver.texturing.emissive(mv.surface).is_some() {
+            } else if solver.materials.texturing.emissive(mv.surface).is_some() {
                 own + vertex_reflected[v]
             } else {
                 vertex_radiance[v]
@@ -465,7 +465,7 @@ fn patch_reflectance(solver: &Solver, scene: &Scene) -> Vec<DVec3> {
     mesh.patches
         .iter()
         .enumerate()
-        .map(|(p, patch)| match solver.patch_rgb_weights.get(p) {
+        .map(|(p, patch)| match solver.patches.rgb_weights.get(p) {
             Some(w) if !w.is_empty() && patch.area > 0.0 => {
                 w.iter().map(|e| e.1).sum::<DVec3>() / patch.area
             }

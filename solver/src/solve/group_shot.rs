@@ -600,23 +600,27 @@ impl Solver {
     /// other member's unshot taken from the patches too. `None` (nothing
     /// taken) when no other patch qualifies (see the module documentation).
     pub(super) fn take_group(&mut self, seed: u32, unshot: DVec3) -> Option<Vec<(u32, DVec3)>> {
-        self.emitters_shot
-            .catch_up(&self.recorded, self.mesh.patches.len());
+        self.record
+            .emitters_shot
+            .catch_up(&self.record.shots, self.mesh.patches.len());
         let patch = &self.mesh.patches[seed as usize];
         let power = |p: u32| {
-            self.patch_shoot_area[p as usize] * self.patch_unshot[p as usize].element_sum()
+            self.patches.shoot_area[p as usize] * self.patches.unshot[p as usize].element_sum()
         };
-        let least = FRACTION * self.patch_shoot_area[seed as usize] * unshot.element_sum();
+        let least = FRACTION * self.patches.shoot_area[seed as usize] * unshot.element_sum();
         if least.is_nan() || least <= 0.0 {
             return None;
         }
         let centre = patch.polygon().iter().copied().sum::<DVec3>() / patch.corner_count as f64;
         let mut surfaces = Vec::new();
-        self.receivers
-            .surfaces_near(centre, RADIUS * self.receivers.diagonal(), &mut surfaces);
+        self.groups.receivers.surfaces_near(
+            centre,
+            RADIUS * self.groups.receivers.diagonal(),
+            &mut surfaces,
+        );
         let mut candidates: Vec<(f64, u32)> = surfaces
             .iter()
-            .flat_map(|&s| self.surface_patches[s as usize].clone())
+            .flat_map(|&s| self.patches.of_surface[s as usize].clone())
             .filter(|&p| p != seed && self.groupable(p))
             .map(|p| (power(p), p))
             .filter(|&(w, p)| w >= least || self.bright_small(p, unshot))
@@ -630,18 +634,18 @@ impl Solver {
         candidates.truncate(MAX_MEMBERS - 1);
         let mut members = vec![(seed, unshot)];
         for &(_, p) in &candidates {
-            let u = std::mem::replace(&mut self.patch_unshot[p as usize], DVec3::ZERO);
+            let u = std::mem::replace(&mut self.patches.unshot[p as usize], DVec3::ZERO);
             members.push((p, u));
         }
         let taken: Vec<u32> = candidates.iter().map(|c| c.1).collect();
         self.unshot_changed(&taken);
-        self.timings.grouped_patches += members.len() as u64;
-        self.timings.group_shots += 1;
+        self.stats.timings.grouped_patches += members.len() as u64;
+        self.stats.timings.group_shots += 1;
         let shot_power: f64 = members[1..]
             .iter()
-            .map(|&(p, u)| PI * self.patch_shoot_area[p as usize] * u.element_sum())
+            .map(|&(p, u)| PI * self.patches.shoot_area[p as usize] * u.element_sum())
             .sum();
-        self.timings.shot_power += shot_power;
+        self.stats.timings.shot_power += shot_power;
         Some(members)
     }
 
@@ -657,7 +661,7 @@ impl Solver {
         let Some(size) = self.mesh.surfaces[patch.surface as usize].min_element_size else {
             return false;
         };
-        self.patch_unshot[p as usize].element_sum() >= FRACTION * unshot.element_sum()
+        self.patches.unshot[p as usize].element_sum() >= FRACTION * unshot.element_sum()
             && super::refine::longest_edge(&self.mesh, patch.root) <= size
     }
 
@@ -677,7 +681,7 @@ impl Solver {
             // vertices at 1.987-2.005 against the exact 2 at ρ = 0.5, and
             // 2.2% off at ρ = 0.95 (test
             // `grouped_furnace_converges_to_le_over_one_minus_rho`).
-            let emits = self.emission[whole.surface as usize] != DVec3::ZERO;
+            let emits = self.materials.emission[whole.surface as usize] != DVec3::ZERO;
             let regions = if self.settings.shoots_uniformly() || emits {
                 None
             } else {
@@ -705,15 +709,17 @@ impl Solver {
     /// Whether patch `p` may shoot in a group: a reflector's always, an
     /// emitter's once its emission has been shot (and recorded) on its own.
     pub(super) fn may_group(&mut self, p: u32) -> bool {
-        self.emitters_shot
-            .catch_up(&self.recorded, self.mesh.patches.len());
+        self.record
+            .emitters_shot
+            .catch_up(&self.record.shots, self.mesh.patches.len());
         self.groupable(p)
     }
 
     /// [`Solver::may_group`] with the emitters' record caught up.
     fn groupable(&self, p: u32) -> bool {
         let surface = self.mesh.patches[p as usize].surface;
-        self.emission[surface as usize] == DVec3::ZERO || self.emitters_shot.shot[p as usize]
+        self.materials.emission[surface as usize] == DVec3::ZERO
+            || self.record.emitters_shot.shot[p as usize]
     }
 }
 

@@ -35,7 +35,14 @@ fn group_and_members(solver: &Solver, members: &[(u32, DVec3)], samples: u32) ->
         .iter()
         .map(|&(p, u)| Piece::whole(&solver.mesh, p, u))
         .collect();
-    let group = GroupShot::new(&solver.mesh, &pieces, 0, &s, &solver.occluder, &solver.kd);
+    let group = GroupShot::new(
+        &solver.mesh,
+        &pieces,
+        0,
+        &s,
+        &solver.occluder,
+        &solver.materials.kd,
+    );
     let shots: Vec<(Shot, SamplePool)> = members
         .iter()
         .enumerate()
@@ -47,7 +54,7 @@ fn group_and_members(solver: &Solver, members: &[(u32, DVec3)], samples: u32) ->
                 u,
                 &s,
                 &solver.occluder,
-                &solver.kd,
+                &solver.materials.kd,
             );
             let pool = SamplePool::new(&shot);
             (shot, pool)
@@ -122,7 +129,7 @@ fn group_estimate_matches_the_members_shots() {
 fn grouped_shooting_loses_no_energy() {
     let scene = cornell();
     let mut solver = Solver::new(&scene, &settings(Shooters::Grouped, false)).unwrap();
-    let emitted = solver.emitted_power;
+    let emitted = solver.stats.emitted_power;
     while solver.step().is_some() {}
     let t = solver.timings();
     // Groups of up to MAX_MEMBERS: 21 grouped shots carry 736 patches here,
@@ -135,12 +142,15 @@ fn grouped_shooting_loses_no_energy() {
     let (mut reflected, mut incident) = (0.0, 0.0);
     for (p, patch) in solver.mesh.patches.iter().enumerate() {
         let surface = patch.surface as usize;
-        let (kd, le) = (solver.kd[surface], solver.emission[surface]);
+        let (kd, le) = (
+            solver.materials.kd[surface],
+            solver.materials.emission[surface],
+        );
         for &(v, w) in solver.patch_weights(p as u32) {
             if solver.hidden_vertices()[v as usize] {
                 continue;
             }
-            let gained = solver.radiance[v as usize] - le;
+            let gained = solver.field.radiance[v as usize] - le;
             reflected += PI * w * gained.element_sum();
             incident += PI * w * (gained / kd.max(DVec3::splat(1e-300))).element_sum();
         }
@@ -159,7 +169,7 @@ fn grouped_shooting_loses_no_energy() {
     eprintln!(
         "grouped: {} shots ({} grouped, {} patches in them), absorbed {:.4}, escaped {:.4}, \
          unshot {:.4} of emitted",
-        solver.shots,
+        solver.stats.shots,
         t.group_shots,
         t.grouped_patches,
         absorbed / emitted,
@@ -248,7 +258,7 @@ fn the_far_field_cut_keeps_the_members_shots() {
     let members: Vec<(u32, DVec3)> = (0..solver.mesh.patches.len() as u32)
         .filter(|&p| {
             let surface = solver.mesh.patches[p as usize].surface;
-            solver.emission[surface as usize] == DVec3::ZERO
+            solver.materials.emission[surface as usize] == DVec3::ZERO
         })
         .map(|p| {
             let k = p as f64;
@@ -270,7 +280,7 @@ fn the_far_field_cut_keeps_the_members_shots() {
         0,
         &solver.settings,
         &solver.occluder,
-        &solver.kd,
+        &solver.materials.kd,
     );
     let mut shares = [0.0; 3];
     for v in 0..solver.mesh.vertices.len() as u32 {
@@ -327,7 +337,7 @@ fn the_candidate_bound_holds_for_every_seed_and_is_tighter_than_every_patch() {
     for p in &solver.mesh.patches {
         per_surface[p.surface as usize] += 1;
     }
-    let radius = group_shot::RADIUS * solver.receivers.diagonal();
+    let radius = group_shot::RADIUS * solver.groups.receivers.diagonal();
     let mut surfaces = Vec::new();
     let most = (0..solver.mesh.patches.len())
         .map(|p| {
@@ -336,6 +346,7 @@ fn the_candidate_bound_holds_for_every_seed_and_is_tighter_than_every_patch() {
             let centre = corners.iter().copied().sum::<DVec3>() / corners.len() as f64;
             surfaces.clear();
             solver
+                .groups
                 .receivers
                 .surfaces_near(centre, radius, &mut surfaces);
             surfaces
@@ -345,7 +356,7 @@ fn the_candidate_bound_holds_for_every_seed_and_is_tighter_than_every_patch() {
         })
         .max()
         .unwrap();
-    let bound = solver.group_candidates.unwrap_or(u64::MAX);
+    let bound = solver.groups.candidates.unwrap_or(u64::MAX);
     let total = solver.mesh.patches.len() as u64;
     assert!(
         most <= bound,
@@ -379,19 +390,21 @@ fn small_facets_of_a_smooth_sphere_join_a_group_by_their_radiance() {
     for (facet_unshot, joins) in [(0.5, true), (0.09, false)] {
         let mut solver = Solver::new(&scene, &s).unwrap();
         let on_sphere: Vec<u32> = (0..solver.mesh.patches.len() as u32)
-            .filter(|&p| solver.kd[solver.mesh.patches[p as usize].surface as usize].x == 0.7)
+            .filter(|&p| {
+                solver.materials.kd[solver.mesh.patches[p as usize].surface as usize].x == 0.7
+            })
             .collect();
         assert_eq!(on_sphere.len(), facet_count, "one patch per facet");
         assert_eq!(solver.small_surface_count(), 0, "the sphere is not flat");
-        solver.patch_unshot.fill(DVec3::ZERO);
+        solver.patches.unshot.fill(DVec3::ZERO);
         for &p in &on_sphere {
-            solver.patch_unshot[p as usize] = DVec3::splat(facet_unshot);
+            solver.patches.unshot[p as usize] = DVec3::splat(facet_unshot);
         }
         let floor = physics_tests::floor_patch_nearest(&solver, DVec3::new(500.0, 0.0, 500.0));
-        let seed_power = solver.patch_shoot_area[floor as usize];
+        let seed_power = solver.patches.shoot_area[floor as usize];
         let largest = on_sphere
             .iter()
-            .map(|&p| solver.patch_shoot_area[p as usize])
+            .map(|&p| solver.patches.shoot_area[p as usize])
             .fold(0.0, f64::max);
         assert!(0.5 * largest < 0.1 * seed_power, "{largest} {seed_power}");
         let members = solver.take_group(floor, DVec3::ONE);

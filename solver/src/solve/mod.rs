@@ -73,6 +73,7 @@ mod seams;
 pub mod shoot;
 mod sites;
 mod small;
+mod state;
 mod textured;
 mod twins;
 mod unshot_tree;
@@ -181,93 +182,18 @@ pub struct Solver {
     settings: SolverSettings,
     mesh: Mesh,
     occluder: Occluder,
-    /// Scene coordinates minus this are the solver's (re-centred) coordinates.
-    offset: DVec3,
-    /// From the scene, for the solution header.
-    scene_recentre: DVec3,
-    scene_camera: Option<solution::camera::Camera>,
-    scene_units_per_metre: f64,
-    up_axis: solution::camera::UpAxis,
-    /// Per surface: the reflectance receivers apply to a shot (1 on
-    /// textured surfaces, whose vertices hold E/π: `textured.rs`).
-    kd: Vec<DVec3>,
-    /// Per surface, its mean reflectance (Kd, or Kd ⊙ the texture's mean),
-    /// for the ambient term.
-    albedo: Vec<DVec3>,
-    /// The textured surfaces.
-    texturing: textured::SurfaceTexturing,
-    emission: Vec<DVec3>,
-    /// Per surface, its patches (contiguous).
-    surface_patches: Vec<std::ops::Range<u32>>,
-    /// Per vertex.
-    radiance: Vec<DVec3>,
-    received: Vec<DVec3>,
-    visible: Vec<u32>,
-    /// The part of `radiance` that came from recorded (emitter) shots.
-    direct: Vec<DVec3>,
-    /// Every shot from an emitter's patch, in order.
-    recorded: Vec<RecordedShot>,
-    /// Their sample pools (rebuilt on resume, not checkpointed).
-    recorded_pools: Vec<SamplePool>,
-    /// Per patch: unshot radiance, and (vertex, area) weights of the gather.
-    patch_unshot: Vec<DVec3>,
-    patch_weights: Vec<Vec<(u32, f64)>>,
-    /// Per patch, its RGB gather weights if textured (empty for the others;
-    /// the whole list is empty when no surface is textured, so an untextured
-    /// solve holds nothing more than before).
-    patch_rgb_weights: Vec<Vec<(u32, DVec3)>>,
-    /// Per vertex: whether its receiving point is enclosed by an object's
-    /// inside ([`hidden`]); classified as vertices appear.
-    hidden: Vec<bool>,
-    /// Per patch: the area its unshot radiance stands for, the gather weights
-    /// of its vertices that are not hidden (its area when none is).
-    patch_shoot_area: Vec<f64>,
-    leaf_count: usize,
-    shots: u64,
-    rays: u64,
-    seconds: f64,
-    /// Total emitted power in scene units (radiance × scene area), summed over
-    /// the channels; [`Solver::progress`] reports it in watts.
-    emitted_power: f64,
-    unshot_power: f64,
-    /// Where step time went (this session).
-    timings: Timings,
-    /// The scene's radiance level (brightest channel of the ambient term
-    /// before any shot), for the meshing's dark floor.
-    radiance_level: f64,
+    scene: state::SceneFacts,
+    materials: state::Materials,
+    field: state::VertexField,
+    patches: state::PatchLight,
+    record: state::Recording,
+    sharing: state::Sharing,
+    groups: state::Groups,
+    stats: state::Stats,
+    memory: state::MemoryGuard,
+    warnings: state::Warnings,
     /// Directional mode's SH state (`None` in diffuse mode); see [`directional`].
     directional: Option<Box<Directional>>,
-    /// Set-up warnings for the caller to show (see [`Solver::warnings`]).
-    warnings: Vec<String>,
-    /// Warnings raised while solving, until taken ([`Solver::take_warnings`]).
-    pending_warnings: Vec<String>,
-    /// The largest peak memory estimated so far ([`budget`]).
-    peak_estimate: u64,
-    /// The scene as imported, which the caller holds during the solve
-    /// ([`budget::scene_bytes`]).
-    scene_bytes: u64,
-    /// Whether the memory budget has refused a split (warned once).
-    refinement_capped: bool,
-    /// The surfaces under a bounding-volume hierarchy, for grouped shots.
-    receivers: cluster::ReceiverTree,
-    /// The most patches a grouped shot can rank ([`budget::Counts`]).
-    group_candidates: Option<u64>,
-    /// The small flat surfaces that receive once per shot ([`small`]).
-    small: small::SmallSurfaces,
-    /// Coincident vertices of a smooth surface that take one sample per
-    /// shot ([`twins`]).
-    twins: twins::Twins,
-    /// The points of finely tessellated smooth surfaces that interpolate
-    /// sites instead of receiving ([`sites`]).
-    sites: sites::Sites,
-    /// What each shot touched, for the sparse passes ([`footprint`]).
-    footprint: footprint::Footprint,
-    /// The patches' unshot power under a tree of sums and maxima, built on the
-    /// first diffuse step ([`unshot_tree`]).
-    unshot_index: Option<unshot_tree::UnshotIndex>,
-    /// Which emitter patches have shot their emission, for grouped shooters
-    /// (derived from `recorded`, so a resume rebuilds it).
-    emitters_shot: group_shot::EmittersShot,
     /// Each vertex's enclosure, probed once for all the files the solve
     /// writes (`enclosure.rs`).
     enclosure: enclosure::EnclosureCache,
@@ -281,19 +207,7 @@ impl Solver {
     /// many patches.
     pub fn new(scene: &Scene, settings: &SolverSettings) -> Result<Solver, SolveError> {
         settings.validate()?;
-        for m in &scene.materials {
-            let ok = |v: DVec3| v.is_finite() && v.min_element() >= 0.0;
-            if !ok(m.kd) || !ok(m.emission) || m.kd.max_element() > 1.0 {
-                return Err(SolveError::BadMaterial {
-                    name: m.name.clone(),
-                    problem: format!(
-                        "Kd {:?} must be in [0, 1] and emission {:?} finite and >= 0",
-                        m.kd.to_array(),
-                        m.emission.to_array()
-                    ),
-                });
-            }
-        }
+        check_materials(scene)?;
         // Refuse before meshing when even the unrefined mesh at SH order 0
         // cannot fit (its counts are known from the polygons alone).
         check_coarsest(
@@ -302,60 +216,21 @@ impl Solver {
             "before meshing",
         )?;
         let offset = scene_centre(scene);
-        let sizing = crate::mesh::Sizing::from_settings(settings, scene);
-        // Receivers are cut along contact lines (`mesh::contact`) in both
-        // modes, and along shadow lines in directional mode; each output
-        // shares the cuts' seams (`seams.rs`; directional output only
-        // within each cut polygon).
-        let cuts = crate::mesh::contact::Cuts::for_settings(settings);
-        let mesh = Mesh::with_contacts(scene, offset, &sizing, cuts)?;
-        match mesh.surfaces.len() {
-            0 => return Err(SolveError::EmptyScene),
-            1 => return Err(SolveError::SinglePolygon),
-            _ => {}
-        }
+        let mesh = mesh_scene(scene, settings, offset)?;
         let texturing = textured::SurfaceTexturing::new(scene, &mesh, offset);
-        // The same with the mesh's exact counts, before the solve's state
-        // (each emitter patch shoots, and is recorded, at least once; a
-        // directional solve's textured vertices also hold E/π).
-        let emitter_patches = budget::emitter_patches(scene, &mesh);
-        let textured: Vec<bool> = texturing.per_surface.iter().map(Option::is_some).collect();
         let scene_bytes = budget::scene_bytes(scene);
-        check_coarsest(
-            &budget::Counts {
-                scene_bytes,
-                chooses_view: scene.camera.is_none(),
-                ..budget::counts_for_mesh(&mesh, settings, |_| 0, &textured, emitter_patches)
-            },
-            settings,
-            "the unrefined mesh",
-        )?;
-        let albedo: Vec<DVec3> = mesh
-            .surfaces
+        check_unrefined(scene, settings, &mesh, &texturing, scene_bytes)?;
+        let (materials, patch_emission) = state::Materials::new(scene, &mesh, texturing);
+        let patches = state::PatchLight::new(&mesh, &materials, patch_emission);
+        let emitted_power: f64 = mesh
+            .patches
             .iter()
-            .zip(&texturing.per_surface)
-            .map(|(s, t)| match t {
-                Some(t) => t.kd * t.texture.texture.mean(),
-                None => scene.materials[s.material].kd,
-            })
-            .collect();
-        // Diffuse and emission textures are modelled in both modes (diffuse:
-        // `textured.rs`; directional: `directional/textured.rs`, whose SH
-        // start from the same per-surface and per-patch emission below).
-        let kd: Vec<DVec3> = (0..mesh.surfaces.len())
-            .map(|s| match texturing.get(s as u32) {
-                Some(_) => DVec3::ONE,
-                None => albedo[s],
-            })
-            .collect();
-        let mut emission: Vec<DVec3> = mesh
-            .surfaces
-            .iter()
-            .map(|s| scene.materials[s.material].emission)
-            .collect();
-        // Each patch of an emission-textured surface shoots its mean Le
-        // (`textured.rs`); the surface's vertices start at its mean Le.
-        let patch_emission = textured::patch_emission(&texturing, &mesh, &mut emission);
+            .zip(&patches.unshot)
+            .map(|(p, u)| PI * p.area * u.element_sum())
+            .sum();
+        if emitted_power.is_nan() || emitted_power <= 0.0 {
+            return Err(SolveError::NoEmitter);
+        }
         let occluder = Occluder::new(
             &mesh
                 .surfaces
@@ -363,127 +238,74 @@ impl Solver {
                 .map(|s| s.vertices.as_slice())
                 .collect::<Vec<_>>(),
         );
-        let mut surface_patches = vec![0..0; mesh.surfaces.len()];
-        for (p, patch) in mesh.patches.iter().enumerate() {
-            let r = &mut surface_patches[patch.surface as usize];
-            if r.start == r.end {
-                *r = p as u32..p as u32 + 1;
-            } else {
-                r.end = p as u32 + 1;
-            }
-        }
-        let radiance: Vec<DVec3> = mesh
-            .vertices
-            .iter()
-            .map(|v| emission[v.surface as usize])
-            .collect();
-        let patch_unshot: Vec<DVec3> = mesh
-            .patches
-            .iter()
-            .zip(patch_emission)
-            .map(|(p, textured)| textured.unwrap_or(emission[p.surface as usize]))
-            .collect();
-        let emitted_power: f64 = mesh
-            .patches
-            .iter()
-            .zip(&patch_unshot)
-            .map(|(p, u)| PI * p.area * u.element_sum())
-            .sum();
-        if emitted_power.is_nan() || emitted_power <= 0.0 {
-            return Err(SolveError::NoEmitter);
-        }
-        let vertex_count = mesh.vertices.len();
-        let patch_count = mesh.patches.len();
-        let receivers = cluster::ReceiverTree::new(&mesh);
-        let per_surface: Vec<u64> = surface_patches.iter().map(|r| r.len() as u64).collect();
-        let group_candidates = Some(
-            receivers.most_patches_near(group_shot::RADIUS * receivers.diagonal(), &per_surface),
-        );
-        let small = small::SmallSurfaces::new(&mesh, &surface_patches);
-        let texturing_any = texturing.any();
         let mut solver = Solver {
             settings: settings.clone(),
-            leaf_count: mesh.leaf_count(),
+            scene: state::SceneFacts {
+                offset,
+                recentre: scene.recentre_offset,
+                camera: scene.camera,
+                units_per_metre: scene.units_per_metre,
+                up_axis: scene.up_axis,
+            },
+            field: state::VertexField::new(&mesh, &materials.emission),
+            groups: state::Groups::new(&mesh, &patches.of_surface),
+            sharing: state::Sharing::new(&mesh, &patches.of_surface),
+            stats: state::Stats {
+                leaf_count: mesh.leaf_count(),
+                emitted_power,
+                ..state::Stats::default()
+            },
+            memory: state::MemoryGuard {
+                scene_bytes,
+                ..state::MemoryGuard::default()
+            },
             mesh,
             occluder,
-            offset,
-            scene_recentre: scene.recentre_offset,
-            scene_camera: scene.camera,
-            scene_units_per_metre: scene.units_per_metre,
-            up_axis: scene.up_axis,
-            kd,
-            albedo,
-            texturing,
-            emission,
-            surface_patches,
-            radiance,
-            received: vec![DVec3::ZERO; vertex_count],
-            visible: vec![0; vertex_count],
-            direct: vec![DVec3::ZERO; vertex_count],
-            recorded: Vec::new(),
-            recorded_pools: Vec::new(),
-            patch_unshot,
-            patch_weights: vec![Vec::new(); patch_count],
-            patch_rgb_weights: if texturing_any {
-                vec![Vec::new(); patch_count]
-            } else {
-                Vec::new()
-            },
-            hidden: Vec::new(),
-            patch_shoot_area: vec![0.0; patch_count],
-            shots: 0,
-            rays: 0,
-            seconds: 0.0,
-            emitted_power,
-            unshot_power: 0.0,
-            radiance_level: 0.0,
-            timings: Timings::default(),
+            materials,
+            patches,
+            record: state::Recording::default(),
+            warnings: state::Warnings::default(),
             directional: None,
-            warnings: Vec::new(),
-            pending_warnings: Vec::new(),
-            peak_estimate: 0,
-            scene_bytes,
-            refinement_capped: false,
-            receivers,
-            group_candidates,
-            small,
-            twins: twins::Twins::default(),
-            sites: sites::Sites::default(),
-            footprint: footprint::Footprint::default(),
-            unshot_index: None,
-            emitters_shot: group_shot::EmittersShot::default(),
             enclosure: enclosure::EnclosureCache::default(),
         };
-        solver.enclosure.catch_up(vertex_count);
-        solver.init_directional(scene)?;
-        let all: Vec<u32> = (0..solver.mesh.surfaces.len() as u32).collect();
-        solver.update_weights(&all);
+        solver.finish_setup(scene)?;
+        Ok(solver)
+    }
+
+    /// The set-up that needs the whole solver: directional mode, the gather
+    /// weights and hidden vertices, the receivers that share samples, and
+    /// the first totals.
+    fn finish_setup(&mut self, scene: &Scene) -> Result<(), SolveError> {
+        self.enclosure.catch_up(self.mesh.vertices.len());
+        self.init_directional(scene)?;
+        let all: Vec<u32> = (0..self.mesh.surfaces.len() as u32).collect();
+        self.update_weights(&all);
         // After `update_weights`, which classifies the vertices as hidden;
         // diffuse mode only (directional coefficients live in each polygon's
         // frame).
-        if solver.directional.is_none() {
-            solver.twins = twins::Twins::new(&solver.mesh, &solver.hidden);
-            solver.sites = sites::Sites::new(
-                &solver.mesh,
-                &solver.hidden,
-                &solver.twins,
-                &solver.small_patch_surfaces(),
-                settings.site_angle,
+        if self.directional.is_none() {
+            self.sharing.twins = twins::Twins::new(&self.mesh, &self.field.hidden);
+            self.sharing.sites = sites::Sites::new(
+                &self.mesh,
+                &self.field.hidden,
+                &self.sharing.twins,
+                &self.small_patch_surfaces(),
+                self.settings.site_angle,
             );
         }
-        solver.unshot_power = solver.total_unshot_power();
-        solver.radiance_level = solver.ambient().max_element();
-        solver.peak_estimate = solver.memory_estimate().peak();
-        Ok(solver)
+        self.stats.unshot_power = self.total_unshot_power();
+        self.stats.radiance_level = self.ambient().max_element();
+        self.memory.peak_estimate = self.memory_estimate().peak();
+        Ok(())
     }
 
     /// Whether the solve has converged (total unshot power below `threshold` ×
     /// emitted power) or used its shot budget.
     pub fn is_done(&self) -> bool {
-        self.shots >= self.settings.max_shots
-            || self.unshot_power < self.settings.threshold * self.emitted_power
-            || self.unshot_power.is_nan()
-            || self.unshot_power <= 0.0
+        self.stats.shots >= self.settings.max_shots
+            || self.stats.unshot_power < self.settings.threshold * self.stats.emitted_power
+            || self.stats.unshot_power.is_nan()
+            || self.stats.unshot_power <= 0.0
     }
 
     /// One shot (Remington 1992, Fig. 3.6 steps 5a–5c): the patch with the most unshot power
@@ -509,14 +331,14 @@ impl Solver {
         // The light not yet shot, this shot's included, for the meshing's
         // local radiance level.
         let ambient = self.ambient_from_index();
-        let unshot = std::mem::replace(&mut self.patch_unshot[source as usize], DVec3::ZERO);
+        let unshot = std::mem::replace(&mut self.patches.unshot[source as usize], DVec3::ZERO);
         self.unshot_changed(&[source]);
         // With grouped shooters the source may take its bright neighbours
         // along (`group_shot.rs`); an emitter's patch shoots its emission
         // alone first, recorded.
         let source_surface = self.mesh.patches[source as usize].surface;
-        self.timings.shot_power +=
-            PI * self.patch_shoot_area[source as usize] * unshot.element_sum();
+        self.stats.timings.shot_power +=
+            PI * self.patches.shoot_area[source as usize] * unshot.element_sum();
         let grouped = self.settings.shooters == crate::settings::Shooters::Grouped;
         let members = if grouped && self.may_group(source) {
             self.take_group(source, unshot)
@@ -526,34 +348,35 @@ impl Solver {
         let mut shot = Shot::for_patch(
             &self.mesh,
             source,
-            self.shots,
+            self.stats.shots,
             unshot,
             &self.settings,
             &self.occluder,
-            &self.kd,
+            &self.materials.kd,
         );
         // Shots from emitters are remembered: vertices that later splits create
         // receive them exactly (see `refine`).
-        let mut recorded = self.emission[source_surface as usize] != DVec3::ZERO
-            && !self.refinement_capped
+        let mut recorded = self.materials.emission[source_surface as usize] != DVec3::ZERO
+            && !self.memory.refinement_capped
             && members.is_none();
         if recorded {
             if let Some(warning) = self.recording_overflows(None, 0) {
                 recorded = false;
-                self.refinement_capped = true;
-                self.pending_warnings.push(warning);
+                self.memory.refinement_capped = true;
+                self.warnings.pending.push(warning);
             }
         }
         if recorded {
-            self.recorded.push(RecordedShot {
-                index: self.shots,
+            self.record.shots.push(RecordedShot {
+                index: self.stats.shots,
                 patch: source,
                 receivers: self.mesh.vertices.len() as u32,
                 unshot: unshot.to_array().map(f64::to_bits),
             });
         }
         if recorded {
-            self.recorded_pools
+            self.record
+                .pools
                 .push(SamplePool::with_sets(&shot, shoot::REPLAY_POOL_SETS));
         }
         // Recorded (emitter) shots stay uniform: their replay to new vertices
@@ -571,10 +394,10 @@ impl Solver {
             let mut group = group_shot::GroupShot::new(
                 &self.mesh,
                 m,
-                self.shots,
+                self.stats.shots,
                 &self.settings,
                 &self.occluder,
-                &self.kd,
+                &self.materials.kd,
             );
             group.ray_share = share;
             group
@@ -592,48 +415,38 @@ impl Solver {
         };
         let mut rays = footprint::shoot_receivers(
             &self.mesh,
-            &mut self.footprint,
+            &mut self.sharing.footprint,
             footprint::SampleSharing {
-                small: &self.small,
-                twins: &self.twins,
-                sites: &self.sites,
+                small: &self.sharing.small,
+                twins: &self.sharing.twins,
+                sites: &self.sharing.sites,
             },
-            refine::VertexState {
-                radiance: &mut self.radiance,
-                received: &mut self.received,
-                visible: &mut self.visible,
-                direct: &mut self.direct,
-            },
+            self.field.state(),
             &shooter,
             recorded,
         );
         let shot_done = Instant::now();
         // A solve the memory budget stopped refining stays unrefined.
-        let refined = if self.settings.adaptive && !self.refinement_capped {
+        let refined = if self.settings.adaptive && !self.memory.refinement_capped {
             let mut split_budget = self.split_budget(None);
             let replay_shots = RecordedShot::rebuild_all(
-                &self.recorded,
+                &self.record.shots,
                 &self.mesh,
                 &self.settings,
                 &self.occluder,
-                &self.kd,
+                &self.materials.kd,
             );
             // Only the touched surfaces' leaves can have a changed corner.
             let scan = self.touched_patches();
             let replay = refine::Replay {
                 recorded: &replay_shots,
-                pools: &self.recorded_pools,
+                pools: &self.record.pools,
                 current_recorded: recorded,
             };
             let refined = refine::refine_field(
                 &mut self.mesh,
                 &mut refine::DiffuseField {
-                    state: refine::VertexState {
-                        radiance: &mut self.radiance,
-                        received: &mut self.received,
-                        visible: &mut self.visible,
-                        direct: &mut self.direct,
-                    },
+                    state: self.field.state(),
                     replay: &replay,
                     shooter: &shooter,
                     scan: scan.as_deref(),
@@ -647,7 +460,7 @@ impl Solver {
                 // (Cornell box, medium: 1.78% / 1.70% MARE → 2.21% / 1.81%;
                 // docs/lab/grouped-shooters.md, "Grouped shooters by default").
                 &refine::Criteria {
-                    dark_floor: refine::DARK_FLOOR * self.radiance_level,
+                    dark_floor: refine::DARK_FLOOR * self.stats.radiance_level,
                     ambient,
                     ..refine::Criteria::from_settings(&self.settings)
                 },
@@ -661,25 +474,25 @@ impl Solver {
         };
         let splits = refined.splits;
         rays += refined.rays;
-        self.leaf_count += 3 * splits;
+        self.stats.leaf_count += 3 * splits;
         let refine_done = Instant::now();
         self.update_patch_weights(&refined.dirty_patches);
         self.unshot_changed(&refined.dirty_patches);
         self.gather();
-        self.timings.shoot += (shot_done - start).as_secs_f64();
-        self.timings.shoot_rays += rays - refined.rays;
-        self.timings.refine += (refine_done - shot_done).as_secs_f64();
-        self.timings.gather += refine_done.elapsed().as_secs_f64();
-        self.shots += 1;
-        self.rays += rays;
-        self.unshot_power = self.unshot_power_from_index();
-        self.seconds += start.elapsed().as_secs_f64();
+        self.stats.timings.shoot += (shot_done - start).as_secs_f64();
+        self.stats.timings.shoot_rays += rays - refined.rays;
+        self.stats.timings.refine += (refine_done - shot_done).as_secs_f64();
+        self.stats.timings.gather += refine_done.elapsed().as_secs_f64();
+        self.stats.shots += 1;
+        self.stats.rays += rays;
+        self.stats.unshot_power = self.unshot_power_from_index();
+        self.stats.seconds += start.elapsed().as_secs_f64();
         Some(ShotReport {
-            shot: self.shots,
+            shot: self.stats.shots,
             source,
             rays,
             unshot_fraction: self.unshot_fraction(),
-            elements: self.leaf_count,
+            elements: self.stats.leaf_count,
             vertices: self.mesh.vertices.len(),
             splits,
         })
@@ -687,16 +500,16 @@ impl Solver {
 
     /// Where step time went since the solver was built or resumed.
     pub fn timings(&self) -> Timings {
-        self.timings
+        self.stats.timings
     }
 
     /// Where the solve stands.
     pub fn progress(&self) -> Progress {
         Progress {
-            shots: self.shots,
-            rays: self.rays,
+            shots: self.stats.shots,
+            rays: self.stats.rays,
             unshot_fraction: self.unshot_fraction(),
-            elements: self.leaf_count,
+            elements: self.stats.leaf_count,
             vertices: self.mesh.vertices.len(),
             emitted_power: self.emitted_watts(),
         }
@@ -705,7 +518,7 @@ impl Solver {
     /// Radiance per mesh vertex (RGB, W·sr⁻¹·m⁻²), emission included, without
     /// the ambient term.
     pub fn vertex_radiance(&self) -> &[DVec3] {
-        &self.radiance
+        &self.field.radiance
     }
 
     /// The mesh, for inspection (element sizes, vertices, display triangles).
@@ -715,19 +528,19 @@ impl Solver {
 
     /// Unshot radiance per patch (RGB).
     pub fn patch_unshot(&self) -> &[DVec3] {
-        &self.patch_unshot
+        &self.patches.unshot
     }
 
     /// The gather weights of `patch`: (vertex, area of the patch the vertex
     /// represents), summing to the patch's area.
     pub fn patch_weights(&self, patch: u32) -> &[(u32, f64)] {
-        &self.patch_weights[patch as usize]
+        &self.patches.weights[patch as usize]
     }
 
     /// The offset subtracted from scene coordinates to get the solver's (and the
     /// solution's) positions.
     pub fn offset(&self) -> DVec3 {
-        self.offset
+        self.scene.offset
     }
 
     pub fn settings(&self) -> &SolverSettings {
@@ -737,7 +550,7 @@ impl Solver {
     /// Seconds spent in [`Solver::step`] (this session and, after a resume, the
     /// sessions before).
     pub fn seconds(&self) -> f64 {
-        self.seconds
+        self.stats.seconds
     }
 
     /// F(v←s) for every vertex from patch `source` as the next shot would
@@ -746,11 +559,11 @@ impl Solver {
         let shot = Shot::for_patch(
             &self.mesh,
             source,
-            self.shots,
+            self.stats.shots,
             DVec3::ONE,
             &self.settings,
             &self.occluder,
-            &self.kd,
+            &self.materials.kd,
         );
         let mut scratch = Scratch::default();
         let pool = SamplePool::new(&shot);
@@ -771,23 +584,23 @@ impl Solver {
         if self.settings.units_per_metre != 1.0 {
             self.settings.units_per_metre
         } else {
-            self.scene_units_per_metre
+            self.scene.units_per_metre
         }
     }
 
     /// The emitted power in watts: areas in scene units² over units_per_metre².
     fn emitted_watts(&self) -> f64 {
-        self.emitted_power / (self.units_per_metre() * self.units_per_metre())
+        self.stats.emitted_power / (self.units_per_metre() * self.units_per_metre())
     }
 
     fn unshot_fraction(&self) -> f64 {
-        self.unshot_power / self.emitted_power
+        self.stats.unshot_power / self.stats.emitted_power
     }
 
     fn total_unshot_power(&self) -> f64 {
         // Summed pairwise, as the diffuse step's tree sums it
         // (`unshot_tree.rs`), so a resumed solve reports the same bits.
-        PI * unshot_tree::pairwise_unshot_area_sum(&self.patch_unshot, &self.patch_shoot_area)
+        PI * unshot_tree::pairwise_unshot_area_sum(&self.patches.unshot, &self.patches.shoot_area)
             .element_sum()
     }
 
@@ -797,9 +610,10 @@ impl Solver {
     fn choose_source(&self) -> u32 {
         let mut best = (0u32, f64::NEG_INFINITY);
         for (i, (a, u)) in self
-            .patch_shoot_area
+            .patches
+            .shoot_area
             .iter()
-            .zip(&self.patch_unshot)
+            .zip(&self.patches.unshot)
             .enumerate()
         {
             let power = a * u.element_sum();
@@ -815,7 +629,7 @@ impl Solver {
     fn update_weights(&mut self, surfaces: &[u32]) {
         let patches: Vec<u32> = surfaces
             .iter()
-            .flat_map(|&s| self.surface_patches[s as usize].clone())
+            .flat_map(|&s| self.patches.of_surface[s as usize].clone())
             .collect();
         self.update_patch_weights(&patches);
     }
@@ -852,20 +666,20 @@ impl Solver {
             let area = self.mesh.patches[p as usize].area;
             let hidden: f64 = w
                 .iter()
-                .filter(|(v, _)| self.hidden[*v as usize])
+                .filter(|(v, _)| self.field.hidden[*v as usize])
                 .map(|(_, a)| a)
                 .sum();
-            self.patch_shoot_area[p as usize] = if hidden > 0.0 {
+            self.patches.shoot_area[p as usize] = if hidden > 0.0 {
                 w.iter()
-                    .filter(|(v, _)| !self.hidden[*v as usize])
+                    .filter(|(v, _)| !self.field.hidden[*v as usize])
                     .map(|(_, a)| a)
                     .sum()
             } else {
                 area
             };
-            self.patch_weights[p as usize] = w;
+            self.patches.weights[p as usize] = w;
         }
-        if self.texturing.any() {
+        if self.materials.texturing.any() {
             self.update_rgb_weights(patches);
         }
     }
@@ -873,16 +687,21 @@ impl Solver {
     /// Bytes of the textures the solve holds and of the RGB gather weights.
     fn texture_bytes(&self) -> u64 {
         let entry = std::mem::size_of::<(u32, DVec3)>() as u64;
-        let entries: u64 = self.patch_rgb_weights.iter().map(|w| w.len() as u64).sum();
+        let entries: u64 = self
+            .patches
+            .rgb_weights
+            .iter()
+            .map(|w| w.len() as u64)
+            .sum();
         let headers =
-            (self.patch_rgb_weights.len() * std::mem::size_of::<Vec<(u32, DVec3)>>()) as u64;
-        self.texturing.texture_bytes() + entries * entry + headers
+            (self.patches.rgb_weights.len() * std::mem::size_of::<Vec<(u32, DVec3)>>()) as u64;
+        self.materials.texturing.texture_bytes() + entries * entry + headers
     }
 
     /// Recomputes the RGB gather weights of the textured ones of `patches`
     /// (`textured.rs`).
     fn update_rgb_weights(&mut self, patches: &[u32]) {
-        let (mesh, texturing) = (&self.mesh, &self.texturing);
+        let (mesh, texturing) = (&self.mesh, &self.materials.texturing);
         let weights: Vec<(u32, Vec<(u32, DVec3)>)> = patches
             .par_iter()
             .filter_map(|&p| {
@@ -893,14 +712,14 @@ impl Solver {
             })
             .collect();
         for (p, w) in weights {
-            self.patch_rgb_weights[p as usize] = w;
+            self.patches.rgb_weights[p as usize] = w;
         }
     }
 
     /// Classifies the vertices created since the last call as hidden or not
     /// ([`hidden::is_hidden`] at their receiving points).
     fn classify_new_vertices(&mut self) {
-        let start = self.hidden.len() as u32;
+        let start = self.field.hidden.len() as u32;
         let end = self.mesh.vertices.len() as u32;
         if start >= end {
             return;
@@ -915,7 +734,7 @@ impl Solver {
                 hidden::is_hidden(occluder, q, n)
             })
             .collect();
-        self.hidden.extend(new);
+        self.field.hidden.extend(new);
     }
 
     /// The quadrants of quad patch `source` with unshot `unshot`, shaped by its
@@ -929,34 +748,38 @@ impl Solver {
     fn shape_view(&self) -> ShapeView<'_> {
         ShapeView {
             mesh: &self.mesh,
-            patch_weights: &self.patch_weights,
-            hidden: &self.hidden,
-            radiance: &self.radiance,
-            emission: &self.emission,
+            patch_weights: &self.patches.weights,
+            hidden: &self.field.hidden,
+            radiance: &self.field.radiance,
+            emission: &self.materials.emission,
         }
     }
 
     /// How many small flat surfaces receive once per shot ([`small`]).
     pub fn small_surface_count(&self) -> usize {
-        self.small.len()
+        self.sharing.small.len()
     }
 
     /// How many vertices copy a coincident vertex's sample ([`twins`]).
     pub fn twin_copy_count(&self) -> usize {
-        self.twins.copies()
+        self.sharing.twins.copies()
     }
 
     /// How many points of finely tessellated smooth surfaces interpolate
     /// sites, and how many of those surfaces' points receive as sites
     /// ([`sites`]).
     pub fn site_counts(&self) -> (usize, usize) {
-        (self.sites.interpolated_count(), self.sites.site_count())
+        (
+            self.sharing.sites.interpolated_count(),
+            self.sharing.sites.site_count(),
+        )
     }
 
     /// Per surface, whether it is one patch that refinement never splits
     /// ([`small::one_small_patch`]).
     fn small_patch_surfaces(&self) -> Vec<bool> {
-        self.surface_patches
+        self.patches
+            .of_surface
             .iter()
             .map(|patches| small::one_small_patch(&self.mesh, patches))
             .collect()
@@ -964,7 +787,7 @@ impl Solver {
 
     /// Per vertex, whether it is hidden ([`hidden`]).
     pub fn hidden_vertices(&self) -> &[bool] {
-        &self.hidden
+        &self.field.hidden
     }
 }
 
@@ -1029,6 +852,62 @@ pub(crate) fn scene_centre(scene: &Scene) -> DVec3 {
     } else {
         DVec3::ZERO
     }
+}
+
+/// Refuses a material with negative or non-finite values, or Kd above 1.
+fn check_materials(scene: &Scene) -> Result<(), SolveError> {
+    for m in &scene.materials {
+        let ok = |v: DVec3| v.is_finite() && v.min_element() >= 0.0;
+        if !ok(m.kd) || !ok(m.emission) || m.kd.max_element() > 1.0 {
+            return Err(SolveError::BadMaterial {
+                name: m.name.clone(),
+                problem: format!(
+                    "Kd {:?} must be in [0, 1] and emission {:?} finite and >= 0",
+                    m.kd.to_array(),
+                    m.emission.to_array()
+                ),
+            });
+        }
+    }
+    Ok(())
+}
+
+/// The scene meshed into patches, re-centred by `offset`. Receivers are cut
+/// along contact lines (`mesh::contact`) in both modes, and along shadow
+/// lines in directional mode; each output shares the cuts' seams
+/// (`seams.rs`; directional output only within each cut polygon).
+fn mesh_scene(scene: &Scene, settings: &SolverSettings, offset: DVec3) -> Result<Mesh, SolveError> {
+    let sizing = crate::mesh::Sizing::from_settings(settings, scene);
+    let cuts = crate::mesh::contact::Cuts::for_settings(settings);
+    let mesh = Mesh::with_contacts(scene, offset, &sizing, cuts)?;
+    match mesh.surfaces.len() {
+        0 => Err(SolveError::EmptyScene),
+        1 => Err(SolveError::SinglePolygon),
+        _ => Ok(mesh),
+    }
+}
+
+/// [`check_coarsest`] with the mesh's exact counts, before the solve's state
+/// (each emitter patch shoots, and is recorded, at least once; a
+/// directional solve's textured vertices also hold E/π).
+fn check_unrefined(
+    scene: &Scene,
+    settings: &SolverSettings,
+    mesh: &Mesh,
+    texturing: &textured::SurfaceTexturing,
+    scene_bytes: u64,
+) -> Result<(), SolveError> {
+    let emitter_patches = budget::emitter_patches(scene, mesh);
+    let textured: Vec<bool> = texturing.per_surface.iter().map(Option::is_some).collect();
+    check_coarsest(
+        &budget::Counts {
+            scene_bytes,
+            chooses_view: scene.camera.is_none(),
+            ..budget::counts_for_mesh(mesh, settings, |_| 0, &textured, emitter_patches)
+        },
+        settings,
+        "the unrefined mesh",
+    )
 }
 
 /// Refuses a solve whose coarsest state (`counts`, no subdivision, SH order 0)

@@ -105,11 +105,11 @@ impl Solver {
             .mesh
             .patches
             .iter()
-            .zip(&self.patch_unshot)
-            .zip(&self.patch_shoot_area)
+            .zip(&self.patches.unshot)
+            .zip(&self.patches.shoot_area)
         {
             area += p.area;
-            reflect += self.albedo[p.surface as usize] * p.area;
+            reflect += self.materials.albedo[p.surface as usize] * p.area;
             unshot += *u * *a;
         }
         if area.is_nan() || area <= 0.0 {
@@ -131,7 +131,7 @@ impl Solver {
     /// gathers use it for their mesh and write their own radiance) has all of
     /// its emission unshot, so its final file gets none.
     pub fn display_ambient(&self, partial: bool) -> DVec3 {
-        if self.settings.ambient && (partial || self.shots > 0) {
+        if self.settings.ambient && (partial || self.stats.shots > 0) {
             self.ambient()
         } else {
             DVec3::ZERO
@@ -161,7 +161,7 @@ impl Solver {
         if !(mean.is_finite() && mean > 0.0) {
             return vec![ambient; representative.len()];
         }
-        let hidden = |r: u32| self.hidden.get(r as usize).copied().unwrap_or(false);
+        let hidden = |r: u32| self.field.hidden.get(r as usize).copied().unwrap_or(false);
         // A point that interpolates sites (`sites.rs`) takes their weighted
         // ε, as it takes their radiance: only the sites are probed.
         let shown: Vec<u32> = representative
@@ -171,7 +171,7 @@ impl Solver {
             .collect();
         let mut probed = Vec::with_capacity(shown.len());
         for &r in &shown {
-            match self.sites.sources_of(r) {
+            match self.sharing.sites.sources_of(r) {
                 Some(sources) => probed.extend(sources.iter().map(|s| s.0)),
                 None => probed.push(r),
             }
@@ -187,7 +187,7 @@ impl Solver {
                 if hidden(r) {
                     return ambient;
                 }
-                let e = match self.sites.sources_of(r) {
+                let e = match self.sharing.sites.sources_of(r) {
                     Some(sources) => sources
                         .iter()
                         .map(|s| s.1 as f64 * probed_epsilons.next().unwrap_or(mean))
@@ -205,10 +205,15 @@ impl Solver {
     /// (`hidden.rs`), then the area-weighted mean over the vertices at its
     /// position. Textured smooth surfaces keep their UV seams.
     fn shared_radiance(&self, triangles: &[[u32; 3]]) -> (SharedVertices, Vec<DVec3>) {
-        let mut radiance: Vec<f64> = self.radiance.iter().flat_map(|l| l.to_array()).collect();
-        let count = self.radiance.len();
-        fill_hidden(triangles, &self.hidden, count, rgb, &mut radiance);
-        let texturing = &self.texturing;
+        let mut radiance: Vec<f64> = self
+            .field
+            .radiance
+            .iter()
+            .flat_map(|l| l.to_array())
+            .collect();
+        let count = self.field.radiance.len();
+        fill_hidden(triangles, &self.field.hidden, count, rgb, &mut radiance);
+        let texturing = &self.materials.texturing;
         let uv = |s, p| texturing.shown(s).map(|t| texturing.uv(t, p));
         let shared = share_vertices(&self.mesh, &uv, Merge::AcrossPolygons);
         shared.merge_values(&self.mesh, rgb, &mut radiance, Lone::Reweighted);
@@ -244,7 +249,7 @@ impl Solver {
         for ((&r, l), a) in shared.representative.iter().zip(&radiance).zip(&ambient_at) {
             let v = &self.mesh.vertices[r as usize];
             let s = &self.mesh.surfaces[v.surface as usize];
-            let shown = *l + self.kd[v.surface as usize] * *a;
+            let shown = *l + self.materials.kd[v.surface as usize] * *a;
             let f = |d: DVec3| d.as_vec3().to_array();
             // A shading normal is not the polygon's: its frame's tangent is
             // the polygon's made orthogonal to it (the format wants an
@@ -271,15 +276,15 @@ impl Solver {
             hi = DVec3::ZERO;
         }
         let indices: Vec<u32> = shared.triangles(&triangles).into_iter().flatten().collect();
-        let scene_offset = self.scene_recentre + self.offset;
-        let camera = self
-            .scene_camera
-            .unwrap_or_else(|| default_camera(lo + scene_offset, hi + scene_offset, self.up_axis));
+        let scene_offset = self.scene.recentre + self.scene.offset;
+        let camera = self.scene.camera.unwrap_or_else(|| {
+            default_camera(lo + scene_offset, hi + scene_offset, self.scene.up_axis)
+        });
         let units_per_metre = self.units_per_metre();
         let mut solution = Solution {
             header: Header {
                 units_per_metre,
-                up_axis: self.up_axis,
+                up_axis: self.scene.up_axis,
                 recentre_offset: scene_offset.to_array(),
                 camera,
                 bounds_min: lo.as_vec3().to_array(),
@@ -287,9 +292,9 @@ impl Solver {
                 partial,
                 mode: SolveMode::Diffuse,
                 stats: SolveStats {
-                    shots: self.shots,
-                    rays: self.rays,
-                    seconds: self.seconds,
+                    shots: self.stats.shots,
+                    rays: self.stats.rays,
+                    seconds: self.stats.seconds,
                     unshot_fraction: self.unshot_fraction(),
                     emitted_power: self.emitted_watts(),
                     ambient: ambient.as_vec3().to_array(),
@@ -310,7 +315,7 @@ impl Solver {
         self.split_textured(&shared, &radiance, &mut solution, &ambient_at);
         // Directional mode: one batch per SH order instead.
         self.directional_batches(&mut solution, ambient);
-        if self.scene_camera.is_none() {
+        if self.scene.camera.is_none() {
             // No authored camera: an eye inside the enclosed space that sees lit
             // surfaces, standing on the floor (`crate::view`, whose notes say
             // why the choice is made here, at solve time); the framing camera

@@ -37,7 +37,7 @@ impl Solver {
     ) {
         // Directional mode writes its textured batches itself
         // (`directional/textured.rs`).
-        if !self.texturing.any_display()
+        if !self.materials.texturing.any_display()
             || solution.batches.is_empty()
             || self.directional.is_some()
         {
@@ -60,7 +60,7 @@ impl Solver {
         for (o, &r) in shared.representative.iter().enumerate() {
             let v = &self.mesh.vertices[r as usize];
             let ambient = ambient_at[o];
-            let Some(t) = self.texturing.shown(v.surface) else {
+            let Some(t) = self.materials.texturing.shown(v.surface) else {
                 let b = &mut batches[0];
                 slot.push((0, b.vertices.len() as u32));
                 b.vertices.push(whole.vertices[o]);
@@ -92,12 +92,12 @@ impl Solver {
             b.vertices.push(whole.vertices[o]);
             // E/π for a diffuse-textured vertex; for an emitter's, 1, with
             // its reflected light in the coefficients.
-            let e = if self.texturing.get(v.surface).is_some() {
+            let e = if self.materials.texturing.get(v.surface).is_some() {
                 // The vertex holds E/π plus its surface's emission (from the
                 // start of the solve; the mean Le of an emission texture).
                 // A flat emission is the untextured term; an emission
                 // texture is shown by the second slot instead.
-                let emission = self.emission[v.surface as usize];
+                let emission = self.materials.emission[v.surface as usize];
                 let untextured = match self.second_slot(v.surface) {
                     Some(_) => DVec3::ZERO,
                     None => emission,
@@ -108,7 +108,8 @@ impl Solver {
             } else {
                 // As `to_solution` computes the coefficients, less Le.
                 let s = v.surface as usize;
-                let reflected = radiance[o] - self.emission[s] + self.kd[s] * ambient;
+                let reflected =
+                    radiance[o] - self.materials.emission[s] + self.materials.kd[s] * ambient;
                 let scale = (4.0 * std::f64::consts::PI).sqrt();
                 let c = reflected.max(DVec3::ZERO) * scale;
                 b.coefficients.extend(c.as_vec3().to_array());
@@ -116,7 +117,12 @@ impl Solver {
             };
             if let Some(texturing) = &mut b.texturing {
                 texturing.vertices.push(TexturedVertex {
-                    uv: self.texturing.uv(t, v.position).as_vec2().to_array(),
+                    uv: self
+                        .materials
+                        .texturing
+                        .uv(t, v.position)
+                        .as_vec2()
+                        .to_array(),
                     irradiance_over_pi: e.as_vec3().to_array(),
                 });
             }
@@ -129,8 +135,8 @@ impl Solver {
     /// The emission texture shown in the second slot of `surface`'s batch:
     /// its emission texture when it also has a diffuse one (the first slot).
     fn second_slot(&self, surface: u32) -> Option<&Textured> {
-        self.texturing.get(surface)?;
-        self.texturing.emissive(surface)
+        self.materials.texturing.get(surface)?;
+        self.materials.texturing.emissive(surface)
     }
 }
 

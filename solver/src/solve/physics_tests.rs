@@ -396,11 +396,11 @@ pub(super) fn floor_patch_nearest(solver: &Solver, target: DVec3) -> u32 {
         let patch = &solver.mesh.patches[p as usize];
         patch.polygon().iter().copied().sum::<DVec3>() / patch.corner_count as f64
     };
-    let target = target - solver.offset;
+    let target = target - solver.scene.offset;
     (0..solver.mesh.patches.len() as u32)
         .filter(|&p| {
             let surface = solver.mesh.patches[p as usize].surface as usize;
-            solver.mesh.surfaces[surface].normal.y > 0.9 && solver.kd[surface].x == 0.5
+            solver.mesh.surfaces[surface].normal.y > 0.9 && solver.materials.kd[surface].x == 0.5
         })
         .min_by(|&a, &b| {
             (centre(a) - target)

@@ -52,7 +52,7 @@ fn one_ray_a_receiver_keeps_the_expectation() {
             unshot,
             &settings,
             &solver.occluder,
-            &solver.kd,
+            &solver.materials.kd,
         );
         let pool = SamplePool::new(&shot);
         for v in 0..solver.mesh.vertices.len() as u32 {
@@ -96,7 +96,7 @@ fn dark_receivers_get_every_ray() {
         DVec3::ONE,
         &settings,
         &solver.occluder,
-        &solver.kd,
+        &solver.materials.kd,
     );
     shot.ray_share = RayShare::new(0.01, DVec3::ZERO);
     let pool = SamplePool::new(&shot);

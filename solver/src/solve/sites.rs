@@ -481,10 +481,10 @@ mod tests {
             .filter(|v| v.surface > 0)
             .map(|v| {
                 v.normal
-                    .angle_between((v.position + solver.offset).normalize())
+                    .angle_between((v.position + solver.scene.offset).normalize())
             })
             .fold(0.0, f64::max);
-        let sources: HashMap<u32, &[(u32, f32)]> = solver.sites.sources().collect();
+        let sources: HashMap<u32, &[(u32, f32)]> = solver.sharing.sites.sources().collect();
         let mut out = Vec::new();
         for (k, (v, l)) in mesh
             .vertices
@@ -492,7 +492,7 @@ mod tests {
             .zip(solver.vertex_radiance())
             .enumerate()
         {
-            let p = v.position + solver.offset;
+            let p = v.position + solver.scene.offset;
             let (n, to_light) = (p.normalize(), centre - p);
             let omega = to_light.normalize();
             let cos_r = n.dot(omega);
@@ -503,7 +503,7 @@ mod tests {
             }
             let expected =
                 0.5 / PI * le * a * a * omega.y * cos_r.max(0.0) / to_light.length_squared();
-            let point = solver.twins.of(k as u32).unwrap_or(k as u32);
+            let point = solver.sharing.twins.of(k as u32).unwrap_or(k as u32);
             let curvature: f64 = sources.get(&point).map_or(0.0, |s| {
                 s.iter()
                     .map(|&(site, w)| {

@@ -233,16 +233,18 @@ mod tests {
             s.shooters = Shooters::Grouped;
             let mut solver = Solver::new(&scene, &s).unwrap();
             let faces: Vec<u32> = (0..solver.mesh.patches.len() as u32)
-                .filter(|&p| solver.kd[solver.mesh.patches[p as usize].surface as usize].x == 0.7)
+                .filter(|&p| {
+                    solver.materials.kd[solver.mesh.patches[p as usize].surface as usize].x == 0.7
+                })
                 .collect();
-            solver.patch_unshot.fill(DVec3::ZERO);
+            solver.patches.unshot.fill(DVec3::ZERO);
             for &p in &faces {
-                solver.patch_unshot[p as usize] = DVec3::splat(face_unshot);
+                solver.patches.unshot[p as usize] = DVec3::splat(face_unshot);
             }
             let floor = floor_patch_nearest(&solver, DVec3::new(500.0, 0.0, 500.0));
             // Unshot power π U A: the seed's with U = 1, a face's with 0.5.
-            let seed_power = solver.patch_shoot_area[floor as usize];
-            let face_power = 0.5 * solver.patch_shoot_area[faces[0] as usize];
+            let seed_power = solver.patches.shoot_area[floor as usize];
+            let face_power = 0.5 * solver.patches.shoot_area[faces[0] as usize];
             assert!(face_power < 0.1 * seed_power, "{face_power} {seed_power}");
             let members = solver.take_group(floor, DVec3::ONE);
             let joined = members.map_or(0, |m| m.iter().filter(|(p, _)| faces.contains(p)).count());
@@ -270,15 +272,15 @@ mod tests {
             // contact cut, `mesh::contact`).
             assert_eq!(solver.small_surface_count(), 16 * 6 + 16);
             while solver.step().is_some() {}
-            let emitted = solver.emitted_power;
+            let emitted = solver.stats.emitted_power;
             let left = solver.total_unshot_power();
             let mut reflected = 0.0;
             for (p, patch) in solver.mesh.patches.iter().enumerate() {
                 let surface = patch.surface as usize;
-                let le = solver.emission[surface];
+                let le = solver.materials.emission[surface];
                 for &(v, w) in solver.patch_weights(p as u32) {
                     if !solver.hidden_vertices()[v as usize] {
-                        let gained = solver.radiance[v as usize] - le;
+                        let gained = solver.field.radiance[v as usize] - le;
                         reflected += PI * w * gained.element_sum();
                     }
                 }

@@ -174,7 +174,7 @@ fn furnace_of_a_smooth_sphere_in_a_tessellated_box() {
     let on_sphere: Vec<[i64; 3]> = batch
         .vertices
         .iter()
-        .map(|v| DVec3::from(v.position.map(f64::from)) + solver.offset)
+        .map(|v| DVec3::from(v.position.map(f64::from)) + solver.scene.offset)
         .filter(|p| (*p - DVec3::splat(0.5)).length() < 0.3)
         .map(|p| p.to_array().map(|x| (x * 1e5).round() as i64))
         .collect();
@@ -219,7 +219,7 @@ fn lit_smooth_sphere_follows_lamberts_cosine_law() {
         let mesh = &solver.mesh;
         let (mut normal_error, mut tilt) = (0.0f64, 0.0f64);
         for v in mesh.vertices.iter().filter(|v| v.surface > 0) {
-            let n = (v.position + solver.offset).normalize();
+            let n = (v.position + solver.scene.offset).normalize();
             normal_error = normal_error.max(v.normal.angle_between(n));
             tilt = tilt.max(
                 v.normal
@@ -232,7 +232,7 @@ fn lit_smooth_sphere_follows_lamberts_cosine_law() {
             if v.surface == 0 {
                 continue;
             }
-            let p = v.position + solver.offset;
+            let p = v.position + solver.scene.offset;
             let n = p.normalize();
             let to_light = centre - p;
             let omega = to_light.normalize();
@@ -349,7 +349,7 @@ fn glossy_smooth_sphere_reflects_about_its_shading_normals() {
         if mv.surface == 0 {
             continue;
         }
-        let p = mv.position + solver.offset;
+        let p = mv.position + solver.scene.offset;
         let n_s = mv.normal;
         let omega = (centre - p).normalize();
         let mu = n_s.dot(omega);
@@ -467,7 +467,7 @@ fn seams_across_polygons_interpolate_the_same_radiance() {
             .vertices
             .iter()
             .filter(|v| v.surface == surface)
-            .map(|v| v.position + solver.offset)
+            .map(|v| v.position + solver.scene.offset)
             .filter(|p| p.x.abs() < 1e-9 && p.y.abs() < 1e-9)
             .map(|p| (p.z * 1e6).round() as i64)
             .collect()
@@ -477,7 +477,7 @@ fn seams_across_polygons_interpolate_the_same_radiance() {
 
     let solution = solver.to_solution(false);
     let batch = &solution.batches[0];
-    let offset = solver.offset;
+    let offset = solver.scene.offset;
     let position =
         |i: u32| DVec3::from(batch.vertices[i as usize].position.map(f64::from)) + offset;
     let on_seam = |p: DVec3| p.x.abs() < 1e-6 && p.y.abs() < 1e-6;

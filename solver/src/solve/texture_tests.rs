@@ -77,7 +77,7 @@ fn a_uniform_texture_solves_as_its_flat_reflectance() {
     textured_wall.diffuse_texture = Some(texture(8, |_, _| 180));
     let textured = solve(&room(textured_wall), 20);
     let flat = solve(&room(material("wall", rho, 0.0)), 20);
-    assert!(textured.texturing.any());
+    assert!(textured.materials.texturing.any());
     for (v, (e, l)) in textured
         .vertex_radiance()
         .iter()
@@ -85,7 +85,7 @@ fn a_uniform_texture_solves_as_its_flat_reflectance() {
         .enumerate()
     {
         let surface = textured.mesh.vertices[v].surface;
-        let shown = if textured.texturing.get(surface).is_some() {
+        let shown = if textured.materials.texturing.get(surface).is_some() {
             *e * rho
         } else {
             *e
@@ -110,11 +110,11 @@ fn a_textured_patch_shoots_the_integral_of_its_albedo() {
     let grey = f64::from(crate::texture::srgb_to_linear(128));
     let mut halves = [0, 0];
     for (p, patch) in solver.mesh.patches.iter().enumerate() {
-        if solver.texturing.get(patch.surface).is_none() {
-            assert!(solver.patch_rgb_weights[p].is_empty());
+        if solver.materials.texturing.get(patch.surface).is_none() {
+            assert!(solver.patches.rgb_weights[p].is_empty());
             continue;
         }
-        let sum: DVec3 = solver.patch_rgb_weights[p].iter().map(|e| e.1).sum();
+        let sum: DVec3 = solver.patches.rgb_weights[p].iter().map(|e| e.1).sum();
         let albedo = sum.x / patch.area;
         // Exact integration: only rounding (1e-12) separates the sums.
         let is_grey = (albedo - 0.5 * grey).abs() < 1e-9;
@@ -191,7 +191,7 @@ fn the_solution_has_a_textured_batch_of_uv_and_e_over_pi_that_round_trips() {
         .vertices
         .iter()
         .zip(solver.vertex_radiance())
-        .filter(|(v, _)| solver.texturing.get(v.surface).is_some())
+        .filter(|(v, _)| solver.materials.texturing.get(v.surface).is_some())
         .map(|(_, l)| *l)
         .collect();
     // Flat walls: one output vertex per mesh vertex, in mesh order, whose
@@ -237,7 +237,8 @@ fn textures_are_counted_in_the_memory_budget() {
     assert_eq!(before.texture_bytes, expected);
     let solver = Solver::new(&scene, &settings()).unwrap();
     let entries: u64 = solver
-        .patch_rgb_weights
+        .patches
+        .rgb_weights
         .iter()
         .map(|w| w.len() as u64)
         .sum();
@@ -262,6 +263,7 @@ fn directional_e_over_pi_is_counted_in_the_memory_budget() {
     // The allocated per-vertex values, summed from the arrays themselves.
     let (allocated, _, _) = d.coefficient_totals();
     let textured: Vec<bool> = solver
+        .materials
         .texturing
         .per_surface
         .iter()
@@ -443,7 +445,11 @@ fn directional_with_ks_zero_a_checkerboard_solves_as_in_diffuse_mode() {
         for v in 0..a.mesh.vertices.len() {
             let (e, sh) = directional_vertex(&b, v);
             let diffuse_value = a.vertex_radiance()[v];
-            if b.texturing.get(a.mesh.vertices[v].surface).is_some() {
+            if b.materials
+                .texturing
+                .get(a.mesh.vertices[v].surface)
+                .is_some()
+            {
                 // Textured: E/π in both, and no untextured term.
                 assert!(sh.iter().all(|&c| c == 0.0), "vertex {v}: {sh:?}");
             }

@@ -178,13 +178,14 @@ mod tests {
         let m = 8;
         let scene = room_with_a_bump(m);
         let solver = Solver::new(&scene, &settings()).unwrap();
-        let on_bump = |v: &crate::mesh::MeshVertex| solver.kd[v.surface as usize].x == 0.7;
+        let on_bump =
+            |v: &crate::mesh::MeshVertex| solver.materials.kd[v.surface as usize].x == 0.7;
         assert_eq!(
             solver.mesh.vertices.iter().filter(|v| on_bump(v)).count(),
             6 * m * m
         );
         assert_eq!(solver.twin_copy_count(), 6 * m * m - (m + 1) * (m + 1));
-        for (v, twin) in solver.twins.pairs() {
+        for (v, twin) in solver.sharing.twins.pairs() {
             let (a, b) = (
                 &solver.mesh.vertices[v as usize],
                 &solver.mesh.vertices[twin as usize],
@@ -201,7 +202,7 @@ mod tests {
         let mut solver = Solver::new(&scene, &settings()).unwrap();
         while solver.step().is_some() {}
         let radiance = solver.vertex_radiance();
-        for (v, twin) in solver.twins.pairs() {
+        for (v, twin) in solver.sharing.twins.pairs() {
             assert_eq!(radiance[v as usize], radiance[twin as usize], "vertex {v}");
         }
     }

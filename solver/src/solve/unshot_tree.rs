@@ -160,15 +160,15 @@ impl Solver {
     /// The index, built from the patches on the first diffuse step (after
     /// set-up or a resume: both write the patches directly).
     fn unshot_index(&mut self) -> &mut UnshotIndex {
-        self.unshot_index.get_or_insert_with(|| {
+        self.patches.unshot_index.get_or_insert_with(|| {
             let (mut area, mut reflect) = (0.0, DVec3::ZERO);
             // The same sums, in the same order, as `Solver::ambient`.
             for p in &self.mesh.patches {
                 area += p.area;
-                reflect += self.albedo[p.surface as usize] * p.area;
+                reflect += self.materials.albedo[p.surface as usize] * p.area;
             }
             UnshotIndex {
-                tree: UnshotTree::new(&self.patch_unshot, &self.patch_shoot_area),
+                tree: UnshotTree::new(&self.patches.unshot, &self.patches.shoot_area),
                 area,
                 reflect,
             }
@@ -179,7 +179,10 @@ impl Solver {
     /// memory estimate).
     #[cfg(test)]
     pub(super) fn unshot_tree_allocated(&self) -> Option<u64> {
-        self.unshot_index.as_ref().map(|i| i.tree.allocated_bytes())
+        self.patches
+            .unshot_index
+            .as_ref()
+            .map(|i| i.tree.allocated_bytes())
     }
 
     /// The patch with the most unshot power ([`Solver::choose_source`]'s
@@ -207,10 +210,10 @@ impl Solver {
 
     /// The unshot radiance or shooting area of `patches` changed.
     pub(super) fn unshot_changed(&mut self, patches: &[u32]) {
-        if let Some(index) = &mut self.unshot_index {
+        if let Some(index) = &mut self.patches.unshot_index {
             index
                 .tree
-                .update_many(patches, &self.patch_unshot, &self.patch_shoot_area);
+                .update_many(patches, &self.patches.unshot, &self.patches.shoot_area);
         }
     }
 }

@@ -33,17 +33,17 @@ fn allocated(solver: &mut Solver) -> u64 {
     }
     let m = &solver.mesh;
     let mut total = bytes(&m.vertices) + bytes(&m.elements) + bytes(&m.split_log);
-    total += bytes(&solver.radiance)
-        + bytes(&solver.received)
-        + bytes(&solver.direct)
-        + bytes(&solver.visible);
-    total += bytes(&solver.hidden);
+    total += bytes(&solver.field.radiance)
+        + bytes(&solver.field.received)
+        + bytes(&solver.field.direct)
+        + bytes(&solver.field.visible);
+    total += bytes(&solver.field.hidden);
     total += (solver.enclosure.slots() * size_of::<f32>()) as u64;
     total += bytes(&m.patches)
-        + bytes(&solver.patch_unshot)
-        + bytes(&solver.patch_shoot_area)
-        + bytes(&solver.patch_weights);
-    for w in &solver.patch_weights {
+        + bytes(&solver.patches.unshot)
+        + bytes(&solver.patches.shoot_area)
+        + bytes(&solver.patches.weights);
+    for w in &solver.patches.weights {
         total += bytes(w) + HEAP_BLOCK_OVERHEAD;
     }
     if let Some(d) = solver.directional() {
@@ -81,17 +81,17 @@ fn modelled(solver: &Solver) -> u64 {
 fn check_index_term(solver: &Solver) {
     let c = solver.memory_counts();
     let e = estimate(&c);
-    let lists = solver.footprint.surface_vertices.allocated_bytes();
+    let lists = solver.sharing.footprint.surface_vertices.allocated_bytes();
     let tree = solver
         .unshot_tree_allocated()
         .expect("built on the first step");
-    let (marked, touched) = solver.footprint.set_lengths();
+    let (marked, touched) = solver.sharing.footprint.set_lengths();
     let surfaces = solver.mesh.surfaces.len();
     assert!(marked <= surfaces && touched <= surfaces);
     let bounds = (surfaces * (1 + 4)) as u64;
-    let small = solver.small.allocated_bytes()
-        + solver.twins.allocated_bytes()
-        + solver.sites.allocated_bytes();
+    let small = solver.sharing.small.allocated_bytes()
+        + solver.sharing.twins.allocated_bytes()
+        + solver.sharing.sites.allocated_bytes();
     assert_eq!(e.index, lists + tree + bounds + small, "{c:?}");
 }
 
@@ -428,13 +428,15 @@ fn surface_term_matches_the_allocated_per_surface_structures() {
         + size_of_val(m.pieces.as_slice())
         + size_of_val(m.piece_patches.as_slice())) as u64
         + corners;
-    let tables = (size_of_val(solver.kd.as_slice())
-        + size_of_val(solver.albedo.as_slice())
-        + size_of_val(solver.emission.as_slice())
-        + size_of_val(solver.surface_patches.as_slice())
-        + size_of_val(solver.texturing.per_surface.as_slice())) as u64;
-    let allocated =
-        mesh + tables + solver.occluder.allocated_bytes() + solver.receivers.allocated_bytes();
+    let tables = (size_of_val(solver.materials.kd.as_slice())
+        + size_of_val(solver.materials.albedo.as_slice())
+        + size_of_val(solver.materials.emission.as_slice())
+        + size_of_val(solver.patches.of_surface.as_slice())
+        + size_of_val(solver.materials.texturing.per_surface.as_slice())) as u64;
+    let allocated = mesh
+        + tables
+        + solver.occluder.allocated_bytes()
+        + solver.groups.receivers.allocated_bytes();
     let modelled = m.surfaces.len() as u64 * surface_bytes();
     assert!(
         off(modelled, allocated) < 0.15,

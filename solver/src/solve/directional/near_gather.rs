@@ -310,19 +310,19 @@ mod tests {
 
     fn gather_of(solver: &Solver, reach: f64) -> NearGather<'_> {
         NearGather {
-            patch_weights: &solver.patch_weights,
-            hidden: &solver.hidden,
-            emission: &solver.emission,
+            patch_weights: &solver.patches.weights,
+            hidden: &solver.field.hidden,
+            emission: &solver.materials.emission,
             settings: &solver.settings,
             occluder: &solver.occluder,
-            kd: &solver.kd,
+            kd: &solver.materials.kd,
             reach,
         }
     }
 
     /// The floor vertex nearest (x, 0, z) (scene coordinates).
     fn floor_vertex(solver: &Solver, d: &Directional, x: f64, z: f64) -> u32 {
-        let at = DVec3::new(x, 0.0, z) - solver.offset;
+        let at = DVec3::new(x, 0.0, z) - solver.scene.offset;
         let (v, _) = (solver.mesh.vertices.iter().enumerate())
             .filter(|(_, mv)| d.lobes[mv.surface as usize].is_some())
             .map(|(v, mv)| (v, (mv.position - at).length()))
@@ -375,7 +375,8 @@ mod tests {
         let (m, [a, b]) = (nv.id, [nv.parents[0], nv.parents[1]]);
         let tables = Tables::new(d, mesh);
         // A reach past the room: every patch that has shot is near.
-        let got = gather_of(&solver, 1e3).corrections(mesh, &solver.radiance, d, &tables, &[nv]);
+        let got =
+            gather_of(&solver, 1e3).corrections(mesh, &solver.field.radiance, d, &tables, &[nv]);
         let correction = got.per_vertex[0].clone().expect("the floor vertex gathers");
         assert!(got.rays > 0);
         let truth = unrecorded(d, mesh, m);

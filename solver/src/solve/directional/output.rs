@@ -68,7 +68,7 @@ impl Solver {
                     .map(|&c| c as f32),
             );
             let c00 = DVec3::from_slice(&radiance[d.vertex_offset[v]..d.vertex_offset[v] + 3])
-                + self.kd[mv.surface as usize] * ambient * scale;
+                + self.materials.kd[mv.surface as usize] * ambient * scale;
             batch.coefficients[start..start + 3].copy_from_slice(&c00.as_vec3().to_array());
         }
         for t in shared.triangles(&triangles) {
@@ -98,7 +98,7 @@ impl Solver {
         let mut values = d.radiance.clone();
         let count = self.mesh.vertices.len();
         let range = |v| d.vertex_range(&self.mesh, v);
-        fill_hidden(triangles, &self.hidden, count, range, &mut values);
+        fill_hidden(triangles, &self.field.hidden, count, range, &mut values);
         values
     }
 }

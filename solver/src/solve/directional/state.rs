@@ -73,18 +73,18 @@ impl Solver {
         let Some(d) = self.directional.as_deref() else {
             return;
         };
-        if self.shots == 0 {
+        if self.stats.shots == 0 {
             return;
         }
         for v in 0..self.mesh.vertices.len() {
             let o = d.vertex_offset[v];
             let surface = self.mesh.vertices[v].surface as usize;
-            self.radiance[v] = d.diffuse_proxy(surface, &d.radiance[o..]);
+            self.field.radiance[v] = d.diffuse_proxy(surface, &d.radiance[o..]);
         }
         for p in 0..self.mesh.patches.len() {
             let order = d.surface_order[self.mesh.patches[p].surface as usize];
             let range = d.patch_range(&self.mesh, p);
-            self.patch_unshot[p] = d.hemisphere_equivalent(order, &d.patch_unshot[range]);
+            self.patches.unshot[p] = d.hemisphere_equivalent(order, &d.patch_unshot[range]);
         }
     }
 }
@@ -102,11 +102,11 @@ impl Solver {
         };
         let tables = Tables::new(&d, &self.mesh);
         let shots = RecordedShot::rebuild_all(
-            &self.recorded,
+            &self.record.shots,
             &self.mesh,
             &self.settings,
             &self.occluder,
-            &self.kd,
+            &self.materials.kd,
         );
         // The pool each recorded shot was shot with (the replay pools are the
         // solver's `recorded_pools`, already rebuilt).
@@ -120,9 +120,9 @@ impl Solver {
             .map(|i| dir_shot(i, &own_pools[i]))
             .collect();
         let replay: Vec<DirShot> = (0..shots.len())
-            .map(|i| dir_shot(i, &self.recorded_pools[i]))
+            .map(|i| dir_shot(i, &self.record.pools[i]))
             .collect();
-        let (mesh, kd, recorded) = (&self.mesh, &self.kd, &self.recorded);
+        let (mesh, kd, recorded) = (&self.mesh, &self.materials.kd, &self.record.shots);
         let mut sums: Vec<Vec<f64>> = Vec::new();
         for start in (0..mesh.vertices.len()).step_by(BLOCK) {
             let end = (start + BLOCK).min(mesh.vertices.len());
@@ -191,7 +191,7 @@ impl Solver {
     fn unshot_prediction(&self, d: &Directional, p: usize, out: &mut Vec<f64>) {
         out.clear();
         out.resize(d.patch_range(&self.mesh, p).len(), 0.0);
-        let weights = &self.patch_weights[p];
+        let weights = &self.patches.weights[p];
         let total: f64 = weights.iter().map(|w| w.1).sum();
         if total <= 0.0 {
             return;
@@ -331,16 +331,19 @@ impl Solver {
                     ));
                 }
                 // One unshot SH per recorded shot, of its source surface's order.
-                let recorded_fits = s.recorded_unshot.len() == self.recorded.len()
-                    && s.recorded_unshot.iter().zip(&self.recorded).all(|(u, r)| {
-                        let surface = self.mesh.patches[r.patch as usize].surface as usize;
-                        u.len() == 3 * coefficient_count(d.surface_order[surface])
-                    });
+                let recorded_fits = s.recorded_unshot.len() == self.record.shots.len()
+                    && s.recorded_unshot
+                        .iter()
+                        .zip(&self.record.shots)
+                        .all(|(u, r)| {
+                            let surface = self.mesh.patches[r.patch as usize].surface as usize;
+                            u.len() == 3 * coefficient_count(d.surface_order[surface])
+                        });
                 if !recorded_fits {
                     return Err(format!(
                         "its {} recorded directional shots do not match its {} recorded shots",
                         s.recorded_unshot.len(),
-                        self.recorded.len()
+                        self.record.shots.len()
                     ));
                 }
                 d.radiance = s.radiance.into_iter().map(f64::from_bits).collect();

@@ -120,12 +120,12 @@ impl Solver {
     /// √(4π) · Σ_v w_v ⊙ ΔE_v/π over its visible vertices (see the module
     /// notes). Nothing for an untextured patch.
     pub(super) fn add_textured_gather(&self, d: &Directional, p: usize, sum: &mut [f64]) {
-        let Some(rgb) = self.patch_rgb_weights.get(p).filter(|w| !w.is_empty()) else {
+        let Some(rgb) = self.patches.rgb_weights.get(p).filter(|w| !w.is_empty()) else {
             return;
         };
         let mut reflected = DVec3::ZERO;
         for &(v, w) in rgb {
-            if !self.hidden[v as usize] {
+            if !self.field.hidden[v as usize] {
                 reflected += w * d.irradiance_over_pi(&self.mesh, &d.received, v as usize);
             }
         }
@@ -146,9 +146,16 @@ impl Solver {
         surface: usize,
     ) -> Option<(&Textured, bool)> {
         if d.textured[surface] {
-            return self.texturing.get(surface as u32).map(|t| (t, false));
+            return self
+                .materials
+                .texturing
+                .get(surface as u32)
+                .map(|t| (t, false));
         }
-        self.texturing.emissive(surface as u32).map(|t| (t, true))
+        self.materials
+            .texturing
+            .emissive(surface as u32)
+            .map(|t| (t, true))
     }
 
     /// Appends one textured SH batch per textured material (see the module
@@ -178,7 +185,7 @@ impl Solver {
             })
             .collect();
         let count = mesh.vertices.len();
-        fill_hidden(&triangles, &self.hidden, count, rgb, &mut irradiance);
+        fill_hidden(&triangles, &self.field.hidden, count, rgb, &mut irradiance);
         // The SH likewise.
         let coefficients = self.displayed_coefficients(d, &triangles);
         let mut sources = Vec::new();
@@ -240,7 +247,8 @@ impl Solver {
                 let o = d.vertex_offset[v];
                 let scale = (4.0 * PI).sqrt();
                 let c00 = DVec3::from_slice(&coefficients[o..o + 3])
-                    + (self.kd[surface] * ambient - self.emission[surface]) * scale;
+                    + (self.materials.kd[surface] * ambient - self.materials.emission[surface])
+                        * scale;
                 batch.coefficients[start..start + 3].copy_from_slice(&f(c00.max(DVec3::ZERO)));
                 DVec3::ONE
             } else {
@@ -248,7 +256,12 @@ impl Solver {
             };
             if let Some(texturing) = &mut batch.texturing {
                 texturing.vertices.push(TexturedVertex {
-                    uv: self.texturing.uv(t, mv.position).as_vec2().to_array(),
+                    uv: self
+                        .materials
+                        .texturing
+                        .uv(t, mv.position)
+                        .as_vec2()
+                        .to_array(),
                     irradiance_over_pi: f(e),
                 });
             }

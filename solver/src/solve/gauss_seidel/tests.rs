@@ -580,7 +580,7 @@ fn textured_cornell_means(patches: u32) -> (Vec<DVec3>, Vec<DVec3>, usize) {
     let gs = solve_gauss_seidel(&scene, &s, &limits).unwrap();
     assert!(gs.converged);
     let mut progressive = Solver::new(&scene, &s).unwrap();
-    assert!(progressive.texturing.any());
+    assert!(progressive.materials.texturing.any());
     while progressive.step().is_some() {}
     let mesh = progressive.mesh();
     let count = mesh.surfaces.len() + 1;
@@ -609,14 +609,14 @@ fn textured_cornell_means(patches: u32) -> (Vec<DVec3>, Vec<DVec3>, usize) {
         // The progressive patch's displayed light: through the RGB weights
         // (∫ ρ E/π) on the textured wall, the area weights elsewhere.
         let radiance = progressive.vertex_radiance();
-        let integral: DVec3 = if progressive.patch_rgb_weights[i].is_empty() {
+        let integral: DVec3 = if progressive.patches.rgb_weights[i].is_empty() {
             progressive
                 .patch_weights(i as u32)
                 .iter()
                 .map(|&(v, w)| radiance[v as usize] * w)
                 .sum()
         } else {
-            progressive.patch_rgb_weights[i]
+            progressive.patches.rgb_weights[i]
                 .iter()
                 .map(|&(v, w)| radiance[v as usize] * w)
                 .sum()
