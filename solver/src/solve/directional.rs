@@ -88,34 +88,30 @@
 use super::budget;
 use super::checkpoint::precision::round_to_kept;
 use super::fine_shape::FineShape;
-use super::refine::Criteria;
 use super::regions::{self, QuadrantScale};
-use super::shoot::RecordedShot;
-use super::shoot::{SamplePool, Shot};
-use super::{ShapeView, ShotReport, SolveError, Solver};
+use super::shoot::Shot;
+use super::{ShapeView, SolveError, Solver};
 use crate::brdf::normalization::funk_hecke_d;
 use crate::brdf::GlossyLobe;
 use crate::mesh::Mesh;
 use crate::scene::Scene;
 use crate::settings::SolverSettings;
 use glam::DVec3;
-use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use solution::sh::coefficient_count;
 use std::f64::consts::PI;
 use std::sync::Arc;
-use std::time::Instant;
 
 mod field;
 mod near_gather;
 mod output;
 mod receive;
+mod shot;
 mod split;
 mod state;
 mod textured;
 
-use field::DirField;
-use receive::{DirScratch, DirShot, ReceivedSh, Tables};
+pub(super) use shot::ShShot;
 
 /// How the next source patch is chosen.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
@@ -562,256 +558,6 @@ impl Solver {
         self.warnings.setup.extend(warnings);
         self.directional = Some(Box::new(d));
         Ok(())
-    }
-
-    /// One directional shot (Remington 1992, Fig. 4.7): see the module documentation.
-    pub(super) fn step_directional(&mut self) -> Option<ShotReport> {
-        let mut d = self.directional.take()?;
-        let report = self.shoot_directional(&mut d);
-        self.directional = Some(d);
-        Some(report)
-    }
-
-    fn choose_directional_source(&self, d: &Directional) -> u32 {
-        match d.choice {
-            SourceChoice::Hemisphere => self.choose_source(),
-            SourceChoice::ZerothTerm => {
-                let mut best = (0u32, f64::NEG_INFINITY);
-                for (i, p) in self.mesh.patches.iter().enumerate() {
-                    let o = d.patch_offset[i];
-                    let power = p.area * d.patch_unshot[o..o + 3].iter().sum::<f64>();
-                    if power > best.1 {
-                        best = (i as u32, power);
-                    }
-                }
-                best.0
-            }
-        }
-    }
-
-    fn shoot_directional(&mut self, d: &mut Directional) -> ShotReport {
-        let start = Instant::now();
-        let source = self.choose_directional_source(d);
-        // The light not yet shot, this shot's included, for the meshing's
-        // local radiance level (as in `Solver::step`).
-        let ambient = self.ambient();
-        let range = d.patch_range(&self.mesh, source as usize);
-        let unshot: Vec<f64> = d.patch_unshot[range.clone()].to_vec();
-        d.patch_unshot[range].fill(0.0);
-        let equivalent = std::mem::replace(&mut self.patches.unshot[source as usize], DVec3::ZERO);
-        let shot = Shot::for_patch(
-            &self.mesh,
-            source,
-            self.stats.shots,
-            equivalent,
-            &self.settings,
-            &self.occluder,
-            &self.materials.kd,
-        );
-        let source_surface = shot.source_surface as usize;
-        // Shots from emitters are remembered, as in `Solver::step`: vertices
-        // that later splits create receive them exactly (see `refine.rs`).
-        let mut recorded = self.materials.emission[source_surface] != DVec3::ZERO
-            && !self.memory.refinement_capped;
-        if recorded {
-            if let Some(warning) = self.recording_overflows(Some(d), unshot.len() as u64) {
-                recorded = false;
-                self.memory.refinement_capped = true;
-                self.warnings.pending.push(warning);
-            }
-        }
-        if recorded {
-            self.record.shots.push(RecordedShot {
-                index: self.stats.shots,
-                patch: source,
-                receivers: self.mesh.vertices.len() as u32,
-                unshot: equivalent.to_array().map(f64::to_bits),
-            });
-            self.record
-                .pools
-                .push(SamplePool::with_sets(&shot, super::shoot::REPLAY_POOL_SETS));
-            d.recorded_unshot.push(unshot.clone());
-        }
-        let pool = SamplePool::new(&shot);
-        let source_order = d.surface_order[source_surface];
-        let tables = Tables::new(d, &self.mesh);
-        // Recorded (emitter) shots stay uniform: refinement replays them from
-        // the patch's mean alone (as in `Solver::step`).
-        let quadrants = if recorded || self.settings.shoots_uniformly() {
-            None
-        } else {
-            quadrant_scale(self.shape_view(), source, &shot)
-        };
-        let mut rays = 0u64;
-        let dir_shot = DirShot {
-            shot: &shot,
-            pool: &pool,
-            unshot: &unshot,
-            source_order,
-            source_tangent: tables.tangent[source_surface],
-            tables: &tables,
-            quadrants: quadrants.as_ref(),
-        };
-        {
-            let mesh = &self.mesh;
-            let kd = &self.materials.kd;
-            let results: Vec<ReceivedSh> = (0..mesh.vertices.len() as u32)
-                .into_par_iter()
-                .map_init(DirScratch::default, |scratch, v| {
-                    dir_shot.receive(mesh, kd, v, scratch)
-                })
-                .collect();
-            for (v, r) in results.into_iter().enumerate() {
-                let o = d.vertex_offset[v];
-                for (k, c) in r.coefficients.iter().enumerate() {
-                    // The state keeps 40 mantissa bits (`checkpoint/precision.rs`).
-                    d.radiance[o + k] = round_to_kept(d.radiance[o + k] + c);
-                    d.received[o + k] = *c;
-                    if recorded {
-                        d.direct[o + k] += c;
-                    }
-                }
-                self.field.visible[v] = r.visible;
-                rays += r.rays as u64;
-                // The diffuse proxies (mean radiance c₀₀ Y₀₀, or E/π on a
-                // textured surface) the L = 0 refinement test reads.
-                let surface = mesh.vertices[v].surface as usize;
-                self.field.radiance[v] = d.diffuse_proxy(surface, &d.radiance[o..]);
-                self.field.received[v] = d.diffuse_proxy(surface, &r.coefficients);
-            }
-        }
-        // Coefficients of vertices refinement creates start here; they are
-        // rounded to the kept bits at the end of the step.
-        let created_from = d.radiance.len();
-        let mut refined = super::refine::Refined::default();
-        // A solve the memory budget stopped refining stays unrefined.
-        if self.settings.adaptive && !self.memory.refinement_capped {
-            let mut split_budget = self.split_budget(Some(d));
-            // The recorded shots, rebuilt (their unshot SH kept in `d`).
-            let replay_shots = RecordedShot::rebuild_all(
-                &self.record.shots,
-                &self.mesh,
-                &self.settings,
-                &self.occluder,
-                &self.materials.kd,
-            );
-            let recorded_unshot = std::mem::take(&mut d.recorded_unshot);
-            let replay: Vec<DirShot> = replay_shots
-                .iter()
-                .zip(&self.record.pools)
-                .zip(&recorded_unshot)
-                .map(|((shot, pool), unshot)| {
-                    let surface = shot.source_surface as usize;
-                    DirShot {
-                        shot,
-                        pool,
-                        unshot,
-                        source_order: tables.surface_order[surface],
-                        source_tangent: tables.tangent[surface],
-                        tables: &tables,
-                        quadrants: None,
-                    }
-                })
-                .collect();
-            refined = super::refine::refine_field(
-                &mut self.mesh,
-                &mut DirField {
-                    d: &mut *d,
-                    radiance: &mut self.field.radiance,
-                    received: &mut self.field.received,
-                    visible: &mut self.field.visible,
-                    direct: &mut self.field.direct,
-                    kd: &self.materials.kd,
-                    shot: &dir_shot,
-                    replay: &replay,
-                    current_recorded: recorded,
-                    near: near_gather::NearGather {
-                        patch_weights: &self.patches.weights,
-                        hidden: &self.field.hidden,
-                        emission: &self.materials.emission,
-                        settings: &self.settings,
-                        occluder: &self.occluder,
-                        kd: &self.materials.kd,
-                        reach: near_gather::NEAR_REACH,
-                    },
-                },
-                // The diffuse step's criteria (see `Solver::step`).
-                &Criteria {
-                    dark_floor: super::refine::DARK_FLOOR * self.stats.radiance_level,
-                    ambient,
-                    ..Criteria::from_settings(&self.settings)
-                },
-                &mut split_budget,
-            );
-            drop(replay);
-            d.recorded_unshot = recorded_unshot;
-            self.after_refinement(&split_budget, Some(d));
-            rays += refined.rays;
-        }
-        // This shot's light joins its patch's sum for the gathers of later
-        // splits (`directional/near_gather.rs`); recorded shots replay.
-        if !recorded {
-            let range = d.patch_range(&self.mesh, source as usize);
-            for (s, u) in d.shot_sum[range].iter_mut().zip(&unshot) {
-                *s = round_to_kept(*s + u);
-            }
-        }
-        let splits = refined.splits;
-        self.stats.leaf_count += 3 * splits;
-        self.update_patch_weights(&refined.dirty_patches);
-        // Gather (see `Solver::gather`): U_p += Σ_v w_vp ΔL_v / A_p per coefficient.
-        for p in 0..self.mesh.patches.len() {
-            let range = d.patch_range(&self.mesh, p);
-            // Hidden vertices are left out, as in `Solver::gather`.
-            let area = self.patches.shoot_area[p];
-            let mut sum = vec![0.0; range.len()];
-            for &(v, w) in &self.patches.weights[p] {
-                if self.field.hidden[v as usize] {
-                    continue;
-                }
-                let o = d.vertex_offset[v as usize];
-                for (s, r) in sum.iter_mut().zip(&d.received[o..o + range.len()]) {
-                    *s += r * w;
-                }
-            }
-            // A textured patch reflects ∫ ρ ΔE/π dA (`directional/textured.rs`).
-            self.add_textured_gather(d, p, &mut sum);
-            for (u, s) in d.patch_unshot[range.clone()].iter_mut().zip(&sum) {
-                if area > 0.0 {
-                    *u += s / area;
-                }
-                // The state keeps 40 mantissa bits (`checkpoint/precision.rs`).
-                *u = round_to_kept(*u);
-            }
-            let order = d.surface_order[self.mesh.patches[p].surface as usize];
-            self.patches.unshot[p] = d.hemisphere_equivalent(order, &d.patch_unshot[range]);
-        }
-        d.received.fill(0.0);
-        self.field.received.fill(DVec3::ZERO);
-        // The new vertices' coefficients, before the proxies are taken from
-        // them (`checkpoint/precision.rs`; the others were rounded as they
-        // received).
-        d.radiance[created_from..]
-            .iter_mut()
-            .for_each(|x| *x = round_to_kept(*x));
-        for v in 0..self.mesh.vertices.len() {
-            let o = d.vertex_offset[v];
-            let surface = self.mesh.vertices[v].surface as usize;
-            self.field.radiance[v] = d.diffuse_proxy(surface, &d.radiance[o..]);
-        }
-        self.stats.shots += 1;
-        self.stats.rays += rays;
-        self.stats.unshot_power = self.total_unshot_power();
-        self.stats.seconds += start.elapsed().as_secs_f64();
-        ShotReport {
-            shot: self.stats.shots,
-            source,
-            rays,
-            unshot_fraction: self.unshot_fraction(),
-            elements: self.stats.leaf_count,
-            vertices: self.mesh.vertices.len(),
-            splits,
-        }
     }
 }
 

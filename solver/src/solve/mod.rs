@@ -66,9 +66,11 @@ pub mod fine_shape;
 mod footprint;
 mod group_shot;
 mod group_tree;
+mod pipeline;
 pub mod ray_share;
 mod refine;
 pub mod regions;
+mod scalar;
 mod seams;
 pub mod shoot;
 mod sites;
@@ -87,10 +89,9 @@ use crate::scene::Scene;
 use crate::settings::{SettingsError, SolverSettings};
 use glam::DVec3;
 use rayon::prelude::*;
-use shoot::{RecordedShot, SamplePool, Scratch, Shot};
+use shoot::{SamplePool, Scratch, Shot};
 use solution::format::SolveMode;
 use std::f64::consts::PI;
-use std::time::Instant;
 
 /// Why a solve cannot start or resume.
 #[derive(Debug, thiserror::Error)]
@@ -315,187 +316,16 @@ impl Solver {
         if self.is_done() {
             return None;
         }
-        let report = if self.directional.is_some() {
-            self.step_directional()
-        } else {
-            self.step_diffuse()
+        let report = match self.directional.take() {
+            Some(mut d) => {
+                let report = self.shoot_with(&mut directional::ShShot::new(&mut d));
+                self.directional = Some(d);
+                report
+            }
+            None => self.shoot_with(&mut scalar::ScalarShot),
         };
         self.enclosure.catch_up(self.mesh.vertices.len());
-        report
-    }
-
-    /// [`Solver::step`] in diffuse mode.
-    fn step_diffuse(&mut self) -> Option<ShotReport> {
-        let start = Instant::now();
-        let source = self.brightest_patch();
-        // The light not yet shot, this shot's included, for the meshing's
-        // local radiance level.
-        let ambient = self.ambient_from_index();
-        let unshot = std::mem::replace(&mut self.patches.unshot[source as usize], DVec3::ZERO);
-        self.unshot_changed(&[source]);
-        // With grouped shooters the source may take its bright neighbours
-        // along (`group_shot.rs`); an emitter's patch shoots its emission
-        // alone first, recorded.
-        let source_surface = self.mesh.patches[source as usize].surface;
-        self.stats.timings.shot_power +=
-            PI * self.patches.shoot_area[source as usize] * unshot.element_sum();
-        let grouped = self.settings.shooters == crate::settings::Shooters::Grouped;
-        let members = if grouped && self.may_group(source) {
-            self.take_group(source, unshot)
-        } else {
-            None
-        };
-        let mut shot = Shot::for_patch(
-            &self.mesh,
-            source,
-            self.stats.shots,
-            unshot,
-            &self.settings,
-            &self.occluder,
-            &self.materials.kd,
-        );
-        // Shots from emitters are remembered: vertices that later splits create
-        // receive them exactly (see `refine`).
-        let mut recorded = self.materials.emission[source_surface as usize] != DVec3::ZERO
-            && !self.memory.refinement_capped
-            && members.is_none();
-        if recorded {
-            if let Some(warning) = self.recording_overflows(None, 0) {
-                recorded = false;
-                self.memory.refinement_capped = true;
-                self.warnings.pending.push(warning);
-            }
-        }
-        if recorded {
-            self.record.shots.push(RecordedShot {
-                index: self.stats.shots,
-                patch: source,
-                receivers: self.mesh.vertices.len() as u32,
-                unshot: unshot.to_array().map(f64::to_bits),
-            });
-        }
-        if recorded {
-            self.record
-                .pools
-                .push(SamplePool::with_sets(&shot, shoot::REPLAY_POOL_SETS));
-        }
-        // Recorded (emitter) shots stay uniform: their replay to new vertices
-        // rebuilds them from the patch and its mean unshot alone.
-        if !recorded && !self.settings.shoots_uniformly() && members.is_none() {
-            shot.regions = self.source_regions(source, unshot).map(Box::new);
-        }
-        // Recorded shots keep every ray: later splits replay them exactly.
-        let share = ray_share::RayShare::new(self.settings.full_rays_above, ambient);
-        if !recorded {
-            shot.ray_share = share;
-        }
-        let pieces = members.as_ref().map(|m| self.group_pieces(m));
-        let group = pieces.as_ref().map(|m| {
-            let mut group = group_shot::GroupShot::new(
-                &self.mesh,
-                m,
-                self.stats.shots,
-                &self.settings,
-                &self.occluder,
-                &self.materials.kd,
-            );
-            group.ray_share = share;
-            group
-        });
-        let pool = match group {
-            Some(_) => SamplePool::with_sets(&shot, 0),
-            None => SamplePool::new(&shot),
-        };
-        let shooter = match &group {
-            Some(g) => group_shot::Shooter::Group(g),
-            None => group_shot::Shooter::Patch {
-                shot: &shot,
-                pool: &pool,
-            },
-        };
-        let mut rays = footprint::shoot_receivers(
-            &self.mesh,
-            &mut self.sharing.footprint,
-            footprint::SampleSharing {
-                small: &self.sharing.small,
-                twins: &self.sharing.twins,
-                sites: &self.sharing.sites,
-            },
-            self.field.state(),
-            &shooter,
-            recorded,
-        );
-        let shot_done = Instant::now();
-        // A solve the memory budget stopped refining stays unrefined.
-        let refined = if self.settings.adaptive && !self.memory.refinement_capped {
-            let mut split_budget = self.split_budget(None);
-            let replay_shots = RecordedShot::rebuild_all(
-                &self.record.shots,
-                &self.mesh,
-                &self.settings,
-                &self.occluder,
-                &self.materials.kd,
-            );
-            // Only the touched surfaces' leaves can have a changed corner.
-            let scan = self.touched_patches();
-            let replay = refine::Replay {
-                recorded: &replay_shots,
-                pools: &self.record.pools,
-                current_recorded: recorded,
-            };
-            let refined = refine::refine_field(
-                &mut self.mesh,
-                &mut refine::DiffuseField {
-                    state: self.field.state(),
-                    replay: &replay,
-                    shooter: &shooter,
-                    scan: scan.as_deref(),
-                },
-                // A grouped shot's visible counts are out of `group_samples`
-                // rays but are judged against `samples`: a group's count also
-                // drops for rays that carry nothing (a sampled member's point
-                // behind the receiver's horizon), so it is not binomial, and
-                // judging it out of `group_samples` gave partly seen
-                // receivers a noise allowance that stopped their refinement
-                // (Cornell box, medium: 1.78% / 1.70% MARE → 2.21% / 1.81%;
-                // docs/lab/grouped-shooters.md, "Grouped shooters by default").
-                &refine::Criteria {
-                    dark_floor: refine::DARK_FLOOR * self.stats.radiance_level,
-                    ambient,
-                    ..refine::Criteria::from_settings(&self.settings)
-                },
-                &mut split_budget,
-            );
-            drop(replay_shots);
-            self.after_refinement(&split_budget, None);
-            refined
-        } else {
-            refine::Refined::default()
-        };
-        let splits = refined.splits;
-        rays += refined.rays;
-        self.stats.leaf_count += 3 * splits;
-        let refine_done = Instant::now();
-        self.update_patch_weights(&refined.dirty_patches);
-        self.unshot_changed(&refined.dirty_patches);
-        self.gather();
-        self.stats.timings.shoot += (shot_done - start).as_secs_f64();
-        self.stats.timings.shoot_rays += rays - refined.rays;
-        self.stats.timings.refine += (refine_done - shot_done).as_secs_f64();
-        self.stats.timings.gather += refine_done.elapsed().as_secs_f64();
-        self.stats.shots += 1;
-        self.stats.rays += rays;
-        self.stats.unshot_power = self.unshot_power_from_index();
-        self.stats.seconds += start.elapsed().as_secs_f64();
-        Some(ShotReport {
-            shot: self.stats.shots,
-            source,
-            rays,
-            unshot_fraction: self.unshot_fraction(),
-            elements: self.stats.leaf_count,
-            vertices: self.mesh.vertices.len(),
-            splits,
-        })
+        Some(report)
     }
 
     /// Where step time went since the solver was built or resumed.

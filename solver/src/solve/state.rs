@@ -255,6 +255,22 @@ impl PatchLight {
     }
 }
 
+impl Recording {
+    /// Remembers `shot` from patch `patch`, shooting mean unshot radiance
+    /// `unshot` to the `receivers` vertices there are, with the pool its
+    /// replays draw from.
+    pub fn push(&mut self, shot: &shoot::Shot, patch: u32, unshot: DVec3, receivers: usize) {
+        self.shots.push(shoot::RecordedShot {
+            index: shot.index,
+            patch,
+            receivers: receivers as u32,
+            unshot: unshot.to_array().map(f64::to_bits),
+        });
+        self.pools
+            .push(shoot::SamplePool::with_sets(shot, shoot::REPLAY_POOL_SETS));
+    }
+}
+
 impl Sharing {
     /// The small flat surfaces; twins and sites are found once the hidden
     /// vertices are known ([`super::Solver::new`]).

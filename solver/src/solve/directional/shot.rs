@@ -1,0 +1,301 @@
+//! Directional mode's [`Transport`]: SH coefficients per vertex and per
+//! patch (module documentation of [`super`], "Transport"). The diffuse
+//! fields of the solver carry each vertex's and patch's diffuse proxy, so
+//! the pipeline's source choice, convergence test and L = 0 refinement are
+//! the diffuse solve's.
+
+use super::field::DirField;
+use super::near_gather;
+use super::receive::{DirScratch, DirShot, ReceivedSh, Tables};
+use super::{quadrant_scale, Directional, SourceChoice};
+use crate::mesh::Mesh;
+use crate::solve::checkpoint::precision::round_to_kept;
+use crate::solve::pipeline::{Shooting, Source, Transport};
+use crate::solve::refine::{self, Refined};
+use crate::solve::shoot::{RecordedShot, SamplePool, Shot};
+use crate::solve::state::VertexField;
+use crate::solve::Solver;
+use glam::DVec3;
+use rayon::prelude::*;
+use std::time::Instant;
+
+/// One directional shot's state between the pipeline's steps.
+pub(in crate::solve) struct ShShot<'d> {
+    d: &'d mut Directional,
+    /// The source patch.
+    source: u32,
+    /// The source's unshot SH, taken out of its patch.
+    unshot: Vec<f64>,
+    /// Whether the shot is recorded (an emitter's: replayed, not summed).
+    recorded: bool,
+    /// Where the coefficients of the vertices refinement creates begin;
+    /// they are rounded to the kept bits once gathered.
+    created_from: usize,
+}
+
+impl<'d> ShShot<'d> {
+    pub(in crate::solve) fn new(d: &'d mut Directional) -> ShShot<'d> {
+        ShShot {
+            d,
+            source: 0,
+            unshot: Vec::new(),
+            recorded: false,
+            created_from: 0,
+        }
+    }
+}
+
+impl Transport for ShShot<'_> {
+    fn take_source(&mut self, s: &mut Solver) -> Source {
+        let d = &mut *self.d;
+        let patch = choose_source(s, d);
+        // The light not yet shot, this shot's included.
+        let ambient = s.ambient();
+        let range = d.patch_range(&s.mesh, patch as usize);
+        self.unshot = d.patch_unshot[range.clone()].to_vec();
+        d.patch_unshot[range].fill(0.0);
+        let unshot = std::mem::replace(&mut s.patches.unshot[patch as usize], DVec3::ZERO);
+        self.source = patch;
+        Source {
+            patch,
+            ambient,
+            unshot,
+        }
+    }
+
+    fn shoot(&mut self, s: &mut Solver, source: &Source) -> Shooting {
+        let d = &mut *self.d;
+        let recorded = s.records(source.patch, true, Some((d, self.unshot.len() as u64)));
+        let shot = Shot::for_patch(
+            &s.mesh,
+            source.patch,
+            s.stats.shots,
+            source.unshot,
+            &s.settings,
+            &s.occluder,
+            &s.materials.kd,
+        );
+        if recorded {
+            s.record
+                .push(&shot, source.patch, source.unshot, s.mesh.vertices.len());
+            d.recorded_unshot.push(self.unshot.clone());
+        }
+        self.recorded = recorded;
+        let pool = SamplePool::new(&shot);
+        let source_surface = shot.source_surface as usize;
+        let tables = Tables::new(d, &s.mesh);
+        // Recorded (emitter) shots stay uniform: refinement replays them from
+        // the patch's mean alone.
+        let quadrants = if recorded || s.settings.shoots_uniformly() {
+            None
+        } else {
+            quadrant_scale(s.shape_view(), source.patch, &shot)
+        };
+        let dir_shot = DirShot {
+            shot: &shot,
+            pool: &pool,
+            unshot: &self.unshot,
+            source_order: d.surface_order[source_surface],
+            source_tangent: tables.tangent[source_surface],
+            tables: &tables,
+            quadrants: quadrants.as_ref(),
+        };
+        let rays = receive_all(
+            &s.mesh,
+            &s.materials.kd,
+            &mut s.field,
+            d,
+            &dir_shot,
+            recorded,
+        );
+        let shot_done = Instant::now();
+        self.created_from = d.radiance.len();
+        if !s.refines() {
+            return Shooting {
+                rays,
+                refined: Refined::default(),
+                shot_done,
+            };
+        }
+        // Adaptive subdivision, the diffuse solve's driver on SH
+        // (`field.rs`), replaying the recorded shots with their unshot SH.
+        let mut split_budget = s.split_budget(Some(d));
+        let replay_shots = RecordedShot::rebuild_all(
+            &s.record.shots,
+            &s.mesh,
+            &s.settings,
+            &s.occluder,
+            &s.materials.kd,
+        );
+        let recorded_unshot = std::mem::take(&mut d.recorded_unshot);
+        let replay: Vec<DirShot> = replay_shots
+            .iter()
+            .zip(&s.record.pools)
+            .zip(&recorded_unshot)
+            .map(|((shot, pool), unshot)| {
+                let surface = shot.source_surface as usize;
+                DirShot {
+                    shot,
+                    pool,
+                    unshot,
+                    source_order: tables.surface_order[surface],
+                    source_tangent: tables.tangent[surface],
+                    tables: &tables,
+                    quadrants: None,
+                }
+            })
+            .collect();
+        let criteria = s.refine_criteria(source.ambient);
+        let refined = refine::refine_field(
+            &mut s.mesh,
+            &mut DirField {
+                d: &mut *d,
+                radiance: &mut s.field.radiance,
+                received: &mut s.field.received,
+                visible: &mut s.field.visible,
+                direct: &mut s.field.direct,
+                kd: &s.materials.kd,
+                shot: &dir_shot,
+                replay: &replay,
+                current_recorded: recorded,
+                near: near_gather::NearGather {
+                    patch_weights: &s.patches.weights,
+                    hidden: &s.field.hidden,
+                    emission: &s.materials.emission,
+                    settings: &s.settings,
+                    occluder: &s.occluder,
+                    kd: &s.materials.kd,
+                    reach: near_gather::NEAR_REACH,
+                },
+            },
+            &criteria,
+            &mut split_budget,
+        );
+        drop(replay);
+        d.recorded_unshot = recorded_unshot;
+        s.after_refinement(&split_budget, Some(d));
+        Shooting {
+            rays: rays + refined.rays,
+            refined,
+            shot_done,
+        }
+    }
+
+    fn gather(&mut self, s: &mut Solver, _dirty: &[u32]) {
+        let d = &mut *self.d;
+        // This shot's light joins its patch's sum for the gathers of later
+        // splits (`directional/near_gather.rs`); recorded shots replay.
+        if !self.recorded {
+            let range = d.patch_range(&s.mesh, self.source as usize);
+            for (sum, u) in d.shot_sum[range].iter_mut().zip(&self.unshot) {
+                *sum = round_to_kept(*sum + u);
+            }
+        }
+        gather_patches(s, d);
+        d.received.fill(0.0);
+        s.field.received.fill(DVec3::ZERO);
+        // The new vertices' coefficients, before the proxies are taken from
+        // them (`checkpoint/precision.rs`; the others were rounded as they
+        // received).
+        d.radiance[self.created_from..]
+            .iter_mut()
+            .for_each(|x| *x = round_to_kept(*x));
+        for v in 0..s.mesh.vertices.len() {
+            let o = d.vertex_offset[v];
+            let surface = s.mesh.vertices[v].surface as usize;
+            s.field.radiance[v] = d.diffuse_proxy(surface, &d.radiance[o..]);
+        }
+    }
+
+    fn unshot_power(&mut self, s: &mut Solver) -> f64 {
+        s.total_unshot_power()
+    }
+}
+
+/// The next source: by hemispherical unshot power, the diffuse solve's
+/// choice on the proxies (the default), or by the [0,0] term alone.
+fn choose_source(s: &Solver, d: &Directional) -> u32 {
+    match d.choice {
+        SourceChoice::Hemisphere => s.choose_source(),
+        SourceChoice::ZerothTerm => {
+            let mut best = (0u32, f64::NEG_INFINITY);
+            for (i, p) in s.mesh.patches.iter().enumerate() {
+                let o = d.patch_offset[i];
+                let power = p.area * d.patch_unshot[o..o + 3].iter().sum::<f64>();
+                if power > best.1 {
+                    best = (i as u32, power);
+                }
+            }
+            best.0
+        }
+    }
+}
+
+/// Every vertex receives `shot`; returns the rays traced. A recorded shot's
+/// coefficients also join each vertex's recorded part.
+fn receive_all(
+    mesh: &Mesh,
+    kd: &[DVec3],
+    field: &mut VertexField,
+    d: &mut Directional,
+    shot: &DirShot,
+    recorded: bool,
+) -> u64 {
+    let results: Vec<ReceivedSh> = (0..mesh.vertices.len() as u32)
+        .into_par_iter()
+        .map_init(DirScratch::default, |scratch, v| {
+            shot.receive(mesh, kd, v, scratch)
+        })
+        .collect();
+    let mut rays = 0u64;
+    for (v, r) in results.into_iter().enumerate() {
+        let o = d.vertex_offset[v];
+        for (k, c) in r.coefficients.iter().enumerate() {
+            // The state keeps 40 mantissa bits (`checkpoint/precision.rs`).
+            d.radiance[o + k] = round_to_kept(d.radiance[o + k] + c);
+            d.received[o + k] = *c;
+            if recorded {
+                d.direct[o + k] += c;
+            }
+        }
+        field.visible[v] = r.visible;
+        rays += r.rays as u64;
+        // The diffuse proxies (mean radiance c₀₀ Y₀₀, or E/π on a textured
+        // surface) the L = 0 refinement test reads.
+        let surface = mesh.vertices[v].surface as usize;
+        field.radiance[v] = d.diffuse_proxy(surface, &d.radiance[o..]);
+        field.received[v] = d.diffuse_proxy(surface, &r.coefficients);
+    }
+    rays
+}
+
+/// The shot's ΔL gathered into every patch's unshot SH, as the diffuse
+/// solve gathers ΔL (`Solver::gather`): U_p += Σ_v w_vp ΔL_v / A_p per
+/// coefficient, hidden vertices left out; then each patch's diffuse proxy.
+fn gather_patches(s: &mut Solver, d: &mut Directional) {
+    for p in 0..s.mesh.patches.len() {
+        let range = d.patch_range(&s.mesh, p);
+        let area = s.patches.shoot_area[p];
+        let mut sum = vec![0.0; range.len()];
+        for &(v, w) in &s.patches.weights[p] {
+            if s.field.hidden[v as usize] {
+                continue;
+            }
+            let o = d.vertex_offset[v as usize];
+            for (total, r) in sum.iter_mut().zip(&d.received[o..o + range.len()]) {
+                *total += r * w;
+            }
+        }
+        // A textured patch reflects ∫ ρ ΔE/π dA (`directional/textured.rs`).
+        s.add_textured_gather(d, p, &mut sum);
+        for (u, total) in d.patch_unshot[range.clone()].iter_mut().zip(&sum) {
+            if area > 0.0 {
+                *u += total / area;
+            }
+            // The state keeps 40 mantissa bits (`checkpoint/precision.rs`).
+            *u = round_to_kept(*u);
+        }
+        let order = d.surface_order[s.mesh.patches[p].surface as usize];
+        s.patches.unshot[p] = d.hemisphere_equivalent(order, &d.patch_unshot[range]);
+    }
+}
