@@ -27,11 +27,12 @@ refuse runtime solver
 refuse solution solver runtime clap ash openxr winit
 refuse solver runtime ash openxr winit
 
-# "Every file is written atomically" and "the solver core is pure" are checked by
-# `cargo clippy` (scripts/test.sh): clippy.toml and solver/clippy.toml list the calls,
-# and every library and program turns the two lints on at its root (Cargo.toml's
+# "Every file is written atomically", "the solver core is pure" and "no function
+# over 150 lines" are checked by `cargo clippy` (scripts/test.sh): clippy.toml and
+# solver/clippy.toml list the calls and the threshold, and every library and program
+# turns the three lints on at its root (Cargo.toml's
 # [workspace.lints] leaves them off for tests). A root that forgot would go unchecked.
-opt_in='#![cfg_attr(not(test), warn(clippy::disallowed_methods, clippy::disallowed_macros))]'
+opt_in='#![cfg_attr(not(test), warn(clippy::disallowed_methods, clippy::disallowed_macros, clippy::too_many_lines))]'
 roots=$(cargo metadata --locked --no-deps --format-version 1 |
   jq -r '.packages[].targets[] | select(any(.kind[]; . == "lib" or . == "bin")) | .src_path')
 while read -r root; do
@@ -53,8 +54,30 @@ if grep -rnw clap "${core[@]/#/solver/src/}" >&2; then
   echo "check-architecture: FAILED: clap in the solver core (above)" >&2
   fail=1
 fi
+# No source file over 1,000 code lines (ARCHITECTURE.md; functions are clippy's
+# too_many_lines): the lines of non-test files under a crate's src/ that are neither
+# blank nor comments, #[cfg(test)] items left out.
+big=$(find . \( -name target -o -name .git \) -prune -o -path '*/src/*.rs' ! -name '*test*' -print |
+  sort | xargs awk '
+    function report() { if (file != "" && n > 1000) printf "%s: %d code lines\n", file, n }
+    FNR == 1 { report(); file = FILENAME; n = 0; skip = 0 }
+    skip {
+      line = $0; o = gsub(/[{]/, "", line); c = gsub(/[}]/, "", line)
+      depth += o - c; if (o) opened = 1
+      if ((opened && depth <= 0) || (!opened && $0 ~ /;[[:space:]]*$/)) skip = 0
+      next
+    }
+    /^[[:space:]]*#\[cfg\(test\)\]/ { skip = 1; depth = 0; opened = 0; next }
+    /^[[:space:]]*$/ || /^[[:space:]]*\/\// { next }
+    { n++ }
+    END { report() }')
+if [ -n "$big" ]; then
+  echo "check-architecture: FAILED: files over 1,000 code lines (split them by job):" >&2
+  echo "$big" >&2
+  fail=1
+fi
 [ "$fail" -eq 0 ] || exit 1
-echo "check-architecture: runtime links no solver; solution links no solver, runtime, clap, ash, openxr, winit; solver links no ash, openxr, winit; no clap in the solver core; every library and program has Clippy's purity and atomic-write lists on (cargo clippy checks them)"
+echo "check-architecture: runtime links no solver; solution links no solver, runtime, clap, ash, openxr, winit; solver links no ash, openxr, winit; no clap in the solver core; every library and program has Clippy's purity, atomic-write and function-length lints on (cargo clippy checks them)"
 
 # The runtime must build on its own: in a workspace build Cargo unifies features
 # and dependencies across members, which could hide a missing one.
