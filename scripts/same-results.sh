@@ -20,35 +20,14 @@ ignore_keys=shooting,shooting_tolerance,uniform_shooters,interpolated_glossy_spl
 ignore_keys+=,per_vertex_small,per_copy_vertices,patches,min_element_area
 ignore_keys+=,brdf_normalization,solver,directional,form_factors,method
 
-if ! git cat-file -e "$base^{commit}" 2>/dev/null; then
-    echo "same-results: commit $base is not in this clone (a shallow clone?); fetch the history first" >&2
-    exit 1
-fi
-
 work=${SAME_RESULTS_DIR:-target/same-results}
 mkdir -p "$work"
 work=$(cd "$work" && pwd)
-# git archive stamps every file with the commit's time, older than any build:
-# when the base changes, its files are touched, or cargo would take the last
-# base's artifacts in the shared target folder as fresh.
-src="$work/base-src"
-commit=$(git rev-parse "$base^{commit}")
-if [ "$(cat "$work/base-commit" 2>/dev/null)" != "$commit" ]; then
-    rm -rf "$src"
-    mkdir -p "$src"
-    git archive "$commit" | tar -x -C "$src"
-    find "$src" -type f -exec touch {} +
-    echo "$commit" > "$work/base-commit"
-fi
-
 # Both solvers and scenegen in the release profile, since the solves dominate,
-# and in one target folder, so that the third-party crates are built once. Both
-# binaries are named solver: the base's is copied out before this tree's
-# replaces it.
+# and in one target folder, so that the third-party crates are built once.
 target=$(pwd)/target
-echo "== same-results: building the base solver ($base)"
-(cd "$src" && CARGO_TARGET_DIR="$target" cargo build --release --locked -p solver)
-cp "$target/release/solver" "$work/base-solver"
+source scripts/lib/base-solver.sh
+build_base_solver "$base" "$work" "$target"
 echo "== same-results: building this tree's solver and scenegen"
 cargo build --release --locked -p solver -p scenegen
 

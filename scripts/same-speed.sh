@@ -41,11 +41,6 @@ triangles=${SAME_SPEED_TRIANGLES:-100000}
 low=0.97
 high=1.03
 
-if ! git cat-file -e "$base^{commit}" 2>/dev/null; then
-    echo "same-speed: commit $base is not in this clone (a shallow clone?); fetch the history first" >&2
-    exit 1
-fi
-
 work=${SAME_SPEED_DIR:-target/same-speed}
 mkdir -p "$work"
 work=$(cd "$work" && pwd)
@@ -78,24 +73,12 @@ case $counter in
         ;;
 esac
 
-src="$work/base-src"
-rm -rf "$src"
-mkdir -p "$src"
-git archive "$base" | tar -x -C "$src"
-# git archive gives every file the commit's time, which can be older than the
-# artifacts the kept target folder holds from another BASE: cargo would then
-# call them fresh. The stamp names the commit they were built from.
-base_hash=$(git rev-parse "$base^{commit}")
-stamp="$work/base-target/same-speed-base"
-if [ "$(cat "$stamp" 2>/dev/null)" != "$base_hash" ]; then
-    find "$src" -type f -exec touch {} +
-fi
-echo "== same-speed: building the base solver ($base), release"
-(cd "$src" && CARGO_TARGET_DIR="$work/base-target" cargo build --release --locked -p solver)
-echo "$base_hash" >"$stamp"
+source scripts/lib/base-solver.sh
+build_base_solver "$base" "$work" "$work/base-target"
+base_hash=$(cat "$work/base-commit")
 echo "== same-speed: building this tree's solver and scenegen, release"
 cargo build --release --locked -p solver -p scenegen
-base_solver="$work/base-target/release/solver"
+base_solver="$work/base-solver"
 new_solver="$(pwd)/target/release/solver"
 # What "new" is, named now: the tree may change while the solves run.
 new_label="$(git rev-parse --short HEAD)$(git diff --quiet HEAD || echo ' + uncommitted changes')"
