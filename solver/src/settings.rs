@@ -3,12 +3,19 @@
 //! Precedence, highest first (design notes): command-line flags, the TOML scene
 //! config, the legacy display file, the preset's defaults. Every source but the
 //! preset produces a [`SettingsPatch`] (all fields optional); [`SolverSettings::resolve`]
-//! applies them in order. The presets live in `config/presets.toml`, embedded at
-//! build time so the binary never depends on the working directory.
+//! applies them in order. `settings/patch.rs` declares each setting a source
+//! can set once, as a TOML key and, where it is one, a `solver solve` flag;
+//! this file holds the resolved settings, their defaults and their ranges.
+//! The presets live in `config/presets.toml`, embedded at build time so the
+//! binary never depends on the working directory.
 
 use crate::method::Method;
 use serde::{Deserialize, Serialize};
 use solution::format::{SolveMode, MAX_SH_ORDER};
+
+mod patch;
+pub(crate) use patch::solve_mode_parser;
+pub use patch::{parse_bytes, SettingsPatch};
 
 /// The presets file, embedded.
 pub const PRESETS_TOML: &str = include_str!("../../config/presets.toml");
@@ -231,45 +238,6 @@ fn default_crease_angle() -> f64 {
     crate::scene::DEFAULT_CREASE_ANGLE
 }
 
-/// A partial set of settings from one source (flags, TOML config, display file, preset).
-#[derive(Clone, Debug, PartialEq, Default, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct SettingsPatch {
-    pub mode: Option<SolveMode>,
-    pub method: Option<Method>,
-    pub samples: Option<u32>,
-    pub hemicube_resolution: Option<u32>,
-    pub shadows: Option<bool>,
-    pub threshold: Option<f64>,
-    pub max_shots: Option<u64>,
-    pub seed: Option<u64>,
-    pub threads: Option<usize>,
-    pub patch_size: Option<f64>,
-    pub adaptive: Option<bool>,
-    pub edge_threshold: Option<f64>,
-    pub shadow_threshold: Option<f64>,
-    pub min_element_size: Option<f64>,
-    pub max_depth: Option<u32>,
-    pub checkpoint_every: Option<u64>,
-    pub ambient: Option<bool>,
-    pub sh_error_target: Option<f64>,
-    pub max_sh_order: Option<u32>,
-    pub cube_resolution: Option<u32>,
-    pub shooters: Option<Shooters>,
-    pub group_samples: Option<u32>,
-    pub units_per_metre: Option<f64>,
-    pub strict: Option<bool>,
-    pub crease_angle: Option<f64>,
-    /// Bytes.
-    pub memory_budget: Option<u64>,
-    /// Degrees; 0: every point of a smooth surface receives (`solve::sites`).
-    pub site_angle: Option<f64>,
-    /// Fraction of a receiver's level above which a shot traces every ray (`solve::ray_share`).
-    pub full_rays_above: Option<f64>,
-    /// Smallest glossy element edge, in α × viewing distance (`solve::directional`).
-    pub glossy_edge: Option<f64>,
-}
-
 /// A setting whose value is out of its range.
 #[derive(Debug, thiserror::Error, PartialEq)]
 #[error("setting `{name}` = {value} is out of range: {expected}")]
@@ -340,49 +308,11 @@ impl SolverSettings {
 
     /// Overwrites every field that `patch` sets.
     pub fn apply(&mut self, patch: &SettingsPatch) {
-        macro_rules! take {
-            ($($field:ident),*) => {$(
-                if let Some(v) = patch.$field.clone() { self.$field = v; }
-            )*};
-        }
-        take!(
-            mode,
-            samples,
-            hemicube_resolution,
-            shadows,
-            threshold,
-            max_shots,
-            seed,
-            patch_size,
-            adaptive,
-            edge_threshold,
-            shadow_threshold,
-            min_element_size,
-            max_depth,
-            checkpoint_every,
-            ambient,
-            sh_error_target,
-            max_sh_order,
-            cube_resolution,
-            shooters,
-            group_samples,
-            units_per_metre,
-            strict,
-            crease_angle,
-            site_angle,
-            full_rays_above,
-            glossy_edge
-        );
+        patch.assign(self);
+        // The method implies the two recorded fields that name its parts.
         if let Some(method) = patch.method {
-            self.method = method;
             self.form_factors = method.form_factors();
             self.directional = method.directional();
-        }
-        if patch.threads.is_some() {
-            self.threads = patch.threads;
-        }
-        if patch.memory_budget.is_some() {
-            self.memory_budget = patch.memory_budget;
         }
     }
 
@@ -712,5 +642,114 @@ mod tests {
         };
         let err = SolverSettings::resolve(Preset::Draft, &[&flags]).unwrap_err();
         assert_eq!(err.name, "samples");
+    }
+
+    /// A patch that sets every key, each to a valid value unlike every preset's.
+    const EVERY_KEY: &str = r#"
+        mode = "directional"
+        method = "cube"
+        samples = 7
+        hemicube_resolution = 64
+        shadows = false
+        threshold = 0.03
+        max_shots = 77
+        seed = 9
+        threads = 3
+        patch_size = 0.2
+        adaptive = false
+        edge_threshold = 0.7
+        shadow_threshold = 0.33
+        min_element_size = 0.05
+        max_depth = 3
+        checkpoint_every = 11
+        ambient = false
+        sh_error_target = 0.02
+        max_sh_order = 12
+        cube_resolution = 5
+        shooters = "patch"
+        group_samples = 99
+        units_per_metre = 2.5
+        strict = true
+        crease_angle = 12.0
+        memory_budget = 123456789
+        site_angle = 4.0
+        full_rays_above = 0.2
+        glossy_edge = 0.3
+    "#;
+
+    #[test]
+    fn every_key_of_a_patch_reaches_the_settings() {
+        let patch: SettingsPatch = toml::from_str(EVERY_KEY).unwrap();
+        let keys = serde_json::to_value(&patch).unwrap();
+        let keys = keys.as_object().unwrap();
+        // Read from the struct: a new field that the list above lacks fails here.
+        for (key, value) in keys {
+            assert!(!value.is_null(), "EVERY_KEY lacks `{key}`");
+        }
+        let settings = SolverSettings::resolve(Preset::Draft, &[&patch]).unwrap();
+        let resolved = serde_json::to_value(&settings).unwrap();
+        for (key, value) in keys {
+            match resolved.get(key) {
+                Some(got) => assert_eq!(got, value, "`{key}`"),
+                // The two settings that solution files do not record.
+                None => match key.as_str() {
+                    "method" => assert_eq!(Some(settings.method), patch.method),
+                    "memory_budget" => assert_eq!(settings.memory_budget, patch.memory_budget),
+                    _ => panic!("`{key}` is neither recorded nor checked"),
+                },
+            }
+        }
+        assert_eq!(
+            (settings.form_factors, settings.directional),
+            (FormFactorMethod::Analytic, DirectionalRepresentation::Cube)
+        );
+    }
+
+    #[test]
+    fn the_recorded_settings_keep_their_keys_in_order() {
+        // Every solution file's header holds this JSON; its keys and their
+        // order are part of the format. No value holds a comma or a colon.
+        let json = serde_json::to_string(&SolverSettings::preset(Preset::Medium)).unwrap();
+        let keys: Vec<&str> = json
+            .trim_matches(['{', '}'])
+            .split(',')
+            .map(|pair| pair.split(':').next().unwrap().trim_matches('"'))
+            .collect();
+        assert_eq!(
+            keys,
+            [
+                "preset",
+                "mode",
+                "form_factors",
+                "samples",
+                "hemicube_resolution",
+                "shadows",
+                "threshold",
+                "max_shots",
+                "seed",
+                "threads",
+                "patch_size",
+                "adaptive",
+                "edge_threshold",
+                "shadow_threshold",
+                "min_element_size",
+                "max_depth",
+                "checkpoint_every",
+                "ambient",
+                "sh_error_target",
+                "max_sh_order",
+                "directional",
+                "cube_resolution",
+                "shooters",
+                "group_samples",
+                "units_per_metre",
+                "strict",
+                "crease_angle",
+                "site_angle",
+                "whole_receivers",
+                "full_rays_above",
+                "glossy_edge",
+            ]
+        );
     }
 }

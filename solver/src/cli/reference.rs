@@ -135,7 +135,7 @@ pub struct ReferenceArgs {
     /// diffuse or directional (glossy); default the scene config's, else diffuse.
     #[arg(
         long,
-        value_parser = crate::cli::solve::args::solve_mode_parser(),
+        value_parser = crate::settings::solve_mode_parser(),
         value_name = "MODE",
         long_help = "As `solver solve --mode`: diffuse ignores Ks (as the solver does); \
             directional reflects Ks through the exact glossy lobe of Remington 1992 \

@@ -64,7 +64,7 @@ pub fn run(args: SolveArgs) -> anyhow::Result<ExitCode> {
     // final settings. The scene config's own values are checked as it is read,
     // before its geometry; all are checked again once combined.
     let no_patch = SettingsPatch::default();
-    let mut early = args.patch();
+    let mut early = args.settings.clone();
     if early.mode.is_none() {
         // The mode may come from the scene config: the method is checked
         // against it once the config is read, before meshing.
@@ -72,8 +72,8 @@ pub fn run(args: SolveArgs) -> anyhow::Result<ExitCode> {
     }
     resolve_settings(&args, &no_patch, &no_patch, &early)?;
     let options = ImportOptions {
-        strict: args.strict,
-        units_per_metre: args.units_per_metre,
+        strict: args.settings.strict.unwrap_or(false),
+        units_per_metre: args.settings.units_per_metre,
         ..Default::default()
     };
     let loaded = crate::scene::load_scene(&args.scene, &options)
@@ -89,7 +89,7 @@ pub fn run(args: SolveArgs) -> anyhow::Result<ExitCode> {
         .as_ref()
         .map(|d| d.settings.clone())
         .unwrap_or_default();
-    let mut settings = resolve_settings(&args, &display_patch, &loaded.settings, &args.patch())?;
+    let mut settings = resolve_settings(&args, &display_patch, &loaded.settings, &args.settings)?;
     warn_clamped_patches(&scene, &settings);
     apply_smoothing(&mut scene, settings.crease_angle);
     // The import's text and parse tables are freed; give their pages back

@@ -1,20 +1,9 @@
-//! The flags of `solver solve` and the settings patch they make.
+//! The flags of `solver solve`: its files and preset here, and every setting
+//! flag from [`SettingsPatch`], which declares each setting once for the
+//! command line and the TOML config alike.
 
-use clap::builder::TypedValueParser;
-use solution::format::SolveMode;
-
-/// `--mode`'s parser. `SolveMode` lives in the contract crate, which does not depend
-/// on clap, so the command line maps its names here.
-pub(crate) fn solve_mode_parser() -> impl clap::builder::TypedValueParser<Value = SolveMode> {
-    clap::builder::PossibleValuesParser::new(["diffuse", "directional"]).map(|name| {
-        match name.as_str() {
-            "directional" => SolveMode::Directional,
-            _ => SolveMode::Diffuse,
-        }
-    })
-}
-use crate::method::Method;
-use crate::settings::{Preset, SettingsPatch, Shooters};
+use crate::settings::{Preset, SettingsPatch};
+use clap::Args;
 use std::path::PathBuf;
 
 /// Exit code of a solve stopped by Ctrl-C after saving its checkpoint (128 + SIGINT,
@@ -24,7 +13,7 @@ pub const EXIT_INTERRUPTED: u8 = 130;
 const AFTER_LONG_HELP: &str = "\
 Exit codes: 0 done, 1 error, 2 bad command line, 130 Ctrl-C (saved; --resume goes on).";
 
-/// `solver solve SCENE -o OUT …`: flags map one to one onto [`SettingsPatch`].
+/// `solver solve SCENE -o OUT …`: the setting flags are [`SettingsPatch`]'s.
 #[derive(clap::Args, Debug, Clone)]
 #[command(after_long_help = AFTER_LONG_HELP)]
 pub struct SolveArgs {
@@ -49,250 +38,9 @@ pub struct SolveArgs {
     )]
     pub preset: Option<Preset>,
 
-    /// Visibility rays per receiving vertex and source patch.
-    #[arg(
-        long,
-        value_name = "N",
-        long_help = "Visibility rays per receiving vertex and source patch (1 to 4096). \
-            More rays give smoother penumbrae, at a cost that grows about linearly \
-            with N."
-    )]
-    pub samples: Option<u32>,
-
-    /// Stop when unshot power falls below this fraction of emitted power.
-    #[arg(
-        long,
-        value_name = "X",
-        long_help = "Stop when the unshot power falls below X times the emitted power (0 < \
-            X < 1). Smaller is more accurate and costs more shots."
-    )]
-    pub threshold: Option<f64>,
-
-    /// Stop after this many shots whatever the unshot power.
-    #[arg(
-        long,
-        value_name = "N",
-        long_help = "Stop after N shots, converged or not: a time budget, whose checkpoint \
-            --resume continues."
-    )]
-    pub max_shots: Option<u64>,
-
-    /// Seed of the jittered sample positions.
-    #[arg(
-        long,
-        value_name = "S",
-        long_help = "Seed of the jittered visibility samples. The same seed and settings \
-            give the same file bit for bit, on any thread count."
-    )]
-    pub seed: Option<u64>,
-
-    /// Worker threads (default: every core).
-    #[arg(
-        long,
-        value_name = "N",
-        long_help = "Worker threads (1 to 1024; default every core). Speed only: the result \
-            does not depend on it."
-    )]
-    pub threads: Option<usize>,
-
-    /// Trace no visibility rays: no shadows, much faster.
-    #[arg(
-        long,
-        long_help = "Trace no visibility rays, so nothing casts a shadow (Remington 1992, \
-            appendix D `-t`). Much faster; for checking a scene, not for results."
-    )]
-    pub no_shadows: bool,
-
-    /// Visibility rays in proportion to what a shot adds, below this fraction of a receiver's light.
-    #[arg(
-        long,
-        value_name = "FRACTION",
-        long_help = "A receiver gets all --samples rays only from shots that add at least \
-            this fraction of its light, fewer in proportion below (0 to 1; 0 \
-            traces every ray). The estimate stays unbiased and only its noise \
-            grows; every preset's 0.01 halves the Cornell box's final time at the \
-            same error (docs/lab/ray-share.md)."
-    )]
-    pub full_rays_above: Option<f64>,
-
-    /// Smallest element edge on a glossy surface, as K × α × half the scene's diagonal.
-    #[arg(
-        long,
-        value_name = "K",
-        long_help = "Directional mode: glossy elements stop splitting at an edge of K × α × \
-            half the scene's diagonal, α the lobe's RMS slope. Smaller K gives \
-            sharper highlights for more elements and time (final's 0.125 takes \
-            twice 0.25's time; docs/lab/glossy-final-floor.md)."
-    )]
-    pub glossy_edge: Option<f64>,
-
-    /// What shoots in one pass: patch (default) or grouped.
-    #[arg(
-        long,
-        value_enum,
-        value_name = "WHO",
-        long_help = "What shoots in one pass. grouped (every preset): a bright patch and \
-            its bright neighbours together, each receiver's rays shared among them \
-            by importance, far fewer passes where many small patches are lit; \
-            patch: one patch per shot, as Remington (1992). Diffuse mode only \
-            (docs/lab/grouped-shooters.md).",
-        hide_possible_values = true
-    )]
-    pub shooters: Option<Shooters>,
-
-    /// Visibility rays per receiving vertex for a grouped shot.
-    #[arg(
-        long,
-        value_name = "N",
-        long_help = "Visibility rays per receiving vertex for a grouped shot (1 to 4096), \
-            shared among its members by what each adds. More rays lower the noise \
-            between seeds; time grows with N where shots are bright \
-            (docs/lab/grouped-shooters.md)."
-    )]
-    pub group_samples: Option<u32>,
-
-    /// Hemicube cells per side of the top face (even, 2 to 2048).
-    #[arg(
-        long,
-        value_name = "R",
-        long_help = "Cells per side of a hemicube's top face for --method hemicube and \
-            gauss-seidel (even, 2 to 2048; default 128). The factor's error falls \
-            like 1/R; time grows like R²."
-    )]
-    pub hemicube_resolution: Option<u32>,
-
-    /// progressive (default), or a seed baseline: hemicube, wallace, gauss-seidel, cube.
-    #[arg(
-        long,
-        value_enum,
-        value_name = "METHOD",
-        long_help = "progressive (default): progressive refinement with exact form factors, \
-            adaptive meshing and checkpoints, in either mode. The seed papers' \
-            baselines, to measure against: hemicube, wallace and gauss-seidel \
-            (diffuse only) and cube (directional only; no textures or smooth \
-            surfaces). A method that cannot solve the scene is refused before any \
-            work (docs/guide.md, \"The method\").",
-        hide_possible_values = true
-    )]
-    pub method: Option<Method>,
-
-    /// diffuse (default) or directional (glossy, spherical harmonics).
-    #[arg(
-        long,
-        value_parser = solve_mode_parser(),
-        value_name = "MODE",
-        long_help = "diffuse (default): one radiance per vertex, MTL Ks ignored. \
-            directional: glossy surfaces store outgoing radiance as spherical \
-            harmonics, so highlights follow the viewer, at a cost in time and file \
-            size that grows with the square of the SH order.",
-        hide_possible_values = true
-    )]
-    pub mode: Option<SolveMode>,
-
-    /// Global-cube cells per face edge k (2 to 256): D = 6k² directions.
-    #[arg(
-        long,
-        value_name = "K",
-        long_help = "Cells per cube face edge k for --method cube (2 to 256; default 8): D \
-            = 6k² directions per glossy vertex. Larger k gives sharper, better \
-            placed highlights; memory and time grow like k² to k⁴."
-    )]
-    pub cube_resolution: Option<u32>,
-
-    /// Target patch size, as a fraction of the scene's bounding-box diagonal.
-    #[arg(
-        long,
-        value_name = "F",
-        long_help = "Target patch size as a fraction of the scene's diagonal (0 < F <= 1): \
-            a polygon gets N × N patches, N = ceil(longest edge / (F × diagonal)). \
-            Smaller F costs time and memory for less meshing bias; a TOML config \
-            may set it per object or material."
-    )]
-    pub patch_size: Option<f64>,
-
-    /// Smallest element's longest edge, as a fraction of the scene's diagonal.
-    #[arg(
-        long,
-        value_name = "F",
-        long_help = "Adaptive subdivision stops at elements of this fraction of the scene's \
-            diagonal (0 < F <= 1), on every polygon alike. Smaller F follows \
-            shadows and gradients more closely, at the cost of more elements, rays \
-            and memory."
-    )]
-    pub min_element_size: Option<f64>,
-
-    /// Scene units per metre (e.g. 1000 for millimetres).
-    #[arg(
-        long,
-        value_name = "U",
-        long_help = "How many scene units make a metre (default 1, or the scene config's). \
-            The runtime scales head tracking, walking and eye separation by it; \
-            the lighting does not change."
-    )]
-    pub units_per_metre: Option<f64>,
-
-    /// Peak memory the solve plans within (e.g. 8GiB, 500MB).
-    #[arg(
-        long,
-        value_name = "SIZE",
-        value_parser = parse_bytes,
-        long_help = "Peak memory the solve plans within, e.g. 8GiB or 500MB (default: 80% \
-            of available memory). Near it glossy SH orders are capped and \
-            refinement stops, each with a warning; a scene that cannot fit is \
-            refused before allocating."
-    )]
-    pub memory_budget: Option<u64>,
-
-    /// Make import warnings errors.
-    #[arg(
-        long,
-        long_help = "Turn import warnings (Kd + Ks above 1 scaled down, degenerate or \
-            non-planar faces, …) into errors, for scenes that must import cleanly."
-    )]
-    pub strict: bool,
-
-    /// Save a checkpoint and a partial solution every K shots.
-    #[arg(
-        long,
-        value_name = "K",
-        long_help = "Every K shots, save OUT.checkpoint and rewrite OUT as a partial \
-            solution a viewer can watch. Smaller K loses less work on a crash; \
-            each save costs writing the whole mesh."
-    )]
-    pub checkpoint_every: Option<u64>,
-
-    /// Do not add the ambient estimate of unshot light to partial solutions.
-    #[arg(
-        long,
-        long_help = "Leave out Cohen et al.'s (1988) ambient estimate of the light not yet \
-            shot, which files otherwise carry (in diffuse mode weighted by each \
-            vertex's enclosure). Partial solutions then look darker but hold only \
-            light actually shot (docs/lab/ambient-term.md)."
-    )]
-    pub no_ambient: bool,
-
-    /// Degrees of shading-normal change a finely tessellated smooth surface's sites span (0: every point receives).
-    #[arg(
-        long,
-        value_name = "DEGREES",
-        long_help = "A smooth surface exported finer than the smallest element receives at \
-            sites, one within that size and this shading-normal angle of every \
-            point (default 10 degrees; 0: every point receives). Smaller angles \
-            add sites and cost, and blur the shading less; diffuse mode \
-            (docs/lab/sites.md)."
-    )]
-    pub site_angle: Option<f64>,
-
-    /// Largest angle (degrees) between neighbouring polygons that still shade as one smooth surface.
-    #[arg(
-        long,
-        value_name = "DEGREES",
-        long_help = "Neighbouring polygons of one material whose normals differ by less \
-            than this angle (default 30 degrees) shade as one smooth surface with \
-            shared vertices. A larger angle rounds off edges meant to be sharp; 0 \
-            keeps every polygon a flat facet."
-    )]
-    pub crease_angle: Option<f64>,
+    // The setting flags: the struct that is also a TOML config's `[solver]` table.
+    #[command(flatten)]
+    pub settings: SettingsPatch,
 
     /// Continue the solve saved in OUT.checkpoint.
     #[arg(
@@ -337,88 +85,29 @@ impl SolveArgs {
     pub fn preset(&self) -> Preset {
         self.preset.unwrap_or_default()
     }
-
-    /// The settings these flags set; everything else is left to lower sources.
-    pub fn patch(&self) -> SettingsPatch {
-        SettingsPatch {
-            mode: self.mode,
-            cube_resolution: self.cube_resolution,
-            method: self.method,
-            full_rays_above: self.full_rays_above,
-            glossy_edge: self.glossy_edge,
-            shooters: self.shooters,
-            group_samples: self.group_samples,
-            samples: self.samples,
-            hemicube_resolution: self.hemicube_resolution,
-            shadows: self.no_shadows.then_some(false),
-            threshold: self.threshold,
-            max_shots: self.max_shots,
-            seed: self.seed,
-            threads: self.threads,
-            checkpoint_every: self.checkpoint_every,
-            ambient: self.no_ambient.then_some(false),
-            units_per_metre: self.units_per_metre,
-            strict: self.strict.then_some(true),
-            crease_angle: self.crease_angle,
-            memory_budget: self.memory_budget,
-            patch_size: self.patch_size,
-            min_element_size: self.min_element_size,
-            site_angle: self.site_angle,
-            ..SettingsPatch::default()
-        }
-    }
 }
 
-/// A size for `--memory-budget`: a non-negative number of bytes, optionally
-/// with a unit, KB/MB/GB/TB (powers of 1000) or KiB/MiB/GiB/TiB (powers of
-/// 1024), case-insensitive, with or without a space (`8GiB`, `500 MB`,
-/// `1.5GiB`, `1048576`).
-pub fn parse_bytes(text: &str) -> Result<u64, String> {
-    let t = text.trim();
-    let split = t
-        .find(|c: char| !(c.is_ascii_digit() || c == '.'))
-        .unwrap_or(t.len());
-    let (number, unit) = (t[..split].trim(), t[split..].trim());
-    let value: f64 = number
-        .parse()
-        .map_err(|_| format!("`{text}` is not a size: expected a number such as 8GiB or 500MB"))?;
-    let scale: f64 = match unit.to_ascii_lowercase().as_str() {
-        "" | "b" => 1.0,
-        "kb" => 1e3,
-        "mb" => 1e6,
-        "gb" => 1e9,
-        "tb" => 1e12,
-        "kib" => 1024.0,
-        "mib" => 1024.0 * 1024.0,
-        "gib" => 1024.0 * 1024.0 * 1024.0,
-        "tib" => 1024.0 * 1024.0 * 1024.0 * 1024.0,
-        _ => {
-            return Err(format!(
-                "`{text}`: unknown unit `{unit}` (use B, KB, MB, GB, TB, KiB, MiB, GiB or TiB)"
-            ))
-        }
-    };
-    let bytes = value * scale;
-    if !bytes.is_finite() || bytes >= u64::MAX as f64 {
-        return Err(format!("`{text}` is too large"));
-    }
-    Ok(bytes.round() as u64)
-}
-
-/// Which flag sets a setting, for error messages (`samples` → `--samples`).
+/// Which flag sets a setting, for error messages (`samples` → `--samples`,
+/// `shadows` → `--no-shadows`), as [`SettingsPatch`] declares it.
 pub fn flag_name(setting: &str) -> String {
-    match setting {
-        "shadows" => "--no-shadows".into(),
-        "ambient" => "--no-ambient".into(),
-        other => format!("--{}", other.replace('_', "-")),
+    let flags = SettingsPatch::augment_args(clap::Command::new("solve"));
+    let long = flags
+        .get_arguments()
+        .find(|arg| arg.get_id() == setting)
+        .and_then(|arg| arg.get_long());
+    match long {
+        Some(long) => format!("--{long}"),
+        None => format!("--{}", setting.replace('_', "-")),
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::settings::SolverSettings;
+    use crate::method::Method;
+    use crate::settings::{parse_bytes, Shooters, SolverSettings};
     use clap::Parser;
+    use solution::format::SolveMode;
 
     #[derive(Parser)]
     struct Wrapper {
@@ -434,7 +123,7 @@ mod tests {
 
     #[test]
     fn unset_flags_leave_the_patch_empty() {
-        assert_eq!(parse(&[]).patch(), SettingsPatch::default());
+        assert_eq!(parse(&[]).settings, SettingsPatch::default());
     }
 
     #[test]
@@ -458,7 +147,7 @@ mod tests {
             "--min-element-size",
             "0.01",
         ]);
-        let p = args.patch();
+        let p = args.settings;
         assert_eq!(p.samples, Some(9));
         assert_eq!(p.threshold, Some(0.25));
         assert_eq!(p.shadows, Some(false));
@@ -489,7 +178,7 @@ mod tests {
         assert!(parse_bytes("lots").unwrap_err().contains("not a size"));
         assert!(parse_bytes("-1GiB").is_err());
         assert_eq!(
-            parse(&["--memory-budget", "2GiB"]).patch().memory_budget,
+            parse(&["--memory-budget", "2GiB"]).settings.memory_budget,
             Some(2 << 30)
         );
     }
@@ -497,9 +186,9 @@ mod tests {
     #[test]
     fn site_angle_flag_and_toml_key_reach_the_settings() {
         // 10° unless asked for; 0 turns the sites off; above 30° is refused.
-        let default = SolverSettings::resolve(Preset::Draft, &[&parse(&[]).patch()]).unwrap();
+        let default = SolverSettings::resolve(Preset::Draft, &[&parse(&[]).settings]).unwrap();
         assert_eq!(default.site_angle, crate::settings::DEFAULT_SITE_ANGLE);
-        let flag = parse(&["--site-angle", "0"]).patch();
+        let flag = parse(&["--site-angle", "0"]).settings;
         assert_eq!(
             SolverSettings::resolve(Preset::Draft, &[&flag])
                 .unwrap()
@@ -513,7 +202,7 @@ mod tests {
                 .site_angle,
             5.0
         );
-        let wide = parse(&["--site-angle", "45"]).patch();
+        let wide = parse(&["--site-angle", "45"]).settings;
         let error = SolverSettings::resolve(Preset::Draft, &[&wide]).unwrap_err();
         assert!(error.to_string().contains("site_angle"), "{error}");
     }
@@ -523,20 +212,20 @@ mod tests {
         // Grouped shots in every preset unless asked for one patch a shot; a
         // grouped shot's rays from the preset, at least the patch shot's.
         for preset in [Preset::Draft, Preset::Medium, Preset::Final] {
-            let default = SolverSettings::resolve(preset, &[&parse(&[]).patch()]).unwrap();
+            let default = SolverSettings::resolve(preset, &[&parse(&[]).settings]).unwrap();
             assert_eq!(default.shooters, Shooters::Grouped);
             assert!(default.group_samples >= default.samples);
-            let patch = parse(&["--shooters", "patch"]).patch();
+            let patch = parse(&["--shooters", "patch"]).settings;
             let resolved = SolverSettings::resolve(preset, &[&patch]).unwrap();
             assert_eq!(resolved.shooters, Shooters::Patch);
         }
-        let flag = parse(&["--shooters", "grouped", "--group-samples", "48"]).patch();
+        let flag = parse(&["--shooters", "grouped", "--group-samples", "48"]).settings;
         assert_eq!(flag.shooters, Some(Shooters::Grouped));
         assert_eq!(flag.group_samples, Some(48));
         let config: SettingsPatch =
             toml::from_str("shooters = \"grouped\"\ngroup_samples = 24").unwrap();
         let resolved =
-            SolverSettings::resolve(Preset::Draft, &[&config, &parse(&[]).patch()]).unwrap();
+            SolverSettings::resolve(Preset::Draft, &[&config, &parse(&[]).settings]).unwrap();
         assert_eq!(resolved.shooters, Shooters::Grouped);
         assert_eq!(resolved.group_samples, 24);
         let zero: SettingsPatch = toml::from_str("group_samples = 0").unwrap();
@@ -549,5 +238,57 @@ mod tests {
     fn flag_names_match_the_command_line() {
         assert_eq!(flag_name("max_shots"), "--max-shots");
         assert_eq!(flag_name("shadows"), "--no-shadows");
+        assert_eq!(flag_name("ambient"), "--no-ambient");
+        assert_eq!(flag_name("memory_budget"), "--memory-budget");
+    }
+
+    #[test]
+    fn switches_set_their_toml_key_only_when_given() {
+        // `--no-shadows`, `--no-ambient` and `--strict` fill the keys
+        // `shadows`, `ambient` and `strict`; absent, they leave them to the
+        // config and the preset, and they take no value.
+        let given = parse(&["--no-shadows", "--no-ambient", "--strict"]).settings;
+        assert_eq!(
+            (given.shadows, given.ambient, given.strict),
+            (Some(false), Some(false), Some(true))
+        );
+        let config: SettingsPatch =
+            toml::from_str("shadows = false\nambient = false\nstrict = true").unwrap();
+        assert_eq!(given, config);
+        let absent = parse(&[]).settings;
+        assert_eq!(
+            (absent.shadows, absent.ambient, absent.strict),
+            (None, None, None)
+        );
+        for flag in ["--no-shadows=true", "--no-ambient=false", "--strict=false"] {
+            let argv = ["solver", "scene.obj", "-o", "out.sol", flag];
+            assert!(Wrapper::try_parse_from(argv).is_err(), "{flag}");
+        }
+    }
+
+    #[test]
+    fn toml_only_settings_are_not_flags_and_the_flags_stay_few() {
+        for flag in [
+            "--edge-threshold",
+            "--max-depth",
+            "--sh-error-target",
+            "--adaptive",
+        ] {
+            let argv = ["solver", "scene.obj", "-o", "out.sol", flag, "1"];
+            assert!(Wrapper::try_parse_from(argv).is_err(), "{flag}");
+        }
+        let config: SettingsPatch = toml::from_str("edge_threshold = 0.2\nmax_depth = 4").unwrap();
+        assert_eq!(
+            (config.edge_threshold, config.max_depth),
+            (Some(0.2), Some(4))
+        );
+        // Issue 40's bound on `solver solve`: at most 30 flags, counting -h,
+        // which clap adds when it builds the command.
+        let command = <Wrapper as clap::CommandFactory>::command();
+        let flags = command
+            .get_arguments()
+            .filter(|arg| !arg.is_positional())
+            .count();
+        assert!(flags < 30, "{flags} flags and -h");
     }
 }
