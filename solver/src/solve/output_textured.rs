@@ -19,7 +19,10 @@ use super::textured::Textured;
 use super::Solver;
 use crate::scene::SceneTexture;
 use glam::DVec3;
-use solution::format::{Batch, Solution, Texture, TextureSlot, TexturedVertex, Texturing};
+use solution::format::{
+    Batch, Representation, ScalarType, Solution, Texture, TextureSlot, TexturedVertex, Texturing,
+    Vertex,
+};
 use std::sync::Arc;
 
 impl Solver {
@@ -44,90 +47,144 @@ impl Solver {
             return;
         }
         let whole = solution.batches.remove(0);
-        let empty = |texturing: Option<Texturing>| Batch {
+        let mut untextured = Batch {
             representation: whole.representation,
             scalar: whole.scalar,
             vertices: Vec::new(),
             coefficients: Vec::new(),
             indices: Vec::new(),
-            texturing,
+            texturing: None,
         };
-        let mut batches = vec![empty(None)];
-        // Per textured batch, its material; per texture index, its source.
-        let mut materials: Vec<usize> = Vec::new();
-        let mut sources = Vec::new();
+        let mut textured = TexturedBatches::default();
+        // Per output vertex, (batch, index in it): batch 0 is the untextured.
         let mut slot: Vec<(usize, u32)> = Vec::with_capacity(whole.vertices.len());
         for (o, &r) in shared.representative.iter().enumerate() {
             let v = &self.mesh.vertices[r as usize];
-            let ambient = ambient_at[o];
             let Some(t) = self.materials.texturing.shown(v.surface) else {
-                let b = &mut batches[0];
-                slot.push((0, b.vertices.len() as u32));
-                b.vertices.push(whole.vertices[o]);
-                b.coefficients
+                slot.push((0, untextured.vertices.len() as u32));
+                untextured.vertices.push(whole.vertices[o]);
+                untextured
+                    .coefficients
                     .extend_from_slice(&whole.coefficients[3 * o..3 * o + 3]);
                 continue;
             };
-            let material = self.mesh.surfaces[v.surface as usize].material;
-            let g = match materials.iter().position(|&m| m == material) {
-                Some(k) => k + 1,
-                None => {
-                    let texture = texture_index(&mut sources, &mut solution.textures, t);
-                    let emission = self.second_slot(v.surface).map(|e| TextureSlot {
-                        texture: texture_index(&mut sources, &mut solution.textures, e),
-                        factor: e.kd.as_vec3().to_array(),
-                    });
-                    materials.push(material);
-                    batches.push(empty(Some(Texturing {
-                        texture,
-                        factor: t.kd.as_vec3().to_array(),
-                        emission,
-                        vertices: Vec::new(),
-                    })));
-                    materials.len()
-                }
-            };
-            let b = &mut batches[g];
-            slot.push((g, b.vertices.len() as u32));
-            b.vertices.push(whole.vertices[o]);
-            // E/π for a diffuse-textured vertex; for an emitter's, 1, with
-            // its reflected light in the coefficients.
-            let e = if self.materials.texturing.get(v.surface).is_some() {
-                // The vertex holds E/π plus its surface's emission (from the
-                // start of the solve; the mean Le of an emission texture).
-                // A flat emission is the untextured term; an emission
-                // texture is shown by the second slot instead.
-                let emission = self.materials.emission[v.surface as usize];
-                let untextured = match self.second_slot(v.surface) {
-                    Some(_) => DVec3::ZERO,
-                    None => emission,
-                };
-                let c00 = untextured * (4.0 * std::f64::consts::PI).sqrt();
-                b.coefficients.extend(c00.as_vec3().to_array());
-                (radiance[o] - emission + ambient).max(DVec3::ZERO)
-            } else {
-                // As `to_solution` computes the coefficients, less Le.
-                let s = v.surface as usize;
-                let reflected =
-                    radiance[o] - self.materials.emission[s] + self.materials.kd[s] * ambient;
-                let scale = (4.0 * std::f64::consts::PI).sqrt();
-                let c = reflected.max(DVec3::ZERO) * scale;
-                b.coefficients.extend(c.as_vec3().to_array());
-                DVec3::ONE
-            };
-            if let Some(texturing) = &mut b.texturing {
-                texturing.vertices.push(TexturedVertex {
-                    uv: self
-                        .materials
-                        .texturing
-                        .uv(t, v.position)
-                        .as_vec2()
-                        .to_array(),
-                    irradiance_over_pi: e.as_vec3().to_array(),
-                });
-            }
+            let g = textured.batch(
+                self.mesh.surfaces[v.surface as usize].material,
+                (t, self.second_slot(v.surface)),
+                whole.representation,
+                &mut solution.textures,
+            );
+            let (c00, e) = self.textured_values(v.surface, radiance[o], ambient_at[o]);
+            let uv = self.materials.texturing.uv(t, v.position);
+            let index = textured.push(g, whole.vertices[o], c00.as_vec3().to_array(), uv, e);
+            slot.push((g + 1, index));
         }
+        let mut batches = vec![untextured];
+        batches.extend(textured.batches);
         place_triangles_and_prepend(solution, batches, &slot, &whole.indices);
+    }
+}
+
+impl Solver {
+    /// A textured output vertex's untextured term (c₀₀) and the per-vertex
+    /// factor of its texture, from its displayed `radiance` and `ambient`
+    /// term. A diffuse-textured vertex: E/π, its radiance less its surface's
+    /// emission (from the start of the solve; the mean Le of an emission
+    /// texture), plus the ambient term; a flat emission is the untextured
+    /// term, an emission texture is shown by the second slot instead. An
+    /// emitter's (emission texture alone): 1, with the light it reflects as
+    /// the untextured term (as `to_solution` computes the coefficients, less
+    /// Le).
+    fn textured_values(&self, surface: u32, radiance: DVec3, ambient: DVec3) -> (DVec3, DVec3) {
+        let scale = (4.0 * std::f64::consts::PI).sqrt();
+        let s = surface as usize;
+        let emission = self.materials.emission[s];
+        if self.materials.texturing.get(surface).is_some() {
+            let untextured = match self.second_slot(surface) {
+                Some(_) => DVec3::ZERO,
+                None => emission,
+            };
+            let e = (radiance - emission + ambient).max(DVec3::ZERO);
+            (untextured * scale, e)
+        } else {
+            let reflected = radiance - emission + self.materials.kd[s] * ambient;
+            (reflected.max(DVec3::ZERO) * scale, DVec3::ONE)
+        }
+    }
+}
+
+/// The textured batches of a solution being written, one per textured
+/// material in the order of their first vertex, and the textures they use,
+/// each added to the solution's list once. Both modes' outputs build theirs
+/// with it (diffuse: [`Solver::split_textured`]; directional:
+/// `directional/textured.rs`).
+#[derive(Default)]
+pub(super) struct TexturedBatches {
+    /// Per batch, its material.
+    materials: Vec<usize>,
+    /// Per index of the solution's texture list, its scene texture.
+    sources: Vec<*const SceneTexture>,
+    pub batches: Vec<Batch>,
+}
+
+impl TexturedBatches {
+    /// The index of `material`'s batch, made on its first vertex with
+    /// `representation` and `shown` (the texture of the first slot, and of
+    /// the second where there is one), their textures added to `textures`.
+    pub fn batch(
+        &mut self,
+        material: usize,
+        shown: (&Textured, Option<&Textured>),
+        representation: Representation,
+        textures: &mut Vec<Texture>,
+    ) -> usize {
+        if let Some(g) = self.materials.iter().position(|&m| m == material) {
+            return g;
+        }
+        let (first, second) = shown;
+        let texture = texture_index(&mut self.sources, textures, first);
+        let emission = second.map(|e| TextureSlot {
+            texture: texture_index(&mut self.sources, textures, e),
+            factor: e.kd.as_vec3().to_array(),
+        });
+        self.materials.push(material);
+        self.batches.push(Batch {
+            representation,
+            scalar: ScalarType::F32,
+            vertices: Vec::new(),
+            coefficients: Vec::new(),
+            indices: Vec::new(),
+            texturing: Some(Texturing {
+                texture,
+                factor: first.kd.as_vec3().to_array(),
+                emission,
+                vertices: Vec::new(),
+            }),
+        });
+        self.batches.len() - 1
+    }
+
+    /// Adds a vertex to batch `g` with its coefficients, texture coordinates
+    /// and per-vertex texture factor (E/π); returns its index in the batch.
+    pub fn push(
+        &mut self,
+        g: usize,
+        vertex: Vertex,
+        coefficients: impl IntoIterator<Item = f32>,
+        uv: glam::DVec2,
+        irradiance_over_pi: DVec3,
+    ) -> u32 {
+        let batch = &mut self.batches[g];
+        let index = batch.vertices.len() as u32;
+        batch.vertices.push(vertex);
+        batch.coefficients.extend(coefficients);
+        if let Some(texturing) = &mut batch.texturing {
+            texturing.vertices.push(TexturedVertex {
+                uv: uv.as_vec2().to_array(),
+                irradiance_over_pi: irradiance_over_pi.as_vec3().to_array(),
+            });
+        }
+        index
     }
 }
 
@@ -171,7 +228,7 @@ pub(super) fn place_triangles_and_prepend(
 
 /// The index in `textures` of `t`'s texture, added (its 8-bit sRGB texels)
 /// the first time; `sources` records which scene texture each index holds.
-pub(super) fn texture_index(
+fn texture_index(
     sources: &mut Vec<*const SceneTexture>,
     textures: &mut Vec<Texture>,
     t: &Textured,

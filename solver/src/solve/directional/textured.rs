@@ -40,10 +40,11 @@ use super::Directional;
 use crate::mesh::Mesh;
 use crate::scene::Scene;
 use crate::solve::hidden::{fill_hidden, rgb};
+use crate::solve::output_textured::TexturedBatches;
 use crate::solve::textured::{SurfaceTexturing, Textured};
 use crate::solve::Solver;
 use glam::DVec3;
-use solution::format::{Batch, Representation, ScalarType, Solution, TexturedVertex, Texturing};
+use solution::format::{Representation, Solution};
 use solution::sh::{coefficient_count, Y00};
 use std::f64::consts::PI;
 
@@ -188,10 +189,8 @@ impl Solver {
         fill_hidden(&triangles, &self.field.hidden, count, rgb, &mut irradiance);
         // The SH likewise.
         let coefficients = self.displayed_coefficients(d, &triangles);
-        let mut sources = Vec::new();
-        // Per textured batch, its material; per mesh vertex, (batch, index).
-        let mut materials: Vec<usize> = Vec::new();
-        let mut batches: Vec<Batch> = Vec::new();
+        let mut textured = TexturedBatches::default();
+        // Per mesh vertex, (batch, index in it).
         let mut local = vec![(usize::MAX, 0u32); mesh.vertices.len()];
         for (v, mv) in mesh.vertices.iter().enumerate() {
             let surface = mv.surface as usize;
@@ -199,47 +198,17 @@ impl Solver {
                 continue;
             };
             let s = &mesh.surfaces[surface];
-            let g = match materials.iter().position(|&m| m == s.material) {
-                Some(g) => g,
-                None => {
-                    let texture = super::super::output_textured::texture_index(
-                        &mut sources,
-                        &mut solution.textures,
-                        t,
-                    );
-                    materials.push(s.material);
-                    batches.push(Batch {
-                        representation: Representation::Sh {
-                            order: d.surface_order[surface],
-                        },
-                        scalar: ScalarType::F32,
-                        vertices: Vec::new(),
-                        coefficients: Vec::new(),
-                        indices: Vec::new(),
-                        texturing: Some(Texturing {
-                            texture,
-                            factor: t.kd.as_vec3().to_array(),
-                            emission: None,
-                            vertices: Vec::new(),
-                        }),
-                    });
-                    batches.len() - 1
-                }
-            };
-            let batch = &mut batches[g];
-            local[v] = (g, batch.vertices.len() as u32);
-            let f = |x: DVec3| x.as_vec3().to_array();
-            batch.vertices.push(solution::format::Vertex {
-                position: f(mv.position),
-                normal: f(s.normal),
-                tangent: f(s.tangent),
-            });
-            let start = batch.coefficients.len();
-            batch.coefficients.extend(
-                coefficients[d.vertex_range(mesh, v)]
-                    .iter()
-                    .map(|&c| c as f32),
+            let order = d.surface_order[surface];
+            let g = textured.batch(
+                s.material,
+                (t, None),
+                Representation::Sh { order },
+                &mut solution.textures,
             );
+            let mut values: Vec<f32> = coefficients[d.vertex_range(mesh, v)]
+                .iter()
+                .map(|&c| c as f32)
+                .collect();
             let e = if emitter {
                 // An emitter's SH hold what it reflects: its radiance less
                 // the mean Le its vertices started with, plus Kd · ambient as
@@ -249,23 +218,21 @@ impl Solver {
                 let c00 = DVec3::from_slice(&coefficients[o..o + 3])
                     + (self.materials.kd[surface] * ambient - self.materials.emission[surface])
                         * scale;
-                batch.coefficients[start..start + 3].copy_from_slice(&f(c00.max(DVec3::ZERO)));
+                values[..3].copy_from_slice(&c00.max(DVec3::ZERO).as_vec3().to_array());
                 DVec3::ONE
             } else {
                 DVec3::from_slice(&irradiance[rgb(v)]) + ambient
             };
-            if let Some(texturing) = &mut batch.texturing {
-                texturing.vertices.push(TexturedVertex {
-                    uv: self
-                        .materials
-                        .texturing
-                        .uv(t, mv.position)
-                        .as_vec2()
-                        .to_array(),
-                    irradiance_over_pi: f(e),
-                });
-            }
+            let f = |x: DVec3| x.as_vec3().to_array();
+            let vertex = solution::format::Vertex {
+                position: f(mv.position),
+                normal: f(s.normal),
+                tangent: f(s.tangent),
+            };
+            let uv = self.materials.texturing.uv(t, mv.position);
+            local[v] = (g, textured.push(g, vertex, values, uv, e));
         }
+        let mut batches = textured.batches;
         for tri in &triangles {
             let (g, _) = local[tri[0] as usize];
             if g == usize::MAX {
