@@ -9,9 +9,8 @@
 //! can keep, only four noisy point samples of a field that varies over the
 //! face by less than the mesh's own resolution. Such a surface receives once,
 //! at its area centroid with its facet normal and the shooter's usual rays,
-//! and every vertex of it gets that ΔL: the estimate of the face's mean the
-//! bounded plan's uniform receipts also use (`cluster.rs`), here exact in its
-//! factor and traced like any receiver.
+//! and every vertex of it gets that ΔL: an estimate of the face's mean, exact
+//! in its factor and traced like any receiver.
 //!
 //! On a floor of small boxes (the scale scenes' 1M Cornell boxes: faces of
 //! 0.5–1 mm against a 25 mm smallest element at `draft`) this is one
@@ -74,8 +73,8 @@ impl SmallSurfaces {
                 q: super::cluster::polygon_centroid(&surface.vertices, surface.normal),
                 n: surface.normal,
                 surface: s as u32,
-                // A stream above every vertex id in practice, as the bounded
-                // plan's centroid estimate of the same surface uses.
+                // A stream above every vertex id in practice, so that no
+                // vertex shares its random numbers.
                 stream: u32::MAX - s as u32,
             });
         }
