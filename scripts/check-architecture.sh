@@ -52,7 +52,7 @@ if [ -n "$missing" ]; then
   fail=1
 fi
 # Clap stays out of the solver core: Clippy cannot scope a disallowed derive, so grep.
-core=(mesh solve geometry brdf texture reference export view)
+core=(mesh solve geometry brdf texture reference export view light)
 if grep -rnw clap "${core[@]/#/solver/src/}" >&2; then
   echo "check-architecture: FAILED: clap in the solver core (above)" >&2
   fail=1

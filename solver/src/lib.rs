@@ -32,6 +32,7 @@ pub mod cli;
 pub mod compare;
 pub mod export;
 pub mod geometry;
+pub mod light;
 pub mod mesh;
 pub mod method;
 pub mod reference;
