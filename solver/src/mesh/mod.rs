@@ -54,7 +54,8 @@ pub struct Surface {
     pub area: f64,
     pub patches_per_side: u32,
     /// The smallest element's longest edge, scene units; `None`: the flat
-    /// `min_element_area` fraction of `area` ([`sizing`]).
+    /// rule's floor, a fixed fraction of `area` (Remington 1992; [`sizing`]),
+    /// for fixed patch counts.
     pub min_element_size: Option<f64>,
     /// Parametric denominator `N · 2^SUBDIVISION_BITS`.
     pub denominator: u32,

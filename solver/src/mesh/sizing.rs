@@ -35,7 +35,8 @@ pub enum PatchRule {
 pub struct Sizing {
     pub patches: PatchRule,
     /// The smallest element, as its longest edge; `None` leaves the decision to
-    /// the flat `min_element_area` (a fraction of each polygon's area).
+    /// the flat rule's floor (a fixed fraction of each polygon's area,
+    /// `refine::FLAT_MIN_ELEMENT_AREA`).
     pub min_element_size: Option<f64>,
     /// Converts per-object sizes given in metres ([`crate::scene::Length::Metres`]).
     pub units_per_metre: f64,

@@ -227,16 +227,15 @@ pub struct Scene {
     pub warnings: Vec<Warning>,
 }
 
-/// `Polygon::patches` of a polygon whose input did not set a subdivision; the
-/// solver replaces it with its resolved `patches` setting through
-/// [`Scene::fill_default_patches`].
+/// `Polygon::patches` of a polygon whose input did not set a subdivision: the
+/// mesh sizes it by `patch_size` (`mesh::sizing`).
 pub const PATCHES_UNSET: u32 = 0;
 
 impl Scene {
     /// Gives every polygon whose input left the patch subdivision unset
-    /// ([`PATCHES_UNSET`]) `patches` × `patches` patches. Call it with the
-    /// resolved [`crate::settings::SolverSettings::patches`], after the settings
-    /// precedence (flags > TOML config > display file > preset) is applied.
+    /// ([`PATCHES_UNSET`]) `patches` × `patches` patches, as a legacy geometry
+    /// file's per-polygon counts would: for tests and measurements that want
+    /// a fixed count instead of sizing by `patch_size`.
     pub fn fill_default_patches(&mut self, patches: u32) {
         for polygon in &mut self.polygons {
             if polygon.patches == PATCHES_UNSET {
@@ -253,7 +252,7 @@ pub struct ImportOptions {
     /// config's `[solver] strict = true` turns it on as well.
     pub strict: bool,
     /// Patch subdivision for polygons whose input sets none; [`PATCHES_UNSET`]
-    /// (the default) leaves them for [`Scene::fill_default_patches`].
+    /// (the default) leaves them to be sized by `patch_size`.
     pub default_patches: u32,
     /// Scene units per metre from the command line; wins over the TOML config's.
     /// Neither given: 1.
