@@ -271,6 +271,8 @@ struct Numbers {
     multiplier: f64,
     nv: usize,
     nh: usize,
+    /// The line of the horizontal count, which a too-large table names.
+    counts_line: usize,
     opening_m: [f64; 3],
     ballast: f64,
     field_twelve: f64,
@@ -296,6 +298,7 @@ fn numbers(cursor: &mut Cursor<'_>, form: IesForm) -> Result<Numbers, IesError> 
     }
     let nv = cursor.count("number of vertical angles", 2, MAX_ANGLES)?;
     let nh = cursor.count("number of horizontal angles", 1, MAX_ANGLES)?;
+    let counts_line = cursor.tokens[cursor.next - 1].line;
     let (kind, token) = cursor.number("photometric type")?;
     let letter = match kind {
         1.0 => None,
@@ -333,6 +336,7 @@ fn numbers(cursor: &mut Cursor<'_>, form: IesForm) -> Result<Numbers, IesError> 
         multiplier,
         nv,
         nh,
+        counts_line,
         opening_m,
         ballast,
         field_twelve,
@@ -389,7 +393,7 @@ pub(super) fn parse(text: &str, origin: &str) -> Result<IesProfile, IesError> {
     // Both counts are capped at 10,000, so the product cannot overflow.
     let cells = nv * nh;
     if cells > MAX_CANDELA_VALUES {
-        let line = cursor.tokens[cursor.next - 1].line;
+        let line = numbers.counts_line;
         let problem = IesProblem::TooMany {
             what: "the number of candela values (vertical × horizontal angles)",
             count: cells as u64,

@@ -369,6 +369,19 @@ fn isotropic_flux_is_four_pi_i() {
 }
 
 #[test]
+fn flux_stays_exact_at_the_angle_cap() {
+    // 10,000 vertical angles over 0..180 (steps of 0.018°), the finest a file may
+    // declare, holding I = θ in degrees: linear, so the interpolant is exact and the
+    // flux is 2π ∫₀^π (180/π) θ sin θ dθ = 2π · (180/π) · π = 360π. Only rounding
+    // remains, which the closed-form weights must keep below 1e-12.
+    let n = MAX_ANGLES;
+    let v: Vec<f64> = (0..n).map(|k| 180.0 * k as f64 / (n - 1) as f64).collect();
+    let p = IesProfile::parse(&Spec::new(&v, &[0.0], &v).render(), "fine.ies").unwrap();
+    let flux = p.total_flux_lm();
+    assert!(close(flux, 360.0 * PI, 1e-12), "{flux}");
+}
+
+#[test]
 fn cosine_lobe_flux_is_pi_i0_within_the_interpolation_bound() {
     let step = 5.0_f64;
     let v: Vec<f64> = (0..=36).map(|k| f64::from(k) * step).collect();
