@@ -88,6 +88,14 @@ impl Spec {
     }
 }
 
+/// The quadrant file below with its TILT line replaced by `tilt` (a line and its block).
+fn with_tilt(tilt: &str) -> Spec {
+    Spec {
+        tilt: tilt.into(),
+        ..Spec::new(&V3, &H3, &QUADRANT)
+    }
+}
+
 /// A quadrant-symmetric table whose bilinear values are easy to work by hand.
 const V3: [f64; 3] = [0.0, 45.0, 90.0];
 const H3: [f64; 3] = [0.0, 45.0, 90.0];
@@ -468,10 +476,7 @@ fn feet_are_converted_to_metres() {
 
 #[test]
 fn tilt_include_is_parsed_and_its_factor_interpolated() {
-    let spec = Spec {
-        tilt: "TILT=INCLUDE\n1\n5\n0 15 30 45\n90\n1.0 0.95 0.9 0.8 0.5".into(),
-        ..Spec::new(&V3, &H3, &QUADRANT)
-    };
+    let spec = with_tilt("TILT=INCLUDE\n1\n5\n0 15 30 45\n90\n1.0 0.95 0.9 0.8 0.5");
     let p = spec.parse().unwrap();
     let tilt = p.tilt.as_ref().unwrap();
     assert_eq!(tilt.geometry, LampGeometry::Vertical);
@@ -491,10 +496,7 @@ fn tilt_include_is_parsed_and_its_factor_interpolated() {
 
 #[test]
 fn tilt_file_is_refused_naming_its_line() {
-    let spec = Spec {
-        tilt: "TILT=lamp.tlt".into(),
-        ..Spec::new(&V3, &H3, &QUADRANT)
-    };
+    let spec = with_tilt("TILT=lamp.tlt");
     let e = spec.parse().unwrap_err();
     assert_eq!(e.line, 4);
     let text = e.to_string();
@@ -507,10 +509,7 @@ fn tilt_file_is_refused_naming_its_line() {
 /// that cuts the last value short, "30" to "3", is a valid file with another value.)
 #[test]
 fn every_truncation_is_an_error_and_never_panics() {
-    let tilted = Spec {
-        tilt: "TILT=INCLUDE\n2\n2\n0 90\n1 0.5".into(),
-        ..Spec::new(&V3, &H3, &QUADRANT)
-    };
+    let tilted = with_tilt("TILT=INCLUDE\n2\n2\n0 90\n1 0.5");
     let specs = forms().into_iter().map(|(_, s)| s).chain([tilted]);
     for spec in specs {
         let text = spec.render();
@@ -534,10 +533,7 @@ fn every_truncation_is_an_error_and_never_panics() {
 /// Every value of the numeric block replaced by each hostile token: never a panic.
 #[test]
 fn hostile_tokens_never_panic() {
-    let tilted = Spec {
-        tilt: "TILT=INCLUDE\n1\n2\n0 90\n1 0.5".into(),
-        ..Spec::new(&V3, &H3, &QUADRANT)
-    };
+    let tilted = with_tilt("TILT=INCLUDE\n1\n2\n0 90\n1 0.5");
     let text = tilted.render();
     let lines: Vec<&str> = text.lines().collect();
     let hostile = [
@@ -568,53 +564,73 @@ fn refused(spec: &Spec, from: &str, to: &str) -> IesError {
 #[test]
 fn malformed_values_are_refused_naming_file_line_and_token() {
     let spec = Spec::new(&V3, &H3, &QUADRANT);
-    // Lines: 1 marker, 2–3 keywords, 4 TILT, 5–6 numbers, 7 vertical, 8 horizontal.
-    let e = refused(&spec, "\n0 45 90\n0 45 90", "\n0 abc 90\n0 45 90");
+    // Lines: 1 marker, 2–3 keywords, 4 TILT, 5–6 numbers, 7 vertical, 8 horizontal,
+    // 9–11 candela rows. Each case: the edit, the line named, and the message's tail.
+    let cases = [
+        (
+            "\n0 45 90\n0",
+            "\n0 abc 90\n0",
+            7,
+            "vertical angle 'abc' is not a finite number",
+        ),
+        (
+            "\n0 45 90\n0",
+            "\n0 60 45\n0",
+            7,
+            "vertical angle '45' must be greater",
+        ),
+        (
+            "0 45 90\n100",
+            "0 45 270\n100",
+            8,
+            "horizontal angle '270' must end",
+        ),
+        (
+            "100 80 10",
+            "100 -80 10",
+            9,
+            "candela value '-80' must be ≥ 0",
+        ),
+        (
+            "100 80 10",
+            "100 NaN 10",
+            9,
+            "candela value 'NaN' is not a finite number",
+        ),
+        (
+            "1000 1 3 3 1 2",
+            "1000 1 -3 3 1 2",
+            5,
+            "number of vertical angles '-3' must",
+        ),
+        (
+            "1000 1 3 3 1 2",
+            "1000 0 3 3 1 2",
+            5,
+            "candela multiplier '0' must",
+        ),
+        ("1 1000 1", "1 -2 1", 5, "lumens per lamp '-2' must"),
+        ("30\n", "30 7\n", 11, "'7' follows the candela table"),
+        (
+            "IESNA:LM-63-2002",
+            "IESNA:LM-63-2099",
+            1,
+            "unknown LM-63 edition",
+        ),
+        ("TILT=NONE", "TILT NONE", 12, "no 'TILT=' line"),
+    ];
+    for (from, to, line, tail) in cases {
+        let e = refused(&spec, from, to);
+        let text = e.to_string();
+        assert!(text.starts_with(&format!("lamp.ies:{line}: ")), "{text}");
+        assert!(text.contains(tail), "{text}");
+    }
+    // The exact message the issue asks for.
+    let e = refused(&spec, "\n0 45 90\n0", "\n0 abc 90\n0");
     assert_eq!(
         e.to_string(),
         "lamp.ies:7: vertical angle 'abc' is not a finite number"
     );
-    let e = refused(&spec, "\n0 45 90\n0 45 90", "\n0 60 45\n0 45 90");
-    assert_eq!(e.line, 7);
-    assert!(
-        e.to_string()
-            .contains("vertical angle '45' must be greater"),
-        "{e}"
-    );
-    let e = refused(&spec, "0 45 90\n100", "0 45 270\n100");
-    assert_eq!(e.line, 8);
-    assert!(e.to_string().contains("horizontal angle '270'"), "{e}");
-    let e = refused(&spec, "100 80 10", "100 -80 10");
-    assert!(
-        e.to_string().contains("candela value '-80' must be ≥ 0"),
-        "{e}"
-    );
-    let e = refused(&spec, "100 80 10", "100 NaN 10");
-    assert!(
-        e.to_string()
-            .contains("candela value 'NaN' is not a finite number"),
-        "{e}"
-    );
-    let e = refused(&spec, "1000 1 3 3 1 2", "1000 1 -3 3 1 2");
-    assert_eq!(e.line, 5);
-    assert!(
-        e.to_string().contains("number of vertical angles '-3'"),
-        "{e}"
-    );
-    let e = refused(&spec, "1000 1 3 3 1 2", "1000 0 3 3 1 2");
-    assert!(e.to_string().contains("candela multiplier '0'"), "{e}");
-    let e = refused(&spec, "1 1000 1", "1 -2 1");
-    assert!(e.to_string().contains("lumens per lamp '-2'"), "{e}");
-    let e = refused(&spec, "30\n", "30 7\n");
-    assert!(
-        e.to_string().contains("'7' follows the candela table"),
-        "{e}"
-    );
-    let e = refused(&spec, "IESNA:LM-63-2002", "IESNA:LM-63-2099");
-    assert_eq!(e.line, 1);
-    assert!(e.to_string().contains("unknown LM-63 edition"), "{e}");
-    let e = refused(&spec, "TILT=NONE", "TILT NONE");
-    assert!(e.to_string().contains("no 'TILT=' line"), "{e}");
 }
 
 #[test]
@@ -667,10 +683,7 @@ fn huge_counts_are_refused_before_allocating() {
         present: 15,
     };
     assert_eq!(e.problem, want);
-    let tilted = Spec {
-        tilt: "TILT=INCLUDE\n1\n4000000000\n0 90\n1 0.5".into(),
-        ..spec
-    };
+    let tilted = with_tilt("TILT=INCLUDE\n1\n4000000000\n0 90\n1 0.5");
     let e = tilted.parse().unwrap_err();
     assert_eq!(e.line, 6);
     assert!(matches!(e.problem, IesProblem::TooMany { .. }), "{e}");
