@@ -6,3 +6,5 @@
 //! as a material's `Ke`. A photometric value X (cd, lx, cd·m⁻²) with colour c
 //! becomes c · X / 683 per channel (`units.rs`): the colour is a filter, and
 //! a white light's RGB luminance is X / 683, as glTF's specification has it.
+
+pub mod units;
