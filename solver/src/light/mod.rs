@@ -7,4 +7,5 @@
 //! becomes c · X / 683 per channel (`units.rs`): the colour is a filter, and
 //! a white light's RGB luminance is X / 683, as glTF's specification has it.
 
+pub mod sun;
 pub mod units;
