@@ -7,5 +7,6 @@
 //! becomes c · X / 683 per channel (`units.rs`): the colour is a filter, and
 //! a white light's RGB luminance is X / 683, as glTF's specification has it.
 
+pub mod sky;
 pub mod sun;
 pub mod units;
