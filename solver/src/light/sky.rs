@@ -20,7 +20,7 @@
 //!   distribution fitted per turbidity for the luminance Y and the
 //!   chromaticities x, y, converted to linear Rec. 709 RGB through CIE XYZ.
 
-use super::sun::Sun;
+use super::sun::{unit_direction, Sun};
 use super::units;
 use glam::DVec3;
 use std::f64::consts::PI;
@@ -65,12 +65,7 @@ fn non_negative_rgb(what: &'static str, rgb: DVec3) -> Result<DVec3, SkyError> {
 }
 
 fn unit(v: DVec3) -> Result<DVec3, SkyError> {
-    let n = v.normalize_or_zero();
-    if v.is_finite() && n != DVec3::ZERO {
-        Ok(n)
-    } else {
-        Err(SkyError::BadDirection(v.x, v.y, v.z))
-    }
+    unit_direction(v).ok_or(SkyError::BadDirection(v.x, v.y, v.z))
 }
 
 /// The sky as a scene describes it.

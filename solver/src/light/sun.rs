@@ -78,13 +78,15 @@ fn in_range(
     }
 }
 
-fn unit(v: DVec3) -> Result<DVec3, SunError> {
+/// `v` at unit length, or `None` where it has no direction (zero, or not
+/// finite). The sky's constructors use it too.
+pub(super) fn unit_direction(v: DVec3) -> Option<DVec3> {
     let n = v.normalize_or_zero();
-    if v.is_finite() && n != DVec3::ZERO {
-        Ok(n)
-    } else {
-        Err(SunError::BadDirection(v.x, v.y, v.z))
-    }
+    (v.is_finite() && n != DVec3::ZERO).then_some(n)
+}
+
+fn unit(v: DVec3) -> Result<DVec3, SunError> {
+    unit_direction(v).ok_or(SunError::BadDirection(v.x, v.y, v.z))
 }
 
 /// The scene's up and north axes, and east = north × up: the frame in which
