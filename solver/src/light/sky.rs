@@ -47,6 +47,8 @@ pub enum SkyError {
     SunBelowHorizon(f64),
     #[error("the direction [{0}, {1}, {2}] must be finite and not zero")]
     BadDirection(f64, f64, f64),
+    #[error("the ground albedo has {0} in a channel; each must be in [0, 1]")]
+    Albedo(f64),
 }
 
 fn non_negative(what: &'static str, value: f64) -> Result<f64, SkyError> {
@@ -133,6 +135,21 @@ impl SkyModel {
     }
 }
 
+impl SkyModel {
+    /// The model after its constructor's checks, for one built directly
+    /// from its public fields.
+    fn checked(self) -> Result<Self, SkyError> {
+        match self {
+            SkyModel::Uniform { radiance } => Self::uniform(radiance),
+            SkyModel::CieOvercast { zenith_radiance } => Self::cie_overcast(zenith_radiance),
+            SkyModel::Clear {
+                turbidity,
+                sun_direction,
+            } => Self::clear(turbidity, sun_direction),
+        }
+    }
+}
+
 /// What a sky shows below the horizon.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub enum BelowHorizon {
@@ -174,6 +191,7 @@ impl Sky {
         sun: Option<&Sun>,
     ) -> Result<Self, SkyError> {
         let up = unit(up)?;
+        let model = model.checked()?;
         let clear = match model {
             SkyModel::Clear {
                 turbidity,
@@ -199,13 +217,8 @@ impl Sky {
             }
         };
         if let BelowHorizon::Ground { albedo } = below {
-            for value in albedo.to_array() {
-                if !(0.0..=1.0).contains(&value) {
-                    return Err(SkyError::Negative {
-                        what: "the ground albedo (at most 1)",
-                        value,
-                    });
-                }
+            if let Some(&value) = albedo.to_array().iter().find(|v| !(0.0..=1.0).contains(*v)) {
+                return Err(SkyError::Albedo(value));
             }
             let from_sun = sun.map_or(DVec3::ZERO, |s| {
                 s.irradiance() * s.direction().dot(up).max(0.0)
@@ -262,12 +275,11 @@ impl Sky {
     /// azimuth. Where the radiance is smooth the error falls as the steps'
     /// square; a horizon crossing the hemisphere makes it fall only as the
     /// steps (about 1e-3 relative at 256 steps).
+    /// A zero or non-finite normal gets zero.
     pub fn irradiance(&self, normal: DVec3, theta_steps: u32) -> DVec3 {
-        hemisphere_irradiance(
-            |w| self.radiance(w),
-            normal.normalize_or_zero(),
-            theta_steps,
-        )
+        unit_direction(normal).map_or(DVec3::ZERO, |n| {
+            hemisphere_irradiance(|w| self.radiance(w), n, theta_steps)
+        })
     }
 
     /// The radiance of the model at unit `w` with w · up ≥ 0.
@@ -569,6 +581,17 @@ mod tests {
         );
         let uniform = SkyModel::uniform(DVec3::ONE).unwrap();
         assert!(Sky::new(uniform, DVec3::ZERO, BelowHorizon::Black, None).is_err());
+        // A model built from its fields is checked too.
+        let direct = SkyModel::Uniform {
+            radiance: DVec3::new(1.0, -2.0, 1.0),
+        };
+        assert!(Sky::new(direct, DVec3::Y, BelowHorizon::Black, None).is_err());
+        let nan_albedo = BelowHorizon::Ground {
+            albedo: DVec3::new(0.5, f64::NAN, 0.5),
+        };
+        assert!(Sky::new(uniform, DVec3::Y, nan_albedo, None).is_err());
+        let sky = Sky::new(uniform, DVec3::Y, BelowHorizon::Black, None).unwrap();
+        assert_eq!(sky.irradiance(DVec3::ZERO, 8), DVec3::ZERO);
     }
 
     #[test]

@@ -945,7 +945,10 @@ mod tests {
                 let d = s.sample_disc(rng.next_f64(), rng.next_f64());
                 assert!((d.direction.length() - 1.0).abs() < 1e-15);
                 assert!((d.direction - axis).length() <= max_chord);
-                assert!(s.disc_contains(d.direction) || diameter < 1.0);
+                // For the real sun cos α is 1 − 1e-5, and a sample on the
+                // rim may round a few ulps outside `disc_contains`'s cosine
+                // test: the chord above is the exact check there.
+                assert!(diameter < 1.0 || s.disc_contains(d.direction));
                 assert_eq!(d.pdf, 1.0 / s.solid_angle());
                 inner += usize::from(d.direction.dot(axis) >= half_cos);
             }
