@@ -8,3 +8,6 @@
 //! a white light's RGB luminance is X / 683, as glTF's specification has it.
 
 pub mod ies;
+pub mod sky;
+pub mod sun;
+pub mod units;
