@@ -341,20 +341,9 @@ pub fn icosphere(subdivisions: u32) -> Vec<[DVec3; 3]> {
     tris
 }
 
-pub fn cpu_model() -> String {
-    std::fs::read_to_string("/proc/cpuinfo")
-        .ok()
-        .and_then(|s| {
-            s.lines()
-                .find(|l| l.starts_with("model name"))
-                .map(|l| l.split(':').nth(1).unwrap_or("").trim().to_string())
-        })
-        .unwrap_or_else(|| "unknown".into())
-}
-
 /// Prints the machine's CPU and SIMD support (the figures depend on both).
 pub fn print_machine() {
-    println!("CPU: {}", cpu_model());
+    println!("CPU: {}", bench_support::host::cpu_model());
     println!(
         "AVX2+FMA: {}",
         cfg!(target_arch = "x86_64")

@@ -431,15 +431,9 @@ fn reference(lobe: &ExactLobe, q: DVec3, eye: DVec3, light: &[DVec3], nodes: usi
 }
 
 /// Relative L2 error over the floor vertices of `values` (per mesh vertex,
-/// one channel) against `reference`.
+/// one channel) against `reference` (the benches' metric).
 fn relative_l2(values: &[f64], reference: &[f64]) -> f64 {
-    let num: f64 = values
-        .iter()
-        .zip(reference)
-        .map(|(a, b)| (a - b) * (a - b))
-        .sum();
-    let den: f64 = reference.iter().map(|b| b * b).sum();
-    (num / den).sqrt()
+    bench_support::metrics::relative_l2(values.iter().copied().zip(reference.iter().copied()))
 }
 
 #[test]
