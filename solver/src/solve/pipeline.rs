@@ -45,9 +45,10 @@ pub(super) trait Transport {
     /// Shoots the source's light to every receiving vertex, then refines the
     /// mesh where the result varies, new vertices receiving exactly.
     fn shoot(&mut self, solver: &mut Solver, source: &Source) -> Shooting;
-    /// Gathers the shot's ΔL into the patches; the gather weights of the
-    /// patches refinement changed (`dirty`) are already up to date.
-    fn gather(&mut self, solver: &mut Solver, dirty: &[u32]);
+    /// Gathers the shot's ΔL from `source` into the patches; the gather
+    /// weights of the patches refinement changed (`dirty`) are already up to
+    /// date.
+    fn gather(&mut self, solver: &mut Solver, source: &Source, dirty: &[u32]);
     /// The total unshot power once gathered.
     fn unshot_power(&mut self, solver: &mut Solver) -> f64;
 }
@@ -64,7 +65,7 @@ impl Solver {
         let splits = shooting.refined.splits;
         self.stats.leaf_count += 3 * splits;
         self.update_patch_weights(&shooting.refined.dirty_patches);
-        transport.gather(self, &shooting.refined.dirty_patches);
+        transport.gather(self, &source, &shooting.refined.dirty_patches);
         let timings = &mut self.stats.timings;
         timings.shoot += (shooting.shot_done - start).as_secs_f64();
         timings.shoot_rays += shooting.rays - shooting.refined.rays;

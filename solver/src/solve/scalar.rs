@@ -154,7 +154,7 @@ impl Transport for ScalarShot {
         }
     }
 
-    fn gather(&mut self, s: &mut Solver, dirty: &[u32]) {
+    fn gather(&mut self, s: &mut Solver, _source: &Source, dirty: &[u32]) {
         s.unshot_changed(dirty);
         s.gather();
     }

@@ -72,7 +72,27 @@ impl Tables {
     }
 }
 
-impl DirShot<'_> {
+impl<'a> DirShot<'a> {
+    /// A recorded (emitter) shot replayed with its unshot SH, shooting
+    /// uniformly as recorded shots do.
+    pub(super) fn replay(
+        shot: &'a Shot<'a>,
+        pool: &'a SamplePool,
+        unshot: &'a [f64],
+        tables: &'a Tables,
+    ) -> DirShot<'a> {
+        let surface = shot.source_surface as usize;
+        DirShot {
+            shot,
+            pool,
+            unshot,
+            source_order: tables.surface_order[surface],
+            source_tangent: tables.tangent[surface],
+            tables,
+            quadrants: None,
+        }
+    }
+
     /// ΔL of vertex `v` as SH coefficients of its surface's order.
     pub(super) fn receive(
         &self,

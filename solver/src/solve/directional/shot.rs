@@ -22,8 +22,6 @@ use std::time::Instant;
 /// One directional shot's state between the pipeline's steps.
 pub(in crate::solve) struct ShShot<'d> {
     d: &'d mut Directional,
-    /// The source patch.
-    source: u32,
     /// The source's unshot SH, taken out of its patch.
     unshot: Vec<f64>,
     /// Whether the shot is recorded (an emitter's: replayed, not summed).
@@ -37,7 +35,6 @@ impl<'d> ShShot<'d> {
     pub(in crate::solve) fn new(d: &'d mut Directional) -> ShShot<'d> {
         ShShot {
             d,
-            source: 0,
             unshot: Vec::new(),
             recorded: false,
             created_from: 0,
@@ -55,7 +52,6 @@ impl Transport for ShShot<'_> {
         self.unshot = d.patch_unshot[range.clone()].to_vec();
         d.patch_unshot[range].fill(0.0);
         let unshot = std::mem::replace(&mut s.patches.unshot[patch as usize], DVec3::ZERO);
-        self.source = patch;
         Source {
             patch,
             ambient,
@@ -132,18 +128,7 @@ impl Transport for ShShot<'_> {
             .iter()
             .zip(&s.record.pools)
             .zip(&recorded_unshot)
-            .map(|((shot, pool), unshot)| {
-                let surface = shot.source_surface as usize;
-                DirShot {
-                    shot,
-                    pool,
-                    unshot,
-                    source_order: tables.surface_order[surface],
-                    source_tangent: tables.tangent[surface],
-                    tables: &tables,
-                    quadrants: None,
-                }
-            })
+            .map(|((shot, pool), unshot)| DirShot::replay(shot, pool, unshot, &tables))
             .collect();
         let criteria = s.refine_criteria(source.ambient);
         let refined = refine::refine_field(
@@ -181,12 +166,12 @@ impl Transport for ShShot<'_> {
         }
     }
 
-    fn gather(&mut self, s: &mut Solver, _dirty: &[u32]) {
+    fn gather(&mut self, s: &mut Solver, source: &Source, _dirty: &[u32]) {
         let d = &mut *self.d;
         // This shot's light joins its patch's sum for the gathers of later
         // splits (`directional/near_gather.rs`); recorded shots replay.
         if !self.recorded {
-            let range = d.patch_range(&s.mesh, self.source as usize);
+            let range = d.patch_range(&s.mesh, source.patch as usize);
             for (sum, u) in d.shot_sum[range].iter_mut().zip(&self.unshot) {
                 *sum = round_to_kept(*sum + u);
             }

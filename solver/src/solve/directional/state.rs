@@ -16,7 +16,7 @@
 use super::receive::{DirScratch, DirShot, Tables};
 use super::{Directional, DirectionalCheckpoint};
 use crate::solve::checkpoint::precision::kept_bits;
-use crate::solve::shoot::{RecordedShot, SamplePool, Shot};
+use crate::solve::shoot::{RecordedShot, SamplePool};
 use crate::solve::Solver;
 use rayon::prelude::*;
 use solution::sh::coefficient_count;
@@ -42,25 +42,6 @@ impl Directional {
             recorded_unshot: &self.recorded_unshot,
             shot_sum: &self.shot_sum,
         }
-    }
-}
-
-fn make_dir_shot<'a>(
-    shot: &'a Shot<'a>,
-    pool: &'a SamplePool,
-    unshot: &'a [f64],
-    source_surface: usize,
-    tables: &'a Tables,
-) -> DirShot<'a> {
-    DirShot {
-        shot,
-        pool,
-        unshot,
-        source_order: tables.surface_order[source_surface],
-        source_tangent: tables.tangent[source_surface],
-        tables,
-        // Recorded (emitter) shots are uniform.
-        quadrants: None,
     }
 }
 
@@ -112,10 +93,8 @@ impl Solver {
         // solver's `recorded_pools`, already rebuilt).
         let own_pools: Vec<SamplePool> = shots.iter().map(SamplePool::new).collect();
         let recorded_unshot = std::mem::take(&mut d.recorded_unshot);
-        let dir_shot = |i: usize, pool| {
-            let surface = shots[i].source_surface as usize;
-            make_dir_shot(&shots[i], pool, &recorded_unshot[i], surface, &tables)
-        };
+        let dir_shot =
+            |i: usize, pool| DirShot::replay(&shots[i], pool, &recorded_unshot[i], &tables);
         let direct: Vec<DirShot> = (0..shots.len())
             .map(|i| dir_shot(i, &own_pools[i]))
             .collect();
