@@ -68,6 +68,7 @@ fn tracked<T>(f: impl FnOnce() -> T) -> (T, usize, usize) {
 
 fn scene(polygons: Vec<Vec<DVec3>>, patches: u32) -> Scene {
     Scene {
+        lights: Default::default(),
         polygons: polygons
             .into_iter()
             .enumerate()

@@ -605,6 +605,7 @@ mod tests {
 
     fn scene(camera: Option<Camera>) -> Scene {
         Scene {
+            lights: Default::default(),
             polygons: vec![],
             materials: vec![],
             units_per_metre: 1.0,

@@ -8,6 +8,32 @@
 //! a white light's RGB luminance is X / 683, as glTF's specification has it.
 
 pub mod ies;
+pub mod lamp;
 pub mod sky;
 pub mod sun;
 pub mod units;
+
+/// Every light of a scene that is not a glowing polygon. Empty by default:
+/// a scene lit only by emissive materials.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Lights {
+    pub sun: Option<sun::Sun>,
+    pub sky: Option<sky::Sky>,
+    pub lamps: Vec<lamp::Lamp>,
+}
+
+impl Lights {
+    pub fn is_empty(&self) -> bool {
+        self.sun.is_none() && self.sky.is_none() && self.lamps.is_empty()
+    }
+
+    /// The same lights with every lamp moved by `-offset` (the solver's
+    /// recentred frame); the sun and the sky are directions and do not move.
+    pub fn recentred(&self, offset: glam::DVec3) -> Lights {
+        let mut lights = self.clone();
+        for lamp in &mut lights.lamps {
+            lamp.position -= offset;
+        }
+        lights
+    }
+}

@@ -5,6 +5,7 @@ use solution::camera::UpAxis;
 
 fn scene_of(polygons: Vec<Vec<DVec3>>, patches: u32) -> Scene {
     Scene {
+        lights: Default::default(),
         polygons: polygons
             .into_iter()
             .map(|vertices| Polygon {

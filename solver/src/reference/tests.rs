@@ -43,6 +43,7 @@ fn polygon(vertices: Vec<DVec3>, material: usize) -> Polygon {
 
 fn scene(polygons: Vec<Polygon>, materials: Vec<Material>) -> Scene {
     Scene {
+        lights: Default::default(),
         polygons,
         materials,
         units_per_metre: 1.0,

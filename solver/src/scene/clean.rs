@@ -170,6 +170,7 @@ pub(crate) fn build_scene(mut raw: RawScene, options: &BuildOptions) -> Result<S
         }
     }
     Ok(Scene {
+        lights: Default::default(),
         polygons,
         materials,
         units_per_metre: options.units_per_metre,

@@ -344,6 +344,7 @@ mod tests {
 
     fn scene(polygons: Vec<Polygon>) -> Scene {
         Scene {
+            lights: Default::default(),
             polygons,
             materials: Vec::new(),
             units_per_metre: 1.0,

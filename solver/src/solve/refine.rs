@@ -502,6 +502,7 @@ mod tests {
     /// The scene of [`square_mesh`].
     fn square_mesh_scene() -> Scene {
         Scene {
+            lights: Default::default(),
             polygons: vec![Polygon {
                 vertices: vec![DVec3::ZERO, DVec3::X, DVec3::new(1.0, 1.0, 0.0), DVec3::Y],
                 vertex_normals: None,

@@ -22,6 +22,7 @@ pub(crate) fn scene_of(
     patches: u32,
 ) -> Scene {
     Scene {
+        lights: Default::default(),
         polygons: polygons
             .into_iter()
             .enumerate()

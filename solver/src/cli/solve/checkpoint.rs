@@ -397,6 +397,7 @@ mod tests {
     fn square(z: f64) -> Scene {
         use glam::DVec3;
         Scene {
+            lights: Default::default(),
             polygons: vec![crate::scene::Polygon {
                 vertices: vec![
                     DVec3::new(0.0, 0.0, z),

@@ -24,6 +24,7 @@ fn scene_of(polygons: Vec<Vec<DVec3>>) -> Scene {
         })
         .collect();
     Scene {
+        lights: Default::default(),
         polygons,
         materials: vec![Material {
             name: "white".into(),

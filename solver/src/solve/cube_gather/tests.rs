@@ -21,6 +21,7 @@ pub(super) fn material(name: &str, kd: f64, ks: f64, alpha: f64, emission: f64) 
 /// A scene of (polygon, material, patches per side).
 pub(super) fn scene(polygons: Vec<(Vec<DVec3>, usize, u32)>, materials: Vec<Material>) -> Scene {
     Scene {
+        lights: Default::default(),
         polygons: polygons
             .into_iter()
             .enumerate()
