@@ -72,6 +72,9 @@ pub struct Checkpoint {
     pub shots: u64,
     pub rays: u64,
     pub seconds: f64,
+    /// The power the lights put into the patches (`lights.rs`); 0 without
+    /// lights.
+    pub lights_power: f64,
     /// The elements split so far, in order.
     pub split_log: Vec<u32>,
     /// Per vertex: radiance (RGB).
@@ -344,7 +347,7 @@ impl Checkpoint {
         let shots = r.u64("HEAD")?;
         let rays = r.u64("HEAD")?;
         let seconds = r.f64("HEAD")?;
-        let _reserved = r.u64("HEAD")?;
+        let lights_power = r.f64("HEAD")?;
         if version != CHECKPOINT_VERSION {
             return Err(StateError::Bad {
                 field: "HEAD",
@@ -390,6 +393,7 @@ impl Checkpoint {
             shots,
             rays,
             seconds,
+            lights_power,
             split_log,
             radiance,
             patch_unshot,
@@ -474,7 +478,9 @@ impl Solver {
         s.u64(self.stats.shots)?;
         s.u64(self.stats.rays)?;
         s.f64(self.stats.seconds)?;
-        s.u64(0)?;
+        // Once reserved (0); now the lights' power, which a solve without
+        // lights leaves 0.
+        s.f64(self.lights.power)?;
         s.u32s(b"SPLT", &self.mesh.split_log)?;
         s.start(b"RECS", self.record.shots.len())?;
         for r in &self.record.shots {
@@ -672,6 +678,15 @@ impl Solver {
         solver.stats.shots = checkpoint.shots;
         solver.stats.rays = checkpoint.rays;
         solver.stats.seconds = checkpoint.seconds;
+        // The lights shoot first: once a shot was taken, theirs was.
+        if checkpoint.shots > 0 && !solver.lights.lights.is_empty() {
+            if !(checkpoint.lights_power.is_finite() && checkpoint.lights_power >= 0.0) {
+                return mismatch(format!("its lights' power is {}", checkpoint.lights_power));
+            }
+            solver.lights.shot = true;
+            solver.lights.power = checkpoint.lights_power;
+            solver.include_lights_power();
+        }
         let directional = checkpoint.directional.is_some();
         solver
             .restore_directional(checkpoint.directional)
@@ -787,6 +802,7 @@ mod tests {
             shots: 9,
             rays: 12345,
             seconds: 1.0 / 3.0,
+            lights_power: 2.5,
             split_log: vec![0, 3, 7],
             radiance: vec![DVec3::new(0.1, 1.0 / 3.0, -0.0), DVec3::splat(2.5e-300)],
             patch_unshot: vec![DVec3::new(1e-7, 0.0, 5.0)],

@@ -245,7 +245,7 @@ fn one_beam_reflects_kd_plus_ks_of_its_irradiance() {
             let factor = solver.vertex_form_factors(light)[centre as usize];
             assert!(factor > 0.0);
             let report = solver.step().unwrap();
-            assert_eq!(report.source, light);
+            assert_eq!(report.source, Some(light));
             let irradiance = 1000.0 * PI * factor;
             let (order, sh) = solver.vertex_sh(centre).unwrap();
             let out = exitance(order, sh);
@@ -1272,7 +1272,7 @@ fn unevenly_lit_source_shoots_by_quadrants_against_exact_factors() {
         centroid.x > 0.5 && centroid.z > 0.5
     };
     let before = solver.vertex_radiance().to_vec();
-    assert_eq!(solver.step().unwrap().source, floor_patch);
+    assert_eq!(solver.step().unwrap().source, Some(floor_patch));
     let epsilon = solver.occluder.scene_epsilon();
     let mut checked = 0;
     // Summed over the wall: exact, uniform, and with the cover's light.

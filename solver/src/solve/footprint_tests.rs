@@ -52,7 +52,7 @@ fn progressive_shooting_loses_no_energy() {
             * solver.patches.shoot_area[source as usize]
             * solver.patches.unshot[source as usize].element_sum();
         let report = solver.step().unwrap();
-        assert_eq!(report.source, source);
+        assert_eq!(report.source, Some(source));
     }
     let left = solver.total_unshot_power();
     let mut reflected = 0.0;

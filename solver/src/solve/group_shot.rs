@@ -92,6 +92,7 @@
 //! truth").
 
 use super::group_tree::{Item, MemberTree, Receiver};
+use super::lights::LightShot;
 use super::shoot::{Received, ReceivingPoint, SamplePool, Scratch, Shot};
 use super::Solver;
 use crate::geometry::formfactor::SourcePolygon;
@@ -552,6 +553,8 @@ pub enum Shooter<'s, 'a> {
         pool: &'s SamplePool,
     },
     Group(&'s GroupShot<'a>),
+    /// The sun, the sky and the lamps (`lights.rs`).
+    Lights(&'s LightShot<'a>),
 }
 
 impl Shooter<'_, '_> {
@@ -568,6 +571,7 @@ impl Shooter<'_, '_> {
         match self {
             Shooter::Patch { shot, pool } => shot.receive(mesh, v, pool, scratch, prior),
             Shooter::Group(group) => group.receive(mesh, v, scratch, prior),
+            Shooter::Lights(lights) => lights.receive(mesh, v),
         }
     }
 
@@ -582,6 +586,7 @@ impl Shooter<'_, '_> {
         match self {
             Shooter::Patch { shot, pool } => shot.receive_at(mesh, at, pool, scratch, prior),
             Shooter::Group(group) => group.receive_at(at, scratch, prior),
+            Shooter::Lights(lights) => lights.receive_at(at),
         }
     }
 
@@ -590,6 +595,7 @@ impl Shooter<'_, '_> {
         match self {
             Shooter::Patch { shot, .. } => shot.kd,
             Shooter::Group(group) => group.kd,
+            Shooter::Lights(lights) => lights.kd,
         }
     }
 }

@@ -66,6 +66,7 @@ pub mod fine_shape;
 mod footprint;
 mod group_shot;
 mod group_tree;
+mod lights;
 mod pipeline;
 pub mod ray_share;
 mod refine;
@@ -104,10 +105,17 @@ pub enum SolveError {
     )]
     SinglePolygon,
     #[error(
-        "the scene has no emitter: no polygon of non-zero area uses a material with emission \
-         (MTL `Ke`, TOML `emission`, legacy `emit`) above zero"
+        "the scene has no emitter and no light: no polygon of non-zero area uses a material \
+         with emission (MTL `Ke`, TOML `emission`, legacy `emit`) above zero, and the scene has \
+         no sun, sky or lamp (TOML `[sun]`, `[sky]`, `[[lights]]`; glTF KHR_lights_punctual; \
+         `solve --sun AZIMUTH,ELEVATION` or `--sky KIND`)"
     )]
     NoEmitter,
+    #[error(
+        "the sun, the sky and lamps light diffuse solves only so far; solve this scene with \
+         `--mode diffuse`, or light it with emissive materials"
+    )]
+    DirectionalLights,
     #[error("material `{name}`: {problem}")]
     BadMaterial { name: String, problem: String },
     #[error(transparent)]
@@ -129,8 +137,8 @@ pub enum SolveError {
 pub struct ShotReport {
     /// Shots done so far, this one included (1 for the first).
     pub shot: u64,
-    /// The patch that shot.
-    pub source: u32,
+    /// The patch that shot; `None` for the lights' shot.
+    pub source: Option<u32>,
     /// Visibility rays traced by this shot (refinement included).
     pub rays: u64,
     /// Total unshot power / total emitted power after the shot.
@@ -198,6 +206,8 @@ pub struct Solver {
     /// Each vertex's enclosure, probed once for all the files the solve
     /// writes (`enclosure.rs`).
     enclosure: enclosure::EnclosureCache,
+    /// The sun, the sky and the lamps, in the solver's frame (`lights.rs`).
+    lights: lights::LightsState,
 }
 
 impl Solver {
@@ -229,8 +239,12 @@ impl Solver {
             .zip(&patches.unshot)
             .map(|(p, u)| PI * p.area * u.element_sum())
             .sum();
-        if emitted_power.is_nan() || emitted_power <= 0.0 {
+        let has_emitter = emitted_power.is_finite() && emitted_power > 0.0;
+        if !has_emitter && scene.lights.is_empty() {
             return Err(SolveError::NoEmitter);
+        }
+        if !scene.lights.is_empty() && settings.mode == SolveMode::Directional {
+            return Err(SolveError::DirectionalLights);
         }
         let occluder = Occluder::new(
             &mesh
@@ -268,6 +282,11 @@ impl Solver {
             warnings: state::Warnings::default(),
             directional: None,
             enclosure: enclosure::EnclosureCache::default(),
+            lights: lights::LightsState {
+                lights: scene.lights.recentred(offset),
+                shot: false,
+                power: 0.0,
+            },
         };
         solver.finish_setup(scene)?;
         Ok(solver)
@@ -303,6 +322,9 @@ impl Solver {
     /// Whether the solve has converged (total unshot power below `threshold` ×
     /// emitted power) or used its shot budget.
     pub fn is_done(&self) -> bool {
+        if self.lights.pending() {
+            return self.stats.shots >= self.settings.max_shots;
+        }
         self.stats.shots >= self.settings.max_shots
             || self.stats.unshot_power < self.settings.threshold * self.stats.emitted_power
             || self.stats.unshot_power.is_nan()
@@ -317,6 +339,7 @@ impl Solver {
             return None;
         }
         let report = match self.directional.take() {
+            None if self.lights.pending() => self.shoot_with(&mut lights::LightsTransport),
             Some(mut d) => {
                 let report = self.shoot_with(&mut directional::ShShot::new(&mut d));
                 self.directional = Some(d);
@@ -796,6 +819,8 @@ mod footprint_tests;
 mod group_shot_tests;
 #[cfg(test)]
 mod hidden_tests;
+#[cfg(test)]
+mod lights_tests;
 #[cfg(test)]
 mod physics_tests;
 #[cfg(test)]

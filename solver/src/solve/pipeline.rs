@@ -18,7 +18,8 @@ use std::time::Instant;
 
 /// The source of the shot in progress.
 pub(super) struct Source {
-    pub patch: u32,
+    /// The patch that shoots; `None` for the lights' shot (`lights.rs`).
+    pub patch: Option<u32>,
     /// The light not yet shot, this shot's included, for the meshing's
     /// local radiance level.
     pub ambient: DVec3,
@@ -58,8 +59,10 @@ impl Solver {
     pub(super) fn shoot_with(&mut self, transport: &mut impl Transport) -> ShotReport {
         let start = Instant::now();
         let source = transport.take_source(self);
-        self.stats.timings.shot_power +=
-            PI * self.patches.shoot_area[source.patch as usize] * source.unshot.element_sum();
+        if let Some(patch) = source.patch {
+            self.stats.timings.shot_power +=
+                PI * self.patches.shoot_area[patch as usize] * source.unshot.element_sum();
+        }
         let shooting = transport.shoot(self, &source);
         let refine_done = Instant::now();
         let splits = shooting.refined.splits;

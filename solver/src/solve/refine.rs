@@ -47,6 +47,7 @@
 
 use super::budget::SplitBudget;
 use super::group_shot::Shooter;
+use super::lights::LightShot;
 use super::shoot::{Received, SamplePool, Scratch, Shot};
 use crate::mesh::{Mesh, NewVertex};
 use crate::settings::SolverSettings;
@@ -244,6 +245,8 @@ pub struct Replay<'a, 'b> {
     pub recorded: &'b [Shot<'a>],
     /// Their sample pools.
     pub pools: &'b [SamplePool],
+    /// The lights' shot, which every solve with lights shoots first.
+    pub lights: Option<&'b LightShot<'a>>,
     /// Whether the current shot is the last of `recorded`.
     pub current_recorded: bool,
 }
@@ -459,6 +462,13 @@ impl Field for DiffuseField<'_, '_, '_> {
                 let mut exact = DVec3::ZERO;
                 let mut rays = 0u64;
                 let mut current = Received::default();
+                // The lights shoot first, so when the current shot is
+                // theirs it is the last (and only) one replayed.
+                if let Some(lights) = replay.lights {
+                    current = lights.receive(mesh, nv.id);
+                    exact += current.radiance;
+                    rays += current.rays as u64;
+                }
                 for (r, p) in replay.recorded.iter().zip(replay.pools) {
                     current = r.receive(mesh, nv.id, p, scratch, None);
                     exact += current.radiance;

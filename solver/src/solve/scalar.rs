@@ -4,6 +4,7 @@
 //! the receivers a shot touched are revisited (`footprint.rs`).
 
 use super::group_shot::{GroupShot, Shooter};
+use super::lights::LightShot;
 use super::pipeline::{Shooting, Source, Transport};
 use super::ray_share::RayShare;
 use super::refine::{self, Refined};
@@ -23,14 +24,15 @@ impl Transport for ScalarShot {
         let unshot = std::mem::replace(&mut s.patches.unshot[patch as usize], DVec3::ZERO);
         s.unshot_changed(&[patch]);
         Source {
-            patch,
+            patch: Some(patch),
             ambient,
             unshot,
         }
     }
 
     fn shoot(&mut self, s: &mut Solver, source: &Source) -> Shooting {
-        let (patch, unshot) = (source.patch, source.unshot);
+        let patch = source.patch.expect("a diffuse shot's source is a patch");
+        let unshot = source.unshot;
         // With grouped shooters the source may take its bright neighbours
         // along (`group_shot.rs`); an emitter's patch shoots its emission
         // alone first, recorded.
@@ -120,9 +122,12 @@ impl Transport for ScalarShot {
         );
         // Only the touched surfaces' leaves can have a changed corner.
         let scan = s.touched_patches();
+        let upm = s.units_per_metre();
+        let lights = LightShot::replay(&s.lights, &s.occluder, &s.materials.kd, &s.settings, upm);
         let replay = refine::Replay {
             recorded: &replay_shots,
             pools: &s.record.pools,
+            lights: lights.as_ref(),
             current_recorded: recorded,
         };
         // A grouped shot's visible counts are out of `group_samples` rays

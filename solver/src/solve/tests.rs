@@ -259,7 +259,7 @@ fn one_shot_delivers_kd_times_the_exactly_intercepted_power() {
     assert!((watts - 6.0 * PI * 1e-6).abs() < 1e-12 * watts, "{watts}");
     for _ in 0..16 {
         let report = solver.step().unwrap();
-        assert!(solver.mesh().patches[report.source as usize].surface == 0);
+        assert!(solver.mesh().patches[report.source.unwrap() as usize].surface == 0);
     }
     let received = solver.progress().unshot_fraction * emitted;
     let expected = 0.5 * emitted * parallel_rectangles(1.0, 1.0, 1.0);

@@ -53,7 +53,7 @@ impl Transport for ShShot<'_> {
         d.patch_unshot[range].fill(0.0);
         let unshot = std::mem::replace(&mut s.patches.unshot[patch as usize], DVec3::ZERO);
         Source {
-            patch,
+            patch: Some(patch),
             ambient,
             unshot,
         }
@@ -61,10 +61,13 @@ impl Transport for ShShot<'_> {
 
     fn shoot(&mut self, s: &mut Solver, source: &Source) -> Shooting {
         let d = &mut *self.d;
-        let recorded = s.records(source.patch, true, Some((d, self.unshot.len() as u64)));
+        let patch = source
+            .patch
+            .expect("a directional shot's source is a patch");
+        let recorded = s.records(patch, true, Some((d, self.unshot.len() as u64)));
         let shot = Shot::for_patch(
             &s.mesh,
-            source.patch,
+            patch,
             s.stats.shots,
             source.unshot,
             &s.settings,
@@ -73,7 +76,7 @@ impl Transport for ShShot<'_> {
         );
         if recorded {
             s.record
-                .push(&shot, source.patch, source.unshot, s.mesh.vertices.len());
+                .push(&shot, patch, source.unshot, s.mesh.vertices.len());
             d.recorded_unshot.push(self.unshot.clone());
         }
         self.recorded = recorded;
@@ -85,7 +88,7 @@ impl Transport for ShShot<'_> {
         let quadrants = if recorded || s.settings.shoots_uniformly() {
             None
         } else {
-            quadrant_scale(s.shape_view(), source.patch, &shot)
+            quadrant_scale(s.shape_view(), patch, &shot)
         };
         let dir_shot = DirShot {
             shot: &shot,
@@ -171,7 +174,10 @@ impl Transport for ShShot<'_> {
         // This shot's light joins its patch's sum for the gathers of later
         // splits (`directional/near_gather.rs`); recorded shots replay.
         if !self.recorded {
-            let range = d.patch_range(&s.mesh, source.patch as usize);
+            let patch = source
+                .patch
+                .expect("a directional shot's source is a patch");
+            let range = d.patch_range(&s.mesh, patch as usize);
             for (sum, u) in d.shot_sum[range].iter_mut().zip(&self.unshot) {
                 *sum = round_to_kept(*sum + u);
             }

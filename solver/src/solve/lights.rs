@@ -1,0 +1,406 @@
+//! The lights' shot (issue 41): the sun, the sky and the lamps light every
+//! receiving vertex directly, once, as the solve's first shot; the light
+//! they reflect then propagates from the patches as an emitter's does.
+//!
+//! Each receiving point q with normal n and diffuse reflectance ρ gets
+//! ΔL = ρ E(q) / π, with E the irradiance:
+//!
+//! - a lamp of intensity I(ω) at distance d (metres): E = I(ω) cos θ / d²,
+//!   the inverse-square law, with visibility by one ray to a point lamp, or
+//!   the visible fraction of `samples` stratified points on the disc a bulb
+//!   of radius r shows the receiver (d clamped to r, `light/lamp.rs`);
+//! - the sun: E = E⊥ ⟨cos θ_i V_i⟩ over `samples` stratified directions
+//!   of its disc (`light/sun.rs`), V_i a ray to infinity;
+//! - the sky: E = (π / N) Σ L(ω_i) V_i over N = [`SKY_RAYS_PER_SAMPLE`] ×
+//!   `samples` cosine-distributed directions (Malley's method on stratified
+//!   points), unbiased for any sky; exact for an open receiver under a
+//!   uniform sky.
+//!
+//! The lights' shot is recorded like an emitter's: vertices that later
+//! splits create receive it exactly ([`super::refine::Replay::lights`]), so
+//! shadow boundaries of the sun and the lamps refine as an area light's do.
+//! Its visible count, for the meshing's noise allowance, is the visible
+//! fraction of the light weighted by each light's share, out of `samples`.
+
+use super::group_shot::Shooter;
+use super::pipeline::{Shooting, Source, Transport};
+use super::refine::{self, Refined};
+use super::shoot::{Received, ReceivingPoint, RecordedShot};
+use super::{footprint, Solver};
+use crate::geometry::sampling::{stratified_square, stream_id, Rng};
+use crate::geometry::visibility::Occluder;
+use crate::light::lamp::Lamp;
+use crate::light::sky::Sky;
+use crate::light::sun::Sun;
+use crate::light::Lights;
+use crate::mesh::Mesh;
+use crate::settings::SolverSettings;
+use glam::DVec3;
+use std::f64::consts::PI;
+use std::time::Instant;
+
+/// Sky rays per receiver over the base `samples` (the sky spans a
+/// hemisphere, an area light a small solid angle): 64 at draft, 256 at
+/// medium, 1,024 at final.
+pub const SKY_RAYS_PER_SAMPLE: u32 = 8;
+
+/// The lights' state in a solve: the lights in the solver's frame, and
+/// whether they have shot.
+#[derive(Default)]
+pub(super) struct LightsState {
+    pub lights: Lights,
+    pub shot: bool,
+    /// The power the lights put into the scene's patches (π Σ ρE/π · A,
+    /// scene units, summed over the channels): their part of the emitted
+    /// power the solve converges against. Checkpointed.
+    pub power: f64,
+}
+
+impl LightsState {
+    /// Whether the lights still have to shoot.
+    pub fn pending(&self) -> bool {
+        !self.shot && !self.lights.is_empty()
+    }
+}
+
+/// One evaluation of the lights at receivers: the lights, the occluder and
+/// the reflectances, and the sampling.
+pub(super) struct LightShot<'a> {
+    pub lights: &'a Lights,
+    pub occluder: &'a Occluder,
+    pub kd: &'a [DVec3],
+    /// Rays per lamp with a radius and per sun; the sky takes
+    /// [`SKY_RAYS_PER_SAMPLE`] times as many.
+    pub samples: u32,
+    pub seed: u64,
+    /// Scene units per metre, for the inverse-square law.
+    pub units_per_metre: f64,
+}
+
+/// One light's irradiance at a point and the fraction of it that arrived.
+#[derive(Clone, Copy, Default)]
+struct Part {
+    irradiance: DVec3,
+    /// The unoccluded irradiance's brightest channel, the light's weight in
+    /// the visible count.
+    weight: f64,
+    visible: f64,
+    rays: u32,
+}
+
+/// The RNG stream of the lights' shot (shot 0 in the shots' numbering is an
+/// emitter's; the lights take a stream no patch shot uses).
+const LIGHTS_STREAM: u64 = u64::MAX;
+
+impl<'a> LightShot<'a> {
+    pub fn new(
+        lights: &'a Lights,
+        occluder: &'a Occluder,
+        kd: &'a [DVec3],
+        settings: &SolverSettings,
+        units_per_metre: f64,
+    ) -> Self {
+        LightShot {
+            lights,
+            occluder,
+            kd,
+            samples: settings.samples,
+            seed: settings.seed,
+            units_per_metre,
+        }
+    }
+
+    /// The lights' replay for later shots: `None` before they shot (or
+    /// without lights).
+    pub fn replay(
+        state: &'a LightsState,
+        occluder: &'a Occluder,
+        kd: &'a [DVec3],
+        settings: &SolverSettings,
+        units_per_metre: f64,
+    ) -> Option<Self> {
+        (state.shot && !state.lights.is_empty())
+            .then(|| Self::new(&state.lights, occluder, kd, settings, units_per_metre))
+    }
+
+    /// ΔL at vertex `v`.
+    pub fn receive(&self, mesh: &Mesh, v: u32) -> Received {
+        let at = ReceivingPoint::of_vertex(mesh, v, self.occluder.scene_epsilon());
+        self.receive_at(&at)
+    }
+
+    /// ΔL at a receiving point: ρ E / π summed over the lights.
+    pub fn receive_at(&self, at: &ReceivingPoint) -> Received {
+        let kd = self.kd[at.surface as usize];
+        if kd == DVec3::ZERO {
+            return Received::default();
+        }
+        let mut rng = Rng::new(self.seed, stream_id(LIGHTS_STREAM, at.stream as u64));
+        let origin = at.q + at.n * self.occluder.scene_epsilon();
+        let mut parts: Vec<Part> = self
+            .lights
+            .lamps
+            .iter()
+            .map(|lamp| self.lamp(lamp, origin, at.n, &mut rng))
+            .collect();
+        if let Some(sun) = &self.lights.sun {
+            parts.push(self.sun(sun, origin, at.n, &mut rng));
+        }
+        if let Some(sky) = &self.lights.sky {
+            parts.push(self.sky(sky, origin, at.n, &mut rng));
+        }
+        let irradiance: DVec3 = parts.iter().map(|p| p.irradiance).sum();
+        let weight: f64 = parts.iter().map(|p| p.weight).sum();
+        let seen: f64 = parts.iter().map(|p| p.weight * p.visible).sum();
+        let fraction = if weight > 0.0 { seen / weight } else { 0.0 };
+        Received {
+            radiance: kd * irradiance / PI,
+            visible: (fraction * self.samples as f64).round() as u32,
+            rays: parts.iter().map(|p| p.rays).sum(),
+        }
+    }
+
+    /// A lamp's irradiance at `origin` (lifted off its surface) facing `n`.
+    fn lamp(&self, lamp: &Lamp, origin: DVec3, n: DVec3, rng: &mut Rng) -> Part {
+        let to_lamp = lamp.position - origin;
+        let distance = to_lamp.length();
+        let w = to_lamp / distance;
+        let cos = w.dot(n);
+        if cos.is_nan() || cos <= 0.0 {
+            return Part::default();
+        }
+        let metres = (distance.max(lamp.radius) / self.units_per_metre).max(f64::MIN_POSITIVE);
+        let unoccluded = lamp.intensity_toward(-w) * cos / (metres * metres);
+        if unoccluded == DVec3::ZERO {
+            return Part::default();
+        }
+        let (visible, rays) = if lamp.radius > 0.0 {
+            // Points on the disc the bulb shows the receiver.
+            let (t, b) = w.any_orthonormal_pair();
+            let mut seen = 0u32;
+            stratified_square(self.samples, rng, |u, v| {
+                let (r, phi) = (lamp.radius * u.sqrt(), 2.0 * PI * v);
+                let point = lamp.position + r * (phi.cos() * t + phi.sin() * b);
+                seen += u32::from(self.occluder.visible(origin, point));
+            });
+            (seen as f64 / self.samples as f64, self.samples)
+        } else {
+            (
+                f64::from(u8::from(self.occluder.visible(origin, lamp.position))),
+                1,
+            )
+        };
+        Part {
+            irradiance: unoccluded * visible,
+            weight: unoccluded.max_element(),
+            visible,
+            rays,
+        }
+    }
+
+    /// The sun's irradiance: E⊥ times the mean of cos θ_i over its visible
+    /// disc directions.
+    fn sun(&self, sun: &Sun, origin: DVec3, n: DVec3, rng: &mut Rng) -> Part {
+        if sun.direction().dot(n) <= -(0.5 * sun.angular_diameter_deg()).to_radians().sin() {
+            return Part::default();
+        }
+        let far = self.far(origin);
+        let (mut lit, mut open) = (0.0, 0.0);
+        let mut rays = 0;
+        stratified_square(self.samples, rng, |u, v| {
+            let w = sun.sample_disc(u, v).direction;
+            let cos = w.dot(n);
+            if cos > 0.0 {
+                open += cos;
+                rays += 1;
+                if self.occluder.visible(origin, origin + w * far) {
+                    lit += cos;
+                }
+            }
+        });
+        let count = self.samples as f64;
+        Part {
+            irradiance: sun.irradiance() * (lit / count),
+            weight: sun.irradiance().max_element() * open / count,
+            visible: if open > 0.0 { lit / open } else { 0.0 },
+            rays,
+        }
+    }
+
+    /// The sky's irradiance by cosine-distributed directions about `n`.
+    fn sky(&self, sky: &Sky, origin: DVec3, n: DVec3, rng: &mut Rng) -> Part {
+        let far = self.far(origin);
+        let (t, b) = n.any_orthonormal_pair();
+        let count = self.samples * SKY_RAYS_PER_SAMPLE;
+        let (mut lit, mut open) = (DVec3::ZERO, DVec3::ZERO);
+        let mut rays = 0;
+        stratified_square(count, rng, |u, v| {
+            // Malley's method: a uniform point on the disc lifted to the
+            // hemisphere has density cos θ / π.
+            let (r, phi) = (u.sqrt(), 2.0 * PI * v);
+            let w = r * (phi.cos() * t + phi.sin() * b) + (1.0 - u).max(0.0).sqrt() * n;
+            let radiance = sky.radiance(w);
+            if radiance == DVec3::ZERO {
+                return;
+            }
+            open += radiance;
+            rays += 1;
+            if self.occluder.visible(origin, origin + w * far) {
+                lit += radiance;
+            }
+        });
+        let scale = PI / count as f64;
+        let weight = (open * scale).max_element();
+        Part {
+            irradiance: lit * scale,
+            weight,
+            visible: if weight > 0.0 {
+                (lit * scale).max_element() / weight
+            } else {
+                0.0
+            },
+            rays,
+        }
+    }
+
+    /// A distance from `origin` past every surface: twice the scene's
+    /// diagonal (the occluder's epsilon is 1e-5 of it) beyond the origin's
+    /// own distance from the centre.
+    fn far(&self, origin: DVec3) -> f64 {
+        2e5 * self.occluder.scene_epsilon() + origin.length()
+    }
+}
+
+/// The lights' shot as a [`Transport`]: every vertex receives the lights,
+/// the mesh refines at their shadows, and the reflected light is gathered
+/// into the patches, which then shoot it on.
+pub(super) struct LightsTransport;
+
+impl Transport for LightsTransport {
+    fn take_source(&mut self, s: &mut Solver) -> Source {
+        s.lights.shot = true;
+        Source {
+            patch: None,
+            ambient: s.ambient_from_index(),
+            unshot: DVec3::ZERO,
+        }
+    }
+
+    fn shoot(&mut self, s: &mut Solver, source: &Source) -> Shooting {
+        let lights = std::mem::take(&mut s.lights.lights);
+        let upm = s.units_per_metre();
+        let shot = LightShot::new(&lights, &s.occluder, &s.materials.kd, &s.settings, upm);
+        let shooter = Shooter::Lights(&shot);
+        let rays = footprint::shoot_receivers(
+            &s.mesh,
+            &mut s.sharing.footprint,
+            footprint::SampleSharing {
+                small: &s.sharing.small,
+                twins: &s.sharing.twins,
+                sites: &s.sharing.sites,
+            },
+            s.field.state(),
+            &shooter,
+            true,
+        );
+        let shot_done = Instant::now();
+        // The power the lights put in, and its level: the mesh's dark floor
+        // and the ambient it is heading for.
+        s.lights.power = s.received_power();
+        let level = s.lights_level();
+        s.stats.emitted_power += s.lights.power;
+        s.stats.radiance_level = s.stats.radiance_level.max(level);
+        let ambient = source.ambient + DVec3::splat(level);
+        let mut refined = Refined::default();
+        if s.refines() {
+            // New vertices receive the lights and every recorded shot
+            // exactly (`refine.rs`).
+            let mut split_budget = s.split_budget(None);
+            let replay_shots = RecordedShot::rebuild_all(
+                &s.record.shots,
+                &s.mesh,
+                &s.settings,
+                &s.occluder,
+                &s.materials.kd,
+            );
+            let scan = s.touched_patches();
+            let replay = refine::Replay {
+                recorded: &replay_shots,
+                pools: &s.record.pools,
+                lights: Some(&shot),
+                current_recorded: true,
+            };
+            let criteria = s.refine_criteria(ambient);
+            refined = refine::refine_field(
+                &mut s.mesh,
+                &mut refine::DiffuseField {
+                    state: s.field.state(),
+                    replay: &replay,
+                    shooter: &shooter,
+                    scan: scan.as_deref(),
+                },
+                &criteria,
+                &mut split_budget,
+            );
+            drop(replay_shots);
+            s.after_refinement(&split_budget, None);
+        }
+        s.lights.lights = lights;
+        Shooting {
+            rays: rays + refined.rays,
+            refined,
+            shot_done,
+        }
+    }
+
+    fn gather(&mut self, s: &mut Solver, _source: &Source, dirty: &[u32]) {
+        s.unshot_changed(dirty);
+        s.gather();
+    }
+
+    fn unshot_power(&mut self, s: &mut Solver) -> f64 {
+        s.unshot_power_from_index()
+    }
+}
+
+impl Solver {
+    /// π Σ_v w_v ρE_v/π over the patches' gather weights, summed over the
+    /// channels: the power the current shot's `received` puts into the
+    /// patches once gathered (`footprint.rs`, the gather).
+    fn received_power(&self) -> f64 {
+        let mut power = DVec3::ZERO;
+        for weights in &self.patches.weights {
+            for &(v, w) in weights {
+                power += self.field.received[v as usize] * w;
+            }
+        }
+        PI * power.element_sum()
+    }
+
+    /// Adds the lights' power to the emitted power the solve converges
+    /// against, and raises the scene's radiance level (the meshing's dark
+    /// floor) to the lights', as their shot did (on resume).
+    pub(super) fn include_lights_power(&mut self) {
+        self.stats.emitted_power += self.lights.power;
+        self.stats.radiance_level = self.stats.radiance_level.max(self.lights_level());
+    }
+
+    /// Cohen et al.'s (1988) ambient radiance of the lights' power, as
+    /// [`Solver::ambient`] has it for unshot light: power / (π · area),
+    /// over 1 − the mean reflectance (its brightest channel), the channels'
+    /// mean.
+    fn lights_level(&self) -> f64 {
+        let (mut area, mut reflect) = (0.0, DVec3::ZERO);
+        for p in &self.mesh.patches {
+            area += p.area;
+            reflect += self.materials.albedo[p.surface as usize] * p.area;
+        }
+        if area.is_nan() || area <= 0.0 {
+            return 0.0;
+        }
+        let r = (DVec3::ONE - reflect / area)
+            .max(DVec3::splat(1e-6))
+            .recip();
+        r.max_element() * self.lights.power / (3.0 * PI * area)
+    }
+}
