@@ -364,6 +364,12 @@ impl Transport for LightsTransport {
 }
 
 impl Solver {
+    /// The scene's sun, sky and lamps in the solver's (and the solution's)
+    /// frame: lamps moved by [`Solver::offset`].
+    pub fn lights(&self) -> &Lights {
+        &self.lights.lights
+    }
+
     /// π Σ_v w_v ρE_v/π over the patches' gather weights, summed over the
     /// channels: the power the current shot's `received` puts into the
     /// patches once gathered (`footprint.rs`, the gather).
