@@ -829,7 +829,7 @@ mod tests {
         s.u64(c.shots).unwrap();
         s.u64(c.rays).unwrap();
         s.f64(c.seconds).unwrap();
-        s.u64(0).unwrap();
+        s.f64(c.lights_power).unwrap();
         s.u32s(b"SPLT", &c.split_log).unwrap();
         s.start(b"RECS", c.recorded.len()).unwrap();
         for r in &c.recorded {
