@@ -1,10 +1,11 @@
 //! The scene as the reference path tracer sees it: the imported polygons with
-//! their planes, one [`Bsdf`] per material, the closest-hit BVH and the emitter
-//! distribution; plus the material and object names the image's id channels
+//! their planes, one [`Bsdf`] per material, the closest-hit BVH, the emitter
+//! distribution and the lights that are not polygons; plus the material and object names the image's id channels
 //! index.
 
 use super::bsdf::Bsdf;
 use super::emitters::Emitters;
+use super::lights::SceneLights;
 use super::lobe::ExactLobe;
 use crate::geometry::visibility::Occluder;
 use crate::scene::Scene;
@@ -53,6 +54,8 @@ pub struct RenderScene {
     pub bsdfs: Vec<Bsdf>,
     pub occluder: Occluder,
     pub emitters: Emitters,
+    /// The sun, the sky and the lamps, re-centred as the surfaces.
+    pub lights: SceneLights,
     pub material_names: Vec<String>,
     pub object_names: Vec<String>,
     /// Largest reflectance `max(Kd + Ks)` over the channels of the used materials:
@@ -166,6 +169,7 @@ impl RenderScene {
             bsdfs,
             occluder,
             emitters,
+            lights: SceneLights::new(&scene.lights, scene.recentre_offset, scene.units_per_metre),
             material_names: scene.materials.iter().map(|m| m.name.clone()).collect(),
             object_names,
             max_albedo,
@@ -183,7 +187,12 @@ impl RenderScene {
         }
     }
 
-    /// The scene's bounds (re-centred coordinates).
+    /// Whether anything lights the scene: an emitting polygon, the sun, the
+    /// sky or a lamp.
+    pub fn is_lit(&self) -> bool {
+        !self.emitters.is_empty() || !self.lights.is_empty()
+    }
+
     /// The BSDF at `point` on surface `polygon`: its material's, with Kd
     /// times the texture's bilinear sample at the point's UV (level 0, repeat
     /// wrap: `Texture::bilinear`) where the surface is textured, and its
@@ -217,6 +226,7 @@ impl RenderScene {
         }
     }
 
+    /// The scene's bounds (re-centred coordinates).
     pub fn bounds(&self) -> (DVec3, DVec3) {
         let mut lo = DVec3::splat(f64::INFINITY);
         let mut hi = DVec3::splat(f64::NEG_INFINITY);
