@@ -34,6 +34,8 @@ pub mod scene;
 pub mod shading;
 
 #[cfg(test)]
+mod light_tests;
+#[cfg(test)]
 mod tests;
 
 pub use image::{id_buffers, Accumulator, PixelSums};
