@@ -632,3 +632,64 @@ fn sun_on_a_glossy_floor_matches_its_closed_form() {
     }
     assert_unbiased("sun on a glossy floor", &z);
 }
+
+/// An axially symmetric LM-63-2002 profile (candela multiplier 1.5) hung
+/// nadir down at height h, its peak given as the lamp's intensity by the
+/// 683 rule: at floor points seen at each tabulated vertical angle θ_k the
+/// radiance is ρ (1.5 · cd_k / 683) cos θ_k / (π d²). Exact to 1e-9
+/// (variance-free; θ from the geometry lands on the table's angles to
+/// ~1e-14°, where the bilinear table returns cd_k).
+#[test]
+fn ies_profile_candela_come_back_on_the_floor() {
+    let vertical = [0.0, 10.0, 20.0, 30.0, 40.0, 50.0, 60.0, 70.0, 80.0, 90.0];
+    let candela = [
+        900.0, 1000.0, 950.0, 700.0, 400.0, 250.0, 120.0, 50.0, 10.0, 0.0,
+    ];
+    let list = |v: &[f64]| {
+        v.iter()
+            .map(|x| x.to_string())
+            .collect::<Vec<_>>()
+            .join(" ")
+    };
+    let text = format!(
+        "IESNA:LM-63-2002\n[TEST] path tracer\nTILT=NONE\n1 -1 1.5 10 1 1 2 0.1 0.1 0\n1 1 40\n{}\n0\n{}\n",
+        list(&vertical),
+        list(&candela)
+    );
+    let ies = std::sync::Arc::new(crate::light::ies::IesProfile::parse(&text, "lamp.ies").unwrap());
+    let peak = 1.5 * 1000.0;
+    let white = DVec3::ONE;
+    let h = 2.0;
+    let lamp = Lamp::point(
+        "luminaire",
+        DVec3::new(0.0, 0.0, h),
+        crate::light::units::candela_to_intensity(peak, white),
+        0.0,
+    )
+    .unwrap()
+    .with_profile(ies, DVec3::NEG_Z)
+    .unwrap();
+    let s = floor_scene(
+        Lights {
+            lamps: vec![lamp],
+            ..Lights::default()
+        },
+        vec![],
+    );
+    let render = RenderScene::new(&s, Physics::default());
+    let tracer = integrator(&render);
+    let eye = DVec3::new(0.2, 0.1, 5.0);
+    for (k, (theta_deg, cd)) in vertical.iter().zip(candela).enumerate().take(9) {
+        let theta = theta_deg.to_radians();
+        let phi = 0.7 * k as f64;
+        let p = h * theta.tan() * DVec3::new(phi.cos(), phi.sin(), 0.0);
+        let d = h / theta.cos();
+        let exact = RHO * (1.5 * cd / 683.0) * theta.cos() / (PI * d * d);
+        let mut rng = Rng::new(12, k as u64);
+        let got = tracer.radiance(eye, (p - eye).normalize(), &mut rng);
+        assert!(
+            (got - DVec3::splat(exact)).abs().max_element() < 1e-9 * exact,
+            "θ = {theta_deg}°: {got} against {exact}"
+        );
+    }
+}
