@@ -18,7 +18,6 @@ use crate::light::lamp::Lamp;
 use crate::light::sky::{BelowHorizon, Sky, SkyModel};
 use crate::light::sun::{Sun, SunPosition, DEFAULT_ANGULAR_DIAMETER_DEG};
 use crate::light::Lights;
-use crate::scene::Scene;
 use glam::DVec3;
 use solution::camera::Camera;
 use solution::format::SolveMode;
@@ -28,8 +27,8 @@ const RHO: f64 = 0.6;
 
 /// A large open floor z = 0 facing up (half-size 50: every test point is
 /// near its middle), of diffuse albedo [`RHO`], lit by `lights`, plus
-/// `extra` black (Kd = 0) polygons as occluders.
-fn floor_scene(lights: Lights, extra: Vec<Vec<DVec3>>) -> Scene {
+/// `extra` black (Kd = 0) polygons as occluders, ready to render.
+fn lit_floor(lights: Lights, extra: Vec<Vec<DVec3>>) -> RenderScene {
     let mut polygons = vec![polygon(square_at(DVec3::ZERO, 50.0, false), 0)];
     polygons.extend(extra.into_iter().map(|p| polygon(p, 1)));
     let mut s = scene(
@@ -40,7 +39,17 @@ fn floor_scene(lights: Lights, extra: Vec<Vec<DVec3>>) -> Scene {
         ],
     );
     s.lights = lights;
-    s
+    RenderScene::new(&s, Physics::default())
+}
+
+/// The open floor of [`lit_floor`] lit by `lamps` alone, with `extra`
+/// black occluders, ready to render.
+fn lamps_over_floor(lamps: Vec<Lamp>, extra: Vec<Vec<DVec3>>) -> RenderScene {
+    let lights = Lights {
+        lamps,
+        ..Lights::default()
+    };
+    lit_floor(lights, extra)
 }
 
 fn integrator(render: &RenderScene) -> Integrator<'_> {
@@ -50,8 +59,16 @@ fn integrator(render: &RenderScene) -> Integrator<'_> {
     }
 }
 
-fn relative_error(got: DVec3, want: DVec3) -> f64 {
-    ((got - want).abs() / want.abs().max(DVec3::splat(1e-300))).max_element()
+/// Asserts `got` equals `want` to 1e-9 relative in every channel: the
+/// tolerance of a variance-free estimate (module notes).
+fn assert_exact(got: DVec3, want: DVec3, what: impl std::fmt::Display) {
+    let error = ((got - want).abs() / want.abs().max(DVec3::splat(1e-300))).max_element();
+    assert!(error < 1e-9, "{what}: {got} against {want}");
+}
+
+/// One sample of the radiance the camera at `eye` sees at the point `p`.
+fn seen(tracer: &Integrator, eye: DVec3, p: DVec3) -> DVec3 {
+    tracer.radiance(eye, (p - eye).normalize(), &mut Rng::new(1, 0))
 }
 
 /// Where the ray (o, d) meets the plane z = 0.
@@ -83,14 +100,7 @@ fn point_lamp_over_a_plane_is_rho_i_cos_over_pi_d_squared() {
     let (i0, h) = (DVec3::new(2.0, 1.0, 0.5), 2.0);
     let at = DVec3::new(0.3, -0.2, h);
     let lamp = Lamp::point("bulb", at, i0, 0.0).unwrap();
-    let s = floor_scene(
-        Lights {
-            lamps: vec![lamp],
-            ..Lights::default()
-        },
-        vec![],
-    );
-    let render = RenderScene::new(&s, Physics::default());
+    let render = lamps_over_floor(vec![lamp], vec![]);
     let tracer = integrator(&render);
     let eye = DVec3::new(0.0, 0.0, 4.0);
     for (k, theta_deg) in [0.0f64, 15.0, 30.0, 45.0, 60.0, 75.0].iter().enumerate() {
@@ -100,12 +110,7 @@ fn point_lamp_over_a_plane_is_rho_i_cos_over_pi_d_squared() {
             DVec3::new(at.x, at.y, 0.0) + h * theta.tan() * DVec3::new(phi.cos(), phi.sin(), 0.0);
         let d = h / theta.cos();
         let exact = RHO * i0 * theta.cos() / (PI * d * d);
-        let mut rng = Rng::new(1, k as u64);
-        let got = tracer.radiance(eye, (p - eye).normalize(), &mut rng);
-        assert!(
-            relative_error(got, exact) < 1e-9,
-            "θ = {theta_deg}°: {got} against {exact}"
-        );
+        assert_exact(seen(&tracer, eye, p), exact, format!("θ = {theta_deg}°"));
     }
 }
 
@@ -121,14 +126,7 @@ fn spot_lamp_has_its_cone_and_squared_ramp() {
         .unwrap()
         .with_spot(DVec3::NEG_Z, 20.0, 30.0)
         .unwrap();
-    let s = floor_scene(
-        Lights {
-            lamps: vec![lamp],
-            ..Lights::default()
-        },
-        vec![],
-    );
-    let render = RenderScene::new(&s, Physics::default());
+    let render = lamps_over_floor(vec![lamp], vec![]);
     let tracer = integrator(&render);
     let eye = DVec3::new(0.1, 0.0, 4.0);
     let halfway = (0.5 * (20f64.to_radians().cos() + 30f64.to_radians().cos())).acos();
@@ -143,8 +141,7 @@ fn spot_lamp_has_its_cone_and_squared_ramp() {
         let p = DVec3::new(h * theta.tan(), 0.0, 0.0);
         let d = h / theta.cos();
         let exact = RHO * i0 * theta.cos() / (PI * d * d) * factor;
-        let mut rng = Rng::new(2, 0);
-        let got = tracer.radiance(eye, (p - eye).normalize(), &mut rng);
+        let got = seen(&tracer, eye, p);
         if factor == 0.0 {
             assert_eq!(
                 got,
@@ -153,11 +150,7 @@ fn spot_lamp_has_its_cone_and_squared_ramp() {
                 theta.to_degrees()
             );
         } else {
-            assert!(
-                relative_error(got, exact) < 1e-9,
-                "θ = {}°: {got} against {exact}",
-                theta.to_degrees()
-            );
+            assert_exact(got, exact, format!("θ = {}°", theta.to_degrees()));
         }
     }
 }
@@ -181,14 +174,7 @@ fn lamps_through_the_camera_match_the_pixel_integrals() {
             .unwrap(),
     ];
     let axis = DVec3::new(0.2, 0.0, -1.0).normalize();
-    let s = floor_scene(
-        Lights {
-            lamps,
-            ..Lights::default()
-        },
-        vec![],
-    );
-    let render = RenderScene::new(&s, Physics::default());
+    let render = lamps_over_floor(lamps, vec![]);
     let tracer = integrator(&render);
     let camera = Camera {
         eye: [0.0, 0.0, 4.0],
@@ -234,14 +220,13 @@ fn uniform_sky(radiance: DVec3, below: BelowHorizon) -> Sky {
 #[test]
 fn uniform_sky_over_a_plane_shows_rho_l() {
     let l = DVec3::new(1.0, 2.0, 3.0);
-    let s = floor_scene(
+    let render = lit_floor(
         Lights {
             sky: Some(uniform_sky(l, BelowHorizon::Black)),
             ..Lights::default()
         },
         vec![],
     );
-    let render = RenderScene::new(&s, Physics::default());
     let tracer = integrator(&render);
     let eye = DVec3::new(0.0, 0.0, 3.0);
     for k in 0..8u64 {
@@ -249,7 +234,7 @@ fn uniform_sky_over_a_plane_shows_rho_l() {
         let mut rng = Rng::new(4, k);
         for _ in 0..16 {
             let got = tracer.radiance(eye, (p - eye).normalize(), &mut rng);
-            assert!(relative_error(got, RHO * l) < 1e-9, "{got}");
+            assert_exact(got, RHO * l, format!("{p}"));
         }
     }
 }
@@ -303,7 +288,7 @@ fn tilted_plane_under_a_uniform_sky_sees_its_share() {
                     .collect();
                 if below == BelowHorizon::Same {
                     for got in samples {
-                        assert!(relative_error(got, exact) < 1e-9, "β = {beta_deg}°: {got}");
+                        assert_exact(got, exact, format!("β = {beta_deg}°"));
                     }
                     continue;
                 }
@@ -332,14 +317,13 @@ fn sun_over_a_plane_gives_rho_e_sin_elevation_over_pi() {
             let toward = DVec3::new(e.cos() * 0.6, e.cos() * 0.8, e.sin());
             let position = SunPosition::from_direction(toward).unwrap();
             let sun = Sun::new(position, e_perp, diameter).unwrap();
-            let s = floor_scene(
+            let render = lit_floor(
                 Lights {
                     sun: Some(sun),
                     ..Lights::default()
                 },
                 vec![],
             );
-            let render = RenderScene::new(&s, Physics::default());
             let tracer = integrator(&render);
             let alpha = (0.5 * diameter).to_radians();
             let exact = RHO * e_perp * e.sin() * (1.0 + alpha.cos()) / 2.0 / PI;
@@ -374,14 +358,13 @@ fn a_square_casts_the_sun_shadow_its_projection_predicts() {
     )
     .unwrap();
     let blocker = square_at(DVec3::new(0.0, 0.0, 1.0), 0.5, false);
-    let s = floor_scene(
+    let render = lit_floor(
         Lights {
             sun: Some(sun),
             ..Lights::default()
         },
         vec![blocker],
     );
-    let render = RenderScene::new(&s, Physics::default());
     let tracer = integrator(&render);
     let shift = 1.0 / e.tan();
     let open = RHO * 100.0 * e.sin() / PI;
@@ -444,37 +427,26 @@ fn rays_that_escape_show_the_sky_and_the_sun_disc() {
     s.lights.sun = Some(sun);
     let render = RenderScene::new(&s, Physics::default());
     let tracer = integrator(&render);
-    let mut rng = Rng::new(8, 0);
     let cie = |cos: f64| lz * (1.0 + 2.0 * cos) / 3.0;
     for theta_deg in [0.0f64, 30.0, 60.0, 89.0] {
         let t = theta_deg.to_radians();
         let dir = DVec3::new(-t.sin(), 0.0, t.cos());
-        let got = tracer.radiance(DVec3::ZERO, dir, &mut rng);
-        assert!(
-            relative_error(got, cie(t.cos())) < 1e-9,
-            "θ = {theta_deg}°: {got}"
-        );
+        let got = seen(&tracer, DVec3::ZERO, dir);
+        assert_exact(got, cie(t.cos()), format!("θ = {theta_deg}°"));
     }
-    let below = DVec3::new(-1.0, 0.0, -0.05).normalize();
-    assert_eq!(tracer.radiance(DVec3::ZERO, below, &mut rng), DVec3::ZERO);
+    let below = DVec3::new(-1.0, 0.0, -0.05);
+    assert_eq!(seen(&tracer, DVec3::ZERO, below), DVec3::ZERO);
     let omega = 4.0
         * PI
         * (0.25 * DEFAULT_ANGULAR_DIAMETER_DEG)
             .to_radians()
             .sin()
             .powi(2);
-    let got = tracer.radiance(DVec3::ZERO, toward, &mut rng);
     let want = cie(toward.z) + e_perp / omega;
-    assert!(
-        relative_error(got, want) < 1e-9,
-        "sun disc: {got} against {want}"
-    );
+    assert_exact(seen(&tracer, DVec3::ZERO, toward), want, "sun disc");
     let aside = (toward + 0.3f64.to_radians() * toward.any_orthonormal_vector()).normalize();
-    let got = tracer.radiance(DVec3::ZERO, aside, &mut rng);
-    assert!(
-        relative_error(got, cie(aside.z)) < 1e-9,
-        "beside the disc: {got}"
-    );
+    let got = seen(&tracer, DVec3::ZERO, aside);
+    assert_exact(got, cie(aside.z), "beside the disc");
 }
 
 /// Lamp distances are in metres: the same scene modelled in millimetres
@@ -501,18 +473,11 @@ fn lamp_distances_are_in_metres_and_lamps_follow_the_recentring() {
     for k in 0..6u64 {
         let p = DVec3::new(0.4 * k as f64 - 1.0, 0.5 - 0.2 * k as f64, 0.0);
         let eye = DVec3::new(0.0, 0.0, 3.0);
-        let mut rng = Rng::new(9, k);
-        let a = integrator(&metres).radiance(eye, (p - eye).normalize(), &mut rng);
-        let b = integrator(&millimetres).radiance(eye * 1000.0, (p - eye).normalize(), &mut rng);
         let exact = RHO / PI * inverse_square(i0, at, p);
-        assert!(
-            relative_error(a, exact) < 1e-9,
-            "metres: {a} against {exact}"
-        );
-        assert!(
-            relative_error(b, exact) < 1e-9,
-            "millimetres: {b} against {exact}"
-        );
+        let a = seen(&integrator(&metres), eye, p);
+        assert_exact(a, exact, "metres");
+        let b = seen(&integrator(&millimetres), eye * 1000.0, p * 1000.0);
+        assert_exact(b, exact, "millimetres");
     }
 }
 
@@ -527,15 +492,7 @@ fn lamp_distances_are_in_metres_and_lamps_follow_the_recentring() {
 fn a_bulb_with_a_radius_has_soft_shadows_and_no_spike() {
     let (i0, r) = (DVec3::new(4.0, 3.0, 2.0), 0.2);
     let with_bulb = |at: DVec3, extra: Vec<Vec<DVec3>>| {
-        let lamp = Lamp::point("bulb", at, i0, r).unwrap();
-        let s = floor_scene(
-            Lights {
-                lamps: vec![lamp],
-                ..Lights::default()
-            },
-            extra,
-        );
-        RenderScene::new(&s, Physics::default())
+        lamps_over_floor(vec![Lamp::point("bulb", at, i0, r).unwrap()], extra)
     };
     let at = DVec3::new(0.0, 0.0, 2.0);
     let open = with_bulb(at, vec![]);
@@ -553,10 +510,7 @@ fn a_bulb_with_a_radius_has_soft_shadows_and_no_spike() {
         let exact = RHO / PI * inverse_square(i0, at, p);
         let mut rng = Rng::new(10, k);
         let got = integrator(&open).outgoing(0, p, DVec3::Z, &mut rng);
-        assert!(
-            relative_error(got, exact) < 1e-9,
-            "open: {got} against {exact}"
-        );
+        assert_exact(got, exact, "open");
         let (mean, se) = estimate(256, |_| {
             integrator(&shadowed).outgoing(0, p, DVec3::Z, &mut rng).z
         });
@@ -566,10 +520,7 @@ fn a_bulb_with_a_radius_has_soft_shadows_and_no_spike() {
     let mut rng = Rng::new(10, 99);
     let got = integrator(&near).outgoing(0, DVec3::ZERO, DVec3::Z, &mut rng);
     let exact = RHO / PI * i0 / (r * r);
-    assert!(
-        relative_error(got, exact) < 1e-9,
-        "touching: {got} against {exact}"
-    );
+    assert_exact(got, exact, "touching");
 }
 
 /// The sun on a glossy floor (directional mode, Ks only), seen near its
@@ -669,14 +620,7 @@ fn ies_profile_candela_come_back_on_the_floor() {
     .unwrap()
     .with_profile(ies, DVec3::NEG_Z)
     .unwrap();
-    let s = floor_scene(
-        Lights {
-            lamps: vec![lamp],
-            ..Lights::default()
-        },
-        vec![],
-    );
-    let render = RenderScene::new(&s, Physics::default());
+    let render = lamps_over_floor(vec![lamp], vec![]);
     let tracer = integrator(&render);
     let eye = DVec3::new(0.2, 0.1, 5.0);
     for (k, (theta_deg, cd)) in vertical.iter().zip(candela).enumerate().take(9) {
@@ -685,11 +629,7 @@ fn ies_profile_candela_come_back_on_the_floor() {
         let p = h * theta.tan() * DVec3::new(phi.cos(), phi.sin(), 0.0);
         let d = h / theta.cos();
         let exact = RHO * (1.5 * cd / 683.0) * theta.cos() / (PI * d * d);
-        let mut rng = Rng::new(12, k as u64);
-        let got = tracer.radiance(eye, (p - eye).normalize(), &mut rng);
-        assert!(
-            (got - DVec3::splat(exact)).abs().max_element() < 1e-9 * exact,
-            "θ = {theta_deg}°: {got} against {exact}"
-        );
+        let got = seen(&tracer, eye, p);
+        assert_exact(got, DVec3::splat(exact), format!("θ = {theta_deg}°"));
     }
 }
