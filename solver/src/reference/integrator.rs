@@ -184,7 +184,9 @@ impl Integrator<'_> {
             let Some(next) = self.intersect(hit.point, sample.wi) else {
                 // The ray leaves the scene: the sky and the sun, weighted
                 // against their next-event samples at this point.
-                radiance += throughput * lights.escaped(sample.wi, sample.pdf, n);
+                if !lights.is_empty() {
+                    radiance += throughput * lights.escaped(sample.wi, sample.pdf, n);
+                }
                 break;
             };
             bsdf_pdf = Some(sample.pdf);
@@ -280,14 +282,10 @@ impl Integrator<'_> {
         if largest.is_nan() || largest <= 0.0 {
             return DVec3::ZERO;
         }
-        let visible = match s.target {
-            Some(point) => scene.occluder.visible(hit.point, point),
-            None => scene
-                .occluder
-                .closest_hit(hit.point, s.wi, f64::INFINITY)
-                .is_none(),
-        };
-        if !visible {
+        let target = s
+            .target
+            .unwrap_or_else(|| scene.lights.beyond_the_scene(hit.point, s.wi));
+        if !scene.occluder.visible(hit.point, target) {
             return DVec3::ZERO;
         }
         let weight = s

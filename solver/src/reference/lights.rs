@@ -40,7 +40,8 @@ pub struct DirectSample {
     /// Unit direction from the shading point toward the light.
     pub wi: DVec3,
     /// Where the shadow ray ends: a point (a lamp), or `None` for a light at
-    /// infinity (the sun, the sky), whose shadow ray must escape the scene.
+    /// infinity (the sun, the sky), whose shadow ray must escape the scene
+    /// ([`SceneLights::beyond_the_scene`]).
     pub target: Option<DVec3>,
     /// The incident radiance over the sample's density (W·sr⁻¹·m⁻² · sr), or
     /// for a lamp its irradiance on a plane facing it over the selection
@@ -63,14 +64,23 @@ pub struct SceneLights {
     lamp_cumulative: Vec<f64>,
     /// Scene units per metre: lamp distances are divided by it.
     units_per_metre: f64,
+    /// The centre and the diagonal of the scene's bounding box: a shadow
+    /// ray toward the sun or the sky ends past every surface.
+    centre: DVec3,
+    diagonal: f64,
 }
 
 impl SceneLights {
     /// `lights` (in original scene coordinates, as `Scene::lights`) moved
     /// into the frame re-centred by `offset`, with distances in scene units
-    /// of which `units_per_metre` make a metre. Lamps of zero power are
-    /// never sampled.
-    pub fn new(lights: &Lights, offset: DVec3, units_per_metre: f64) -> SceneLights {
+    /// of which `units_per_metre` make a metre, for a scene whose surfaces
+    /// span `bounds` (re-centred). Lamps of zero power are never sampled.
+    pub fn new(
+        lights: &Lights,
+        offset: DVec3,
+        units_per_metre: f64,
+        bounds: (DVec3, DVec3),
+    ) -> SceneLights {
         let lights = lights.recentred(offset);
         let mut lamps = Vec::new();
         let mut lamp_cumulative = Vec::new();
@@ -89,7 +99,17 @@ impl SceneLights {
             lamps,
             lamp_cumulative,
             units_per_metre,
+            centre: 0.5 * (bounds.0 + bounds.1),
+            diagonal: (bounds.1 - bounds.0).length(),
         }
+    }
+
+    /// Where a shadow ray from `x` along unit `wi` toward a light at
+    /// infinity ends: past every surface, since any surface point is within
+    /// half the diagonal of the box's centre. A segment test there is the
+    /// any-hit query, cheaper than finding the nearest hit.
+    pub fn beyond_the_scene(&self, x: DVec3, wi: DVec3) -> DVec3 {
+        x + wi * ((x - self.centre).length() + self.diagonal)
     }
 
     /// Whether there is no sun, no sky and no lamp to sample.

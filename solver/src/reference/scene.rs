@@ -164,12 +164,18 @@ impl RenderScene {
             .iter()
             .map(|s| (bsdfs[s.material].kd + bsdfs[s.material].ks).max_element())
             .fold(0.0, f64::max);
+        let lights = SceneLights::new(
+            &scene.lights,
+            scene.recentre_offset,
+            scene.units_per_metre,
+            bounds_of(&surfaces),
+        );
         RenderScene {
             surfaces,
             bsdfs,
             occluder,
             emitters,
-            lights: SceneLights::new(&scene.lights, scene.recentre_offset, scene.units_per_metre),
+            lights,
             material_names: scene.materials.iter().map(|m| m.name.clone()).collect(),
             object_names,
             max_albedo,
@@ -228,16 +234,21 @@ impl RenderScene {
 
     /// The scene's bounds (re-centred coordinates).
     pub fn bounds(&self) -> (DVec3, DVec3) {
-        let mut lo = DVec3::splat(f64::INFINITY);
-        let mut hi = DVec3::splat(f64::NEG_INFINITY);
-        for v in self.surfaces.iter().flat_map(|s| &s.vertices) {
-            lo = lo.min(*v);
-            hi = hi.max(*v);
-        }
-        if lo.x > hi.x {
-            (DVec3::ZERO, DVec3::ZERO)
-        } else {
-            (lo, hi)
-        }
+        bounds_of(&self.surfaces)
+    }
+}
+
+/// The bounding box of `surfaces`' vertices; zero when there are none.
+fn bounds_of(surfaces: &[Surface]) -> (DVec3, DVec3) {
+    let mut lo = DVec3::splat(f64::INFINITY);
+    let mut hi = DVec3::splat(f64::NEG_INFINITY);
+    for v in surfaces.iter().flat_map(|s| &s.vertices) {
+        lo = lo.min(*v);
+        hi = hi.max(*v);
+    }
+    if lo.x > hi.x {
+        (DVec3::ZERO, DVec3::ZERO)
+    } else {
+        (lo, hi)
     }
 }
