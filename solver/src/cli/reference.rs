@@ -308,8 +308,10 @@ pub fn run(args: ReferenceArgs) -> anyhow::Result<ExitCode> {
 
 /// Says what was built and, for a bounce limit, the bound on the missing light.
 fn report_scene(render: &RenderScene, args: &ReferenceArgs) {
-    if render.emitters.is_empty() {
-        eprintln!("solver: warning: the scene has no emitter: the image will be black");
+    if !render.is_lit() {
+        eprintln!(
+            "solver: warning: the scene has no emitter, sun, sky or lamp: the image will be black"
+        );
     }
     for lobe in &render.lobes {
         eprintln!(

@@ -6,8 +6,9 @@
 //! Physics (the solver's): surfaces are one-sided. A ray that meets a polygon's
 //! back face finds it black (no emission, no reflection), yet the polygon blocks
 //! light from either side, as the solver's visibility rays do. Emitters are
-//! Lambertian with radiance `emission` toward their front. There is no light
-//! from the background.
+//! Lambertian with radiance `emission` toward their front. A ray that leaves
+//! the scene sees the sky and the sun's disc, if the scene has them; lamps
+//! are points that no ray meets ([`super::lights`]).
 
 use super::scene::RenderScene;
 use crate::geometry::sampling::Rng;
@@ -44,7 +45,7 @@ pub struct Integrator<'a> {
 /// The power heuristic (β = 2) weight of a strategy of density `a` against one
 /// of density `b` (Veach 1997, §9.2.4).
 #[inline]
-fn power_heuristic(a: f64, b: f64) -> f64 {
+pub(super) fn power_heuristic(a: f64, b: f64) -> f64 {
     let (a2, b2) = (a * a, b * b);
     if a2 + b2 > 0.0 {
         a2 / (a2 + b2)
@@ -97,7 +98,7 @@ impl Integrator<'_> {
     pub fn radiance(&self, origin: DVec3, dir: DVec3, rng: &mut Rng) -> DVec3 {
         match self.intersect(origin, dir) {
             Some(hit) => self.path(hit, dir, rng),
-            None => DVec3::ZERO,
+            None => self.scene.lights.background(dir),
         }
     }
 
@@ -126,6 +127,7 @@ impl Integrator<'_> {
         let mut throughput = DVec3::ONE;
         // Density of the BSDF sample that found this hit; None for the eye ray.
         let mut bsdf_pdf: Option<f64> = None;
+        let lights = &scene.lights;
         let mut depth = 0;
         loop {
             if !hit.front {
@@ -155,6 +157,9 @@ impl Integrator<'_> {
             }
             let wo = -dir;
             radiance += throughput * self.direct_light(hit, wo, rng);
+            if !lights.is_empty() {
+                radiance += throughput * self.direct_lights(hit, wo, rng);
+            }
             let Some(sample) = bsdf.sample(wo, n, rng) else {
                 break;
             };
@@ -177,6 +182,11 @@ impl Integrator<'_> {
                 break;
             }
             let Some(next) = self.intersect(hit.point, sample.wi) else {
+                // The ray leaves the scene: the sky and the sun, weighted
+                // against their next-event samples at this point.
+                if !lights.is_empty() {
+                    radiance += throughput * lights.escaped(sample.wi, sample.pdf, n);
+                }
                 break;
             };
             bsdf_pdf = Some(sample.pdf);
@@ -219,5 +229,68 @@ impl Integrator<'_> {
         let weight = power_heuristic(pdf_l, bsdf.pdf(wi, wo, n));
         let le = scene.emission_at(light.polygon, light.point);
         f * le * (cos_i * weight / pdf_l)
+    }
+
+    /// Next-event estimation of the sun, the sky and the lamps at `hit`
+    /// toward `wo`: one sample of each that the scene has (random numbers
+    /// are drawn only for those, so a scene without them renders as before).
+    fn direct_lights(&self, hit: SurfaceHit, wo: DVec3, rng: &mut Rng) -> DVec3 {
+        let lights = &self.scene.lights;
+        let surface = &self.scene.surfaces[hit.polygon];
+        let n = surface.shading_normal(hit.point);
+        let mut sum = DVec3::ZERO;
+        if lights.has_sun() {
+            let (u1, u2) = (rng.next_f64(), rng.next_f64());
+            if let Some(s) = lights.sample_sun(u1, u2) {
+                sum += self.light_sample(hit, wo, n, &s);
+            }
+        }
+        if lights.has_sky() {
+            let (u1, u2) = (rng.next_f64(), rng.next_f64());
+            if let Some(s) = lights.sample_sky(n, u1, u2) {
+                sum += self.light_sample(hit, wo, n, &s);
+            }
+        }
+        if lights.has_lamps() {
+            let (u0, u1, u2) = (rng.next_f64(), rng.next_f64(), rng.next_f64());
+            if let Some(s) = lights.sample_lamp(hit.point, u0, u1, u2) {
+                sum += self.light_sample(hit, wo, n, &s);
+            }
+        }
+        sum
+    }
+
+    /// One light sample's contribution at `hit` (shading normal `n`) toward
+    /// `wo`: f · cos θ_i · weight, times its MIS weight against BSDF
+    /// sampling, if the shadow ray reaches the light.
+    fn light_sample(
+        &self,
+        hit: SurfaceHit,
+        wo: DVec3,
+        n: DVec3,
+        s: &super::lights::DirectSample,
+    ) -> DVec3 {
+        let scene = self.scene;
+        let geometric = scene.surfaces[hit.polygon].normal;
+        let cos_i = s.wi.dot(n);
+        if cos_i <= 0.0 || s.wi.dot(geometric) <= 0.0 || s.weight.max_element() <= 0.0 {
+            return DVec3::ZERO;
+        }
+        let bsdf = scene.bsdf_at(hit.polygon, hit.point);
+        let f = bsdf.eval(s.wi, wo, n);
+        let largest = f.max_element();
+        if largest.is_nan() || largest <= 0.0 {
+            return DVec3::ZERO;
+        }
+        let target = s
+            .target
+            .unwrap_or_else(|| scene.lights.beyond_the_scene(hit.point, s.wi));
+        if !scene.occluder.visible(hit.point, target) {
+            return DVec3::ZERO;
+        }
+        let weight = s
+            .pdf
+            .map_or(1.0, |pdf| power_heuristic(pdf, bsdf.pdf(s.wi, wo, n)));
+        f * s.weight * (cos_i * weight)
     }
 }

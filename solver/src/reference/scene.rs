@@ -1,10 +1,11 @@
 //! The scene as the reference path tracer sees it: the imported polygons with
-//! their planes, one [`Bsdf`] per material, the closest-hit BVH and the emitter
-//! distribution; plus the material and object names the image's id channels
+//! their planes, one [`Bsdf`] per material, the closest-hit BVH, the emitter
+//! distribution and the lights that are not polygons; plus the material and object names the image's id channels
 //! index.
 
 use super::bsdf::Bsdf;
 use super::emitters::Emitters;
+use super::lights::SceneLights;
 use super::lobe::ExactLobe;
 use crate::geometry::visibility::Occluder;
 use crate::scene::Scene;
@@ -53,6 +54,8 @@ pub struct RenderScene {
     pub bsdfs: Vec<Bsdf>,
     pub occluder: Occluder,
     pub emitters: Emitters,
+    /// The sun, the sky and the lamps, re-centred as the surfaces.
+    pub lights: SceneLights,
     pub material_names: Vec<String>,
     pub object_names: Vec<String>,
     /// Largest reflectance `max(Kd + Ks)` over the channels of the used materials:
@@ -161,11 +164,18 @@ impl RenderScene {
             .iter()
             .map(|s| (bsdfs[s.material].kd + bsdfs[s.material].ks).max_element())
             .fold(0.0, f64::max);
+        let lights = SceneLights::new(
+            &scene.lights,
+            scene.recentre_offset,
+            scene.units_per_metre,
+            bounds_of(&surfaces),
+        );
         RenderScene {
             surfaces,
             bsdfs,
             occluder,
             emitters,
+            lights,
             material_names: scene.materials.iter().map(|m| m.name.clone()).collect(),
             object_names,
             max_albedo,
@@ -183,7 +193,12 @@ impl RenderScene {
         }
     }
 
-    /// The scene's bounds (re-centred coordinates).
+    /// Whether anything lights the scene: an emitting polygon, the sun, the
+    /// sky or a lamp.
+    pub fn is_lit(&self) -> bool {
+        !self.emitters.is_empty() || !self.lights.is_empty()
+    }
+
     /// The BSDF at `point` on surface `polygon`: its material's, with Kd
     /// times the texture's bilinear sample at the point's UV (level 0, repeat
     /// wrap: `Texture::bilinear`) where the surface is textured, and its
@@ -217,17 +232,23 @@ impl RenderScene {
         }
     }
 
+    /// The scene's bounds (re-centred coordinates).
     pub fn bounds(&self) -> (DVec3, DVec3) {
-        let mut lo = DVec3::splat(f64::INFINITY);
-        let mut hi = DVec3::splat(f64::NEG_INFINITY);
-        for v in self.surfaces.iter().flat_map(|s| &s.vertices) {
-            lo = lo.min(*v);
-            hi = hi.max(*v);
-        }
-        if lo.x > hi.x {
-            (DVec3::ZERO, DVec3::ZERO)
-        } else {
-            (lo, hi)
-        }
+        bounds_of(&self.surfaces)
+    }
+}
+
+/// The bounding box of `surfaces`' vertices; zero when there are none.
+fn bounds_of(surfaces: &[Surface]) -> (DVec3, DVec3) {
+    let mut lo = DVec3::splat(f64::INFINITY);
+    let mut hi = DVec3::splat(f64::NEG_INFINITY);
+    for v in surfaces.iter().flat_map(|s| &s.vertices) {
+        lo = lo.min(*v);
+        hi = hi.max(*v);
+    }
+    if lo.x > hi.x {
+        (DVec3::ZERO, DVec3::ZERO)
+    } else {
+        (lo, hi)
     }
 }

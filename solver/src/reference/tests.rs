@@ -17,7 +17,7 @@ use solution::camera::{Camera, UpAxis};
 use solution::format::SolveMode;
 use std::f64::consts::PI;
 
-fn material(name: &str, kd: f64, ks: f64, alpha: f64, le: DVec3) -> Material {
+pub(super) fn material(name: &str, kd: f64, ks: f64, alpha: f64, le: DVec3) -> Material {
     Material {
         name: name.into(),
         kd: DVec3::splat(kd),
@@ -29,7 +29,7 @@ fn material(name: &str, kd: f64, ks: f64, alpha: f64, le: DVec3) -> Material {
     }
 }
 
-fn polygon(vertices: Vec<DVec3>, material: usize) -> Polygon {
+pub(super) fn polygon(vertices: Vec<DVec3>, material: usize) -> Polygon {
     Polygon {
         vertices,
         vertex_normals: None,
@@ -41,7 +41,7 @@ fn polygon(vertices: Vec<DVec3>, material: usize) -> Polygon {
     }
 }
 
-fn scene(polygons: Vec<Polygon>, materials: Vec<Material>) -> Scene {
+pub(super) fn scene(polygons: Vec<Polygon>, materials: Vec<Material>) -> Scene {
     Scene {
         lights: Default::default(),
         polygons,
@@ -114,7 +114,7 @@ fn z_stats(z: &[f64]) -> (f64, f64) {
     (mean * n.sqrt(), mean_sq)
 }
 
-fn assert_unbiased(name: &str, z: &[f64]) {
+pub(super) fn assert_unbiased(name: &str, z: &[f64]) {
     let (scaled_mean, mean_sq) = z_stats(z);
     assert!(
         scaled_mean.abs() < 4.0 && mean_sq > 0.5 && mean_sq < 2.0,
@@ -124,7 +124,7 @@ fn assert_unbiased(name: &str, z: &[f64]) {
 }
 
 /// Mean and standard error of `count` samples of `f`.
-fn estimate(count: usize, mut f: impl FnMut(usize) -> f64) -> (f64, f64) {
+pub(super) fn estimate(count: usize, mut f: impl FnMut(usize) -> f64) -> (f64, f64) {
     let (mut s, mut s2) = (0.0, 0.0);
     for k in 0..count {
         let x = f(k);
@@ -212,7 +212,7 @@ fn glossy_furnace_mean_exitance_is_pi_le_over_one_minus_ks() {
     assert_unbiased("glossy furnace", &z);
 }
 
-fn square_at(centre: DVec3, half: f64, facing_down: bool) -> Vec<DVec3> {
+pub(super) fn square_at(centre: DVec3, half: f64, facing_down: bool) -> Vec<DVec3> {
     let c = centre;
     let v = |x: f64, y: f64| c + DVec3::new(x * half, y * half, 0.0);
     if facing_down {
