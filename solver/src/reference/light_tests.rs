@@ -450,16 +450,17 @@ fn rays_that_escape_show_the_sky_and_the_sun_disc() {
 }
 
 /// Lamp distances are in metres: the same scene modelled in millimetres
-/// (units_per_metre = 1000), re-centred by an offset its lamp is not
-/// (Scene::lights are in original coordinates), gives the same radiance as
-/// in metres, to 1e-9, and both the closed form ρ I cos θ / (π d²).
+/// (units_per_metre = 1000) gives the same radiance as in metres, to 1e-9,
+/// and both the closed form ρ I cos θ / (π d²). Lamps are in the polygons'
+/// frame (`Scene::lights`), so the import's recentre offset, a record of
+/// what was subtracted from both, moves neither.
 #[test]
-fn lamp_distances_are_in_metres_and_lamps_follow_the_recentring() {
+fn lamp_distances_are_in_metres_and_lamps_share_the_polygons_frame() {
     let i0 = DVec3::new(1.0, 2.0, 3.0);
     let at = DVec3::new(0.3, 0.1, 0.8);
     let offset = DVec3::new(1234.0, -567.0, 89.0);
     let render_in = |scale: f64| {
-        let lamp = Lamp::point("bulb", at * scale + offset, i0, 0.0).unwrap();
+        let lamp = Lamp::point("bulb", at * scale, i0, 0.0).unwrap();
         let mut s = scene(
             vec![polygon(square_at(DVec3::ZERO, 50.0 * scale, false), 0)],
             vec![material("floor", RHO, 0.0, 1.0, DVec3::ZERO)],

@@ -71,17 +71,12 @@ pub struct SceneLights {
 }
 
 impl SceneLights {
-    /// `lights` (in original scene coordinates, as `Scene::lights`) moved
-    /// into the frame re-centred by `offset`, with distances in scene units
-    /// of which `units_per_metre` make a metre, for a scene whose surfaces
-    /// span `bounds` (re-centred). Lamps of zero power are never sampled.
-    pub fn new(
-        lights: &Lights,
-        offset: DVec3,
-        units_per_metre: f64,
-        bounds: (DVec3, DVec3),
-    ) -> SceneLights {
-        let lights = lights.recentred(offset);
+    /// `lights` (in the polygons' frame, as `Scene::lights`), with
+    /// distances in scene units of which `units_per_metre` make a metre, for
+    /// a scene whose surfaces span `bounds`. Lamps of zero power are never
+    /// sampled.
+    pub fn new(lights: &Lights, units_per_metre: f64, bounds: (DVec3, DVec3)) -> SceneLights {
+        let lights = lights.clone();
         let mut lamps = Vec::new();
         let mut lamp_cumulative = Vec::new();
         let mut total = 0.0;

@@ -164,12 +164,7 @@ impl RenderScene {
             .iter()
             .map(|s| (bsdfs[s.material].kd + bsdfs[s.material].ks).max_element())
             .fold(0.0, f64::max);
-        let lights = SceneLights::new(
-            &scene.lights,
-            scene.recentre_offset,
-            scene.units_per_metre,
-            bounds_of(&surfaces),
-        );
+        let lights = SceneLights::new(&scene.lights, scene.units_per_metre, bounds_of(&surfaces));
         RenderScene {
             surfaces,
             bsdfs,

@@ -224,8 +224,9 @@ pub struct Scene {
     pub camera: Option<Camera>,
     /// The bounding-box centre subtracted (in f64) from every input position.
     pub recentre_offset: DVec3,
-    /// The sun, sky and lamps (`crate::light`), in original scene
-    /// coordinates; empty when only emissive materials light the scene.
+    /// The sun, sky and lamps (`crate::light`), in the polygons' frame (lamps
+    /// recentred with them); empty when only emissive materials light the
+    /// scene.
     pub lights: crate::light::Lights,
     pub warnings: Vec<Warning>,
 }
