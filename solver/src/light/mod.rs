@@ -9,6 +9,7 @@
 
 pub mod ies;
 pub mod lamp;
+pub mod portal;
 pub mod sky;
 pub mod sun;
 pub mod units;
@@ -20,6 +21,9 @@ pub struct Lights {
     pub sun: Option<sun::Sun>,
     pub sky: Option<sky::Sky>,
     pub lamps: Vec<lamp::Lamp>,
+    /// Openings the sky lights an interior through (`portal.rs`); they
+    /// change how the sky is sampled, not what it gives.
+    pub portals: Vec<portal::Portal>,
 }
 
 impl Lights {
@@ -33,6 +37,9 @@ impl Lights {
         let mut lights = self.clone();
         for lamp in &mut lights.lamps {
             lamp.position -= offset;
+        }
+        for portal in &mut lights.portals {
+            *portal = portal.moved(offset);
         }
         lights
     }

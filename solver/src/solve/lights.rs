@@ -14,7 +14,9 @@
 //! - the sky: E = (π / N) Σ L(ω_i) V_i over N = [`SKY_RAYS_PER_SAMPLE`] ×
 //!   `samples` cosine-distributed directions (Malley's method on stratified
 //!   points), unbiased for any sky; exact for an open receiver under a
-//!   uniform sky.
+//!   uniform sky. With portals (`light/portal.rs`) half of the rays go
+//!   through the portals the receiver faces, combined with the cosine
+//!   half by the balance heuristic.
 //!
 //! The lights' shot is recorded like an emitter's: vertices that later
 //! splits create receive it exactly ([`super::refine::Replay::lights`]), so
@@ -27,7 +29,7 @@ use super::pipeline::{Shooting, Source, Transport};
 use super::refine::{self, Refined};
 use super::shoot::{Received, ReceivingPoint, RecordedShot};
 use super::{footprint, Solver};
-use crate::geometry::sampling::{stratified_square, stream_id, Rng};
+use crate::geometry::sampling::{stratified_points, stratified_square, stream_id, Rng};
 use crate::geometry::visibility::Occluder;
 use crate::light::lamp::Lamp;
 use crate::light::sky::Sky;
@@ -227,40 +229,89 @@ impl<'a> LightShot<'a> {
         }
     }
 
-    /// The sky's irradiance by cosine-distributed directions about `n`.
+    /// The sky's irradiance: cosine-distributed directions about `n`, and
+    /// with portals, points drawn on the portals the receiver faces, the
+    /// two combined by Veach's (1997, §9.2) multi-sample balance heuristic:
+    /// each direction ω counts f(ω) / Σ_j n_j p_j(ω), with f = L cos θ V and
+    /// n_j samples from density p_j (`light/portal.rs`).
     fn sky(&self, sky: &Sky, origin: DVec3, n: DVec3, rng: &mut Rng) -> Part {
         let far = self.far(origin);
-        let (t, b) = n.any_orthonormal_pair();
         let count = self.samples * SKY_RAYS_PER_SAMPLE;
+        let portals = self.portal_shares(origin, n, count / 2);
+        let cosine = count - portals.iter().map(|&(_, k)| k).sum::<u32>();
+        // The balance heuristic's denominator at unit direction w.
+        let density = |w: DVec3| {
+            let cos = w.dot(n).max(0.0);
+            cosine as f64 * cos / PI
+                + portals
+                    .iter()
+                    .map(|&(p, k)| k as f64 * self.lights.portals[p].direction_pdf(origin, w))
+                    .sum::<f64>()
+        };
         let (mut lit, mut open) = (DVec3::ZERO, DVec3::ZERO);
         let mut rays = 0;
-        stratified_square(count, rng, |u, v| {
+        let mut add = |w: DVec3| {
+            let cos = w.dot(n);
+            let radiance = sky.radiance(w);
+            if cos <= 0.0 || radiance == DVec3::ZERO {
+                return;
+            }
+            let f = radiance * cos / density(w);
+            open += f;
+            rays += 1;
+            if self.occluder.visible(origin, origin + w * far) {
+                lit += f;
+            }
+        };
+        let (t, b) = n.any_orthonormal_pair();
+        stratified_square(cosine, rng, |u, v| {
             // Malley's method: a uniform point on the disc lifted to the
             // hemisphere has density cos θ / π.
             let (r, phi) = (u.sqrt(), 2.0 * PI * v);
-            let w = r * (phi.cos() * t + phi.sin() * b) + (1.0 - u).max(0.0).sqrt() * n;
-            let radiance = sky.radiance(w);
-            if radiance == DVec3::ZERO {
-                return;
-            }
-            open += radiance;
-            rays += 1;
-            if self.occluder.visible(origin, origin + w * far) {
-                lit += radiance;
-            }
+            add(r * (phi.cos() * t + phi.sin() * b) + (1.0 - u).max(0.0).sqrt() * n);
         });
-        let scale = PI / count as f64;
-        let weight = (open * scale).max_element();
+        let mut points = Vec::new();
+        for &(p, k) in &portals {
+            points.clear();
+            stratified_points(self.lights.portals[p].corners(), k, rng, &mut points);
+            for q in &points {
+                add((*q - origin).normalize());
+            }
+        }
+        let weight = open.max_element();
         Part {
-            irradiance: lit * scale,
+            irradiance: lit,
             weight,
             visible: if weight > 0.0 {
-                (lit * scale).max_element() / weight
+                lit.max_element() / weight
             } else {
                 0.0
             },
             rays,
         }
+    }
+
+    /// How `total` portal samples are shared among the portals in front of
+    /// the receiver at `origin` facing `n`: by each one's approximate solid
+    /// angle times the cosine toward it, at least one each; none without
+    /// portals in front.
+    fn portal_shares(&self, origin: DVec3, n: DVec3, total: u32) -> Vec<(usize, u32)> {
+        let weights: Vec<(usize, f64)> = self
+            .lights
+            .portals
+            .iter()
+            .enumerate()
+            .filter_map(|(i, p)| {
+                let cos = (p.centre() - origin).normalize_or_zero().dot(n);
+                let w = p.approximate_solid_angle(origin) * cos;
+                (w > 0.0).then_some((i, w))
+            })
+            .collect();
+        let sum: f64 = weights.iter().map(|&(_, w)| w).sum();
+        weights
+            .into_iter()
+            .map(|(i, w)| (i, ((total as f64 * w / sum).round() as u32).max(1)))
+            .collect()
     }
 
     /// A distance from `origin` past every surface: twice the scene's
