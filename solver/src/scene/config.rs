@@ -23,6 +23,10 @@
 //!                                     # a number in scene units
 //! min_element_size = 5                # smallest element's longest edge, same syntax
 //!
+//! [sun]                               # and [sky], [[lights]], a top-level north:
+//! direction = [1, 2, 1]               # the scene's lights (`config_lights.rs`)
+//! illuminance = 100000
+//!
 //! [solver]                            # any solver setting (SettingsPatch)
 //! samples = 16
 //!
