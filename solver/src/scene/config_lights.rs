@@ -702,8 +702,13 @@ fn read_lamp(
         None => 0.0,
     };
     let position = DVec3::from(*l.position.get_ref());
-    let mut lamp = Lamp::point(&name, position, DVec3::ONE, radius)
-        .map_err(|e| err(l.position.span(), e.to_string()))?;
+    let mut lamp = Lamp::point(&name, position, DVec3::ONE, radius).map_err(|e| {
+        let [x, y, z] = *l.position.get_ref();
+        err(
+            l.position.span(),
+            format!("position = [{x}, {y}, {z}]: {e}"),
+        )
+    })?;
     if spot {
         lamp = aim_spot(at, table, &item, lamp)?;
     } else if let Some(key) = given(&[

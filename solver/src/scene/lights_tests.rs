@@ -458,6 +458,11 @@ fn bad_lamp_values_name_the_file_line_and_value() {
     );
     refused(lamp, "[[lights]]", "needs a strength");
     refused(
+        "[[lights]]\nposition = [0, nan, 0]\nintensity = 1\n",
+        "position",
+        "[0, NaN, 0]",
+    );
+    refused(
         &format!("{lamp}intensity = 1\ncandela = 2\n"),
         "candela",
         "give one",
