@@ -243,10 +243,7 @@ fn at_most_one(
         return Err(at.err(
             second.1.clone(),
             item,
-            format!(
-                "[{item}] gives both `{}` and `{}`: give one",
-                first.0, second.0
-            ),
+            format!("`{}` and `{}` are both given: give one", first.0, second.0),
         ));
     }
     Ok(())
@@ -290,7 +287,7 @@ fn color_filter(
     Ok(v)
 }
 
-/// `[sun]`.
+/// `[sun]`, with a warning when it is below the horizon.
 fn read_sun(
     at: &ConfigSource,
     table: &Spanned<SunTable>,
@@ -298,7 +295,21 @@ fn read_sun(
     warnings: &mut Vec<Warning>,
 ) -> Result<Sun, SceneError> {
     let s = table.get_ref();
-    let position = sun_position(at, table, axes, warnings)?;
+    let position = sun_position(at, table, axes)?;
+    let (_, elevation) = axes.azimuth_elevation(position.direction());
+    if elevation <= 0.0 {
+        warnings.push(Warning {
+            source: SourceRef {
+                file: at.path.to_path_buf(),
+                line: at.line(table.span()),
+                item: "sun".to_owned(),
+            },
+            message: format!(
+                "the sun is at or below the horizon (elevation {elevation:.2}°): it lights \
+                 nothing above the ground"
+            ),
+        });
+    }
     let diameter = s
         .angular_diameter_deg
         .as_ref()
@@ -341,7 +352,6 @@ fn sun_position(
     at: &ConfigSource,
     table: &Spanned<SunTable>,
     axes: &SceneAxes,
-    warnings: &mut Vec<Warning>,
 ) -> Result<SunPosition, SceneError> {
     let s = table.get_ref();
     let ways = given(&[
@@ -390,7 +400,7 @@ fn sun_position(
             },
         );
     }
-    sun_from_place(at, table, axes, warnings)
+    sun_from_place(at, table, axes)
 }
 
 /// The sun seen from `latitude`, `longitude` at local `date` and `time`
@@ -399,7 +409,6 @@ fn sun_from_place(
     at: &ConfigSource,
     table: &Spanned<SunTable>,
     axes: &SceneAxes,
-    warnings: &mut Vec<Warning>,
 ) -> Result<SunPosition, SceneError> {
     let s = table.get_ref();
     let (Some(lat), Some(lon), Some(date), Some(time)) =
@@ -443,34 +452,18 @@ fn sun_from_place(
         hours,
         utc_offset_hours: zone.map_or(0.0, |z| *z.get_ref()),
     };
-    let (position, ephemeris) =
-        SunPosition::from_place_and_time(&site, &local, axes).map_err(|e| {
-            let key = match &e {
-                SunError::OutOfRange { what, .. } | SunError::NotFinite { what, .. } => match *what
-                {
-                    "latitude" => Some(lat.span()),
-                    "longitude" => Some(lon.span()),
-                    "the UTC offset" => zone.map(|z| z.span()),
-                    _ => Some(time.span()),
-                },
-                _ => Some(date.span()),
-            };
-            at.err(key.unwrap_or(table.span()), "sun", e.to_string())
-        })?;
-    if ephemeris.apparent_elevation_deg <= 0.0 {
-        warnings.push(Warning {
-            source: SourceRef {
-                file: at.path.to_path_buf(),
-                line: at.line(table.span()),
-                item: "sun".to_owned(),
+    let (position, _) = SunPosition::from_place_and_time(&site, &local, axes).map_err(|e| {
+        let key = match &e {
+            SunError::OutOfRange { what, .. } | SunError::NotFinite { what, .. } => match *what {
+                "latitude" => Some(lat.span()),
+                "longitude" => Some(lon.span()),
+                "the UTC offset" => zone.map(|z| z.span()),
+                _ => Some(time.span()),
             },
-            message: format!(
-                "the sun is below the horizon at that place and time (elevation {:.2}°): \
-                 it lights nothing",
-                ephemeris.apparent_elevation_deg
-            ),
-        });
-    }
+            _ => Some(date.span()),
+        };
+        at.err(key.unwrap_or(table.span()), "sun", e.to_string())
+    })?;
     Ok(position)
 }
 

@@ -164,6 +164,19 @@ fn a_sun_below_the_horizon_is_a_warning() {
         .warnings
         .iter()
         .any(|w| w.message.contains("below the horizon")));
+    // The same for any form of position; a sun above the horizon is quiet.
+    for (elevation, warned) in [(-5, true), (5, false)] {
+        let path = config(
+            dir.path(),
+            &format!("[sun]\nazimuth_deg = 0\nelevation_deg = {elevation}\nirradiance = 1\n"),
+        );
+        let scene = load_scene(&path, &ImportOptions::default()).unwrap().scene;
+        let found = scene
+            .warnings
+            .iter()
+            .any(|w| w.message.contains("below the horizon") && w.source.line == Some(2));
+        assert_eq!(found, warned, "{elevation}: {:?}", scene.warnings);
+    }
 }
 
 #[test]
@@ -365,7 +378,7 @@ fn bad_sun_values_name_the_file_line_and_value() {
     refused(
         "[sun]\ndirection = [0, 1, 0]\nazimuth_deg = 3\nelevation_deg = 4\nirradiance = 1\n",
         "azimuth_deg",
-        "both `direction` and `azimuth_deg/elevation_deg`",
+        "`direction` and `azimuth_deg/elevation_deg` are both given",
     );
     refused(
         "[sun]\nlatitude = 45\nlongitude = 0\ndate = \"2024-13-01\"\ntime = \"12:00\"\nirradiance = 1\n",
