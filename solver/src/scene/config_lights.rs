@@ -269,8 +269,8 @@ fn color_filter(
         return Err(at.err(
             c.span(),
             item,
-            "`color` filters a photometric value (candela, lux, cd/m²); a radiometric RGB \
-             value is already coloured: leave `color` out"
+            "`color` filters a photometric strength (candela, lux, cd/m²), and there is none \
+             here (a radiometric RGB value is already coloured): leave `color` out"
                 .to_owned(),
         ));
     }

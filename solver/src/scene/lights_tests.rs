@@ -403,7 +403,7 @@ fn bad_sun_values_name_the_file_line_and_value() {
     refused(
         "[sun]\ndirection = [0, 1, 0]\nirradiance = 1\ncolor = [1, 0, 0]\n",
         "color",
-        "radiometric",
+        "leave `color` out",
     );
 }
 
