@@ -227,3 +227,44 @@ fn lights_light_a_gltf_scene_without_emitters() {
     assert!(message.contains("--sun AZIMUTH,ELEVATION"), "{message}");
     assert!(!message.contains("Ke r g b"), "{message}");
 }
+
+#[test]
+fn a_scene_config_keeps_its_gltf_lights_and_adds_its_own() {
+    let dir = tempfile::tempdir().unwrap();
+    let lights =
+        json!([{"type": "point", "intensity": 683.0}, {"type": "directional", "intensity": 683.0}]);
+    let (rotation, tilt) = quat(DQuat::from_rotation_x(-0.8));
+    let nodes = json!([
+        {"translation": [0.0, 1.0, 0.0], "extensions": {"KHR_lights_punctual": {"light": 0}}},
+        {"rotation": rotation, "extensions": {"KHR_lights_punctual": {"light": 1}}}
+    ]);
+    write(
+        dir.path(),
+        "lit",
+        &document(lights, nodes, json!([0, 1, 2])),
+    );
+    let config = dir.path().join("scene.toml");
+    std::fs::write(
+        &config,
+        "geometry = [\"lit.gltf\"]\n[sky]\nkind = \"clear\"\n\
+         [[lights]]\nposition = [0, 2, 0]\nintensity = 2\n",
+    )
+    .unwrap();
+    let scene = load_scene(&config, &ImportOptions::default())
+        .unwrap()
+        .scene;
+    let lights = scene.lights.recentred(-scene.recentre_offset);
+    // The file's lamp first, then the config's.
+    let intensities: Vec<f64> = lights.lamps.iter().map(|l| l.intensity.x).collect();
+    assert_eq!(intensities, [1.0, 2.0]);
+    assert_eq!(lights.lamps[0].position, DVec3::new(0.0, 1.0, 0.0));
+    // The config's clear sky follows the file's directional light.
+    let sun = lights.sun.unwrap();
+    assert!((sun.direction() - tilt * DVec3::Z).length() < 1e-12);
+    let model = lights.sky.unwrap().model();
+    assert!(matches!(
+        model,
+        crate::light::sky::SkyModel::Clear { sun_direction, .. }
+            if (sun_direction - sun.direction()).length() < 1e-15
+    ));
+}
