@@ -333,6 +333,8 @@ fn help_explains_every_flag() {
         "--display",
         "--preview",
         "--stats-json",
+        "--sun",
+        "--sky",
     ] {
         assert!(help.contains(flag), "--help does not mention {flag}");
     }

@@ -74,6 +74,10 @@ pub fn run(args: SolveArgs) -> anyhow::Result<ExitCode> {
     let options = ImportOptions {
         strict: args.settings.strict.unwrap_or(false),
         units_per_metre: args.settings.units_per_metre,
+        lights: crate::scene::LightFlags {
+            sun: args.sun,
+            sky: args.sky,
+        },
         ..Default::default()
     };
     let loaded = crate::scene::load_scene(&args.scene, &options)

@@ -26,6 +26,7 @@ use super::text::{rgb, short};
 use super::weld::weld;
 use super::{Material, Polygon, Scene, SceneError, SourceRef, Warning};
 use crate::geometry::polygon::{ear_clip, newell_normal};
+use crate::light::Lights;
 use glam::DVec3;
 use solution::camera::{Camera, UpAxis};
 
@@ -103,6 +104,10 @@ pub(crate) struct BuildOptions {
     pub units_per_metre: f64,
     pub up_axis: UpAxis,
     pub camera: Option<Camera>,
+    /// The sun, sky and lamps, in the input's original coordinates.
+    pub lights: Lights,
+    /// Whether the input is a TOML scene config (for the no-emitter hint).
+    pub from_config: bool,
 }
 
 /// Turns parsed input into a scene (the module comment lists the steps).
@@ -152,13 +157,13 @@ pub(crate) fn build_scene(mut raw: RawScene, options: &BuildOptions) -> Result<S
     polygons.shrink_to_fit();
 
     let materials = finish_materials(&raw.materials, &mut polygons, &mut warnings)?;
-    if !polygons.iter().any(|p| materials[p.material].is_emitter()) {
+    if options.lights.is_empty() && !polygons.iter().any(|p| materials[p.material].is_emitter()) {
         let names: Vec<&str> = materials.iter().map(|m| m.name.as_str()).collect();
         return Err(SceneError::NoEmitter(format!(
-            "{files}: none of the materials in use ({}) emits light, so the solution would be black. \
-             Give one an emission: `Ke r g b` in the MTL file, `emit r g b` on a legacy attribute line, \
-             or `emission = [r, g, b]` under `[materials.NAME]` in a TOML scene config",
-            names.join(", ")
+            "{files}: none of the materials in use ({}) emits light and the scene has no \
+             lights, so the solution would be black. {}",
+            names.join(", "),
+            no_emitter_hint(&raw.files, options.from_config)
         )));
     }
     if options.strict {
@@ -170,7 +175,7 @@ pub(crate) fn build_scene(mut raw: RawScene, options: &BuildOptions) -> Result<S
         }
     }
     Ok(Scene {
-        lights: Default::default(),
+        lights: options.lights.recentred(recentre_offset),
         polygons,
         materials,
         units_per_metre: options.units_per_metre,
@@ -280,6 +285,50 @@ fn some_user_has_uvs(
         ),
     );
     false
+}
+
+/// What to do about a scene with no emitter, for the kinds of file it came
+/// from: an emission in the geometry's own terms, or lights (issue 41).
+fn no_emitter_hint(files: &[std::path::PathBuf], from_config: bool) -> String {
+    let extension = |f: &std::path::PathBuf| {
+        f.extension()
+            .and_then(|e| e.to_str())
+            .map(str::to_ascii_lowercase)
+            .unwrap_or_default()
+    };
+    let has = |kinds: &[&str]| files.iter().any(|f| kinds.contains(&extension(f).as_str()));
+    let gltf = has(&["gltf", "glb"]);
+    let obj = has(&["obj"]);
+    let legacy = files
+        .iter()
+        .any(|f| !["gltf", "glb", "obj"].contains(&extension(f).as_str()));
+    let mut ways = Vec::new();
+    if from_config {
+        ways.push(
+            "`emission = [r, g, b]` under `[materials.NAME]` in the TOML scene config".to_owned(),
+        );
+    }
+    if obj {
+        ways.push("`Ke r g b` in the MTL file".to_owned());
+    }
+    if gltf {
+        ways.push(
+            "an emissive material or `KHR_lights_punctual` lights in the glTF file".to_owned(),
+        );
+    }
+    if legacy {
+        ways.push("`emit r g b` on a legacy attribute line".to_owned());
+    }
+    let lights = if from_config {
+        "add `[sun]`, `[sky]` or `[[lights]]` tables to the scene config"
+    } else {
+        "light it from a TOML scene config with `[sun]`, `[sky]` or `[[lights]]` tables"
+    };
+    format!(
+        "Give a material an emission ({}), {lights}, or pass `solver solve` the flags \
+         `--sun AZIMUTH,ELEVATION` and `--sky KIND` (docs/lights.md)",
+        ways.join(", or ")
+    )
 }
 
 fn describe_files(files: &[std::path::PathBuf]) -> String {

@@ -23,6 +23,10 @@
 //!                                     # a number in scene units
 //! min_element_size = 5                # smallest element's longest edge, same syntax
 //!
+//! [sun]                               # and [sky], [[lights]], a top-level north:
+//! direction = [1, 2, 1]               # the scene's lights (`config_lights.rs`)
+//! illuminance = 100000
+//!
 //! [solver]                            # any solver setting (SettingsPatch)
 //! samples = 16
 //!
@@ -47,12 +51,17 @@
 //! final `units_per_metre` (the command line's, else this file's).
 
 use super::clean::emission_problem;
+use super::config_lights::{
+    merge_file_lights, read_lights, LampTable, LightScene, LightTables, SkyTable, SunTable,
+};
 use super::display::{load_display_file, DisplayParams};
 use super::legacy::{parse_legacy, MAX_PATCHES};
 use super::obj::parse_obj;
 use super::raw::{RawMaterial, RawPolygon, RawScene};
 use super::text::{line_of_offset, read_text, rgb};
 use super::{SceneError, SourceRef};
+use crate::light::sun::SceneAxes;
+use crate::light::Lights;
 use crate::settings::SettingsPatch;
 use glam::DVec3;
 use serde::de::{self, SeqAccess, Visitor};
@@ -80,6 +89,12 @@ struct ConfigFile {
     objects: BTreeMap<String, Spanned<ObjectOverride>>,
     solver: Option<Spanned<SettingsPatch>>,
     camera: Option<Spanned<CameraConfig>>,
+    /// The scene's north for the sun's azimuth (`config_lights.rs`).
+    north: Option<Spanned<[f64; 3]>>,
+    sun: Option<Spanned<SunTable>>,
+    sky: Option<Spanned<SkyTable>>,
+    #[serde(default)]
+    lights: Vec<Spanned<LampTable>>,
 }
 
 #[derive(Deserialize)]
@@ -144,7 +159,7 @@ pub struct MeshSizes {
 
 /// A length value before its check: a number or a string.
 #[derive(Clone, Debug)]
-enum RawLength {
+pub(super) enum RawLength {
     Number(f64),
     Text(String),
 }
@@ -178,7 +193,7 @@ impl<'de> Deserialize<'de> for RawLength {
 
 /// Checks a length: finite and > 0; a string is a number followed by `m`,
 /// `cm` or `mm` (spaces allowed between).
-fn parse_length(key: &str, raw: &RawLength) -> Result<Length, String> {
+pub(super) fn parse_length(key: &str, raw: &RawLength) -> Result<Length, String> {
     let (length, shown) = match raw {
         RawLength::Number(v) => (Some(Length::SceneUnits(*v)), v.to_string()),
         RawLength::Text(t) => {
@@ -209,7 +224,7 @@ fn parse_length(key: &str, raw: &RawLength) -> Result<Length, String> {
 
 /// A colour: one grey number or `[r, g, b]`.
 #[derive(Clone, Copy, Debug)]
-struct Rgb(DVec3);
+pub(super) struct Rgb(pub DVec3);
 
 impl<'de> Deserialize<'de> for Rgb {
     fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
@@ -256,19 +271,41 @@ pub(crate) struct ConfigScene {
     pub camera: Option<Camera>,
     pub units_per_metre: Option<f64>,
     pub up_axis: UpAxis,
+    /// The sun, sky and lamps of the config's tables and its glTF files, in
+    /// the geometry's original coordinates.
+    pub lights: Lights,
+    /// The scene's up and north, for command-line lights (`light_flags.rs`).
+    pub axes: SceneAxes,
 }
 
-/// Reads a TOML scene config and every file it names.
-pub(crate) fn load_config(path: &Path) -> Result<ConfigScene, SceneError> {
+/// Reads a TOML scene config and every file it names. `units_per_metre_flag`
+/// is the command line's scale, which wins over the config's for lengths in
+/// metres (a lamp's radius).
+pub(crate) fn load_config(
+    path: &Path,
+    units_per_metre_flag: Option<f64>,
+) -> Result<ConfigScene, SceneError> {
     let text = read_text(path)?;
     let at = ConfigSource { path, text: &text };
     let config = parse_config(&at)?;
     let dir = path.parent().unwrap_or(Path::new(""));
-    let mut raw = read_geometry(&at, &config, dir)?;
+    let (mut raw, file_lights) = read_geometry(&at, &config, dir)?;
     apply_material_overrides(&at, &config, &mut raw)?;
     apply_object_overrides(&at, &config, &mut raw)?;
     let (settings, units_per_metre) = solver_settings(&at, &config)?;
     let up_axis = config.up.unwrap_or_default();
+    let tables = LightTables {
+        north: config.north.as_ref(),
+        sun: config.sun.as_ref(),
+        sky: config.sky.as_ref(),
+        lamps: &config.lights,
+    };
+    let scene = LightScene {
+        up_axis,
+        units_per_metre: units_per_metre_flag.or(units_per_metre).unwrap_or(1.0),
+        dir,
+    };
+    let (lights, axes) = read_lights(&at, &tables, &scene, file_lights, &mut raw.warnings)?;
     let display = match &config.display {
         Some(name) => {
             let file = dir.join(name.get_ref());
@@ -289,21 +326,28 @@ pub(crate) fn load_config(path: &Path) -> Result<ConfigScene, SceneError> {
         camera,
         units_per_metre,
         up_axis,
+        lights,
+        axes,
     })
 }
 
 /// The config file being read, for errors at the line of a TOML span.
-struct ConfigSource<'a> {
-    path: &'a Path,
-    text: &'a str,
+pub(super) struct ConfigSource<'a> {
+    pub path: &'a Path,
+    pub text: &'a str,
 }
 
 impl ConfigSource<'_> {
-    fn line(&self, span: std::ops::Range<usize>) -> Option<usize> {
+    pub(super) fn line(&self, span: std::ops::Range<usize>) -> Option<usize> {
         Some(line_of_offset(self.text, span.start))
     }
 
-    fn err(&self, span: std::ops::Range<usize>, item: &str, message: String) -> SceneError {
+    pub(super) fn err(
+        &self,
+        span: std::ops::Range<usize>,
+        item: &str,
+        message: String,
+    ) -> SceneError {
         SceneError::at(self.path, self.line(span), item.to_owned(), message)
     }
 
@@ -363,12 +407,13 @@ fn parse_config(at: &ConfigSource) -> Result<ConfigFile, SceneError> {
     Ok(config)
 }
 
-/// Every geometry file the config names, in order, as one raw scene.
+/// Every geometry file the config names, in order, as one raw scene, and
+/// the lights of its glTF files (`KHR_lights_punctual`).
 fn read_geometry(
     at: &ConfigSource,
     config: &ConfigFile,
     dir: &Path,
-) -> Result<RawScene, SceneError> {
+) -> Result<(RawScene, Lights), SceneError> {
     if config.geometry.get_ref().is_empty() {
         return Err(at.err(
             config.geometry.span(),
@@ -378,6 +423,7 @@ fn read_geometry(
         ));
     }
     let mut raw = RawScene::default();
+    let mut lights = Lights::default();
     for name in config.geometry.get_ref() {
         let file = dir.join(name.get_ref());
         let extension = file
@@ -386,10 +432,13 @@ fn read_geometry(
             .map(str::to_ascii_lowercase);
         let part = match extension.as_deref() {
             Some("obj") => parse_obj(&file),
-            // A glTF's geometry and materials only: in a scene config, the
-            // config's own `units_per_metre` (default 1, which is glTF's metre)
-            // and `camera` apply, not the glTF file's camera.
-            Some("gltf") | Some("glb") => super::gltf::parse_gltf(&file).map(|g| g.raw),
+            // A glTF's geometry, materials and lights only: in a scene
+            // config, the config's own `units_per_metre` (default 1, which is
+            // glTF's metre) and `camera` apply, not the glTF file's camera.
+            Some("gltf") | Some("glb") => super::gltf::parse_gltf(&file).map(|g| {
+                merge_file_lights(&mut lights, g.lights, &file, &mut raw.warnings);
+                g.raw
+            }),
             Some("toml") => {
                 return Err(at.err(
                     name.span(),
@@ -405,7 +454,7 @@ fn read_geometry(
         .map_err(|e| at.reread(name, "geometry", &file, e))?;
         raw.append(part);
     }
-    Ok(raw)
+    Ok((raw, lights))
 }
 
 /// Checks one `[materials.KEY]` table's values, each at its own line.

@@ -13,10 +13,12 @@ use std::path::{Path, PathBuf};
 
 mod clean;
 mod config;
+mod config_lights;
 mod display;
 mod error;
 mod gltf;
 mod legacy;
+mod light_flags;
 mod mtl;
 mod obj;
 mod planar;
@@ -34,6 +36,8 @@ pub(crate) use weld::IntMap;
 #[cfg(test)]
 mod hostile_tests;
 #[cfg(test)]
+mod lights_tests;
+#[cfg(test)]
 mod tests;
 
 pub use clean::{
@@ -43,6 +47,9 @@ pub use clean::{
 pub use config::{Length, MeshSizes};
 pub use display::{load_display_file, DisplayParams};
 pub use error::SceneError;
+pub use light_flags::{
+    LightFlags, SkyFlag, SkyFlagKind, SunFlag, DEFAULT_SKY_LUX, DEFAULT_SUN_LUX,
+};
 pub use mtl::alpha_from_ns;
 pub use smooth::{smooth_scene, SmoothReport, DEFAULT_CREASE_ANGLE, SMOOTH_TOLERANCE};
 pub use texture_file::{MAX_TEXTURE_FILE_BYTES, MAX_TEXTURE_SIZE, MAX_TEXTURE_TEXELS};
@@ -224,9 +231,9 @@ pub struct Scene {
     pub camera: Option<Camera>,
     /// The bounding-box centre subtracted (in f64) from every input position.
     pub recentre_offset: DVec3,
-    /// The sun, sky and lamps (`crate::light`), in the polygons' frame (lamps
-    /// recentred with them); empty when only emissive materials light the
-    /// scene.
+    /// The sun, sky and lamps (`crate::light`), in the polygons' re-centred
+    /// frame (lamp positions less [`Scene::recentre_offset`]); empty when
+    /// only emissive materials light the scene.
     pub lights: crate::light::Lights,
     pub warnings: Vec<Warning>,
 }
@@ -261,6 +268,8 @@ pub struct ImportOptions {
     /// Scene units per metre from the command line; wins over the TOML config's.
     /// Neither given: 1.
     pub units_per_metre: Option<f64>,
+    /// A sun and a sky from the command line, which replace the scene's.
+    pub lights: LightFlags,
 }
 
 impl Default for ImportOptions {
@@ -269,6 +278,7 @@ impl Default for ImportOptions {
             strict: false,
             default_patches: PATCHES_UNSET,
             units_per_metre: None,
+            lights: LightFlags::default(),
         }
     }
 }
@@ -314,10 +324,16 @@ pub fn load_scene(path: &Path, options: &ImportOptions) -> Result<LoadedScene, S
         units_per_metre: options.units_per_metre.unwrap_or(1.0),
         up_axis: UpAxis::default(),
         camera: None,
+        lights: Default::default(),
+        from_config: false,
     };
+    let mut axes = None;
     let (raw, settings, display) = match extension.as_deref() {
         Some("toml") => {
-            let c = config::load_config(path)?;
+            let c = config::load_config(path, options.units_per_metre)?;
+            build.lights = c.lights;
+            build.from_config = true;
+            axes = Some(c.axes);
             build.strict |= c.settings.strict == Some(true);
             build.units_per_metre = options.units_per_metre.or(c.units_per_metre).unwrap_or(1.0);
             build.up_axis = c.up_axis;
@@ -331,6 +347,7 @@ pub fn load_scene(path: &Path, options: &ImportOptions) -> Result<LoadedScene, S
                 .units_per_metre
                 .unwrap_or(self::gltf::UNITS_PER_METRE);
             build.camera = g.camera;
+            build.lights = g.lights;
             (g.raw, SettingsPatch::default(), None)
         }
         Some("mtl") => {
@@ -352,6 +369,14 @@ pub fn load_scene(path: &Path, options: &ImportOptions) -> Result<LoadedScene, S
         }
         _ => (legacy::parse_legacy(path)?, SettingsPatch::default(), None),
     };
+    if !options.lights.is_empty() {
+        let axes = match axes {
+            Some(axes) => axes,
+            None => config_lights::scene_axes(build.up_axis, None)
+                .map_err(|e| SceneError::at(path, None, "", e.to_string()))?,
+        };
+        options.lights.apply(&mut build.lights, &axes, path)?;
+    }
     let scene = clean::build_scene(raw, &build)?;
     Ok(LoadedScene {
         scene,

@@ -165,6 +165,19 @@ pub fn scene_fingerprint(scene: &Scene) -> String {
     h.f64(scene.recentre_offset.x);
     h.f64(scene.recentre_offset.y);
     h.f64(scene.recentre_offset.z);
+    // The lights (issue 41), only when there are some, so that the
+    // fingerprints of scenes lit by their materials alone do not change. The
+    // debug form prints every f64 exactly; a lamp's name is left out.
+    if !scene.lights.is_empty() {
+        let l = &scene.lights;
+        h.str(&format!("{:?}{:?}", l.sun, l.sky));
+        for lamp in &l.lamps {
+            h.str(&format!(
+                "{:?}{:?}{:?}{:?}{:?}",
+                lamp.position, lamp.intensity, lamp.radius, lamp.beam, lamp.profile
+            ));
+        }
+    }
     format!("{:016x}", h.0)
 }
 
@@ -427,6 +440,21 @@ mod tests {
             recentre_offset: DVec3::ZERO,
             warnings: vec![],
         }
+    }
+
+    #[test]
+    fn scene_fingerprint_sees_the_lights() {
+        let a = square(0.0);
+        let mut lit = a.clone();
+        let position = crate::light::sun::SunPosition::from_direction(glam::DVec3::Y).unwrap();
+        let sun = crate::light::sun::Sun::new(position, glam::DVec3::ONE, 0.53).unwrap();
+        lit.lights.sun = Some(sun);
+        assert_ne!(scene_fingerprint(&a), scene_fingerprint(&lit));
+        let mut lower = lit.clone();
+        let position = crate::light::sun::SunPosition::from_direction(glam::DVec3::ONE).unwrap();
+        lower.lights.sun =
+            Some(crate::light::sun::Sun::new(position, glam::DVec3::ONE, 0.53).unwrap());
+        assert_ne!(scene_fingerprint(&lit), scene_fingerprint(&lower));
     }
 
     #[test]

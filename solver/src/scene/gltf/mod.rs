@@ -42,18 +42,21 @@
 //! per material or feature: textures other than the base colour's, or on
 //! another set than `TEXCOORD_0` (flat factors are used), alpha modes,
 //! transmission, clearcoat and the other material extensions, normal maps,
-//! double-sided materials, punctual lights (not turned
-//! into emitters: radiosity needs area emitters), skins, morph targets and
-//! animations.
+//! double-sided materials, skins, morph targets and animations.
+//!
+//! * **Lights** (`KHR_lights_punctual`): point and spot lights become lamps
+//!   and the brightest directional light the sun ([`lights`]).
 //!
 //! The jobs are split by module: [`container`] reads the `.gltf`/`.glb`
 //! container and the buffers (files, the GLB BIN chunk, data URIs);
 //! [`nodes`] walks the scene graph, placing each mesh's triangles and taking
-//! the camera; [`materials`] converts materials and locates their textures;
+//! the camera; [`lights`] converts punctual lights; [`materials`] converts
+//! materials and locates their textures;
 //! [`accessors`] reads typed vertex and index data out of the buffers.
 
 use super::raw::RawScene;
 use super::{SceneError, SourceRef, Warning};
+use crate::light::Lights;
 use container::{check_views, load_buffers, split_glb};
 use gltf::{Document, Gltf};
 use solution::camera::Camera;
@@ -61,9 +64,12 @@ use std::path::Path;
 
 mod accessors;
 mod container;
+mod lights;
 mod materials;
 mod nodes;
 
+#[cfg(test)]
+mod lights_tests;
 #[cfg(test)]
 mod tests;
 
@@ -90,10 +96,12 @@ const TOLERATED_REQUIRED: &[&str] = &[
     "KHR_materials_pbrSpecularGlossiness",
 ];
 
-/// What a glTF file contributes: geometry and materials, and a camera.
+/// What a glTF file contributes: geometry and materials, a camera, and its
+/// punctual lights.
 pub(crate) struct GltfScene {
     pub raw: RawScene,
     pub camera: Option<Camera>,
+    pub lights: Lights,
 }
 
 /// Where errors and warnings point: the file, and the glTF item.
@@ -146,10 +154,15 @@ pub(crate) fn parse_gltf(path: &Path) -> Result<GltfScene, SceneError> {
     check_views(&ctx, &document, &buffers)?;
     document_warnings(&ctx, &document, &mut warnings);
 
-    let (mut raw, camera) = nodes::walk(&ctx, &document, &buffers)?;
+    let (mut raw, camera, light_nodes) = nodes::walk(&ctx, &document, &buffers)?;
     warnings.append(&mut raw.warnings);
+    let lights = lights::read_lights(&ctx, &document, &light_nodes, &mut warnings)?;
     raw.warnings = warnings;
-    Ok(GltfScene { raw, camera })
+    Ok(GltfScene {
+        raw,
+        camera,
+        lights,
+    })
 }
 
 /// Refuses files that require what this importer cannot read, by name and
@@ -219,20 +232,6 @@ fn validate(ctx: &Context, document: Document) -> Result<Document, SceneError> {
 
 /// Warnings about features of the file as a whole.
 fn document_warnings(ctx: &Context, document: &Document, warnings: &mut Vec<Warning>) {
-    let lights = document
-        .nodes()
-        .filter(|n| n.extension_value("KHR_lights_punctual").is_some())
-        .count();
-    if lights > 0 {
-        warnings.push(ctx.warning(
-            "KHR_lights_punctual",
-            format!(
-                "{lights} punctual light(s) ignored: point, spot and directional lights are not \
-                 turned into emitters, because radiosity needs area emitters; give the light \
-                 fixtures an emissive material instead"
-            ),
-        ));
-    }
     let skins = document.skins().count();
     if skins > 0 {
         warnings.push(ctx.warning(

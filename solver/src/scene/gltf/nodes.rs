@@ -25,13 +25,24 @@ pub(crate) const MAX_PLACED_TRIANGLES: usize = 10_000_000;
 /// camera's aspect ratio (square when the file gives none).
 const CAMERA_IMAGE_WIDTH: u32 = 512;
 
+/// A node that carries a `KHR_lights_punctual` light, where the walk placed it.
+pub(super) struct LightNode {
+    /// The node's name for messages ([`node_name`]).
+    pub name: String,
+    /// The node's `{"light": N}` extension object.
+    pub extension: serde_json::Value,
+    /// The node's world matrix.
+    pub world: DMat4,
+}
+
 /// Walks the scene graph ([`Builder::walk_scene`]): the file's triangles and
-/// materials, in the raw form, and its first perspective camera.
+/// materials, in the raw form, its first perspective camera, and the nodes
+/// that carry punctual lights.
 pub(super) fn walk(
     ctx: &Context,
     document: &Document,
     buffers: &[Buffer],
-) -> Result<(RawScene, Option<Camera>), SceneError> {
+) -> Result<(RawScene, Option<Camera>, Vec<LightNode>), SceneError> {
     let mut builder = Builder {
         ctx,
         document,
@@ -46,9 +57,10 @@ pub(super) fn walk(
         warned_orthographic: false,
         warned_meshes: Vec::new(),
         uv_maps: HashMap::new(),
+        lights: Vec::new(),
     };
     builder.walk_scene()?;
-    Ok((builder.raw, builder.camera))
+    Ok((builder.raw, builder.camera, builder.lights))
 }
 
 /// The state of the scene-graph walk.
@@ -67,6 +79,8 @@ struct Builder<'a> {
     /// For each raw material with a base-colour texture, the map from the
     /// primitive's `TEXCOORD_0` to the solver's UVs ([`uv_map`]).
     uv_maps: HashMap<usize, DAffine2>,
+    /// The nodes with a punctual light, in walk order.
+    lights: Vec<LightNode>,
 }
 
 impl Builder<'_> {
@@ -101,6 +115,13 @@ impl Builder<'_> {
             }
             if let Some(mesh) = node.mesh() {
                 self.add_mesh(&node, &mesh, world)?;
+            }
+            if let Some(extension) = node.extension_value("KHR_lights_punctual") {
+                self.lights.push(LightNode {
+                    name: item.clone(),
+                    extension: extension.clone(),
+                    world,
+                });
             }
             for child in node.children().collect::<Vec<_>>().into_iter().rev() {
                 stack.push((child, world));

@@ -475,6 +475,8 @@ fn unmodelled_features_are_warned_once_each_naming_the_file() {
     let path = write_gltf(dir.path(), "fancy", &f);
     let scene = parse_gltf(&path).unwrap();
     assert_eq!(scene.raw.polygons.len(), 2, "two instances of the triangle");
+    // The punctual light is imported (`lights.rs`), not warned about.
+    assert_eq!(scene.lights.lamps.len(), 1);
     let warnings = &scene.raw.warnings;
     for phrase in [
         "metallicRoughnessTexture ignored, the flat factors used",
@@ -484,8 +486,6 @@ fn unmodelled_features_are_warned_once_each_naming_the_file() {
         "doubleSided",
         "KHR_materials_transmission ignored",
         "KHR_materials_clearcoat ignored",
-        "1 punctual light(s) ignored",
-        "not turned into emitters",
         "1 skin(s) ignored",
         "Lines primitive skipped",
     ] {
