@@ -52,7 +52,8 @@
 
 use super::clean::emission_problem;
 use super::config_lights::{
-    merge_file_lights, read_lights, LampTable, LightScene, LightTables, SkyTable, SunTable,
+    merge_file_lights, read_lights, LampTable, LightScene, LightTables, PortalTable, SkyTable,
+    SunTable,
 };
 use super::display::{load_display_file, DisplayParams};
 use super::legacy::{parse_legacy, MAX_PATCHES};
@@ -95,6 +96,8 @@ struct ConfigFile {
     sky: Option<Spanned<SkyTable>>,
     #[serde(default)]
     lights: Vec<Spanned<LampTable>>,
+    #[serde(default)]
+    portals: Vec<Spanned<PortalTable>>,
 }
 
 #[derive(Deserialize)]
@@ -299,6 +302,7 @@ pub(crate) fn load_config(
         sun: config.sun.as_ref(),
         sky: config.sky.as_ref(),
         lamps: &config.lights,
+        portals: &config.portals,
     };
     let scene = LightScene {
         up_axis,

@@ -37,6 +37,7 @@ use super::text::read_text;
 use super::{SceneError, SourceRef, Warning};
 use crate::light::ies::IesProfile;
 use crate::light::lamp::Lamp;
+use crate::light::portal::Portal;
 use crate::light::sky::{BelowHorizon, Sky, SkyModel};
 use crate::light::sun::{
     LocalTime, SceneAxes, Site, Sun, SunError, SunPosition, DEFAULT_ANGULAR_DIAMETER_DEG,
@@ -109,12 +110,21 @@ pub(super) struct LampTable {
     ies: Option<Spanned<String>>,
 }
 
+/// A `[[portals]]` table: the corners of a window the sky lights the
+/// interior through (`light/portal.rs`), in scene units.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct PortalTable {
+    corners: Spanned<Vec<[f64; 3]>>,
+}
+
 /// The config's light tables as parsed.
 pub(super) struct LightTables<'a> {
     pub north: Option<&'a Spanned<[f64; 3]>>,
     pub sun: Option<&'a Spanned<SunTable>>,
     pub sky: Option<&'a Spanned<SkyTable>>,
     pub lamps: &'a [Spanned<LampTable>],
+    pub portals: &'a [Spanned<PortalTable>],
 }
 
 /// What the lights need from the rest of the scene.
@@ -160,6 +170,18 @@ pub(super) fn read_lights(
     for (index, table) in tables.lamps.iter().enumerate() {
         let lamp = read_lamp(at, table, index, scene, &axes, &mut profiles)?;
         lights.lamps.push(lamp);
+    }
+    for (index, table) in tables.portals.iter().enumerate() {
+        let corners = table.get_ref().corners.get_ref();
+        let corners: Vec<DVec3> = corners.iter().map(|c| DVec3::from(*c)).collect();
+        let portal = Portal::new(&corners).map_err(|e| {
+            at.err(
+                table.get_ref().corners.span(),
+                &format!("portals[{index}]"),
+                format!("{e}: corners {corners:?}"),
+            )
+        })?;
+        lights.portals.push(portal);
     }
     Ok((lights, axes))
 }
