@@ -1,0 +1,391 @@
+//! `atrium`: a courtyard the size of Sponza (35 × 16 m in plan, 16 m high,
+//! millimetres) with an open roof, lit by a sun and a uniform sky.
+//!
+//! Along each long side runs an arcade of two storeys: a row of columns
+//! (capped cylinders) carrying arch blocks ([`crate::arch`]), a gallery floor
+//! slab over the ground storey, a roof slab over the upper one and an attic
+//! wall above it up to 16 m; behind each arcade a back wall closes its aisle,
+//! and plain walls close the two short ends. A half-column (pilaster) against
+//! each end wall carries the end arches. Each column stands exactly on the
+//! floor or on the gallery slab and ends exactly on the spring line, where
+//! the arch blocks' bottom strips cover its top disc, so no light leaks at
+//! its base or its top. Drapes hang in every other bay of the upper galleries
+//! and a fountain stands in the middle of the court. Nothing covers the court.
+//!
+//! The count is reached by the number of bays (10 when it lands within 5%,
+//! as Sponza's long sides have, else the nearest of 4–14) and a level t: the
+//! columns get 4t + 4 segments around and t bands, the arches 2·min(t+1, 12)
+//! segments.
+
+use crate::arch::{add_arch, ArchSpec};
+use crate::mesh::{Closure, Mesh, Vec3};
+use crate::primitives::{
+    add_box, add_cylinder, add_horizontal_rect, cylinder_triangle_count, BoxSpec, Placement,
+};
+use crate::scene::{Camera, Lights, Material, Scene};
+
+/// The court's extent along x (the long axis) and z, and the walls' height.
+pub const LENGTH: f64 = 35_000.0;
+pub const WIDTH: f64 = 16_000.0;
+pub const HEIGHT: f64 = 16_000.0;
+const WALL: f64 = 600.0;
+/// From a back wall to its column line.
+const AISLE: f64 = 3_500.0;
+pub const COLUMN_RADIUS: f64 = 300.0;
+/// Half the arch blocks' and attic's depth: more than the column radius, so
+/// that the arches' bottom strips cover the columns' top discs.
+pub const ARCH_HALF_DEPTH: f64 = 350.0;
+/// From an arch's crown to the slab over it.
+const CROWN: f64 = 450.0;
+const SLAB: f64 = 500.0;
+/// The fountain: a basin and a pillar on it, in the middle of the court.
+const BASIN: (f64, f64) = (1_600.0, 500.0);
+const PILLAR: (f64, f64) = (200.0, 1_200.0);
+/// Drapes hang this far into the upper galleries, this long, this thick.
+const DRAPE: (f64, f64, f64) = (250.0, 3_500.0, 50.0);
+
+/// The two column lines (z) and the open court between the arcades.
+pub const COLUMN_LINES: [f64; 2] = [AISLE, WIDTH - AISLE];
+pub const COURT_Z: [f64; 2] = [AISLE + ARCH_HALF_DEPTH, WIDTH - AISLE - ARCH_HALF_DEPTH];
+/// The highest point of anything standing in the court (the fountain).
+pub const COURT_OBJECTS_TOP: f64 = BASIN.1 + PILLAR.1;
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Params {
+    /// Bays per arcade: bays − 1 columns between the two pilasters.
+    pub bays: u32,
+    /// Column segments around (≥ 3).
+    pub segments: u32,
+    /// Column side bands (≥ 1).
+    pub rings: u32,
+    /// Arch intrados segments (even, ≥ 2).
+    pub arch_segments: u32,
+}
+
+/// One storey of the arcades, millimetres above the floor.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Storey {
+    /// The columns' feet: the floor, or the top of the gallery slab.
+    pub base: f64,
+    /// The columns' tops and the arches' springs.
+    pub spring: f64,
+    /// The underside of the slab the arches carry.
+    pub top: f64,
+}
+
+/// A named solid of the plan.
+enum Solid {
+    Block(BoxSpec),
+    Column {
+        base: Vec3,
+        height: f64,
+    },
+    Fountain {
+        base: Vec3,
+        radius: f64,
+        height: f64,
+    },
+    Arch(ArchSpec),
+}
+
+struct Part {
+    name: String,
+    material: &'static str,
+    solid: Solid,
+}
+
+const BAY_PREFERENCE: [u32; 11] = [10, 11, 9, 12, 8, 13, 7, 14, 6, 5, 4];
+
+impl Params {
+    /// The ladder's level t.
+    pub fn at_level(bays: u32, t: u32) -> Params {
+        Params {
+            bays,
+            segments: 4 * t + 4,
+            rings: t,
+            arch_segments: 2 * (t + 1).min(12),
+        }
+    }
+
+    /// The first bay count in [`BAY_PREFERENCE`] whose best level lands within
+    /// 5% of `triangles`, else the nearest over all.
+    pub fn for_triangles(triangles: usize) -> Params {
+        let mut best: Option<(usize, Params)> = None;
+        for bays in BAY_PREFERENCE {
+            let mut t = 1;
+            loop {
+                let p = Params::at_level(bays, t);
+                let count = p.triangle_count();
+                let error = count.abs_diff(triangles);
+                if best.is_none_or(|(e, _)| error < e) {
+                    best = Some((error, p));
+                }
+                if count > 2 * triangles || t >= 1_000 {
+                    break;
+                }
+                t += 1;
+            }
+            let (error, p) = best.expect("the ladder has a level");
+            if p.bays == bays && (error as f64) <= 0.05 * triangles as f64 {
+                return p;
+            }
+        }
+        best.expect("the ladder has a level").1
+    }
+
+    /// Column centre to column centre.
+    pub fn pitch(&self) -> f64 {
+        LENGTH / self.bays as f64
+    }
+
+    /// The ground storey up to the gallery slab, the upper one up to the roof
+    /// slab. Each arch's rise is its half-opening (a round arch) unless that
+    /// exceeds 40% of the storey (a flatter, elliptical arch); the spring
+    /// line is rounded to a whole millimetre.
+    pub fn storeys(&self) -> [Storey; 2] {
+        let half_opening = 0.5 * self.pitch() - COLUMN_RADIUS;
+        let storey = |base: f64, top: f64| {
+            let rise = half_opening.min(0.4 * (top - base));
+            Storey {
+                base,
+                spring: (top - CROWN - rise).round(),
+                top,
+            }
+        };
+        [storey(0.0, 7_000.0), storey(7_000.0 + SLAB, 13_000.0)]
+    }
+
+    pub fn triangle_count(&self) -> usize {
+        let solids: usize = self
+            .plan()
+            .iter()
+            .map(|part| match &part.solid {
+                Solid::Block(spec) => spec.triangle_count(),
+                Solid::Column { .. } => cylinder_triangle_count(self.segments, self.rings),
+                Solid::Fountain { .. } => cylinder_triangle_count(self.segments, 1),
+                Solid::Arch(spec) => spec.triangle_count(),
+            })
+            .sum();
+        // The floor is one quad.
+        solids + 2
+    }
+
+    /// Every solid: walls, slabs and attics, then each storey's arcades, then
+    /// the drapes and the fountain.
+    fn plan(&self) -> Vec<Part> {
+        let mut parts = Vec::new();
+        let mut block = |name: String, material, min: Vec3, max: Vec3| {
+            parts.push(Part {
+                name,
+                material,
+                solid: Solid::Block(BoxSpec {
+                    min,
+                    max,
+                    divisions: [1; 3],
+                }),
+            });
+        };
+        let [ground, upper] = self.storeys();
+        block(
+            "end_wall_west".into(),
+            "wall",
+            [-WALL, 0.0, -WALL],
+            [0.0, HEIGHT, WIDTH + WALL],
+        );
+        block(
+            "end_wall_east".into(),
+            "wall",
+            [LENGTH, 0.0, -WALL],
+            [LENGTH + WALL, HEIGHT, WIDTH + WALL],
+        );
+        for (side, line) in ["south", "north"].into_iter().zip(COLUMN_LINES) {
+            // The aisle's extent in z: from the back wall to the arcade's front.
+            let (back, front) = if line < 0.5 * WIDTH {
+                ([-WALL, 0.0], [0.0, line + ARCH_HALF_DEPTH])
+            } else {
+                ([WIDTH, WIDTH + WALL], [line - ARCH_HALF_DEPTH, WIDTH])
+            };
+            let arcade_z = [line - ARCH_HALF_DEPTH, line + ARCH_HALF_DEPTH];
+            let xz = |z: [f64; 2], y: [f64; 2]| ([0.0, y[0], z[0]], [LENGTH, y[1], z[1]]);
+            let slabs = [
+                ("back_wall", "wall", back, [0.0, HEIGHT]),
+                ("gallery_slab", "slab", front, [ground.top, upper.base]),
+                ("roof_slab", "slab", front, [upper.top, upper.top + SLAB]),
+                ("attic", "wall", arcade_z, [upper.top + SLAB, HEIGHT]),
+            ];
+            for (kind, material, z, y) in slabs {
+                let (min, max) = xz(z, y);
+                block(format!("{kind}_{side}"), material, min, max);
+            }
+        }
+        for (level, storey) in [ground, upper].iter().enumerate() {
+            for (side, line) in ["south", "north"].into_iter().zip(COLUMN_LINES) {
+                self.arcade(&mut parts, storey, level, side, line);
+            }
+        }
+        self.drapes(&mut parts, &upper);
+        let centre = [0.5 * LENGTH, 0.0, 0.5 * WIDTH];
+        parts.push(Part {
+            name: "fountain_basin".into(),
+            material: "fountain",
+            solid: Solid::Fountain {
+                base: centre,
+                radius: BASIN.0,
+                height: BASIN.1,
+            },
+        });
+        parts.push(Part {
+            name: "fountain_pillar".into(),
+            material: "fountain",
+            solid: Solid::Fountain {
+                base: [centre[0], BASIN.1, centre[2]],
+                radius: PILLAR.0,
+                height: PILLAR.1,
+            },
+        });
+        parts
+    }
+
+    /// One storey of one arcade: the pilasters at both ends, the columns
+    /// between and an arch over every bay.
+    fn arcade(&self, parts: &mut Vec<Part>, storey: &Storey, level: usize, side: &str, line: f64) {
+        let z = [line - ARCH_HALF_DEPTH, line + ARCH_HALF_DEPTH];
+        let pitch = self.pitch();
+        for (end, x) in [
+            ("west", [0.0, COLUMN_RADIUS]),
+            ("east", [LENGTH - COLUMN_RADIUS, LENGTH]),
+        ] {
+            parts.push(Part {
+                name: format!("pilaster_{level}_{side}_{end}"),
+                material: "column",
+                solid: Solid::Block(BoxSpec {
+                    min: [x[0], storey.base, z[0]],
+                    max: [x[1], storey.spring, z[1]],
+                    divisions: [1; 3],
+                }),
+            });
+        }
+        for j in 1..self.bays {
+            parts.push(Part {
+                name: format!("column_{level}_{side}_{j}"),
+                material: "column",
+                solid: Solid::Column {
+                    base: [j as f64 * pitch, storey.base, line],
+                    height: storey.spring - storey.base,
+                },
+            });
+        }
+        let rise = storey.top - CROWN - storey.spring;
+        for j in 0..self.bays {
+            // The last bay ends exactly on the east wall, not at bays·pitch.
+            let x1 = if j + 1 == self.bays {
+                LENGTH
+            } else {
+                (j + 1) as f64 * pitch
+            };
+            parts.push(Part {
+                name: format!("arch_{level}_{side}_{j}"),
+                material: "arch",
+                solid: Solid::Arch(ArchSpec {
+                    x: [j as f64 * pitch, x1],
+                    inset: COLUMN_RADIUS,
+                    z,
+                    y: [storey.spring, storey.top],
+                    rise,
+                    segments: self.arch_segments,
+                }),
+            });
+        }
+    }
+
+    /// A drape hanging from the roof slab in every other bay of both upper
+    /// galleries, behind the arches.
+    fn drapes(&self, parts: &mut Vec<Part>, upper: &Storey) {
+        let (gap, drop, thickness) = DRAPE;
+        let colours = ["drape_red", "drape_green", "drape_blue"];
+        let mut n = 0;
+        for (side, line) in ["south", "north"].into_iter().zip(COLUMN_LINES) {
+            let z = if line < 0.5 * WIDTH {
+                let face = line - ARCH_HALF_DEPTH - gap;
+                [face - thickness, face]
+            } else {
+                let face = line + ARCH_HALF_DEPTH + gap;
+                [face, face + thickness]
+            };
+            for j in (1..self.bays).step_by(2) {
+                let x0 = j as f64 * self.pitch() + COLUMN_RADIUS + 150.0;
+                let x1 = (j + 1) as f64 * self.pitch() - COLUMN_RADIUS - 150.0;
+                parts.push(Part {
+                    name: format!("drape_{side}_{j}"),
+                    material: colours[n % colours.len()],
+                    solid: Solid::Block(BoxSpec {
+                        min: [x0, upper.top - drop, z[0]],
+                        max: [x1, upper.top, z[1]],
+                        divisions: [1; 3],
+                    }),
+                });
+                n += 1;
+            }
+        }
+    }
+}
+
+pub fn generate(params: Params) -> Scene {
+    let mut mesh = Mesh::default();
+    mesh.begin_object("floor", "floor", Closure::Open);
+    add_horizontal_rect(&mut mesh, [0.0, LENGTH], [0.0, WIDTH], 0.0, true);
+    for part in params.plan() {
+        mesh.begin_object(part.name, part.material, Closure::Outward);
+        match part.solid {
+            Solid::Block(spec) => add_box(&mut mesh, &spec, &Placement::IDENTITY, Closure::Outward),
+            Solid::Column { base, height } => add_cylinder(
+                &mut mesh,
+                base,
+                COLUMN_RADIUS,
+                height,
+                params.segments,
+                params.rings,
+            ),
+            Solid::Fountain {
+                base,
+                radius,
+                height,
+            } => add_cylinder(&mut mesh, base, radius, height, params.segments, 1),
+            Solid::Arch(spec) => add_arch(&mut mesh, &spec),
+        }
+    }
+    let stone = |name, kd| Material {
+        name,
+        kd,
+        ke: [0.0; 3],
+    };
+    Scene {
+        description: format!(
+            "atrium: 35 x 16 x 16 m open court, two storeys of {} bays, columns {} x {}, arches {} segments",
+            params.bays, params.segments, params.rings, params.arch_segments
+        ),
+        mesh,
+        materials: vec![
+            stone("floor", [0.5, 0.47, 0.42]),
+            stone("wall", [0.6, 0.57, 0.52]),
+            stone("slab", [0.55, 0.53, 0.5]),
+            stone("column", [0.65, 0.62, 0.56]),
+            stone("arch", [0.62, 0.58, 0.5]),
+            stone("fountain", [0.45, 0.45, 0.45]),
+            stone("drape_red", [0.55, 0.12, 0.1]),
+            stone("drape_green", [0.12, 0.4, 0.15]),
+            stone("drape_blue", [0.12, 0.2, 0.5]),
+        ],
+        // In the court near the west end at eye height, looking east along
+        // the long axis past the fountain.
+        camera: Camera {
+            eye: [1_500.0, 1_700.0, 0.5 * WIDTH],
+            target: [LENGTH, 4_000.0, 0.5 * WIDTH],
+            fov_y_deg: 60.0,
+        },
+        // The sun at 55° over the south arcade toward the east end: it lights
+        // the north arcade's court face, a strip of the court floor and the
+        // fountain, and the south arcade stands in its own shadow.
+        lights: Lights::daylight(55.0, [3f64.sqrt(), -1.0]),
+    }
+}
