@@ -28,6 +28,8 @@ pub mod spheres;
 pub mod window_room;
 
 #[cfg(test)]
+mod daylit_tests;
+#[cfg(test)]
 mod tests;
 
 use anyhow::bail;

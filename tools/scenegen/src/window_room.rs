@@ -22,7 +22,7 @@ pub const WINDOW_X: [f64; 2] = [1_500.0, 4_000.0];
 pub const WINDOW_Y: [f64; 2] = [1_500.0, 3_700.0];
 /// The sun's elevation and its bearing from the room, degrees from +z toward +x.
 pub const SUN_ELEVATION_DEG: f64 = 40.0;
-const SUN_BEARING_DEG: f64 = 20.0;
+const SUN_BEARING_DEG: f64 = 15.0;
 
 /// The boxes: footprint centre (x, z), width, height, depth, yaw in degrees.
 const BOXES: [([f64; 2], [f64; 3], f64); 2] = [
