@@ -28,8 +28,8 @@ const SUN_BEARING_DEG: f64 = 15.0;
 const BOXES: [([f64; 2], [f64; 3], f64); 2] = [
     // In the sun patch.
     ([2_000.0, 2_600.0], [1_000.0, 1_000.0, 1_000.0], 25.0),
-    // Tall, near the front right corner.
-    ([4_200.0, 1_400.0], [1_200.0, 2_400.0, 1_200.0], -15.0),
+    // Tall, in the back corner by the red wall: it cuts the sun beam's edge.
+    ([4_300.0, 4_000.0], [1_200.0, 2_400.0, 1_200.0], -15.0),
 ];
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -45,8 +45,10 @@ pub struct Params {
 const FACES: [(&str, &str, usize, bool); 6] = [
     ("floor", "white", 1, false),
     ("ceiling", "white", 1, true),
-    ("left_wall_red", "red", 0, false),
-    ("right_wall_green", "green", 0, true),
+    // As in the Cornell box: red at +x, on the left seen from the camera
+    // (which looks along +z), green at x = 0 on the right.
+    ("right_wall_green", "green", 0, false),
+    ("left_wall_red", "red", 0, true),
     ("front_wall", "white", 2, false),
     ("back_wall", "white", 2, true),
 ];
