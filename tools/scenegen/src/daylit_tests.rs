@@ -267,6 +267,14 @@ fn the_window_room_is_closed_except_for_the_window() {
             length(sub(vector_area, expected)) < 1e-6 * width * height,
             "{vector_area:?}"
         );
+        // The boxes stand on the floor, inside the walls.
+        for b in objects(mesh, "box_") {
+            let (lo, hi) = bounds(mesh, b);
+            assert!(lo[1].abs() < 1e-9, "{}", b.name);
+            for a in [0, 2] {
+                assert!(lo[a] > 0.0 && hi[a] < SIDE, "{}: {lo:?} {hi:?}", b.name);
+            }
+        }
     }
 }
 
