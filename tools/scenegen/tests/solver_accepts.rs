@@ -1,7 +1,8 @@
 //! End to end: each family at about 1k triangles, written to files and
 //! solved by the real `solver` binary (`--preset draft`, a budget of 3 shots,
 //! `--strict` so that any import warning — a degenerate, non-planar or
-//! mis-wound face — fails the test), then described by `solver info`.
+//! mis-wound face — fails the test), then described by `solver info`; and the
+//! daylit families' geometry, imported under `--strict` the same way.
 
 use scenegen::{generate, scene::write_scene, Family};
 use std::path::{Path, PathBuf};
@@ -103,5 +104,50 @@ fn the_solver_accepts_every_family() {
             );
         }
         assert_eq!(header["camera"]["eye"][0], scene.camera.eye[0], "{header}");
+    }
+}
+
+#[test]
+fn the_solver_imports_the_daylit_families_strictly() {
+    // The daylit scenes' geometry under `--strict` (no degenerate, non-planar
+    // or mis-wound face). Their lights are dropped and one material made to
+    // emit instead, so that this checks the geometry whether or not the
+    // solver reading the config knows `[sun]` and `[sky]`.
+    let solver = solver();
+    let dir = tempfile::tempdir().unwrap();
+    for (family, triangles, emitter) in [
+        (Family::Atrium, 5_000, "drape_red"),
+        (Family::WindowRoom, 300, "white"),
+    ] {
+        let mut scene = generate(family, triangles, 1).unwrap();
+        scene.lights = Default::default();
+        let paths = write_scene(&scene, dir.path(), family.name()).unwrap();
+        let mut config = std::fs::read_to_string(&paths.toml).unwrap();
+        config.push_str(&format!(
+            "\n[materials.{emitter}]\nemission = [1.0, 1.0, 1.0]\n"
+        ));
+        std::fs::write(&paths.toml, config).unwrap();
+        let run = Command::new(&solver)
+            .arg("solve")
+            .arg(&paths.toml)
+            .arg("--out")
+            .arg(dir.path().join(format!("{}.sol", family.name())))
+            .args([
+                "--preset",
+                "draft",
+                "--max-shots",
+                "1",
+                "--strict",
+                "--threads",
+                "2",
+            ])
+            .output()
+            .unwrap();
+        assert!(
+            run.status.success(),
+            "{}: {}",
+            family.name(),
+            String::from_utf8_lossy(&run.stderr)
+        );
     }
 }
