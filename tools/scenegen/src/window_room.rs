@@ -10,10 +10,11 @@
 //! is reached by the lattice's cells per side (the window's edges added, and
 //! the uniform lines too close to them dropped) and the boxes' face grid.
 
-use crate::mesh::{Closure, Corner, Mesh};
-use crate::primitives::{add_box, BoxSpec, Placement};
+use crate::mesh::{Closure, Mesh};
+use crate::primitives::{
+    add_box, add_lattice_box, lattice_box_triangle_count, BoxFace, BoxSpec, Placement,
+};
 use crate::scene::{Camera, Lights, Material, Scene};
-use std::collections::HashMap;
 
 /// The room's inner side: it spans [0, SIDE] on every axis.
 pub const SIDE: f64 = 5_500.0;
@@ -40,18 +41,22 @@ pub struct Params {
     pub box_divisions: u32,
 }
 
-/// The room's six faces: name, material, the axis it is normal to, which
-/// end of that axis, and the direction it faces (into the room).
-const FACES: [(&str, &str, usize, bool); 6] = [
-    ("floor", "white", 1, false),
-    ("ceiling", "white", 1, true),
-    // As in the Cornell box: red at +x, on the left seen from the camera
-    // (which looks along +z), green at x = 0 on the right.
-    ("right_wall_green", "green", 0, false),
-    ("left_wall_red", "red", 0, true),
-    ("front_wall", "white", 2, false),
-    ("back_wall", "white", 2, true),
-];
+/// The room's faces as objects: name and material by (axis, far side).
+fn face_object(face: BoxFace) -> (&'static str, &'static str) {
+    match (face.axis, face.far) {
+        (0, false) => ("right_wall_green", "green"),
+        // As in the Cornell box: red at +x, on the left seen from the camera
+        // (which looks along +z), green at x = 0 on the right.
+        (0, true) => ("left_wall_red", "red"),
+        (1, false) => ("floor", "white"),
+        (1, true) => ("ceiling", "white"),
+        (2, false) => ("front_wall", "white"),
+        _ => ("back_wall", "white"),
+    }
+}
+
+/// The back wall, which holds the window; its cells' u is x and v is y.
+const BACK: BoxFace = BoxFace { axis: 2, far: true };
 
 impl Params {
     pub fn at_level(cells: u32) -> Params {
@@ -88,16 +93,13 @@ impl Params {
     }
 
     pub fn triangle_count(&self) -> usize {
-        let cells = self.lattice().map(|lines| lines.len() - 1);
-        let [x, y, z] = cells;
-        let window = self.window_cells();
-        let room = 2 * (x * y + y * z + z * x) - window;
+        let room = lattice_box_triangle_count(&self.lattice()) - 2 * self.window_cells();
         let box_spec = BoxSpec {
             min: [0.0; 3],
             max: [1.0; 3],
             divisions: [self.box_divisions; 3],
         };
-        2 * room + BOXES.len() * box_spec.triangle_count()
+        room + BOXES.len() * box_spec.triangle_count()
     }
 
     /// The back wall's cells inside the window.
@@ -131,42 +133,20 @@ fn in_window(x: [f64; 2], y: [f64; 2]) -> bool {
     x[0] >= WINDOW_X[0] && x[1] <= WINDOW_X[1] && y[0] >= WINDOW_Y[0] && y[1] <= WINDOW_Y[1]
 }
 
-/// Adds the room's faces, one object each, on the shared lattice.
+/// Adds the room as one lattice box facing in, an object per face, without
+/// the window's cells.
 fn add_room(mesh: &mut Mesh, lattice: &[Vec<f64>; 3]) {
-    let mut vertices: HashMap<[usize; 3], u32> = HashMap::new();
-    let mut vertex = |mesh: &mut Mesh, ijk: [usize; 3]| -> Corner {
-        Corner::flat(
-            *vertices
-                .entry(ijk)
-                .or_insert_with(|| mesh.add_position(std::array::from_fn(|a| lattice[a][ijk[a]]))),
-        )
-    };
-    for (name, material, axis, far) in FACES {
-        mesh.begin_object(name, material, Closure::Open);
-        let (u, v) = ((axis + 1) % 3, (axis + 2) % 3);
-        let level = if far { lattice[axis].len() - 1 } else { 0 };
-        let mut inward = [0.0; 3];
-        inward[axis] = if far { -1.0 } else { 1.0 };
-        for i in 0..lattice[u].len() - 1 {
-            for j in 0..lattice[v].len() - 1 {
-                let span = |lines: &Vec<f64>, k: usize| [lines[k], lines[k + 1]];
-                // The back wall's axes are (x, y): u = 0, v = 1.
-                if axis == 2 && far && in_window(span(&lattice[u], i), span(&lattice[v], j)) {
-                    continue;
-                }
-                let at = |di: usize, dj: usize| {
-                    let mut ijk = [level; 3];
-                    ijk[u] = i + di;
-                    ijk[v] = j + dj;
-                    ijk
-                };
-                let [a, b, c, d] =
-                    [at(0, 0), at(1, 0), at(1, 1), at(0, 1)].map(|ijk| vertex(mesh, ijk));
-                mesh.triangle_facing([a, b, c], inward);
-                mesh.triangle_facing([a, c, d], inward);
-            }
-        }
-    }
+    add_lattice_box(
+        mesh,
+        lattice,
+        &Placement::IDENTITY,
+        Closure::Inward,
+        |mesh, face| {
+            let (name, material) = face_object(face);
+            mesh.begin_object(name, material, Closure::Open);
+        },
+        |cell| !(cell.face == BACK && in_window(cell.u, cell.v)),
+    );
 }
 
 pub fn generate(params: Params) -> Scene {
