@@ -3,14 +3,17 @@
 //!
 //! Along each long side runs an arcade of two storeys: a row of columns
 //! (capped cylinders) carrying arch blocks ([`crate::arch`]), a gallery floor
-//! slab over the ground storey, a roof slab over the upper one and an attic
-//! wall above it up to 16 m; behind each arcade a back wall closes its aisle,
-//! and plain walls close the two short ends. A half-column (pilaster) against
-//! each end wall carries the end arches. Each column stands exactly on the
-//! floor or on the gallery slab and ends exactly on the spring line, where
-//! the arch blocks' bottom strips cover its top disc, so no light leaks at
-//! its base or its top. Drapes hang in every other bay of the upper galleries
-//! and a fountain stands in the middle of the court. Nothing covers the court.
+//! slab over the ground storey and a solid roof block over the upper one up
+//! to 16 m (its court face is the attic); behind each arcade a back wall
+//! closes its aisle, and plain walls close the two short ends. A half-column
+//! (pilaster) against each end wall carries the end arches. Each column
+//! stands exactly on the floor or on the gallery slab and ends exactly on the
+//! spring line, where the arch blocks' bottom strips cover its top disc, so
+//! no light leaks at its base or its top; the walls and slabs are cut where
+//! the slabs and arcades touch them, so that none of their elements reaches
+//! across a contact. Drapes hang in every other bay of the upper galleries
+//! and a fountain stands in the middle of the court. Nothing covers the
+//! court.
 //!
 //! The count is reached by the number of bays (10 when it lands within 5%,
 //! as Sponza's long sides have, else the nearest of 4–14) and a level t: the
@@ -20,7 +23,8 @@
 use crate::arch::{add_arch, ArchSpec};
 use crate::mesh::{Closure, Mesh, Vec3};
 use crate::primitives::{
-    add_box, add_cylinder, add_horizontal_rect, cylinder_triangle_count, BoxSpec, Placement,
+    add_box, add_cylinder, add_horizontal_rect, add_lattice_box, cylinder_triangle_count,
+    lattice_box_triangle_count, BoxSpec, Placement,
 };
 use crate::scene::{Camera, Lights, Material, Scene};
 
@@ -32,7 +36,7 @@ const WALL: f64 = 600.0;
 /// From a back wall to its column line.
 const AISLE: f64 = 3_500.0;
 pub const COLUMN_RADIUS: f64 = 300.0;
-/// Half the arch blocks' and attic's depth: more than the column radius, so
+/// Half the arch blocks' depth: more than the column radius, so
 /// that the arches' bottom strips cover the columns' top discs.
 pub const ARCH_HALF_DEPTH: f64 = 350.0;
 /// From an arch's crown to the slab over it.
@@ -76,6 +80,8 @@ pub struct Storey {
 /// A named solid of the plan.
 enum Solid {
     Block(BoxSpec),
+    /// A box cut on these lines per axis ([`add_lattice_box`]).
+    Lattice([Vec<f64>; 3]),
     Column {
         base: Vec3,
         height: f64,
@@ -161,6 +167,7 @@ impl Params {
             .iter()
             .map(|part| match &part.solid {
                 Solid::Block(spec) => spec.triangle_count(),
+                Solid::Lattice(lines) => lattice_box_triangle_count(lines),
                 Solid::Column { .. } => cylinder_triangle_count(self.segments, self.rings),
                 Solid::Fountain { .. } => cylinder_triangle_count(self.segments, 1),
                 Solid::Arch(spec) => spec.triangle_count(),
@@ -170,54 +177,12 @@ impl Params {
         solids + 2
     }
 
-    /// Every solid: walls, slabs and attics, then each storey's arcades, then
-    /// the drapes and the fountain.
+    /// Every solid: walls and slabs, then each storey's arcades, then the
+    /// drapes and the fountain.
     fn plan(&self) -> Vec<Part> {
         let mut parts = Vec::new();
-        let mut block = |name: String, material, min: Vec3, max: Vec3| {
-            parts.push(Part {
-                name,
-                material,
-                solid: Solid::Block(BoxSpec {
-                    min,
-                    max,
-                    divisions: [1; 3],
-                }),
-            });
-        };
+        self.shell(&mut parts);
         let [ground, upper] = self.storeys();
-        block(
-            "end_wall_west".into(),
-            "wall",
-            [-WALL, 0.0, -WALL],
-            [0.0, HEIGHT, WIDTH + WALL],
-        );
-        block(
-            "end_wall_east".into(),
-            "wall",
-            [LENGTH, 0.0, -WALL],
-            [LENGTH + WALL, HEIGHT, WIDTH + WALL],
-        );
-        for (side, line) in ["south", "north"].into_iter().zip(COLUMN_LINES) {
-            // The aisle's extent in z: from the back wall to the arcade's front.
-            let (back, front) = if line < 0.5 * WIDTH {
-                ([-WALL, 0.0], [0.0, line + ARCH_HALF_DEPTH])
-            } else {
-                ([WIDTH, WIDTH + WALL], [line - ARCH_HALF_DEPTH, WIDTH])
-            };
-            let arcade_z = [line - ARCH_HALF_DEPTH, line + ARCH_HALF_DEPTH];
-            let xz = |z: [f64; 2], y: [f64; 2]| ([0.0, y[0], z[0]], [LENGTH, y[1], z[1]]);
-            let slabs = [
-                ("back_wall", "wall", back, [0.0, HEIGHT]),
-                ("gallery_slab", "slab", front, [ground.top, upper.base]),
-                ("roof_slab", "slab", front, [upper.top, upper.top + SLAB]),
-                ("attic", "wall", arcade_z, [upper.top + SLAB, HEIGHT]),
-            ];
-            for (kind, material, z, y) in slabs {
-                let (min, max) = xz(z, y);
-                block(format!("{kind}_{side}"), material, min, max);
-            }
-        }
         for (level, storey) in [ground, upper].iter().enumerate() {
             for (side, line) in ["south", "north"].into_iter().zip(COLUMN_LINES) {
                 self.arcade(&mut parts, storey, level, side, line);
@@ -244,6 +209,70 @@ impl Params {
             },
         });
         parts
+    }
+
+    /// The end walls, and along each side its back wall, gallery slab and
+    /// roof block (the upper gallery's ceiling, whose court face is the
+    /// attic up to 16 m). Each is a lattice box cut on the lines where other
+    /// solids touch it (the slabs' and roof's heights on the walls, the
+    /// arcades' depth on the end walls and under the slabs), so that no
+    /// element of a visible face reaches across a contact into another room:
+    /// an aisle's wall cannot borrow the gallery's light above the slab, nor
+    /// an end wall's aisle part the court's.
+    fn shell(&self, parts: &mut Vec<Part>) {
+        let [ground, upper] = self.storeys();
+        let heights = vec![0.0, ground.top, upper.base, upper.top, HEIGHT];
+        let [south, north] =
+            COLUMN_LINES.map(|line| [line - ARCH_HALF_DEPTH, line + ARCH_HALF_DEPTH]);
+        let across = vec![
+            -WALL,
+            0.0,
+            south[0],
+            south[1],
+            north[0],
+            north[1],
+            WIDTH,
+            WIDTH + WALL,
+        ];
+        let mut lattice = |name: String, material, lines: [Vec<f64>; 3]| {
+            parts.push(Part {
+                name,
+                material,
+                solid: Solid::Lattice(lines),
+            });
+        };
+        lattice(
+            "end_wall_west".into(),
+            "wall",
+            [vec![-WALL, 0.0], heights.clone(), across.clone()],
+        );
+        lattice(
+            "end_wall_east".into(),
+            "wall",
+            [vec![LENGTH, LENGTH + WALL], heights.clone(), across],
+        );
+        let along = vec![0.0, LENGTH];
+        for (side, arcade) in [("south", south), ("north", north)] {
+            // From the back wall to the arcade's front, cut at the arcade.
+            let (back, aisle) = if side == "south" {
+                (vec![-WALL, 0.0], vec![0.0, arcade[0], arcade[1]])
+            } else {
+                (vec![WIDTH, WIDTH + WALL], vec![arcade[0], arcade[1], WIDTH])
+            };
+            let solids = [
+                ("back_wall", "wall", heights.clone(), back),
+                (
+                    "gallery_slab",
+                    "slab",
+                    vec![ground.top, upper.base],
+                    aisle.clone(),
+                ),
+                ("roof", "wall", vec![upper.top, HEIGHT], aisle),
+            ];
+            for (kind, material, y, z) in solids {
+                lattice(format!("{kind}_{side}"), material, [along.clone(), y, z]);
+            }
+        }
     }
 
     /// One storey of one arcade: the pilasters at both ends, the columns
@@ -338,6 +367,14 @@ pub fn generate(params: Params) -> Scene {
         mesh.begin_object(part.name, part.material, Closure::Outward);
         match part.solid {
             Solid::Block(spec) => add_box(&mut mesh, &spec, &Placement::IDENTITY, Closure::Outward),
+            Solid::Lattice(lines) => add_lattice_box(
+                &mut mesh,
+                &lines,
+                &Placement::IDENTITY,
+                Closure::Outward,
+                |_, _| {},
+                |_| true,
+            ),
             Solid::Column { base, height } => add_cylinder(
                 &mut mesh,
                 base,

@@ -177,6 +177,48 @@ fn atrium_columns_stand_on_the_floor_and_slab_and_meet_the_arches() {
 }
 
 #[test]
+fn atrium_walls_and_slabs_have_an_edge_at_every_contact() {
+    // Where a slab meets a wall, or an arcade meets an end wall or a slab's
+    // underside, the touched face has an edge along the contact: no triangle
+    // reaches across it, so no element mixes the light of the two sides
+    // (an aisle's wall top with the gallery above the slab, an end wall's
+    // aisle part with the court).
+    let p = atrium::Params::for_triangles(5_000);
+    let mesh = &atrium::generate(p).mesh;
+    let [ground, upper] = p.storeys();
+    let slabs = vec![ground.top, upper.base, upper.top];
+    let arcades: Vec<f64> = atrium::COLUMN_LINES
+        .iter()
+        .flat_map(|l| [l - atrium::ARCH_HALF_DEPTH, l + atrium::ARCH_HALF_DEPTH])
+        .collect();
+    let cases = [
+        ("back_wall_", 1, &slabs),
+        ("end_wall_", 1, &slabs),
+        ("end_wall_", 2, &arcades),
+        ("gallery_slab_", 2, &arcades),
+        ("roof_", 2, &arcades),
+    ];
+    for (prefix, axis, lines) in cases {
+        let found = objects(mesh, prefix);
+        assert!(!found.is_empty(), "{prefix}");
+        for object in found {
+            for t in &object.triangles {
+                let values = t.map(|c| mesh.positions[c.position as usize][axis]);
+                let lo = values.iter().copied().fold(f64::INFINITY, f64::min);
+                let hi = values.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+                for &c in lines {
+                    assert!(
+                        !(lo < c - 1e-6 && hi > c + 1e-6),
+                        "{}: a triangle spans {lo}..{hi} across the contact at {c} (axis {axis})",
+                        object.name
+                    );
+                }
+            }
+        }
+    }
+}
+
+#[test]
 fn atrium_materials_are_stone_and_nothing_emits() {
     let scene = atrium::generate(atrium::Params::for_triangles(5_000));
     for m in &scene.materials {
