@@ -144,6 +144,16 @@ impl Params {
         LENGTH / self.bays as f64
     }
 
+    /// The x of column line j (0 and `bays` are the end walls' faces): the
+    /// last is exactly the east wall's, not bays · pitch rounded.
+    pub fn bay_x(&self, j: u32) -> f64 {
+        if j == self.bays {
+            LENGTH
+        } else {
+            j as f64 * self.pitch()
+        }
+    }
+
     /// The ground storey up to the gallery slab, the upper one up to the roof
     /// slab. Each arch's rise is its half-opening (a round arch) unless that
     /// exceeds 40% of the storey (a flatter, elliptical arch); the spring
@@ -252,25 +262,34 @@ impl Params {
             [vec![LENGTH, LENGTH + WALL], heights.clone(), across],
         );
         let along = vec![0.0, LENGTH];
+        let bay_lines: Vec<f64> = (0..=self.bays).map(|j| self.bay_x(j)).collect();
         for (side, arcade) in [("south", south), ("north", north)] {
-            // From the back wall to the arcade's front, cut at the arcade.
-            let (back, aisle) = if side == "south" {
-                (vec![-WALL, 0.0], vec![0.0, arcade[0], arcade[1]])
+            // From the back wall to the arcade's front, cut at the arcade;
+            // the roof's underside also where the drapes hang from it.
+            let drape = drape_z(0.5 * (arcade[0] + arcade[1]));
+            let (back, aisle, roof) = if side == "south" {
+                let aisle = vec![0.0, arcade[0], arcade[1]];
+                let roof = vec![0.0, drape[0], drape[1], arcade[0], arcade[1]];
+                (vec![-WALL, 0.0], aisle, roof)
             } else {
-                (vec![WIDTH, WIDTH + WALL], vec![arcade[0], arcade[1], WIDTH])
+                let aisle = vec![arcade[0], arcade[1], WIDTH];
+                let roof = vec![arcade[0], arcade[1], drape[0], drape[1], WIDTH];
+                (vec![WIDTH, WIDTH + WALL], aisle, roof)
             };
             let solids = [
                 ("back_wall", "wall", heights.clone(), back),
-                (
-                    "gallery_slab",
-                    "slab",
-                    vec![ground.top, upper.base],
-                    aisle.clone(),
-                ),
-                ("roof", "wall", vec![upper.top, HEIGHT], aisle),
+                ("gallery_slab", "slab", vec![ground.top, upper.base], aisle),
+                ("roof", "wall", vec![upper.top, HEIGHT], roof),
             ];
             for (kind, material, y, z) in solids {
-                lattice(format!("{kind}_{side}"), material, [along.clone(), y, z]);
+                // The roof also at every bay: its 50 mm drape strips would
+                // otherwise be slivers 35 m long.
+                let x = if kind == "roof" {
+                    bay_lines.clone()
+                } else {
+                    along.clone()
+                };
+                lattice(format!("{kind}_{side}"), material, [x, y, z]);
             }
         }
     }
@@ -279,7 +298,6 @@ impl Params {
     /// between and an arch over every bay.
     fn arcade(&self, parts: &mut Vec<Part>, storey: &Storey, level: usize, side: &str, line: f64) {
         let z = [line - ARCH_HALF_DEPTH, line + ARCH_HALF_DEPTH];
-        let pitch = self.pitch();
         for (end, x) in [
             ("west", [0.0, COLUMN_RADIUS]),
             ("east", [LENGTH - COLUMN_RADIUS, LENGTH]),
@@ -299,24 +317,18 @@ impl Params {
                 name: format!("column_{level}_{side}_{j}"),
                 material: "column",
                 solid: Solid::Column {
-                    base: [j as f64 * pitch, storey.base, line],
+                    base: [self.bay_x(j), storey.base, line],
                     height: storey.spring - storey.base,
                 },
             });
         }
         let rise = storey.top - CROWN - storey.spring;
         for j in 0..self.bays {
-            // The last bay ends exactly on the east wall, not at bays·pitch.
-            let x1 = if j + 1 == self.bays {
-                LENGTH
-            } else {
-                (j + 1) as f64 * pitch
-            };
             parts.push(Part {
                 name: format!("arch_{level}_{side}_{j}"),
                 material: "arch",
                 solid: Solid::Arch(ArchSpec {
-                    x: [j as f64 * pitch, x1],
+                    x: [self.bay_x(j), self.bay_x(j + 1)],
                     inset: COLUMN_RADIUS,
                     z,
                     y: [storey.spring, storey.top],
@@ -330,20 +342,14 @@ impl Params {
     /// A drape hanging from the roof slab in every other bay of both upper
     /// galleries, behind the arches.
     fn drapes(&self, parts: &mut Vec<Part>, upper: &Storey) {
-        let (gap, drop, thickness) = DRAPE;
+        let (_, drop, _) = DRAPE;
         let colours = ["drape_red", "drape_green", "drape_blue"];
         let mut n = 0;
         for (side, line) in ["south", "north"].into_iter().zip(COLUMN_LINES) {
-            let z = if line < 0.5 * WIDTH {
-                let face = line - ARCH_HALF_DEPTH - gap;
-                [face - thickness, face]
-            } else {
-                let face = line + ARCH_HALF_DEPTH + gap;
-                [face, face + thickness]
-            };
+            let z = drape_z(line);
             for j in (1..self.bays).step_by(2) {
-                let x0 = j as f64 * self.pitch() + COLUMN_RADIUS + 150.0;
-                let x1 = (j + 1) as f64 * self.pitch() - COLUMN_RADIUS - 150.0;
+                let x0 = self.bay_x(j) + COLUMN_RADIUS + 150.0;
+                let x1 = self.bay_x(j + 1) - COLUMN_RADIUS - 150.0;
                 parts.push(Part {
                     name: format!("drape_{side}_{j}"),
                     material: colours[n % colours.len()],
@@ -356,6 +362,19 @@ impl Params {
                 n += 1;
             }
         }
+    }
+}
+
+/// The z range of the drapes behind the arcade on column line `line`: in
+/// its upper gallery, a gap behind the arch blocks.
+pub fn drape_z(line: f64) -> [f64; 2] {
+    let (gap, _, thickness) = DRAPE;
+    if line < 0.5 * WIDTH {
+        let face = line - ARCH_HALF_DEPTH - gap;
+        [face - thickness, face]
+    } else {
+        let face = line + ARCH_HALF_DEPTH + gap;
+        [face, face + thickness]
     }
 }
 
