@@ -116,27 +116,27 @@ impl Params {
     /// The first bay count in [`BAY_PREFERENCE`] whose best level lands within
     /// 5% of `triangles`, else the nearest over all.
     pub fn for_triangles(triangles: usize) -> Params {
-        let mut best: Option<(usize, Params)> = None;
+        let mut best = (usize::MAX, Params::at_level(BAY_PREFERENCE[0], 1));
         for bays in BAY_PREFERENCE {
             let mut t = 1;
             loop {
                 let p = Params::at_level(bays, t);
                 let count = p.triangle_count();
                 let error = count.abs_diff(triangles);
-                if best.is_none_or(|(e, _)| error < e) {
-                    best = Some((error, p));
+                if error < best.0 {
+                    best = (error, p);
                 }
                 if count > 2 * triangles || t >= 1_000 {
                     break;
                 }
                 t += 1;
             }
-            let (error, p) = best.expect("the ladder has a level");
+            let (error, p) = best;
             if p.bays == bays && (error as f64) <= 0.05 * triangles as f64 {
                 return p;
             }
         }
-        best.expect("the ladder has a level").1
+        best.1
     }
 
     /// Column centre to column centre.
