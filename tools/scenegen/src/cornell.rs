@@ -11,7 +11,7 @@
 use crate::mesh::{Closure, Corner, Mesh, Vec3};
 use crate::primitives::{add_box, footprint_radius, BoxSpec, Placement};
 use crate::rng::SplitMix64;
-use crate::scene::{Camera, Material, Scene};
+use crate::scene::{Camera, Lights, Material, Scene};
 
 /// The room's triangles: floor, ceiling, back, left and right walls (one quad,
 /// two triangles each) and the light (two).
@@ -143,6 +143,7 @@ pub fn generate(count: usize, seed: u64) -> Scene {
             target: [278.0, 273.0, 0.0],
             fov_y_deg: 39.3077,
         },
+        lights: Lights::default(),
     }
 }
 

@@ -9,7 +9,7 @@
 
 use crate::mesh::{Closure, Mesh};
 use crate::primitives::{add_box, add_horizontal_rect, BoxSpec, Placement};
-use crate::scene::{Camera, Material, Scene};
+use crate::scene::{Camera, Lights, Material, Scene};
 
 /// Wall centre line to wall centre line.
 pub const PITCH: f64 = 4000.0;
@@ -230,5 +230,6 @@ pub fn generate(params: Params) -> Scene {
             target: [PITCH, 1100.0, PITCH],
             fov_y_deg: 60.0,
         },
+        lights: Lights::default(),
     }
 }

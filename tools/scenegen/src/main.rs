@@ -20,9 +20,10 @@ struct Args {
     family: Family,
     /// Triangles wanted: the family's parameter is chosen to land within ±20%
     /// of it, and the actual count is printed. More triangles make a larger
-    /// OBJ (about 40 bytes a triangle) and a slower solve.
-    #[arg(long, default_value_t = 1000)]
-    triangles: usize,
+    /// OBJ (about 40 bytes a triangle) and a slower solve. Default 1000; 65000
+    /// for the atrium, 300 for the window room.
+    #[arg(long)]
+    triangles: Option<usize>,
     /// Seed of the Cornell boxes' layout (sizes, positions, yaw); the same seed
     /// gives the same file. The other families are regular and ignore it.
     #[arg(long, default_value_t = 1)]
@@ -37,7 +38,10 @@ struct Args {
 
 fn main() -> anyhow::Result<()> {
     let args = Args::parse();
-    let scene = generate(args.family, args.triangles, args.seed)?;
+    let triangles = args
+        .triangles
+        .unwrap_or_else(|| args.family.default_triangles());
+    let scene = generate(args.family, triangles, args.seed)?;
     let stem = args.name.unwrap_or_else(|| args.family.name().to_owned());
     let paths = write_scene(&scene, &args.out, &stem)
         .with_context(|| format!("writing the scene into {}", args.out.display()))?;
@@ -45,7 +49,7 @@ fn main() -> anyhow::Result<()> {
         "{}: {} triangles ({} requested); {}",
         args.family.name(),
         scene.mesh.triangle_count(),
-        args.triangles,
+        triangles,
         scene.description
     );
     println!("wrote {} (+ .mtl, .obj)", paths.toml.display());

@@ -55,15 +55,61 @@ impl BoxSpec {
 /// its triangles out of the solid (a block, a wall slab), Inward into it (a room).
 pub fn add_box(mesh: &mut Mesh, spec: &BoxSpec, placement: &Placement, closure: Closure) {
     let divisions = spec.divisions.map(|d| d.max(1));
+    let lines: [Vec<f64>; 3] = std::array::from_fn(|axis| {
+        (0..=divisions[axis])
+            .map(|k| {
+                let t = k as f64 / divisions[axis] as f64;
+                spec.min[axis] + t * (spec.max[axis] - spec.min[axis])
+            })
+            .collect()
+    });
+    add_lattice_box(mesh, &lines, placement, closure, |_, _| {}, |_| true);
+}
+
+/// One face of a lattice box: the axis it is normal to and whether it lies at
+/// that axis' last line (the far side) or its first.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct BoxFace {
+    pub axis: usize,
+    pub far: bool,
+}
+
+/// One cell of a lattice box's face: its face, and its ranges along the
+/// face's two other axes (axis + 1 and axis + 2, cyclically).
+#[derive(Clone, Copy, Debug)]
+pub struct FaceCell {
+    pub face: BoxFace,
+    pub u: [f64; 2],
+    pub v: [f64; 2],
+}
+
+/// Triangles of a closed lattice box: two per cell of each face.
+pub fn lattice_box_triangle_count(lines: &[Vec<f64>; 3]) -> usize {
+    let [a, b, c] = lines.each_ref().map(|l| l.len() - 1);
+    4 * (a * b + b * c + c * a)
+}
+
+/// Adds the box spanned by `lines` (per axis, increasing; the first and last
+/// are its extent) with each face cut on the lines of its two axes, so that
+/// a face has an edge wherever something touches it along a line. Faces
+/// meeting at an edge share its vertices. `begin_face` is called before each
+/// face's cells (to start an object per face, or nothing); a cell for which
+/// `keep` is false is left out (a window), which opens the box there.
+pub fn add_lattice_box(
+    mesh: &mut Mesh,
+    lines: &[Vec<f64>; 3],
+    placement: &Placement,
+    closure: Closure,
+    mut begin_face: impl FnMut(&mut Mesh, BoxFace),
+    keep: impl Fn(&FaceCell) -> bool,
+) {
+    let last = lines.each_ref().map(|l| l.len() - 1);
     // Lattice points on the surface, keyed by their integer coordinates, so
     // that the faces meeting at an edge share its vertices.
-    let mut lattice: HashMap<[u32; 3], u32> = HashMap::new();
-    let mut vertex = |mesh: &mut Mesh, ijk: [u32; 3]| -> u32 {
+    let mut lattice: HashMap<[usize; 3], u32> = HashMap::new();
+    let mut vertex = |mesh: &mut Mesh, ijk: [usize; 3]| -> u32 {
         *lattice.entry(ijk).or_insert_with(|| {
-            let local: [f64; 3] = std::array::from_fn(|axis| {
-                let t = ijk[axis] as f64 / divisions[axis] as f64;
-                spec.min[axis] + t * (spec.max[axis] - spec.min[axis])
-            });
+            let local: [f64; 3] = std::array::from_fn(|axis| lines[axis][ijk[axis]]);
             mesh.add_position(placement.apply(local))
         })
     };
@@ -72,13 +118,25 @@ pub fn add_box(mesh: &mut Mesh, spec: &BoxSpec, placement: &Placement, closure: 
         // u0v0 → u1v0 → u1v1 → u0v1 has normal +axis.
         let u = (axis + 1) % 3;
         let v = (axis + 2) % 3;
-        for side in [0, divisions[axis]] {
-            let outward_positive = side != 0;
-            let reversed = outward_positive == (closure == Closure::Inward);
-            for i in 0..divisions[u] {
-                for j in 0..divisions[v] {
-                    let at = |di: u32, dj: u32| {
-                        let mut ijk = [0u32; 3];
+        for side in [0, last[axis]] {
+            let face = BoxFace {
+                axis,
+                far: side != 0,
+            };
+            begin_face(mesh, face);
+            let reversed = face.far == (closure == Closure::Inward);
+            for i in 0..last[u] {
+                for j in 0..last[v] {
+                    let cell = FaceCell {
+                        face,
+                        u: [lines[u][i], lines[u][i + 1]],
+                        v: [lines[v][j], lines[v][j + 1]],
+                    };
+                    if !keep(&cell) {
+                        continue;
+                    }
+                    let at = |di: usize, dj: usize| {
+                        let mut ijk = [0usize; 3];
                         ijk[axis] = side;
                         ijk[u] = i + di;
                         ijk[v] = j + dj;

@@ -2,10 +2,10 @@
 //! surface is smooth), `NAME.mtl` (Kd reflectance, Ke emitted radiance in
 //! W·sr⁻¹·m⁻², linear RGB, one-sided toward the winding's front) and
 //! `NAME.toml`, the solver's scene config (solver/src/scene/config.rs), which
-//! states the units (millimetres: `units_per_metre = 1000`), +y up and a camera
-//! inside the scene.
+//! states the units (millimetres: `units_per_metre = 1000`), +y up, a camera
+//! inside the scene and, for the daylit families, a `[sun]` and a `[sky]`.
 
-use crate::mesh::Mesh;
+use crate::mesh::{length, Mesh, Vec3};
 use anyhow::Context;
 use solution::atomic::write_atomically;
 use std::fmt::Write as _;
@@ -30,6 +30,58 @@ pub struct Camera {
     pub fov_y_deg: f64,
 }
 
+/// The `[sun]` table: a distant disc.
+#[derive(Clone, Debug)]
+pub struct Sun {
+    /// Toward the sun, scene frame (any length; never zero).
+    pub direction: Vec3,
+    /// Irradiance on a plane facing the sun, W·m⁻² per channel.
+    pub irradiance: [f64; 3],
+    pub angular_diameter_deg: f64,
+}
+
+/// The `[sky]` table: a uniform sky, black below the horizon.
+#[derive(Clone, Debug)]
+pub struct Sky {
+    /// W·sr⁻¹·m⁻² per channel: πL on an open horizontal plane.
+    pub radiance: [f64; 3],
+}
+
+/// The lights the config states besides the MTL's emitters (none for the
+/// families lit by emissive polygons, whose configs stay as they were).
+#[derive(Clone, Debug, Default)]
+pub struct Lights {
+    pub sun: Option<Sun>,
+    pub sky: Option<Sky>,
+}
+
+/// 100 klux of white sun: 100 000 / 683 W·m⁻² per channel (a photometric X
+/// with colour c is c·X/683 in the solver's units, docs/lights.md).
+pub const SUN_100_KLUX: [f64; 3] = [146.4, 146.4, 146.4];
+/// A bluish uniform sky; its horizontal illuminance is π · 683 · L ≈ 7.5 klux
+/// for the green channel, a bright overcast-to-clear day's diffuse light.
+pub const SKY_RADIANCE: [f64; 3] = [3.0, 3.5, 4.5];
+
+impl Lights {
+    /// A 100 klux sun at `elevation_deg` above the horizon, its horizontal
+    /// bearing along `heading` (x, z; need not be unit length), and the
+    /// uniform [`SKY_RADIANCE`] sky.
+    pub fn daylight(elevation_deg: f64, heading: [f64; 2]) -> Lights {
+        let (sin_e, cos_e) = elevation_deg.to_radians().sin_cos();
+        let h = length([heading[0], 0.0, heading[1]]);
+        Lights {
+            sun: Some(Sun {
+                direction: [cos_e * heading[0] / h, sin_e, cos_e * heading[1] / h],
+                irradiance: SUN_100_KLUX,
+                angular_diameter_deg: 0.53,
+            }),
+            sky: Some(Sky {
+                radiance: SKY_RADIANCE,
+            }),
+        }
+    }
+}
+
 #[derive(Clone, Debug)]
 pub struct Scene {
     /// One line saying what the scene is and which parameters made it.
@@ -37,6 +89,7 @@ pub struct Scene {
     pub mesh: Mesh,
     pub materials: Vec<Material>,
     pub camera: Camera,
+    pub lights: Lights,
 }
 
 /// Where [`write_scene`] put the three files.
@@ -126,7 +179,7 @@ pub fn mtl_text(scene: &Scene) -> String {
 
 pub fn toml_text(scene: &Scene, obj_name: &str) -> String {
     let c = &scene.camera;
-    format!(
+    let mut s = format!(
         "# {}\n# Scene config for `solver solve` (solver/src/scene/config.rs), written by tools/scenegen.\n\
          # No patch or solver overrides: the preset decides the meshing, as for a user's model.\n\n\
          geometry = [\"{obj_name}\"]\n\
@@ -148,5 +201,69 @@ pub fn toml_text(scene: &Scene, obj_name: &str) -> String {
         c.target[1],
         c.target[2],
         c.fov_y_deg
+    );
+    s.push_str(&lights_text(&scene.lights));
+    s
+}
+
+/// The `[sun]` and `[sky]` tables (empty when the scene has neither, so the
+/// emitter-lit families' configs are unchanged).
+pub fn lights_text(lights: &Lights) -> String {
+    let mut s = String::new();
+    if let Some(sun) = &lights.sun {
+        let d = sun.direction;
+        let elevation = (d[1] / length(d)).asin().to_degrees();
+        let _ = write!(
+            s,
+            "\n# Sun at {elevation:.1} deg elevation. Irradiance in W*m^-2 per channel on a plane\n\
+             # facing it (100 klux of white sun is 100000/683 = 146.4).\n\
+             [sun]\n\
+             direction = {}\n\
+             irradiance = {}\n\
+             angular_diameter_deg = {}\n",
+            toml_vector(d),
+            toml_vector(sun.irradiance),
+            toml_number(sun.angular_diameter_deg)
+        );
+    }
+    if let Some(sky) = &lights.sky {
+        let _ = write!(
+            s,
+            "\n# Uniform sky radiance in W*sr^-1*m^-2 per channel (pi*L on an open horizontal plane).\n\
+             [sky]\n\
+             kind = \"uniform\"\n\
+             radiance = {}\n\
+             below_horizon = \"black\"\n",
+            toml_vector(sky.radiance)
+        );
+    }
+    s
+}
+
+/// `[a, b, c]` with each number as [`toml_number`] writes it.
+fn toml_vector(v: [f64; 3]) -> String {
+    format!(
+        "[{}, {}, {}]",
+        toml_number(v[0]),
+        toml_number(v[1]),
+        toml_number(v[2])
     )
+}
+
+/// A TOML float (always with a decimal point, so that no parser reads an
+/// integer) with at most 6 decimals and no trailing zeros: 146.4, 3.0, 0.286788.
+pub fn toml_number(x: f64) -> String {
+    let fixed = format!("{x:.6}");
+    let trimmed = fixed.trim_end_matches('0');
+    let text = if trimmed.ends_with('.') {
+        format!("{trimmed}0")
+    } else {
+        trimmed.to_owned()
+    };
+    // −0.000000 would print as "-0.0".
+    if text == "-0.0" {
+        "0.0".to_owned()
+    } else {
+        text
+    }
 }

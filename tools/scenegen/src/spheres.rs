@@ -10,7 +10,7 @@ use crate::primitives::{
     add_box, add_cylinder, add_horizontal_rect, add_sphere, cylinder_triangle_count,
     sphere_triangle_count, BoxSpec, Placement,
 };
-use crate::scene::{Camera, Material, Scene};
+use crate::scene::{Camera, Lights, Material, Scene};
 
 const ROOM: [f64; 3] = [6000.0, 3000.0, 6000.0];
 const LIGHT_SIDE: f64 = 1200.0;
@@ -120,5 +120,6 @@ pub fn generate(params: Params) -> Scene {
             target: [3000.0, 800.0, 4000.0],
             fov_y_deg: 60.0,
         },
+        lights: Lights::default(),
     }
 }

@@ -1,18 +1,29 @@
 //! Properties every generated scene must have, checked on each family at
 //! about 1k and 10k triangles (the 100k and 1M scenes are built by the same
-//! code with larger parameters; generating them here would slow the suite).
+//! code with larger parameters; generating them here would slow the suite),
+//! and on the daylit families at the sizes of [`DAYLIT`].
 
 use crate::mesh::{check_closed, dot, sub, Closure, Mesh};
 use crate::{cornell, floorplan, generate, spheres, Family, COUNT_TOLERANCE};
 
 const SIZES: [usize; 2] = [1_000, 10_000];
 
+/// The daylit families (not in [`Family::ALL`]) at a test size and their
+/// default one; the atrium has no 1k scene, its smallest is about 1 300.
+const DAYLIT: [(Family, usize); 4] = [
+    (Family::Atrium, 5_000),
+    (Family::Atrium, 65_000),
+    (Family::WindowRoom, 300),
+    (Family::WindowRoom, 5_000),
+];
+
 fn each_scene(mut check: impl FnMut(Family, usize, &Mesh)) {
-    for family in Family::ALL {
-        for n in SIZES {
-            let scene = generate(family, n, 3).unwrap();
-            check(family, n, &scene.mesh);
-        }
+    let emitter_lit = Family::ALL
+        .into_iter()
+        .flat_map(|family| SIZES.map(|n| (family, n)));
+    for (family, n) in emitter_lit.chain(DAYLIT) {
+        let scene = generate(family, n, 3).unwrap();
+        check(family, n, &scene.mesh);
     }
 }
 
