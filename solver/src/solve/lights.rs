@@ -26,7 +26,7 @@
 
 use super::group_shot::Shooter;
 use super::pipeline::{Shooting, Source, Transport};
-use super::refine::{self, Refined};
+use super::refine::{self, Criteria, Refined, DARK_FLOOR};
 use super::shoot::{Received, ReceivingPoint, RecordedShot};
 use super::{footprint, Solver};
 use crate::geometry::sampling::{stratified_points, stratified_square, stream_id, Rng};
@@ -355,13 +355,16 @@ impl Transport for LightsTransport {
             true,
         );
         let shot_done = Instant::now();
-        // The power the lights put in, and its level: the mesh's dark floor
-        // and the ambient it is heading for.
-        s.lights.power = s.received_power();
-        let level = s.lights_level();
-        s.stats.emitted_power += s.lights.power;
-        s.stats.radiance_level = s.stats.radiance_level.max(level);
+        // The level of the light the lights put in, before refinement adds
+        // to it: this shot's dark floor and the ambient it is heading for.
+        // (The gather measures their power exactly, `unshot_power`.)
+        let level = s.lights_level(s.received_power());
         let ambient = source.ambient + DVec3::splat(level);
+        let floor = s.stats.radiance_level.max(level);
+        let criteria = Criteria {
+            dark_floor: DARK_FLOOR * floor,
+            ..s.refine_criteria(ambient)
+        };
         let mut refined = Refined::default();
         if s.refines() {
             // New vertices receive the lights and every recorded shot
@@ -381,7 +384,6 @@ impl Transport for LightsTransport {
                 lights: Some(&shot),
                 current_recorded: true,
             };
-            let criteria = s.refine_criteria(ambient);
             refined = refine::refine_field(
                 &mut s.mesh,
                 &mut refine::DiffuseField {
@@ -409,8 +411,13 @@ impl Transport for LightsTransport {
         s.gather();
     }
 
+    /// The unshot power once gathered. What the lights added to it is
+    /// their power: it joins the emitted power the solve converges against.
     fn unshot_power(&mut self, s: &mut Solver) -> f64 {
-        s.unshot_power_from_index()
+        let total = s.unshot_power_from_index();
+        s.lights.power = (total - s.stats.unshot_power).max(0.0);
+        s.include_lights_power();
+        total
     }
 }
 
@@ -439,14 +446,15 @@ impl Solver {
     /// floor) to the lights', as their shot did (on resume).
     pub(super) fn include_lights_power(&mut self) {
         self.stats.emitted_power += self.lights.power;
-        self.stats.radiance_level = self.stats.radiance_level.max(self.lights_level());
+        let level = self.lights_level(self.lights.power);
+        self.stats.radiance_level = self.stats.radiance_level.max(level);
     }
 
-    /// Cohen et al.'s (1988) ambient radiance of the lights' power, as
+    /// Cohen et al.'s (1988) ambient radiance of the lights' `power`, as
     /// [`Solver::ambient`] has it for unshot light: power / (π · area),
     /// over 1 − the mean reflectance (its brightest channel), the channels'
     /// mean.
-    fn lights_level(&self) -> f64 {
+    fn lights_level(&self, power: f64) -> f64 {
         let (mut area, mut reflect) = (0.0, DVec3::ZERO);
         for p in &self.mesh.patches {
             area += p.area;
@@ -458,6 +466,6 @@ impl Solver {
         let r = (DVec3::ONE - reflect / area)
             .max(DVec3::splat(1e-6))
             .recip();
-        r.max_element() * self.lights.power / (3.0 * PI * area)
+        r.max_element() * power / (3.0 * PI * area)
     }
 }
