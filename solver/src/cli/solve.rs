@@ -94,6 +94,9 @@ pub fn run(args: SolveArgs) -> anyhow::Result<ExitCode> {
         .map(|d| d.settings.clone())
         .unwrap_or_default();
     let mut settings = resolve_settings(&args, &display_patch, &loaded.settings, &args.settings)?;
+    for line in scene.lights.describe() {
+        eprintln!("solver: light: {line}");
+    }
     warn_clamped_patches(&scene, &settings);
     apply_smoothing(&mut scene, settings.crease_angle);
     // The import's text and parse tables are freed; give their pages back

@@ -43,4 +43,54 @@ impl Lights {
         }
         lights
     }
+
+    /// One line per light, for `solve` to print at import: what it is,
+    /// where, and its strength (a lamp's power ∫ I dω in W per channel, the
+    /// sun's and the sky's irradiance on a plane facing up).
+    pub fn describe(&self) -> Vec<String> {
+        let rgb = |v: glam::DVec3| format!("[{:.4}, {:.4}, {:.4}]", v.x, v.y, v.z);
+        let mut lines = Vec::new();
+        if let Some(sun) = &self.sun {
+            let d = sun.direction();
+            lines.push(format!(
+                "sun toward [{:.3}, {:.3}, {:.3}], {} W/m² facing it, disc {}°",
+                d.x,
+                d.y,
+                d.z,
+                rgb(sun.irradiance()),
+                sun.angular_diameter_deg()
+            ));
+        }
+        if let Some(sky) = &self.sky {
+            let kind = match sky.model() {
+                sky::SkyModel::Uniform { .. } => "uniform",
+                sky::SkyModel::CieOvercast { .. } => "CIE overcast",
+                sky::SkyModel::Clear { .. } => "clear (Preetham)",
+            };
+            lines.push(format!(
+                "sky {kind}, {} W/m² on an open horizontal plane",
+                rgb(sky.horizontal_irradiance())
+            ));
+        }
+        for lamp in &self.lamps {
+            let kind = match lamp.beam {
+                lamp::Beam::Point => "point",
+                lamp::Beam::Spot { .. } => "spot",
+            };
+            let p = lamp.position;
+            lines.push(format!(
+                "lamp {} ({kind}{}) at [{:.3}, {:.3}, {:.3}], {} W",
+                lamp.name,
+                if lamp.profile.is_some() { ", IES" } else { "" },
+                p.x,
+                p.y,
+                p.z,
+                rgb(lamp.power())
+            ));
+        }
+        if !self.portals.is_empty() {
+            lines.push(format!("{} sky portal(s)", self.portals.len()));
+        }
+        lines
+    }
 }
