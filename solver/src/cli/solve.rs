@@ -94,7 +94,7 @@ pub fn run(args: SolveArgs) -> anyhow::Result<ExitCode> {
         .map(|d| d.settings.clone())
         .unwrap_or_default();
     let mut settings = resolve_settings(&args, &display_patch, &loaded.settings, &args.settings)?;
-    for line in scene.lights.describe() {
+    for line in scene.lights.describe(scene.recentre_offset) {
         eprintln!("solver: light: {line}");
     }
     warn_clamped_patches(&scene, &settings);

@@ -46,8 +46,10 @@ impl Lights {
 
     /// One line per light, for `solve` to print at import: what it is,
     /// where, and its strength (a lamp's power ∫ I dω in W per channel, the
-    /// sun's and the sky's irradiance on a plane facing up).
-    pub fn describe(&self) -> Vec<String> {
+    /// sun's and the sky's irradiance on a plane facing up). Lamp positions
+    /// are printed plus `offset`: the scene's recentre offset gives them back
+    /// in the input's own coordinates.
+    pub fn describe(&self, offset: glam::DVec3) -> Vec<String> {
         let rgb = |v: glam::DVec3| format!("[{:.4}, {:.4}, {:.4}]", v.x, v.y, v.z);
         let mut lines = Vec::new();
         if let Some(sun) = &self.sun {
@@ -77,7 +79,7 @@ impl Lights {
                 lamp::Beam::Point => "point",
                 lamp::Beam::Spot { .. } => "spot",
             };
-            let p = lamp.position;
+            let p = lamp.position + offset;
             lines.push(format!(
                 "lamp {} ({kind}{}) at [{:.3}, {:.3}, {:.3}], {} W",
                 lamp.name,
