@@ -816,6 +816,8 @@ mod emissive_tests;
 #[cfg(test)]
 mod footprint_tests;
 #[cfg(test)]
+mod gltf_lights_tests;
+#[cfg(test)]
 mod group_shot_tests;
 #[cfg(test)]
 mod hidden_tests;
