@@ -25,6 +25,7 @@ fn solution() -> Solution {
         vertex(0.0, 1.0),
     ];
     Solution {
+        lighting: None,
         header: Header {
             units_per_metre: 1000.0,
             up_axis: UpAxis::NegZ,

@@ -27,6 +27,7 @@ fn header() -> Header {
 
 fn solution(batches: Vec<Batch>) -> Solution {
     Solution {
+        lighting: None,
         header: header(),
         batches,
         textures: Vec::new(),

@@ -282,6 +282,7 @@ impl Solver {
         });
         let units_per_metre = self.units_per_metre();
         let mut solution = Solution {
+            lighting: None,
             header: Header {
                 units_per_metre,
                 up_axis: self.scene.up_axis,
