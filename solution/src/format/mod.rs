@@ -31,7 +31,8 @@ mod tests;
 mod texture_tests;
 
 pub use describe::{
-    batch_json, describe_json, describe_text, describe_textures_text, textures_json,
+    batch_json, describe_json, describe_lighting_text, describe_text, describe_textures_text,
+    lighting_json, textures_json,
 };
 pub use error::{FormatError, Problem};
 pub use layout::MAX_SH_ORDER;

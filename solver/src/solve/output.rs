@@ -324,6 +324,8 @@ impl Solver {
             let framing = solution.header.camera;
             solution.header.camera = crate::view::default_camera(&solution, framing);
         }
+        // The exposure key, the lights and the visible sky (`output_lights.rs`).
+        solution.lighting = self.lighting(&solution);
         solution
     }
 }
