@@ -35,7 +35,7 @@ pub use inspect::{Edges, Inspect};
 pub use multiview::MultiviewMode;
 pub use readback::EyeImage;
 pub use scene::{CoefficientStorage, DrawKind, GpuScene, SceneError, UploadStats};
-pub use tonemap::{ToneCurve, ToneSettings};
+pub use tonemap::{file_tone, ToneCurve, ToneSettings};
 
 use crate::gpu::{
     Buffer, BufferDesc, Fence, Gpu, GpuError, Image, ImageDesc, MemoryLocation, VkContext,
