@@ -143,3 +143,74 @@ fn a_file_without_environment_keeps_its_black_background() {
         .count();
     assert!(black > 100, "{black} black pixels above the walls");
 }
+
+#[test]
+fn screenshot_of_a_lit_file_is_exposed_from_its_key_through_aces() {
+    // `runtime screenshot` of a lit file: the file's key 0.5 gives
+    // log2(0.18 / 0.5) = −1.47 stops, `--exposure 1` adds one, and the
+    // default curve is ACES; the PNG matches the CPU reference (sky
+    // included) tone-mapped so. Tolerance: ±2 of 255 per channel (the
+    // half-float target and Vulkan's sRGB conversion, each about one step)
+    // for all but 2% of pixels (silhouette pixels of the walls' tops).
+    // Measured on lavapipe: no value off by more than 2.
+    common::use_lavapipe_unless_chosen();
+    let dir = tempfile::tempdir().unwrap();
+    let solution = lit_room(DVec3::new(-0.15, 0.6, -1.0));
+    let path = dir.path().join("lit.sol");
+    solution::format::write_solution(&path, &solution).unwrap();
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_runtime"))
+        .arg("screenshot")
+        .arg(&path)
+        .args(["--eye", "0.3", "1.2", "2.5", "--target", "-0.4", "4", "-2"])
+        .args([
+            "--fov-y",
+            "70",
+            "--size",
+            "48x40",
+            "--mono",
+            "--exposure",
+            "1",
+        ])
+        .args(["--samples", "1", "--out"])
+        .arg(dir.path().join("shot"))
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let png = image::open(dir.path().join("shot.png")).unwrap().to_rgb8();
+    let camera = Camera {
+        eye: [0.3, 1.2, 2.5],
+        target: [-0.4, 4.0, -2.0],
+        up: solution.header.camera.up,
+        fov_y_deg: 70.0,
+        width: 48,
+        height: 40,
+    };
+    let view = camera.mono_view(DVec3::from(solution.header.recentre_offset));
+    let cpu = solution::raster::render(&solution, &view, &Default::default()).unwrap();
+    let stops = (0.18f32 / 0.5).log2() + 1.0;
+    let expected =
+        solution::raster::tonemap_srgb8(&cpu, stops, solution::raster::ToneCurve::AcesFit);
+    let off = png
+        .as_raw()
+        .iter()
+        .zip(&expected)
+        .filter(|(a, b)| a.abs_diff(**b) > 2)
+        .count();
+    eprintln!(
+        "lit screenshot: {off} of {} channel values off by more than 2",
+        expected.len()
+    );
+    assert!(
+        off * 50 <= expected.len(),
+        "{off} of {} values differ",
+        expected.len()
+    );
+    // And the exposure was applied: the clamp curve at 0 EV would give
+    // other bytes.
+    let clamp0 = solution::raster::tonemap_srgb8(&cpu, 0.0, solution::raster::ToneCurve::Clamp);
+    assert_ne!(png.as_raw(), &clamp0);
+}
