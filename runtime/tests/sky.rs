@@ -48,6 +48,18 @@ fn lit_room(sun_toward: DVec3) -> Solution {
     solution
 }
 
+/// From inside the room, looking up over the walls' tops at the sky.
+fn looking_up(width: u32, height: u32) -> Camera {
+    Camera {
+        eye: [0.3, 1.2, 2.5],
+        target: [-0.4, 4.0, -2.0],
+        up: [0.0, 1.0, 0.0],
+        fov_y_deg: 70.0,
+        width,
+        height,
+    }
+}
+
 fn render(solution: &Solution, camera: &Camera) -> Vec<runtime::render::EyeImage> {
     let gpu = common::gpu();
     let views = camera.stereo_views(0.3, DVec3::ZERO);
@@ -86,19 +98,11 @@ const TOLERANCES: common::Tolerances = common::Tolerances {
 
 #[test]
 fn open_room_shows_the_sky_and_sun_as_the_cpu_reference() {
-    let looking_up = Camera {
-        eye: [0.3, 1.2, 2.5],
-        target: [-0.4, 4.0, -2.0],
-        up: [0.0, 1.0, 0.0],
-        fov_y_deg: 70.0,
-        width: 96,
-        height: 80,
-    };
     // The sun in the view, up and ahead.
     let solution = lit_room(DVec3::new(-0.15, 0.6, -1.0));
     for (name, camera) in [
         ("sky-room", common::room_camera(96, 80)),
-        ("sky-up", looking_up),
+        ("sky-up", looking_up(96, 80)),
     ] {
         let eyes = render(&solution, &camera);
         let views = camera.stereo_views(0.3, DVec3::ZERO);
@@ -127,15 +131,7 @@ fn open_room_shows_the_sky_and_sun_as_the_cpu_reference() {
 
 #[test]
 fn a_file_without_environment_keeps_its_black_background() {
-    let camera = Camera {
-        eye: [0.3, 1.2, 2.5],
-        target: [-0.4, 4.0, -2.0],
-        up: [0.0, 1.0, 0.0],
-        fov_y_deg: 70.0,
-        width: 48,
-        height: 40,
-    };
-    let eyes = render(&common::diffuse_room(4), &camera);
+    let eyes = render(&common::diffuse_room(4), &looking_up(48, 40));
     let black = eyes[0]
         .radiance
         .chunks_exact(3)
@@ -181,15 +177,7 @@ fn screenshot_of_a_lit_file_is_exposed_from_its_key_through_aces() {
         String::from_utf8_lossy(&out.stderr)
     );
     let png = image::open(dir.path().join("shot.png")).unwrap().to_rgb8();
-    let camera = Camera {
-        eye: [0.3, 1.2, 2.5],
-        target: [-0.4, 4.0, -2.0],
-        up: solution.header.camera.up,
-        fov_y_deg: 70.0,
-        width: 48,
-        height: 40,
-    };
-    let view = camera.mono_view(DVec3::from(solution.header.recentre_offset));
+    let view = looking_up(48, 40).mono_view(DVec3::from(solution.header.recentre_offset));
     let cpu = solution::raster::render(&solution, &view, &Default::default()).unwrap();
     let stops = (0.18f32 / 0.5).log2() + 1.0;
     let expected =

@@ -1,25 +1,12 @@
 //! Stage 7: the environment behind the geometry (format x.1).
 
 use super::*;
-use crate::camera::{Camera, Fov, UpAxis};
-use crate::format::{
-    equirect_direction, Lighting, ScalarType, SolveMode, SolveStats, SunDisc, Vertex,
-};
+use crate::camera::{Fov, UpAxis};
+use crate::format::{equirect_direction, Lighting, ScalarType, SunDisc, Vertex};
 
 fn solution(batches: Vec<Batch>, env: Environment) -> Solution {
     Solution {
-        header: Header {
-            units_per_metre: 1.0,
-            up_axis: UpAxis::PosY,
-            recentre_offset: [0.0; 3],
-            camera: Camera::default(),
-            bounds_min: [-20.0; 3],
-            bounds_max: [20.0; 3],
-            partial: false,
-            mode: SolveMode::Diffuse,
-            stats: SolveStats::default(),
-            settings_json: String::new(),
-        },
+        header: super::tests::header(),
         batches,
         textures: Vec::new(),
         lighting: Some(Lighting {

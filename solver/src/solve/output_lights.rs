@@ -214,37 +214,15 @@ mod tests {
     use crate::light::sky::SkyModel;
     use crate::light::sun::SunPosition;
     use crate::settings::{Preset, SolverSettings};
-    use crate::solve::tests::{material, scene_of};
     use std::f64::consts::PI;
 
     const RHO: f64 = 0.5;
 
-    /// An open floor of side 2h facing up and a square of side 0.2h below it
-    /// facing down, under `lights` (as `lights_tests.rs`).
+    /// The open floor of `lights_tests.rs` (a floor of side 2h facing up,
+    /// a square of side 0.2h below it facing down, ρ = 0.5) under `lights`,
+    /// solved at draft without the ambient term.
     fn solved_floor(half: f64, lights: Lights) -> Solution {
-        let v = |x: f64, y: f64, z: f64| DVec3::new(x, y, z) * half;
-        let polygons = vec![
-            (
-                vec![
-                    v(-1., 0., 1.),
-                    v(1., 0., 1.),
-                    v(1., 0., -1.),
-                    v(-1., 0., -1.),
-                ],
-                0,
-            ),
-            (
-                vec![
-                    v(-0.1, -1., -0.1),
-                    v(0.1, -1., -0.1),
-                    v(0.1, -1., 0.1),
-                    v(-0.1, -1., 0.1),
-                ],
-                0,
-            ),
-        ];
-        let mut scene = scene_of(polygons, vec![material("grey", RHO, 0.0)], 8);
-        scene.lights = lights;
+        let scene = crate::solve::lights_tests::open_floor(half, Vec::new(), lights);
         let mut settings = SolverSettings::preset(Preset::Draft);
         settings.ambient = false;
         let mut solver = Solver::new(&scene, &settings).unwrap();
