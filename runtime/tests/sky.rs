@@ -202,3 +202,38 @@ fn screenshot_of_a_lit_file_is_exposed_from_its_key_through_aces() {
     let clamp0 = solution::raster::tonemap_srgb8(&cpu, 0.0, solution::raster::ToneCurve::Clamp);
     assert_ne!(png.as_raw(), &clamp0);
 }
+
+#[test]
+fn a_reloaded_file_brings_its_sky_or_its_black() {
+    // The mirror's `--watch` reload (`StereoRenderer::set_mapped`): a plain
+    // file, then a lit one, then the plain one again.
+    let gpu = common::gpu();
+    let camera = looking_up(48, 40);
+    let views = [camera.mono_view(DVec3::ZERO)];
+    let swapchain = OffscreenSwapchain::new(&gpu, 48, 40, 1).unwrap();
+    let desc = RendererDesc {
+        width: 48,
+        height: 40,
+        max_samples: 1,
+        ..RendererDesc::default()
+    };
+    let (_plain_dir, plain) = common::mapped(&common::diffuse_room(4));
+    let (_lit_dir, lit) = common::mapped(&lit_room(DVec3::new(0.0, 1.0, 0.0)));
+    let mut renderer = StereoRenderer::from_mapped(&gpu, &plain, desc, &swapchain.desc()).unwrap();
+    let mut black = Vec::new();
+    for file in [&plain, &lit, &plain] {
+        renderer.set_mapped(&gpu, file).unwrap();
+        renderer.render(&views, 0).unwrap();
+        let eye = &renderer.read_back(&gpu, 0, 1).unwrap()[0];
+        let zero = eye
+            .radiance
+            .chunks_exact(3)
+            .filter(|p| p.iter().all(|&c| c == 0.0));
+        black.push(zero.count());
+    }
+    assert!(
+        black[0] > 100 && black[1] == 0 && black[2] == black[0],
+        "{black:?}"
+    );
+    common::assert_validation_clean(&gpu);
+}

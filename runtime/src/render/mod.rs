@@ -521,6 +521,9 @@ impl StereoRenderer {
         self.upload_time = upload_time;
         self.upload_stats = stats;
         self.create_descriptors()?;
+        // The new file's sky (or none), on the current pass sets.
+        let env = file.lighting().and_then(|l| l.environment.as_ref());
+        self.set_environment(gpu, env, file.header().up_axis)?;
         Ok(())
     }
 
