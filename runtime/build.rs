@@ -38,6 +38,8 @@ const SHADERS: &[(&str, &str, &[&str])] = &[
     ("inspect.frag", "inspect.frag.spv", &[]),
     ("composite.frag", "composite.frag.spv", &[]),
     ("overlay.frag", "overlay.frag.spv", &[]),
+    ("sky.vert", "sky.vert.spv", &[]),
+    ("sky.frag", "sky.frag.spv", &[]),
 ];
 
 fn main() {

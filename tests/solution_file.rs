@@ -112,6 +112,7 @@ fn grid_solution(n: u32) -> Solution {
         })
         .collect();
     Solution {
+        lighting: None,
         header: Header {
             units_per_metre: 1.0,
             up_axis: UpAxis::PosY,

@@ -175,6 +175,7 @@ fn parallax_of_a_known_point_is_ipd_times_focal_over_depth() {
         height: 96,
     };
     let solution = Solution {
+        lighting: None,
         header: common::header([-0.15, 1.05, -3.0], [0.15, 1.35, -3.0], camera),
         batches: vec![marker],
         textures: Vec::new(),

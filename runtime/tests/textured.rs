@@ -81,6 +81,7 @@ fn scene() -> Solution {
         texturing: None,
     };
     Solution {
+        lighting: None,
         header: common::header([-2.0, -1.0, -2.0], [2.0, 1.0, -2.0], near()),
         batches: vec![textured, plain],
         textures: vec![checkerboard()],

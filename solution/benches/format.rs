@@ -69,6 +69,7 @@ fn time<T>(label: &str, bytes: u64, repeats: u32, mut f: impl FnMut() -> T) {
 
 fn main() {
     let solution = Solution {
+        lighting: None,
         header: Header {
             units_per_metre: 1000.0,
             up_axis: UpAxis::PosY,

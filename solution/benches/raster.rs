@@ -74,6 +74,7 @@ fn room(floor_order: u32) -> Solution {
         wall(far, -z, -y, 0),       // right wall, normal −x
     ];
     Solution {
+        lighting: None,
         header: Header {
             units_per_metre: 1.0,
             up_axis: UpAxis::PosY,

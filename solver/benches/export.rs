@@ -50,6 +50,7 @@ fn grid(side: u32, order: u32) -> Solution {
         }
     };
     Solution {
+        lighting: None,
         header: Header {
             units_per_metre: 100.0,
             up_axis: UpAxis::PosZ,

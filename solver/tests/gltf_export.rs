@@ -278,6 +278,7 @@ fn textured_solution_through_the_cli() {
             .collect(),
     };
     let mut solution = Solution {
+        lighting: None,
         header: Header {
             units_per_metre: 1.0,
             up_axis: UpAxis::PosY,

@@ -25,6 +25,7 @@ fn solution() -> Solution {
         vertex(0.0, 1.0),
     ];
     Solution {
+        lighting: None,
         header: Header {
             units_per_metre: 1000.0,
             up_axis: UpAxis::NegZ,
@@ -180,4 +181,56 @@ fn info_refuses_corrupt_and_missing_files_naming_them() {
         stderr.contains("cannot open") && stderr.contains("missing.sol"),
         "{stderr}"
     );
+}
+
+#[test]
+fn info_prints_the_lights_of_a_lit_file() {
+    // A file with lights (format 1.1): the exposure key, one line per light
+    // and the environment in text; a `lighting` object in JSON. A file
+    // without lights has neither (the test above).
+    let mut lit = solution();
+    lit.lighting = Some(solution::format::Lighting {
+        exposure_key: 0.25,
+        lights_json: Some(
+            r#"{"lights":[{"kind":"sun","irradiance_w_m2":[146,146,146]},{"kind":"point","name":"bulb"}],"power_into_scene":3.5}"#
+                .into(),
+        ),
+        environment: Some(solution::format::Environment {
+            width: 2,
+            height: 1,
+            texels: vec![[1.0, 2.0, 3.0], [0.5, 0.5, 0.5]],
+            sun: None,
+        }),
+    });
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("lit.sol");
+    write_solution(&path, &lit).unwrap();
+    let out = info(&[], &path);
+    let text = String::from_utf8(out.stdout).unwrap();
+    for line in [
+        "format_version: 1.1",
+        "exposure_key: 0.25",
+        "lights: 2",
+        "lights.power_into_scene: 3.5",
+        "environment: 2x1 RGB f32",
+    ] {
+        assert!(
+            text.lines().any(|l| l == line),
+            "no line {line:?} in:\n{text}"
+        );
+    }
+    assert!(
+        text.contains(r#"  {"irradiance_w_m2":[146,146,146],"kind":"sun"}"#),
+        "{text}"
+    );
+    let out = info(&["--json"], &path);
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v["lighting"]["exposure_key"], 0.25);
+    assert_eq!(v["lighting"]["lights"]["lights"][1]["name"], "bulb");
+    assert_eq!(v["lighting"]["environment"]["width"], 2);
+    let plain = dir.path().join("plain.sol");
+    write_solution(&plain, &solution()).unwrap();
+    let out = info(&["--json"], &plain);
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert!(v.get("lighting").is_none());
 }

@@ -3,7 +3,7 @@
 use super::{
     open_gpu, open_solution, parse_size, report_truncation_mapped, RenderOptions, Timings,
 };
-use crate::render::{CullStats, DrawKind, GpuScene, RendererDesc, StereoRenderer, ToneSettings};
+use crate::render::{CullStats, DrawKind, GpuScene, RendererDesc, StereoRenderer};
 use crate::session::{run_frame, HeadPath, MockDesc, MockSession, Session};
 use anyhow::Result;
 use glam::DVec3;
@@ -120,10 +120,7 @@ pub fn run(args: &BenchArgs) -> Result<BenchReport> {
         max_samples: args.render.samples,
         multiview: args.render.multiview,
         max_order: args.render.max_order,
-        tone: ToneSettings {
-            exposure_stops: args.render.exposure,
-            curve: args.render.tonemap,
-        },
+        tone: args.render.tone(file.lighting()),
         culling: args.render.culling(),
     };
     let mut renderer = StereoRenderer::from_mapped(&gpu, &file, desc, &session.swapchain())?;

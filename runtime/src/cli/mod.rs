@@ -78,8 +78,11 @@ pub struct RenderOptions {
     /// that costs (Parseval) is printed per batch.
     #[arg(long, value_name = "L")]
     pub max_order: Option<u32>,
-    /// Exposure in stops: radiance is multiplied by 2^E before the tone curve
-    /// (PNG only; the EXR holds unexposed radiance).
+    /// Exposure offset in stops (EV): radiance is multiplied by 2^E before
+    /// the tone curve, on top of the file's automatic exposure (a file with
+    /// lights stores its log-average radiance, shown at the key value 0.18;
+    /// a file without is drawn at 0 EV) (PNG only; the EXR holds unexposed
+    /// radiance).
     #[arg(
         long,
         value_name = "E",
@@ -87,9 +90,10 @@ pub struct RenderOptions {
         allow_negative_numbers = true
     )]
     pub exposure: f32,
-    /// Tone curve after exposure.
-    #[arg(long, value_enum, default_value_t = crate::render::ToneCurve::Clamp)]
-    pub tonemap: crate::render::ToneCurve,
+    /// Tone curve after exposure [default: aces for a file with lights (a
+    /// physically lit scene), clamp for any other].
+    #[arg(long, value_enum)]
+    pub tonemap: Option<crate::render::ToneCurve>,
     /// Most samples per pixel (MSAA); the device may allow fewer; 1 turns it off.
     #[arg(long, value_name = "N", default_value_t = 4)]
     pub samples: u32,
@@ -131,6 +135,16 @@ impl RenderOptions {
             enabled: !self.no_cull,
             chunk_triangles: self.chunk_triangles,
         }
+    }
+
+    /// The tone a file is shown with: its automatic exposure plus
+    /// `--exposure`, through `--tonemap` or the file's default curve
+    /// ([`crate::render::file_tone`]).
+    pub fn tone(
+        &self,
+        lighting: Option<&solution::format::Lighting>,
+    ) -> crate::render::ToneSettings {
+        crate::render::file_tone(lighting, self.exposure, self.tonemap)
     }
 
     pub fn check(&self) -> Result<()> {

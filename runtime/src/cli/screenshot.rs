@@ -4,7 +4,7 @@ use super::{
     open_gpu, open_solution, parse_size, report_truncation_mapped, write_exr, write_png,
     RenderOptions, Timings,
 };
-use crate::render::{RendererDesc, StereoRenderer, ToneSettings};
+use crate::render::{RendererDesc, StereoRenderer};
 use crate::session::OffscreenSwapchain;
 use anyhow::{Context, Result};
 use glam::DVec3;
@@ -93,10 +93,7 @@ pub fn run(args: &ScreenshotArgs) -> Result<()> {
         max_samples: args.render.samples,
         multiview: args.render.multiview,
         max_order: args.render.max_order,
-        tone: ToneSettings {
-            exposure_stops: args.render.exposure,
-            curve: args.render.tonemap,
-        },
+        tone: args.render.tone(file.lighting()),
         culling: args.render.culling(),
     };
     let mut renderer = StereoRenderer::from_mapped(&gpu, &file, desc, &swapchain.desc())?;

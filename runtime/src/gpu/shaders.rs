@@ -25,6 +25,9 @@ pub const INSPECT_FRAG: &[u8] = spirv!("inspect.frag.spv");
 /// The mirror window's composite pass (its vertex shader is `TONEMAP_VERT`,
 /// the full-screen triangle).
 pub const COMPOSITE_FRAG: &[u8] = spirv!("composite.frag.spv");
+/// The environment behind the geometry (solution format x.1).
+pub const SKY_VERT: &[u8] = spirv!("sky.vert.spv");
+pub const SKY_FRAG: &[u8] = spirv!("sky.frag.spv");
 /// The mirror's text overlay over copied eye images.
 pub const OVERLAY_FRAG: &[u8] = spirv!("overlay.frag.spv");
 

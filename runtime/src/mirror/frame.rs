@@ -7,7 +7,7 @@ use super::present::{self, Layout, Overlay};
 use super::{font, scene_frame, script, stats, App, MirrorArgs, Running, SCRIPT_DT};
 use crate::cli::{open_solution, write_exr, write_png};
 use crate::gpu::Gpu;
-use crate::render::{Edges, Inspect, RendererDesc, StereoRenderer, ToneSettings};
+use crate::render::{Edges, Inspect, RendererDesc, StereoRenderer};
 use anyhow::{Context, Result};
 use glam::DVec3;
 use solution::camera::{Camera, EyeView};
@@ -223,10 +223,13 @@ impl Running {
             }
             drop(retired);
         }
-        let tone = ToneSettings {
-            exposure_stops: view.exposure_stops,
-            curve: args.render.tonemap,
-        };
+        // The file's automatic exposure plus the view's EV offset (`[`, `]`,
+        // starting at `--exposure`).
+        let tone = crate::render::file_tone(
+            solution.lighting(),
+            view.exposure_stops,
+            args.render.tonemap,
+        );
         if self.renderer.is_none() {
             let desc = RendererDesc {
                 width: eye_w,

@@ -25,6 +25,7 @@ mod passes;
 mod readback;
 mod record;
 pub mod scene;
+pub mod sky;
 pub mod textures;
 pub mod tonemap;
 pub mod truncation;
@@ -34,7 +35,7 @@ pub use inspect::{Edges, Inspect};
 pub use multiview::MultiviewMode;
 pub use readback::EyeImage;
 pub use scene::{CoefficientStorage, DrawKind, GpuScene, SceneError, UploadStats};
-pub use tonemap::{ToneCurve, ToneSettings};
+pub use tonemap::{file_tone, ToneCurve, ToneSettings};
 
 use crate::gpu::{
     Buffer, BufferDesc, Fence, Gpu, GpuError, Image, ImageDesc, MemoryLocation, VkContext,
@@ -118,6 +119,8 @@ struct Target {
 /// The stereo renderer. Fields are declared newest-first; `Drop` waits for the
 /// device before they are destroyed.
 pub struct StereoRenderer {
+    /// The environment behind the geometry (format x.1 files with one).
+    sky: Option<sky::SkyGpu>,
     /// Made on the first [`StereoRenderer::set_inspect`] that draws lines.
     inspect_gpu: Option<inspect::InspectGpu>,
     inspect: Inspect,
@@ -261,6 +264,11 @@ impl StereoRenderer {
         let upload_time = upload_start.elapsed();
         let mut renderer = Self::from_scene(gpu, scene, &solution.header, desc, swapchain)?;
         renderer.upload_time = upload_time;
+        let env = solution
+            .lighting
+            .as_ref()
+            .and_then(|l| l.environment.as_ref());
+        renderer.set_environment(gpu, env, solution.header.up_axis)?;
         Ok(renderer)
     }
 
@@ -286,6 +294,8 @@ impl StereoRenderer {
         let mut renderer = Self::from_scene(gpu, scene, file.header(), desc, swapchain)?;
         renderer.upload_time = upload_time;
         renderer.upload_stats = stats;
+        let env = file.lighting().and_then(|l| l.environment.as_ref());
+        renderer.set_environment(gpu, env, file.header().up_axis)?;
         Ok(renderer)
     }
 
@@ -343,6 +353,7 @@ impl StereoRenderer {
             unsafe { device.allocate_command_buffers(&alloc) }.ctx("vkAllocateCommandBuffers")?[0];
 
         let mut renderer = StereoRenderer {
+            sky: None,
             inspect_gpu: None,
             inspect: Inspect::default(),
             targets: Vec::new(),
@@ -510,6 +521,9 @@ impl StereoRenderer {
         self.upload_time = upload_time;
         self.upload_stats = stats;
         self.create_descriptors()?;
+        // The new file's sky (or none), on the current pass sets.
+        let env = file.lighting().and_then(|l| l.environment.as_ref());
+        self.set_environment(gpu, env, file.header().up_axis)?;
         Ok(())
     }
 
@@ -820,6 +834,11 @@ impl StereoRenderer {
         self.fence.wait()?;
         self.fence.reset()?;
         self.write_uniforms(views);
+        if let Some(sky) = self.sky.as_mut() {
+            // SAFETY: the frame fence was waited for above, so no submitted
+            // work reads the sky's uniforms.
+            unsafe { sky.write_views(views) };
+        }
         self.cull(views.len());
         self.record(views.len(), image)?;
         let cmds = [self.command_buffer];

@@ -155,6 +155,7 @@ fn probe_scene() -> (solution::format::Solution, solution::camera::Camera) {
     };
     (
         solution::format::Solution {
+            lighting: None,
             header,
             batches: vec![batch],
             textures: Vec::new(),

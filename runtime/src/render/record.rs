@@ -129,6 +129,11 @@ impl StereoRenderer {
             device.cmd_bind_vertex_buffers(cmd, 0, &[self.scene.vertices.raw], &[0]);
             device.cmd_bind_index_buffer(cmd, self.scene.indices.raw, 0, vk::IndexType::UINT32);
         }
+        if let Some(sky) = &self.sky {
+            // SAFETY: inside the scene subpass of pass set `set_index`; the
+            // background goes first, so the geometry covers it.
+            unsafe { sky.record(device, cmd, set_index, self.scene.radiance_scale) };
+        }
         // SAFETY: inside the scene subpass of `set`, the scene's buffers bound.
         unsafe { self.record_batches(cmd, set) };
         if let (Some(lines), Some(&frame_set)) = (&self.inspect_gpu, self.batch_sets.first()) {

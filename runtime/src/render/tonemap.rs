@@ -68,6 +68,41 @@ impl ToneSettings {
     }
 }
 
+/// The automatic exposure of a file, in stops: the one that shows its
+/// stored log-average radiance (the header's exposure key, format x.1) at
+/// the key value 0.18, log₂(0.18 / L̄); 0 for a file without a key (x.0),
+/// which is drawn as before.
+pub fn file_exposure_stops(lighting: Option<&solution::format::Lighting>) -> f32 {
+    lighting
+        .and_then(|l| shared::key_exposure_stops(l.exposure_key, shared::DEFAULT_KEY_VALUE))
+        .unwrap_or(0.0)
+}
+
+/// The tone curve a file is shown with unless the user names one: ACES for
+/// a physically lit file (one with lights, format x.1), whose sun patches
+/// and sky are far above the key value and would clip; clamp for every
+/// other file, so the images of files without lights keep their bytes.
+pub fn default_curve(lighting: Option<&solution::format::Lighting>) -> ToneCurve {
+    if lighting.is_some() {
+        ToneCurve::Aces
+    } else {
+        ToneCurve::Clamp
+    }
+}
+
+/// The tone of a file: its automatic exposure plus the user's EV offset
+/// `offset_stops`, through `curve` or else [`default_curve`].
+pub fn file_tone(
+    lighting: Option<&solution::format::Lighting>,
+    offset_stops: f32,
+    curve: Option<ToneCurve>,
+) -> ToneSettings {
+    ToneSettings {
+        exposure_stops: file_exposure_stops(lighting) + offset_stops,
+        curve: curve.unwrap_or_else(|| default_curve(lighting)),
+    }
+}
+
 /// The sRGB transfer function for a linear value in 0..1.
 pub fn srgb_encode(linear: f32) -> f32 {
     shared::linear_to_srgb(linear)
@@ -76,6 +111,27 @@ pub fn srgb_encode(linear: f32) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_lit_file_is_exposed_from_its_key_with_aces_and_others_as_before() {
+        let lit = solution::format::Lighting {
+            exposure_key: 0.72,
+            ..Default::default()
+        };
+        // 0.18 / 0.72 = 2⁻²: two stops down, plus the user's offset.
+        let tone = file_tone(Some(&lit), 0.5, None);
+        assert!((tone.exposure_stops + 1.5).abs() < 1e-6);
+        assert_eq!(tone.curve, ToneCurve::Aces);
+        assert_eq!(
+            file_tone(Some(&lit), 0.0, Some(ToneCurve::Clamp)).curve,
+            ToneCurve::Clamp
+        );
+        // No key (0: not computed) or no lighting: the offset alone, clamp.
+        let unkeyed = solution::format::Lighting::default();
+        assert_eq!(file_tone(Some(&unkeyed), 0.5, None).exposure_stops, 0.5);
+        let plain = file_tone(None, 1.0, None);
+        assert_eq!((plain.exposure_stops, plain.curve), (1.0, ToneCurve::Clamp));
+    }
 
     #[test]
     fn exposure_is_in_stops_and_codes_match_the_shader() {

@@ -14,7 +14,7 @@ use super::system::{quiet_loader_log, XrSystem};
 use super::vulkan::create_gpu;
 use crate::cli::{open_solution, report_truncation_mapped, RenderOptions};
 use crate::gpu::Gpu;
-use crate::render::{RendererDesc, StereoRenderer, ToneSettings};
+use crate::render::{RendererDesc, StereoRenderer};
 use crate::session::{run_frame, Session};
 use anyhow::{bail, Context, Result};
 use solution::format::MappedSolution;
@@ -78,7 +78,7 @@ pub fn frame_stats(times_ms: &[f64]) -> FrameStats {
     }
 }
 
-fn renderer_desc(args: &XrArgs, width: u32, height: u32) -> RendererDesc {
+fn renderer_desc(args: &XrArgs, file: &MappedSolution, width: u32, height: u32) -> RendererDesc {
     RendererDesc {
         width,
         height,
@@ -87,10 +87,7 @@ fn renderer_desc(args: &XrArgs, width: u32, height: u32) -> RendererDesc {
         // spoils XR swapchain images too), a single pass elsewhere.
         multiview: args.render.multiview,
         max_order: args.render.max_order,
-        tone: ToneSettings {
-            exposure_stops: args.render.exposure,
-            curve: args.render.tonemap,
-        },
+        tone: args.render.tone(file.lighting()),
         culling: args.render.culling(),
     }
 }
@@ -102,7 +99,7 @@ fn new_renderer(
     session: &XrSession,
 ) -> Result<StereoRenderer> {
     let swapchain = session.swapchain();
-    let desc = renderer_desc(args, swapchain.width, swapchain.height);
+    let desc = renderer_desc(args, file, swapchain.width, swapchain.height);
     StereoRenderer::from_mapped(gpu, file, desc, &swapchain).context("cannot prepare the renderer")
 }
 
@@ -145,6 +142,13 @@ pub fn run(args: XrArgs) -> Result<()> {
             app.session.prepare_overlay(&app.gpu);
             generation = app.session.swapchain_generation();
         }
+        // The file's automatic exposure, `--exposure` and the stick's steps.
+        let offset = args.render.exposure + app.session.exposure_offset_stops();
+        app.renderer.set_tone(crate::render::file_tone(
+            file.lighting(),
+            offset,
+            args.render.tonemap,
+        ));
         let start = Instant::now();
         let report = run_frame(&mut app.session, &mut app.renderer)?;
         if report.image.is_some() {

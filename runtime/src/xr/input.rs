@@ -4,7 +4,7 @@
 //! | action     | type     | does                                                  |
 //! |------------|----------|-------------------------------------------------------|
 //! | `walk`     | vector2  | left stick/trackpad: walk along the head's heading    |
-//! | `turn`     | vector2  | right stick/trackpad x: snap turn                      |
+//! | `turn`     | vector2  | right stick/trackpad x: snap turn; y: exposure ±½ stop |
 //! | `recentre` | boolean  | right stick click (menu on sticks-less controllers): back to the stored camera (`radview`'s `r`, Remington 1992, app. C.1) |
 //! | `help`     | boolean  | left menu button: toggle the help overlay (`radview`'s F1/F2) |
 //!
@@ -81,6 +81,8 @@ pub struct ControlState {
     /// Raw stick deflection (dead zone not yet applied).
     pub walk: DVec2,
     pub turn_x: f64,
+    /// The same stick's y: exposure steps ([`super::exposure`]).
+    pub turn_y: f64,
     /// True in the frame the button went down.
     pub recentre_pressed: bool,
     pub help_pressed: bool,
@@ -201,6 +203,7 @@ impl XrInput {
         Ok(ControlState {
             walk: vector(&walk),
             turn_x: vector(&turn).x,
+            turn_y: vector(&turn).y,
             recentre_pressed: pressed(&recentre),
             help_pressed: pressed(&help),
         })
@@ -212,6 +215,7 @@ pub const HELP: &str = "\
 walkthrough controls (OpenXR)
   left stick      walk along your heading
   right stick     snap turn left / right
+                  up / down: exposure +/- half a stop
   right stick (click), or right menu
                   recentre: back to the stored camera view
   left menu       show / hide this help

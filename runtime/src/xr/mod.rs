@@ -29,6 +29,7 @@
 
 pub mod cli;
 pub mod config;
+pub mod exposure;
 pub mod input;
 pub mod lifecycle;
 pub mod locomotion;

@@ -256,6 +256,8 @@ pub struct XrSession {
     generation: u64,
     need_recentre: bool,
     help_visible: bool,
+    /// The EV offset the right stick's y has set.
+    exposure: super::exposure::ExposureStepper,
     /// Keeps the Vulkan device and instance alive until the session is gone.
     _vulkan: Arc<DeviceShared>,
 }
@@ -327,6 +329,7 @@ impl XrSession {
             generation: 0,
             need_recentre: true,
             help_visible: false,
+            exposure: Default::default(),
             _vulkan: gpu.shared.clone(),
         })
     }
@@ -557,6 +560,7 @@ impl XrSession {
                     .walk(walk, &head, dt, self.config.walk_speed_m_s);
                 self.locomotion
                     .snap_turn(c.turn_x, &head, self.config.snap_turn_deg);
+                self.exposure.step(c.turn_y);
             }
         }
 
@@ -572,6 +576,11 @@ impl XrSession {
             None => eyes,
         };
         Ok(self.eyes.len() == 2 && flags.contains(xr::ViewStateFlags::ORIENTATION_VALID))
+    }
+
+    /// The EV offset (stops) the controller has set, added to `--exposure`.
+    pub fn exposure_offset_stops(&self) -> f32 {
+        self.exposure.offset_stops
     }
 
     fn seconds(&self, time: xr::Time) -> f64 {

@@ -200,6 +200,7 @@ pub fn diffuse_room(n: usize) -> Solution {
         batch.indices.extend(indices.iter().map(|i| i + base));
     }
     Solution {
+        lighting: None,
         header: header(ROOM_MIN, ROOM_MAX, room_camera(256, 256)),
         batches: vec![batch],
         textures: Vec::new(),
@@ -614,6 +615,7 @@ pub fn city(n: usize, m: usize) -> Solution {
         .filter(|b| !b.indices.is_empty())
         .collect();
     Solution {
+        lighting: None,
         header,
         batches,
         textures: Vec::new(),

@@ -3,7 +3,7 @@
 use super::layout;
 use super::read::BatchInfo;
 use super::texture::TextureInfo;
-use super::{Header, Representation, ScalarType, SolveMode};
+use super::{Header, Lighting, Representation, ScalarType, SolveMode};
 use serde_json::{json, Value};
 
 fn triple<T: std::fmt::Display>(v: &[T; 3]) -> String {
@@ -220,5 +220,77 @@ pub fn describe_json(header: &Header, batches: &[BatchInfo]) -> Value {
         },
         "settings": settings,
         "batches": batches.iter().map(batch_json).collect::<Vec<_>>(),
+    })
+}
+
+/// The lighting of a format x.1 file as text: the exposure key, the lights
+/// (one line each, from the JSON record) and the environment's size and sun.
+/// Empty for an x.0 file.
+pub fn describe_lighting_text(lighting: Option<&Lighting>) -> String {
+    use std::fmt::Write;
+    let mut out = String::new();
+    let Some(l) = lighting else {
+        return out;
+    };
+    let _ = (|| -> std::fmt::Result {
+        writeln!(out, "exposure_key: {}", l.exposure_key)?;
+        if let Some(text) = &l.lights_json {
+            match serde_json::from_str::<Value>(text) {
+                Ok(v) => {
+                    let list = v["lights"].as_array().cloned().unwrap_or_default();
+                    writeln!(out, "lights: {}", list.len())?;
+                    for light in list {
+                        writeln!(out, "  {light}")?;
+                    }
+                    if let Some(p) = v.get("power_into_scene") {
+                        writeln!(out, "lights.power_into_scene: {p}")?;
+                    }
+                }
+                Err(_) => writeln!(out, "lights: {}", text.replace('\n', " "))?,
+            }
+        }
+        if let Some(env) = &l.environment {
+            writeln!(out, "environment: {}x{} RGB f32", env.width, env.height)?;
+            if let Some(sun) = &env.sun {
+                writeln!(out, "environment.sun.direction: {}", triple(&sun.direction))?;
+                writeln!(
+                    out,
+                    "environment.sun.angular_diameter_deg: {}",
+                    sun.angular_diameter_deg
+                )?;
+                writeln!(out, "environment.sun.radiance: {}", triple(&sun.radiance))?;
+            }
+        }
+        Ok(())
+    })();
+    out
+}
+
+/// The lighting as a JSON object (`null` for an x.0 file); the lights record
+/// parsed when it is JSON.
+pub fn lighting_json(lighting: Option<&Lighting>) -> Value {
+    let Some(l) = lighting else {
+        return Value::Null;
+    };
+    let lights = l
+        .lights_json
+        .as_ref()
+        .map(|t| serde_json::from_str::<Value>(t).unwrap_or_else(|_| Value::String(t.clone())));
+    let environment = l.environment.as_ref().map(|e| {
+        json!({
+            "width": e.width,
+            "height": e.height,
+            "texels": "RGB f32",
+            "sun": e.sun.map(|s| json!({
+                "direction": s.direction,
+                "angular_diameter_deg": s.angular_diameter_deg,
+                "radiance": s.radiance,
+            })),
+        })
+    });
+    json!({
+        "exposure_key": l.exposure_key,
+        "lights": lights,
+        "environment": environment,
     })
 }

@@ -9,7 +9,7 @@ use super::*;
 
 /// The textured solution with the quad (batch 3) also showing texture 0 as
 /// its emission, factor Ke = (2, 1, 0.5).
-fn two_slot_solution() -> Solution {
+pub(super) fn two_slot_solution() -> Solution {
     let mut solution = textured_solution();
     solution.batches[3].texturing.as_mut().unwrap().emission = Some(TextureSlot {
         texture: 0,
@@ -167,7 +167,7 @@ fn every_truncation_and_bit_flip_of_a_version_3_file_is_refused() {
 fn newer_minor_version_of_3_is_read_by_skipping_what_it_adds() {
     let original = two_slot_solution();
     let future = EncodeOptions {
-        minor: layout::VERSION_MINOR + 1,
+        minor: Some(layout::VERSION_MINOR + 1),
         header_extra: 8,
         batch_entry_extra: 16,
         section_entry_extra: 8,

@@ -39,8 +39,14 @@ pub const TEXTURED_VERSION_MAJOR: u16 = 2;
 pub const UNTEXTURED_VERSION_MAJOR: u16 = 1;
 /// The newest minor version this code writes and fully understands. Files with a
 /// newer minor version are read by skipping fields and sections this code does
-/// not know (see the versioning policy in the specification).
-pub const VERSION_MINOR: u16 = 0;
+/// not know (see the versioning policy in the specification). Minor version 1
+/// (1.1, 2.1, 3.1; issue 41) appends the exposure key and the lights and
+/// environment section indices to the header and adds those two section
+/// kinds; a writer uses it only for a solution with lights, so every other
+/// file stays x.0 byte for byte.
+pub const VERSION_MINOR: u16 = 1;
+/// The minor version of a file with lights ([`super::Lighting`]).
+pub const LIGHTING_VERSION_MINOR: u16 = 1;
 
 /// Every section (settings, vertices, coefficients, indices) starts at a multiple
 /// of this many bytes. 64 is a cache line and the widest SIMD load (AVX-512), and
@@ -54,6 +60,9 @@ pub const SECTION_ALIGN: u64 = 64;
 pub const PREAMBLE_LEN: usize = 64;
 /// Size of the header block in version 1.0 (newer minor versions may append).
 pub const HEADER_LEN: usize = 216;
+/// Size of the header block in minor version 1 (1.1, 2.1, 3.1): the exposure
+/// key and two section indices appended, and a reserved word.
+pub const HEADER_LEN_V1_1: usize = 232;
 /// Size of one batch-table entry in version 1.0.
 pub const BATCH_ENTRY_LEN: usize = 56;
 /// Size of one batch-table entry in version 2.0 (texture fields appended, the
@@ -66,6 +75,17 @@ pub const TEXTURED_VERTEX_LEN: usize = 20;
 /// Size of the prefix of a texture section before its encoded image: width,
 /// height, encoding, reserved (4 × u32).
 pub const TEXTURE_PREFIX_LEN: usize = 16;
+
+/// The header length a minor version defines: the 1.0 header, or from minor
+/// version 1 on the 1.1 header (exposure key and two section indices
+/// appended). A newer minor version than this reader's holds the 1.1 fields.
+pub fn header_len(minor: u16) -> usize {
+    if minor >= LIGHTING_VERSION_MINOR {
+        HEADER_LEN_V1_1
+    } else {
+        HEADER_LEN
+    }
+}
 
 /// The batch-entry length a major version defines.
 pub fn batch_entry_len(major: u16) -> usize {
@@ -121,6 +141,15 @@ pub mod header {
     pub const EMITTED_POWER: usize = 192;
     pub const AMBIENT: usize = 200;
     pub const RESERVED: usize = 212;
+    /// Minor version 1: f32, the log-average radiance (0 when not computed).
+    pub const EXPOSURE_KEY: usize = 216;
+    /// Minor version 1: the lights section's index, or [`super::NO_SECTION`].
+    pub const LIGHTS_SECTION: usize = 220;
+    /// Minor version 1: the environment section's index, or
+    /// [`super::NO_SECTION`].
+    pub const ENVIRONMENT_SECTION: usize = 224;
+    /// Minor version 1: reserved (0).
+    pub const RESERVED_V1_1: usize = 228;
 }
 
 /// Batch-table entry field offsets.
@@ -163,6 +192,10 @@ pub mod texture {
     pub const ENCODING: usize = 8;
     pub const RESERVED: usize = 12;
 }
+
+/// A header section index that refers to no section (minor version 1: a
+/// file without lights or without an environment).
+pub const NO_SECTION: u32 = u32::MAX;
 
 /// The batch fields of an untextured batch in version 2 (texture index and
 /// textured-vertices section).
@@ -244,6 +277,12 @@ pub const SECTION_TEXTURED_VERTICES: u32 = 5;
 /// image.
 pub const SECTION_TEXTURE: u32 = 6;
 
+/// Minor version 1: the lights, UTF-8 JSON text.
+pub const SECTION_LIGHTS: u32 = 7;
+/// Minor version 1: the environment, a prefix and RGB f32 texels
+/// (`lighting.rs`).
+pub const SECTION_ENVIRONMENT: u32 = 8;
+
 /// The largest section kind a major version defines.
 pub fn last_section_kind(major: u16) -> u32 {
     if major >= 2 {
@@ -251,6 +290,14 @@ pub fn last_section_kind(major: u16) -> u32 {
     } else {
         SECTION_INDICES
     }
+}
+
+/// Whether version `major.minor` (at most this reader's minor) defines the
+/// section kind `kind`.
+pub fn section_kind_known(major: u16, minor: u16, kind: u32) -> bool {
+    (SECTION_SETTINGS..=last_section_kind(major)).contains(&kind)
+        || (minor >= LIGHTING_VERSION_MINOR
+            && (kind == SECTION_LIGHTS || kind == SECTION_ENVIRONMENT))
 }
 
 /// The largest SH order L anything in the project handles: the solver's settings
@@ -290,6 +337,8 @@ pub fn section_kind_name(kind: u32) -> &'static str {
         SECTION_INDICES => "indices",
         SECTION_TEXTURED_VERTICES => "textured vertices",
         SECTION_TEXTURE => "texture",
+        SECTION_LIGHTS => "lights",
+        SECTION_ENVIRONMENT => "environment",
         _ => "unknown",
     }
 }
@@ -459,6 +508,9 @@ mod tests {
     fn blocks_are_tiled_and_aligned() {
         assert_eq!(preamble::RESERVED_1 + 8, PREAMBLE_LEN);
         assert_eq!(header::RESERVED + 4, HEADER_LEN);
+        assert_eq!(header::EXPOSURE_KEY, HEADER_LEN);
+        assert_eq!(header::RESERVED_V1_1 + 4, HEADER_LEN_V1_1);
+        assert_eq!(HEADER_LEN_V1_1 % 8, 0);
         assert_eq!(batch::RESERVED + 4, BATCH_ENTRY_LEN);
         assert_eq!(batch::TEXTURE_FACTOR + 12, BATCH_ENTRY_LEN_V2);
         assert_eq!(batch::EMISSION_TEXTURE, BATCH_ENTRY_LEN_V2);

@@ -14,6 +14,7 @@ use serde::{Deserialize, Serialize};
 mod describe;
 mod error;
 pub mod layout;
+mod lighting;
 mod read;
 mod split;
 mod texture;
@@ -23,15 +24,22 @@ mod write;
 #[cfg(test)]
 mod emission_slot_tests;
 #[cfg(test)]
+mod lighting_tests;
+#[cfg(test)]
 mod tests;
 #[cfg(test)]
 mod texture_tests;
 
 pub use describe::{
-    batch_json, describe_json, describe_text, describe_textures_text, textures_json,
+    batch_json, describe_json, describe_lighting_text, describe_text, describe_textures_text,
+    lighting_json, textures_json,
 };
 pub use error::{FormatError, Problem};
 pub use layout::MAX_SH_ORDER;
+pub use lighting::{
+    equirect_direction, equirect_frame, equirect_uv, Environment, Lighting, SunDisc,
+    DEFAULT_ENVIRONMENT_SIZE, MAX_ENVIRONMENT_TEXELS,
+};
 pub use read::{decode, read_solution, BatchInfo, BatchSection, BatchTexture, MappedSolution};
 pub use split::{split_to_storage_range, PORTABLE_STORAGE_RANGE};
 pub use texture::{decode_png, encode_png, TextureInfo};
@@ -221,4 +229,8 @@ pub struct Solution {
     /// untextured solution, which is then written as format 1.0, byte for byte
     /// what version 1 writers wrote.
     pub textures: Vec<Texture>,
+    /// The exposure key, the lights and the visible sky (issue 41). `None`
+    /// for a solution without lights, which is then written as x.0, byte for
+    /// byte what older writers wrote; `Some` makes the file x.1.
+    pub lighting: Option<Lighting>,
 }

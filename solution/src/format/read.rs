@@ -33,9 +33,11 @@ use super::error::{FormatError, Problem};
 use super::layout;
 use super::texture::{self, TextureInfo};
 use super::validate;
+use super::Lighting;
 use super::{Batch, Header, Representation, ScalarType, Solution, Texture, TextureSlot, Texturing};
 use batch_table::read_batch_table;
 use content::{check_content, textured_vertex_at, vertex_at};
+use lighting::{claim_lighting, read_lighting};
 use metadata::{block_layout, checked_metadata, read_header, read_preamble};
 use sections::{
     check_checksums, check_every_section_used, check_placement, check_section_sizes,
@@ -46,6 +48,7 @@ use std::path::Path;
 
 mod batch_table;
 mod content;
+mod lighting;
 mod mapped;
 mod metadata;
 mod sections;
@@ -128,6 +131,9 @@ pub(crate) struct Parsed {
     /// Byte range (the encoded image, after the prefix), section index and
     /// stored CRC of each texture section.
     pub texture_sections: Vec<(Range<usize>, usize, u32)>,
+    /// Minor version 1: the exposure key, lights and environment, read and
+    /// checked in full (they are small).
+    pub lighting: Option<Lighting>,
 }
 
 /// Validates the bytes of a whole solution file, stage by stage (see the module
@@ -150,6 +156,7 @@ fn parse_checking(bytes: &[u8], batch_checksums: bool) -> Result<Parsed, Problem
         read_header(&metadata[blocks.header.clone()], preamble.newer)?;
     let mut sections = read_section_table(&metadata[blocks.sections.clone()], &blocks)?;
     sections.claim(settings_section, Role::Settings, layout::SECTION_SETTINGS)?;
+    let lighting_refs = claim_lighting(&metadata[blocks.header.clone()], &blocks, &mut sections)?;
     let texture_indices = claim_textures(&mut sections, blocks.major)?;
     let (batches, batch_sections) = read_batch_table(
         &metadata[blocks.batches.clone()],
@@ -164,6 +171,7 @@ fn parse_checking(bytes: &[u8], batch_checksums: bool) -> Result<Parsed, Problem
     check_section_sizes(&batches, &batch_sections, &sections)?;
     check_checksums(bytes, &sections, batch_checksums)?;
     header.settings_json = settings_text(bytes, &sections, settings_section as usize)?;
+    let lighting = read_lighting(bytes, &sections, lighting_refs, blocks.newer)?;
     let (textures, texture_sections) = check_textures(
         bytes,
         &sections,
@@ -189,6 +197,7 @@ fn parse_checking(bytes: &[u8], batch_checksums: bool) -> Result<Parsed, Problem
         batch_sections: refs_and_crcs,
         textures,
         texture_sections,
+        lighting,
     })
 }
 
@@ -258,6 +267,7 @@ pub(crate) fn materialize(bytes: &[u8], parsed: &Parsed) -> Result<Solution, Pro
         header: parsed.header.clone(),
         batches,
         textures,
+        lighting: parsed.lighting.clone(),
     })
 }
 

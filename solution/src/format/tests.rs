@@ -89,6 +89,7 @@ pub(crate) fn sample_solution() -> Solution {
         texturing: None,
     };
     Solution {
+        lighting: None,
         header,
         batches: vec![quad, glossy, cube],
         textures: Vec::new(),
@@ -531,7 +532,7 @@ fn newer_minor_version_is_read_by_skipping_what_it_adds() {
     use super::write::{encode_with, EncodeOptions};
     let original = sample_solution();
     let future = EncodeOptions {
-        minor: layout::VERSION_MINOR + 1,
+        minor: Some(layout::VERSION_MINOR + 1),
         header_extra: 16,
         batch_entry_extra: 8,
         section_entry_extra: 24,
@@ -549,7 +550,7 @@ fn newer_minor_version_is_read_by_skipping_what_it_adds() {
     );
     assert!(matches!(problem(&current), Problem::BadLength { .. }));
     let only_section = EncodeOptions {
-        minor: layout::VERSION_MINOR,
+        minor: Some(layout::VERSION_MINOR),
         extra_sections: vec![(77, vec![1, 2, 3])],
         ..EncodeOptions::default()
     };
@@ -661,10 +662,7 @@ fn mapped_file_matches_and_is_aligned() {
     let original = sample_solution();
     write_solution(&path, &original).unwrap();
     let mapped = MappedSolution::open(&path).unwrap();
-    assert_eq!(
-        mapped.version(),
-        (layout::UNTEXTURED_VERSION_MAJOR, layout::VERSION_MINOR)
-    );
+    assert_eq!(mapped.version(), (layout::UNTEXTURED_VERSION_MAJOR, 0));
     assert_eq!(mapped.header(), &original.header);
     assert_eq!(mapped.batches().len(), 3);
     assert_eq!(

@@ -139,7 +139,7 @@ fn with_texture_section(section: Vec<u8>) -> Vec<u8> {
         &encode_png(&original.textures[0]).unwrap(),
     );
     let options = EncodeOptions {
-        minor: layout::VERSION_MINOR,
+        minor: None,
         texture_sections: Some(vec![good, section]),
         ..EncodeOptions::default()
     };
@@ -348,7 +348,7 @@ fn every_single_bit_flip_of_a_textured_file_is_refused() {
 fn newer_minor_version_of_2_is_read_by_skipping_what_it_adds() {
     let original = textured_solution();
     let future = EncodeOptions {
-        minor: layout::VERSION_MINOR + 1,
+        minor: Some(layout::VERSION_MINOR + 1),
         header_extra: 8,
         batch_entry_extra: 16,
         section_entry_extra: 8,

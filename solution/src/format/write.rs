@@ -22,9 +22,11 @@ const F16_OVERFLOW: f32 = 65520.0;
 /// Knobs that only tests turn: they let a test write what a newer minor version
 /// would (longer blocks, sections of kinds this version does not know), to check
 /// that this reader skips them.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, Default)]
 pub(crate) struct EncodeOptions {
-    pub minor: u16,
+    /// The minor version to claim; `None` picks it from the solution (1 with
+    /// lighting, else 0).
+    pub minor: Option<u16>,
     pub header_extra: usize,
     pub batch_entry_extra: usize,
     pub section_entry_extra: usize,
@@ -32,19 +34,6 @@ pub(crate) struct EncodeOptions {
     /// Written instead of the encoded textures' sections (prefix and image),
     /// so a test can store a hostile image under correct checksums.
     pub texture_sections: Option<Vec<Vec<u8>>>,
-}
-
-impl Default for EncodeOptions {
-    fn default() -> Self {
-        EncodeOptions {
-            minor: layout::VERSION_MINOR,
-            header_extra: 0,
-            batch_entry_extra: 0,
-            section_entry_extra: 0,
-            extra_sections: Vec::new(),
-            texture_sections: None,
-        }
-    }
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -59,6 +48,12 @@ struct Plan {
     /// 1 without textures (the version-1 layout, byte for byte), 2 with
     /// textures but no emission slot (the version-2 layout), else 3.
     major: u16,
+    /// 0, or [`layout::LIGHTING_VERSION_MINOR`] for a solution with lighting.
+    minor: u16,
+    /// The lights and environment sections' indices, or
+    /// [`layout::NO_SECTION`].
+    lights_section: u32,
+    environment_section: u32,
     /// Per batch, the section indices of its vertices, coefficients, indices
     /// and (textured batches) textured vertices.
     batch_sections: Vec<[u32; 4]>,
@@ -161,6 +156,9 @@ pub fn check_solution(solution: &Solution) -> Result<(), Problem> {
         if let Some(t) = &batch.texturing {
             check_texturing(b, batch, t, solution.textures.len())?;
         }
+    }
+    if let Some(lighting) = &solution.lighting {
+        super::lighting::check_lighting(lighting)?;
     }
     let mut decoded = 0u64;
     for (k, texture) in solution.textures.iter().enumerate() {
@@ -272,10 +270,12 @@ fn section_len(what: &str, count: u64, size: u64) -> Result<u64, Problem> {
     })
 }
 
-fn plan(solution: &Solution, options: &EncodeOptions) -> Result<Plan, Problem> {
+/// The lowest version that holds the solution: major 1 without textures, 2
+/// with textures but no second slot, else 3 ([`layout::VERSION_MAJOR`]);
+/// minor 1 with lighting, else 0 (unless a test forces another).
+fn pick_version(solution: &Solution, options: &EncodeOptions) -> (u16, u16) {
     let textured =
         !solution.textures.is_empty() || solution.batches.iter().any(|b| b.texturing.is_some());
-    // The lowest major version that holds the solution (layout::VERSION_MAJOR).
     let second_slot = solution
         .batches
         .iter()
@@ -287,7 +287,19 @@ fn plan(solution: &Solution, options: &EncodeOptions) -> Result<Plan, Problem> {
     } else {
         layout::UNTEXTURED_VERSION_MAJOR
     };
-    let header_len = layout::HEADER_LEN + options.header_extra;
+    let lit = solution.lighting.as_ref().is_some_and(|l| !l.is_empty());
+    let minor = options.minor.unwrap_or(if lit {
+        layout::LIGHTING_VERSION_MINOR
+    } else {
+        0
+    });
+    (major, minor)
+}
+
+fn plan(solution: &Solution, options: &EncodeOptions) -> Result<Plan, Problem> {
+    let (major, minor) = pick_version(solution, options);
+    let lighting = solution.lighting.as_ref().filter(|l| !l.is_empty());
+    let header_len = layout::header_len(minor.min(layout::VERSION_MINOR)) + options.header_extra;
     let batch_entry_len = layout::batch_entry_len(major) + options.batch_entry_extra;
     let section_entry_len = layout::SECTION_ENTRY_LEN + options.section_entry_extra;
     let mut sections = vec![SectionPlan {
@@ -368,6 +380,7 @@ fn plan(solution: &Solution, options: &EncodeOptions) -> Result<Plan, Problem> {
         });
         texture_sections.push(bytes);
     }
+    let (lights_section, environment_section) = plan_lighting(lighting, &mut sections);
     for (kind, bytes) in &options.extra_sections {
         sections.push(SectionPlan {
             kind: *kind,
@@ -407,6 +420,9 @@ fn plan(solution: &Solution, options: &EncodeOptions) -> Result<Plan, Problem> {
     }
     Ok(Plan {
         major,
+        minor,
+        lights_section,
+        environment_section,
         batch_sections,
         texture_sections,
         header_len,
@@ -416,6 +432,35 @@ fn plan(solution: &Solution, options: &EncodeOptions) -> Result<Plan, Problem> {
         sections,
         file_len: end,
     })
+}
+
+/// Appends the lights and environment sections (minor version 1) and returns
+/// their indices, [`layout::NO_SECTION`] for each one absent.
+fn plan_lighting(
+    lighting: Option<&super::Lighting>,
+    sections: &mut Vec<SectionPlan>,
+) -> (u32, u32) {
+    let mut indices = (layout::NO_SECTION, layout::NO_SECTION);
+    let Some(l) = lighting else {
+        return indices;
+    };
+    if let Some(json) = &l.lights_json {
+        indices.0 = sections.len() as u32;
+        sections.push(SectionPlan {
+            kind: layout::SECTION_LIGHTS,
+            offset: 0,
+            length: json.len() as u64,
+        });
+    }
+    if let Some(env) = &l.environment {
+        indices.1 = sections.len() as u32;
+        sections.push(SectionPlan {
+            kind: layout::SECTION_ENVIRONMENT,
+            offset: 0,
+            length: super::lighting::environment_section_len(env),
+        });
+    }
+    indices
 }
 
 /// Streams sections through a fixed-size buffer, hashing what it writes and
@@ -545,6 +590,18 @@ fn write_planned<W: Write + Seek>(
         stream.push(bytes)?;
         crcs.push(stream.finish_section()?);
     }
+    if let Some(l) = solution.lighting.as_ref().filter(|l| !l.is_empty()) {
+        if let Some(json) = &l.lights_json {
+            stream.pad_to(next_offset())?;
+            stream.push(json.as_bytes())?;
+            crcs.push(stream.finish_section()?);
+        }
+        if let Some(env) = &l.environment {
+            stream.pad_to(next_offset())?;
+            stream.push(&super::lighting::environment_section_bytes(env))?;
+            crcs.push(stream.finish_section()?);
+        }
+    }
     for (_, bytes) in &options.extra_sections {
         stream.pad_to(next_offset())?;
         stream.push(bytes)?;
@@ -552,25 +609,20 @@ fn write_planned<W: Write + Seek>(
     }
     debug_assert_eq!(stream.position, plan.file_len);
 
-    let metadata = metadata_bytes(solution, plan, options, &crcs);
+    let metadata = metadata_bytes(solution, plan, &crcs);
     out.seek(SeekFrom::Start(0))?;
     out.write_all(&metadata)?;
     out.flush()
 }
 
-fn metadata_bytes(
-    solution: &Solution,
-    plan: &Plan,
-    options: &EncodeOptions,
-    crcs: &[u32],
-) -> Vec<u8> {
+fn metadata_bytes(solution: &Solution, plan: &Plan, crcs: &[u32]) -> Vec<u8> {
     use layout::{batch as bf, header as hf, preamble as pf, section as sf};
     let mut metadata = vec![0u8; plan.metadata_len];
 
     let (pre, rest) = metadata.split_at_mut(layout::PREAMBLE_LEN);
     let mut p = FieldsMut::new(pre);
     p.u16(pf::VERSION_MAJOR, plan.major);
-    p.u16(pf::VERSION_MINOR, options.minor);
+    p.u16(pf::VERSION_MINOR, plan.minor);
     p.u64(pf::FILE_LENGTH, plan.file_len);
     p.u64(pf::METADATA_LENGTH, plan.metadata_len as u64);
     p.u32(pf::HEADER_LENGTH, plan.header_len as u32);
@@ -603,6 +655,12 @@ fn metadata_bytes(
     f.f64(hf::UNSHOT_FRACTION, h.stats.unshot_fraction);
     f.f64(hf::EMITTED_POWER, h.stats.emitted_power);
     f.f32x3(hf::AMBIENT, h.stats.ambient);
+    if plan.minor >= layout::LIGHTING_VERSION_MINOR {
+        let key = solution.lighting.as_ref().map_or(0.0, |l| l.exposure_key);
+        f.f32(hf::EXPOSURE_KEY, key);
+        f.u32(hf::LIGHTS_SECTION, plan.lights_section);
+        f.u32(hf::ENVIRONMENT_SECTION, plan.environment_section);
+    }
 
     let (batch_table, section_table) =
         rest.split_at_mut(plan.batch_entry_len * solution.batches.len());

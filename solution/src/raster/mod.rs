@@ -47,7 +47,10 @@
 //!    A batch with format 3's emission slot also adds `Ke ⊙ ρ_e(u, v)`, the
 //!    emission texture filtered the same way at the same (u, v).
 //! 6. **Depth test** LESS against a 32-bit float buffer cleared to 1.0, in draw order
-//!    (batches in file order, triangles in index order). The background is black.
+//!    (batches in file order, triangles in index order). The background is black,
+//!    except in a file with an environment (format x.1):
+//! 7. **Environment**: each pixel nothing covered shows the sky toward its
+//!    centre's view direction and the sun's disc (`draw_environment`).
 //!
 //! The stored radiance is drawn as it is: no ambient term (a partial solution's
 //! ambient estimate is the caller's to add), no exposure, no tone mapping; see
@@ -65,6 +68,8 @@
 //! differing pixels by the edge pixels, not demand zero.
 
 pub mod compare;
+#[cfg(test)]
+mod environment_tests;
 mod pipeline;
 pub mod tonemap;
 
@@ -80,8 +85,8 @@ pub use tonemap::{
     ToneCurve,
 };
 
-use crate::camera::{clip_planes_for, EyeView, MAX_IMAGE_SIDE};
-use crate::format::{Batch, Header, Representation, Solution};
+use crate::camera::{clip_planes_for, EyeView, UpAxis, MAX_IMAGE_SIDE};
+use crate::format::{Batch, Environment, Header, Representation, Solution};
 use crate::sh;
 use crate::texture::MipChain;
 use glam::{DVec3, DVec4};
@@ -311,7 +316,42 @@ pub fn render(
             rasterizer.draw_triangle([corner(0), corner(1), corner(2)]);
         }
     }
+    if let Some(env) = solution
+        .lighting
+        .as_ref()
+        .and_then(|l| l.environment.as_ref())
+    {
+        draw_environment(&mut image, env, solution.header.up_axis, view);
+    }
     Ok(image)
+}
+
+/// The view direction through the centre of pixel (`i`, `j`) (not unit
+/// length): forward + tan_x · right + tan_y · up, the tangents interpolated
+/// across the view's (possibly asymmetric) field of view, row 0 at the top.
+pub fn pixel_direction(view: &EyeView, i: u32, j: u32) -> DVec3 {
+    let (tl, tr, tu, td) = view.fov.tangents();
+    let x = tl + (tr - tl) * (f64::from(i) + 0.5) / f64::from(view.width);
+    let y = tu - (tu - td) * (f64::from(j) + 0.5) / f64::from(view.height);
+    view.forward + x * view.right + y * view.up
+}
+
+/// Stage 7 (format x.1): the environment behind the geometry. Every pixel no
+/// triangle covered (its depth still the cleared 1.0, the far plane) shows
+/// the sky toward its centre's view direction, bilinear in the
+/// equirectangular texture, plus the sun's disc
+/// ([`crate::format::Environment::radiance`]); the depth stays 1.0. The
+/// runtime's background pass draws the same at depth 1.0 behind a LESS test.
+fn draw_environment(image: &mut Image, env: &Environment, up: UpAxis, view: &EyeView) {
+    for j in 0..image.height {
+        for i in 0..image.width {
+            let k = j as usize * image.width as usize + i as usize;
+            if image.depth[k] < 1.0 {
+                continue;
+            }
+            image.pixels[k] = env.radiance(up, pixel_direction(view, i, j).to_array());
+        }
+    }
 }
 
 /// The clip planes both renderers use for `view` when none are given:

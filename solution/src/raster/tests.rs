@@ -10,7 +10,7 @@ use glam::DVec2;
 const W: u32 = 64;
 const H: u32 = 48;
 
-fn header() -> Header {
+pub(super) fn header() -> Header {
     Header {
         units_per_metre: 1.0,
         up_axis: UpAxis::PosY,
@@ -27,6 +27,7 @@ fn header() -> Header {
 
 fn solution(batches: Vec<Batch>) -> Solution {
     Solution {
+        lighting: None,
         header: header(),
         batches,
         textures: Vec::new(),

@@ -64,6 +64,7 @@ fn quad(texture: Texture, factor: [f32; 3], e: f32, c00: f32) -> Solution {
         }),
     };
     Solution {
+        lighting: None,
         header: Header {
             units_per_metre: 1.0,
             up_axis: UpAxis::PosY,

@@ -126,9 +126,76 @@ pub fn auto_exposure_stops(image: &Image, key: f32) -> f32 {
     (key as f64 / log_average).log2() as f32
 }
 
+/// The key value a scene's log-average radiance is shown at: middle grey,
+/// Reinhard et al.'s (2002) "normal-key" value.
+pub const DEFAULT_KEY_VALUE: f32 = 0.18;
+
+/// δ in [`log_average_luminance`], relative to the weighted mean luminance:
+/// it keeps black samples from sending the log-average to 0 while leaving the
+/// key proportional to the radiance (scaling every radiance by k scales the
+/// result by k).
+pub const LOG_AVERAGE_DELTA: f64 = 1e-4;
+
+/// The log-average luminance of weighted RGB radiance samples, Reinhard et
+/// al. 2002 ("Photographic tone reproduction for digital images"), eq. 1:
+/// exp(Σ w log(δ + Y) / Σ w), with Y the Rec. 709 luminance, w a sample's
+/// weight (the solver passes each vertex's share of its triangles' area) and
+/// δ = [`LOG_AVERAGE_DELTA`] × the weighted mean of Y. 0 when there is no
+/// positive weight or no light; non-finite samples and weights are skipped.
+pub fn log_average_luminance(samples: impl IntoIterator<Item = ([f32; 3], f64)> + Clone) -> f32 {
+    let usable =
+        |(rgb, w): &([f32; 3], f64)| w.is_finite() && *w > 0.0 && rgb.iter().all(|c| c.is_finite());
+    let (mut weight, mut mean) = (0.0f64, 0.0f64);
+    for (rgb, w) in samples.clone().into_iter().filter(usable) {
+        weight += w;
+        mean += w * f64::from(luminance(rgb).max(0.0));
+    }
+    if weight <= 0.0 || mean <= 0.0 {
+        return 0.0;
+    }
+    let delta = LOG_AVERAGE_DELTA * mean / weight;
+    let log_sum: f64 = samples
+        .into_iter()
+        .filter(usable)
+        .map(|(rgb, w)| w * (delta + f64::from(luminance(rgb).max(0.0))).ln())
+        .sum();
+    (log_sum / weight).exp() as f32
+}
+
+/// The exposure in stops that shows a stored log-average radiance
+/// `exposure_key` at `key_value`: log₂(key_value / exposure_key); `None` for a
+/// key that is 0 (not computed), negative or not finite.
+pub fn key_exposure_stops(exposure_key: f32, key_value: f32) -> Option<f32> {
+    (exposure_key.is_finite() && exposure_key > 0.0 && key_value > 0.0)
+        .then(|| (f64::from(key_value) / f64::from(exposure_key)).log2() as f32)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn log_average_is_the_geometric_mean_weighted_by_area() {
+        // Two grey samples 1 and 100 of equal weight: geometric mean 10 (δ
+        // adds at most 1e-4 × 50.5 inside each log: relative 5e-3 on the
+        // sample of 1, so 2.5e-3 on the mean).
+        let two = [([1.0f32; 3], 1.0f64), ([100.0; 3], 1.0)];
+        let got = log_average_luminance(two);
+        assert!((got - 10.0).abs() < 10.0 * 3e-3, "{got}");
+        // Weight 3:1 toward 100: 100^0.75 = 31.6.
+        let weighted = [([1.0f32; 3], 1.0f64), ([100.0; 3], 3.0)];
+        let got = log_average_luminance(weighted);
+        assert!((got - 31.62).abs() < 31.62 * 3e-3, "{got}");
+        // Scaling the radiance scales the key: δ is relative.
+        let scaled = [([1000.0f32; 3], 1.0f64), ([100_000.0; 3], 1.0)];
+        assert!((log_average_luminance(scaled) / got.max(1.0) - 10_000.0 / 31.62).abs() < 1.0);
+        assert_eq!(log_average_luminance([([0.0f32; 3], 1.0f64)]), 0.0);
+        assert_eq!(log_average_luminance(Vec::<([f32; 3], f64)>::new()), 0.0);
+        // The stops show the key at 0.18.
+        let stops = key_exposure_stops(0.72, 0.18).unwrap();
+        assert!((stops + 2.0).abs() < 1e-6);
+        assert_eq!(key_exposure_stops(0.0, 0.18), None);
+    }
 
     const CURVES: [ToneCurve; 3] = [ToneCurve::Clamp, ToneCurve::Reinhard, ToneCurve::AcesFit];
 

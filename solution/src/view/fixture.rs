@@ -79,6 +79,7 @@ pub fn solution_of(batch: Batch, up: UpAxis, units_per_metre: f64, offset: [f64;
         hi = hi.max(Vec3::from(v.position));
     }
     Solution {
+        lighting: None,
         header: Header {
             units_per_metre,
             up_axis: up,

@@ -2,7 +2,8 @@
 //! prints its header and batches.
 
 use solution::format::{
-    describe_json, describe_text, describe_textures_text, textures_json, MappedSolution,
+    describe_json, describe_lighting_text, describe_text, describe_textures_text, lighting_json,
+    textures_json, MappedSolution,
 };
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -28,6 +29,9 @@ pub fn run(args: InfoArgs) -> anyhow::Result<ExitCode> {
             object.insert("format_version".into(), format!("{major}.{minor}").into());
             object.insert("file_bytes".into(), solution.file_len().into());
             object.insert("textures".into(), textures_json(solution.textures()));
+            if solution.lighting().is_some() {
+                object.insert("lighting".into(), lighting_json(solution.lighting()));
+            }
         }
         println!("{}", serde_json::to_string_pretty(&value)?);
     } else {
@@ -36,6 +40,7 @@ pub fn run(args: InfoArgs) -> anyhow::Result<ExitCode> {
         println!("file_bytes: {}", solution.file_len());
         print!("{}", describe_text(solution.header(), solution.batches()));
         print!("{}", describe_textures_text(solution.textures()));
+        print!("{}", describe_lighting_text(solution.lighting()));
     }
     Ok(ExitCode::SUCCESS)
 }

@@ -96,6 +96,7 @@ fn solution(up_axis: UpAxis) -> Solution {
         texturing: None,
     };
     Solution {
+        lighting: None,
         header: header(up_axis),
         batches: vec![diffuse, empty, glossy, cube],
         textures: Vec::new(),

@@ -19,7 +19,7 @@ const RHO: f64 = 0.5;
 
 /// A square floor of side `2 half` at height 0 (scene units), facing +y,
 /// and a small square below it facing −y; `extra` polygons are added.
-fn open_floor(half: f64, extra: Vec<(Vec<DVec3>, usize)>, lights: Lights) -> Scene {
+pub(super) fn open_floor(half: f64, extra: Vec<(Vec<DVec3>, usize)>, lights: Lights) -> Scene {
     let v = |x: f64, y: f64, z: f64| DVec3::new(x, y, z) * half;
     let mut polygons = vec![
         (

@@ -60,6 +60,7 @@ pub mod enclosure;
 pub mod gauss_seidel;
 pub mod hidden;
 mod output;
+mod output_lights;
 mod output_textured;
 pub(crate) use output::default_camera;
 pub mod fine_shape;
@@ -83,6 +84,7 @@ mod unshot_tree;
 
 pub use checkpoint::Checkpoint;
 pub use directional::{Directional, DirectionalCheckpoint, SourceChoice};
+pub use output_lights::{environment, exposure_key, lighting_record, lights_json};
 
 use crate::geometry::visibility::Occluder;
 use crate::mesh::{Mesh, MeshError};

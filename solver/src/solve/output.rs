@@ -282,6 +282,7 @@ impl Solver {
         });
         let units_per_metre = self.units_per_metre();
         let mut solution = Solution {
+            lighting: None,
             header: Header {
                 units_per_metre,
                 up_axis: self.scene.up_axis,
@@ -323,6 +324,8 @@ impl Solver {
             let framing = solution.header.camera;
             solution.header.camera = crate::view::default_camera(&solution, framing);
         }
+        // The exposure key, the lights and the visible sky (`output_lights.rs`).
+        solution.lighting = self.lighting(&solution);
         solution
     }
 }

@@ -276,6 +276,7 @@ mod tests {
             }
         }
         Solution {
+            lighting: None,
             header: Header {
                 units_per_metre: 1.0,
                 up_axis: Default::default(),

@@ -5,7 +5,7 @@
 use super::super::error::{FormatError, Problem};
 use super::super::layout;
 use super::super::texture::{self, TextureInfo};
-use super::super::{Header, Solution, Texture};
+use super::super::{Header, Lighting, Solution, Texture};
 use super::content::check_finite_coefficients;
 use super::{materialize, parse_checking, BatchInfo, Parsed};
 use std::path::{Path, PathBuf};
@@ -57,6 +57,12 @@ impl MappedSolution {
 
     pub fn batches(&self) -> &[BatchInfo] {
         &self.parsed.batches
+    }
+
+    /// The exposure key, lights and environment (minor version 1), checked
+    /// in full by the open; `None` for an x.0 file.
+    pub fn lighting(&self) -> Option<&Lighting> {
+        self.parsed.lighting.as_ref()
     }
 
     fn section(&self, batch: usize, which: usize) -> &[u8] {

@@ -9,8 +9,8 @@ use super::super::{Header, SolveStats};
 use crate::camera::{Camera, UpAxis};
 use std::ops::Range;
 
-/// Version-1.0 block sizes must match exactly; a newer minor version may make
-/// them longer (appending fields this reader skips) but keeps them multiples of 8.
+/// The block sizes of the file's own minor version (x.0 or x.1) must match
+/// exactly; a newer minor version may make them longer (appending fields this reader skips) but keeps them multiples of 8.
 pub(super) fn check_block_len(
     what: &str,
     value: u32,
@@ -151,6 +151,8 @@ pub(super) struct Blocks {
     pub(super) section_entry_len: usize,
     pub(super) section_count: u32,
     pub(super) major: u16,
+    /// The file's minor version.
+    pub(super) minor: u16,
     pub(super) newer: bool,
 }
 
@@ -163,7 +165,7 @@ pub(super) fn block_layout(preamble: &Preamble<'_>, metadata_len: u64) -> Result
     let header_len = check_block_len(
         "the header length",
         pre.u32(pf::HEADER_LENGTH),
-        layout::HEADER_LEN,
+        layout::header_len(preamble.minor.min(layout::VERSION_MINOR)),
         newer,
     )?;
     let batch_entry_len = check_block_len(
@@ -215,6 +217,7 @@ pub(super) fn block_layout(preamble: &Preamble<'_>, metadata_len: u64) -> Result
         section_entry_len,
         section_count,
         major: preamble.major,
+        minor: preamble.minor,
         newer,
     })
 }

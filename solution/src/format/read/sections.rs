@@ -27,6 +27,8 @@ pub(super) enum Role {
     Indices(usize),
     TexturedVertices(usize),
     Texture(usize),
+    Lights,
+    Environment,
 }
 
 pub(super) fn role_name(role: Role) -> String {
@@ -38,6 +40,8 @@ pub(super) fn role_name(role: Role) -> String {
         Role::Indices(b) => format!("indices of batch {b}"),
         Role::TexturedVertices(b) => format!("textured vertices of batch {b}"),
         Role::Texture(k) => format!("texture {k}"),
+        Role::Lights => "lights".into(),
+        Role::Environment => "environment".into(),
     }
 }
 
@@ -70,6 +74,8 @@ impl Sections {
             Role::Indices(b) => format!("batch {b}: indices section"),
             Role::TexturedVertices(b) => format!("batch {b}: textured vertices section"),
             Role::Texture(k) => format!("texture {k}"),
+            Role::Lights => "header: lights section".to_string(),
+            Role::Environment => "header: environment section".to_string(),
             Role::Unused => "a section reference".to_string(),
         };
         let i = index as usize;
@@ -128,8 +134,7 @@ pub(super) fn read_section_table(table: &[u8], blocks: &Blocks) -> Result<Sectio
             reason: "shorter than version 1.0's entry".into(),
         })?;
         let kind = f.u32(sf::KIND);
-        let known = layout::SECTION_SETTINGS..=layout::last_section_kind(blocks.major);
-        if !known.contains(&kind) && !blocks.newer {
+        if !layout::section_kind_known(blocks.major, blocks.minor, kind) && !blocks.newer {
             return Err(Problem::UnknownCode {
                 field: format!("section {i}: kind"),
                 code: kind,

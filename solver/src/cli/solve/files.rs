@@ -28,6 +28,14 @@ fn write_solution_within(
     what: &str,
     max_bytes: u64,
 ) -> anyhow::Result<()> {
+    // The exposure key from the final radiance: the Gauss–Seidel and
+    // global-cube solves replace the batches after `Solver::to_solution`.
+    if solution.lighting.is_some() {
+        let key = crate::solve::exposure_key(solution);
+        if let Some(lighting) = solution.lighting.as_mut() {
+            lighting.exposure_key = key;
+        }
+    }
     solution.batches = split_to_storage_range(std::mem::take(&mut solution.batches), max_bytes);
     solution::format::write_solution(path, solution)
         .with_context(|| format!("writing {what} {}", path.display()))

@@ -27,7 +27,13 @@ pub fn write_preview(path: &Path, solution: &Solution, camera: &Camera) -> anyho
     camera.validate().with_context(context)?;
     let view = camera.mono_view(DVec3::from_array(solution.header.recentre_offset));
     let image = raster::render(solution, &view, &RenderOptions::default()).with_context(context)?;
-    let stops = raster::auto_exposure_stops(&image, EXPOSURE_KEY);
+    // A file with lights is exposed from its stored key, as the runtime
+    // exposes it (its sky would otherwise weigh in the image's average).
+    let stops = solution
+        .lighting
+        .as_ref()
+        .and_then(|l| raster::tonemap::key_exposure_stops(l.exposure_key, EXPOSURE_KEY))
+        .unwrap_or_else(|| raster::auto_exposure_stops(&image, EXPOSURE_KEY));
     let rgb = raster::tonemap_srgb8(&image, stops, ToneCurve::AcesFit);
     let mut png = Vec::new();
     image::codecs::png::PngEncoder::new(&mut png)

@@ -206,6 +206,7 @@ mod tests {
                 tangent: [1.0, 0.0, 0.0],
             };
             Solution {
+                lighting: None,
                 header: Header {
                     units_per_metre: 1.0,
                     up_axis: Default::default(),
