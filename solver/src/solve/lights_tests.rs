@@ -429,3 +429,15 @@ fn a_portal_gives_the_same_light_with_less_noise() {
     );
     assert!(sp < 0.5 * sc, "σ with the portal {sp}, without {sc}");
 }
+
+#[test]
+fn before_the_lights_shoot_all_of_their_light_is_unshot() {
+    // A scene lit only by lights has emitted nothing before their shot: its
+    // unshot fraction is 1 (not 0 / 0), so progress and ETA start sane.
+    let lamp = Lamp::point("bulb", DVec3::new(0.0, 1.0, 0.0), DVec3::ONE, 0.0).unwrap();
+    let mut solver =
+        Solver::new(&open_floor(1.0, Vec::new(), lamp_lights(lamp)), &settings()).unwrap();
+    assert_eq!(solver.progress().unshot_fraction, 1.0);
+    solver.step().unwrap();
+    assert_eq!(solver.progress().unshot_fraction, 1.0);
+}

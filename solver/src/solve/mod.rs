@@ -449,6 +449,11 @@ impl Solver {
     }
 
     fn unshot_fraction(&self) -> f64 {
+        // Before the lights of a scene without emitters shoot, nothing has
+        // been emitted yet and all of it is to come: 1, not 0 / 0.
+        if self.lights.pending() && self.stats.emitted_power <= 0.0 {
+            return 1.0;
+        }
         self.stats.unshot_power / self.stats.emitted_power
     }
 
