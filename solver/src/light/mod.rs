@@ -7,6 +7,7 @@
 //! becomes c · X / 683 per channel (`units.rs`): the colour is a filter, and
 //! a white light's RGB luminance is X / 683, as glTF's specification has it.
 
+pub mod envmap;
 pub mod ies;
 pub mod lamp;
 pub mod portal;
@@ -68,6 +69,7 @@ impl Lights {
                 sky::SkyModel::Uniform { .. } => "uniform",
                 sky::SkyModel::CieOvercast { .. } => "CIE overcast",
                 sky::SkyModel::Clear { .. } => "clear (Preetham)",
+                sky::SkyModel::Map { .. } => "environment map",
             };
             lines.push(format!(
                 "sky {kind}, {} W/m² on an open horizontal plane",

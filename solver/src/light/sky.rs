@@ -20,10 +20,12 @@
 //!   distribution fitted per turbidity for the luminance Y and the
 //!   chromaticities x, y, converted to linear Rec. 709 RGB through CIE XYZ.
 
+use super::envmap::EnvMap;
 use super::sun::{unit_direction, Sun};
 use super::units;
 use glam::DVec3;
 use std::f64::consts::PI;
+use std::sync::Arc;
 
 /// E_h / L_z for the CIE overcast sky:
 /// E_h = ∫₀^{2π} ∫₀^{π/2} L_z (1 + 2 cos θ)/3 · cos θ sin θ dθ dφ
@@ -71,7 +73,7 @@ fn unit(v: DVec3) -> Result<DVec3, SkyError> {
 }
 
 /// The sky as a scene describes it.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub enum SkyModel {
     /// The same radiance in every direction above the horizon.
     Uniform { radiance: DVec3 },
@@ -84,6 +86,9 @@ pub enum SkyModel {
         turbidity: f64,
         sun_direction: DVec3,
     },
+    /// An equirectangular environment map (`envmap.rs`), its columns
+    /// starting at `north` (made horizontal about the sky's up).
+    Map { map: Arc<EnvMap>, north: DVec3 },
 }
 
 impl SkyModel {
@@ -140,6 +145,10 @@ impl SkyModel {
     /// from its public fields.
     fn checked(self) -> Result<Self, SkyError> {
         match self {
+            SkyModel::Map { map, north } => Ok(SkyModel::Map {
+                map,
+                north: unit(north)?,
+            }),
             SkyModel::Uniform { radiance } => Self::uniform(radiance),
             SkyModel::CieOvercast { zenith_radiance } => Self::cie_overcast(zenith_radiance),
             SkyModel::Clear {
@@ -170,7 +179,7 @@ pub enum BelowHorizon {
 }
 
 /// A sky evaluated in the scene frame about its up axis.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct Sky {
     model: SkyModel,
     up: DVec3,
@@ -191,7 +200,17 @@ impl Sky {
         sun: Option<&Sun>,
     ) -> Result<Self, SkyError> {
         let up = unit(up)?;
-        let model = model.checked()?;
+        let model = match model.checked()? {
+            // The map's north made horizontal about this sky's up.
+            SkyModel::Map { map, north } => {
+                let horizontal = north - up * north.dot(up);
+                SkyModel::Map {
+                    map,
+                    north: unit(horizontal)?,
+                }
+            }
+            other => other,
+        };
         let clear = match model {
             SkyModel::Clear {
                 turbidity,
@@ -207,10 +226,11 @@ impl Sky {
             horizontal_irradiance: DVec3::ZERO,
             ground_radiance: DVec3::ZERO,
         };
-        sky.horizontal_irradiance = match model {
-            SkyModel::Uniform { radiance } => PI * radiance,
+        sky.horizontal_irradiance = match &sky.model {
+            SkyModel::Map { map, .. } => map.horizontal_irradiance(),
+            SkyModel::Uniform { radiance } => PI * *radiance,
             SkyModel::CieOvercast { zenith_radiance } => {
-                CIE_OVERCAST_HORIZONTAL_FACTOR * zenith_radiance
+                CIE_OVERCAST_HORIZONTAL_FACTOR * *zenith_radiance
             }
             SkyModel::Clear { .. } => {
                 hemisphere_irradiance(|w| sky.above(w), up, NUMERIC_THETA_STEPS)
@@ -229,7 +249,7 @@ impl Sky {
     }
 
     pub fn model(&self) -> SkyModel {
-        self.model
+        self.model.clone()
     }
 
     pub fn up(&self) -> DVec3 {
@@ -247,6 +267,10 @@ impl Sky {
         let w = direction.normalize_or_zero();
         let cos_theta = w.dot(self.up);
         if cos_theta >= 0.0 {
+            return self.above(w);
+        }
+        if let (SkyModel::Map { .. }, BelowHorizon::Same) = (&self.model, self.below) {
+            // A map holds its own lower half: "same" shows it.
             return self.above(w);
         }
         match self.below {
@@ -284,10 +308,14 @@ impl Sky {
 
     /// The radiance of the model at unit `w` with w · up ≥ 0.
     fn above(&self, w: DVec3) -> DVec3 {
-        match self.model {
-            SkyModel::Uniform { radiance } => radiance,
+        match &self.model {
+            SkyModel::Map { map, north } => {
+                let east = north.cross(self.up);
+                map.radiance(DVec3::new(w.dot(*north), w.dot(east), w.dot(self.up)))
+            }
+            SkyModel::Uniform { radiance } => *radiance,
             SkyModel::CieOvercast { zenith_radiance } => {
-                zenith_radiance * (1.0 + 2.0 * w.dot(self.up)) / 3.0
+                *zenith_radiance * (1.0 + 2.0 * w.dot(self.up)) / 3.0
             }
             SkyModel::Clear { .. } => self
                 .clear
@@ -519,7 +547,7 @@ mod tests {
         // 10 klux of white: L_z = 9·10⁴/(7π) cd/m², and the plane gets back
         // 10⁴/683 W/m² per channel.
         let model = SkyModel::cie_overcast_illuminance(10_000.0, DVec3::ONE).unwrap();
-        let sky = Sky::new(model, DVec3::Y, BelowHorizon::Black, None).unwrap();
+        let sky = Sky::new(model.clone(), DVec3::Y, BelowHorizon::Black, None).unwrap();
         let lux = units::irradiance_to_lux(sky.horizontal_irradiance().y);
         assert!((lux - 10_000.0).abs() < 1e-9, "{lux}");
         let SkyModel::CieOvercast { zenith_radiance } = model else {
@@ -536,23 +564,23 @@ mod tests {
         let mirrored = DVec3::new(0.3, 1.0, 0.2);
         let uniform = SkyModel::uniform(l).unwrap();
         let cie = SkyModel::cie_overcast(l).unwrap();
-        let make = |m, b, sun| Sky::new(m, DVec3::Y, b, sun).unwrap();
+        let make = |m: &SkyModel, b, sun| Sky::new(m.clone(), DVec3::Y, b, sun).unwrap();
         assert_eq!(
-            make(uniform, BelowHorizon::default(), None).radiance(down),
+            make(&uniform, BelowHorizon::default(), None).radiance(down),
             DVec3::ZERO
         );
-        assert_eq!(make(uniform, BelowHorizon::Same, None).radiance(down), l);
-        let same = make(cie, BelowHorizon::Same, None);
+        assert_eq!(make(&uniform, BelowHorizon::Same, None).radiance(down), l);
+        let same = make(&cie, BelowHorizon::Same, None);
         assert!(rel(same.radiance(down), same.radiance(mirrored)) < 1e-15);
         assert!(same.radiance(-DVec3::Y).min_element() > 0.0);
         // Ground: ρ E_h / π with E_h = πL from the uniform sky, so ρL; and
         // a sun of E⊥ at elevation 30° adds ρ E⊥ sin 30° / π.
         let albedo = DVec3::new(0.2, 0.4, 0.6);
         let ground = BelowHorizon::Ground { albedo };
-        assert!(rel(make(uniform, ground, None).radiance(down), albedo * l) < 1e-15);
+        assert!(rel(make(&uniform, ground, None).radiance(down), albedo * l) < 1e-15);
         let position = SunPosition::from_direction(DVec3::new(3f64.sqrt(), 1.0, 0.0)).unwrap();
         let sun = Sun::new(position, DVec3::splat(100.0), 0.53).unwrap();
-        let lit = make(uniform, ground, Some(&sun));
+        let lit = make(&uniform, ground, Some(&sun));
         let expected = albedo * (PI * l + DVec3::splat(50.0)) / PI;
         assert!(rel(lit.radiance(down), expected) < 1e-12);
         assert!(rel(lit.ground_radiance(), expected) < 1e-12);
@@ -580,7 +608,7 @@ mod tests {
             "{err}"
         );
         let uniform = SkyModel::uniform(DVec3::ONE).unwrap();
-        assert!(Sky::new(uniform, DVec3::ZERO, BelowHorizon::Black, None).is_err());
+        assert!(Sky::new(uniform.clone(), DVec3::ZERO, BelowHorizon::Black, None).is_err());
         // A model built from its fields is checked too.
         let direct = SkyModel::Uniform {
             radiance: DVec3::new(1.0, -2.0, 1.0),
@@ -589,7 +617,7 @@ mod tests {
         let nan_albedo = BelowHorizon::Ground {
             albedo: DVec3::new(0.5, f64::NAN, 0.5),
         };
-        assert!(Sky::new(uniform, DVec3::Y, nan_albedo, None).is_err());
+        assert!(Sky::new(uniform.clone(), DVec3::Y, nan_albedo, None).is_err());
         let sky = Sky::new(uniform, DVec3::Y, BelowHorizon::Black, None).unwrap();
         assert_eq!(sky.irradiance(DVec3::ZERO, 8), DVec3::ZERO);
     }

@@ -90,6 +90,12 @@ pub(super) struct SkyTable {
     turbidity: Option<Spanned<f64>>,
     below_horizon: Option<Spanned<String>>,
     ground_albedo: Option<Spanned<Rgb>>,
+    /// `kind = "map"`: the `.hdr` or `.exr` file, relative to the config.
+    file: Option<Spanned<String>>,
+    /// `kind = "map"`: a factor on its texels (default 1).
+    scale: Option<Spanned<f64>>,
+    /// `kind = "map"`: degrees about up, from north toward east (default 0).
+    rotation_deg: Option<Spanned<f64>>,
 }
 
 /// One `[[lights]]` table: a point or spot lamp.
@@ -164,7 +170,7 @@ pub(super) fn read_lights(
         lights.sun = Some(read_sun(at, table, &axes, warnings)?);
     }
     if let Some(table) = tables.sky {
-        lights.sky = Some(read_sky(at, table, axes.up(), lights.sun.as_ref())?);
+        lights.sky = Some(read_sky(at, table, &axes, scene.dir, lights.sun.as_ref())?);
     }
     let mut profiles = HashMap::new();
     for (index, table) in tables.lamps.iter().enumerate() {
@@ -519,11 +525,30 @@ fn parse_time(text: &str) -> Option<f64> {
 fn read_sky(
     at: &ConfigSource,
     table: &Spanned<SkyTable>,
-    up: DVec3,
+    axes: &SceneAxes,
+    dir: &Path,
     sun: Option<&Sun>,
 ) -> Result<Sky, SceneError> {
     let s = table.get_ref();
-    let model = sky_model(at, table, sun)?;
+    let up = axes.up();
+    let model = if s.kind.get_ref() == "map" {
+        map_model(at, table, axes, dir)?
+    } else {
+        for (key, given) in [
+            ("file", span(&s.file)),
+            ("scale", span(&s.scale)),
+            ("rotation_deg", span(&s.rotation_deg)),
+        ] {
+            if let Some(span) = given {
+                return Err(at.err(
+                    span,
+                    "sky",
+                    format!("`{key}` applies to kind = \"map\" only"),
+                ));
+            }
+        }
+        sky_model(at, table, sun)?
+    };
     let below = below_horizon(at, table)?;
     Sky::new(model, up, below, sun).map_err(|e| {
         let key = match e {
@@ -563,15 +588,6 @@ fn sky_model(
              (on a horizontal plane: L_z = 9E/(7π))",
         ),
         "clear" => (&["turbidity"], "`turbidity` (2 to 10, default 3)"),
-        "map" => {
-            return Err(at.err(
-                s.kind.span(),
-                "sky",
-                "kind = \"map\": environment-map skies are not supported yet; use \"uniform\", \
-                 \"cie-overcast\" or \"clear\""
-                    .to_owned(),
-            ))
-        }
         other => {
             return Err(at.err(
                 s.kind.span(),
@@ -627,6 +643,55 @@ fn sky_model(
     model.map_err(|e| {
         let key = strengths.first().map(|k| k.1.clone());
         at.err(key.unwrap_or(s.kind.span()), "sky", e.to_string())
+    })
+}
+
+/// A `kind = "map"` sky: its `file` read (relative to the config), times
+/// `scale`, turned by `rotation_deg`; no other strength key applies.
+fn map_model(
+    at: &ConfigSource,
+    table: &Spanned<SkyTable>,
+    axes: &SceneAxes,
+    dir: &Path,
+) -> Result<SkyModel, SceneError> {
+    let s = table.get_ref();
+    let others = given(&[
+        ("radiance", span(&s.radiance)),
+        ("luminance", span(&s.luminance)),
+        ("zenith_radiance", span(&s.zenith_radiance)),
+        ("zenith_luminance", span(&s.zenith_luminance)),
+        ("illuminance", span(&s.illuminance)),
+        ("turbidity", span(&s.turbidity)),
+        ("color", span(&s.color)),
+    ]);
+    if let Some((key, span)) = others.first() {
+        return Err(at.err(
+            span.clone(),
+            "sky",
+            format!("`{key}` does not apply to kind = \"map\": give `file`, and `scale` for its strength"),
+        ));
+    }
+    let Some(file) = &s.file else {
+        return Err(at.err(
+            s.kind.span(),
+            "sky",
+            "kind = \"map\" needs `file = \"sky.hdr\"` (a Radiance .hdr or OpenEXR .exr)"
+                .to_owned(),
+        ));
+    };
+    let scale = s.scale.as_ref().map_or(1.0, |v| *v.get_ref());
+    let rotation = s.rotation_deg.as_ref().map_or(0.0, |v| *v.get_ref());
+    let path = dir.join(file.get_ref());
+    let map = super::envmap_file::load_envmap(&path, scale, rotation).map_err(|e| {
+        at.err(
+            file.span(),
+            "sky",
+            format!("the map {} {e}", path.display()),
+        )
+    })?;
+    Ok(SkyModel::Map {
+        map: std::sync::Arc::new(map),
+        north: axes.north(),
     })
 }
 

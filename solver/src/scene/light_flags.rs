@@ -76,7 +76,7 @@ impl LightFlags {
                 Sun::from_illuminance(position, f.lux, DVec3::ONE, DEFAULT_ANGULAR_DIAMETER_DEG)
                     .map_err(|e| err("--sun", e.to_string()))?;
             lights.sun = Some(sun);
-            if let (Some(sky), None) = (lights.sky, self.sky) {
+            if let (Some(sky), None) = (lights.sky.clone(), self.sky) {
                 lights.sky = Some(retie_sky(&sky, &sun).map_err(|e| {
                     err(
                         "--sun",

@@ -51,7 +51,12 @@ fn line_of(body: &str, needle: &str) -> usize {
 /// `line_needle`, and `value`.
 fn refused(body: &str, line_needle: &str, value: &str) -> String {
     let dir = tempfile::tempdir().unwrap();
-    let path = config(dir.path(), body);
+    refused_in(dir.path(), body, line_needle, value)
+}
+
+/// [`refused`] with the config written in `dir`, beside files a test put there.
+fn refused_in(dir: &Path, body: &str, line_needle: &str, value: &str) -> String {
+    let path = config(dir, body);
     let message = match load_scene(&path, &ImportOptions::default()) {
         Ok(_) => panic!("accepted: {body}"),
         Err(e) => e.to_string(),
@@ -414,7 +419,22 @@ fn bad_sky_values_name_the_file_line_and_value() {
         "kind",
         "\"stormy\"",
     );
-    refused("[sky]\nkind = \"map\"\n", "kind", "not supported yet");
+    refused("[sky]\nkind = \"map\"\n", "kind", "needs `file");
+    refused(
+        "[sky]\nkind = \"map\"\nfile = \"gone.hdr\"\n",
+        "file",
+        "cannot be read",
+    );
+    refused(
+        "[sky]\nkind = \"map\"\nfile = \"gone.hdr\"\nradiance = 1\n",
+        "radiance",
+        "does not apply",
+    );
+    refused(
+        "[sky]\nkind = \"uniform\"\nradiance = 1\nscale = 2\n",
+        "scale",
+        "\"map\" only",
+    );
     refused(
         "[sky]\nkind = \"uniform\"\nradiance = -1\n",
         "radiance",
@@ -689,5 +709,46 @@ fn a_clear_sky_flag_needs_a_sun() {
     assert!(
         message.contains("--sky") && message.contains("-5"),
         "{message}"
+    );
+}
+
+#[test]
+fn map_skies_load_from_hdr_files_and_absurd_sizes_are_refused() {
+    // A 2 × 1 map: its texels come back through the sky (the upper row is
+    // the whole sphere here, so every direction above the horizon sees one
+    // of the two texels); a file claiming 100,000² texels is refused before
+    // anything is allocated, naming the config's line and the size.
+    let dir = tempfile::tempdir().unwrap();
+    let mut hdr = b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 1 +X 2\n".to_vec();
+    hdr.extend(crate::light::envmap::radiance_to_rgbe([1.0, 1.0, 1.0]));
+    hdr.extend(crate::light::envmap::radiance_to_rgbe([4.0, 4.0, 4.0]));
+    std::fs::write(dir.path().join("sky.hdr"), &hdr).unwrap();
+    let path = config(
+        dir.path(),
+        "[sky]\nkind = \"map\"\nfile = \"sky.hdr\"\nscale = 0.5\n",
+    );
+    let loaded = load_scene(&path, &ImportOptions::default()).unwrap();
+    let sky = loaded.scene.lights.sky.unwrap();
+    let up = sky.up();
+    let values: Vec<f64> = [DVec3::X, DVec3::NEG_X, DVec3::Z, DVec3::NEG_Z]
+        .iter()
+        .map(|d| sky.radiance((*d + up).normalize()).x)
+        .collect();
+    assert!(
+        values
+            .iter()
+            .all(|v| (*v - 0.5).abs() < 0.01 || (*v - 2.0).abs() < 0.02),
+        "{values:?}"
+    );
+    std::fs::write(
+        dir.path().join("huge.hdr"),
+        b"#?RADIANCE\n\n-Y 100000 +X 100000\n",
+    )
+    .unwrap();
+    refused_in(
+        dir.path(),
+        "[sky]\nkind = \"map\"\nfile = \"huge.hdr\"\n",
+        "file",
+        "100000×100000",
     );
 }

@@ -15,6 +15,7 @@ mod clean;
 mod config;
 mod config_lights;
 mod display;
+mod envmap_file;
 mod error;
 mod gltf;
 mod legacy;

@@ -441,3 +441,118 @@ fn before_the_lights_shoot_all_of_their_light_is_unshot() {
     solver.step().unwrap();
     assert_eq!(solver.progress().unshot_fraction, 1.0);
 }
+
+fn map_sky(width: usize, height: usize, texel: impl Fn(usize, usize) -> f32) -> Lights {
+    let texels = (0..height)
+        .flat_map(|row| (0..width).map(move |col| (row, col)))
+        .map(|(row, col)| [texel(row, col); 3])
+        .collect();
+    let map = crate::light::envmap::EnvMap::new(width, height, texels, 1.0, 0.0).unwrap();
+    let model = SkyModel::Map {
+        map: std::sync::Arc::new(map),
+        north: DVec3::NEG_Z,
+    };
+    Lights {
+        sky: Some(Sky::new(model, DVec3::Y, BelowHorizon::Black, None).unwrap()),
+        ..Lights::default()
+    }
+}
+
+#[test]
+fn a_constant_map_lights_as_the_uniform_sky() {
+    // Every texel 2: each cosine sample sees 2 from the map as from the
+    // uniform sky, along the same directions, so the two solves agree to
+    // rounding (1e-12).
+    let uniform = sky_lights(SkyModel::uniform(DVec3::splat(2.0)).unwrap(), DVec3::Y);
+    let a = solved(&open_floor(2.0, Vec::new(), uniform), &settings());
+    let b = solved(
+        &open_floor(2.0, Vec::new(), map_sky(16, 8, |_, _| 2.0)),
+        &settings(),
+    );
+    for (la, lb) in a.vertex_radiance().iter().zip(b.vertex_radiance()) {
+        assert!(
+            (*la - *lb).abs().max_element() <= 1e-12 * la.max_element(),
+            "{la} {lb}"
+        );
+    }
+}
+
+#[test]
+fn a_map_with_one_bright_quadrant_lights_the_wall_facing_it() {
+    // Four walls facing north, east, south and west around a post; the map
+    // is bright (10) only between azimuths 45° and 135° (centred on east)
+    // above the horizon. East = north × up = +x for north −z and up +y. The
+    // east wall's vertices must match ρ E / π with E the map's irradiance on
+    // that plane, by the midpoint rule over the hemisphere (`Sky::irradiance`,
+    // independent of the solver's sampling), within 4 standard errors of
+    // the mean over its vertices; the west wall, facing away, gets nothing;
+    // north and south get the quadrant's edge only, less than east.
+    let lights = map_sky(8, 4, |row, col| {
+        if row < 2 && (1..=2).contains(&col) {
+            10.0
+        } else {
+            0.0
+        }
+    });
+    let sky = lights.sky.clone().unwrap();
+    let c = |x: f64, y: f64, z: f64| DVec3::new(x, y, z);
+    let walls = vec![
+        (
+            vec![
+                c(-1., 0., -1.),
+                c(-1., 2., -1.),
+                c(1., 2., -1.),
+                c(1., 0., -1.),
+            ],
+            0,
+        ),
+        (
+            vec![c(1., 0., -1.), c(1., 2., -1.), c(1., 2., 1.), c(1., 0., 1.)],
+            0,
+        ),
+        (
+            vec![c(1., 0., 1.), c(1., 2., 1.), c(-1., 2., 1.), c(-1., 0., 1.)],
+            0,
+        ),
+        (
+            vec![
+                c(-1., 0., 1.),
+                c(-1., 2., 1.),
+                c(-1., 2., -1.),
+                c(-1., 0., -1.),
+            ],
+            0,
+        ),
+    ];
+    let mut scene = scene_of(walls, vec![material("grey", RHO, 0.0)], 4);
+    scene.lights = lights;
+    let solver = solved(&scene, &settings());
+    let mean_on = |normal: DVec3| {
+        let mesh = solver.mesh();
+        let values: Vec<f64> = mesh
+            .vertices
+            .iter()
+            .zip(solver.vertex_radiance())
+            .filter(|(v, _)| v.normal.dot(normal) > 0.99)
+            .map(|(_, l)| l.x)
+            .collect();
+        values.iter().sum::<f64>() / values.len() as f64
+    };
+    let east = mean_on(DVec3::X);
+    let expected = RHO * sky.irradiance(DVec3::X, 256).x / PI;
+    // Per vertex a cosine sample is 10 or 0 with p the bright share of the
+    // projected hemisphere; σ/mean ≤ √((1 − p)/(p N)); ≥ 20 vertices.
+    let p = expected * PI / RHO / (10.0 * PI);
+    let rays = (8 * settings().samples) as f64;
+    let sigma = ((1.0 - p) / (p * rays)).sqrt() / 20f64.sqrt();
+    println!("bright quadrant: east wall {east:.4} against {expected:.4} (σ {sigma:.4} relative)");
+    assert!(
+        (east / expected - 1.0).abs() < 4.0 * sigma,
+        "east {east}, expected {expected}"
+    );
+    assert_eq!(mean_on(DVec3::NEG_X), 0.0, "the west wall faces away");
+    for side in [DVec3::Z, DVec3::NEG_Z] {
+        let l = mean_on(side);
+        assert!(l < 0.5 * east, "{side}: {l} against east {east}");
+    }
+}

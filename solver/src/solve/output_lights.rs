@@ -172,6 +172,10 @@ fn sky_json(sky: &Sky) -> Value {
         } => {
             json!({"model": "clear", "turbidity": turbidity, "sun_direction": sun_direction.to_array()})
         }
+        SkyModel::Map { map, north } => {
+            let (width, height) = map.size();
+            json!({"model": "map", "width": width, "height": height, "north": north.to_array()})
+        }
     };
     v["kind"] = json!("sky");
     v["up"] = json!(sky.up().to_array());
@@ -268,7 +272,7 @@ mod tests {
         let sky = Sky::new(clear, DVec3::Y, BelowHorizon::Black, Some(&sun)).unwrap();
         let lights = Lights {
             sun: Some(sun),
-            sky: Some(sky),
+            sky: Some(sky.clone()),
             lamps: Vec::new(),
             portals: Vec::new(),
         };
