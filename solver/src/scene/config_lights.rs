@@ -12,7 +12,7 @@
 //! angular_diameter_deg = 0.53
 //!
 //! [sky]
-//! kind = "cie-overcast"         # "uniform" | "cie-overcast" | "clear" ("map": not yet)
+//! kind = "cie-overcast"         # "uniform" | "cie-overcast" | "clear" | "map"
 //! illuminance = 10000           # horizontal lux (or a kind's radiometric value)
 //! below_horizon = "ground"      # "black" (default) | "same" | "ground"
 //! ground_albedo = 0.2

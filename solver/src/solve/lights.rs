@@ -41,6 +41,10 @@ use glam::DVec3;
 use std::f64::consts::PI;
 use std::time::Instant;
 
+/// How close geometry must enclose a lamp in every direction for
+/// [`Solver::enclosed_lamp_warnings`] to warn: 10 cm, a bulb or a shade.
+pub const ENCLOSED_WITHIN_M: f64 = 0.1;
+
 /// Sky rays per receiver over the base `samples` (the sky spans a
 /// hemisphere, an area light a small solid angle): 64 at draft, 256 at
 /// medium, 1,024 at final.
@@ -426,6 +430,40 @@ impl Solver {
     /// frame: lamps moved by [`Solver::offset`].
     pub fn lights(&self) -> &Lights {
         &self.lights.lights
+    }
+
+    /// A warning for each lamp that geometry encloses within
+    /// [`ENCLOSED_WITHIN_M`] (or twice its radius) in every one of 26
+    /// directions, as a bulb or a closed shade modelled around it does: its
+    /// light cannot get out, and the scene stays dark around it.
+    pub(super) fn enclosed_lamp_warnings(&self) -> Vec<String> {
+        let dirs: Vec<DVec3> = (-1..=1)
+            .flat_map(|x| (-1..=1).flat_map(move |y| (-1..=1).map(move |z| (x, y, z))))
+            .filter(|&d| d != (0, 0, 0))
+            .map(|(x, y, z)| DVec3::new(x as f64, y as f64, z as f64).normalize())
+            .collect();
+        let upm = self.units_per_metre();
+        self.lights
+            .lights
+            .lamps
+            .iter()
+            .filter(|lamp| {
+                let reach = (ENCLOSED_WITHIN_M * upm).max(2.0 * lamp.radius);
+                dirs.iter().all(|d| {
+                    !self
+                        .occluder
+                        .visible(lamp.position, lamp.position + *d * reach)
+                })
+            })
+            .map(|lamp| {
+                format!(
+                    "lamp {} is enclosed by geometry within {ENCLOSED_WITHIN_M} m in every \
+                     direction (a bulb or shade mesh around it?): its light cannot get out; \
+                     move it, or remove the mesh that encloses it",
+                    lamp.name
+                )
+            })
+            .collect()
     }
 
     /// π Σ_v w_v ρE_v/π over the patches' gather weights, summed over the

@@ -556,3 +556,26 @@ fn a_map_with_one_bright_quadrant_lights_the_wall_facing_it() {
         assert!(l < 0.5 * east, "{side}: {l} against east {east}");
     }
 }
+
+#[test]
+fn a_lamp_inside_a_closed_bulb_mesh_is_warned_about() {
+    // A lamp inside a closed 4 cm cube (a bulb modelled around it) lights
+    // nothing outside it: the set-up warns, naming the lamp; the same lamp
+    // above the open floor raises no warning.
+    let bulb = super::physics_tests::cube(0.04, DVec3::new(-0.02, 0.98, -0.02));
+    let lamp = Lamp::point("desk", DVec3::new(0.0, 1.0, 0.0), DVec3::ONE, 0.0).unwrap();
+    let inside = open_floor(2.0, bulb, lamp_lights(lamp.clone()));
+    let solver = Solver::new(&inside, &settings()).unwrap();
+    let warned: Vec<&String> = solver
+        .warnings()
+        .iter()
+        .filter(|w| w.contains("enclosed"))
+        .collect();
+    assert!(
+        warned.len() == 1 && warned[0].contains("desk"),
+        "{:?}",
+        solver.warnings()
+    );
+    let open = Solver::new(&open_floor(2.0, Vec::new(), lamp_lights(lamp)), &settings()).unwrap();
+    assert!(!open.warnings().iter().any(|w| w.contains("enclosed")));
+}

@@ -299,6 +299,8 @@ impl Solver {
     /// the first totals.
     fn finish_setup(&mut self, scene: &Scene) -> Result<(), SolveError> {
         self.enclosure.catch_up(self.mesh.vertices.len());
+        let enclosed = self.enclosed_lamp_warnings();
+        self.warnings.setup.extend(enclosed);
         self.init_directional(scene)?;
         let all: Vec<u32> = (0..self.mesh.surfaces.len() as u32).collect();
         self.update_weights(&all);
