@@ -12,6 +12,7 @@ pub mod ies;
 pub mod lamp;
 pub mod portal;
 pub mod sky;
+pub mod sky_sampling;
 pub mod sun;
 pub mod units;
 

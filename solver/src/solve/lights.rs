@@ -15,8 +15,9 @@
 //!   `samples` cosine-distributed directions (Malley's method on stratified
 //!   points), unbiased for any sky; exact for an open receiver under a
 //!   uniform sky. With portals (`light/portal.rs`) half of the rays go
-//!   through the portals the receiver faces, combined with the cosine
-//!   half by the balance heuristic.
+//!   through the portals the receiver faces, and for a sky with a bright
+//!   spot half of the rest are drawn by its radiance from a table
+//!   (`light/sky_sampling.rs`); all are combined by the balance heuristic.
 //!
 //! The lights' shot is recorded like an emitter's: vertices that later
 //! splits create receive it exactly ([`super::refine::Replay::lights`]), so
@@ -33,6 +34,7 @@ use crate::geometry::sampling::{stratified_points, stratified_square, stream_id,
 use crate::geometry::visibility::Occluder;
 use crate::light::lamp::Lamp;
 use crate::light::sky::Sky;
+use crate::light::sky_sampling::SkyDistribution;
 use crate::light::sun::Sun;
 use crate::light::Lights;
 use crate::mesh::Mesh;
@@ -60,9 +62,23 @@ pub(super) struct LightsState {
     /// scene units, summed over the channels): their part of the emitted
     /// power the solve converges against. Checkpointed.
     pub power: f64,
+    /// The sky tabulated for sampling by its radiance, where that pays
+    /// (`light/sky_sampling.rs`).
+    pub sky_table: Option<SkyDistribution>,
 }
 
 impl LightsState {
+    /// The lights (in the solver's frame), not yet shot.
+    pub fn new(lights: Lights) -> Self {
+        let sky_table = lights.sky.as_ref().and_then(SkyDistribution::worth_it);
+        LightsState {
+            lights,
+            shot: false,
+            power: 0.0,
+            sky_table,
+        }
+    }
+
     /// Whether the lights still have to shoot.
     pub fn pending(&self) -> bool {
         !self.shot && !self.lights.is_empty()
@@ -73,6 +89,7 @@ impl LightsState {
 /// the reflectances, and the sampling.
 pub(super) struct LightShot<'a> {
     pub lights: &'a Lights,
+    pub sky_table: Option<&'a SkyDistribution>,
     pub occluder: &'a Occluder,
     pub kd: &'a [DVec3],
     /// Rays per lamp with a radius and per sun; the sky takes
@@ -100,14 +117,15 @@ const LIGHTS_STREAM: u64 = u64::MAX;
 
 impl<'a> LightShot<'a> {
     pub fn new(
-        lights: &'a Lights,
+        state: &'a LightsState,
         occluder: &'a Occluder,
         kd: &'a [DVec3],
         settings: &SolverSettings,
         units_per_metre: f64,
     ) -> Self {
         LightShot {
-            lights,
+            lights: &state.lights,
+            sky_table: state.sky_table.as_ref(),
             occluder,
             kd,
             samples: settings.samples,
@@ -126,7 +144,7 @@ impl<'a> LightShot<'a> {
         units_per_metre: f64,
     ) -> Option<Self> {
         (state.shot && !state.lights.is_empty())
-            .then(|| Self::new(&state.lights, occluder, kd, settings, units_per_metre))
+            .then(|| Self::new(state, occluder, kd, settings, units_per_metre))
     }
 
     /// ΔL at vertex `v`.
@@ -242,11 +260,18 @@ impl<'a> LightShot<'a> {
         let far = self.far(origin);
         let count = self.samples * SKY_RAYS_PER_SAMPLE;
         let portals = self.portal_shares(origin, n, count / 2);
-        let cosine = count - portals.iter().map(|&(_, k)| k).sum::<u32>();
+        let rest = count - portals.iter().map(|&(_, k)| k).sum::<u32>();
+        let tabled = if self.sky_table.is_some() {
+            rest / 2
+        } else {
+            0
+        };
+        let cosine = rest - tabled;
         // The balance heuristic's denominator at unit direction w.
         let density = |w: DVec3| {
             let cos = w.dot(n).max(0.0);
             cosine as f64 * cos / PI
+                + self.sky_table.map_or(0.0, |t| tabled as f64 * t.pdf(w))
                 + portals
                     .iter()
                     .map(|&(p, k)| k as f64 * self.lights.portals[p].direction_pdf(origin, w))
@@ -274,6 +299,9 @@ impl<'a> LightShot<'a> {
             let (r, phi) = (u.sqrt(), 2.0 * PI * v);
             add(r * (phi.cos() * t + phi.sin() * b) + (1.0 - u).max(0.0).sqrt() * n);
         });
+        if let Some(table) = self.sky_table {
+            stratified_square(tabled, rng, |u, v| add(table.sample(u, v).0));
+        }
         let mut points = Vec::new();
         for &(p, k) in &portals {
             points.clear();
@@ -342,7 +370,7 @@ impl Transport for LightsTransport {
     }
 
     fn shoot(&mut self, s: &mut Solver, source: &Source) -> Shooting {
-        let lights = std::mem::take(&mut s.lights.lights);
+        let lights = std::mem::take(&mut s.lights);
         let upm = s.units_per_metre();
         let shot = LightShot::new(&lights, &s.occluder, &s.materials.kd, &s.settings, upm);
         let shooter = Shooter::Lights(&shot);
@@ -402,7 +430,7 @@ impl Transport for LightsTransport {
             drop(replay_shots);
             s.after_refinement(&split_budget, None);
         }
-        s.lights.lights = lights;
+        s.lights = lights;
         Shooting {
             rays: rays + refined.rays,
             refined,

@@ -284,11 +284,7 @@ impl Solver {
             warnings: state::Warnings::default(),
             directional: None,
             enclosure: enclosure::EnclosureCache::default(),
-            lights: lights::LightsState {
-                lights: scene.lights.recentred(offset),
-                shot: false,
-                power: 0.0,
-            },
+            lights: lights::LightsState::new(scene.lights.recentred(offset)),
         };
         solver.finish_setup(scene)?;
         Ok(solver)
