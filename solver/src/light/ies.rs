@@ -38,7 +38,7 @@
 
 mod parse;
 #[cfg(test)]
-mod tests;
+pub(crate) mod tests;
 
 /// The most vertical or horizontal angles a file may declare. Real files hold up to a
 /// few hundred of each; 10,000 is a tenth of a degree over half a turn many times over.

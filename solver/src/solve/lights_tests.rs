@@ -655,3 +655,47 @@ fn a_map_with_a_painted_sun_is_sampled_by_its_radiance() {
     );
     assert!(sigma < 0.1 * exact, "σ {sigma}");
 }
+
+#[test]
+fn an_ies_profile_comes_back_at_the_receiver_in_every_file_form() {
+    // The same quadrant-symmetric table in each LM-63 form (1986 to 2019),
+    // on a lamp 2 m over the open floor aimed down: at every floor vertex
+    // L = ρ (I(θ, φ) / 683) cos θ_r / (π d²), with I the table's bilinear
+    // value written out by hand (`ies/tests.rs`) at the vertex's angles in
+    // the lamp's type C frame (θ from the nadir, φ from its `across` axis,
+    // folded into the quadrant), times the file's scale. Exact (one ray a
+    // vertex): 1e-9.
+    use crate::light::ies::tests::{bilinear_by_hand, forms};
+    use crate::light::ies::IesProfile;
+    let at = DVec3::new(0.0, 2.0, 0.0);
+    for (form, spec) in forms() {
+        let profile = std::sync::Arc::new(IesProfile::parse(&spec.render(), "lamp.ies").unwrap());
+        let mut lamp = Lamp::point("ies", at, DVec3::ONE, 0.0)
+            .unwrap()
+            .with_profile(profile.clone(), DVec3::NEG_Y)
+            .unwrap();
+        let frame = lamp.profile.clone().unwrap();
+        lamp.intensity = DVec3::splat(frame.peak_candela / 683.0);
+        let solver = solved(&open_floor(3.0, Vec::new(), lamp_lights(lamp)), &settings());
+        let side = frame.down.cross(frame.across);
+        for (p, l) in floor_vertices(&solver) {
+            let w = (p - at).normalize();
+            let theta = w.dot(frame.down).clamp(-1.0, 1.0).acos().to_degrees();
+            let phi = w
+                .dot(side)
+                .atan2(w.dot(frame.across))
+                .to_degrees()
+                .rem_euclid(360.0);
+            let half = if phi > 180.0 { 360.0 - phi } else { phi };
+            let folded = if half > 90.0 { 180.0 - half } else { half };
+            let candela = bilinear_by_hand(&spec, theta, folded) * profile.scale();
+            let d2 = (at - p).length_squared();
+            let expected = RHO * (candela / 683.0) * (at.y - p.y) / d2.sqrt() / (PI * d2);
+            assert!(
+                (l.x - expected).abs() <= 1e-9 * expected.max(1e-12),
+                "{form:?} at {p}: {} against {expected}",
+                l.x
+            );
+        }
+    }
+}

@@ -7,7 +7,7 @@ use std::f64::consts::PI;
 
 /// A synthetic LM-63 file, rendered to text by [`Spec::render`].
 #[derive(Clone)]
-struct Spec {
+pub(crate) struct Spec {
     /// The first line (`None` for the 1986 form).
     marker: Option<&'static str>,
     /// Header lines before `TILT=`.
@@ -59,7 +59,7 @@ impl Spec {
         }
     }
 
-    fn render(&self) -> String {
+    pub(crate) fn render(&self) -> String {
         let mut lines: Vec<String> = self.marker.iter().map(|m| (*m).to_owned()).collect();
         lines.extend(self.header.iter().cloned());
         lines.push(self.tilt.clone());
@@ -111,7 +111,7 @@ fn close(a: f64, b: f64, rel: f64) -> bool {
 
 /// Bilinear interpolation written independently of the module: find the cell by a
 /// linear scan, then weight the four corners.
-fn bilinear_by_hand(spec: &Spec, theta: f64, phi: f64) -> f64 {
+pub(crate) fn bilinear_by_hand(spec: &Spec, theta: f64, phi: f64) -> f64 {
     let (v, h) = (&spec.vertical, &spec.horizontal);
     let cell = |nodes: &[f64], x: f64| {
         let i = (0..nodes.len() - 1)
@@ -129,7 +129,7 @@ fn bilinear_by_hand(spec: &Spec, theta: f64, phi: f64) -> f64 {
 }
 
 /// The five forms with their first line, a typical header, and the twelfth field.
-fn forms() -> Vec<(IesForm, Spec)> {
+pub(crate) fn forms() -> Vec<(IesForm, Spec)> {
     let base = Spec {
         multiplier: 2.0,
         ballast: 0.95,
