@@ -104,29 +104,6 @@ settings_patch! {
         )]
         pub shadows: Option<bool>,
 
-        /// Visibility rays in proportion to what a shot adds, below this fraction of a receiver's light.
-        #[arg(
-            long,
-            value_name = "FRACTION",
-            long_help = "A receiver gets all --samples rays only from shots that add at least \
-                this fraction of its light, fewer in proportion below (0 to 1; 0 \
-                traces every ray). The estimate stays unbiased and only its noise \
-                grows; every preset's 0.01 halves the Cornell box's final time at the \
-                same error (docs/lab/ray-share.md)."
-        )]
-        pub full_rays_above: Option<f64>,
-
-        /// Smallest element edge on a glossy surface, as K × α × half the scene's diagonal.
-        #[arg(
-            long,
-            value_name = "K",
-            long_help = "Directional mode: glossy elements stop splitting at an edge of K × α × \
-                half the scene's diagonal, α the lobe's RMS slope. Smaller K gives \
-                sharper highlights for more elements and time (final's 0.125 takes \
-                twice 0.25's time; docs/lab/glossy-final-floor.md)."
-        )]
-        pub glossy_edge: Option<f64>,
-
         /// What shoots in one pass: patch (default) or grouped.
         #[arg(
             long,
@@ -303,6 +280,19 @@ settings_patch! {
         // The keys below are TOML only (scene configs and presets): tuning that
         // the presets choose and no command line needs. `SolverSettings` says
         // what each means.
+        /// A receiver gets all `samples` rays only from shots that add at
+        /// least this fraction of its light, fewer in proportion below (0 to
+        /// 1; 0 traces every ray): unbiased, only noisier; every preset's
+        /// 0.01 halves the Cornell box's final time at the same error
+        /// (docs/lab/ray-share.md).
+        #[arg(skip)]
+        pub full_rays_above: Option<f64>,
+        /// Directional mode: glossy elements stop splitting at an edge of
+        /// K × α × half the scene's diagonal, α the lobe's RMS slope
+        /// (final's 0.125 takes twice 0.25's time;
+        /// docs/lab/glossy-final-floor.md).
+        #[arg(skip)]
+        pub glossy_edge: Option<f64>,
         #[arg(skip)]
         pub adaptive: Option<bool>,
         #[arg(skip)]
