@@ -345,7 +345,7 @@ impl Solver {
                 self.directional = Some(d);
                 report
             }
-            None => self.shoot_with(&mut scalar::ScalarShot),
+            None => self.shoot_with(&mut scalar::ScalarShot::default()),
         };
         self.enclosure.catch_up(self.mesh.vertices.len());
         Some(report)

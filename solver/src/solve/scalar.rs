@@ -14,12 +14,17 @@ use crate::settings::Shooters;
 use glam::DVec3;
 use std::time::Instant;
 
-/// Diffuse shots; they keep no state between the steps of one shot.
-pub(super) struct ScalarShot;
+/// Diffuse shots; between the steps of one shot they keep only the source
+/// patch `take_source` chose.
+#[derive(Default)]
+pub(super) struct ScalarShot {
+    patch: u32,
+}
 
 impl Transport for ScalarShot {
     fn take_source(&mut self, s: &mut Solver) -> Source {
         let patch = s.brightest_patch();
+        self.patch = patch;
         let ambient = s.ambient_from_index();
         let unshot = std::mem::replace(&mut s.patches.unshot[patch as usize], DVec3::ZERO);
         s.unshot_changed(&[patch]);
@@ -31,7 +36,7 @@ impl Transport for ScalarShot {
     }
 
     fn shoot(&mut self, s: &mut Solver, source: &Source) -> Shooting {
-        let patch = source.patch.expect("a diffuse shot's source is a patch");
+        let patch = self.patch;
         let unshot = source.unshot;
         // With grouped shooters the source may take its bright neighbours
         // along (`group_shot.rs`); an emitter's patch shoots its emission

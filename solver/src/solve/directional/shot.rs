@@ -22,6 +22,8 @@ use std::time::Instant;
 /// One directional shot's state between the pipeline's steps.
 pub(in crate::solve) struct ShShot<'d> {
     d: &'d mut Directional,
+    /// The source patch, chosen by `take_source`.
+    patch: u32,
     /// The source's unshot SH, taken out of its patch.
     unshot: Vec<f64>,
     /// Whether the shot is recorded (an emitter's: replayed, not summed).
@@ -35,6 +37,7 @@ impl<'d> ShShot<'d> {
     pub(in crate::solve) fn new(d: &'d mut Directional) -> ShShot<'d> {
         ShShot {
             d,
+            patch: 0,
             unshot: Vec::new(),
             recorded: false,
             created_from: 0,
@@ -46,6 +49,7 @@ impl Transport for ShShot<'_> {
     fn take_source(&mut self, s: &mut Solver) -> Source {
         let d = &mut *self.d;
         let patch = choose_source(s, d);
+        self.patch = patch;
         // The light not yet shot, this shot's included.
         let ambient = s.ambient();
         let range = d.patch_range(&s.mesh, patch as usize);
@@ -61,9 +65,7 @@ impl Transport for ShShot<'_> {
 
     fn shoot(&mut self, s: &mut Solver, source: &Source) -> Shooting {
         let d = &mut *self.d;
-        let patch = source
-            .patch
-            .expect("a directional shot's source is a patch");
+        let patch = self.patch;
         let recorded = s.records(patch, true, Some((d, self.unshot.len() as u64)));
         let shot = Shot::for_patch(
             &s.mesh,
@@ -169,14 +171,12 @@ impl Transport for ShShot<'_> {
         }
     }
 
-    fn gather(&mut self, s: &mut Solver, source: &Source, _dirty: &[u32]) {
+    fn gather(&mut self, s: &mut Solver, _source: &Source, _dirty: &[u32]) {
         let d = &mut *self.d;
         // This shot's light joins its patch's sum for the gathers of later
         // splits (`directional/near_gather.rs`); recorded shots replay.
         if !self.recorded {
-            let patch = source
-                .patch
-                .expect("a directional shot's source is a patch");
+            let patch = self.patch;
             let range = d.patch_range(&s.mesh, patch as usize);
             for (sum, u) in d.shot_sum[range].iter_mut().zip(&self.unshot) {
                 *sum = round_to_kept(*sum + u);
