@@ -103,6 +103,7 @@ use std::f64::consts::PI;
 use std::sync::Arc;
 
 mod field;
+mod lights;
 mod near_gather;
 mod output;
 mod receive;
@@ -111,6 +112,7 @@ mod split;
 mod state;
 mod textured;
 
+pub(super) use lights::DirLightsShot;
 pub(super) use shot::ShShot;
 
 /// How the next source patch is chosen.

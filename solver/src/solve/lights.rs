@@ -100,6 +100,19 @@ pub(super) struct LightShot<'a> {
     pub units_per_metre: f64,
 }
 
+/// Where the lights' visible samples go ([`LightShot::visit`]): the unit
+/// direction toward the light and the irradiance the sample brings.
+pub(super) type Sink<'s> = &'s mut dyn FnMut(DVec3, DVec3);
+
+/// What the lights bring to one receiving point: their irradiance, and the
+/// visible count and the rays of [`Received`].
+#[derive(Clone, Copy, Default)]
+pub(super) struct Arrival {
+    pub irradiance: DVec3,
+    pub visible: u32,
+    pub rays: u32,
+}
+
 /// One light's irradiance at a point and the fraction of it that arrived.
 #[derive(Clone, Copy, Default)]
 struct Part {
@@ -159,33 +172,47 @@ impl<'a> LightShot<'a> {
         if kd == DVec3::ZERO {
             return Received::default();
         }
+        let arrival = self.visit(at, &mut |_, _| {});
+        Received {
+            radiance: kd * arrival.irradiance / PI,
+            visible: arrival.visible,
+            rays: arrival.rays,
+        }
+    }
+
+    /// The lights at a receiving point: each visible sample goes to `sink`
+    /// as the unit direction toward its light and the irradiance it brings
+    /// (a glossy receiver reflects each by its lobe,
+    /// `directional/lights.rs`); returns their sum, and the visible count
+    /// and the rays for the meshing.
+    pub fn visit(&self, at: &ReceivingPoint, sink: Sink) -> Arrival {
         let mut rng = Rng::new(self.seed, stream_id(LIGHTS_STREAM, at.stream as u64));
         let origin = at.q + at.n * self.occluder.scene_epsilon();
         let mut parts: Vec<Part> = self
             .lights
             .lamps
             .iter()
-            .map(|lamp| self.lamp(lamp, origin, at.n, &mut rng))
+            .map(|lamp| self.lamp(lamp, origin, at.n, &mut rng, &mut *sink))
             .collect();
         if let Some(sun) = &self.lights.sun {
-            parts.push(self.sun(sun, origin, at.n, &mut rng));
+            parts.push(self.sun(sun, origin, at.n, &mut rng, &mut *sink));
         }
         if let Some(sky) = &self.lights.sky {
-            parts.push(self.sky(sky, origin, at.n, &mut rng));
+            parts.push(self.sky(sky, origin, at.n, &mut rng, sink));
         }
         let irradiance: DVec3 = parts.iter().map(|p| p.irradiance).sum();
         let weight: f64 = parts.iter().map(|p| p.weight).sum();
         let seen: f64 = parts.iter().map(|p| p.weight * p.visible).sum();
         let fraction = if weight > 0.0 { seen / weight } else { 0.0 };
-        Received {
-            radiance: kd * irradiance / PI,
+        Arrival {
+            irradiance,
             visible: (fraction * self.samples as f64).round() as u32,
             rays: parts.iter().map(|p| p.rays).sum(),
         }
     }
 
     /// A lamp's irradiance at `origin` (lifted off its surface) facing `n`.
-    fn lamp(&self, lamp: &Lamp, origin: DVec3, n: DVec3, rng: &mut Rng) -> Part {
+    fn lamp(&self, lamp: &Lamp, origin: DVec3, n: DVec3, rng: &mut Rng, sink: Sink) -> Part {
         let to_lamp = lamp.position - origin;
         let distance = to_lamp.length();
         let w = to_lamp / distance;
@@ -202,17 +229,21 @@ impl<'a> LightShot<'a> {
             // Points on the disc the bulb shows the receiver.
             let (t, b) = w.any_orthonormal_pair();
             let mut seen = 0u32;
+            let share = unoccluded / self.samples as f64;
             stratified_square(self.samples, rng, |u, v| {
                 let (r, phi) = (lamp.radius * u.sqrt(), 2.0 * PI * v);
                 let point = lamp.position + r * (phi.cos() * t + phi.sin() * b);
-                seen += u32::from(self.occluder.visible(origin, point));
+                if self.occluder.visible(origin, point) {
+                    seen += 1;
+                    sink((point - origin).normalize_or(w), share);
+                }
             });
             (seen as f64 / self.samples as f64, self.samples)
+        } else if self.occluder.visible(origin, lamp.position) {
+            sink(w, unoccluded);
+            (1.0, 1)
         } else {
-            (
-                f64::from(u8::from(self.occluder.visible(origin, lamp.position))),
-                1,
-            )
+            (0.0, 1)
         };
         Part {
             irradiance: unoccluded * visible,
@@ -224,13 +255,14 @@ impl<'a> LightShot<'a> {
 
     /// The sun's irradiance: E⊥ times the mean of cos θ_i over its visible
     /// disc directions.
-    fn sun(&self, sun: &Sun, origin: DVec3, n: DVec3, rng: &mut Rng) -> Part {
+    fn sun(&self, sun: &Sun, origin: DVec3, n: DVec3, rng: &mut Rng, sink: Sink) -> Part {
         if sun.direction().dot(n) <= -(0.5 * sun.angular_diameter_deg()).to_radians().sin() {
             return Part::default();
         }
         let far = self.far(origin);
         let (mut lit, mut open) = (0.0, 0.0);
         let mut rays = 0;
+        let count = self.samples as f64;
         stratified_square(self.samples, rng, |u, v| {
             let w = sun.sample_disc(u, v).direction;
             let cos = w.dot(n);
@@ -239,10 +271,10 @@ impl<'a> LightShot<'a> {
                 rays += 1;
                 if self.occluder.visible(origin, origin + w * far) {
                     lit += cos;
+                    sink(w, sun.irradiance() * (cos / count));
                 }
             }
         });
-        let count = self.samples as f64;
         Part {
             irradiance: sun.irradiance() * (lit / count),
             weight: sun.irradiance().max_element() * open / count,
@@ -256,7 +288,7 @@ impl<'a> LightShot<'a> {
     /// two combined by Veach's (1997, §9.2) multi-sample balance heuristic:
     /// each direction ω counts f(ω) / Σ_j n_j p_j(ω), with f = L cos θ V and
     /// n_j samples from density p_j (`light/portal.rs`).
-    fn sky(&self, sky: &Sky, origin: DVec3, n: DVec3, rng: &mut Rng) -> Part {
+    fn sky(&self, sky: &Sky, origin: DVec3, n: DVec3, rng: &mut Rng, sink: Sink) -> Part {
         let far = self.far(origin);
         let count = self.samples * SKY_RAYS_PER_SAMPLE;
         let portals = self.portal_shares(origin, n, count / 2);
@@ -290,6 +322,7 @@ impl<'a> LightShot<'a> {
             rays += 1;
             if self.occluder.visible(origin, origin + w * far) {
                 lit += f;
+                sink(w, f);
             }
         };
         let (t, b) = n.any_orthonormal_pair();
@@ -447,9 +480,7 @@ impl Transport for LightsTransport {
     /// their power: it joins the emitted power the solve converges against.
     fn unshot_power(&mut self, s: &mut Solver) -> f64 {
         let total = s.unshot_power_from_index();
-        s.lights.power = (total - s.stats.unshot_power).max(0.0);
-        s.include_lights_power();
-        total
+        s.measure_lights_power(total)
     }
 }
 
@@ -497,7 +528,7 @@ impl Solver {
     /// π Σ_v w_v ρE_v/π over the patches' gather weights, summed over the
     /// channels: the power the current shot's `received` puts into the
     /// patches once gathered (`footprint.rs`, the gather).
-    fn received_power(&self) -> f64 {
+    pub(super) fn received_power(&self) -> f64 {
         let mut power = DVec3::ZERO;
         for weights in &self.patches.weights {
             for &(v, w) in weights {
@@ -505,6 +536,14 @@ impl Solver {
             }
         }
         PI * power.element_sum()
+    }
+
+    /// The lights' power, measured once their shot is gathered: what they
+    /// added to the unshot power, which is now `total` (returned).
+    pub(super) fn measure_lights_power(&mut self, total: f64) -> f64 {
+        self.lights.power = (total - self.stats.unshot_power).max(0.0);
+        self.include_lights_power();
+        total
     }
 
     /// Adds the lights' power to the emitted power the solve converges
@@ -520,7 +559,7 @@ impl Solver {
     /// [`Solver::ambient`] has it for unshot light: power / (π · area),
     /// over 1 − the mean reflectance (its brightest channel), the channels'
     /// mean.
-    fn lights_level(&self, power: f64) -> f64 {
+    pub(super) fn lights_level(&self, power: f64) -> f64 {
         let (mut area, mut reflect) = (0.0, DVec3::ZERO);
         for p in &self.mesh.patches {
             area += p.area;

@@ -113,11 +113,6 @@ pub enum SolveError {
          `solve --sun AZIMUTH,ELEVATION` or `--sky KIND`)"
     )]
     NoEmitter,
-    #[error(
-        "the sun, the sky and lamps light diffuse solves only so far; solve this scene with \
-         `--mode diffuse`, or light it with emissive materials"
-    )]
-    DirectionalLights,
     #[error("material `{name}`: {problem}")]
     BadMaterial { name: String, problem: String },
     #[error(transparent)]
@@ -245,9 +240,6 @@ impl Solver {
         if !has_emitter && scene.lights.is_empty() {
             return Err(SolveError::NoEmitter);
         }
-        if !scene.lights.is_empty() && settings.mode == SolveMode::Directional {
-            return Err(SolveError::DirectionalLights);
-        }
         let occluder = Occluder::new(
             &mesh
                 .surfaces
@@ -340,6 +332,11 @@ impl Solver {
         }
         let report = match self.directional.take() {
             None if self.lights.pending() => self.shoot_with(&mut lights::LightsTransport),
+            Some(mut d) if self.lights.pending() => {
+                let report = self.shoot_with(&mut directional::DirLightsShot::new(&mut d));
+                self.directional = Some(d);
+                report
+            }
             Some(mut d) => {
                 let report = self.shoot_with(&mut directional::ShShot::new(&mut d));
                 self.directional = Some(d);
@@ -814,6 +811,8 @@ pub(crate) fn human_bytes(bytes: u128) -> String {
     }
 }
 
+#[cfg(test)]
+mod directional_lights_tests;
 #[cfg(test)]
 mod directional_tests;
 #[cfg(test)]

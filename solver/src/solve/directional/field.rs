@@ -1,8 +1,9 @@
 //! Directional mode's refinement field (`refine.rs`'s [`Field`] on SH
 //! coefficients).
 
+use super::lights::DirSource;
 use super::near_gather;
-use super::receive::{DirScratch, DirShot, ReceivedSh};
+use super::receive::{DirScratch, ReceivedSh};
 use super::split::should_split_sh;
 use super::Directional;
 use crate::mesh::{Mesh, NewVertex};
@@ -25,8 +26,8 @@ pub(super) struct DirField<'s, 'a> {
     /// the directional part is `Directional::direct`.
     pub(super) direct: &'s mut Vec<DVec3>,
     pub(super) kd: &'s [DVec3],
-    pub(super) shot: &'s DirShot<'a>,
-    pub(super) replay: &'s [DirShot<'a>],
+    pub(super) shot: &'s DirSource<'a>,
+    pub(super) replay: &'s [DirSource<'a>],
     /// Whether the current shot is the last of `replay`.
     pub(super) current_recorded: bool,
     /// New glossy vertices gather their near patches' shot light.
@@ -143,7 +144,7 @@ impl Field for DirField<'_, '_> {
             .collect();
         let near = self
             .near
-            .corrections(mesh, self.radiance, self.d, shot.tables, created);
+            .corrections(mesh, self.radiance, self.d, shot.tables(), created);
         let d = &mut *self.d;
         let mut total = near.rays;
         for ((nv, (exact, current, rays)), correction) in

@@ -26,11 +26,115 @@ pub(super) struct DirScratch {
     /// The visible source samples and the buffers that find them.
     sampling: SampleScratch,
     basis: Vec<f64>,
-    unit: Vec<f64>,
-    lobe_scratch: Vec<f64>,
+    pub(super) lobe: LobeScratch,
     /// Per visible sample, its scale of the unshot radiance when the source
     /// shoots by quadrants ([`QuadrantScale::sample_scales`]); empty otherwise.
     scales: Vec<DVec3>,
+}
+
+/// The buffers of [`Reflector::add`].
+#[derive(Default)]
+pub(super) struct LobeScratch {
+    unit: Vec<f64>,
+    scratch: Vec<f64>,
+}
+
+/// How one receiving vertex reflects light arriving from a direction
+/// (module documentation of [`super`], "Transport"): its diffuse part as
+/// c₀₀ (or, textured, E/π after its coefficients) and its glossy lobe.
+pub(super) struct Reflector<'t> {
+    /// Its coefficients per channel, (L+1)².
+    count: usize,
+    textured: bool,
+    kd: DVec3,
+    ks: DVec3,
+    lobe: Option<&'t GlossyLobe>,
+    /// The vertex's shading normal, and its polygon's SH frame.
+    shading: DVec3,
+    normal: DVec3,
+    tangent: DVec3,
+}
+
+impl<'t> Reflector<'t> {
+    pub(super) fn of_vertex(mesh: &Mesh, tables: &'t Tables, kd: &[DVec3], v: u32) -> Self {
+        let surface = mesh.vertices[v as usize].surface as usize;
+        let s = &mesh.surfaces[surface];
+        Reflector {
+            count: coefficient_count(tables.surface_order[surface]),
+            textured: tables.textured[surface],
+            kd: kd[surface],
+            ks: tables.ks[surface],
+            lobe: tables.lobes[surface].as_deref(),
+            shading: mesh.vertices[v as usize].normal,
+            normal: s.normal,
+            tangent: s.tangent,
+        }
+    }
+
+    /// Whether it reflects anything (Kd or a lobe).
+    pub(super) fn reflects(&self) -> bool {
+        self.kd != DVec3::ZERO || self.lobe.is_some()
+    }
+
+    /// Zeroed coefficients for it: a textured surface keeps E/π after them.
+    pub(super) fn zeroed(&self) -> Vec<f64> {
+        vec![0.0; 3 * self.count + if self.textured { 3 } else { 0 }]
+    }
+
+    /// Adds to `out` what it reflects of `irradiance` (ΔE, per channel)
+    /// arriving from the unit direction `toward` (scene frame).
+    pub(super) fn add(
+        &self,
+        out: &mut [f64],
+        toward: DVec3,
+        irradiance: DVec3,
+        scratch: &mut LobeScratch,
+    ) {
+        if self.textured {
+            // Textured: ΔE/π, which the texture multiplies at display
+            // and in the gather (`directional/textured.rs`; kd is 1).
+            let e = self.kd * irradiance / PI;
+            let at = 3 * self.count;
+            out[at] += e.x;
+            out[at + 1] += e.y;
+            out[at + 2] += e.z;
+        } else {
+            // Diffuse part: radiance Kd·ΔE/π as c₀₀.
+            let diffuse = self.kd * irradiance / PI * (4.0 * PI).sqrt();
+            out[0] += diffuse.x;
+            out[1] += diffuse.y;
+            out[2] += diffuse.z;
+        }
+        let Some(lobe) = self.lobe else {
+            return;
+        };
+        scratch.unit.resize(self.count, 0.0);
+        scratch.scratch.resize(self.count, 0.0);
+        scratch.unit.fill(0.0);
+        if self.shading == self.normal {
+            let omega_i = sh::to_local(toward, self.normal, self.tangent);
+            lobe.add_lobe_sh(omega_i, 1.0, &mut scratch.unit, &mut scratch.scratch);
+        } else {
+            // A smooth surface reflects about its shading normal; the lobe is
+            // expressed in the polygon's frame, like every coefficient of
+            // this surface (module documentation, "Frames").
+            let mu_i = self.shading.dot(toward);
+            let mirror = 2.0 * mu_i * self.shading - toward;
+            lobe.add_lobe_sh_about(
+                mu_i,
+                sh::to_local(mirror, self.normal, self.tangent),
+                1.0,
+                &mut scratch.unit,
+                &mut scratch.scratch,
+            );
+        }
+        let e = irradiance * self.ks;
+        for (o, u) in out.chunks_exact_mut(3).zip(&scratch.unit) {
+            o[0] += u * e.x;
+            o[1] += u * e.y;
+            o[2] += u * e.z;
+        }
+    }
 }
 
 /// One directional shot: the diffuse [`Shot`] (geometry, samples,
@@ -101,16 +205,10 @@ impl<'a> DirShot<'a> {
         v: u32,
         scratch: &mut DirScratch,
     ) -> ReceivedSh {
-        let surface = mesh.vertices[v as usize].surface as usize;
-        let order = self.tables.surface_order[surface];
-        let count = coefficient_count(order);
-        // A textured surface keeps E/π after its coefficients.
-        let textured = self.tables.textured[surface];
-        let mut out = vec![0.0; 3 * count + if textured { 3 } else { 0 }];
-        let kd = kd[surface];
-        let ks = self.tables.ks[surface];
-        let lobe = self.tables.lobes[surface].as_deref();
-        if surface as u32 == self.shot.source_surface || (kd == DVec3::ZERO && lobe.is_none()) {
+        let surface = mesh.vertices[v as usize].surface;
+        let reflector = Reflector::of_vertex(mesh, self.tables, kd, v);
+        let mut out = reflector.zeroed();
+        if surface == self.shot.source_surface || !reflector.reflects() {
             return ReceivedSh {
                 coefficients: out,
                 visible: 0,
@@ -123,14 +221,13 @@ impl<'a> DirShot<'a> {
         // comes from (a source shooting by quadrants: equal shares of area
         // samples would average the quadrants out). Between two diffuse ends
         // of a uniform shot, the diffuse solver's own samples.
-        let by = if order > 0 || self.source_order > 0 || self.quadrants.is_some() {
+        let by = if reflector.count > 1 || self.source_order > 0 || self.quadrants.is_some() {
             SampleBy::SolidAngle
         } else {
             SampleBy::Area
         };
         let (q, visible, rays) =
             visible_samples(self.shot, mesh, v, self.pool, &mut scratch.sampling, by);
-        let shading = mesh.vertices[v as usize].normal;
         // A source shooting by quadrants: each sample's scale is its
         // quadrant's, times the ratio that makes their unoccluded sum exact.
         scratch.scales.clear();
@@ -138,19 +235,15 @@ impl<'a> DirShot<'a> {
             let sampling = &scratch.sampling;
             quadrants.sample_scales(
                 q,
-                shading,
+                reflector.shading,
                 &sampling.samples,
                 &sampling.occluded,
                 &mut scratch.scales,
             );
         }
-        let s = &mesh.surfaces[surface];
         let source_count = coefficient_count(self.source_order);
         scratch.basis.resize(source_count, 0.0);
-        scratch.unit.resize(count, 0.0);
-        scratch.lobe_scratch.resize(count, 0.0);
         let samples = std::mem::take(&mut scratch.sampling.samples);
-        let sqrt_4pi = (4.0 * PI).sqrt();
         for (i, &(p, share)) in samples.iter().enumerate() {
             let Some(toward_source) = (p - q).try_normalize() else {
                 continue;
@@ -173,47 +266,7 @@ impl<'a> DirShot<'a> {
                 .map_or(unshot, |&scale| unshot * scale);
             // Ringing of a truncated lobe below zero is not light to shoot.
             let irradiance = unshot.max(DVec3::ZERO) * PI * share;
-            if textured {
-                // Textured: ΔE/π, which the texture multiplies at display
-                // and in the gather (`directional/textured.rs`; kd is 1).
-                let e = kd * irradiance / PI;
-                let at = 3 * count;
-                out[at] += e.x;
-                out[at + 1] += e.y;
-                out[at + 2] += e.z;
-            } else {
-                // Diffuse part: radiance Kd·ΔE/π as c₀₀.
-                let diffuse = kd * irradiance / PI * sqrt_4pi;
-                out[0] += diffuse.x;
-                out[1] += diffuse.y;
-                out[2] += diffuse.z;
-            }
-            if let Some(lobe) = lobe {
-                scratch.unit.fill(0.0);
-                if shading == s.normal {
-                    let omega_i = sh::to_local(toward_source, s.normal, s.tangent);
-                    lobe.add_lobe_sh(omega_i, 1.0, &mut scratch.unit, &mut scratch.lobe_scratch);
-                } else {
-                    // A smooth surface reflects about its shading normal; the
-                    // lobe is expressed in the polygon's frame, like every
-                    // coefficient of this surface (module documentation, "Frames").
-                    let mu_i = shading.dot(toward_source);
-                    let mirror = 2.0 * mu_i * shading - toward_source;
-                    lobe.add_lobe_sh_about(
-                        mu_i,
-                        sh::to_local(mirror, s.normal, s.tangent),
-                        1.0,
-                        &mut scratch.unit,
-                        &mut scratch.lobe_scratch,
-                    );
-                }
-                let e = irradiance * ks;
-                for (o, u) in out.chunks_exact_mut(3).zip(&scratch.unit) {
-                    o[0] += u * e.x;
-                    o[1] += u * e.y;
-                    o[2] += u * e.z;
-                }
-            }
+            reflector.add(&mut out, toward_source, irradiance, &mut scratch.lobe);
         }
         scratch.sampling.samples = samples;
         ReceivedSh {

@@ -5,11 +5,13 @@
 //! the diffuse solve's.
 
 use super::field::DirField;
+use super::lights::{DirLights, DirSource};
 use super::near_gather;
 use super::receive::{DirScratch, DirShot, ReceivedSh, Tables};
 use super::{quadrant_scale, Directional, SourceChoice};
 use crate::mesh::Mesh;
 use crate::solve::checkpoint::precision::round_to_kept;
+use crate::solve::lights::LightShot;
 use crate::solve::pipeline::{Shooting, Source, Transport};
 use crate::solve::refine::{self, Refined};
 use crate::solve::shoot::{RecordedShot, SamplePool, Shot};
@@ -92,7 +94,7 @@ impl Transport for ShShot<'_> {
         } else {
             quadrant_scale(s.shape_view(), patch, &shot)
         };
-        let dir_shot = DirShot {
+        let dir_shot = DirSource::Patch(DirShot {
             shot: &shot,
             pool: &pool,
             unshot: &self.unshot,
@@ -100,7 +102,7 @@ impl Transport for ShShot<'_> {
             source_tangent: tables.tangent[source_surface],
             tables: &tables,
             quadrants: quadrants.as_ref(),
-        };
+        });
         let rays = receive_all(
             &s.mesh,
             &s.materials.kd,
@@ -129,11 +131,27 @@ impl Transport for ShShot<'_> {
             &s.materials.kd,
         );
         let recorded_unshot = std::mem::take(&mut d.recorded_unshot);
-        let replay: Vec<DirShot> = replay_shots
+        // The lights shot first: they replay first (`directional/lights.rs`).
+        let upm = s.units_per_metre();
+        let (kd, settings) = (&s.materials.kd, &s.settings);
+        let lights = LightShot::replay(&s.lights, &s.occluder, kd, settings, upm);
+        let replay: Vec<DirSource> = lights
             .iter()
-            .zip(&s.record.pools)
-            .zip(&recorded_unshot)
-            .map(|((shot, pool), unshot)| DirShot::replay(shot, pool, unshot, &tables))
+            .map(|lights| {
+                DirSource::Lights(DirLights {
+                    lights,
+                    tables: &tables,
+                })
+            })
+            .chain(
+                replay_shots
+                    .iter()
+                    .zip(&s.record.pools)
+                    .zip(&recorded_unshot)
+                    .map(|((shot, pool), unshot)| {
+                        DirSource::Patch(DirShot::replay(shot, pool, unshot, &tables))
+                    }),
+            )
             .collect();
         let criteria = s.refine_criteria(source.ambient);
         let refined = refine::refine_field(
@@ -182,24 +200,31 @@ impl Transport for ShShot<'_> {
                 *sum = round_to_kept(*sum + u);
             }
         }
-        gather_patches(s, d);
-        d.received.fill(0.0);
-        s.field.received.fill(DVec3::ZERO);
-        // The new vertices' coefficients, before the proxies are taken from
-        // them (`checkpoint/precision.rs`; the others were rounded as they
-        // received).
-        d.radiance[self.created_from..]
-            .iter_mut()
-            .for_each(|x| *x = round_to_kept(*x));
-        for v in 0..s.mesh.vertices.len() {
-            let o = d.vertex_offset[v];
-            let surface = s.mesh.vertices[v].surface as usize;
-            s.field.radiance[v] = d.diffuse_proxy(surface, &d.radiance[o..]);
-        }
+        finish_shot(s, d, self.created_from);
     }
 
     fn unshot_power(&mut self, s: &mut Solver) -> f64 {
         s.total_unshot_power()
+    }
+}
+
+/// The end of every directional shot: its ΔL gathered into the patches,
+/// the received coefficients cleared, the new vertices' coefficients rounded
+/// to the kept bits, and every vertex's diffuse proxy taken.
+pub(super) fn finish_shot(s: &mut Solver, d: &mut Directional, created_from: usize) {
+    gather_patches(s, d);
+    d.received.fill(0.0);
+    s.field.received.fill(DVec3::ZERO);
+    // The new vertices' coefficients, before the proxies are taken from
+    // them (`checkpoint/precision.rs`; the others were rounded as they
+    // received).
+    d.radiance[created_from..]
+        .iter_mut()
+        .for_each(|x| *x = round_to_kept(*x));
+    for v in 0..s.mesh.vertices.len() {
+        let o = d.vertex_offset[v];
+        let surface = s.mesh.vertices[v].surface as usize;
+        s.field.radiance[v] = d.diffuse_proxy(surface, &d.radiance[o..]);
     }
 }
 
@@ -224,12 +249,12 @@ fn choose_source(s: &Solver, d: &Directional) -> u32 {
 
 /// Every vertex receives `shot`; returns the rays traced. A recorded shot's
 /// coefficients also join each vertex's recorded part.
-fn receive_all(
+pub(super) fn receive_all(
     mesh: &Mesh,
     kd: &[DVec3],
     field: &mut VertexField,
     d: &mut Directional,
-    shot: &DirShot,
+    shot: &DirSource,
     recorded: bool,
 ) -> u64 {
     let results: Vec<ReceivedSh> = (0..mesh.vertices.len() as u32)

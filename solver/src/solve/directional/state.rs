@@ -13,9 +13,11 @@
 //! (shot, pool, vertex) — the samples come from stateless streams — so doing
 //! the same additions in the same order gives the same bits.
 
+use super::lights::DirLights;
 use super::receive::{DirScratch, DirShot, Tables};
 use super::{Directional, DirectionalCheckpoint};
 use crate::solve::checkpoint::precision::kept_bits;
+use crate::solve::lights::LightShot;
 use crate::solve::shoot::{RecordedShot, SamplePool};
 use crate::solve::Solver;
 use rayon::prelude::*;
@@ -101,7 +103,16 @@ impl Solver {
         let replay: Vec<DirShot> = (0..shots.len())
             .map(|i| dir_shot(i, &self.record.pools[i]))
             .collect();
-        let (mesh, kd, recorded) = (&self.mesh, &self.materials.kd, &self.record.shots);
+        // The lights shot first, to every vertex alike (a pure function of
+        // the vertex): their part comes first in each sum.
+        let upm = self.units_per_metre();
+        let (kd, settings) = (&self.materials.kd, &self.settings);
+        let light_shot = LightShot::replay(&self.lights, &self.occluder, kd, settings, upm);
+        let lights = light_shot.as_ref().map(|lights| DirLights {
+            lights,
+            tables: &tables,
+        });
+        let (mesh, recorded) = (&self.mesh, &self.record.shots);
         let mut sums: Vec<Vec<f64>> = Vec::new();
         for start in (0..mesh.vertices.len()).step_by(BLOCK) {
             let end = (start + BLOCK).min(mesh.vertices.len());
@@ -109,6 +120,12 @@ impl Solver {
                 .into_par_iter()
                 .map_init(DirScratch::default, |scratch, v| {
                     let mut sum = vec![0.0; d.vertex_slot(mesh, v as usize).len()];
+                    if let Some(lights) = &lights {
+                        let got = lights.receive(mesh, kd, v, scratch);
+                        for (s, c) in sum.iter_mut().zip(&got.coefficients) {
+                            *s += c;
+                        }
+                    }
                     for (i, r) in recorded.iter().enumerate() {
                         let shot = if v >= r.receivers {
                             &replay[i]

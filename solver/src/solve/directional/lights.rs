@@ -1,0 +1,199 @@
+//! The lights' shot in directional mode (issue 41): the sun, the sky and the
+//! lamps light every vertex's SH, so a polished floor shows the sun's
+//! highlight and glossy surfaces reflect the sky.
+//!
+//! Each visible light sample arriving from ω_i with irradiance ΔE_i
+//! ([`LightShot::visit`], the same samples, rays and random streams as the
+//! diffuse solve's lights) is reflected as a patch's sample is
+//! ([`Reflector::add`]): Kd·ΔE_i/π as c₀₀, and Ks·ΔE_i·C_R(μ_i) times the
+//! lobe about the mirror of ω_i. The sky's samples are cosine-, portal- and
+//! radiance-distributed (`solve/lights.rs`); their sum over a glossy lobe is
+//! the Monte Carlo estimate of ∫ f_s L cos θ dω, unbiased like the
+//! irradiance, and band-limited by the lobe's order.
+//!
+//! The shot is recorded like an emitter's: its coefficients join each
+//! vertex's `direct` part, and vertices created later receive it exactly,
+//! first of the replayed shots ([`DirSource::Lights`]).
+
+use super::field::DirField;
+use super::near_gather;
+use super::receive::{DirScratch, DirShot, ReceivedSh, Reflector, Tables};
+use super::shot::{finish_shot, receive_all};
+use super::Directional;
+use crate::mesh::Mesh;
+use crate::solve::lights::LightShot;
+use crate::solve::pipeline::{Shooting, Source, Transport};
+use crate::solve::refine::{self, Criteria, Refined, DARK_FLOOR};
+use crate::solve::shoot::ReceivingPoint;
+use crate::solve::Solver;
+use glam::DVec3;
+use std::time::Instant;
+
+/// The lights evaluated into a receiving vertex's SH.
+pub(in crate::solve) struct DirLights<'a> {
+    pub(super) lights: &'a LightShot<'a>,
+    pub(super) tables: &'a Tables,
+}
+
+impl DirLights<'_> {
+    /// The lights' ΔL at vertex `v` as SH coefficients of its surface's
+    /// order.
+    pub(super) fn receive(
+        &self,
+        mesh: &Mesh,
+        kd: &[DVec3],
+        v: u32,
+        scratch: &mut DirScratch,
+    ) -> ReceivedSh {
+        let reflector = Reflector::of_vertex(mesh, self.tables, kd, v);
+        let mut coefficients = reflector.zeroed();
+        if !reflector.reflects() {
+            return ReceivedSh {
+                coefficients,
+                visible: 0,
+                rays: 0,
+            };
+        }
+        let at = ReceivingPoint::of_vertex(mesh, v, self.lights.occluder.scene_epsilon());
+        let arrival = self.lights.visit(&at, &mut |toward, irradiance| {
+            reflector.add(&mut coefficients, toward, irradiance, &mut scratch.lobe);
+        });
+        ReceivedSh {
+            coefficients,
+            visible: arrival.visible,
+            rays: arrival.rays,
+        }
+    }
+}
+
+/// What a vertex receives in directional mode: a patch's shot, or the
+/// lights'.
+pub(in crate::solve) enum DirSource<'a> {
+    Patch(DirShot<'a>),
+    Lights(DirLights<'a>),
+}
+
+impl DirSource<'_> {
+    /// ΔL of vertex `v` as SH coefficients of its surface's order.
+    pub(super) fn receive(
+        &self,
+        mesh: &Mesh,
+        kd: &[DVec3],
+        v: u32,
+        scratch: &mut DirScratch,
+    ) -> ReceivedSh {
+        match self {
+            DirSource::Patch(shot) => shot.receive(mesh, kd, v, scratch),
+            DirSource::Lights(lights) => lights.receive(mesh, kd, v, scratch),
+        }
+    }
+
+    pub(super) fn tables(&self) -> &Tables {
+        match self {
+            DirSource::Patch(shot) => shot.tables,
+            DirSource::Lights(lights) => lights.tables,
+        }
+    }
+}
+
+/// The lights' shot as directional mode's [`Transport`]: every vertex
+/// receives them in SH, the mesh refines at their shadows, and the reflected
+/// light is gathered into the patches' unshot SH.
+pub(in crate::solve) struct DirLightsShot<'d> {
+    d: &'d mut Directional,
+    /// Where the coefficients of the vertices refinement creates begin.
+    created_from: usize,
+}
+
+impl<'d> DirLightsShot<'d> {
+    pub(in crate::solve) fn new(d: &'d mut Directional) -> DirLightsShot<'d> {
+        DirLightsShot { d, created_from: 0 }
+    }
+}
+
+impl Transport for DirLightsShot<'_> {
+    fn take_source(&mut self, s: &mut Solver) -> Source {
+        s.lights.shot = true;
+        Source {
+            patch: None,
+            ambient: s.ambient(),
+            unshot: DVec3::ZERO,
+        }
+    }
+
+    fn shoot(&mut self, s: &mut Solver, source: &Source) -> Shooting {
+        let d = &mut *self.d;
+        let upm = s.units_per_metre();
+        let lights = std::mem::take(&mut s.lights);
+        let shot = LightShot::new(&lights, &s.occluder, &s.materials.kd, &s.settings, upm);
+        let tables = Tables::new(d, &s.mesh);
+        let replay = [DirSource::Lights(DirLights {
+            lights: &shot,
+            tables: &tables,
+        })];
+        let kd = &s.materials.kd;
+        let rays = receive_all(&s.mesh, kd, &mut s.field, d, &replay[0], true);
+        let shot_done = Instant::now();
+        self.created_from = d.radiance.len();
+        // As the diffuse lights' shot (`solve/lights.rs`): the level of the
+        // light they put in sets this shot's dark floor and ambient.
+        let level = s.lights_level(s.received_power());
+        let criteria = Criteria {
+            dark_floor: DARK_FLOOR * s.stats.radiance_level.max(level),
+            ..s.refine_criteria(source.ambient + DVec3::splat(level))
+        };
+        if !s.refines() {
+            s.lights = lights;
+            return Shooting {
+                rays,
+                refined: Refined::default(),
+                shot_done,
+            };
+        }
+        let mut split_budget = s.split_budget(Some(d));
+        let refined = refine::refine_field(
+            &mut s.mesh,
+            &mut DirField {
+                d: &mut *d,
+                radiance: &mut s.field.radiance,
+                received: &mut s.field.received,
+                visible: &mut s.field.visible,
+                direct: &mut s.field.direct,
+                kd,
+                shot: &replay[0],
+                replay: &replay,
+                current_recorded: true,
+                near: near_gather::NearGather {
+                    patch_weights: &s.patches.weights,
+                    hidden: &s.field.hidden,
+                    emission: &s.materials.emission,
+                    settings: &s.settings,
+                    occluder: &s.occluder,
+                    kd,
+                    reach: near_gather::NEAR_REACH,
+                },
+            },
+            &criteria,
+            &mut split_budget,
+        );
+        drop(replay);
+        s.lights = lights;
+        s.after_refinement(&split_budget, Some(d));
+        Shooting {
+            rays: rays + refined.rays,
+            refined,
+            shot_done,
+        }
+    }
+
+    fn gather(&mut self, s: &mut Solver, _source: &Source, _dirty: &[u32]) {
+        finish_shot(s, self.d, self.created_from);
+    }
+
+    /// The unshot power once gathered; what the lights added to it is their
+    /// power (`solve/lights.rs`).
+    fn unshot_power(&mut self, s: &mut Solver) -> f64 {
+        let total = s.total_unshot_power();
+        s.measure_lights_power(total)
+    }
+}
