@@ -125,7 +125,7 @@ fn the_sun_on_a_glossy_floor_reflects_kd_plus_ks_and_its_lobe_about_the_mirror()
     .unwrap();
     for alpha in [0.3, 0.1] {
         let lights = Lights {
-            sun: Some(sun.clone()),
+            sun: Some(sun),
             ..Lights::default()
         };
         let solver = solved(&glossy_floor(lights, alpha), &directional(false));

@@ -176,7 +176,6 @@ impl Transport for DirLightsShot<'_> {
             &criteria,
             &mut split_budget,
         );
-        drop(replay);
         s.lights = lights;
         s.after_refinement(&split_budget, Some(d));
         Shooting {
