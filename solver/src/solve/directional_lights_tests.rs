@@ -180,8 +180,8 @@ fn a_uniform_sky_on_a_glossy_floor_is_reflected_by_its_lobe() {
     // carries πL/N, and each is reflected with albedo Kd + Ks: the exitance
     // is (Kd + Ks) πL at every vertex, to the C_R table's 1e-6 (1e-5).
     // Toward ω_o, radiance Kd L + ∫ L f cos θ_i dω_i ([`sky_reflected`]),
-    // a Monte Carlo estimate per vertex over N = 8 · samples directions:
-    // unbiased, so the mean over the n vertices (independent streams) lies
+    // a Monte Carlo estimate per vertex over N = max(8 · samples, 2 (L+1)²)
+    // directions: unbiased, so the mean over the n vertices (independent streams) lies
     // within 4 standard errors of it (their spread over √n).
     let l = 2.0;
     for alpha in [0.3, 0.1] {

@@ -172,7 +172,7 @@ impl<'a> LightShot<'a> {
         if kd == DVec3::ZERO {
             return Received::default();
         }
-        let arrival = self.visit(at, &mut |_, _| {});
+        let arrival = self.visit(at, 0, &mut |_, _| {});
         Received {
             radiance: kd * arrival.irradiance / PI,
             visible: arrival.visible,
@@ -184,8 +184,10 @@ impl<'a> LightShot<'a> {
     /// as the unit direction toward its light and the irradiance it brings
     /// (a glossy receiver reflects each by its lobe,
     /// `directional/lights.rs`); returns their sum, and the visible count
-    /// and the rays for the meshing.
-    pub fn visit(&self, at: &ReceivingPoint, sink: Sink) -> Arrival {
+    /// and the rays for the meshing. The sky takes at least `sky_rays`
+    /// (a glossy receiver estimates a coefficient per SH function from
+    /// them, `directional/lights.rs`).
+    pub fn visit(&self, at: &ReceivingPoint, sky_rays: u32, sink: Sink) -> Arrival {
         let mut rng = Rng::new(self.seed, stream_id(LIGHTS_STREAM, at.stream as u64));
         let origin = at.q + at.n * self.occluder.scene_epsilon();
         let mut parts: Vec<Part> = self
@@ -198,7 +200,8 @@ impl<'a> LightShot<'a> {
             parts.push(self.sun(sun, origin, at.n, &mut rng, &mut *sink));
         }
         if let Some(sky) = &self.lights.sky {
-            parts.push(self.sky(sky, origin, at.n, &mut rng, sink));
+            let count = sky_rays.max(self.samples * SKY_RAYS_PER_SAMPLE);
+            parts.push(self.sky(sky, origin, at.n, count, &mut rng, sink));
         }
         let irradiance: DVec3 = parts.iter().map(|p| p.irradiance).sum();
         let weight: f64 = parts.iter().map(|p| p.weight).sum();
@@ -288,9 +291,16 @@ impl<'a> LightShot<'a> {
     /// two combined by Veach's (1997, §9.2) multi-sample balance heuristic:
     /// each direction ω counts f(ω) / Σ_j n_j p_j(ω), with f = L cos θ V and
     /// n_j samples from density p_j (`light/portal.rs`).
-    fn sky(&self, sky: &Sky, origin: DVec3, n: DVec3, rng: &mut Rng, sink: Sink) -> Part {
+    fn sky(
+        &self,
+        sky: &Sky,
+        origin: DVec3,
+        n: DVec3,
+        count: u32,
+        rng: &mut Rng,
+        sink: Sink,
+    ) -> Part {
         let far = self.far(origin);
-        let count = self.samples * SKY_RAYS_PER_SAMPLE;
         let portals = self.portal_shares(origin, n, count / 2);
         let rest = count - portals.iter().map(|&(_, k)| k).sum::<u32>();
         let tabled = if self.sky_table.is_some() {

@@ -3,6 +3,7 @@
 //! source's unshot SH evaluated toward the receiver, and the diffuse and
 //! glossy parts of what the receiver reflects.
 
+use super::lights::SKY_RAYS_PER_COEFFICIENT;
 use super::Directional;
 use crate::brdf::GlossyLobe;
 use crate::mesh::Mesh;
@@ -74,6 +75,16 @@ impl<'t> Reflector<'t> {
     /// Whether it reflects anything (Kd or a lobe).
     pub(super) fn reflects(&self) -> bool {
         self.kd != DVec3::ZERO || self.lobe.is_some()
+    }
+
+    /// The sky rays it wants at least: [`SKY_RAYS_PER_COEFFICIENT`] per
+    /// SH coefficient when glossy, none more otherwise.
+    pub(super) fn sky_rays(&self) -> u32 {
+        if self.lobe.is_some() {
+            SKY_RAYS_PER_COEFFICIENT * self.count as u32
+        } else {
+            0
+        }
     }
 
     /// Zeroed coefficients for it: a textured surface keeps E/π after them.
