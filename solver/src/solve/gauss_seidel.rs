@@ -218,6 +218,9 @@ pub fn solve_gauss_seidel(
     if settings.mode != SolveMode::Diffuse {
         return Err(SolveError::UnsupportedMode(settings.mode).into());
     }
+    if !scene.lights.is_empty() {
+        return Err(SolveError::LightsNeedProgressive("gauss-seidel").into());
+    }
     if !(limits.tolerance > 0.0 && limits.tolerance < 1.0) {
         return Err(GaussSeidelError::BadTolerance(limits.tolerance));
     }

@@ -699,3 +699,30 @@ fn an_ies_profile_comes_back_at_the_receiver_in_every_file_form() {
         }
     }
 }
+
+#[test]
+fn the_one_call_gathers_refuse_a_scene_with_lights_naming_the_method_that_lights_it() {
+    // Gauss–Seidel and the global cube gather emissive polygons only: a
+    // sun-lit scene would come out black, so it is refused before any work.
+    let scene = open_floor(1.0, Vec::new(), sun_lights(40.0, 100.0));
+    let limits = super::gauss_seidel::GaussSeidelLimits::default();
+    let text = super::gauss_seidel::solve_gauss_seidel(&scene, &settings(), &limits)
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(
+        text.contains("gauss-seidel") && text.contains("--method progressive"),
+        "{text}"
+    );
+    let mut cube = settings();
+    cube.mode = SolveMode::Directional;
+    let limits = super::cube_gather::CubeLimits::default();
+    let text = super::cube_gather::solve_cube(&scene, &cube, &limits)
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(
+        text.contains("cube") && text.contains("--method progressive"),
+        "{text}"
+    );
+}

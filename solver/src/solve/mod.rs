@@ -121,6 +121,13 @@ pub enum SolveError {
     Settings(#[from] SettingsError),
     #[error("mode `{0:?}` is not implemented by this solver yet; use `diffuse`")]
     UnsupportedMode(SolveMode),
+    /// A one-call gather (Gauss–Seidel, global cube) of a scene with lights:
+    /// only progressive refinement shoots the sun, the sky and the lamps.
+    #[error(
+        "`--method {0}` gathers the light of emissive polygons only, and this scene is lit \
+         by a sun, a sky or lamps: solve it with `--method progressive` (the default)"
+    )]
+    LightsNeedProgressive(&'static str),
     #[error("the checkpoint does not belong to this scene and these settings: {0}")]
     CheckpointMismatch(String),
     /// The memory budget cannot hold even the coarsest solve: the message

@@ -495,6 +495,9 @@ fn receiving_points(
 /// coplanar smooth group's interpolated normals are the facet's to rounding).
 /// The progressive method solves both.
 fn check_scene(scene: &Scene) -> Result<(), CubeError> {
+    if !scene.lights.is_empty() {
+        return Err(SolveError::LightsNeedProgressive("cube").into());
+    }
     for p in &scene.polygons {
         let m = &scene.materials[p.material];
         if p.uv_map.is_some() {
