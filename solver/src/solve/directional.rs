@@ -417,6 +417,12 @@ impl Directional {
         &self.surface_order
     }
 
+    /// The smallest element edge glossy refinement may create on each mesh
+    /// surface ([`min_glossy_edge`]; 0 for L = 0 surfaces).
+    pub fn min_glossy_edges(&self) -> &[f64] {
+        &self.min_edge
+    }
+
     /// Values held per vertex of mesh surface `s` in each per-vertex array:
     /// its coefficients, and E/π when it is textured (for the memory budget).
     pub(super) fn vertex_values(&self, s: usize) -> u64 {

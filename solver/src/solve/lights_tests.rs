@@ -153,7 +153,7 @@ fn spot_lamp_is_full_inside_dark_outside_and_ramps_between() {
     );
 }
 
-fn sun_lights(elevation_deg: f64, irradiance: f64) -> Lights {
+pub(super) fn sun_lights(elevation_deg: f64, irradiance: f64) -> Lights {
     let e = elevation_deg.to_radians();
     let toward = DVec3::new(e.cos() * 0.6, e.sin(), e.cos() * 0.8);
     let position = SunPosition::from_direction(toward).unwrap();

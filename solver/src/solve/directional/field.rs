@@ -34,6 +34,16 @@ pub(super) struct DirField<'s, 'a> {
     pub(super) near: near_gather::NearGather<'s>,
 }
 
+impl DirField<'_, '_> {
+    /// Whether a shadow's edge crosses leaf `e`: its corners saw different
+    /// shares of this shot's source.
+    fn crosses_shadow(&self, mesh: &Mesh, e: u32) -> bool {
+        let corners = mesh.elements[e as usize].corners();
+        let first = self.visible[corners[0] as usize];
+        corners.iter().any(|&v| self.visible[v as usize] != first)
+    }
+}
+
 impl Field for DirField<'_, '_> {
     fn changed(&self, v: u32) -> bool {
         let o = self.d.vertex_offset[v as usize];
@@ -59,11 +69,15 @@ impl Field for DirField<'_, '_> {
                 e,
             )
         } else {
-            // A textured glossy surface also splits where E/π changes,
-            // above the same α floor.
+            // A glossy surface also splits where its diffuse proxy (its
+            // mean radiance, or E/π when textured) changes by the diffuse
+            // test: across a shadow's edge below the α floor, since the
+            // lobe blurs directions but not a step in visibility across
+            // the surface (a sun patch's edge on a polished floor); and,
+            // textured, above the floor where E/π changes.
             should_split_sh(mesh, self.d, self.visible, criteria, e)
-                || (self.d.textured[surface as usize]
-                    && self.d.above_glossy_floor(mesh, e)
+                || ((self.crosses_shadow(mesh, e)
+                    || (self.d.textured[surface as usize] && self.d.above_glossy_floor(mesh, e)))
                     && criteria.should_split_at(
                         mesh,
                         Some(self.kd),
