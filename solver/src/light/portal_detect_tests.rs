@@ -281,3 +281,76 @@ fn only_the_largest_openings_become_portals_with_a_note() {
         "{note}"
     );
 }
+
+/// Writes the room with a window in its back wall as an OBJ of triangles
+/// (the importer welds them back into quads) and a config with `body`, and
+/// imports it; the window's corners, in the file's coordinates.
+fn import_window_room(body: &str) -> (Result<crate::scene::Scene, String>, [DVec3; 4]) {
+    let (u, v) = ([0.5, 1.25], [0.625, 1.5]);
+    let mut polygons = room(&[(2, S)]);
+    polygons.extend(wall_with_hole(2, S, u, v));
+    let mut obj = String::new();
+    let mut count = 0;
+    for q in &polygons {
+        for p in q {
+            obj.push_str(&format!("v {} {} {}\n", p.x, p.y, p.z));
+        }
+        obj.push_str(&format!("f {} {} {}\n", count + 1, count + 2, count + 3));
+        obj.push_str(&format!("f {} {} {}\n", count + 1, count + 3, count + 4));
+        count += 4;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("room.obj"), obj).unwrap();
+    let path = dir.path().join("room.toml");
+    std::fs::write(&path, format!("geometry = [\"room.obj\"]\n{body}")).unwrap();
+    let scene = crate::scene::load_scene(&path, &Default::default())
+        .map(|l| l.scene)
+        .map_err(|e| e.to_string());
+    let hole =
+        [(u[0], v[0]), (u[1], v[0]), (u[1], v[1]), (u[0], v[1])].map(|(x, y)| on(2, S, x, y));
+    (scene, hole)
+}
+
+const SKY: &str = "[sky]\nkind = \"uniform\"\nradiance = 1\n";
+
+#[test]
+fn an_imported_room_with_a_sky_gets_its_window_as_a_portal_unless_told_not_to() {
+    // Detected after welding, in the polygons' re-centred frame: moved back
+    // by the offset, the portal is the window in the file's coordinates.
+    let (scene, hole) = import_window_room(SKY);
+    let scene = scene.unwrap();
+    let lights = scene.lights.recentred(-scene.recentre_offset);
+    assert_eq!(lights.portals.len(), 1, "{:?}", lights.portals);
+    assert!(same_corners(&lights.portals[0], &hole));
+    assert!(faces_the_room(&lights.portals[0]));
+    let lines = scene.lights.describe(scene.recentre_offset);
+    assert!(
+        lines.iter().any(
+            |l| l.starts_with("portal (detected) at [0.875, 1.062, 2.000]")
+                && l.ends_with("area 0.6562")
+        ),
+        "{lines:?}"
+    );
+    // Turned off, or without a sky: none.
+    let (off, _) = import_window_room(&format!("{SKY}portals = \"none\"\n"));
+    assert!(off.unwrap().lights.portals.is_empty());
+    let sun = "[sun]\ndirection = [0, 1, 1]\nirradiance = 100\n";
+    let (sunlit, _) = import_window_room(sun);
+    assert!(sunlit.unwrap().lights.portals.is_empty());
+    // Declared portals win, and are not detected.
+    let declared = "[[portals]]\ncorners = [[0, 0, 2], [1, 0, 2], [1, 1, 2]]\n";
+    let (scene, _) = import_window_room(&format!("{SKY}{declared}"));
+    let portals = scene.unwrap().lights.portals;
+    assert_eq!(portals.len(), 1);
+    assert!(!portals[0].is_detected());
+}
+
+#[test]
+fn a_bad_portals_value_names_the_file_line_and_value() {
+    let (scene, _) = import_window_room(&format!("{SKY}portals = \"always\"\n"));
+    let message = scene.unwrap_err();
+    assert!(
+        message.contains("room.toml:5") && message.contains("\"always\""),
+        "{message}"
+    );
+}
