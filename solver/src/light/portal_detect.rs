@@ -323,7 +323,8 @@ impl Geometry<'_> {
         let rel: Vec<DVec3> = points.iter().map(|p| *p - centre).collect();
         let twice = newell_normal(&rel);
         let area = 0.5 * twice.length();
-        if !(area >= MIN_OPENING_AREA * self.diagonal * self.diagonal) {
+        // A NaN area (non-finite input) is refused too.
+        if area.is_nan() || area < MIN_OPENING_AREA * self.diagonal * self.diagonal {
             return None;
         }
         let n = twice / (2.0 * area);
