@@ -404,7 +404,7 @@ impl Geometry<'_> {
 /// The smallest-area rectangle around the convex, counter-clockwise `hull`,
 /// counter-clockwise: one of its sides lies on a side of the hull (Freeman
 /// and Shapira 1975), found by rotating calipers (Toussaint 1983) in O(k).
-fn min_area_rectangle(hull: &[DVec2]) -> Option<[DVec2; 4]> {
+pub(super) fn min_area_rectangle(hull: &[DVec2]) -> Option<[DVec2; 4]> {
     let n = hull.len();
     if n < 3 {
         return None;
