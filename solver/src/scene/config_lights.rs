@@ -16,6 +16,8 @@
 //! illuminance = 10000           # horizontal lux (or a kind's radiometric value)
 //! below_horizon = "ground"      # "black" (default) | "same" | "ground"
 //! ground_albedo = 0.2
+//! portals = "none"             # "auto" (default): the geometry's openings
+//!                               # are sky portals unless [[portals]] are given
 //!
 //! [[lights]]
 //! kind = "spot"                 # "point" (default) | "spot"
