@@ -16,7 +16,7 @@
 //! illuminance = 10000           # horizontal lux (or a kind's radiometric value)
 //! below_horizon = "ground"      # "black" (default) | "same" | "ground"
 //! ground_albedo = 0.2
-//! portals = "none"             # "auto" (default): the geometry's openings
+//! portals = "none"              # "auto" (default): the geometry's openings
 //!                               # are sky portals unless [[portals]] are given
 //!
 //! [[lights]]
