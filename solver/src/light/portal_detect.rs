@@ -120,6 +120,8 @@ pub fn detect_portals(polygons: &[&[DVec3]], diagonal: f64) -> Detection {
         }
     }
     let positions = std::mem::take(&mut ids.positions);
+    // The grid of every vertex is not needed past here.
+    drop(ids);
     let open = unmatched(sides);
     let Some(pieces) = split_at_t_junctions(&open, &positions, tol) else {
         return Detection {
