@@ -11,6 +11,9 @@ pub mod envmap;
 pub mod ies;
 pub mod lamp;
 pub mod portal;
+pub mod portal_detect;
+#[cfg(test)]
+mod portal_detect_tests;
 pub mod sky;
 pub mod sky_sampling;
 pub mod sun;
@@ -46,10 +49,11 @@ impl Lights {
         lights
     }
 
-    /// One line per light, for `solve` to print at import: what it is,
-    /// where, and its strength (a lamp's power ∫ I dω in W per channel, the
-    /// sun's and the sky's irradiance on a plane facing up). Lamp positions
-    /// are printed plus `offset`: the scene's recentre offset gives them back
+    /// One line per light and portal, for `solve` to print at import: what
+    /// it is, where, and its strength (a lamp's power ∫ I dω in W per channel, the
+    /// sun's and the sky's irradiance on a plane facing up; a portal's
+    /// sides and area in scene units). Lamp and portal positions are
+    /// printed plus `offset`: the scene's recentre offset gives them back
     /// in the input's own coordinates.
     pub fn describe(&self, offset: glam::DVec3) -> Vec<String> {
         let rgb = |v: glam::DVec3| format!("[{:.4}, {:.4}, {:.4}]", v.x, v.y, v.z);
@@ -93,8 +97,27 @@ impl Lights {
                 rgb(lamp.power())
             ));
         }
-        if !self.portals.is_empty() {
-            lines.push(format!("{} sky portal(s)", self.portals.len()));
+        for portal in &self.portals {
+            let c = portal.centre() + offset;
+            let k = portal.corners();
+            let side = |i: usize| (k[(i + 1) % k.len()] - k[i]).length();
+            let size = if k.len() == 4 {
+                format!("{:.3} × {:.3}", side(0), side(1))
+            } else {
+                "a triangle".to_owned()
+            };
+            lines.push(format!(
+                "portal ({}) at [{:.3}, {:.3}, {:.3}], {size}, area {:.4}",
+                if portal.is_detected() {
+                    "detected"
+                } else {
+                    "declared"
+                },
+                c.x,
+                c.y,
+                c.z,
+                portal.area()
+            ));
         }
         lines
     }

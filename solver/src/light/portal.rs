@@ -34,6 +34,8 @@ pub struct Portal {
     /// Unit normal (either side: rays cross both ways).
     normal: DVec3,
     area: f64,
+    /// Found in the geometry (`portal_detect.rs`), not declared.
+    detected: bool,
 }
 
 impl Portal {
@@ -68,7 +70,21 @@ impl Portal {
             corners: corners.to_vec(),
             normal,
             area,
+            detected: false,
         })
+    }
+
+    /// The same portal, marked as found in the geometry.
+    pub fn into_detected(self) -> Portal {
+        Portal {
+            detected: true,
+            ..self
+        }
+    }
+
+    /// Whether the portal was found in the geometry, not declared.
+    pub fn is_detected(&self) -> bool {
+        self.detected
     }
 
     pub fn corners(&self) -> &[DVec3] {

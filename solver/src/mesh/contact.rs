@@ -416,7 +416,7 @@ fn ring_area(ring: &[DVec2]) -> f64 {
 
 /// Andrew's monotone chain: the convex hull, counter-clockwise, without
 /// collinear points.
-fn convex_hull(points: &[DVec2]) -> Vec<DVec2> {
+pub(crate) fn convex_hull(points: &[DVec2]) -> Vec<DVec2> {
     let mut p = points.to_vec();
     p.sort_by(|a, b| a.x.total_cmp(&b.x).then(a.y.total_cmp(&b.y)));
     p.dedup();

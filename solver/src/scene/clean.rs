@@ -26,6 +26,7 @@ use super::text::{rgb, short};
 use super::weld::weld;
 use super::{Material, Polygon, Scene, SceneError, SourceRef, Warning};
 use crate::geometry::polygon::{ear_clip, newell_normal};
+use crate::light::portal_detect::{detect_portals, PortalMode};
 use crate::light::Lights;
 use glam::DVec3;
 use solution::camera::{Camera, UpAxis};
@@ -106,6 +107,8 @@ pub(crate) struct BuildOptions {
     pub camera: Option<Camera>,
     /// The sun, sky and lamps, in the input's original coordinates.
     pub lights: Lights,
+    /// Whether to find sky portals in the geometry (`[sky] portals`).
+    pub portal_mode: PortalMode,
     /// Whether the input is a TOML scene config (for the no-emitter hint).
     pub from_config: bool,
 }
@@ -174,8 +177,19 @@ pub(crate) fn build_scene(mut raw: RawScene, options: &BuildOptions) -> Result<S
             });
         }
     }
+    let mut lights = options.lights.recentred(recentre_offset);
+    if let Some(note) = detect_sky_portals(&mut lights, &polygons, diagonal, options.portal_mode) {
+        // After the strict check: a note on which openings became portals
+        // is no fault of the input.
+        let source = SourceRef {
+            file: raw.files.first().cloned().unwrap_or_default(),
+            line: None,
+            item: "sky portals".to_owned(),
+        };
+        warn(&mut warnings, &source, note);
+    }
     Ok(Scene {
-        lights: options.lights.recentred(recentre_offset),
+        lights,
         polygons,
         materials,
         units_per_metre: options.units_per_metre,
@@ -184,6 +198,24 @@ pub(crate) fn build_scene(mut raw: RawScene, options: &BuildOptions) -> Result<S
         recentre_offset,
         warnings,
     })
+}
+
+/// Gives a scene with a sky and no declared portals the portals of its
+/// geometry's openings (`light::portal_detect`), in the polygons' frame,
+/// unless `mode` turns detection off; returns detection's note.
+fn detect_sky_portals(
+    lights: &mut Lights,
+    polygons: &[Polygon],
+    diagonal: f64,
+    mode: PortalMode,
+) -> Option<String> {
+    if lights.sky.is_none() || !lights.portals.is_empty() || mode == PortalMode::Off {
+        return None;
+    }
+    let rings: Vec<&[DVec3]> = polygons.iter().map(|p| p.vertices.as_slice()).collect();
+    let found = detect_portals(&rings, diagonal);
+    lights.portals = found.portals;
+    found.note
 }
 
 /// A product Kd ⊙ mean(texture) whose brightest channel is below this is

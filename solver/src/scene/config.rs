@@ -52,8 +52,8 @@
 
 use super::clean::emission_problem;
 use super::config_lights::{
-    merge_file_lights, read_lights, LampTable, LightScene, LightTables, PortalTable, SkyTable,
-    SunTable,
+    merge_file_lights, portal_mode, read_lights, LampTable, LightScene, LightTables, PortalTable,
+    SkyTable, SunTable,
 };
 use super::display::{load_display_file, DisplayParams};
 use super::legacy::{parse_legacy, MAX_PATCHES};
@@ -61,6 +61,7 @@ use super::obj::parse_obj;
 use super::raw::{RawMaterial, RawPolygon, RawScene};
 use super::text::{line_of_offset, read_text, rgb};
 use super::{SceneError, SourceRef};
+use crate::light::portal_detect::PortalMode;
 use crate::light::sun::SceneAxes;
 use crate::light::Lights;
 use crate::settings::SettingsPatch;
@@ -279,6 +280,8 @@ pub(crate) struct ConfigScene {
     pub lights: Lights,
     /// The scene's up and north, for command-line lights (`light_flags.rs`).
     pub axes: SceneAxes,
+    /// `[sky] portals`: whether to detect portals in the geometry.
+    pub portal_mode: PortalMode,
 }
 
 /// Reads a TOML scene config and every file it names. `units_per_metre_flag`
@@ -310,6 +313,7 @@ pub(crate) fn load_config(
         dir,
     };
     let (lights, axes) = read_lights(&at, &tables, &scene, file_lights, &mut raw.warnings)?;
+    let portal_mode = portal_mode(&at, &tables)?;
     let display = match &config.display {
         Some(name) => {
             let file = dir.join(name.get_ref());
@@ -332,6 +336,7 @@ pub(crate) fn load_config(
         up_axis,
         lights,
         axes,
+        portal_mode,
     })
 }
 

@@ -16,6 +16,8 @@
 //! illuminance = 10000           # horizontal lux (or a kind's radiometric value)
 //! below_horizon = "ground"      # "black" (default) | "same" | "ground"
 //! ground_albedo = 0.2
+//! portals = "none"              # "auto" (default): the geometry's openings
+//!                               # are sky portals unless [[portals]] are given
 //!
 //! [[lights]]
 //! kind = "spot"                 # "point" (default) | "spot"
@@ -38,6 +40,7 @@ use super::{SceneError, SourceRef, Warning};
 use crate::light::ies::IesProfile;
 use crate::light::lamp::Lamp;
 use crate::light::portal::Portal;
+use crate::light::portal_detect::PortalMode;
 use crate::light::sky::{BelowHorizon, Sky, SkyModel};
 use crate::light::sun::{
     LocalTime, SceneAxes, Site, Sun, SunError, SunPosition, DEFAULT_ANGULAR_DIAMETER_DEG,
@@ -96,6 +99,9 @@ pub(super) struct SkyTable {
     scale: Option<Spanned<f64>>,
     /// `kind = "map"`: degrees about up, from north toward east (default 0).
     rotation_deg: Option<Spanned<f64>>,
+    /// `"auto"` (default): find the openings of the geometry as portals
+    /// when no `[[portals]]` are declared; `"none"`: do not.
+    portals: Option<Spanned<String>>,
 }
 
 /// One `[[lights]]` table: a point or spot lamp.
@@ -190,6 +196,27 @@ pub(super) fn read_lights(
         lights.portals.push(portal);
     }
     Ok((lights, axes))
+}
+
+/// The `[sky]` table's `portals` key: whether to detect portals
+/// (`light/portal_detect.rs`); `auto` without the key or the table.
+pub(super) fn portal_mode(
+    at: &ConfigSource,
+    tables: &LightTables,
+) -> Result<PortalMode, SceneError> {
+    let Some(given) = tables.sky.and_then(|t| t.get_ref().portals.as_ref()) else {
+        return Ok(PortalMode::Auto);
+    };
+    PortalMode::parse(given.get_ref()).ok_or_else(|| {
+        at.err(
+            given.span(),
+            "sky",
+            format!(
+                "portals = {:?}: expected \"auto\" or \"none\"",
+                given.get_ref()
+            ),
+        )
+    })
 }
 
 /// Adds one glTF file's lights to those of the files before it: lamps

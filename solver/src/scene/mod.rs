@@ -22,7 +22,7 @@ mod legacy;
 mod light_flags;
 mod mtl;
 mod obj;
-mod planar;
+pub(crate) mod planar;
 mod raw;
 mod recentre;
 pub mod smooth;
@@ -31,8 +31,9 @@ mod texture_file;
 pub mod uv;
 mod weld;
 
-/// A hash map for integer keys derived from geometry (`weld::IntHasher`).
-pub(crate) use weld::IntMap;
+/// A hash map for integer keys derived from geometry (`weld::IntHasher`), and
+/// the welder's vertex matching (for finding openings, `light::portal_detect`).
+pub(crate) use weld::{IntMap, VertexIds};
 
 #[cfg(test)]
 mod hostile_tests;
@@ -326,6 +327,7 @@ pub fn load_scene(path: &Path, options: &ImportOptions) -> Result<LoadedScene, S
         up_axis: UpAxis::default(),
         camera: None,
         lights: Default::default(),
+        portal_mode: Default::default(),
         from_config: false,
     };
     let mut axes = None;
@@ -333,6 +335,7 @@ pub fn load_scene(path: &Path, options: &ImportOptions) -> Result<LoadedScene, S
         Some("toml") => {
             let c = config::load_config(path, options.units_per_metre)?;
             build.lights = c.lights;
+            build.portal_mode = c.portal_mode;
             build.from_config = true;
             axes = Some(c.axes);
             build.strict |= c.settings.strict == Some(true);

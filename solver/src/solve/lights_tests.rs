@@ -339,7 +339,7 @@ fn lights_in_a_closed_room_converge_and_resume_bit_identically() {
 
 /// A closed 2 m cube room whose ceiling has a 0.6 m square hole in its
 /// middle, every face facing in: four ceiling panels around the hole.
-fn skylit_room(portal: bool, seed: u64) -> (Scene, SolverSettings) {
+pub(super) fn skylit_room(portal: bool, seed: u64) -> (Scene, SolverSettings) {
     let mut polygons: Vec<(Vec<DVec3>, usize)> = super::physics_tests::cube(2.0, DVec3::ZERO)
         .into_iter()
         .filter(|(f, _)| !f.iter().all(|p| (p.y - 2.0).abs() < 1e-12))
@@ -371,11 +371,11 @@ fn skylit_room(portal: bool, seed: u64) -> (Scene, SolverSettings) {
     (scene, s)
 }
 
-/// The floor's direct light from the lights' shot alone, per vertex, and
-/// its exact value ρ L F, F the form factor from the point the rays leave
-/// to the hole (Lambert's polygon formula, `geometry::formfactor`).
-fn floor_direct(portal: bool, seed: u64) -> (Vec<f64>, Vec<f64>) {
-    let (scene, settings) = skylit_room(portal, seed);
+/// The floor's direct light from the lights' shot alone in a
+/// [`skylit_room`], per vertex, and its exact value ρ L F, F the form
+/// factor from the point the rays leave to the hole (Lambert's polygon
+/// formula, `geometry::formfactor`).
+fn floor_direct((scene, settings): (Scene, SolverSettings)) -> (Vec<f64>, Vec<f64>) {
     let mut solver = Solver::new(&scene, &settings).unwrap();
     solver.step().unwrap();
     let mesh = solver.mesh();
@@ -404,30 +404,59 @@ fn a_portal_gives_the_same_light_with_less_noise() {
     // ⟨(a − b)²⟩ / 2. The portal sends half of the rays through the hole,
     // where cosine sampling sends the hole's small projected solid angle's
     // share: its noise must be lower by at least half.
-    let ((p1, exact), (p2, _)) = (floor_direct(true, 1), floor_direct(true, 2));
-    let ((c1, _), (c2, _)) = (floor_direct(false, 1), floor_direct(false, 2));
-    let n = p1.len() as f64;
-    let mean = |x: &[f64]| x.iter().sum::<f64>() / x.len() as f64;
-    let sigma = |a: &[f64], b: &[f64]| {
-        (a.iter().zip(b).map(|(x, y)| (x - y).powi(2)).sum::<f64>() / (2.0 * a.len() as f64)).sqrt()
-    };
-    let (sp, sc) = (sigma(&p1, &p2), sigma(&c1, &c2));
-    let (mp, mc, me) = (mean(&p1), mean(&c1), mean(&exact));
-    println!(
-        "skylight: {n} floor vertices, mean {mp:.5} (portal) / {mc:.5} (cosine) / {me:.5} \
-         (exact), per-vertex σ {sp:.5} / {sc:.5} ({:.1}% / {:.1}% of the mean)",
-        100.0 * sp / me,
-        100.0 * sc / me
-    );
-    assert!(
-        (mp - me).abs() < 4.0 * sp / n.sqrt(),
-        "portal mean {mp}, exact {me}"
-    );
-    assert!(
-        (mc - me).abs() < 4.0 * sc / n.sqrt(),
-        "cosine mean {mc}, exact {me}"
-    );
-    assert!(sp < 0.5 * sc, "σ with the portal {sp}, without {sc}");
+    let portal = FloorNoise::of(|seed| skylit_room(true, seed));
+    let cosine = FloorNoise::of(|seed| skylit_room(false, seed));
+    portal.compare("portal", &cosine);
+}
+
+/// The floor's direct light in a skylit room from two seeds: its mean over
+/// the n floor vertices, the exact mean, and the per-vertex noise σ,
+/// measured as σ² = ⟨(a − b)²⟩ / 2 over the vertices.
+pub(super) struct FloorNoise {
+    n: f64,
+    mean: f64,
+    exact: f64,
+    sigma: f64,
+}
+
+impl FloorNoise {
+    /// Solves the rooms `room(1)` and `room(2)` (seeds 1 and 2).
+    pub(super) fn of(room: impl Fn(u64) -> (Scene, SolverSettings)) -> FloorNoise {
+        let ((a, exact), (b, _)) = (floor_direct(room(1)), floor_direct(room(2)));
+        let mean = |x: &[f64]| x.iter().sum::<f64>() / x.len() as f64;
+        let squares: f64 = a.iter().zip(&b).map(|(x, y)| (x - y).powi(2)).sum();
+        FloorNoise {
+            n: a.len() as f64,
+            mean: mean(&a),
+            exact: mean(&exact),
+            sigma: (squares / (2.0 * a.len() as f64)).sqrt(),
+        }
+    }
+
+    /// Both estimates are unbiased, so each mean lies within 4 standard
+    /// errors of the exact mean; `self` (sampled through portals, `label`)
+    /// has at most half of `cosine`'s noise.
+    pub(super) fn compare(&self, label: &str, cosine: &FloorNoise) {
+        let (sp, sc, me) = (self.sigma, cosine.sigma, self.exact);
+        println!(
+            "skylight: {} floor vertices, mean {:.5} ({label}) / {:.5} (cosine) / {me:.5} \
+             (exact), per-vertex σ {sp:.5} / {sc:.5} ({:.1}% / {:.1}% of the mean)",
+            self.n,
+            self.mean,
+            cosine.mean,
+            100.0 * sp / me,
+            100.0 * sc / me
+        );
+        for (noise, name) in [(self, label), (cosine, "cosine")] {
+            assert!(
+                (noise.mean - noise.exact).abs() < 4.0 * noise.sigma / noise.n.sqrt(),
+                "{name} mean {}, exact {}",
+                noise.mean,
+                noise.exact
+            );
+        }
+        assert!(sp < 0.5 * sc, "σ with the {label} {sp}, without {sc}");
+    }
 }
 
 #[test]

@@ -837,6 +837,8 @@ mod lights_tests;
 #[cfg(test)]
 mod physics_tests;
 #[cfg(test)]
+mod portal_detect_tests;
+#[cfg(test)]
 mod ray_share_tests;
 #[cfg(test)]
 mod smooth_tests;
