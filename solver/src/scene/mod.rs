@@ -22,6 +22,7 @@ mod legacy;
 mod light_flags;
 mod mtl;
 mod obj;
+mod path_case;
 mod planar;
 mod raw;
 mod recentre;
