@@ -110,11 +110,19 @@ fn solve(solver: &Path, scene: &Path, out: &Path, flags: &[&str]) {
 /// every 2, then resumes it to the end: the file of a resumed solve.
 fn interrupted_and_resumed(solver: &Path, scene: &Path, out: &Path) {
     let draft = ["--preset", "draft"];
-    solve(
-        solver,
-        scene,
-        out,
-        &[&draft[..], &["--max-shots", "3", "--checkpoint-every", "2"]].concat(),
+    // Stopped at its shot cap, the solve exits with status 4 (status 0 from a
+    // base commit older than that status).
+    let mut capped = Command::new(solver);
+    capped
+        .arg("solve")
+        .arg(scene)
+        .arg("-o")
+        .arg(out)
+        .args(draft)
+        .args(["--max-shots", "3", "--checkpoint-every", "2"]);
+    common::run_to_shot_cap(
+        &mut capped,
+        &format!("{} solve {}", solver.display(), scene.display()),
     );
     solve(solver, scene, out, &[&draft[..], &["--resume"]].concat());
 }

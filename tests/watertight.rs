@@ -23,7 +23,7 @@ use std::path::Path;
 use std::process::Command;
 
 mod common;
-use common::{binary, lavapipe, run};
+use common::{binary, lavapipe, run, run_to_shot_cap};
 
 /// Cells per side of each wall's triangle grid.
 const WALL_CELLS: usize = 4;
@@ -146,7 +146,7 @@ fn a_closed_tessellated_room_shows_no_background_pixel_from_inside() {
     let solution = dir.path().join("room.sol");
     // Medium refines shadow boundaries on the floor and walls; 150 shots are
     // enough for every surface to have been refined and lit.
-    run(
+    run_to_shot_cap(
         Command::new(binary("solver"))
             .arg("solve")
             .arg(&scene)

@@ -62,6 +62,19 @@ fn assert_ok(out: &Output) {
     assert!(out.status.success(), "solver failed: {}", stderr(out));
 }
 
+/// The exit status `solver solve --help` documents for a solve stopped at its
+/// shot cap above its threshold.
+const EXIT_SHOT_CAP: i32 = 4;
+
+fn assert_capped(out: &Output) {
+    assert_eq!(
+        out.status.code(),
+        Some(EXIT_SHOT_CAP),
+        "not stopped at the shot cap: {}",
+        stderr(out)
+    );
+}
+
 /// The solve flags every test shares: the draft preset, two threads (the
 /// machine's cores) and a fixed seed.
 fn draft(scene: &Path, out: &Path) -> Command {
@@ -171,7 +184,7 @@ fn resume_after_a_stop_equals_an_uninterrupted_solve() {
     let split = dir.path().join("split.sol");
     let checkpoint = dir.path().join("split.sol.checkpoint");
     let first = run(draft(&scene, &split).args(["--max-shots", "3", "--checkpoint-every", "2"]));
-    assert_ok(&first);
+    assert_capped(&first);
     assert!(checkpoint.exists(), "{}", stderr(&first));
     assert!(stderr(&first).contains("--resume"), "{}", stderr(&first));
     assert_eq!(read(&split).header.stats.shots, 3);
@@ -194,13 +207,49 @@ fn resume_after_a_stop_equals_an_uninterrupted_solve() {
     assert_same_result(&read(&whole), &read(&split));
 }
 
+/// An honest ending: a solve stopped by `--max-shots` above its threshold exits
+/// with its own status, says how far it got against the threshold, marks its file
+/// partial and keeps its checkpoint; `--resume` with a larger cap converges.
+#[test]
+fn shot_cap_ends_partial_with_its_own_exit_code() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = write_room(dir.path(), "room", 10.0);
+    let out = dir.path().join("room.sol");
+    let checkpoint = dir.path().join("room.sol.checkpoint");
+    // Three shots cannot bring the unshot power under 0.01%: the light alone is
+    // one shot, and the six walls, the blocker and their refinements are more.
+    let capped = run(draft(&scene, &out).args(["--max-shots", "3", "--threshold", "1e-4"]));
+    assert_capped(&capped);
+    let message = stderr(&capped);
+    assert!(
+        message.contains("stopped after 3 shots")
+            && message.contains("unshot, above the threshold 0.01%")
+            && message.contains("partial"),
+        "{message}"
+    );
+    let partial = read(&out);
+    assert!(partial.header.partial, "the file says partial: true");
+    assert_eq!(partial.header.stats.shots, 3);
+    assert!(partial.header.stats.unshot_fraction >= 1e-4);
+    assert!(checkpoint.exists(), "the checkpoint is kept: {message}");
+
+    let resumed =
+        run(draft(&scene, &out).args(["--threshold", "1e-4", "--resume", "--max-shots", "100000"]));
+    assert_ok(&resumed);
+    let done = read(&out);
+    assert!(!done.header.partial);
+    assert!(done.header.stats.shots > 3);
+    assert!(done.header.stats.unshot_fraction < 1e-4);
+    assert!(!checkpoint.exists(), "removed once converged");
+}
+
 #[test]
 fn checkpoint_of_another_scene_or_settings_is_refused() {
     let dir = tempfile::tempdir().unwrap();
     let scene = write_room(dir.path(), "room", 10.0);
     let brighter = write_room(dir.path(), "brighter", 20.0);
     let out = dir.path().join("room.sol");
-    assert_ok(&run(draft(&scene, &out).args(["--max-shots", "1"])));
+    assert_capped(&run(draft(&scene, &out).args(["--max-shots", "1"])));
 
     let other_scene = run(draft(&brighter, &out).arg("--resume"));
     assert!(!other_scene.status.success());
@@ -338,6 +387,11 @@ fn help_explains_every_flag() {
     ] {
         assert!(help.contains(flag), "--help does not mention {flag}");
     }
+    // The exit codes, the shot cap's among them.
+    assert!(
+        help.contains("Exit codes") && help.contains("4 stopped at the shot cap"),
+        "{help}"
+    );
     // The knobs say what they trade.
     assert!(help.contains("faster") && help.contains("slower"), "{help}");
 }
@@ -389,9 +443,9 @@ fn ctrl_c_saves_a_resumable_checkpoint() {
     let resumed = run(draft(&scene, &out)
         .args(long)
         .args(["--resume", "--max-shots", &budget]));
-    assert_ok(&resumed);
+    assert_capped(&resumed);
     let whole = dir.path().join("whole.sol");
-    assert_ok(&run(draft(&scene, &whole)
+    assert_capped(&run(draft(&scene, &whole)
         .args(long)
         .args(["--max-shots", &budget])));
     let (a, b) = (read(&out), read(&whole));

@@ -46,6 +46,19 @@ pub fn lavapipe(cmd: &mut Command) {
     cmd.env("VK_ICD_FILENAMES", &found[0]);
 }
 
+/// Runs a solve that may stop at its `--max-shots` above the threshold: it then
+/// exits with status 4 (a partial file and a kept checkpoint), which is what
+/// the caller asked for, not a failure.
+#[allow(dead_code)] // Each test crate compiles this module; not all call this.
+pub fn run_to_shot_cap(cmd: &mut Command, what: &str) {
+    let out = cmd.output().unwrap();
+    assert!(
+        out.status.success() || out.status.code() == Some(4),
+        "{what} failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
 pub fn run(cmd: &mut Command, what: &str) {
     let out = cmd.output().unwrap();
     assert!(

@@ -17,7 +17,7 @@ mod progress;
 mod session;
 mod stats;
 
-pub use args::{SolveArgs, EXIT_INTERRUPTED};
+pub use args::{SolveArgs, EXIT_INTERRUPTED, EXIT_SHOT_CAP};
 pub use stats::RunStats;
 
 use crate::method::Dispatch;
@@ -32,7 +32,8 @@ use std::process::ExitCode;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 
-/// Runs the command; `Ok` carries the exit code (0, or 130 when interrupted).
+/// Runs the command; `Ok` carries the exit code (0; [`EXIT_SHOT_CAP`] when stopped
+/// at the shot cap above the threshold; 130 when interrupted).
 pub fn run(args: SolveArgs) -> anyhow::Result<ExitCode> {
     let checkpoint_path = files::checkpoint_path(&args.out);
     check_checkpoint_state(&args, &checkpoint_path)?;
@@ -578,16 +579,21 @@ fn finish(
             std::fs::remove_file(checkpoint_path)
                 .with_context(|| format!("removing {}", checkpoint_path.display()))?;
         }
+        Ok(ExitCode::SUCCESS)
     } else {
         eprintln!(
-            "solver: stopped after {} shots (budget {}) above the threshold; {} is kept: \
-             run the same command with --resume and a larger --max-shots to continue",
+            "solver: stopped after {} shots (budget {}) with {:.4}% of the emitted power \
+             unshot, above the threshold {}%; {} is partial and {} is kept: run the same \
+             command with --resume and a larger --max-shots to continue",
             stats.shots,
             settings.max_shots,
+            100.0 * stats.unshot_fraction,
+            100.0 * settings.threshold,
+            args.out.display(),
             checkpoint_path.display()
         );
+        Ok(ExitCode::from(EXIT_SHOT_CAP))
     }
-    Ok(ExitCode::SUCCESS)
 }
 
 #[cfg(test)]

@@ -166,7 +166,7 @@ pub(crate) fn build_scene(mut raw: RawScene, options: &BuildOptions) -> Result<S
             "{files}: none of the materials in use ({}) emits light and the scene has no \
              lights, so the solution would be black. {}",
             names.join(", "),
-            no_emitter_hint(&raw.files, options.from_config)
+            super::emitter_hint::no_emitter_hint(&raw.files, options.from_config)
         )));
     }
     if options.strict {
@@ -317,50 +317,6 @@ fn some_user_has_uvs(
         ),
     );
     false
-}
-
-/// What to do about a scene with no emitter, for the kinds of file it came
-/// from: an emission in the geometry's own terms, or lights (issue 41).
-fn no_emitter_hint(files: &[std::path::PathBuf], from_config: bool) -> String {
-    let extension = |f: &std::path::PathBuf| {
-        f.extension()
-            .and_then(|e| e.to_str())
-            .map(str::to_ascii_lowercase)
-            .unwrap_or_default()
-    };
-    let has = |kinds: &[&str]| files.iter().any(|f| kinds.contains(&extension(f).as_str()));
-    let gltf = has(&["gltf", "glb"]);
-    let obj = has(&["obj"]);
-    let legacy = files
-        .iter()
-        .any(|f| !["gltf", "glb", "obj"].contains(&extension(f).as_str()));
-    let mut ways = Vec::new();
-    if from_config {
-        ways.push(
-            "`emission = [r, g, b]` under `[materials.NAME]` in the TOML scene config".to_owned(),
-        );
-    }
-    if obj {
-        ways.push("`Ke r g b` in the MTL file".to_owned());
-    }
-    if gltf {
-        ways.push(
-            "an emissive material or `KHR_lights_punctual` lights in the glTF file".to_owned(),
-        );
-    }
-    if legacy {
-        ways.push("`emit r g b` on a legacy attribute line".to_owned());
-    }
-    let lights = if from_config {
-        "add `[sun]`, `[sky]` or `[[lights]]` tables to the scene config"
-    } else {
-        "light it from a TOML scene config with `[sun]`, `[sky]` or `[[lights]]` tables"
-    };
-    format!(
-        "Give a material an emission ({}), {lights}, or pass `solver solve` the flags \
-         `--sun AZIMUTH,ELEVATION` and `--sky KIND` (docs/lights.md)",
-        ways.join(", or ")
-    )
 }
 
 fn describe_files(files: &[std::path::PathBuf]) -> String {

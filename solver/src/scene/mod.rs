@@ -15,6 +15,7 @@ mod clean;
 mod config;
 mod config_lights;
 mod display;
+mod emitter_hint;
 mod envmap_file;
 mod error;
 mod gltf;
@@ -22,6 +23,7 @@ mod legacy;
 mod light_flags;
 mod mtl;
 mod obj;
+mod path_case;
 pub(crate) mod planar;
 mod raw;
 mod recentre;
@@ -48,6 +50,7 @@ pub use clean::{
 };
 pub use config::{Length, MeshSizes};
 pub use display::{load_display_file, DisplayParams};
+pub(crate) use emitter_hint::{distinct_files, no_emitter_hint};
 pub use error::SceneError;
 pub use light_flags::{
     LightFlags, SkyFlag, SkyFlagKind, SunFlag, DEFAULT_SKY_LUX, DEFAULT_SUN_LUX,

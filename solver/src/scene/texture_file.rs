@@ -8,6 +8,10 @@
 //! 65535 × 65535 texels (16 GiB of RGBA); the header is read first and such a
 //! file refused before any allocation beyond the file itself, and the decoder
 //! runs under `image::Limits` as a second guard.
+//!
+//! A file named with the wrong letter case (`SP_LUK.JPG` for `sp_luk.JPG`, as
+//! scenes authored on Windows often do) is found in its folder and read, with a
+//! warning naming both spellings ([`super::path_case`]).
 
 use super::{SceneTexture, SourceRef, Warning};
 use std::io::Cursor;
@@ -39,7 +43,7 @@ pub(crate) fn load_texture(
 ) -> Option<Arc<SceneTexture>> {
     let texture = match bytes {
         Some(bytes) => decode(path, bytes),
-        None => read(path),
+        None => read_any_case(path, source, statement, warnings),
     };
     match texture {
         Ok(t) => Some(Arc::new(t)),
@@ -54,6 +58,51 @@ pub(crate) fn load_texture(
             });
             None
         }
+    }
+}
+
+/// Reads `path`; when no file has that name, reads the one file in its folder
+/// whose name differs from it only in letter case, with a warning naming both
+/// spellings. Several such files are refused, each named: which one is meant
+/// cannot be told.
+#[allow(clippy::disallowed_methods)] // An edge: an importer reads the textures its scene names.
+fn read_any_case(
+    path: &Path,
+    source: &SourceRef,
+    statement: &str,
+    warnings: &mut Vec<Warning>,
+) -> Result<SceneTexture, String> {
+    let missing =
+        matches!(std::fs::metadata(path), Err(e) if e.kind() == std::io::ErrorKind::NotFound);
+    if !missing {
+        return read(path);
+    }
+    match super::path_case::case_variants(path).as_slice() {
+        [] => read(path),
+        [found] => {
+            warnings.push(Warning {
+                source: source.clone(),
+                message: format!(
+                    "{statement} texture {}: no file has that name; {} differs from it only in \
+                     letter case and is read instead (rename the file, or spell the name as the \
+                     file is, to silence this)",
+                    path.display(),
+                    found.display()
+                ),
+            });
+            read(found)
+        }
+        several => Err(format!(
+            "cannot be read (no file has that name), and {} files differ from it only in \
+             letter case ({}): which one is meant cannot be told; spell the name as one of \
+             them is",
+            several.len(),
+            several
+                .iter()
+                .map(|p| p.display().to_string())
+                .collect::<Vec<_>>()
+                .join(", ")
+        )),
     }
 }
 
@@ -235,6 +284,65 @@ pub(crate) mod tests {
         assert!(
             warnings[0].message.contains("missing.png: cannot be read"),
             "{warnings:?}"
+        );
+    }
+
+    /// A texture named with the wrong letter case (Sponza's MTL names
+    /// `SP_LUK.JPG` for `sp_luk.JPG`) is read, with a warning naming both
+    /// spellings, through an MTL and a glTF `uri` alike; two files that differ
+    /// only in case are refused, both named.
+    #[test]
+    fn a_texture_named_in_the_wrong_case_is_found_in_its_folder() {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(dir.path().join("sp_luk.png"), png(2, 2, |_, _| 128)).unwrap();
+        let (t, warnings) = load(&dir.path().join("SP_LUK.PNG"));
+        assert!(t.is_some(), "{warnings:?}");
+        assert_eq!(warnings.len(), 1, "{warnings:?}");
+        let message = &warnings[0].message;
+        assert!(
+            message.contains("SP_LUK.PNG: no file has that name")
+                && message.contains("sp_luk.png differs from it only in letter case"),
+            "{message}"
+        );
+        // The texture read is the file's, under its own name.
+        assert!((t.unwrap().texture.mean().x - 0.2159).abs() < 1e-3);
+
+        // Through an MTL: the material is textured, and the warning says so.
+        std::fs::write(
+            dir.path().join("s.mtl"),
+            "newmtl floor\nKd 1 1 1\nmap_Kd SP_LUK.PNG\nnewmtl light\nKe 1 1 1\n",
+        )
+        .unwrap();
+        let obj = "mtllib s.mtl\nv 0 0 0\nv 2 0 0\nv 2 0 -1\nv 0 0 -1\n\
+                   v 0 1 0\nv 1 1 0\nv 1 1 -1\nv 0 1 -1\n\
+                   vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n\
+                   usemtl floor\nf 1/1 2/2 3/3 4/4\nusemtl light\nf 5 8 7 6\n";
+        let path = dir.path().join("s.obj");
+        std::fs::write(&path, obj).unwrap();
+        let scene = load_scene(&path, &ImportOptions::default()).unwrap().scene;
+        let floor = &scene.materials[scene.polygons[0].material];
+        assert!(floor.diffuse_texture.is_some(), "{:?}", scene.warnings);
+        assert!(
+            scene
+                .warnings
+                .iter()
+                .any(|w| w.message.contains("only in letter case")),
+            "{:?}",
+            scene.warnings
+        );
+
+        // Two candidates: refused, both named, and the flat Kd is used.
+        std::fs::write(dir.path().join("Sp_Luk.png"), png(2, 2, |_, _| 255)).unwrap();
+        let (t, warnings) = load(&dir.path().join("SP_LUK.PNG"));
+        assert!(t.is_none());
+        assert_eq!(warnings.len(), 1, "{warnings:?}");
+        let message = &warnings[0].message;
+        assert!(
+            message.contains("2 files differ from it only in letter case")
+                && message.contains("Sp_Luk.png")
+                && message.contains("sp_luk.png")
+                && message.ends_with("the flat Kd is used"),
+            "{message}"
         );
     }
 

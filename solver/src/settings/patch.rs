@@ -72,7 +72,8 @@ settings_patch! {
             long,
             value_name = "N",
             long_help = "Stop after N shots, converged or not: a time budget, whose checkpoint \
-                --resume continues."
+                --resume continues. A solve stopped by it above its threshold writes a \
+                partial file and exits with status 4."
         )]
         pub max_shots: Option<u64>,
 

@@ -106,13 +106,14 @@ pub enum SolveError {
          nothing to solve (add the surfaces it should light)"
     )]
     SinglePolygon,
+    /// `hint` says the fix in the formats of the scene's files
+    /// ([`crate::scene::no_emitter_hint`]).
     #[error(
-        "the scene has no emitter and no light: no polygon of non-zero area uses a material \
-         with emission (MTL `Ke`, TOML `emission`, legacy `emit`) above zero, and the scene has \
-         no sun, sky or lamp (TOML `[sun]`, `[sky]`, `[[lights]]`; glTF KHR_lights_punctual; \
-         `solve --sun AZIMUTH,ELEVATION` or `--sky KIND`)"
+        "the scene has no emitter and no light: no polygon of non-zero area emits light (an \
+         emission above zero, not blacked out by its emission texture), and the scene has no \
+         sun, sky or lamp. {hint}"
     )]
-    NoEmitter,
+    NoEmitter { hint: String },
     #[error("material `{name}`: {problem}")]
     BadMaterial { name: String, problem: String },
     #[error(transparent)]
@@ -134,6 +135,20 @@ pub enum SolveError {
     /// gives the estimate, the budget and what to change (see `check_coarsest`).
     #[error("{0}")]
     OverBudget(String),
+}
+
+impl SolveError {
+    /// [`SolveError::NoEmitter`] with the fix in the formats of the files the
+    /// scene's polygons came from. A TOML config is not among them (the scene
+    /// does not keep its name), so its `emission` is not offered: the import's
+    /// own check ([`crate::scene::SceneError::NoEmitter`]) offers it.
+    fn no_emitter(scene: &Scene) -> Self {
+        let files =
+            crate::scene::distinct_files(scene.polygons.iter().map(|p| p.source.file.as_path()));
+        SolveError::NoEmitter {
+            hint: crate::scene::no_emitter_hint(&files, false),
+        }
+    }
 }
 
 /// What one shot did.
@@ -245,7 +260,7 @@ impl Solver {
             .sum();
         let has_emitter = emitted_power.is_finite() && emitted_power > 0.0;
         if !has_emitter && scene.lights.is_empty() {
-            return Err(SolveError::NoEmitter);
+            return Err(SolveError::no_emitter(scene));
         }
         let occluder = Occluder::new(
             &mesh

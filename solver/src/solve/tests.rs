@@ -289,8 +289,30 @@ fn bad_scenes_are_refused_with_clear_errors() {
         mats.clone(),
         1,
     ));
-    assert!(matches!(e, SolveError::NoEmitter), "{e}");
+    assert!(matches!(e, SolveError::NoEmitter { .. }), "{e}");
     assert!(e.to_string().contains("no emitter"));
+    // The fix in the scene's own format: a glTF's polygons are told about
+    // `emissiveFactor`, not the MTL's `Ke` (issue 42), and every scene about
+    // the sun and sky.
+    let mut gltf = scene_of(
+        vec![(floor.clone(), 0), (facing_square(), 0)],
+        mats.clone(),
+        1,
+    );
+    for polygon in &mut gltf.polygons {
+        polygon.source.file = "car.gltf".into();
+    }
+    let message = err(gltf).to_string();
+    for phrase in [
+        "emissiveFactor",
+        "KHR_lights_punctual",
+        "[sun]",
+        "--sun",
+        "--sky",
+    ] {
+        assert!(message.contains(phrase), "{phrase:?} not in {message}");
+    }
+    assert!(!message.contains("Ke r g b"), "{message}");
     let e = err(scene_of(
         vec![(floor.clone(), 3), (facing_square(), 0)],
         mats.clone(),

@@ -33,7 +33,7 @@ fn json(bytes: &[u8]) -> serde_json::Value {
 }
 
 /// `solver solve TOML --out OUT --preset draft --max-shots SHOTS --strict
-/// --threads 2 EXTRA…`, which must succeed.
+/// --threads 2 EXTRA…`, which must succeed or stop at its shot cap (status 4).
 fn solve_strictly(
     solver: &Path,
     family: Family,
@@ -53,7 +53,7 @@ fn solve_strictly(
         .output()
         .unwrap();
     assert!(
-        run.status.success(),
+        run.status.success() || run.status.code() == Some(4),
         "{}: {}",
         family.name(),
         String::from_utf8_lossy(&run.stderr)

@@ -11,8 +11,15 @@ use std::path::PathBuf;
 /// as shells report an interrupted program).
 pub const EXIT_INTERRUPTED: u8 = 130;
 
+/// Exit code of a progressive solve that stopped at its shot cap (`max_shots`, from
+/// the preset or `--max-shots`) above its threshold: the file is marked partial and
+/// the checkpoint is kept. Not 3, which `runtime mirror` already means.
+pub const EXIT_SHOT_CAP: u8 = 4;
+
 const AFTER_LONG_HELP: &str = "\
-Exit codes: 0 done, 1 error, 2 bad command line, 130 Ctrl-C (saved; --resume goes on).";
+Exit codes: 0 done, 1 error, 2 bad command line, 4 stopped at the shot cap (--max-shots) \
+above the threshold (the file is partial; the checkpoint is kept: --resume with a larger \
+--max-shots goes on), 130 Ctrl-C (saved; --resume goes on).";
 
 /// `solver solve SCENE -o OUT …`: the setting flags are [`SettingsPatch`]'s.
 #[derive(clap::Args, Debug, Clone)]

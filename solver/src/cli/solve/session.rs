@@ -122,7 +122,9 @@ impl Session<'_> {
             // (rewritten below with the final figures when not interrupted).
             self.save(&shooter, seconds)?;
         }
-        let mut solution = shooter.solution(stopped_by_user);
+        // A solve that stopped short of its threshold (Ctrl-C, or the shot cap) is
+        // marked partial, so that no reader takes it for a finished one.
+        let mut solution = shooter.solution(!converged);
         solution.header.stats.seconds = seconds;
         if let Some(note) = shooter.memory_note() {
             eprintln!("solver: {note}");
@@ -349,6 +351,10 @@ mod tests {
         let s = session(dir.path(), &flag, 1000);
         let outcome = s.run(toy(3), 0.0).unwrap();
         assert!(!outcome.converged && !outcome.interrupted);
+        assert!(
+            outcome.solution.header.partial,
+            "an unconverged end is partial"
+        );
         let (meta, _): (Meta, ToyState) = s.load().unwrap();
         assert_eq!(meta.shots, 3);
     }

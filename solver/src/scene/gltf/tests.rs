@@ -802,6 +802,59 @@ fn base_colour_texture_gives_each_texel_centre_its_linear_albedo() {
     }
 }
 
+/// A glTF with no emitter is told the fix in glTF's terms (`emissiveFactor`,
+/// `KHR_lights_punctual`), and the sun and sky options, not the MTL's `Ke`.
+#[test]
+fn a_gltf_without_emitter_is_told_the_gltf_fix() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut f = textured_quad();
+    f.json["materials"][1]["emissiveFactor"] = json!([0.0, 0.0, 0.0]);
+    let path = write_glb(dir.path(), "dark", &f);
+    let Err(err) = load_scene(&path, &ImportOptions::default()) else {
+        panic!("a scene with no emitter is refused");
+    };
+    let message = err.to_string();
+    assert!(
+        matches!(err, crate::scene::SceneError::NoEmitter(_)),
+        "{message}"
+    );
+    for phrase in [
+        "`\"emissiveFactor\": [r, g, b]`",
+        "KHR_lights_punctual",
+        "`[sun]`, `[sky]`",
+        "--sun AZIMUTH,ELEVATION",
+        "--sky KIND",
+    ] {
+        assert!(message.contains(phrase), "{phrase:?} not in {message}");
+    }
+    assert!(!message.contains("Ke r g b"), "{message}");
+}
+
+/// An image `uri` in the wrong letter case (`CHECKER.PNG` for the file
+/// `checker.png`) is read, with a warning naming both spellings.
+#[test]
+fn an_image_uri_in_the_wrong_case_is_found_in_its_folder() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut f = textured_quad();
+    let png =
+        &f.bin[f.bin.len() - (f.json["bufferViews"][3]["byteLength"].as_u64().unwrap() as usize)..];
+    std::fs::write(dir.path().join("checker.png"), png).unwrap();
+    f.json["images"] = json!([{"uri": "CHECKER.PNG"}]);
+    let scene = load(&write_gltf(dir.path(), "quad", &f)).scene;
+    let got = albedo_at(&scene, 0.25, 0.25);
+    assert!((got - texel(0, 0)).abs() <= TEXEL_TOLERANCE, "{got}");
+    assert!(
+        scene
+            .warnings
+            .iter()
+            .any(|w| w.message.contains("CHECKER.PNG: no file has that name")
+                && w.message
+                    .contains("checker.png differs from it only in letter case")),
+        "{:?}",
+        scene.warnings
+    );
+}
+
 #[test]
 fn texture_transform_offsets_scales_and_rotates_the_uvs() {
     let dir = tempfile::tempdir().unwrap();

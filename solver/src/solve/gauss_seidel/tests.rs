@@ -147,7 +147,7 @@ fn bad_input_is_refused_with_clear_errors() {
     let dark = scene_of(cube(), vec![material("grey", 0.5, 0.0)], 2);
     assert!(matches!(
         solve_gauss_seidel(&dark, &settings(16), &GaussSeidelLimits::default()),
-        Err(GaussSeidelError::Solve(SolveError::NoEmitter))
+        Err(GaussSeidelError::Solve(SolveError::NoEmitter { .. }))
     ));
     let scene = scene_of(cube(), vec![material("furnace", 0.5, 1.0)], 2);
     let err = solve_gauss_seidel(&scene, &settings(15), &GaussSeidelLimits::default())

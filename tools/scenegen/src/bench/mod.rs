@@ -21,6 +21,8 @@ use std::time::Duration;
 
 /// The solver's exit code after Ctrl-C (SIGINT): progress saved.
 const EXIT_INTERRUPTED: i32 = 130;
+/// `solver solve`'s status when it stopped at its shot cap above the threshold.
+const EXIT_SHOT_CAP: i32 = 4;
 
 #[derive(Clone, Debug)]
 pub struct Config {
@@ -98,6 +100,8 @@ fn run_point(config: &Config, family: Family, size: usize, preset: &str) -> anyh
     let measured = run_limited(&mut command, &log, config.limit, config.grace, &checkpoint)?;
     let log_text = std::fs::read_to_string(&log).unwrap_or_default();
     let status = match (measured.ending, measured.hit_limit) {
+        (Ending::Exited(EXIT_SHOT_CAP), _) => Status::ShotBudget,
+        // A solver from before that status said so with status 0.
         (Ending::Exited(0), _) if log_text.contains("stopped after") => Status::ShotBudget,
         (Ending::Exited(0), _) => Status::Converged,
         (Ending::Exited(EXIT_INTERRUPTED), true) | (Ending::Signalled(_), true) => {
