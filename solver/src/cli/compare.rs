@@ -1,7 +1,9 @@
 //! `solver compare TEST REFERENCE`: how far a rendered image is from ground truth.
 //! Files, flags and printing live here; the measurements are `crate::compare`.
 
-use crate::compare::edge_band::{edge_band_error, EdgeBand, DEFAULT_EDGE_RATIO};
+use crate::compare::edge_band::{
+    edge_band_error, edge_mask, render_mask, EdgeBand, DEFAULT_EDGE_RATIO,
+};
 use crate::compare::flip::{default_pixels_per_degree, flip_with_progress, Exposures, Variant};
 use crate::compare::heatmap;
 use crate::compare::image::{IdChannel, Image, LoadedImage};
@@ -95,6 +97,10 @@ pub struct CompareArgs {
     /// far above a 2–5 % noisy reference's 1.1–1.3, below a sun shadow's 5+).
     #[arg(long, value_name = "RATIO", default_value_t = DEFAULT_EDGE_RATIO)]
     pub edge_ratio: f64,
+    /// With --edge-band, write the band as a PNG: edge pixels orange over the
+    /// reference in grey, to see which edges it holds.
+    #[arg(long, value_name = "PNG", requires = "edge_band")]
+    pub edge_map: Option<PathBuf>,
     /// Print everything as one JSON object instead of text.
     #[arg(long)]
     pub json: bool,
@@ -233,10 +239,19 @@ pub fn run(args: CompareArgs) -> anyhow::Result<ExitCode> {
         }
         None => None,
     };
-    let edge_band = args.edge_band.then(|| {
-        let relative = signed_relative_luminance_error(t, r);
-        edge_band_error(t, r, &relative.errors, flip_map.as_deref(), args.edge_ratio)
-    });
+    let edge_band = match args.edge_band {
+        false => None,
+        true => {
+            let mask = edge_mask(r, args.edge_ratio);
+            if let Some(path) = &args.edge_map {
+                write_png(path, &render_mask(r, &mask), r.width, r.height)?;
+            }
+            let relative = signed_relative_luminance_error(t, r);
+            let errors = &relative.errors;
+            let map = flip_map.as_deref();
+            Some(edge_band_error(t, r, errors, map, &mask, args.edge_ratio))
+        }
+    };
     let report = Report {
         test: args.test.display().to_string(),
         reference: args.reference.display().to_string(),

@@ -45,6 +45,24 @@ pub fn edge_mask(reference: &Image, ratio: f64) -> Vec<bool> {
     mask
 }
 
+/// The mask drawn over the reference, RGB8 row 0 at the top: edge pixels orange,
+/// the rest grey by Y / (Y + mean Y), so that one can see which edges the band holds.
+pub fn render_mask(reference: &Image, mask: &[bool]) -> Vec<u8> {
+    let y = reference.luminances();
+    let mean = y.iter().map(|&v| v as f64).sum::<f64>() / y.len().max(1) as f64;
+    y.iter()
+        .zip(mask)
+        .flat_map(|(&v, &edge)| {
+            if edge {
+                [255, 120, 0]
+            } else {
+                let g = (255.0 * v as f64 / (v as f64 + mean).max(f64::MIN_POSITIVE)) as u8;
+                [g, g, g]
+            }
+        })
+        .collect()
+}
+
 /// The error over one class of pixels (the edge band, or the rest).
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct BandError {
@@ -69,16 +87,16 @@ pub struct EdgeBand {
     pub rest: BandError,
 }
 
-/// Splits the error by [`edge_mask`]. `relative` is the per-pixel signed relative
+/// Splits the error by `mask` (from [`edge_mask`] with `ratio`). `relative` is the per-pixel signed relative
 /// luminance error (`None` where unlit), `flip_map` the per-pixel FLIP if any.
 pub fn edge_band_error(
     test: &Image,
     reference: &Image,
     relative: &[Option<f64>],
     flip_map: Option<&[f32]>,
+    mask: &[bool],
     ratio: f64,
 ) -> EdgeBand {
-    let mask = edge_mask(reference, ratio);
     let class = |want: bool| {
         let chosen: Vec<usize> = (0..mask.len()).filter(|&i| mask[i] == want).collect();
         let lit: Vec<f64> = chosen.iter().filter_map(|&i| relative[i]).collect();
@@ -165,7 +183,8 @@ mod tests {
             flip[i] = 1.0;
         }
         let relative = super::super::metrics::signed_relative_luminance_error(&test, &reference);
-        let band = edge_band_error(&test, &reference, &relative.errors, Some(&flip), 2.0);
+        let mask = edge_mask(&reference, 2.0);
+        let band = edge_band_error(&test, &reference, &relative.errors, Some(&flip), &mask, 2.0);
         assert_eq!((band.edge.pixels, band.rest.pixels), (10, 35));
         assert_eq!((band.edge.lit_pixels, band.rest.lit_pixels), (10, 35));
         assert!((band.edge.mare - 0.5).abs() < 1e-6, "{}", band.edge.mare);
