@@ -419,6 +419,10 @@ fn describe_edge_band(out: &mut String, band: &EdgeBand) {
         "", "pixels", "lit", "MARE", "signed", "rel. RMSE", "FLIP"
     );
     for (name, e) in [("edge", &band.edge), ("rest", &band.rest)] {
+        if e.pixels == 0 {
+            let _ = writeln!(out, "  {name:>5}  {:>9}  (no pixels)", 0);
+            continue;
+        }
         let flip = e.flip.map_or("-".to_string(), |f| format!("{f:.4}"));
         let _ = writeln!(
             out,

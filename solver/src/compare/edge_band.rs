@@ -99,6 +99,17 @@ pub fn edge_band_error(
 ) -> EdgeBand {
     let class = |want: bool| {
         let chosen: Vec<usize> = (0..mask.len()).filter(|&i| mask[i] == want).collect();
+        if chosen.is_empty() {
+            // No means to take (a uniform reference has no edge pixels).
+            return BandError {
+                pixels: 0,
+                lit_pixels: 0,
+                mare: 0.0,
+                mean_signed: 0.0,
+                relative_rmse: 0.0,
+                flip: None,
+            };
+        }
         let lit: Vec<f64> = chosen.iter().filter_map(|&i| relative[i]).collect();
         let (mut squared, mut reference_sum) = (0.0f64, 0.0f64);
         for &i in &chosen {
@@ -111,7 +122,7 @@ pub fn edge_band_error(
                 reference_sum += r[c] as f64;
             }
         }
-        let values = (3 * chosen.len()).max(1) as f64;
+        let values = (3 * chosen.len()) as f64;
         let lit_count = lit.len().max(1) as f64;
         BandError {
             pixels: chosen.len(),
@@ -119,9 +130,8 @@ pub fn edge_band_error(
             mare: lit.iter().map(|e| e.abs()).sum::<f64>() / lit_count,
             mean_signed: lit.iter().sum::<f64>() / lit_count,
             relative_rmse: (squared / values).sqrt() / (reference_sum / values),
-            flip: flip_map.map(|m| {
-                chosen.iter().map(|&i| m[i] as f64).sum::<f64>() / chosen.len().max(1) as f64
-            }),
+            flip: flip_map
+                .map(|m| chosen.iter().map(|&i| m[i] as f64).sum::<f64>() / chosen.len() as f64),
         }
     };
     EdgeBand {
@@ -196,5 +206,12 @@ mod tests {
         assert_eq!(band.rest.mare, 0.0);
         assert_eq!(band.rest.relative_rmse, 0.0);
         assert_eq!((band.edge.flip, band.rest.flip), (Some(1.0), Some(0.0)));
+        // A uniform reference has no edge: the empty class reports zeros, not NaN.
+        let flat = Image::filled(5, 4, [0.5; 3]);
+        let mask = edge_mask(&flat, 2.0);
+        let band = edge_band_error(&flat, &flat, &[Some(0.0); 20], None, &mask, 2.0);
+        assert_eq!((band.edge.pixels, band.rest.pixels), (0, 20));
+        assert_eq!((band.edge.mare, band.edge.relative_rmse), (0.0, 0.0));
+        assert_eq!(band.rest.relative_rmse, 0.0);
     }
 }
