@@ -1,4 +1,4 @@
-//! `edge-elements SOLUTION --axis y --at 0 --threshold Y`: how wide a solution
+//! `edge_elements SOLUTION --axis 1 --at 0 --threshold Y`: how wide a solution
 //! draws the shadow edges on one plane (see `sweep::edge_elements`). Prints the
 //! number of triangles on the plane, of those that straddle the lit/unlit
 //! boundary, and their sizes in scene units, as JSON.

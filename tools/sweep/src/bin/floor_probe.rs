@@ -1,4 +1,4 @@
-//! `floor-probe SOLUTION --at Y (--ring X Z R | --line X0 Z0 X1 Z1 N)`: a
+//! `floor_probe SOLUTION --at Y (--ring X Z R | --line X0 Z0 X1 Z1 N)`: a
 //! solution's luminance on the horizontal plane y = Y (scene units) as it is
 //! drawn: on a contact ring (the visible side's vertices, by angle), or at
 //! N + 1 points along a segment. See `sweep::floor_probe`.
