@@ -3,6 +3,10 @@
 //! number of triangles on the plane, of those that straddle the lit/unlit
 //! boundary, and their sizes in scene units, as JSON.
 
+// Shipped code: Clippy checks clippy.toml's lists here (ARCHITECTURE.md's invariants).
+#![cfg_attr(not(test), warn(clippy::disallowed_methods, clippy::disallowed_macros))]
+#![cfg_attr(not(test), warn(clippy::too_many_lines))]
+
 use anyhow::{bail, Context};
 use clap::Parser;
 use glam::DVec3;

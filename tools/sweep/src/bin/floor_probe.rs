@@ -3,6 +3,10 @@
 //! drawn: on a contact ring (the visible side's vertices, by angle), or at
 //! N + 1 points along a segment. See `sweep::floor_probe`.
 
+// Shipped code: Clippy checks clippy.toml's lists here (ARCHITECTURE.md's invariants).
+#![cfg_attr(not(test), warn(clippy::disallowed_methods, clippy::disallowed_macros))]
+#![cfg_attr(not(test), warn(clippy::too_many_lines))]
+
 use anyhow::{bail, Context};
 use clap::Parser;
 use glam::DVec3;
