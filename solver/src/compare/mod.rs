@@ -7,9 +7,11 @@
 //!   channels (`se.*`, `material_id`, `object_id`) where present;
 //! * [`metrics`]: means, relative RMSE, MARE, maximum error, the per-material and
 //!   per-object breakdown and the reference's own noise;
+//! * [`edge_band`]: the error on the reference's sharp edges apart from the rest;
 //! * [`flip`]: LDR-FLIP and HDR-FLIP;
 //! * [`heatmap`]: the signed relative error as a diverging colour map.
 
+pub mod edge_band;
 pub mod flip;
 pub mod heatmap;
 pub mod image;

@@ -6,26 +6,11 @@
 
 use scenegen::{generate, scene::write_scene, Family};
 use std::ffi::OsStr;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::Command;
 
-/// The workspace's solver binary (debug, else release). Another package's
-/// binary has no `CARGO_BIN_EXE_*`, so it is found in the target folder.
-fn solver() -> PathBuf {
-    let target = std::env::var_os("CARGO_TARGET_DIR")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../../target"));
-    ["debug", "release"]
-        .iter()
-        .map(|profile| target.join(profile).join("solver"))
-        .find(|p| p.exists())
-        .unwrap_or_else(|| {
-            panic!(
-                "no solver binary in {}: build it first with `cargo build -p solver`",
-                target.display()
-            )
-        })
-}
+mod common;
+use common::solver;
 
 fn json(bytes: &[u8]) -> serde_json::Value {
     serde_json::from_slice(bytes)

@@ -1,6 +1,7 @@
 //! The speed/accuracy sweep of issue 7, as a library so that its pieces are unit
 //! tested: child-process measurement ([`child`]), error metrics and the Pareto
-//! front ([`metrics`]), the per-vertex reference lookup ([`lookup`]), EXR input
+//! front ([`metrics`]), the triangles that draw a shadow edge
+//! ([`edge_elements`]), a plane's radiance as drawn ([`floor_probe`]), the per-vertex reference lookup ([`lookup`]), EXR input
 //! ([`image`]) and the SVG plot ([`svg`]). The binary (`src/main.rs`) holds the
 //! sweep's points and writes `docs/tradeoffs.md`.
 
@@ -9,6 +10,8 @@
 #![cfg_attr(not(test), warn(clippy::too_many_lines))]
 
 pub mod child;
+pub mod edge_elements;
+pub mod floor_probe;
 pub mod image;
 pub mod lookup;
 pub mod metrics;
