@@ -35,12 +35,13 @@
 //!   its own vertices along the contact line, so the hidden vertices there are
 //!   not averaged with the visible ones; a crack along that line could only
 //!   show the covering object's base, which stands on it.
-//! * **Shadow lines** (directional mode, [`Cuts::ShadowLines`]). The
-//!   visible parts are also cut along the lines that the occluder's edges
-//!   standing on each footprint corner cast from each emitter vertex
-//!   ([`cut_shadow_lines`]). The corner is then an apex where the radiance's
-//!   limit depends on the side: each part keeps its own vertex there
-//!   ([`Part::apexes`]), which the seam pass does not merge.
+//! * **Shadow lines.** The visible parts are also cut along the lines that
+//!   the occluder's edges standing on each footprint corner cast from the
+//!   sun and each lamp (in both modes), and from each emitter vertex
+//!   (directional mode, [`Cuts::ShadowLines`]) ([`cut_shadow_lines`]). The
+//!   corner is then an apex where the radiance's limit depends on the side:
+//!   each part keeps its own vertex there ([`Part::apexes`]), which the seam
+//!   pass does not merge.
 //!
 //! Receivers left whole: non-convex polygons, smooth ones (their corner
 //! normals would need interpolating), and polygons no other object touches.
@@ -99,8 +100,9 @@ pub enum Cuts {
 }
 
 impl Cuts {
-    /// The cuts a solve with `settings` makes. Shadow lines are cut in
-    /// directional mode only: there they take the glossy Cornell box's floor
+    /// The cuts a solve with `settings` makes. The emitters' shadow lines
+    /// are cut in directional mode only (the sun's and the lamps' in both,
+    /// [`ShadowCasters`]: their shadows are hard): there they take the glossy Cornell box's floor
     /// camera from 7.50% to 4.40% MARE at `final` (9.60% to 5.97% at
     /// `medium`), while in diffuse mode they made the Cornell box's `final`
     /// worse (1.44% → 1.52%, past its 1.5% target; errors of 12–40% at the
@@ -127,24 +129,7 @@ pub fn conform(scene: &Scene, cuts: Cuts) -> Vec<Option<Vec<Part>>> {
     let tol = CONTACT_TOLERANCE * diagonal;
     let objects = objects(scene, tol);
     let grid = VertexGrid::new(scene, diagonal, tol);
-    // Shadow lines are cut only under a few emitters: each emitter vertex
-    // adds a line at every footprint corner, and a receiver's parts grow with
-    // the lines (a scene lit by many polygons keeps the contact cuts alone).
-    let mut emitter_vertices: Vec<DVec3> = scene
-        .polygons
-        .iter()
-        .filter(|p| {
-            cuts == Cuts::ShadowLines
-                && scene
-                    .materials
-                    .get(p.material)
-                    .is_some_and(|m| m.emission != DVec3::ZERO)
-        })
-        .flat_map(|p| p.vertices.iter().copied())
-        .collect();
-    if emitter_vertices.len() > MAX_SHADOW_LIGHT_VERTICES {
-        emitter_vertices.clear();
-    }
+    let casters = ShadowCasters::of(scene, cuts);
     for (index, polygon) in scene.polygons.iter().enumerate() {
         let v = &polygon.vertices;
         if v.len() < 3
@@ -165,14 +150,10 @@ pub fn conform(scene: &Scene, cuts: Cuts) -> Vec<Option<Vec<Part>>> {
         }
         let outline: Vec<DVec2> = v.iter().map(|&p| frame.project(p)).collect();
         let mut parts = cut(&outline, &footprints, tol);
-        let lights: Vec<DVec2> = emitter_vertices
-            .iter()
-            .filter(|&&p| frame.height(p) > tol)
-            .map(|&p| frame.project(p))
-            .collect();
+        let groups = casters.seen_from(&frame, tol);
         let mut corners = Vec::new();
-        if !lights.is_empty() {
-            (parts, corners) = cut_shadow_lines(parts, &footprints, &lights, tol);
+        if !groups.is_empty() {
+            (parts, corners) = cut_shadow_lines(parts, &footprints, &groups, tol);
         }
         if parts.len() > 1 {
             out[index] = Some(
@@ -203,6 +184,100 @@ pub fn conform(scene: &Scene, cuts: Cuts) -> Vec<Option<Vec<Part>>> {
         }
     }
     out
+}
+
+/// What casts the shadow lines cut at footprint corners: the emitters'
+/// vertices (directional mode, at most [`MAX_SHADOW_LIGHT_VERTICES`] in
+/// all), and in both modes the lamps (points, as many) and the sun (a
+/// direction). A lamp or the sun casts a hard shadow whose sides leave the
+/// corners of whatever stands on a receiver (a column's umbra on a sunlit
+/// floor), which refinement cannot find when no vertex lies inside it.
+struct ShadowCasters {
+    emitter_vertices: Vec<DVec3>,
+    lamps: Vec<DVec3>,
+    /// Toward the sun, unit.
+    sun: Option<DVec3>,
+}
+
+impl ShadowCasters {
+    fn of(scene: &Scene, cuts: Cuts) -> ShadowCasters {
+        // Each emitter vertex adds a line at every footprint corner, and a
+        // receiver's parts grow with the lines: a scene lit by many
+        // polygons keeps the contact cuts alone.
+        let mut emitter_vertices: Vec<DVec3> = scene
+            .polygons
+            .iter()
+            .filter(|p| {
+                cuts == Cuts::ShadowLines
+                    && scene
+                        .materials
+                        .get(p.material)
+                        .is_some_and(|m| m.emission != DVec3::ZERO)
+            })
+            .flat_map(|p| p.vertices.iter().copied())
+            .collect();
+        if emitter_vertices.len() > MAX_SHADOW_LIGHT_VERTICES {
+            emitter_vertices.clear();
+        }
+        let mut lamps: Vec<DVec3> = scene.lights.lamps.iter().map(|l| l.position).collect();
+        if lamps.len() > MAX_SHADOW_LIGHT_VERTICES {
+            lamps.clear();
+        }
+        ShadowCasters {
+            emitter_vertices,
+            lamps,
+            sun: scene.lights.sun.as_ref().map(|s| s.direction()),
+        }
+    }
+
+    /// The casters above a receiver's plane, projected on it, in groups
+    /// whose lines are cut together: the emitter's vertices, each lamp, the
+    /// sun (as its shadow's direction).
+    fn seen_from(&self, frame: &Frame, tol: f64) -> Vec<Caster> {
+        let above = |p: &&DVec3| frame.height(**p) > tol;
+        let mut groups = Vec::new();
+        let emitter: Vec<DVec2> = self
+            .emitter_vertices
+            .iter()
+            .filter(above)
+            .map(|&p| frame.project(p))
+            .collect();
+        if !emitter.is_empty() {
+            groups.push(Caster::Points(emitter));
+        }
+        for lamp in self.lamps.iter().filter(above) {
+            groups.push(Caster::Points(vec![frame.project(*lamp)]));
+        }
+        if let Some(sun) = self.sun.filter(|s| s.dot(frame.n) > 0.0) {
+            let along = DVec2::new(sun.dot(frame.t), sun.dot(frame.b));
+            if let Some(away) = (-along).try_normalize() {
+                groups.push(Caster::Direction(away));
+            }
+        }
+        groups
+    }
+}
+
+/// One group of shadow casters as seen in a receiver's plane.
+enum Caster {
+    /// Points (projected): the lines leave a corner away from each.
+    Points(Vec<DVec2>),
+    /// A light at infinity: the lines leave every corner along this
+    /// direction.
+    Direction(DVec2),
+}
+
+impl Caster {
+    /// The directions of the shadow lines from corner `c`.
+    fn directions(&self, c: DVec2) -> Vec<DVec2> {
+        match self {
+            Caster::Points(points) => points
+                .iter()
+                .filter_map(|&l| (c - l).try_normalize())
+                .collect(),
+            Caster::Direction(d) => vec![*d],
+        }
+    }
 }
 
 /// A receiver's plane: its first vertex and an orthonormal frame (t, b, n)
@@ -501,7 +576,7 @@ fn cut(outline: &[DVec2], footprints: &[Vec<DVec2>], tol: f64) -> Vec<(Vec<DVec2
 fn cut_shadow_lines(
     mut parts: Vec<(Vec<DVec2>, bool)>,
     footprints: &[Vec<DVec2>],
-    lights: &[DVec2],
+    casters: &[Caster],
     tol: f64,
 ) -> (Vec<(Vec<DVec2>, bool)>, Vec<DVec2>) {
     let mut apexes = Vec::new();
@@ -509,53 +584,17 @@ fn cut_shadow_lines(
     let floor = 1e-9 * parts.iter().map(|(r, _)| ring_area(r).abs()).sum::<f64>();
     for hull in footprints {
         for &c in hull {
-            let directions: Vec<DVec2> = lights
-                .iter()
-                .filter_map(|&l| (c - l).try_normalize())
-                .collect();
-            let Some(&first) = directions.first() else {
-                continue;
-            };
-            // The extremes by angle about the first direction (the emitter's
-            // vertices all lie on one side of the corner when it is not
-            // under the emitter; otherwise the lines are skipped).
-            let angle = |d: DVec2| first.perp_dot(d).atan2(first.dot(d));
-            let (lo, hi) = directions
-                .iter()
-                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &d| {
-                    (lo.min(angle(d)), hi.max(angle(d)))
-                });
-            if hi - lo >= std::f64::consts::FRAC_PI_2 {
-                continue;
-            }
             let mut split = false;
-            for &d in &directions {
-                let mut next = Vec::with_capacity(parts.len() + 1);
-                for (part, covered) in parts {
-                    // The corner lies on the part's boundary (a vertex, or
-                    // on an edge: the footprint's cut lines run past it), and
-                    // the shadow line, a ray from the corner, runs into the
-                    // part (the line's other half, toward the emitter, is no
-                    // shadow's edge).
-                    let touches = (0..part.len()).any(|i| {
-                        segment_distance(c, part[i], part[(i + 1) % part.len()]) <= 1e3 * snap
-                    });
-                    let step = 1e-3 * ring_area(&part).abs().sqrt();
-                    if covered || !touches || !inside_convex(&part, c + d * step) {
-                        next.push((part, covered));
-                        continue;
-                    }
-                    let left = clip(&part, c, c + d, snap);
-                    let right = clip(&part, c + d, c, snap);
-                    if ring_area(&left) > floor && ring_area(&right) > floor {
-                        next.push((left, false));
-                        next.push((right, false));
-                        split = true;
-                    } else {
-                        next.push((part, false));
-                    }
+            for caster in casters {
+                let directions = caster.directions(c);
+                if !narrow(&directions) {
+                    continue;
                 }
-                parts = next;
+                for &d in &directions {
+                    let cut;
+                    (parts, cut) = cut_ray(parts, c, d, snap, floor);
+                    split |= cut;
+                }
             }
             // Lines that only run into the footprint split nothing, and the
             // corner stays an ordinary vertex.
@@ -565,6 +604,58 @@ fn cut_shadow_lines(
         }
     }
     (parts, apexes)
+}
+
+/// Whether `directions` spread over less than a right angle: the corner is
+/// not under the emitter they come from, so its edge's shadow is a narrow
+/// wedge. (One direction always is.)
+fn narrow(directions: &[DVec2]) -> bool {
+    let Some(&first) = directions.first() else {
+        return false;
+    };
+    let angle = |d: DVec2| first.perp_dot(d).atan2(first.dot(d));
+    let (lo, hi) = directions
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &d| {
+            (lo.min(angle(d)), hi.max(angle(d)))
+        });
+    hi - lo < std::f64::consts::FRAC_PI_2
+}
+
+/// Cuts the parts that the ray from corner `c` along `d` runs into; returns
+/// the parts and whether any was split.
+fn cut_ray(
+    parts: Vec<(Vec<DVec2>, bool)>,
+    c: DVec2,
+    d: DVec2,
+    snap: f64,
+    floor: f64,
+) -> (Vec<(Vec<DVec2>, bool)>, bool) {
+    let mut split = false;
+    let mut next = Vec::with_capacity(parts.len() + 1);
+    for (part, covered) in parts {
+        // The corner lies on the part's boundary (a vertex, or on an edge:
+        // the footprint's cut lines run past it), and the shadow line, a ray
+        // from the corner, runs into the part (the line's other half, toward
+        // the light, is no shadow's edge).
+        let touches = (0..part.len())
+            .any(|i| segment_distance(c, part[i], part[(i + 1) % part.len()]) <= 1e3 * snap);
+        let step = 1e-3 * ring_area(&part).abs().sqrt();
+        if covered || !touches || !inside_convex(&part, c + d * step) {
+            next.push((part, covered));
+            continue;
+        }
+        let left = clip(&part, c, c + d, snap);
+        let right = clip(&part, c + d, c, snap);
+        if ring_area(&left) > floor && ring_area(&right) > floor {
+            next.push((left, false));
+            next.push((right, false));
+            split = true;
+        } else {
+            next.push((part, false));
+        }
+    }
+    (next, split)
 }
 
 /// Whether `p` lies strictly inside the convex counter-clockwise `ring`.

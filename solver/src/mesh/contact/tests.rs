@@ -372,3 +372,59 @@ fn shadow_lines_run_from_the_base_corners_away_from_each_light_vertex() {
     };
     assert_eq!(touching(floor), touching(plain));
 }
+
+#[test]
+fn the_sun_cuts_shadow_lines_from_the_base_corners_away_from_it_in_both_modes() {
+    // A box on a floor in the sun: its umbra's sides leave the footprint's
+    // corners along the sun's direction projected on the floor, turned away
+    // from it. Cut in diffuse mode too (a hard shadow a vertex-less umbra
+    // would hide from refinement: docs/lab/lights-atrium.md, "Column
+    // bases"), and not at all without a sun.
+    let (mut scene, base) = box_on_floor();
+    let plain = conform(&scene, Cuts::Contacts);
+    let plain = plain[0].as_ref().expect("the floor is cut");
+    let toward = DVec3::new(0.3, 0.8, -0.5).normalize();
+    let position = crate::light::sun::SunPosition::from_direction(toward).unwrap();
+    scene.lights.sun = Some(crate::light::sun::Sun::new(position, DVec3::ONE, 0.53).unwrap());
+    let parts = conform(&scene, Cuts::Contacts);
+    let floor = parts[0].as_ref().expect("the floor is cut");
+    let total: f64 = floor.iter().map(|q| area3(&q.vertices)).sum();
+    assert!(
+        (total - 4.0).abs() < 1e-12,
+        "the parts tile the floor: {total}"
+    );
+    assert!(
+        floor.len() > plain.len(),
+        "{} parts, {} before",
+        floor.len(),
+        plain.len()
+    );
+    let away = DVec3::new(-toward.x, 0.0, -toward.z).normalize();
+    // Each part meeting an apex lists it: the distinct ones.
+    let mut apexes: Vec<DVec3> = Vec::new();
+    for &c in floor.iter().flat_map(|q| &q.apexes) {
+        if !apexes.contains(&c) {
+            apexes.push(c);
+        }
+    }
+    // Two corners cast the umbra's sides, and the one between them, behind
+    // the box, its own line: three of the four run into the floor.
+    assert_eq!(apexes.len(), 3, "{apexes:?}");
+    for &c in &apexes {
+        assert!(
+            base.iter().any(|&b| (b - c).length() < 1e-12),
+            "apex {c} is no corner"
+        );
+        assert!(
+            inside_base(&base, c + away * 1e-6) <= 0.0,
+            "its line runs under the box"
+        );
+        let edge = floor.iter().filter(|q| q.apexes.contains(&c)).any(|q| {
+            q.vertices.iter().any(|&v| {
+                let e = v - c;
+                e.length() > 1e-9 && e.normalize().dot(away) > 1.0 - 1e-12
+            })
+        });
+        assert!(edge, "no edge from apex {c} away from the sun");
+    }
+}
