@@ -30,14 +30,22 @@ pub(super) struct DirField<'s, 'a> {
     pub(super) replay: &'s [DirSource<'a>],
     /// Whether the current shot is the last of `replay`.
     pub(super) current_recorded: bool,
+    /// The lights' shot: the sun's and the lamps' shadows are hard, so
+    /// glossy elements across their edges split below the α floor
+    /// ([`DirField::crosses_shadow`]). A patch's penumbra is as wide as the
+    /// patch looks, and keeps the floor.
+    pub(super) hard_shadows: bool,
     /// New glossy vertices gather their near patches' shot light.
     pub(super) near: near_gather::NearGather<'s>,
 }
 
 impl DirField<'_, '_> {
-    /// Whether a shadow's edge crosses leaf `e`: its corners saw different
-    /// shares of this shot's source.
+    /// Whether a hard shadow's edge crosses leaf `e`: in the lights' shot,
+    /// its corners saw different shares of the lights.
     fn crosses_shadow(&self, mesh: &Mesh, e: u32) -> bool {
+        if !self.hard_shadows {
+            return false;
+        }
         let corners = mesh.elements[e as usize].corners();
         let first = self.visible[corners[0] as usize];
         corners.iter().any(|&v| self.visible[v as usize] != first)
@@ -71,8 +79,8 @@ impl Field for DirField<'_, '_> {
         } else {
             // A glossy surface also splits where its diffuse proxy (its
             // mean radiance, or E/π when textured) changes by the diffuse
-            // test: across a shadow's edge below the α floor, since the
-            // lobe blurs directions but not a step in visibility across
+            // test: across a hard shadow's edge below the α floor, since
+            // the lobe blurs directions but not a step in visibility across
             // the surface (a sun patch's edge on a polished floor); and,
             // textured, above the floor where E/π changes.
             should_split_sh(mesh, self.d, self.visible, criteria, e)

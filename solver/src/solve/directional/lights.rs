@@ -176,6 +176,7 @@ impl Transport for DirLightsShot<'_> {
                 shot: &replay[0],
                 replay: &replay,
                 current_recorded: true,
+                hard_shadows: true,
                 near: near_gather::NearGather {
                     patch_weights: &s.patches.weights,
                     hidden: &s.field.hidden,

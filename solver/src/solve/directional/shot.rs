@@ -166,6 +166,7 @@ impl Transport for ShShot<'_> {
                 shot: &dir_shot,
                 replay: &replay,
                 current_recorded: recorded,
+                hard_shadows: false,
                 near: near_gather::NearGather {
                     patch_weights: &s.patches.weights,
                     hidden: &s.field.hidden,
