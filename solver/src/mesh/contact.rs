@@ -243,10 +243,10 @@ impl ShadowCasters {
             .map(|&p| frame.project(p))
             .collect();
         if !emitter.is_empty() {
-            groups.push(Caster::Emitter(emitter));
+            groups.push(Caster::Points(emitter));
         }
         for lamp in self.lamps.iter().filter(above) {
-            groups.push(Caster::Lamp(frame.project(*lamp)));
+            groups.push(Caster::Points(vec![frame.project(*lamp)]));
         }
         if let Some(sun) = self.sun.filter(|s| s.dot(frame.n) > 0.0) {
             let along = DVec2::new(sun.dot(frame.t), sun.dot(frame.b));
@@ -260,37 +260,22 @@ impl ShadowCasters {
 
 /// One group of shadow casters as seen in a receiver's plane.
 enum Caster {
-    /// An emitter's vertices (projected): a line leaves every corner away
-    /// from each.
-    Emitter(Vec<DVec2>),
-    /// A lamp (projected): lines leave the footprint's silhouette corners
-    /// as seen from it.
-    Lamp(DVec2),
-    /// The sun: lines leave the silhouette corners along this direction.
+    /// Points (projected): the lines leave a corner away from each.
+    Points(Vec<DVec2>),
+    /// A light at infinity: the lines leave every corner along this
+    /// direction.
     Direction(DVec2),
 }
 
 impl Caster {
-    /// The directions of the shadow lines from corner `c` of `hull`. A
-    /// lamp's or the sun's only from the corners whose line is tangent to
-    /// the footprint, the umbra's sides: a column's other corners would
-    /// cut its umbra into slivers that refinement cannot split.
-    fn directions(&self, c: DVec2, hull: &[DVec2], snap: f64) -> Vec<DVec2> {
-        let tangent = |d: DVec2| {
-            let sides = hull.iter().map(|&q| d.perp_dot(q - c));
-            sides.clone().all(|x| x >= -snap) || sides.clone().all(|x| x <= snap)
-        };
+    /// The directions of the shadow lines from corner `c`.
+    fn directions(&self, c: DVec2) -> Vec<DVec2> {
         match self {
-            Caster::Emitter(points) => points
+            Caster::Points(points) => points
                 .iter()
                 .filter_map(|&l| (c - l).try_normalize())
                 .collect(),
-            Caster::Lamp(l) => (c - *l)
-                .try_normalize()
-                .filter(|&d| tangent(d))
-                .into_iter()
-                .collect(),
-            Caster::Direction(d) => Some(*d).filter(|&d| tangent(d)).into_iter().collect(),
+            Caster::Direction(d) => vec![*d],
         }
     }
 }
@@ -601,7 +586,7 @@ fn cut_shadow_lines(
         for &c in hull {
             let mut split = false;
             for caster in casters {
-                let directions = caster.directions(c, hull, snap);
+                let directions = caster.directions(c);
                 if !narrow(&directions) {
                     continue;
                 }
