@@ -6,10 +6,22 @@ use super::near_gather;
 use super::receive::{DirScratch, ReceivedSh};
 use super::split::should_split_sh;
 use super::Directional;
+use crate::geometry::visibility::Occluder;
 use crate::mesh::{Mesh, NewVertex};
+use crate::settings::SolverSettings;
 use crate::solve::refine::{Criteria, Field};
+use crate::solve::state::{Materials, PatchLight, VertexField};
 use glam::DVec3;
 use rayon::prelude::*;
+
+/// The solver's parts a directional shot's refinement reads beside the
+/// mesh and the vertex field it changes.
+pub(super) struct SolverParts<'s> {
+    pub patches: &'s PatchLight,
+    pub materials: &'s Materials,
+    pub settings: &'s SolverSettings,
+    pub occluder: &'s Occluder,
+}
 
 /// Directional mode's [`Field`] for adaptive subdivision: the same driver,
 /// candidates, splits and replay of recorded (emitter) shots as the diffuse
@@ -39,7 +51,49 @@ pub(super) struct DirField<'s, 'a> {
     pub(super) near: near_gather::NearGather<'s>,
 }
 
-impl DirField<'_, '_> {
+impl<'s, 'a> DirField<'s, 'a> {
+    /// The field of one shot over the solver's vertex state `field`:
+    /// `shot`, the recorded shots `replay` (ending with `shot` when it is
+    /// recorded: `current_recorded`), whether its shadows are hard (the
+    /// lights'), and what new glossy vertices' near gather reads.
+    pub(super) fn of_shot(
+        d: &'s mut Directional,
+        field: &'s mut VertexField,
+        solver: SolverParts<'s>,
+        shot: &'s DirSource<'a>,
+        replay: &'s [DirSource<'a>],
+        (current_recorded, hard_shadows): (bool, bool),
+    ) -> Self {
+        let VertexField {
+            radiance,
+            received,
+            visible,
+            direct,
+            hidden,
+        } = field;
+        DirField {
+            d,
+            radiance,
+            received,
+            visible,
+            direct,
+            kd: &solver.materials.kd,
+            shot,
+            replay,
+            current_recorded,
+            hard_shadows,
+            near: near_gather::NearGather {
+                patch_weights: &solver.patches.weights,
+                hidden,
+                emission: &solver.materials.emission,
+                settings: solver.settings,
+                occluder: solver.occluder,
+                kd: &solver.materials.kd,
+                reach: near_gather::NEAR_REACH,
+            },
+        }
+    }
+
     /// Whether a hard shadow's edge crosses leaf `e`: in the lights' shot,
     /// its corners saw different shares of the lights.
     fn crosses_shadow(&self, mesh: &Mesh, e: u32) -> bool {

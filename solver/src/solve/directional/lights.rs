@@ -23,8 +23,7 @@
 //! vertex's `direct` part, and vertices created later receive it exactly,
 //! first of the replayed shots ([`DirSource::Lights`]).
 
-use super::field::DirField;
-use super::near_gather;
+use super::field::{DirField, SolverParts};
 use super::receive::{DirScratch, DirShot, ReceivedSh, Reflector, Tables};
 use super::shot::{finish_shot, receive_all};
 use super::Directional;
@@ -166,27 +165,19 @@ impl Transport for DirLightsShot<'_> {
         let mut split_budget = s.split_budget(Some(d));
         let refined = refine::refine_field(
             &mut s.mesh,
-            &mut DirField {
-                d: &mut *d,
-                radiance: &mut s.field.radiance,
-                received: &mut s.field.received,
-                visible: &mut s.field.visible,
-                direct: &mut s.field.direct,
-                kd,
-                shot: &replay[0],
-                replay: &replay,
-                current_recorded: true,
-                hard_shadows: true,
-                near: near_gather::NearGather {
-                    patch_weights: &s.patches.weights,
-                    hidden: &s.field.hidden,
-                    emission: &s.materials.emission,
+            &mut DirField::of_shot(
+                d,
+                &mut s.field,
+                SolverParts {
+                    patches: &s.patches,
+                    materials: &s.materials,
                     settings: &s.settings,
                     occluder: &s.occluder,
-                    kd,
-                    reach: near_gather::NEAR_REACH,
                 },
-            },
+                &replay[0],
+                &replay,
+                (true, true),
+            ),
             &criteria,
             &mut split_budget,
         );

@@ -4,9 +4,8 @@
 //! the pipeline's source choice, convergence test and L = 0 refinement are
 //! the diffuse solve's.
 
-use super::field::DirField;
+use super::field::{DirField, SolverParts};
 use super::lights::{DirLights, DirSource};
-use super::near_gather;
 use super::receive::{DirScratch, DirShot, ReceivedSh, Tables};
 use super::{quadrant_scale, Directional, SourceChoice};
 use crate::mesh::Mesh;
@@ -156,27 +155,19 @@ impl Transport for ShShot<'_> {
         let criteria = s.refine_criteria(source.ambient);
         let refined = refine::refine_field(
             &mut s.mesh,
-            &mut DirField {
-                d: &mut *d,
-                radiance: &mut s.field.radiance,
-                received: &mut s.field.received,
-                visible: &mut s.field.visible,
-                direct: &mut s.field.direct,
-                kd: &s.materials.kd,
-                shot: &dir_shot,
-                replay: &replay,
-                current_recorded: recorded,
-                hard_shadows: false,
-                near: near_gather::NearGather {
-                    patch_weights: &s.patches.weights,
-                    hidden: &s.field.hidden,
-                    emission: &s.materials.emission,
+            &mut DirField::of_shot(
+                d,
+                &mut s.field,
+                SolverParts {
+                    patches: &s.patches,
+                    materials: &s.materials,
                     settings: &s.settings,
                     occluder: &s.occluder,
-                    kd: &s.materials.kd,
-                    reach: near_gather::NEAR_REACH,
                 },
-            },
+                &dir_shot,
+                &replay,
+                (recorded, false),
+            ),
             &criteria,
             &mut split_budget,
         );
