@@ -137,7 +137,8 @@ pub struct ReferenceArgs {
         long,
         value_parser = crate::settings::solve_mode_parser(),
         value_name = "MODE",
-        long_help = "As `solver solve --mode`: diffuse ignores Ks (as the solver does); \
+        long_help = "As `solver solve --mode`: diffuse folds Ks into Kd (per channel, capped at \
+            1, as the solver does); \
             directional reflects Ks through the exact glossy lobe of Remington 1992 \
             eq. 4.2 (no spherical-harmonic truncation). Default: the scene config's \
             mode, else diffuse."

@@ -1,5 +1,7 @@
 //! A scene material as the reference path tracer reflects it: Lambertian Kd
 //! plus, in directional mode, Ks times the exact glossy lobe ([`ExactLobe`]);
+//! in diffuse mode Kd with Ks folded in, as the solver does
+//! (`scene::Material::diffuse_equivalent_kd`, applied by `RenderScene::new`);
 //! one-sided (nothing is reflected or emitted below the surface).
 //!
 //! Sampling is a one-sample mixture of the cosine-weighted hemisphere (for Kd)
@@ -17,7 +19,7 @@ use std::sync::Arc;
 #[derive(Clone, Debug)]
 pub struct Bsdf {
     pub kd: DVec3,
-    /// Glossy reflectance; zero in diffuse mode (Ks is ignored there, as by the solver).
+    /// Glossy reflectance; zero in diffuse mode (Ks is folded into Kd there, as by the solver).
     pub ks: DVec3,
     pub lobe: Option<Arc<ExactLobe>>,
     /// Emitted radiance toward the front side.

@@ -107,7 +107,12 @@ impl RenderScene {
             .materials
             .iter()
             .map(|m| {
-                let lobe = if glossy && m.is_glossy() {
+                if !glossy {
+                    // Diffuse mode: the solver's fold of the specular albedo
+                    // into Kd, so that the truth agrees with what it solves.
+                    return Bsdf::new(m.diffuse_equivalent_kd(), DVec3::ZERO, None, m.emission);
+                }
+                let lobe = if m.is_glossy() {
                     lobes.get(&m.alpha.to_bits()).cloned()
                 } else {
                     None

@@ -151,6 +151,24 @@ impl Material {
     pub fn is_glossy(&self) -> bool {
         self.ks.max_element() > 0.0
     }
+    /// The diffuse reflectance that stands for this material in diffuse mode:
+    /// Kd plus the glossy lobe's specular albedo, per channel, capped at 1.
+    /// The lobe is normalised so that its cosine-weighted hemispherical
+    /// integral is Ks at every incidence (Remington 1992's `C_R`;
+    /// `brdf::GlossyLobe::albedo`), so Ks is the fraction of the incident
+    /// power it reflects, and a Lambertian Kd + Ks reflects the same power,
+    /// only spread evenly instead of about the mirror direction. Without
+    /// the fold a metal (Kd = 0) would be black in diffuse mode. The cap
+    /// only matters for inputs the importer has not already scaled (it
+    /// keeps Kd + Ks ≤ 1). A diffuse texture multiplies the result as it
+    /// multiplies Kd, so on a textured material the texture scales Ks too:
+    /// what glTF's metallic-roughness model does for a metal (its specular
+    /// colour is the textured base colour), and less than an MTL's flat Ks
+    /// where the texture is dark. The solver ([`crate::solve::Solver::new`])
+    /// and the reference path tracer both call this, so that they agree.
+    pub fn diffuse_equivalent_kd(&self) -> DVec3 {
+        (self.kd + self.ks).min(DVec3::ONE)
+    }
     /// The reflectance at texture coordinate `uv` (bilinear texture sample
     /// times Kd), or the flat Kd when the material has no texture or the
     /// point no UV.

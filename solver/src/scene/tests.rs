@@ -1042,3 +1042,28 @@ fn mtl_statements_not_modelled_reach_the_scene_warnings_for_used_materials_only(
         other => panic!("{other:?}"),
     }
 }
+
+#[test]
+fn diffuse_equivalent_kd_adds_ks_per_channel_and_caps_at_one() {
+    let mut m = Material {
+        name: "gold".into(),
+        kd: DVec3::ZERO,
+        ks: DVec3::ZERO,
+        alpha: 0.2,
+        emission: DVec3::ZERO,
+        diffuse_texture: None,
+        emission_texture: None,
+    };
+    // A gold metal: Kd = 0, Ks = the base colour. Exact in binary, so the
+    // sums compare exactly.
+    m.ks = DVec3::new(1.0, 0.75, 0.25);
+    assert_eq!(m.diffuse_equivalent_kd(), DVec3::new(1.0, 0.75, 0.25));
+    // Each channel on its own: Kd + Ks where below 1, 1 where above.
+    m.kd = DVec3::new(0.5, 0.125, 0.0);
+    assert_eq!(m.diffuse_equivalent_kd(), DVec3::new(1.0, 0.875, 0.25));
+    m.kd = DVec3::new(0.75, 0.5, 0.5);
+    assert_eq!(m.diffuse_equivalent_kd(), DVec3::new(1.0, 1.0, 0.75));
+    // A diffuse material is unchanged.
+    m.ks = DVec3::ZERO;
+    assert_eq!(m.diffuse_equivalent_kd(), m.kd);
+}

@@ -160,7 +160,8 @@ settings_patch! {
             long,
             value_parser = solve_mode_parser(),
             value_name = "MODE",
-            long_help = "diffuse (default): one radiance per vertex, MTL Ks ignored. \
+            long_help = "diffuse (default): one radiance per vertex; a glossy material's Ks is \
+                folded into its Kd (per channel, capped at 1), with a warning. \
                 directional: glossy surfaces store outgoing radiance as spherical \
                 harmonics, so highlights follow the viewer, at a cost in time and file \
                 size that grows with the square of the SH order.",

@@ -213,34 +213,37 @@ pub struct DirectionalCheckpoint {
     pub shot_sum: Vec<u64>,
 }
 
-/// The warning for a diffuse solve of a scene with glossy materials (design
-/// notes, "Directional mode": say which materials were treated as diffuse and
-/// how to opt in). `None` when no used material has Ks > 0.
-pub fn diffuse_mode_warning(scene: &Scene, mesh: &Mesh) -> Option<String> {
+/// The warnings for a diffuse solve of a scene with glossy materials (design
+/// notes, "Directional mode"), one per used material with Ks > 0: its
+/// specular albedo was folded into its diffuse reflectance
+/// ([`crate::scene::Material::diffuse_equivalent_kd`]), and `--mode
+/// directional` shows its glossy lobe properly. Empty when no used material
+/// is glossy.
+pub fn diffuse_mode_warning(scene: &Scene, mesh: &Mesh) -> Vec<String> {
     let mut used = vec![false; scene.materials.len()];
     for s in &mesh.surfaces {
         used[s.material] = true;
     }
-    let names: Vec<&str> = scene
+    let rgb = |v: glam::DVec3| format!("({:.3}, {:.3}, {:.3})", v.x, v.y, v.z);
+    scene
         .materials
         .iter()
         .zip(&used)
         .filter(|(m, &u)| u && m.is_glossy())
-        .map(|(m, _)| m.name.as_str())
-        .collect();
-    if names.is_empty() {
-        return None;
-    }
-    Some(format!(
-        "diffuse mode: material(s) {} have Ks > 0 and were treated as diffuse (Ks ignored); \
-         solve with `--mode directional` (or `mode = \"directional\"` in the scene config) to \
-         reflect their glossy lobes",
-        names
-            .iter()
-            .map(|n| format!("`{n}`"))
-            .collect::<Vec<_>>()
-            .join(", ")
-    ))
+        .map(|(m, _)| {
+            format!(
+                "diffuse mode: material `{}` is glossy (Ks {}); its specular albedo was folded \
+                 into its diffuse reflectance (Kd {} became {}, per channel, capped at 1), so \
+                 it reflects as much light but spreads it evenly; solve with `--mode \
+                 directional` (or `mode = \"directional\"` in the scene config) to show its \
+                 glossy reflection properly",
+                m.name,
+                rgb(m.ks),
+                rgb(m.kd),
+                rgb(m.diffuse_equivalent_kd())
+            )
+        })
+        .collect()
 }
 
 impl Directional {
@@ -539,14 +542,14 @@ impl Solver {
         }
     }
 
-    /// Warnings of the set-up: glossy materials treated as diffuse, SH orders
+    /// Warnings of the set-up: glossy materials folded into diffuse, SH orders
     /// capped. The command line prints them.
     pub fn warnings(&self) -> &[String] {
         &self.warnings.setup
     }
 
     /// Sets up directional mode (called by [`Solver::new`]) or, in diffuse mode,
-    /// records the warning for glossy materials treated as diffuse.
+    /// records a warning per glossy material folded into diffuse.
     pub(super) fn init_directional(&mut self, scene: &Scene) -> Result<(), SolveError> {
         if self.settings.mode != solution::format::SolveMode::Directional {
             self.warnings

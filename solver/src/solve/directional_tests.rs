@@ -354,14 +354,18 @@ fn glossy_floor_solves_to_batches_of_order_zero_and_above() {
 }
 
 #[test]
-fn diffuse_solve_of_a_glossy_scene_warns_naming_the_materials_and_the_flag() {
+fn diffuse_solve_of_a_glossy_scene_warns_once_per_glossy_material_naming_the_fold_and_the_flag() {
     let (scene, mut settings) = glossy_floor();
     settings.mode = SolveMode::Diffuse;
+    let glossy = scene.materials.iter().filter(|m| m.is_glossy()).count();
+    assert_eq!(glossy, 1, "the config's one glossy material");
     let solver = Solver::new(&scene, &settings).unwrap();
-    assert_eq!(solver.warnings().len(), 1);
+    assert_eq!(solver.warnings().len(), 1, "{:?}", solver.warnings());
     let w = &solver.warnings()[0];
     assert!(
-        w.contains("`glossy_floor`") && w.contains("--mode directional"),
+        w.contains("`glossy_floor`")
+            && w.contains("folded into its diffuse reflectance")
+            && w.contains("--mode directional"),
         "{w}"
     );
     assert!(!w.contains("`white`"), "{w}");

@@ -460,7 +460,8 @@ fn record_in_settings(settings_json: &mut String, record: serde_json::Value) {
     }
 }
 
-/// Per patch its reflectance: the material's Kd, or on a textured surface
+/// Per patch its reflectance: the material's Kd (with its specular albedo
+/// folded in, [`crate::scene::Material::diffuse_equivalent_kd`]), or on a textured surface
 /// the mean of ρ = Kd ⊙ texture over the patch, Σ_v w_v / A from its RGB
 /// gather weights (exact integrals of the texture, `solve/textured.rs`).
 fn patch_reflectance(solver: &Solver, scene: &Scene) -> Vec<DVec3> {
@@ -472,7 +473,9 @@ fn patch_reflectance(solver: &Solver, scene: &Scene) -> Vec<DVec3> {
             Some(w) if !w.is_empty() && patch.area > 0.0 => {
                 w.iter().map(|e| e.1).sum::<DVec3>() / patch.area
             }
-            _ => scene.materials[mesh.surfaces[patch.surface as usize].material].kd,
+            // Diffuse mode only, as the solver's own reflectance.
+            _ => scene.materials[mesh.surfaces[patch.surface as usize].material]
+                .diffuse_equivalent_kd(),
         })
         .collect()
 }

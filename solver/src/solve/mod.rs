@@ -250,7 +250,8 @@ impl Solver {
         let texturing = textured::SurfaceTexturing::new(scene, &mesh, offset);
         let scene_bytes = budget::scene_bytes(scene);
         check_unrefined(scene, settings, &mesh, &texturing, scene_bytes)?;
-        let (materials, patch_emission) = state::Materials::new(scene, &mesh, texturing);
+        let (materials, patch_emission) =
+            state::Materials::new(scene, &mesh, texturing, settings.mode);
         let patches = state::PatchLight::new(&mesh, &materials, patch_emission);
         let emitted_power: f64 = mesh
             .patches

@@ -84,6 +84,25 @@ fn furnace_converges_to_le_over_one_minus_rho() {
 }
 
 #[test]
+fn metal_furnace_in_diffuse_mode_reflects_its_specular_albedo() {
+    // A closed cube of a metal (Kd = 0, Ks = 0.5) emitting Le = 1: the glossy
+    // lobe reflects Ks of the incident power at every incidence (its
+    // normalization, `brdf::GlossyLobe::albedo`), so in diffuse mode, where Ks
+    // is folded into Kd, the furnace is the diffuse one for ρ = 0.5:
+    // L = Le / (1 − ρ) = 2, with the same ≈ ρ × unshot error as above
+    // (threshold 0.002, so 1% holds). Without the fold it would be 1 (Le only).
+    let mut scene = furnace(0.0, 2);
+    scene.materials[0].ks = DVec3::splat(0.5);
+    scene.materials[0].alpha = 0.2;
+    let mut solver = Solver::new(&scene, &furnace_settings(0.002)).unwrap();
+    assert_eq!(solver.warnings().len(), 1, "{:?}", solver.warnings());
+    while solver.step().is_some() {}
+    let err = worst_error(&solver, 2.0);
+    println!("metal furnace Ks = 0.5: worst relative error {err:.2e}");
+    assert!(err < 0.01, "{err}");
+}
+
+#[test]
 fn furnace_near_unit_reflectance_error_is_bounded_by_unshot_and_falls() {
     // ρ = 0.999 in a small cube (one patch per face): far from converged after
     // 300 shots, but every vertex's error must stay within the unshot fraction

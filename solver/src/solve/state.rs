@@ -7,6 +7,7 @@ use super::{footprint, group_shot, sites, small, textured, twins, unshot_tree};
 use crate::mesh::Mesh;
 use crate::scene::Scene;
 use glam::DVec3;
+use solution::format::SolveMode;
 
 /// What the solution header needs of the scene, and where the solver's
 /// coordinates sit in it.
@@ -151,19 +152,34 @@ impl Materials {
     /// directional: `directional/textured.rs`, whose SH start from the same
     /// per-surface and per-patch emission). Also returns, per patch of an
     /// emission-textured surface, the mean Le it shoots (`textured.rs`); the
-    /// surface's vertices start at its mean Le.
+    /// surface's vertices start at its mean Le. In diffuse `mode` a glossy
+    /// material reflects its diffuse equivalent
+    /// ([`crate::scene::Material::diffuse_equivalent_kd`]), textured or not.
     pub fn new(
         scene: &Scene,
         mesh: &Mesh,
-        texturing: textured::SurfaceTexturing,
+        mut texturing: textured::SurfaceTexturing,
+        mode: SolveMode,
     ) -> (Materials, Vec<Option<DVec3>>) {
+        let material_kd = |material: usize| {
+            let m = &scene.materials[material];
+            match mode {
+                SolveMode::Diffuse => m.diffuse_equivalent_kd(),
+                SolveMode::Directional => m.kd,
+            }
+        };
+        for (s, t) in mesh.surfaces.iter().zip(&mut texturing.per_surface) {
+            if let Some(t) = t {
+                t.kd = material_kd(s.material);
+            }
+        }
         let albedo: Vec<DVec3> = mesh
             .surfaces
             .iter()
             .zip(&texturing.per_surface)
             .map(|(s, t)| match t {
                 Some(t) => t.kd * t.texture.texture.mean(),
-                None => scene.materials[s.material].kd,
+                None => material_kd(s.material),
             })
             .collect();
         let kd: Vec<DVec3> = (0..mesh.surfaces.len())
