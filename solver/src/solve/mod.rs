@@ -851,6 +851,8 @@ mod hidden_tests;
 #[cfg(test)]
 mod lights_tests;
 #[cfg(test)]
+mod metal_tests;
+#[cfg(test)]
 mod physics_tests;
 #[cfg(test)]
 mod portal_detect_tests;
