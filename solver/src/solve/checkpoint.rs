@@ -571,6 +571,24 @@ impl Solver {
             ));
         }
         let mut solver = Solver::new(scene, settings)?;
+        // The mode before the fingerprint: diffuse mode folds glossy
+        // materials' Ks into the reflectances the fingerprint hashes, and
+        // the mode is the more useful thing to name.
+        let name = |directional: bool| {
+            if directional {
+                "directional"
+            } else {
+                "diffuse"
+            }
+        };
+        let written = checkpoint.directional.is_some();
+        if written != (settings.mode == solution::format::SolveMode::Directional) {
+            return mismatch(format!(
+                "it was written by a {} solve, this one is {}",
+                name(written),
+                name(!written)
+            ));
+        }
         if checkpoint.fingerprint != solver.fingerprint() {
             return mismatch(format!(
                 "its scene fingerprint is {:016x}, this scene's is {:016x} (another scene, or \
