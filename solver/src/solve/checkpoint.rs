@@ -462,6 +462,29 @@ fn read_directional<R: Read>(
     ))
 }
 
+/// Refuses a checkpoint written in the other mode. Checked before the
+/// fingerprint: diffuse mode folds glossy materials' Ks into the
+/// reflectances the fingerprint hashes, and the mode is the more useful
+/// thing to name.
+fn check_mode(checkpoint: &Checkpoint, settings: &SolverSettings) -> Result<(), SolveError> {
+    let name = |directional: bool| {
+        if directional {
+            "directional"
+        } else {
+            "diffuse"
+        }
+    };
+    let written = checkpoint.directional.is_some();
+    if written == (settings.mode == solution::format::SolveMode::Directional) {
+        return Ok(());
+    }
+    Err(SolveError::CheckpointMismatch(format!(
+        "it was written by a {} solve, this one is {}",
+        name(written),
+        name(!written)
+    )))
+}
+
 impl Solver {
     /// Writes the state between shots to `w`, section by section straight from
     /// the solver's own arrays (no copy of the state is made; buffer `w`).
@@ -571,24 +594,7 @@ impl Solver {
             ));
         }
         let mut solver = Solver::new(scene, settings)?;
-        // The mode before the fingerprint: diffuse mode folds glossy
-        // materials' Ks into the reflectances the fingerprint hashes, and
-        // the mode is the more useful thing to name.
-        let name = |directional: bool| {
-            if directional {
-                "directional"
-            } else {
-                "diffuse"
-            }
-        };
-        let written = checkpoint.directional.is_some();
-        if written != (settings.mode == solution::format::SolveMode::Directional) {
-            return mismatch(format!(
-                "it was written by a {} solve, this one is {}",
-                name(written),
-                name(!written)
-            ));
-        }
+        check_mode(&checkpoint, settings)?;
         if checkpoint.fingerprint != solver.fingerprint() {
             return mismatch(format!(
                 "its scene fingerprint is {:016x}, this scene's is {:016x} (another scene, or \
