@@ -36,7 +36,6 @@ fn write_scene(dir: &std::path::Path) -> std::path::PathBuf {
         .flatten()
         .flat_map(|v| v.to_le_bytes())
         .collect();
-    std::fs::write(dir.join("room.bin"), &bin).unwrap();
     let half = std::f64::consts::FRAC_1_SQRT_2;
     let doc = json!({
         "asset": {"version": "2.0"},
@@ -62,9 +61,41 @@ fn write_scene(dir: &std::path::Path) -> std::path::PathBuf {
         "accessors": [{"bufferView": 0, "componentType": 5126, "count": 12, "type": "VEC3",
                        "min": [-2.0, 0.0, -2.0], "max": [2.0, 3.0, 2.0]}]
     });
+    write_gltf(dir, &bin, &doc)
+}
+
+/// Writes `bin` as `room.bin` and `doc` (whose buffer names it) as
+/// `room.gltf` in `dir`; returns the glTF's path.
+pub(super) fn write_gltf(
+    dir: &std::path::Path,
+    bin: &[u8],
+    doc: &serde_json::Value,
+) -> std::path::PathBuf {
+    std::fs::write(dir.join("room.bin"), bin).unwrap();
     let path = dir.join("room.gltf");
-    std::fs::write(&path, serde_json::to_vec(&doc).unwrap()).unwrap();
+    std::fs::write(&path, serde_json::to_vec(doc).unwrap()).unwrap();
     path
+}
+
+/// The path tracer's mean radiance toward `eye` from `target` over `n`
+/// paths, and its standard error, per channel.
+pub(super) fn traced(
+    tracer: &Integrator,
+    eye: DVec3,
+    target: DVec3,
+    rng: &mut Rng,
+    n: usize,
+) -> (DVec3, DVec3) {
+    let samples: Vec<DVec3> = (0..n)
+        .map(|_| tracer.radiance(eye, (target - eye).normalize(), rng))
+        .collect();
+    let mean = samples.iter().sum::<DVec3>() / n as f64;
+    let var = samples
+        .iter()
+        .map(|s| (*s - mean) * (*s - mean))
+        .sum::<DVec3>()
+        / (n - 1) as f64;
+    (mean, (var / n as f64).map(f64::sqrt))
 }
 
 #[test]
@@ -106,14 +137,8 @@ fn gltf_point_and_spot_lights_agree_with_the_path_tracer() {
         // The vertex in the path tracer's (the scene's recentred) frame.
         let p = mesh.vertices[v as usize].position + to_scene;
         let eye = p + DVec3::new(0.1, 1.0, 0.05);
-        let mut rng = Rng::new(7, v as u64);
-        let n = 4000;
-        let samples: Vec<f64> = (0..n)
-            .map(|_| tracer.radiance(eye, (p - eye).normalize(), &mut rng).x)
-            .collect();
-        let mean = samples.iter().sum::<f64>() / n as f64;
-        let var = samples.iter().map(|s| (s - mean).powi(2)).sum::<f64>() / (n - 1) as f64;
-        let se = (var / n as f64).sqrt();
+        let (mean, se) = traced(&tracer, eye, p, &mut Rng::new(7, v as u64), 4000);
+        let (mean, se) = (mean.x, se.x);
         let solved = solver.vertex_radiance()[v as usize].x;
         assert!(
             (solved - mean).abs() < 0.03 * mean + 4.0 * se,

@@ -10,6 +10,7 @@ use crate::geometry::sampling::Rng;
 use crate::reference::{Integrator, Physics, RenderScene};
 use crate::scene::{load_scene, ImportOptions};
 use crate::settings::Preset;
+use crate::solve::gltf_lights_tests::{traced, write_gltf};
 use serde_json::json;
 
 /// Gold's specular colour at normal incidence, linear RGB (the usual
@@ -141,7 +142,6 @@ fn write_scene(dir: &std::path::Path) -> std::path::PathBuf {
         primitives.push(json!({"attributes": {"POSITION": i}, "material": i}));
         bin.extend(bytes);
     }
-    std::fs::write(dir.join("room.bin"), &bin).unwrap();
     let doc = json!({
         "asset": {"version": "2.0"},
         "scene": 0,
@@ -162,9 +162,7 @@ fn write_scene(dir: &std::path::Path) -> std::path::PathBuf {
         "bufferViews": views,
         "accessors": accessors
     });
-    let path = dir.join("room.gltf");
-    std::fs::write(&path, serde_json::to_vec(&doc).unwrap()).unwrap();
-    path
+    write_gltf(dir, &bin, &doc)
 }
 
 #[test]
@@ -202,16 +200,15 @@ fn gltf_gold_sphere_in_diffuse_mode_has_the_path_tracers_colour() {
     let start = std::time::Instant::now();
     while solver.step().is_some() {}
     let seconds = start.elapsed().as_secs_f64();
+    // The path tracer works in the scene's recentred frame, which is the
+    // solver's plus `to_scene`; the file's is that plus the recentring.
+    let (mesh, to_scene) = (solver.mesh(), solver.offset());
+    let to_input = to_scene + scene.recentre_offset;
     let render = RenderScene::new(&scene, Physics::default());
     let tracer = Integrator {
         scene: &render,
         max_depth: None,
     };
-    // Solver positions plus `to_scene` are the scene's (recentred) ones,
-    // plus `to_input` the file's.
-    let to_scene = solver.offset();
-    let to_input = to_scene + scene.recentre_offset;
-    let mesh = solver.mesh();
     let centre = DVec3::from_array(CENTRE.map(f64::from));
     let on_sphere: Vec<u32> = (0..mesh.vertices.len() as u32)
         .filter(|&v| mesh.surfaces[mesh.vertices[v as usize].surface as usize].material == gold)
@@ -228,18 +225,7 @@ fn gltf_gold_sphere_in_diffuse_mode_has_the_path_tracers_colour() {
         // this facet and not its neighbour, in the path tracer's frame.
         let p = (vertex.position + 1e-4 * (vertex.inward - vertex.position)) + to_scene;
         let eye = p + 0.3 * vertex.normal;
-        let mut rng = Rng::new(11, v as u64);
-        let n = 20000;
-        let samples: Vec<DVec3> = (0..n)
-            .map(|_| tracer.radiance(eye, (p - eye).normalize(), &mut rng))
-            .collect();
-        let mean = samples.iter().sum::<DVec3>() / n as f64;
-        let var = samples
-            .iter()
-            .map(|s| (*s - mean) * (*s - mean))
-            .sum::<DVec3>()
-            / (n - 1) as f64;
-        let se = (var / n as f64).map(f64::sqrt);
+        let (mean, se) = traced(&tracer, eye, p, &mut Rng::new(11, v as u64), 20000);
         let solved = solver.vertex_radiance()[v as usize];
         for k in 0..3 {
             assert!(
