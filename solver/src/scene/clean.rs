@@ -231,7 +231,7 @@ pub const DARK_TEXTURE: f64 = 0.02;
 /// file).
 fn diffuse_texture(
     raw: &RawMaterial,
-    kd: DVec3,
+    (kd, ks): (DVec3, DVec3),
     index: usize,
     polygons: &[Polygon],
     warnings: &mut Vec<Warning>,
@@ -248,7 +248,11 @@ fn diffuse_texture(
         warnings,
     )?;
     let product = kd * texture.texture.mean();
-    if product.max_element() < DARK_TEXTURE {
+    // Not dark when its glossy lobe reflects: a glTF metal (Kd 0) shows its
+    // Ks ⊙ texture in either mode (diffuse mode folds Ks into the factor,
+    // `Material::diffuse_equivalent_kd`).
+    let reflected = (kd + ks).min(DVec3::ONE) * texture.texture.mean();
+    if reflected.max_element() < DARK_TEXTURE {
         warn(
             warnings,
             at,
@@ -677,7 +681,7 @@ fn finish_materials(
                 ),
             });
         }
-        let diffuse_texture = diffuse_texture(m, kd, i, polygons, warnings);
+        let diffuse_texture = diffuse_texture(m, (kd, ks), i, polygons, warnings);
         let emission_texture = emission_texture(m, i, polygons, warnings);
         let material = Material {
             name: m.name.clone(),

@@ -1051,3 +1051,26 @@ fn an_emission_beyond_the_bound_is_refused_naming_the_material() {
         "{text}"
     );
 }
+
+#[test]
+fn a_textured_metal_is_not_warned_dark_but_a_dark_dielectric_is() {
+    // A metal's Kd is 0, so Kd ⊙ texture is black; but its lobe reflects
+    // Ks ⊙ texture (diffuse mode folds Ks into the factor the texture
+    // multiplies), so "very dark reflectance" would be wrong advice. A
+    // dielectric of base colour 0.01 is dark either way (0.01 + Ks 0.04,
+    // times the texture's mean, below the 2% threshold).
+    let dir = tempfile::tempdir().unwrap();
+    let dark = |metallic: f64, base: f64| {
+        let mut f = textured_quad();
+        let pbr = &mut f.json["materials"][0]["pbrMetallicRoughness"];
+        pbr["metallicFactor"] = json!(metallic);
+        pbr["baseColorFactor"] = json!([base, base, base, 1.0]);
+        let scene = load(&write_glb(dir.path(), "quad", &f)).scene;
+        scene
+            .warnings
+            .iter()
+            .any(|w| w.message.contains("very dark reflectance"))
+    };
+    assert!(!dark(1.0, 0.96), "a metal");
+    assert!(dark(0.0, 0.01), "a dark dielectric");
+}
