@@ -77,6 +77,13 @@ fn a_uniform_texture_solves_as_its_flat_reflectance() {
     textured_wall.diffuse_texture = Some(texture(8, |_, _| 180));
     let textured = solve(&room(textured_wall), 20);
     let flat = solve(&room(material("wall", rho, 0.0)), 20);
+    assert_textured_solves_as_flat(&textured, &flat, rho);
+}
+
+/// Asserts that `textured` (whose textured vertices hold E/π) shows the
+/// light of `flat` once its textured vertices are scaled by `reflectance`,
+/// to 1e-9 relative (see above), and has the same unshot fraction.
+fn assert_textured_solves_as_flat(textured: &Solver, flat: &Solver, reflectance: f64) {
     assert!(textured.materials.texturing.any());
     for (v, (e, l)) in textured
         .vertex_radiance()
@@ -86,7 +93,7 @@ fn a_uniform_texture_solves_as_its_flat_reflectance() {
     {
         let surface = textured.mesh.vertices[v].surface;
         let shown = if textured.materials.texturing.get(surface).is_some() {
-            *e * rho
+            *e * reflectance
         } else {
             *e
         };
@@ -97,6 +104,22 @@ fn a_uniform_texture_solves_as_its_flat_reflectance() {
     }
     let (a, b) = (textured.progress(), flat.progress());
     assert!((a.unshot_fraction - b.unshot_fraction).abs() < 1e-9);
+}
+
+#[test]
+fn a_textured_glossy_wall_in_diffuse_mode_folds_ks_into_the_textured_factor() {
+    // Kd 0.25 and Ks 0.5 times a uniform texture of linear ρ (sRGB 180):
+    // diffuse mode folds Ks into the factor the texture multiplies
+    // (`Material::diffuse_equivalent_kd`), so the wall reflects 0.75 ρ, the
+    // light of that flat Kd untextured, to the same 1e-9 as above.
+    let rho = f64::from(crate::texture::srgb_to_linear(180));
+    let mut glossy_wall = material("wall", 0.25, 0.0);
+    glossy_wall.ks = DVec3::splat(0.5);
+    glossy_wall.alpha = 0.3;
+    glossy_wall.diffuse_texture = Some(texture(8, |_, _| 180));
+    let textured = solve(&room(glossy_wall), 20);
+    let flat = solve(&room(material("wall", 0.75 * rho, 0.0)), 20);
+    assert_textured_solves_as_flat(&textured, &flat, 0.75 * rho);
 }
 
 #[test]
