@@ -225,12 +225,19 @@ pub fn diffuse_mode_warning(scene: &Scene, mesh: &Mesh) -> Vec<String> {
         used[s.material] = true;
     }
     let rgb = |v: glam::DVec3| format!("({:.3}, {:.3}, {:.3})", v.x, v.y, v.z);
-    scene
+    let glossy = scene
         .materials
         .iter()
         .zip(&used)
         .filter(|(m, &u)| u && m.is_glossy())
-        .map(|(m, _)| {
+        .map(|(m, _)| m);
+    // A dielectric's faint specular (glTF gives every non-metal Ks = 0.04)
+    // is folded without a warning each: one line counts them.
+    let (faint, strong): (Vec<_>, Vec<_>) =
+        glossy.partition(|m| m.ks.max_element() <= DIELECTRIC_KS);
+    let mut warnings: Vec<String> = strong
+        .iter()
+        .map(|m| {
             format!(
                 "diffuse mode: material `{}` is glossy (Ks {}); its specular albedo was folded \
                  into its diffuse reflectance (Kd {} became {}, per channel, capped at 1), so \
@@ -243,8 +250,21 @@ pub fn diffuse_mode_warning(scene: &Scene, mesh: &Mesh) -> Vec<String> {
                 rgb(m.diffuse_equivalent_kd())
             )
         })
-        .collect()
+        .collect();
+    if let Some(first) = faint.first() {
+        warnings.push(format!(
+            "diffuse mode: {} material(s) with a dielectric's specular albedo (Ks at most \
+             {DIELECTRIC_KS}, `{}` among them) had it folded into their diffuse reflectance",
+            faint.len(),
+            first.name
+        ));
+    }
+    warnings
 }
+
+/// The specular albedo of a dielectric (glTF's F0 = 0.04 for every
+/// non-metal): at or below it, a material's fold is counted, not warned.
+pub const DIELECTRIC_KS: f64 = 0.04;
 
 impl Directional {
     /// Chooses each material's order, builds its lobe, and sets vertex radiance
