@@ -369,6 +369,23 @@ fn diffuse_solve_of_a_glossy_scene_warns_once_per_glossy_material_naming_the_fol
         "{w}"
     );
     assert!(!w.contains("`white`"), "{w}");
+    // Two dielectrics (glTF's Ks = 0.04) beside it: one line counts them.
+    let mut scene = scene;
+    for m in scene.materials.iter_mut().filter(|m| !m.is_glossy()) {
+        m.ks = DVec3::splat(super::directional::DIELECTRIC_KS);
+    }
+    let faint = scene
+        .materials
+        .iter()
+        .filter(|m| m.ks.max_element() == 0.04)
+        .count();
+    let solver = Solver::new(&scene, &settings).unwrap();
+    let warnings = solver.warnings();
+    assert_eq!(warnings.len(), 2, "{warnings:?}");
+    assert!(
+        warnings[1].contains(&format!("{faint} material(s)")),
+        "{warnings:?}"
+    );
 }
 
 #[test]
