@@ -210,11 +210,7 @@ impl Field for DirField<'_, '_> {
                     rays += got.rays as u64;
                     current = Some(got);
                 }
-                let current = current.unwrap_or(ReceivedSh {
-                    coefficients: Vec::new(),
-                    visible: 0,
-                    rays: 0,
-                });
+                let current = current.unwrap_or(ReceivedSh::nothing(Vec::new()));
                 (exact, current, rays)
             })
             .collect();

@@ -58,11 +58,7 @@ impl DirLights<'_> {
         let reflector = Reflector::of_vertex(mesh, self.tables, kd, v);
         let mut coefficients = reflector.zeroed();
         if !reflector.reflects() {
-            return ReceivedSh {
-                coefficients,
-                visible: 0,
-                rays: 0,
-            };
+            return ReceivedSh::nothing(coefficients);
         }
         let at = ReceivingPoint::of_vertex(mesh, v, self.lights.occluder.scene_epsilon());
         let arrival = self

@@ -56,6 +56,17 @@ pub(super) struct Reflector<'t> {
     tangent: DVec3,
 }
 
+impl ReceivedSh {
+    /// Nothing received: `coefficients` (zeroed), no ray traced.
+    pub(super) fn nothing(coefficients: Vec<f64>) -> Self {
+        ReceivedSh {
+            coefficients,
+            visible: 0,
+            rays: 0,
+        }
+    }
+}
+
 impl<'t> Reflector<'t> {
     pub(super) fn of_vertex(mesh: &Mesh, tables: &'t Tables, kd: &[DVec3], v: u32) -> Self {
         let surface = mesh.vertices[v as usize].surface as usize;
@@ -220,11 +231,7 @@ impl<'a> DirShot<'a> {
         let reflector = Reflector::of_vertex(mesh, self.tables, kd, v);
         let mut out = reflector.zeroed();
         if surface == self.shot.source_surface || !reflector.reflects() {
-            return ReceivedSh {
-                coefficients: out,
-                visible: 0,
-                rays: 0,
-            };
+            return ReceivedSh::nothing(out);
         }
         // Where the light's direction matters (a glossy receiver, or a
         // source whose radiance depends on direction), samples by solid
