@@ -38,8 +38,8 @@ struct Rect {
 }
 
 /// The solids and rectangles of a plan, before meshing.
-struct Plan {
-    walls: Vec<BoxSpec>,
+pub(crate) struct Plan {
+    pub(crate) walls: Vec<BoxSpec>,
     rects: Vec<Rect>,
 }
 
@@ -68,7 +68,7 @@ impl Params {
         best
     }
 
-    fn divisions(&self, spec: &BoxSpec) -> [u32; 3] {
+    pub(crate) fn divisions(&self, spec: &BoxSpec) -> [u32; 3] {
         std::array::from_fn(|a| {
             let length = spec.max[a] - spec.min[a];
             ((length / self.edge).ceil() as u32).max(1)
@@ -76,13 +76,12 @@ impl Params {
     }
 
     pub fn triangle_count(&self) -> usize {
-        let plan = self.plan();
-        plan.walls.iter().map(|w| w.triangle_count()).sum::<usize>() + 2 * plan.rects.len()
+        self.plan().triangle_count()
     }
 
     /// Walls along x at z = j·PITCH and along z at x = i·PITCH, pillars at
     /// the grid nodes. Slabs run between pillars, so no two solids overlap.
-    fn plan(&self) -> Plan {
+    pub(crate) fn plan(&self) -> Plan {
         let n = self.rooms as usize;
         let t = 0.5 * THICKNESS;
         let mut walls = Vec::new();
@@ -179,17 +178,28 @@ impl Params {
     }
 }
 
+impl Plan {
+    pub(crate) fn triangle_count(&self) -> usize {
+        self.walls.iter().map(|w| w.triangle_count()).sum::<usize>() + 2 * self.rects.len()
+    }
+
+    /// The walls (one object each) and the rectangles, in that order.
+    pub(crate) fn mesh(&self) -> Mesh {
+        let mut mesh = Mesh::default();
+        for (i, wall) in self.walls.iter().enumerate() {
+            mesh.begin_object(format!("wall_{i}"), "wall", Closure::Outward);
+            add_box(&mut mesh, wall, &Placement::IDENTITY, Closure::Outward);
+        }
+        for (i, r) in self.rects.iter().enumerate() {
+            mesh.begin_object(format!("{}_{i}", r.name_kind), r.name_kind, Closure::Open);
+            add_horizontal_rect(&mut mesh, r.x, r.z, r.y, r.up);
+        }
+        mesh
+    }
+}
+
 pub fn generate(params: Params) -> Scene {
-    let plan = params.plan();
-    let mut mesh = Mesh::default();
-    for (i, wall) in plan.walls.iter().enumerate() {
-        mesh.begin_object(format!("wall_{i}"), "wall", Closure::Outward);
-        add_box(&mut mesh, wall, &Placement::IDENTITY, Closure::Outward);
-    }
-    for (i, r) in plan.rects.iter().enumerate() {
-        mesh.begin_object(format!("{}_{i}", r.name_kind), r.name_kind, Closure::Open);
-        add_horizontal_rect(&mut mesh, r.x, r.z, r.y, r.up);
-    }
+    let mesh = params.plan().mesh();
     let n = params.rooms;
     Scene {
         description: format!(
@@ -197,39 +207,48 @@ pub fn generate(params: Params) -> Scene {
             params.edge.min(1e9)
         ),
         mesh,
-        materials: vec![
-            Material {
-                name: "wall",
-                kd: [0.7, 0.68, 0.65],
-                ke: [0.0; 3],
-            },
-            Material {
-                name: "floor",
-                kd: [0.45, 0.35, 0.25],
-                ke: [0.0; 3],
-            },
-            Material {
-                name: "threshold",
-                kd: [0.45, 0.35, 0.25],
-                ke: [0.0; 3],
-            },
-            Material {
-                name: "ceiling",
-                kd: [0.8, 0.8, 0.8],
-                ke: [0.0; 3],
-            },
-            Material {
-                name: "light",
-                kd: [0.78, 0.78, 0.78],
-                ke: [10.0, 10.0, 10.0],
-            },
-        ],
-        // In the first room, looking diagonally toward its doors.
-        camera: Camera {
-            eye: [600.0, 1600.0, 600.0],
-            target: [PITCH, 1100.0, PITCH],
-            fov_y_deg: 60.0,
-        },
+        materials: materials(),
+        camera: first_room_camera(),
         lights: Lights::default(),
+    }
+}
+
+/// The walls', floors', ceilings' and lights' materials.
+pub(crate) fn materials() -> Vec<Material> {
+    vec![
+        Material {
+            name: "wall",
+            kd: [0.7, 0.68, 0.65],
+            ke: [0.0; 3],
+        },
+        Material {
+            name: "floor",
+            kd: [0.45, 0.35, 0.25],
+            ke: [0.0; 3],
+        },
+        Material {
+            name: "threshold",
+            kd: [0.45, 0.35, 0.25],
+            ke: [0.0; 3],
+        },
+        Material {
+            name: "ceiling",
+            kd: [0.8, 0.8, 0.8],
+            ke: [0.0; 3],
+        },
+        Material {
+            name: "light",
+            kd: [0.78, 0.78, 0.78],
+            ke: [10.0, 10.0, 10.0],
+        },
+    ]
+}
+
+/// In the first room, looking diagonally toward its doors.
+pub(crate) fn first_room_camera() -> Camera {
+    Camera {
+        eye: [600.0, 1600.0, 600.0],
+        target: [PITCH, 1100.0, PITCH],
+        fov_y_deg: 60.0,
     }
 }

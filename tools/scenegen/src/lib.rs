@@ -6,7 +6,8 @@
 //! and [`floorplan`] (a grid of rooms with thick walls and doors); and a
 //! two daylit ones lit by a sun and a sky (issue 41): [`atrium`] (a
 //! Sponza-sized open court with two storeys of arcades) and [`window_room`]
-//! (a closed room with one window). Scenes are millimetres, +y up,
+//! (a closed room with one window); and [`office`], the floor plan
+//! furnished, for the set-up's cost (issue 42). Scenes are millimetres, +y up,
 //! written as OBJ + MTL + a TOML scene config ([`scene`]). [`bench`] drives
 //! the release `solver` over families × sizes × presets and reports cost and
 //! growth; its default families are [`Family::ALL`], the emitter-lit three.
@@ -21,6 +22,7 @@ pub mod bench;
 pub mod cornell;
 pub mod floorplan;
 pub mod mesh;
+pub mod office;
 pub mod primitives;
 pub mod rng;
 pub mod scene;
@@ -45,6 +47,9 @@ pub enum Family {
     SpheresRoom,
     /// A grid of rooms with thick walls, doors and one light per room.
     FloorPlan,
+    /// The floor plan's rooms furnished with cabinets, shelves, desks and
+    /// chairs standing on the floors and against the walls (contacts).
+    Office,
     /// A 35 × 16 × 16 m open court with two storeys of arcades, lit by sun and
     /// sky (65 000 triangles by default, about 1 300 at least).
     Atrium,
@@ -65,6 +70,7 @@ impl Family {
             Family::CornellBoxes => "cornell-boxes",
             Family::SpheresRoom => "spheres-room",
             Family::FloorPlan => "floor-plan",
+            Family::Office => "office",
             Family::Atrium => "atrium",
             Family::WindowRoom => "window-room",
         }
@@ -92,6 +98,7 @@ pub fn generate(family: Family, triangles: usize, seed: u64) -> anyhow::Result<s
         Family::CornellBoxes => cornell::generate(cornell::boxes_for(triangles), seed),
         Family::SpheresRoom => spheres::generate(spheres::Params::for_triangles(triangles)),
         Family::FloorPlan => floorplan::generate(floorplan::Params::for_triangles(triangles)),
+        Family::Office => office::generate(office::Params::for_triangles(triangles)),
         Family::Atrium => atrium::generate(atrium::Params::for_triangles(triangles)),
         Family::WindowRoom => window_room::generate(window_room::Params::for_triangles(triangles)),
     };

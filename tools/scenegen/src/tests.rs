@@ -4,7 +4,7 @@
 //! and on the daylit families at the sizes of [`DAYLIT`].
 
 use crate::mesh::{check_closed, dot, sub, Closure, Mesh};
-use crate::{cornell, floorplan, generate, spheres, Family, COUNT_TOLERANCE};
+use crate::{cornell, floorplan, generate, office, spheres, Family, COUNT_TOLERANCE};
 
 const SIZES: [usize; 2] = [1_000, 10_000];
 
@@ -17,11 +17,14 @@ const DAYLIT: [(Family, usize); 4] = [
     (Family::WindowRoom, 5_000),
 ];
 
+/// The set-up benchmark's office (not in [`Family::ALL`]) at a test size.
+const OFFICE: [(Family, usize); 1] = [(Family::Office, 10_000)];
+
 fn each_scene(mut check: impl FnMut(Family, usize, &Mesh)) {
     let emitter_lit = Family::ALL
         .into_iter()
         .flat_map(|family| SIZES.map(|n| (family, n)));
-    for (family, n) in emitter_lit.chain(DAYLIT) {
+    for (family, n) in emitter_lit.chain(DAYLIT).chain(OFFICE) {
         let scene = generate(family, n, 3).unwrap();
         check(family, n, &scene.mesh);
     }
@@ -36,6 +39,7 @@ fn counts_land_within_tolerance_at_every_size() {
             cornell::ROOM_TRIANGLES + cornell::BOX_TRIANGLES * cornell::boxes_for(n),
             spheres::Params::for_triangles(n).triangle_count(),
             floorplan::Params::for_triangles(n).triangle_count(),
+            office::Params::for_triangles(n).triangle_count(),
         ];
         for count in counts {
             let error = (count as f64 - n as f64).abs() / n as f64;
@@ -264,4 +268,38 @@ fn too_small_a_request_is_an_error_not_a_wrong_count() {
     let e = generate(Family::FloorPlan, 50, 1).unwrap_err().to_string();
     assert!(e.contains("more than 20%"), "{e}");
     assert!(generate(Family::CornellBoxes, 0, 1).is_err());
+}
+
+/// The office's furniture stands: every piece's lowest point is on the floor
+/// (y = 0) or on the top of another piece (a desk top on its legs, a seat on
+/// its column), so each piece touches what it rests on, which is what the
+/// set-up's contact cuts work on. Exact: the generator places them so.
+#[test]
+fn office_furniture_rests_on_the_floor_or_on_another_piece() {
+    let scene = office::generate(office::Params::for_triangles(10_000));
+    let mesh = &scene.mesh;
+    let span = |o: &crate::mesh::Object| {
+        o.triangles
+            .iter()
+            .flatten()
+            .map(|c| mesh.positions[c.position as usize][1])
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), y| {
+                (lo.min(y), hi.max(y))
+            })
+    };
+    let pieces: Vec<_> = mesh
+        .objects
+        .iter()
+        .filter(|o| ["cabinet", "desk", "metal", "seat"].contains(&o.material.as_str()))
+        .collect();
+    assert!(pieces.len() >= 16 * 4, "{} pieces", pieces.len());
+    let tops: Vec<f64> = pieces.iter().map(|o| span(o).1).collect();
+    for piece in &pieces {
+        let bottom = span(piece).0;
+        assert!(
+            bottom == 0.0 || tops.contains(&bottom),
+            "{} floats at {bottom}",
+            piece.name
+        );
+    }
 }
