@@ -35,6 +35,7 @@ pub mod geometry;
 pub mod light;
 pub mod mesh;
 pub mod method;
+pub mod progress;
 pub mod reference;
 pub mod scene;
 pub mod settings;

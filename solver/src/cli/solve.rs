@@ -15,6 +15,7 @@ pub mod memory;
 mod preview;
 mod progress;
 mod session;
+mod setup_progress;
 mod stats;
 
 pub use args::{SolveArgs, EXIT_INTERRUPTED, EXIT_SHOT_CAP};
@@ -136,7 +137,7 @@ pub fn run(args: SolveArgs) -> anyhow::Result<ExitCode> {
         .num_threads(threads)
         .build()
         .context("starting the worker threads")?;
-    let interrupted = install_ctrlc();
+    let interrupt = install_ctrlc();
     let session = Session {
         out: &args.out,
         checkpoint_path: checkpoint_path.clone(),
@@ -151,11 +152,13 @@ pub fn run(args: SolveArgs) -> anyhow::Result<ExitCode> {
         max_shots: settings.max_shots,
         checkpoint_every: settings.checkpoint_every,
         threads,
-        interrupted: &interrupted,
+        interrupted: &interrupt.pressed,
     };
     // The method was checked against the mode when the settings resolved.
     let outcome = match settings.method.dispatch() {
-        Dispatch::Progressive => pool.install(|| solve(&args, &scene, &settings, &session))?,
+        Dispatch::Progressive => {
+            pool.install(|| solve(&args, &scene, &settings, &session, &interrupt.shooting))?
+        }
         Dispatch::GaussSeidel => {
             pool.install(|| gauss_seidel(&args, &scene, &settings, threads))?
         }
@@ -291,28 +294,54 @@ pub(crate) fn print_warnings(warnings: &[crate::scene::Warning]) {
     }
 }
 
-/// Sets a flag on Ctrl-C; the loop checks it between shots. A second Ctrl-C
-/// quits at once (a long shot need not be waited for), keeping the last periodic
-/// checkpoint; every file is written atomically, so none is left half-written. If
-/// the handler cannot be installed, Ctrl-C kills the process as usual, which is
-/// said once.
-fn install_ctrlc() -> Arc<AtomicBool> {
-    let flag = Arc::new(AtomicBool::new(false));
-    let handler_flag = Arc::clone(&flag);
+/// Ctrl-C's state: whether it was pressed, and whether the set-up has
+/// ended (its checkpoint written), which decides what a second one loses.
+pub struct Interrupt {
+    pub pressed: AtomicBool,
+    pub shooting: AtomicBool,
+}
+
+/// Sets a flag on Ctrl-C; the set-up runs to its end and saves its
+/// checkpoint, the loop checks the flag between shots. A second Ctrl-C quits
+/// at once (a long shot or pass need not be waited for), keeping the last
+/// checkpoint, and says what that loses; every file is written atomically,
+/// so none is left half-written. If the handler cannot be installed, Ctrl-C
+/// kills the process as usual, which is said once.
+fn install_ctrlc() -> Arc<Interrupt> {
+    let state = Arc::new(Interrupt {
+        pressed: AtomicBool::new(false),
+        shooting: AtomicBool::new(false),
+    });
+    let handler_state = Arc::clone(&state);
     let installed = ctrlc::set_handler(move || {
-        if handler_flag.swap(true, Ordering::SeqCst) {
-            eprintln!("\nsolver: second Ctrl-C: quitting now; --resume continues from the last checkpoint");
+        let shooting = handler_state.shooting.load(Ordering::SeqCst);
+        if handler_state.pressed.swap(true, Ordering::SeqCst) {
+            if shooting {
+                eprintln!("\nsolver: second Ctrl-C: quitting now; --resume continues from the last checkpoint");
+            } else {
+                eprintln!(
+                    "\nsolver: second Ctrl-C: quitting now; the set-up is lost (its checkpoint was \
+                     not written yet) and the next run starts it over"
+                );
+            }
             #[allow(clippy::disallowed_methods)] // An edge: a second Ctrl-C quits at once.
             std::process::exit(EXIT_INTERRUPTED.into());
         }
-        eprintln!(
-            "\nsolver: Ctrl-C: stopping after the current shot (press again to quit at once)"
-        );
+        if shooting {
+            eprintln!(
+                "\nsolver: Ctrl-C: stopping after the current shot (press again to quit at once)"
+            );
+        } else {
+            eprintln!(
+                "\nsolver: Ctrl-C: finishing the set-up, then saving a checkpoint that --resume \
+                 starts from (press again to quit at once and lose the set-up)"
+            );
+        }
     });
     if let Err(err) = installed {
         eprintln!("solver: note: Ctrl-C will stop without a final checkpoint ({err})");
     }
-    flag
+    state
 }
 
 /// Starts or resumes the solver core and runs the session.
@@ -321,58 +350,71 @@ fn solve(
     scene: &Scene,
     settings: &SolverSettings,
     session: &Session,
+    shooting: &AtomicBool,
 ) -> anyhow::Result<Outcome> {
+    let mut progress = setup_progress::SetupProgress::new();
     if args.resume {
         let (meta, state) = session.load::<Checkpoint>()?;
-        let solver = Solver::resume(scene, settings, state)
+        let solver = Solver::resume_observed(scene, settings, state, &mut progress)
             .with_context(|| format!("resuming from {}", session.checkpoint_path.display()))?;
         memory::return_freed_memory();
+        eprintln!("solver: {}", progress.summary());
         eprintln!(
             "solver: resuming {} at shot {} ({:.1} s spent before)",
             args.scene.display(),
             meta.shots,
             meta.seconds
         );
+        shooting.store(true, Ordering::SeqCst);
         session.run(solver, meta.seconds)
     } else {
-        let solver = Solver::new(scene, settings)
+        let solver = Solver::new_observed(scene, settings, &mut progress)
             .map_err(plain)
             .with_context(|| format!("setting up the solve of {}", args.scene.display()))?;
         // Set-up's transients (contact cuts, grown vectors) are freed.
         memory::return_freed_memory();
-        solver
-            .warnings()
-            .iter()
-            .for_each(|w| eprintln!("solver: warning: {w}"));
-        let estimate = solver.memory_estimate();
+        eprintln!("solver: {}", progress.summary());
+        // Nothing done so far is lost from here on.
+        session.save_checkpoint(&solver, progress.seconds())?;
+        shooting.store(true, Ordering::SeqCst);
+        report_setup(&solver);
+        session.run(solver, progress.seconds())
+    }
+}
+
+/// What the set-up decided that the user may want to know.
+fn report_setup(solver: &Solver) {
+    solver
+        .warnings()
+        .iter()
+        .for_each(|w| eprintln!("solver: warning: {w}"));
+    let estimate = solver.memory_estimate();
+    eprintln!(
+        "solver: memory: estimated peak {} at the start ({})",
+        crate::solve::budget::human_bytes(estimate.peak() as u128),
+        estimate.breakdown()
+    );
+    let small = solver.small_surface_count();
+    if small > 0 {
         eprintln!(
-            "solver: memory: estimated peak {} at the start ({})",
-            crate::solve::budget::human_bytes(estimate.peak() as u128),
-            estimate.breakdown()
+            "solver: {small} small flat surfaces (one patch within the smallest element) \
+             receive once per shot, at their centroid"
         );
-        let small = solver.small_surface_count();
-        if small > 0 {
-            eprintln!(
-                "solver: {small} small flat surfaces (one patch within the smallest element) \
-                 receive once per shot, at their centroid"
-            );
-        }
-        let copies = solver.twin_copy_count();
-        if copies > 0 {
-            eprintln!(
-                "solver: {copies} vertices copy a coincident vertex of their smooth surface \
-                 and take its sample"
-            );
-        }
-        let (interpolated, sites) = solver.site_counts();
-        if interpolated > 0 {
-            eprintln!(
-                "solver: {interpolated} points of finely tessellated smooth surfaces \
-                 interpolate {sites} sites (--site-angle {}°; 0: every point receives)",
-                solver.settings().site_angle
-            );
-        }
-        session.run(solver, 0.0)
+    }
+    let copies = solver.twin_copy_count();
+    if copies > 0 {
+        eprintln!(
+            "solver: {copies} vertices copy a coincident vertex of their smooth surface \
+             and take its sample"
+        );
+    }
+    let (interpolated, sites) = solver.site_counts();
+    if interpolated > 0 {
+        eprintln!(
+            "solver: {interpolated} points of finely tessellated smooth surfaces \
+             interpolate {sites} sites (--site-angle {}°; 0: every point receives)",
+            solver.settings().site_angle
+        );
     }
 }
 

@@ -50,6 +50,8 @@ use crate::scene::Scene;
 use glam::{DVec2, DVec3};
 use std::collections::HashMap;
 
+mod points;
+
 /// A point lies on a receiver's plane when it is within this fraction of the
 /// scene diagonal of it. The Cornell box's light hangs 0.1 mm below its
 /// ceiling, 1.04e-4 of the 961 mm diagonal, and must count as covering it;
@@ -121,69 +123,107 @@ impl Cuts {
 
 /// For every polygon of `scene`, its parts, or `None` where it stays whole.
 pub fn conform(scene: &Scene, cuts: Cuts) -> Vec<Option<Vec<Part>>> {
+    conform_observed(scene, cuts, &mut crate::progress::Quiet)
+}
+
+/// [`conform`], reporting to `observer` ([`crate::progress::Pass::ContactCuts`]).
+/// The receivers are cut in parallel, chunk by chunk, in the scene's order.
+pub fn conform_observed(
+    scene: &Scene,
+    cuts: Cuts,
+    observer: &mut dyn crate::progress::Observer,
+) -> Vec<Option<Vec<Part>>> {
+    use rayon::prelude::*;
+    let pass = crate::progress::Pass::ContactCuts;
+    let count = scene.polygons.len();
+    observer.advance(pass, 0, count as u64);
     let diagonal = crate::mesh::sizing::scene_diagonal(scene);
-    let mut out = vec![None; scene.polygons.len()];
-    if cuts == Cuts::None || !(diagonal.is_finite() && diagonal > 0.0) || scene.polygons.len() < 2 {
-        return out;
+    if cuts == Cuts::None || !(diagonal.is_finite() && diagonal > 0.0) || count < 2 {
+        observer.advance(pass, count as u64, count as u64);
+        return vec![None; count];
     }
     let tol = CONTACT_TOLERANCE * diagonal;
-    let objects = objects(scene, tol);
-    let grid = VertexGrid::new(scene, diagonal, tol);
-    let casters = ShadowCasters::of(scene, cuts);
-    for (index, polygon) in scene.polygons.iter().enumerate() {
+    let context = Context {
+        scene,
+        objects: objects(scene, tol),
+        tree: vertex_tree(scene),
+        casters: ShadowCasters::of(scene, cuts),
+        tol,
+    };
+    let mut out = Vec::with_capacity(count);
+    for start in (0..count).step_by(crate::progress::CHUNK) {
+        let end = (start + crate::progress::CHUNK).min(count);
+        let chunk: Vec<Option<Vec<Part>>> = (start..end)
+            .into_par_iter()
+            .map_init(Vec::new, |near, index| context.parts_of(index, near))
+            .collect();
+        out.extend(chunk);
+        observer.advance(pass, end as u64, count as u64);
+    }
+    out
+}
+
+/// What cutting one receiver reads.
+struct Context<'s> {
+    scene: &'s Scene,
+    objects: Vec<usize>,
+    tree: points::PointTree,
+    casters: ShadowCasters,
+    tol: f64,
+}
+
+impl Context<'_> {
+    /// Polygon `index`'s parts, or `None` where it stays whole; `near` is
+    /// scratch.
+    fn parts_of(&self, index: usize, near: &mut Vec<(u32, u32)>) -> Option<Vec<Part>> {
+        let (scene, tol) = (self.scene, self.tol);
+        let polygon = &scene.polygons[index];
         let v = &polygon.vertices;
         if v.len() < 3
             || polygon.vertex_normals.is_some()
             || !v.iter().all(|p| p.is_finite())
             || !crate::geometry::polygon::is_convex(v)
         {
-            continue;
+            return None;
         }
-        let Some(frame) = Frame::new(v) else {
-            continue;
-        };
-        let Some(footprints) = footprints(scene, index, &frame, &grid, &objects, tol) else {
-            continue;
-        };
+        let frame = Frame::new(v)?;
+        let footprints = footprints(self, index, &frame, near)?;
         if footprints.is_empty() {
-            continue;
+            return None;
         }
         let outline: Vec<DVec2> = v.iter().map(|&p| frame.project(p)).collect();
         let mut parts = cut(&outline, &footprints, tol);
-        let groups = casters.seen_from(&frame, tol);
+        let groups = self.casters.seen_from(&frame, tol);
         let mut corners = Vec::new();
         if !groups.is_empty() {
             (parts, corners) = cut_shadow_lines(parts, &footprints, &groups, tol);
         }
-        if parts.len() > 1 {
-            out[index] = Some(
-                parts
-                    .into_iter()
-                    .map(|(ring, covered)| Part {
-                        apexes: corners
-                            .iter()
-                            .filter(|&&c| !covered && ring.iter().any(|&q| (q - c).length() <= tol))
-                            .map(|&c| frame.lift(c))
-                            .collect(),
-                        // The receiver's own corners are kept bit for bit
-                        // (they meet other polygons' corners); new ones are
-                        // lifted from the plane.
-                        vertices: ring
-                            .iter()
-                            .map(|&q| {
-                                outline
-                                    .iter()
-                                    .position(|&o| (o - q).length() <= 1e-6 * tol)
-                                    .map_or_else(|| frame.lift(q), |k| v[k])
-                            })
-                            .collect(),
-                        covered,
-                    })
-                    .collect(),
-            );
-        }
+        (parts.len() > 1).then(|| {
+            parts
+                .into_iter()
+                .map(|(ring, covered)| Part {
+                    apexes: corners
+                        .iter()
+                        .filter(|&&c| !covered && ring.iter().any(|&q| (q - c).length() <= tol))
+                        .map(|&c| frame.lift(c))
+                        .collect(),
+                    // The receiver's own corners are kept bit for bit
+                    // (they meet other polygons' corners); new ones are
+                    // lifted from the plane.
+                    vertices: ring
+                        .iter()
+                        .map(|&q| {
+                            outline
+                                .iter()
+                                .position(|&o| (o - q).length() <= 1e-6 * tol)
+                                .map_or_else(|| frame.lift(q), |k| v[k])
+                        })
+                        .collect(),
+                    covered,
+                })
+                .collect()
+        })
     }
-    out
 }
 
 /// What casts the shadow lines cut at footprint corners: the emitters'
@@ -350,56 +390,21 @@ fn cell(p: DVec3, size: f64) -> [i64; 3] {
     [c.x as i64, c.y as i64, c.z as i64]
 }
 
-/// Every polygon vertex of the scene in a uniform grid, for the vertices near
-/// one receiver.
-struct VertexGrid {
-    size: f64,
-    cells: HashMap<[i64; 3], Vec<(u32, u32)>>,
-}
-
-impl VertexGrid {
-    fn new(scene: &Scene, diagonal: f64, tol: f64) -> VertexGrid {
-        let count: usize = scene.polygons.iter().map(|p| p.vertices.len()).sum();
-        // About one vertex per cell on a surface-filling scene.
-        let size = (diagonal / (count.max(1) as f64).sqrt()).max(4.0 * tol);
-        let mut cells: HashMap<[i64; 3], Vec<(u32, u32)>> = HashMap::new();
-        for (i, polygon) in scene.polygons.iter().enumerate() {
-            for (k, p) in polygon.vertices.iter().enumerate() {
-                if p.is_finite() {
-                    cells
-                        .entry(cell(*p, size))
-                        .or_default()
-                        .push((i as u32, k as u32));
-                }
-            }
-        }
-        VertexGrid { size, cells }
-    }
-
-    /// The (polygon, vertex) pairs in the cells that the box `lo..hi` touches.
-    fn near(&self, lo: DVec3, hi: DVec3, out: &mut Vec<(u32, u32)>) {
-        out.clear();
-        let (a, b) = (cell(lo, self.size), cell(hi, self.size));
-        let cells = (0..3).map(|k| (b[k] - a[k] + 1) as f64).product::<f64>();
-        if cells > self.cells.len() as f64 {
-            // A receiver larger than the occupied cells: scan them all.
-            for (key, list) in &self.cells {
-                if (0..3).all(|k| key[k] >= a[k] && key[k] <= b[k]) {
-                    out.extend_from_slice(list);
-                }
-            }
-            return;
-        }
-        for x in a[0]..=b[0] {
-            for y in a[1]..=b[1] {
-                for z in a[2]..=b[2] {
-                    if let Some(list) = self.cells.get(&[x, y, z]) {
-                        out.extend_from_slice(list);
-                    }
-                }
-            }
-        }
-    }
+/// Every finite polygon vertex of the scene, in a k-d tree ([`points`]).
+fn vertex_tree(scene: &Scene) -> points::PointTree {
+    let (points, items) = scene
+        .polygons
+        .iter()
+        .enumerate()
+        .flat_map(|(i, polygon)| {
+            polygon
+                .vertices
+                .iter()
+                .enumerate()
+                .map(move |(k, &p)| (p, (i as u32, k as u32)))
+        })
+        .unzip();
+    points::PointTree::new(points, items)
 }
 
 /// The footprints on receiver `index`: per touching object, the convex hull
@@ -407,25 +412,30 @@ impl VertexGrid {
 /// and inside the receiver; `None` when more than [`MAX_FOOTPRINTS`] objects
 /// touch it (it stays whole, and no hull is computed).
 fn footprints(
-    scene: &Scene,
+    context: &Context,
     index: usize,
     frame: &Frame,
-    grid: &VertexGrid,
-    objects: &[usize],
-    tol: f64,
+    near: &mut Vec<(u32, u32)>,
 ) -> Option<Vec<Vec<DVec2>>> {
+    let (scene, objects, tol) = (context.scene, &context.objects, context.tol);
     let v = &scene.polygons[index].vertices;
     let (lo, hi) = v
         .iter()
         .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), &p| {
             (lo.min(p), hi.max(p))
         });
-    let mut near = Vec::new();
-    grid.near(lo - DVec3::splat(tol), hi + DVec3::splat(tol), &mut near);
+    let query = points::Query {
+        lo: lo - DVec3::splat(tol),
+        hi: hi + DVec3::splat(tol),
+        origin: frame.origin,
+        normal: frame.n,
+        tol,
+    };
+    context.tree.near(&query, near);
     let outline: Vec<DVec2> = v.iter().map(|&p| frame.project(p)).collect();
     let mut by_object: HashMap<usize, Vec<DVec2>> = HashMap::new();
     let mut coplanar: HashMap<u32, bool> = HashMap::new();
-    for &(polygon, vertex) in &near {
+    for &(polygon, vertex) in near.iter() {
         // The receiver's own object (the walls that share the floor's
         // corners) is meshed as its input joins it.
         if objects[polygon as usize] == objects[index] {

@@ -261,16 +261,19 @@ impl Mesh {
     /// quadtree), positions re-centred by subtracting `offset`, with patch
     /// counts and smallest elements from `sizing`.
     pub fn with_sizing(scene: &Scene, offset: DVec3, sizing: &Sizing) -> Result<Mesh, MeshError> {
-        Self::with_contacts(scene, offset, sizing, contact::Cuts::Contacts)
+        let parts = contact::conform(scene, contact::Cuts::Contacts);
+        Self::with_contacts(scene, offset, sizing, &parts, &mut crate::progress::Quiet)
     }
 
-    /// [`Self::with_sizing`], with receivers cut as `cuts` says
-    /// ([`contact`]).
+    /// [`Self::with_sizing`], with each polygon cut into `parts[index]` where
+    /// that is `Some` ([`contact::conform`]; a missing entry leaves the
+    /// polygon whole), reporting to `observer`.
     pub fn with_contacts(
         scene: &Scene,
         offset: DVec3,
         sizing: &Sizing,
-        cuts: contact::Cuts,
+        parts: &[Option<Vec<contact::Part>>],
+        observer: &mut dyn crate::progress::Observer,
     ) -> Result<Mesh, MeshError> {
         let mut mesh = Mesh {
             surfaces: Vec::new(),
@@ -283,8 +286,11 @@ impl Mesh {
             piece_patches: Vec::new(),
             table: VertexTable::default(),
         };
-        let parts = contact::conform(scene, cuts);
+        let count = scene.polygons.len() as u64;
         for (index, poly) in scene.polygons.iter().enumerate() {
+            if index % crate::progress::CHUNK == 0 {
+                observer.advance(crate::progress::Pass::Meshing, index as u64, count);
+            }
             if poly.material >= scene.materials.len() {
                 return Err(MeshError::BadMaterial {
                     at: poly.source.clone(),
@@ -336,7 +342,7 @@ impl Mesh {
                     corner_normals,
                     apexes,
                 };
-            match &parts[index] {
+            match parts.get(index).and_then(Option::as_ref) {
                 None => mesh.add_surface(spec(vertices, n, corner_normals, Vec::new())),
                 Some(parts) => {
                     for part in parts {
@@ -355,6 +361,7 @@ impl Mesh {
         for piece_index in 0..mesh.pieces.len() {
             mesh.add_patches(piece_index as u32)?;
         }
+        observer.advance(crate::progress::Pass::Meshing, count, count);
         Ok(mesh)
     }
 

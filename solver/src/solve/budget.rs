@@ -530,8 +530,13 @@ fn groups_shots(settings: &SolverSettings) -> bool {
 /// per triangle or quad piece and at most (N+1)² vertices (a polygon of k > 4
 /// vertices is counted as k − 2 triangles), at SH order 0, with E/π on the
 /// vertices of a directional solve's textured surfaces (a diffuse texture
-/// and UVs, as `SurfaceTexturing::new` decides).
-pub fn counts_before_meshing(scene: &Scene, settings: &SolverSettings) -> Counts {
+/// and UVs, as `SurfaceTexturing::new` decides). `parts` are the polygons'
+/// cuts (`mesh::contact::conform`), counted part by part.
+pub fn counts_before_meshing(
+    scene: &Scene,
+    settings: &SolverSettings,
+    parts: &[Option<Vec<crate::mesh::contact::Part>>],
+) -> Counts {
     let mut c = Counts {
         samples: settings.samples as u64,
         directional: settings.mode == solution::format::SolveMode::Directional,
@@ -558,9 +563,7 @@ pub fn counts_before_meshing(scene: &Scene, settings: &SolverSettings) -> Counts
     };
     // The receivers the mesh cuts along contact lines (`mesh::contact`),
     // part by part, as `Solver::new` decides.
-    let parts =
-        crate::mesh::contact::conform(scene, crate::mesh::contact::Cuts::for_settings(settings));
-    for (p, parts) in scene.polygons.iter().zip(&parts) {
+    for (p, parts) in scene.polygons.iter().zip(parts) {
         let textured = p.uv_map.is_some() && scene.materials[p.material].diffuse_texture.is_some();
         match parts {
             None => count(
@@ -593,6 +596,15 @@ pub fn counts_before_meshing(scene: &Scene, settings: &SolverSettings) -> Counts
         c.patch_coefficients = 3 * c.patches;
     }
     c
+}
+
+/// The cuts [`counts_before_meshing`] takes, as `Solver::new` makes them.
+#[cfg(test)]
+pub fn cuts_of(
+    scene: &Scene,
+    settings: &SolverSettings,
+) -> Vec<Option<Vec<crate::mesh::contact::Part>>> {
+    crate::mesh::contact::conform(scene, crate::mesh::contact::Cuts::for_settings(settings))
 }
 
 /// The counts of a built mesh, its surfaces at SH orders `order_of(surface)`

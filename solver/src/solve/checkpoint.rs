@@ -586,6 +586,16 @@ impl Solver {
         settings: &SolverSettings,
         checkpoint: Checkpoint,
     ) -> Result<Solver, SolveError> {
+        Self::resume_observed(scene, settings, checkpoint, &mut crate::progress::Quiet)
+    }
+
+    /// [`Solver::resume`], reporting the set-up's passes to `observer`.
+    pub fn resume_observed(
+        scene: &Scene,
+        settings: &SolverSettings,
+        checkpoint: Checkpoint,
+        observer: &mut dyn crate::progress::Observer,
+    ) -> Result<Solver, SolveError> {
         let mismatch = |what: String| Err(SolveError::CheckpointMismatch(what));
         if checkpoint.version != CHECKPOINT_VERSION {
             return mismatch(format!(
@@ -593,7 +603,7 @@ impl Solver {
                 checkpoint.version
             ));
         }
-        let mut solver = Solver::new(scene, settings)?;
+        let mut solver = Solver::new_observed(scene, settings, observer)?;
         check_mode(&checkpoint, settings)?;
         if checkpoint.fingerprint != solver.fingerprint() {
             return mismatch(format!(

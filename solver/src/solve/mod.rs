@@ -236,17 +236,32 @@ impl Solver {
     /// polygon, no emitter, a material with negative or non-finite values, too
     /// many patches.
     pub fn new(scene: &Scene, settings: &SolverSettings) -> Result<Solver, SolveError> {
+        Self::new_observed(scene, settings, &mut crate::progress::Quiet)
+    }
+
+    /// [`Solver::new`], reporting each pass of the set-up to `observer`.
+    pub fn new_observed(
+        scene: &Scene,
+        settings: &SolverSettings,
+        observer: &mut dyn crate::progress::Observer,
+    ) -> Result<Solver, SolveError> {
         settings.validate()?;
         check_materials(scene)?;
+        // The receivers' cuts, once: the estimate below counts their parts
+        // and the mesh is built from them.
+        let cuts = crate::mesh::contact::Cuts::for_settings(settings);
+        let parts = crate::mesh::contact::conform_observed(scene, cuts, observer);
         // Refuse before meshing when even the unrefined mesh at SH order 0
-        // cannot fit (its counts are known from the polygons alone).
+        // cannot fit (its counts are known from the polygons' parts alone).
         check_coarsest(
-            &budget::counts_before_meshing(scene, settings),
+            &budget::counts_before_meshing(scene, settings, &parts),
             settings,
             "before meshing",
         )?;
         let offset = scene_centre(scene);
-        let mesh = mesh_scene(scene, settings, offset)?;
+        let mesh = mesh_scene(scene, settings, offset, &parts, observer)?;
+        drop(parts);
+        observer.advance(crate::progress::Pass::SolverState, 0, 1);
         let texturing = textured::SurfaceTexturing::new(scene, &mesh, offset);
         let scene_bytes = budget::scene_bytes(scene);
         check_unrefined(scene, settings, &mesh, &texturing, scene_bytes)?;
@@ -263,6 +278,8 @@ impl Solver {
         if !has_emitter && scene.lights.is_empty() {
             return Err(SolveError::no_emitter(scene));
         }
+        observer.advance(crate::progress::Pass::SolverState, 1, 1);
+        observer.advance(crate::progress::Pass::Occluder, 0, 1);
         let occluder = Occluder::new(
             &mesh
                 .surfaces
@@ -270,6 +287,7 @@ impl Solver {
                 .map(|s| s.vertices.as_slice())
                 .collect::<Vec<_>>(),
         );
+        observer.advance(crate::progress::Pass::Occluder, 1, 1);
         let mut solver = Solver {
             settings: settings.clone(),
             scene: state::SceneFacts {
@@ -301,18 +319,24 @@ impl Solver {
             enclosure: enclosure::EnclosureCache::default(),
             lights: lights::LightsState::new(scene.lights.recentred(offset)),
         };
-        solver.finish_setup(scene)?;
+        solver.finish_setup(scene, observer)?;
         Ok(solver)
     }
 
     /// The set-up that needs the whole solver: directional mode, the gather
     /// weights and hidden vertices, the receivers that share samples, and
     /// the first totals.
-    fn finish_setup(&mut self, scene: &Scene) -> Result<(), SolveError> {
+    fn finish_setup(
+        &mut self,
+        scene: &Scene,
+        observer: &mut dyn crate::progress::Observer,
+    ) -> Result<(), SolveError> {
         self.enclosure.catch_up(self.mesh.vertices.len());
         let enclosed = self.enclosed_lamp_warnings();
         self.warnings.setup.extend(enclosed);
         self.init_directional(scene)?;
+        self.classify_vertices_observed(observer);
+        observer.advance(crate::progress::Pass::SharedSamples, 0, 1);
         let all: Vec<u32> = (0..self.mesh.surfaces.len() as u32).collect();
         self.update_weights(&all);
         // After `update_weights`, which classifies the vertices as hidden;
@@ -331,6 +355,7 @@ impl Solver {
         self.stats.unshot_power = self.total_unshot_power();
         self.stats.radiance_level = self.ambient().max_element();
         self.memory.peak_estimate = self.memory_estimate().peak();
+        observer.advance(crate::progress::Pass::SharedSamples, 1, 1);
         Ok(())
     }
 
@@ -597,22 +622,32 @@ impl Solver {
     /// Classifies the vertices created since the last call as hidden or not
     /// ([`hidden::is_hidden`] at their receiving points).
     fn classify_new_vertices(&mut self) {
-        let start = self.field.hidden.len() as u32;
+        self.classify_vertices_observed(&mut crate::progress::Quiet);
+    }
+
+    /// [`Self::classify_new_vertices`] in chunks, reporting to `observer`.
+    fn classify_vertices_observed(&mut self, observer: &mut dyn crate::progress::Observer) {
         let end = self.mesh.vertices.len() as u32;
-        if start >= end {
-            return;
+        let pass = crate::progress::Pass::HiddenVertices;
+        while (self.field.hidden.len() as u32) < end {
+            let start = self.field.hidden.len() as u32;
+            observer.advance(pass, start as u64, end as u64);
+            let stop = end.min(start + crate::progress::CHUNK as u32);
+            let mesh = &self.mesh;
+            let occluder = &self.occluder;
+            let epsilon = occluder.scene_epsilon();
+            let new: Vec<bool> = (start..stop)
+                .into_par_iter()
+                .map(|v| {
+                    let (q, n) = shoot::receiving_point(mesh, v, epsilon);
+                    hidden::is_hidden(occluder, q, n)
+                })
+                .collect();
+            self.field.hidden.extend(new);
+            if stop == end {
+                observer.advance(pass, end as u64, end as u64);
+            }
         }
-        let mesh = &self.mesh;
-        let occluder = &self.occluder;
-        let epsilon = occluder.scene_epsilon();
-        let new: Vec<bool> = (start..end)
-            .into_par_iter()
-            .map(|v| {
-                let (q, n) = shoot::receiving_point(mesh, v, epsilon);
-                hidden::is_hidden(occluder, q, n)
-            })
-            .collect();
-        self.field.hidden.extend(new);
     }
 
     /// The quadrants of quad patch `source` with unshot `unshot`, shaped by its
@@ -754,10 +789,15 @@ fn check_materials(scene: &Scene) -> Result<(), SolveError> {
 /// along contact lines (`mesh::contact`) in both modes, and along shadow
 /// lines in directional mode; each output shares the cuts' seams
 /// (`seams.rs`; directional output only within each cut polygon).
-fn mesh_scene(scene: &Scene, settings: &SolverSettings, offset: DVec3) -> Result<Mesh, SolveError> {
+fn mesh_scene(
+    scene: &Scene,
+    settings: &SolverSettings,
+    offset: DVec3,
+    parts: &[Option<Vec<crate::mesh::contact::Part>>],
+    observer: &mut dyn crate::progress::Observer,
+) -> Result<Mesh, SolveError> {
     let sizing = crate::mesh::Sizing::from_settings(settings, scene);
-    let cuts = crate::mesh::contact::Cuts::for_settings(settings);
-    let mesh = Mesh::with_contacts(scene, offset, &sizing, cuts)?;
+    let mesh = Mesh::with_contacts(scene, offset, &sizing, parts, observer)?;
     match mesh.surfaces.len() {
         0 => Err(SolveError::EmptyScene),
         1 => Err(SolveError::SinglePolygon),

@@ -256,7 +256,8 @@ fn textures_are_counted_in_the_memory_budget() {
     let mut wall = material("wall", 1.0, 0.0);
     wall.diffuse_texture = Some(shared);
     let scene = room(wall);
-    let before = budget::counts_before_meshing(&scene, &settings());
+    let before =
+        budget::counts_before_meshing(&scene, &settings(), &budget::cuts_of(&scene, &settings()));
     assert_eq!(before.texture_bytes, expected);
     let solver = Solver::new(&scene, &settings()).unwrap();
     let entries: u64 = solver
@@ -311,7 +312,8 @@ fn directional_e_over_pi_is_counted_in_the_memory_budget() {
     // Before meshing: N² patches and (N+1)² vertices a quad, six values per
     // textured vertex at order 0: an upper bound (the walls' patch corners
     // are shared along their edges only within a wall, as counted).
-    let before = budget::counts_before_meshing(&scene, &settings);
+    let before =
+        budget::counts_before_meshing(&scene, &settings, &budget::cuts_of(&scene, &settings));
     assert!(before.vertex_coefficients >= allocated);
     let before_plain_walls = 3 * before.vertices;
     assert!(before.vertex_coefficients > before_plain_walls);

@@ -71,15 +71,21 @@ impl Session<'_> {
         )?)
     }
 
-    /// Saves the checkpoint, then the partial solution a viewer can watch; both
-    /// atomically.
-    fn save<S: Shooter>(&self, shooter: &S, seconds: f64) -> anyhow::Result<()> {
+    /// Saves the checkpoint alone, atomically: the one written as soon as the
+    /// set-up ends, so that no interrupt after it loses the set-up.
+    pub fn save_checkpoint<S: Shooter>(&self, shooter: &S, seconds: f64) -> anyhow::Result<()> {
         let meta = Meta {
             seconds,
             shots: shooter.snapshot().shots,
             ..self.meta.clone()
         };
-        checkpoint::write(&self.checkpoint_path, &meta, |w| shooter.write_state(w))?;
+        checkpoint::write(&self.checkpoint_path, &meta, |w| shooter.write_state(w))
+    }
+
+    /// Saves the checkpoint, then the partial solution a viewer can watch; both
+    /// atomically.
+    fn save<S: Shooter>(&self, shooter: &S, seconds: f64) -> anyhow::Result<()> {
+        self.save_checkpoint(shooter, seconds)?;
         let mut partial = shooter.solution(true);
         partial.header.stats.seconds = seconds;
         super::files::write_solution(self.out, &mut partial, "partial solution")

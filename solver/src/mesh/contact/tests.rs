@@ -193,7 +193,14 @@ fn no_floor_element_straddles_the_contact_line() {
     let (scene, base) = box_on_floor();
     let sizing = Sizing::flat(5);
     let mut conformed = Mesh::with_sizing(&scene, DVec3::ZERO, &sizing).unwrap();
-    let mut whole = Mesh::with_contacts(&scene, DVec3::ZERO, &sizing, Cuts::None).unwrap();
+    let mut whole = Mesh::with_contacts(
+        &scene,
+        DVec3::ZERO,
+        &sizing,
+        &conform(&scene, Cuts::None),
+        &mut crate::progress::Quiet,
+    )
+    .unwrap();
     // Refine every floor element twice, as adaptive subdivision would near
     // the box: the quadtree stays inside its part.
     for mesh in [&mut conformed, &mut whole] {

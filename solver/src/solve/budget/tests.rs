@@ -133,7 +133,7 @@ fn estimate_matches_the_allocated_state_of_a_diffuse_solve() {
     // exact and whose vertices (n+1)² per piece over-counts (a triangle has
     // (n+1)(n+2)/2, a fan shares its diagonals): an upper bound, 13% over
     // here, within 20%.
-    let before = counts_before_meshing(&scene, &settings);
+    let before = counts_before_meshing(&scene, &settings, &cuts_of(&scene, &settings));
     assert_eq!(before.elements, real.elements);
     assert!(before.vertices >= real.vertices);
     assert!(off(before.vertices, real.vertices) < 0.2);
@@ -394,8 +394,12 @@ fn the_fixed_term_starts_from_the_resident_set_measured_before_meshing() {
         let measured = solver.memory_estimate();
         assert_eq!(measured.fixed, modelled.fixed + extra);
         assert_eq!(measured.peak(), modelled.peak() + extra);
-        let c = counts_before_meshing(&scene, &measured_settings);
-        let c0 = counts_before_meshing(&scene, &settings);
+        let c = counts_before_meshing(
+            &scene,
+            &measured_settings,
+            &cuts_of(&scene, &measured_settings),
+        );
+        let c0 = counts_before_meshing(&scene, &settings, &cuts_of(&scene, &settings));
         assert_eq!(estimate(&c).peak(), estimate(&c0).peak() + extra);
     }
 }
@@ -462,13 +466,23 @@ fn the_group_term_follows_what_the_solve_shoots() {
         let (scene, mut settings) = bundled("cornell_box.obj", Preset::Draft, mode, 2);
         settings.shooters = shooters;
         assert_eq!(
-            counts_before_meshing(&scene, &settings).grouped,
+            counts_before_meshing(&scene, &settings, &cuts_of(&scene, &settings)).grouped,
             grouped,
             "{mode:?}, {shooters:?}"
         );
-        let with = estimate(&counts_before_meshing(&scene, &settings)).shot;
+        let with = estimate(&counts_before_meshing(
+            &scene,
+            &settings,
+            &cuts_of(&scene, &settings),
+        ))
+        .shot;
         settings.shooters = crate::settings::Shooters::Patch;
-        let without = estimate(&counts_before_meshing(&scene, &settings)).shot;
+        let without = estimate(&counts_before_meshing(
+            &scene,
+            &settings,
+            &cuts_of(&scene, &settings),
+        ))
+        .shot;
         assert_eq!(with > without, grouped, "{mode:?}, {shooters:?}");
     }
 }
