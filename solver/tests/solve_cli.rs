@@ -451,4 +451,166 @@ fn ctrl_c_saves_a_resumable_checkpoint() {
     let (a, b) = (read(&out), read(&whole));
     assert_eq!(a.header.stats.shots, shots + 3);
     assert_same_result(&a, &b);
+    // The resume took the set-up's searches from the checkpoint.
+    let fresh = setup_line(&message);
+    let again = setup_line(&stderr(&resumed));
+    eprintln!("set-up, fresh: {fresh}\nset-up, resumed: {again}");
+    assert!(
+        fresh.contains("contact cuts") && fresh.contains("hidden vertices"),
+        "{fresh}"
+    );
+    assert!(
+        !again.contains("contact cuts") && !again.contains("hidden vertices"),
+        "{again}"
+    );
+}
+
+/// The set-up's summary line (`solver: set-up 1.2 s (contact cuts …)`).
+fn setup_line(stderr: &str) -> String {
+    stderr
+        .lines()
+        .find(|l| l.starts_with("solver: set-up "))
+        .unwrap_or_else(|| panic!("no set-up summary in:\n{stderr}"))
+        .to_owned()
+}
+
+/// A 16 m room whose floor carries an n × n field of 10 cm boxes (five faces
+/// each, standing on it) under one ceiling light: a set-up of many
+/// receivers and vertices to probe, long enough to be interrupted.
+fn write_box_field(dir: &Path, n: usize) -> PathBuf {
+    let mut obj = String::from("mtllib field.mtl\nusemtl white\n");
+    let mut v = 0;
+    let mut quad = |obj: &mut String, corners: [[f64; 3]; 4]| {
+        for c in corners {
+            obj.push_str(&format!("v {} {} {}\n", c[0], c[1], c[2]));
+        }
+        obj.push_str(&format!("f {} {} {} {}\n", v + 1, v + 2, v + 3, v + 4));
+        v += 4;
+    };
+    let s = 16.0;
+    // Floor, ceiling and walls, counter-clockwise seen from inside.
+    quad(
+        &mut obj,
+        [[0.0, 0.0, 0.0], [0.0, 0.0, s], [s, 0.0, s], [s, 0.0, 0.0]],
+    );
+    quad(
+        &mut obj,
+        [[0.0, 3.0, 0.0], [s, 3.0, 0.0], [s, 3.0, s], [0.0, 3.0, s]],
+    );
+    quad(
+        &mut obj,
+        [
+            [0.0, 0.0, 0.0],
+            [s, 0.0, 0.0],
+            [s, 3.0, 0.0],
+            [0.0, 3.0, 0.0],
+        ],
+    );
+    quad(
+        &mut obj,
+        [[0.0, 0.0, s], [0.0, 3.0, s], [s, 3.0, s], [s, 0.0, s]],
+    );
+    quad(
+        &mut obj,
+        [
+            [0.0, 0.0, 0.0],
+            [0.0, 3.0, 0.0],
+            [0.0, 3.0, s],
+            [0.0, 0.0, s],
+        ],
+    );
+    quad(
+        &mut obj,
+        [[s, 0.0, 0.0], [s, 0.0, s], [s, 3.0, s], [s, 3.0, 0.0]],
+    );
+    for i in 0..n {
+        for j in 0..n {
+            let (x0, z0) = (1.0 + i as f64 * 0.15, 1.0 + j as f64 * 0.15);
+            let (x1, z1, h) = (x0 + 0.1, z0 + 0.1, 0.1);
+            quad(
+                &mut obj,
+                [[x0, h, z0], [x0, h, z1], [x1, h, z1], [x1, h, z0]],
+            );
+            quad(
+                &mut obj,
+                [[x0, 0.0, z0], [x1, 0.0, z0], [x1, h, z0], [x0, h, z0]],
+            );
+            quad(
+                &mut obj,
+                [[x0, 0.0, z1], [x0, h, z1], [x1, h, z1], [x1, 0.0, z1]],
+            );
+            quad(
+                &mut obj,
+                [[x0, 0.0, z0], [x0, h, z0], [x0, h, z1], [x0, 0.0, z1]],
+            );
+            quad(
+                &mut obj,
+                [[x1, 0.0, z0], [x1, 0.0, z1], [x1, h, z1], [x1, h, z0]],
+            );
+        }
+    }
+    obj.push_str("usemtl light\n");
+    let (a, b, y) = (7.0, 9.0, 2.999);
+    quad(&mut obj, [[a, y, a], [b, y, a], [b, y, b], [a, y, b]]);
+    std::fs::write(
+        dir.join("field.mtl"),
+        "newmtl white\nKd 0.6 0.6 0.6\nnewmtl light\nKd 0.5 0.5 0.5\nKe 10 10 10\n",
+    )
+    .unwrap();
+    let path = dir.join("field.obj");
+    std::fs::write(&path, obj).unwrap();
+    path
+}
+
+/// A real Ctrl-C (SIGINT) during the set-up: the set-up finishes, its
+/// checkpoint is written and the solve stops (exit 130); `--resume` skips
+/// the set-up's searches and reaches the same bits as an uninterrupted solve
+/// to the same shot budget. The two set-ups' times are printed.
+#[cfg(unix)]
+#[test]
+fn ctrl_c_during_the_set_up_keeps_the_set_up() {
+    use std::io::{BufRead, BufReader};
+    let dir = tempfile::tempdir().unwrap();
+    let scene = write_box_field(dir.path(), 90);
+    let budget = ["--max-shots", "4"];
+    let whole = dir.path().join("whole.sol");
+    let reference = run(draft(&scene, &whole).args(budget));
+    assert_capped(&reference);
+
+    let out = dir.path().join("field.sol");
+    let mut child = draft(&scene, &out)
+        .args(budget)
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut seen = String::new();
+    // The memory budget's line is the last before the set-up begins.
+    let mut signalled = false;
+    for line in BufReader::new(child.stderr.take().unwrap()).lines() {
+        let line = line.unwrap();
+        seen.push_str(&line);
+        seen.push('\n');
+        if !signalled && line.contains("memory budget") {
+            let kill = Command::new("kill")
+                .args(["-INT", &child.id().to_string()])
+                .status()
+                .unwrap();
+            assert!(kill.success());
+            signalled = true;
+        }
+    }
+    let status = child.wait().unwrap();
+    assert_eq!(status.code(), Some(130), "{seen}");
+    assert!(seen.contains("finishing the set-up"), "{seen}");
+    assert!(dir.path().join("field.sol.checkpoint").exists(), "{seen}");
+
+    let resumed = run(draft(&scene, &out).args(budget).arg("--resume"));
+    assert_capped(&resumed);
+    assert_same_result(&read(&out), &read(&whole));
+    let (fresh, again) = (setup_line(&seen), setup_line(&stderr(&resumed)));
+    eprintln!("set-up, fresh: {fresh}\nset-up, resumed: {again}");
+    assert!(
+        !again.contains("contact cuts") && !again.contains("hidden vertices"),
+        "{again}"
+    );
 }

@@ -36,6 +36,9 @@ use std::sync::Arc;
 /// Runs the command; `Ok` carries the exit code (0; [`EXIT_SHOT_CAP`] when stopped
 /// at the shot cap above the threshold; 130 when interrupted).
 pub fn run(args: SolveArgs) -> anyhow::Result<ExitCode> {
+    // From the start: a Ctrl-C during the import lets the set-up finish and
+    // save, as one during the set-up does.
+    let interrupt = install_ctrlc();
     let checkpoint_path = files::checkpoint_path(&args.out);
     check_checkpoint_state(&args, &checkpoint_path)?;
     // Find out now, not after an hour of solving, that an output cannot be written.
@@ -137,7 +140,6 @@ pub fn run(args: SolveArgs) -> anyhow::Result<ExitCode> {
         .num_threads(threads)
         .build()
         .context("starting the worker threads")?;
-    let interrupt = install_ctrlc();
     let session = Session {
         out: &args.out,
         checkpoint_path: checkpoint_path.clone(),

@@ -43,6 +43,11 @@
 //! and unmasks (`directional/state.rs`). Directional mode keeps its radiance
 //! and unshot coefficients at 40 mantissa bits ([`precision`]), so their 12
 //! low bits are zero, and the masks leave them so.
+//! Last come the set-up's results (`CUTI`, `CUTV`, `HIDN`, [`SetupResult`]):
+//! the contact cuts and the hidden flags, which the set-up finds by searching
+//! the scene and casting probe rays, so that a resume rebuilds the mesh from
+//! them and probes no vertex again. The first checkpoint is written as the
+//! set-up ends, at shot 0.
 //! The file envelope around it (magic, settings, checksum) is the command line's
 //! (`cli/solve/checkpoint.rs`).
 
@@ -57,8 +62,9 @@ pub(super) use packed::CHUNK_VALUES;
 pub(super) mod precision;
 
 /// Bump when the meaning of the fields changes (3: the f64 arrays packed;
-/// 4: directional masks use only the kept bits, [`precision`]; 5: `SHSS`).
-pub const CHECKPOINT_VERSION: u32 = 5;
+/// 4: directional masks use only the kept bits, [`precision`]; 5: `SHSS`;
+/// 6: the set-up's `CUTI`, `CUTV` and `HIDN`).
+pub const CHECKPOINT_VERSION: u32 = 6;
 
 /// Everything [`Solver::resume`] needs, as read back from a checkpoint. See the
 /// module documentation. (Writing streams from the solver itself:
@@ -92,6 +98,75 @@ pub struct Checkpoint {
     pub directional: Option<super::DirectionalCheckpoint>,
     /// Directional mode: per patch, 1 where its unshot SH is masked.
     pub unshot_masked: Vec<u32>,
+    /// The set-up's searches, so that a resume does not repeat them: the
+    /// receivers cut along contact lines (polygon, parts), and per vertex
+    /// whether it is hidden (`hidden.rs`).
+    pub setup: SetupResult,
+}
+
+impl SetupResult {
+    /// Per polygon of `scene`, its part of `cuts` or `None`; a cut naming no
+    /// polygon, or a part that is not a finite polygon, is refused.
+    pub(super) fn parts_for(
+        polygons_hash: u64,
+        cuts: Vec<(u32, Vec<crate::mesh::contact::Part>)>,
+        scene: &Scene,
+    ) -> Result<Vec<Option<Vec<crate::mesh::contact::Part>>>, SolveError> {
+        let mut parts = vec![None; scene.polygons.len()];
+        if polygons_hash != self::polygons_hash(scene) {
+            return Err(SolveError::CheckpointMismatch(
+                "its contact cuts were made on other polygons (another scene)".into(),
+            ));
+        }
+        for (polygon, cut) in cuts {
+            let sound = cut.iter().all(|p| {
+                p.vertices.len() >= 3 && p.vertices.iter().chain(&p.apexes).all(|v| v.is_finite())
+            });
+            match parts.get_mut(polygon as usize) {
+                Some(slot @ None) if sound => *slot = Some(cut),
+                _ => {
+                    return Err(SolveError::CheckpointMismatch(format!(
+                        "its contact cuts name polygon {polygon} twice, beyond the scene's {} \
+                         or with a degenerate part",
+                        scene.polygons.len()
+                    )))
+                }
+            }
+        }
+        Ok(parts)
+    }
+}
+
+/// FNV-1a over every polygon's vertex count and coordinates' bits.
+pub fn polygons_hash(scene: &Scene) -> u64 {
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    let mut eat = |x: u64| {
+        for b in x.to_le_bytes() {
+            h ^= b as u64;
+            h = h.wrapping_mul(0x0000_0100_0000_01b3);
+        }
+    };
+    for p in &scene.polygons {
+        eat(p.vertices.len() as u64);
+        for v in &p.vertices {
+            v.to_array().iter().for_each(|c| eat(c.to_bits()));
+        }
+    }
+    h
+}
+
+/// What the set-up found by searching the scene: stored in every
+/// checkpoint, from the first (written as the set-up ends), so that
+/// `--resume` rebuilds the mesh from it instead of searching again.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct SetupResult {
+    /// FNV-1a of the scene's polygons' vertices ([`polygons_hash`]): the
+    /// stored parts stand for those polygons only.
+    pub polygons_hash: u64,
+    /// The cut polygons (index into the scene's polygons) and their parts.
+    pub cuts: Vec<(u32, Vec<crate::mesh::contact::Part>)>,
+    /// Per mesh vertex, hidden or not.
+    pub hidden: Vec<bool>,
 }
 
 /// A checkpoint's solver state cannot be read: `field` names the section.
@@ -381,9 +456,10 @@ impl Checkpoint {
                 })
             }
         };
+        let setup = read_setup(&mut r)?;
         if r.remaining != 0 {
             return Err(StateError::Bad {
-                field: "SHRU",
+                field: "HIDN",
                 detail: format!("{} bytes follow the last section", r.remaining),
             });
         }
@@ -401,8 +477,85 @@ impl Checkpoint {
             recorded,
             directional,
             unshot_masked,
+            setup,
         })
     }
+}
+
+/// The set-up's sections: `CUTI` (the polygons' hash, low word first; per
+/// cut polygon: its index and part count;
+/// per part: covered 0/1, vertex count, apex count), `CUTV` (packed: every
+/// part's vertices then apexes, xyz) and `HIDN` (the vertex count, then the
+/// hidden flags 32 a word, least significant bit first).
+fn read_setup<R: Read>(r: &mut SectionReader<'_, R>) -> Result<SetupResult, StateError> {
+    let index = r.u32s("CUTI")?;
+    let values = r.packed("CUTV")?;
+    let bad = |detail: String| StateError::Bad {
+        field: "CUTI",
+        detail,
+    };
+    let mut words = index.iter().copied();
+    let (lo, hi) = (words.next(), words.next());
+    let polygons_hash = match (lo, hi) {
+        (Some(lo), Some(hi)) => lo as u64 | (hi as u64) << 32,
+        _ => return Err(bad("no polygons' hash".into())),
+    };
+    let mut points = values.chunks_exact(3).map(DVec3::from_slice);
+    let mut take = |n: u32| -> Result<Vec<DVec3>, StateError> {
+        (0..n)
+            .map(|_| {
+                points
+                    .next()
+                    .ok_or_else(|| bad("more points than CUTV holds".into()))
+            })
+            .collect()
+    };
+    let mut cuts = Vec::new();
+    while let Some(polygon) = words.next() {
+        let mut next = || {
+            words
+                .next()
+                .ok_or_else(|| bad("a part is cut short".into()))
+        };
+        let count = next()?;
+        let mut parts = Vec::new();
+        for _ in 0..count {
+            let (covered, vertices, apexes) = (next()?, next()?, next()?);
+            parts.push((covered, vertices, apexes));
+        }
+        let parts = parts
+            .into_iter()
+            .map(|(covered, vertices, apexes)| {
+                Ok(crate::mesh::contact::Part {
+                    vertices: take(vertices)?,
+                    covered: covered != 0,
+                    apexes: take(apexes)?,
+                })
+            })
+            .collect::<Result<Vec<_>, StateError>>()?;
+        cuts.push((polygon, parts));
+    }
+    if points.next().is_some() {
+        return Err(bad("CUTV holds more points than the parts".into()));
+    }
+    let flags = r.u32s("HIDN")?;
+    let (count, bits) = flags
+        .split_first()
+        .map_or((0, &[][..]), |(c, b)| (*c as usize, b));
+    if bits.len() != count.div_ceil(32) {
+        return Err(StateError::Bad {
+            field: "HIDN",
+            detail: format!("{count} flags in {} words", bits.len()),
+        });
+    }
+    let hidden = (0..count)
+        .map(|v| bits[v / 32] >> (v % 32) & 1 == 1)
+        .collect();
+    Ok(SetupResult {
+        polygons_hash,
+        cuts,
+        hidden,
+    })
 }
 
 /// The directional sections, and the per-patch flags of masked unshot SH.
@@ -460,6 +613,45 @@ fn read_directional<R: Read>(
         },
         unshot_masked,
     ))
+}
+
+/// Writes [`read_setup`]'s sections.
+fn write_setup<W: Write>(
+    s: &mut SectionWriter<'_, W>,
+    polygons_hash: u64,
+    cuts: &[(u32, Vec<crate::mesh::contact::Part>)],
+    hidden: &[bool],
+) -> io::Result<()> {
+    let mut index = vec![polygons_hash as u32, (polygons_hash >> 32) as u32];
+    let mut values = Vec::new();
+    for (polygon, parts) in cuts {
+        index.extend([*polygon, parts.len() as u32]);
+        for part in parts {
+            index.extend([
+                part.covered as u32,
+                part.vertices.len() as u32,
+                part.apexes.len() as u32,
+            ]);
+        }
+        for part in parts {
+            values.extend(
+                part.vertices
+                    .iter()
+                    .chain(&part.apexes)
+                    .flat_map(|p| p.to_array()),
+            );
+        }
+    }
+    s.u32s(b"CUTI", &index)?;
+    s.packed(b"CUTV", values.len(), values.into_iter())?;
+    let mut flags = vec![hidden.len() as u32];
+    flags.extend(hidden.chunks(32).map(|chunk| {
+        chunk
+            .iter()
+            .enumerate()
+            .fold(0u32, |word, (k, &h)| word | (h as u32) << k)
+    }));
+    s.u32s(b"HIDN", &flags)
 }
 
 /// Refuses a checkpoint written in the other mode. Checked before the
@@ -574,7 +766,12 @@ impl Solver {
                 sections.shot_sum.iter().copied(),
             )?;
         }
-        Ok(())
+        write_setup(
+            &mut s,
+            self.setup_cuts.polygons_hash,
+            &self.setup_cuts.cuts,
+            &self.field.hidden,
+        )
     }
 
     /// Rebuilds a solver from `checkpoint` on the same scene. With the same
@@ -593,7 +790,7 @@ impl Solver {
     pub fn resume_observed(
         scene: &Scene,
         settings: &SolverSettings,
-        checkpoint: Checkpoint,
+        mut checkpoint: Checkpoint,
         observer: &mut dyn crate::progress::Observer,
     ) -> Result<Solver, SolveError> {
         let mismatch = |what: String| Err(SolveError::CheckpointMismatch(what));
@@ -603,7 +800,11 @@ impl Solver {
                 checkpoint.version
             ));
         }
-        let mut solver = Solver::new_observed(scene, settings, observer)?;
+        // The set-up's searches are not repeated: the mesh is rebuilt from
+        // the stored cuts and the stored hidden flags are taken as they are.
+        let setup = std::mem::take(&mut checkpoint.setup);
+        let hidden = setup.hidden.clone();
+        let mut solver = Solver::set_up(scene, settings, Some(setup), observer)?;
         check_mode(&checkpoint, settings)?;
         if checkpoint.fingerprint != solver.fingerprint() {
             return mismatch(format!(
@@ -626,6 +827,14 @@ impl Solver {
             .mesh
             .replay(&checkpoint.split_log)
             .map_err(|e| SolveError::CheckpointMismatch(e.to_string()))?;
+        if hidden.len() > solver.mesh.vertices.len() {
+            return mismatch(format!(
+                "it has {} hidden flags, the replayed mesh {} vertices",
+                hidden.len(),
+                solver.mesh.vertices.len()
+            ));
+        }
+        solver.field.hidden = hidden;
         // A directional checkpoint stores no diffuse proxies (they are recomputed
         // below); a diffuse one stores both.
         let proxies_derived = checkpoint.directional.is_some()
@@ -849,6 +1058,18 @@ mod tests {
             }],
             directional: None,
             unshot_masked: Vec::new(),
+            setup: SetupResult {
+                polygons_hash: 0x0123_4567_89ab_cdef,
+                cuts: vec![(
+                    1,
+                    vec![crate::mesh::contact::Part {
+                        vertices: vec![DVec3::X, DVec3::Y, DVec3::new(0.5, -0.25, 1e-9)],
+                        covered: true,
+                        apexes: vec![DVec3::Y],
+                    }],
+                )],
+                hidden: (0..33).map(|v| v % 3 == 0).collect(),
+            },
         }
     }
 
@@ -875,6 +1096,13 @@ mod tests {
         s.packed_dvec3s(b"RADI", &c.radiance).unwrap();
         s.packed_dvec3s(b"UNSH", &c.patch_unshot).unwrap();
         s.packed_dvec3s(b"DIRC", &c.direct).unwrap();
+        write_setup(
+            &mut s,
+            c.setup.polygons_hash,
+            &c.setup.cuts,
+            &c.setup.hidden,
+        )
+        .unwrap();
         out
     }
 

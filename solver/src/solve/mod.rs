@@ -227,6 +227,9 @@ pub struct Solver {
     enclosure: enclosure::EnclosureCache,
     /// The sun, the sky and the lamps, in the solver's frame (`lights.rs`).
     lights: lights::LightsState,
+    /// The polygons the set-up cut along contact lines and their parts, kept
+    /// for checkpoints (its `hidden` stays empty: `field.hidden` is written).
+    setup_cuts: checkpoint::SetupResult,
 }
 
 impl Solver {
@@ -245,12 +248,32 @@ impl Solver {
         settings: &SolverSettings,
         observer: &mut dyn crate::progress::Observer,
     ) -> Result<Solver, SolveError> {
+        Self::set_up(scene, settings, None, observer)
+    }
+
+    /// The set-up, searching the scene, or taking what a checkpoint stored of
+    /// an earlier search (`found`: a resume).
+    fn set_up(
+        scene: &Scene,
+        settings: &SolverSettings,
+        found: Option<checkpoint::SetupResult>,
+        observer: &mut dyn crate::progress::Observer,
+    ) -> Result<Solver, SolveError> {
         settings.validate()?;
         check_materials(scene)?;
         // The receivers' cuts, once: the estimate below counts their parts
         // and the mesh is built from them.
-        let cuts = crate::mesh::contact::Cuts::for_settings(settings);
-        let parts = crate::mesh::contact::conform_observed(scene, cuts, observer);
+        let (parts, mut hidden) = match found {
+            Some(found) => (
+                checkpoint::SetupResult::parts_for(found.polygons_hash, found.cuts, scene)?,
+                found.hidden,
+            ),
+            None => {
+                let cuts = crate::mesh::contact::Cuts::for_settings(settings);
+                let parts = crate::mesh::contact::conform_observed(scene, cuts, observer);
+                (parts, Vec::new())
+            }
+        };
         // Refuse before meshing when even the unrefined mesh at SH order 0
         // cannot fit (its counts are known from the polygons' parts alone).
         check_coarsest(
@@ -260,7 +283,15 @@ impl Solver {
         )?;
         let offset = scene_centre(scene);
         let mesh = mesh_scene(scene, settings, offset, &parts, observer)?;
-        drop(parts);
+        let setup_cuts = checkpoint::SetupResult {
+            polygons_hash: checkpoint::polygons_hash(scene),
+            cuts: parts
+                .into_iter()
+                .enumerate()
+                .filter_map(|(i, p)| p.map(|p| (i as u32, p)))
+                .collect(),
+            hidden: Vec::new(),
+        };
         observer.advance(crate::progress::Pass::SolverState, 0, 1);
         let texturing = textured::SurfaceTexturing::new(scene, &mesh, offset);
         let scene_bytes = budget::scene_bytes(scene);
@@ -318,7 +349,11 @@ impl Solver {
             directional: None,
             enclosure: enclosure::EnclosureCache::default(),
             lights: lights::LightsState::new(scene.lights.recentred(offset)),
+            setup_cuts,
         };
+        // The flags a checkpoint stored for the unrefined mesh's vertices.
+        hidden.truncate(solver.mesh.vertices.len());
+        solver.field.hidden = hidden;
         solver.finish_setup(scene, observer)?;
         Ok(solver)
     }
