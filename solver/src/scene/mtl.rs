@@ -78,6 +78,7 @@ pub(crate) fn parse_mtl(path: &Path, text: &str) -> Result<Vec<RawMaterial>, Sce
                 diffuse_bytes: None,
                 emission_map: None,
                 emission_bytes: None,
+                metal_map: None,
             });
             ke_given.push(false);
             warned.clear();

@@ -561,7 +561,10 @@ pub fn counts_before_meshing(scene: &Scene, settings: &SolverSettings) -> Counts
     let parts =
         crate::mesh::contact::conform(scene, crate::mesh::contact::Cuts::for_settings(settings));
     for (p, parts) in scene.polygons.iter().zip(&parts) {
-        let textured = p.uv_map.is_some() && scene.materials[p.material].diffuse_texture.is_some();
+        let textured = p.uv_map.is_some() && {
+            let m = &scene.materials[p.material];
+            m.diffuse_texture.is_some() || m.folded_texture.is_some()
+        };
         match parts {
             None => count(
                 p.vertices.len(),
@@ -578,11 +581,12 @@ pub fn counts_before_meshing(scene: &Scene, settings: &SolverSettings) -> Counts
     }
     c.weight_entries = c.vertices + 3 * c.patches;
     let mut textures: Vec<*const crate::scene::SceneTexture> = Vec::new();
-    for t in scene
-        .materials
-        .iter()
-        .flat_map(|m| m.diffuse_texture.iter().chain(&m.emission_texture))
-    {
+    for t in scene.materials.iter().flat_map(|m| {
+        m.diffuse_texture
+            .iter()
+            .chain(&m.emission_texture)
+            .chain(&m.folded_texture)
+    }) {
         if !textures.contains(&std::sync::Arc::as_ptr(t)) {
             textures.push(std::sync::Arc::as_ptr(t));
             c.texture_bytes += t.bytes();
