@@ -159,7 +159,24 @@ pub(crate) fn build_scene(mut raw: RawScene, options: &BuildOptions) -> Result<S
     // (`solve::budget::scene_bytes`): about 100 MiB of the 1M Cornell boxes' peak.
     polygons.shrink_to_fit();
 
+    let unlit_polygons: Vec<bool> = polygons
+        .iter()
+        .map(|p| raw.materials.get(p.material).is_some_and(|m| m.unlit))
+        .collect();
     let materials = finish_materials(&raw.materials, &mut polygons, &mut warnings)?;
+    let mut unlit = vec![false; materials.len()];
+    for (p, &u) in polygons.iter().zip(&unlit_polygons) {
+        unlit[p.material] |= u;
+    }
+    let mut lights = options.lights.recentred(recentre_offset);
+    super::skybox::handle_enclosing_shell(
+        &mut polygons,
+        &materials,
+        &unlit,
+        &mut lights,
+        diagonal,
+        &mut warnings,
+    );
     if options.lights.is_empty() && !polygons.iter().any(|p| materials[p.material].is_emitter()) {
         let names: Vec<&str> = materials.iter().map(|m| m.name.as_str()).collect();
         return Err(SceneError::NoEmitter(format!(
@@ -177,7 +194,6 @@ pub(crate) fn build_scene(mut raw: RawScene, options: &BuildOptions) -> Result<S
             });
         }
     }
-    let mut lights = options.lights.recentred(recentre_offset);
     if let Some(note) = detect_sky_portals(&mut lights, &polygons, diagonal, options.portal_mode) {
         // After the strict check: a note on which openings became portals
         // is no fault of the input.

@@ -413,6 +413,7 @@ fn read_attribute(
         emission_map: None,
         emission_bytes: None,
         metal_map: None,
+        unlit: false,
     })
 }
 

@@ -28,6 +28,8 @@ mod path_case;
 pub(crate) mod planar;
 mod raw;
 mod recentre;
+mod shell;
+mod skybox;
 pub mod smooth;
 mod text;
 mod texture_file;

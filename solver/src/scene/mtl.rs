@@ -79,6 +79,7 @@ pub(crate) fn parse_mtl(path: &Path, text: &str) -> Result<Vec<RawMaterial>, Sce
                 emission_map: None,
                 emission_bytes: None,
                 metal_map: None,
+                unlit: false,
             });
             ke_given.push(false);
             warned.clear();

@@ -53,6 +53,9 @@ pub(crate) struct RawMaterial {
     /// read by [`super::clean`] only if a polygon uses the material
     /// ([`super::metal_texture`]).
     pub metal_map: Option<MetalMap>,
+    /// glTF `KHR_materials_unlit`: a picture shown as is, which on an
+    /// enclosing shell marks a skybox ([`super::skybox`]).
+    pub unlit: bool,
 }
 
 /// A glTF `metallicRoughnessTexture` (B: metalness, G: roughness, linear)
@@ -93,6 +96,7 @@ impl RawMaterial {
             emission_map: None,
             emission_bytes: None,
             metal_map: None,
+            unlit: false,
         }
     }
 

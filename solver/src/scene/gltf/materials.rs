@@ -37,7 +37,8 @@ const UNMODELLED_MATERIAL_EXTENSIONS: &[(&str, &str)] = &[
     ("KHR_materials_dispersion", "dispersion"),
     (
         "KHR_materials_unlit",
-        "unlit shading (the surface is lit like any other)",
+        "unlit shading (the surface is lit like any other, as a diffuse surface of its base \
+         colour; an unlit textured skybox can become the sky's environment map)",
     ),
     (
         "KHR_materials_pbrSpecularGlossiness",
@@ -183,6 +184,17 @@ pub(super) fn convert_material(
             warn(format!("{extension} ignored: {what} is not modelled"));
         }
     }
+    // An unlit material shows its base colour as is (KHR_materials_unlit);
+    // lit, the nearest is a diffuse surface of that colour, without the
+    // metallic split (a metal's Kd would be 0).
+    let unlit = material.extension_value("KHR_materials_unlit").is_some();
+    // Its metalness would not apply.
+    let metal = metal.filter(|_| !unlit);
+    let (kd, ks) = if unlit {
+        (DVec3::new(r, g, b), DVec3::ZERO)
+    } else {
+        (kd, ks)
+    };
     let raw = RawMaterial {
         name,
         aliases: Vec::new(),
@@ -213,6 +225,7 @@ pub(super) fn convert_material(
             metallic: metallic.clamp(0.0, 1.0),
             roughness: roughness.clamp(0.0, 1.0),
         }),
+        unlit,
     };
     // A polygon has one UV set: the textures' maps are equal when several
     // are kept (above).

@@ -77,6 +77,8 @@ mod lights_tests;
 #[cfg(test)]
 mod metal_tests;
 #[cfg(test)]
+mod skybox_tests;
+#[cfg(test)]
 mod tests;
 
 /// glTF's unit of length is the metre (glTF 2.0 specification, §3.4).
