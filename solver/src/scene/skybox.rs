@@ -75,7 +75,7 @@ pub(super) fn handle_enclosing_shell(
          holds the whole scene",
         shell.polygons.len(),
         names.join(", "),
-        first.source
+        first.source.item
     );
     let source = SourceRef {
         item: "enclosing shell".to_owned(),
@@ -108,8 +108,7 @@ pub(super) fn handle_enclosing_shell(
                 "{what}; {kind}. The scene has a sky, so the skybox's texture became the sky's \
                  environment map (seen from the shell's centre, scaled to the configured sky's \
                  horizontal illuminance; docs/lights.md, \"Skyboxes and other enclosing shells\") and the shell was removed \
-                 from the geometry{}",
-                blocked_note(&outside, " (the sun and lamps outside it now reach the scene)")
+                 from the geometry, so it no longer keeps outside light from the scene"
             )
         }
         None => format!(
