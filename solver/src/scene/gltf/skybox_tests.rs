@@ -273,3 +273,46 @@ fn a_closed_room_lit_from_inside_is_not_reported_but_one_a_sky_cannot_enter_is()
     );
     assert_eq!(lit.polygons.len(), 14, "a lit shell is kept");
 }
+
+/// The largest radiance of any vertex after the lights' shot and a few more,
+/// at draft.
+fn brightest_after_lights(scene: &crate::scene::Scene) -> f64 {
+    let mut settings = crate::settings::SolverSettings::preset(crate::settings::Preset::Draft);
+    settings.max_shots = 20;
+    let mut solver = crate::solve::Solver::new(scene, &settings).unwrap();
+    while solver.step().is_some() {}
+    solver
+        .vertex_radiance()
+        .iter()
+        .map(|l| l.max_element())
+        .fold(0.0, f64::max)
+}
+
+#[test]
+fn the_sky_reaches_the_floor_once_the_skybox_is_its_map_and_not_through_a_kept_shell() {
+    let dir = tempfile::tempdir().unwrap();
+    // Converted: the floor under the sky map is lit. The lamp's radiance is
+    // 1; the sky's 10 klux give an open floor E = 10000/683 = 14.6 W/m², so
+    // ρE/π = 2.5 in luminance for its ρ = 0.54 (grey 0.5 with the
+    // dielectric's 0.04 folded in); the map is blue overhead, so the blue
+    // channel is brighter still (measured 5.8).
+    let converted = with_sky(&skybox(dir.path())).scene;
+    let lit = brightest_after_lights(&converted);
+    println!("brightest vertex under the skybox's map: {lit}");
+    assert!(lit > 2.0, "{lit}");
+    // Kept (lit walls, not unlit): the sky outside meets only their backs,
+    // and the lamp alone lights the room.
+    let quads: Vec<Quad> = cube_inward(10.0, 0, 1)
+        .into_iter()
+        .chain(furniture(2, 3))
+        .collect();
+    let kept = with_sky(&write_glb(
+        dir.path(),
+        "kept",
+        &fixture(&quads, materials(false)),
+    ))
+    .scene;
+    let dark = brightest_after_lights(&kept);
+    println!("brightest vertex inside the kept shell: {dark}");
+    assert!(dark < 1.1, "{dark}");
+}
