@@ -93,6 +93,7 @@ fn scene(polygons: Vec<Vec<DVec3>>, patches: u32) -> Scene {
             emission: DVec3::ONE,
             diffuse_texture: None,
             emission_texture: None,
+            folded_texture: None,
         }],
         units_per_metre: 1.0,
         up_axis: UpAxis::PosY,

@@ -595,6 +595,10 @@ fn finish(
     } = outcome;
     if !interrupted {
         files::write_solution(&args.out, &mut solution, "solution")?;
+        // The light that never reaches the viewer (`solve::enclosure`).
+        if let Some(warning) = crate::solve::enclosure::dark_view_warning(&solution) {
+            eprintln!("solver: warning: {warning}");
+        }
     }
     eprintln!("solver: {}", stats.summary(settings.threshold));
     if let Some(path) = &args.stats_json {

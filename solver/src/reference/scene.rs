@@ -63,8 +63,11 @@ pub struct RenderScene {
     pub max_albedo: f64,
     /// Glossy lobes built, by α: their tables' sizes and measured errors.
     pub lobes: Vec<Arc<ExactLobe>>,
-    /// Per material, its diffuse texture (the scene's, decoded to linear).
-    pub textures: Vec<Option<Arc<crate::scene::SceneTexture>>>,
+    /// Per material, the factor and texture whose product is its diffuse
+    /// reflectance where a surface has UVs: Kd (diffuse mode: Ks folded in)
+    /// and the diffuse texture, or in diffuse mode the per-texel fold of a
+    /// glTF metallic-roughness texture with factor 1.
+    pub textures: Vec<Option<(DVec3, Arc<crate::scene::SceneTexture>)>>,
     /// Per material, its emission texture (`map_Ke`), read the same way.
     pub emission_textures: Vec<Option<Arc<crate::scene::SceneTexture>>>,
 }
@@ -144,7 +147,9 @@ impl RenderScene {
                     object,
                     uv_map: p.uv_map.filter(|_| {
                         let m = &scene.materials[p.material];
-                        m.diffuse_texture.is_some() || m.emission_texture.is_some()
+                        m.diffuse_texture.is_some()
+                            || m.emission_texture.is_some()
+                            || m.folded_texture.is_some()
                     }),
                 }
             })
@@ -180,10 +185,16 @@ impl RenderScene {
             object_names,
             max_albedo,
             lobes: lobes.into_values().collect(),
+            // Diffuse mode reads the per-texel fold where glTF's
+            // metallic-roughness texture gave one (`Material::diffuse_mode_texture`).
             textures: scene
                 .materials
                 .iter()
-                .map(|m| m.diffuse_texture.clone())
+                .map(|m| match (glossy, m.diffuse_mode_texture()) {
+                    (false, Some((kd, t))) => Some((kd, t.clone())),
+                    (false, None) => None,
+                    (true, _) => m.diffuse_texture.clone().map(|t| (m.kd, t)),
+                })
                 .collect(),
             emission_textures: scene
                 .materials
@@ -213,7 +224,7 @@ impl RenderScene {
             return std::borrow::Cow::Borrowed(bsdf);
         };
         let kd = match &self.textures[surface.material] {
-            Some(texture) => bsdf.kd * texture.texture.bilinear(map.at(point)),
+            Some((kd, texture)) => *kd * texture.texture.bilinear(map.at(point)),
             None => bsdf.kd,
         };
         let emission = self.emission_at(polygon, point);

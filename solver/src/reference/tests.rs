@@ -26,6 +26,7 @@ pub(super) fn material(name: &str, kd: f64, ks: f64, alpha: f64, le: DVec3) -> M
         emission: le,
         diffuse_texture: None,
         emission_texture: None,
+        folded_texture: None,
     }
 }
 

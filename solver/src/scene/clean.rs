@@ -128,7 +128,7 @@ pub(crate) fn build_scene(mut raw: RawScene, options: &BuildOptions) -> Result<S
     let textured: Vec<bool> = raw
         .materials
         .iter()
-        .map(|m| m.diffuse_map.is_some() || m.emission_map.is_some())
+        .map(|m| m.diffuse_map.is_some() || m.emission_map.is_some() || m.metal_map.is_some())
         .collect();
     for mut polygon in std::mem::take(&mut raw.polygons) {
         if !textured.get(polygon.material).copied().unwrap_or(false) {
@@ -159,7 +159,24 @@ pub(crate) fn build_scene(mut raw: RawScene, options: &BuildOptions) -> Result<S
     // (`solve::budget::scene_bytes`): about 100 MiB of the 1M Cornell boxes' peak.
     polygons.shrink_to_fit();
 
+    let unlit_polygons: Vec<bool> = polygons
+        .iter()
+        .map(|p| raw.materials.get(p.material).is_some_and(|m| m.unlit))
+        .collect();
     let materials = finish_materials(&raw.materials, &mut polygons, &mut warnings)?;
+    let mut unlit = vec![false; materials.len()];
+    for (p, &u) in polygons.iter().zip(&unlit_polygons) {
+        unlit[p.material] |= u;
+    }
+    let mut lights = options.lights.recentred(recentre_offset);
+    super::skybox::handle_enclosing_shell(
+        &mut polygons,
+        &materials,
+        &unlit,
+        &mut lights,
+        diagonal,
+        &mut warnings,
+    );
     if options.lights.is_empty() && !polygons.iter().any(|p| materials[p.material].is_emitter()) {
         let names: Vec<&str> = materials.iter().map(|m| m.name.as_str()).collect();
         return Err(SceneError::NoEmitter(format!(
@@ -177,7 +194,6 @@ pub(crate) fn build_scene(mut raw: RawScene, options: &BuildOptions) -> Result<S
             });
         }
     }
-    let mut lights = options.lights.recentred(recentre_offset);
     if let Some(note) = detect_sky_portals(&mut lights, &polygons, diagonal, options.portal_mode) {
         // After the strict check: a note on which openings became portals
         // is no fault of the input.
@@ -293,7 +309,7 @@ fn emission_texture(
 /// Whether some polygon using material `index` has UVs, so that its texture
 /// (`statement`, e.g. `map_Kd`, multiplying the flat `factor`) can be used;
 /// if none has, a warning naming the first user says the flat factor is used.
-fn some_user_has_uvs(
+pub(super) fn some_user_has_uvs(
     raw: &RawMaterial,
     index: usize,
     polygons: &[Polygon],
@@ -654,7 +670,14 @@ fn finish_materials(
             warnings.push(w.clone());
         }
         warnings.extend(m.unmodelled.iter().cloned());
-        let (mut kd, mut ks) = (m.kd, m.ks);
+        // glTF's metallic-roughness texture sets the material's Kd, Ks and α
+        // from its means (`metal_texture`), before the sum is checked.
+        let metal = super::metal_texture::read(m, i, polygons, warnings);
+        let (raw_kd, raw_ks, alpha) = match &metal {
+            Some(metal) => (metal.kd, metal.ks, metal.alpha),
+            None => (m.kd, m.ks, m.alpha),
+        };
+        let (mut kd, mut ks) = (raw_kd, raw_ks);
         let sum = kd + ks;
         if sum.max_element() > 1.0 {
             // Design notes, "Units and conventions": reflectance ≥ 1 never converges
@@ -672,8 +695,8 @@ fn finish_materials(
                 message: format!(
                     "Kd + Ks > 1 in material `{}`: Kd {} + Ks {} = {}{overridden}; both scaled by {} to Kd {}, Ks {}",
                     m.name,
-                    rgb(m.kd),
-                    rgb(m.ks),
+                    rgb(raw_kd),
+                    rgb(raw_ks),
                     rgb(sum),
                     rgb(scale),
                     rgb(kd),
@@ -683,14 +706,16 @@ fn finish_materials(
         }
         let diffuse_texture = diffuse_texture(m, (kd, ks), i, polygons, warnings);
         let emission_texture = emission_texture(m, i, polygons, warnings);
+        let folded_texture = metal.and_then(|metal| metal.fold(diffuse_texture.as_deref()));
         let material = Material {
             name: m.name.clone(),
             kd,
             ks,
-            alpha: m.alpha,
+            alpha,
             emission: m.emission,
             diffuse_texture,
             emission_texture,
+            folded_texture,
         };
         // The same name twice (two files, or an MTL that redefines it): share one
         // entry when identical, else tell them apart by their file.

@@ -412,6 +412,8 @@ fn read_attribute(
         diffuse_bytes: None,
         emission_map: None,
         emission_bytes: None,
+        metal_map: None,
+        unlit: false,
     })
 }
 

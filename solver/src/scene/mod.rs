@@ -21,12 +21,15 @@ mod error;
 mod gltf;
 mod legacy;
 mod light_flags;
+mod metal_texture;
 mod mtl;
 mod obj;
 mod path_case;
 pub(crate) mod planar;
 mod raw;
 mod recentre;
+mod shell;
+mod skybox;
 pub mod smooth;
 mod text;
 mod texture_file;
@@ -104,6 +107,12 @@ pub struct Material {
     /// emitted radiance at a point is `emission ⊙ texture(uv)` (docs/textures.md,
     /// "Emissive textures") where the polygon has UVs, `emission` elsewhere.
     pub emission_texture: Option<std::sync::Arc<SceneTexture>>,
+    /// The diffuse-mode reflectance per texel where glTF's
+    /// metallic-roughness texture makes the fold of Ks into Kd vary
+    /// (`metal_texture.rs`): the reflectance at a point is this texture's
+    /// value (factor 1) where the polygon has UVs, in diffuse mode only;
+    /// directional mode keeps `kd ⊙ diffuse_texture` and the flat Ks.
+    pub folded_texture: Option<std::sync::Arc<SceneTexture>>,
 }
 
 /// A decoded diffuse texture: the 8-bit sRGB texels as read (for the solution
@@ -168,6 +177,21 @@ impl Material {
     /// and the reference path tracer both call this, so that they agree.
     pub fn diffuse_equivalent_kd(&self) -> DVec3 {
         (self.kd + self.ks).min(DVec3::ONE)
+    }
+    /// The factor and texture whose product is the diffuse-mode reflectance
+    /// where a polygon has UVs: the per-texel fold (factor 1) when glTF's
+    /// metallic-roughness texture gave one, else
+    /// [`Material::diffuse_equivalent_kd`] times the diffuse texture; `None`
+    /// for an untextured material. The solver and the path tracer both call
+    /// this in diffuse mode.
+    pub fn diffuse_mode_texture(&self) -> Option<(DVec3, &std::sync::Arc<SceneTexture>)> {
+        match &self.folded_texture {
+            Some(t) => Some((DVec3::ONE, t)),
+            None => self
+                .diffuse_texture
+                .as_ref()
+                .map(|t| (self.diffuse_equivalent_kd(), t)),
+        }
     }
     /// The reflectance at texture coordinate `uv` (bilinear texture sample
     /// times Kd), or the flat Kd when the material has no texture or the

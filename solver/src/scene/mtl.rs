@@ -78,6 +78,8 @@ pub(crate) fn parse_mtl(path: &Path, text: &str) -> Result<Vec<RawMaterial>, Sce
                 diffuse_bytes: None,
                 emission_map: None,
                 emission_bytes: None,
+                metal_map: None,
+                unlit: false,
             });
             ke_given.push(false);
             warned.clear();

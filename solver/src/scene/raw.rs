@@ -49,6 +49,31 @@ pub(crate) struct RawMaterial {
     pub emission_map: Option<(PathBuf, SourceRef)>,
     /// Its encoded bytes when they are not a file of their own.
     pub emission_bytes: Option<std::sync::Arc<[u8]>>,
+    /// glTF's metallic-roughness texture with the factors it multiplies,
+    /// read by [`super::clean`] only if a polygon uses the material
+    /// ([`super::metal_texture`]).
+    pub metal_map: Option<MetalMap>,
+    /// glTF `KHR_materials_unlit`: a picture shown as is, which on an
+    /// enclosing shell marks a skybox ([`super::skybox`]).
+    pub unlit: bool,
+}
+
+/// A glTF `metallicRoughnessTexture` (B: metalness, G: roughness, linear)
+/// and the material's factors, from which [`super::metal_texture`] derives
+/// Kd, Ks, α and the diffuse-mode reflectance texture.
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct MetalMap {
+    /// The image file, or the glTF file and image index naming its bytes.
+    pub file: PathBuf,
+    /// The encoded image when it is not a file of its own.
+    pub bytes: Option<std::sync::Arc<[u8]>>,
+    /// The material, for warnings.
+    pub source: SourceRef,
+    /// `baseColorFactor` (rgb), `metallicFactor` and `roughnessFactor`,
+    /// clamped to [0, 1].
+    pub base_colour: DVec3,
+    pub metallic: f64,
+    pub roughness: f64,
 }
 
 impl RawMaterial {
@@ -70,6 +95,8 @@ impl RawMaterial {
             diffuse_bytes: None,
             emission_map: None,
             emission_bytes: None,
+            metal_map: None,
+            unlit: false,
         }
     }
 

@@ -1053,6 +1053,7 @@ fn diffuse_equivalent_kd_adds_ks_per_channel_and_caps_at_one() {
         emission: DVec3::ZERO,
         diffuse_texture: None,
         emission_texture: None,
+        folded_texture: None,
     };
     // A gold metal: Kd = 0, Ks = the base colour. Exact in binary, so the
     // sums compare exactly.

@@ -41,24 +41,73 @@ pub(crate) fn load_texture(
     statement: &str,
     warnings: &mut Vec<Warning>,
 ) -> Option<Arc<SceneTexture>> {
-    let texture = match bytes {
-        Some(bytes) => decode(path, bytes),
-        None => read_any_case(path, source, statement, warnings),
-    };
-    match texture {
-        Ok(t) => Some(Arc::new(t)),
-        Err(why) => {
-            warnings.push(Warning {
-                source: source.clone(),
-                message: format!(
-                    "{statement} texture {}: {why}; the flat {} is used",
-                    path.display(),
-                    statement.strip_prefix("map_").unwrap_or(statement)
-                ),
-            });
+    let flat = format!(
+        "the flat {}",
+        statement.strip_prefix("map_").unwrap_or(statement)
+    );
+    let image = load_rgba(path, bytes, source, (statement, &flat), warnings)?;
+    match SceneTexture::from_rgba(path.to_path_buf(), image.width, image.height, image.rgba) {
+        Some(t) => Some(Arc::new(t)),
+        None => {
+            warn_unusable(
+                path,
+                source,
+                (statement, &flat),
+                "decoded to an image of zero size",
+                warnings,
+            );
             None
         }
     }
+}
+
+/// A decoded image: `width × height × 4` bytes of RGBA8, rows top to bottom,
+/// as stored (no colour decoding).
+pub(crate) struct Rgba8 {
+    pub width: u32,
+    pub height: u32,
+    pub rgba: Vec<u8>,
+}
+
+/// Reads and decodes an image as [`load_texture`] does, under the same caps,
+/// but keeps its 8-bit channels as stored: for data textures (glTF's
+/// metallic-roughness texture is linear, not sRGB). `(statement, flat)` name
+/// the texture and what is used instead in the warning given when it cannot be
+/// used.
+pub(crate) fn load_rgba(
+    path: &Path,
+    bytes: Option<&[u8]>,
+    source: &SourceRef,
+    (statement, flat): (&str, &str),
+    warnings: &mut Vec<Warning>,
+) -> Option<Rgba8> {
+    let image = match bytes {
+        Some(bytes) => decode(bytes),
+        None => read_any_case(path, source, statement, warnings),
+    };
+    match image {
+        Ok(image) => Some(image),
+        Err(why) => {
+            warn_unusable(path, source, (statement, flat), &why, warnings);
+            None
+        }
+    }
+}
+
+fn warn_unusable(
+    path: &Path,
+    source: &SourceRef,
+    (statement, flat): (&str, &str),
+    why: &str,
+    warnings: &mut Vec<Warning>,
+) {
+    warnings.push(Warning {
+        source: source.clone(),
+        message: format!(
+            "{statement} texture {}: {why}; {flat} is used",
+            path.display()
+        ),
+    });
 }
 
 /// Reads `path`; when no file has that name, reads the one file in its folder
@@ -71,7 +120,7 @@ fn read_any_case(
     source: &SourceRef,
     statement: &str,
     warnings: &mut Vec<Warning>,
-) -> Result<SceneTexture, String> {
+) -> Result<Rgba8, String> {
     let missing =
         matches!(std::fs::metadata(path), Err(e) if e.kind() == std::io::ErrorKind::NotFound);
     if !missing {
@@ -107,7 +156,7 @@ fn read_any_case(
 }
 
 #[allow(clippy::disallowed_methods)] // An edge: an importer reads the textures its scene names.
-fn read(path: &Path) -> Result<SceneTexture, String> {
+fn read(path: &Path) -> Result<Rgba8, String> {
     let length = std::fs::metadata(path)
         .map_err(|e| format!("cannot be read ({e})"))?
         .len();
@@ -117,12 +166,12 @@ fn read(path: &Path) -> Result<SceneTexture, String> {
         ));
     }
     let bytes = std::fs::read(path).map_err(|e| format!("cannot be read ({e})"))?;
-    decode(path, &bytes)
+    decode(&bytes)
 }
 
-/// Decodes an encoded PNG or JPEG (`path` names it), its size checked from
-/// its header before anything is decoded.
-fn decode(path: &Path, bytes: &[u8]) -> Result<SceneTexture, String> {
+/// Decodes an encoded PNG or JPEG, its size checked from its header before
+/// anything is decoded.
+fn decode(bytes: &[u8]) -> Result<Rgba8, String> {
     if bytes.len() as u64 > MAX_TEXTURE_FILE_BYTES {
         return Err(format!(
             "the image has {} bytes, more than the {MAX_TEXTURE_FILE_BYTES} read",
@@ -154,9 +203,11 @@ fn decode(path: &Path, bytes: &[u8]) -> Result<SceneTexture, String> {
         .map_err(|e| format!("cannot be decoded (truncated or corrupt?): {e}"))?;
     let rgba = image.to_rgba8();
     drop(image);
-    let (w, h) = (rgba.width(), rgba.height());
-    SceneTexture::from_rgba(path.to_path_buf(), w, h, rgba.into_raw())
-        .ok_or_else(|| "decoded to an image of zero size".to_owned())
+    Ok(Rgba8 {
+        width: rgba.width(),
+        height: rgba.height(),
+        rgba: rgba.into_raw(),
+    })
 }
 
 fn check_size(width: u32, height: u32) -> Result<(), String> {

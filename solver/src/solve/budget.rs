@@ -564,7 +564,10 @@ pub fn counts_before_meshing(
     // The receivers the mesh cuts along contact lines (`mesh::contact`),
     // part by part, as `Solver::new` decides.
     for (p, parts) in scene.polygons.iter().zip(parts) {
-        let textured = p.uv_map.is_some() && scene.materials[p.material].diffuse_texture.is_some();
+        let textured = p.uv_map.is_some() && {
+            let m = &scene.materials[p.material];
+            m.diffuse_texture.is_some() || m.folded_texture.is_some()
+        };
         match parts {
             None => count(
                 p.vertices.len(),
@@ -581,11 +584,12 @@ pub fn counts_before_meshing(
     }
     c.weight_entries = c.vertices + 3 * c.patches;
     let mut textures: Vec<*const crate::scene::SceneTexture> = Vec::new();
-    for t in scene
-        .materials
-        .iter()
-        .flat_map(|m| m.diffuse_texture.iter().chain(&m.emission_texture))
-    {
+    for t in scene.materials.iter().flat_map(|m| {
+        m.diffuse_texture
+            .iter()
+            .chain(&m.emission_texture)
+            .chain(&m.folded_texture)
+    }) {
         if !textures.contains(&std::sync::Arc::as_ptr(t)) {
             textures.push(std::sync::Arc::as_ptr(t));
             c.texture_bytes += t.bytes();

@@ -121,6 +121,116 @@ fn cosine_direction(k: u32, t: DVec3, b: DVec3, n: DVec3) -> DVec3 {
     (t * phi.cos() + b * phi.sin()) * r + n * (1.0 - u).max(0.0).sqrt()
 }
 
+/// Rays of the viewer's survey ([`dark_view_warning`]).
+pub const VIEW_RAYS: usize = 256;
+/// The view is dark when the mean luminance its survey sees is below this
+/// fraction of the solution's area-weighted mean luminance. A viewer inside
+/// a lit room sees about the mean (0.5 to 2 times it); a tenth of a percent
+/// is a view with no light in it.
+pub const DARK_VIEW_FRACTION: f64 = 1e-3;
+
+/// Rec. 709 luminance of linear RGB.
+fn luma(rgb: [f32; 3]) -> f64 {
+    0.2126 * f64::from(rgb[0]) + 0.7152 * f64::from(rgb[1]) + 0.0722 * f64::from(rgb[2])
+}
+
+/// Per vertex of `batch`, the luminance it shows where its textures average
+/// 1: the SH's L = 0 term (a cube's mean), plus a textured vertex's factor ⊙
+/// E/π and an emission slot's factor. Textures are left out: the test below
+/// asks whether light arrived at all, not how much.
+fn vertex_luminance(batch: &solution::format::Batch) -> Vec<f64> {
+    use solution::format::Representation;
+    let per_channel = batch.representation.coefficients_per_channel() as usize;
+    (0..batch.vertices.len())
+        .map(|v| {
+            let at = |k: usize, c: usize| {
+                let i = (v * per_channel + k) * 3 + c;
+                batch.coefficients.get(i).copied().unwrap_or(0.0)
+            };
+            let rgb = [0, 1, 2].map(|c| match batch.representation {
+                Representation::Sh { .. } => at(0, c) * solution::sh::Y00 as f32,
+                Representation::Cube { .. } => {
+                    (0..per_channel).map(|k| at(k, c)).sum::<f32>() / per_channel.max(1) as f32
+                }
+            });
+            let textured = batch.texturing.as_ref().map_or(0.0, |t| {
+                let e = t.vertices.get(v).map_or([0.0; 3], |x| x.irradiance_over_pi);
+                let reflected = luma([0, 1, 2].map(|c| t.factor[c] * e[c]));
+                reflected + t.emission.as_ref().map_or(0.0, |slot| luma(slot.factor))
+            });
+            (luma(rgb) + textured).max(0.0)
+        })
+        .collect()
+}
+
+/// A warning when the light of a finished solve never reaches the viewer:
+/// from the header camera's eye (the authored camera, or the default view),
+/// [`VIEW_RAYS`] rays over the whole sphere see a mean luminance below
+/// [`DARK_VIEW_FRACTION`] of the solution's area-weighted mean (front faces
+/// only: a ray meeting a back face sees nothing, as from outside a closed
+/// room), or no surface holds any light at all. Either way every emitter is
+/// enclosed away from the view, or a closed shell around the scene took the
+/// light of a sun, sky or lamp outside it (the importer names such a shell,
+/// `scene::shell`). `None` for a view with light in it.
+pub fn dark_view_warning(solution: &solution::format::Solution) -> Option<String> {
+    use glam::Vec3;
+    let mut triangles: Vec<[Vec3; 3]> = Vec::new();
+    let mut corners: Vec<[f64; 3]> = Vec::new();
+    let (mut sum, mut area) = (0.0, 0.0);
+    for batch in &solution.batches {
+        let luminance = vertex_luminance(batch);
+        for tri in batch.indices.chunks_exact(3) {
+            let get = |i: u32| {
+                batch
+                    .vertices
+                    .get(i as usize)
+                    .map(|v| Vec3::from(v.position))
+            };
+            let (Some(a), Some(b), Some(c)) = (get(tri[0]), get(tri[1]), get(tri[2])) else {
+                continue;
+            };
+            let l = [0, 1, 2].map(|k| luminance.get(tri[k] as usize).copied().unwrap_or(0.0));
+            let a_t = 0.5 * f64::from((b - a).cross(c - a).length());
+            sum += a_t * (l[0] + l[1] + l[2]) / 3.0;
+            area += a_t;
+            triangles.push([a, b, c]);
+            corners.push(l);
+        }
+    }
+    let mean = if area > 0.0 { sum / area } else { 0.0 };
+    let header = &solution.header;
+    let eye = DVec3::from_array(header.camera.eye) - DVec3::from_array(header.recentre_offset);
+    if mean <= 0.0 {
+        return Some(
+            "no surface of the solution holds any light, though the scene has lights: every              emitter is enclosed away from the rest, or a closed shell around the scene (a              skybox mesh?) took all the light of a sun, sky or lamp outside it; see the              import's warnings"
+                .to_owned(),
+        );
+    }
+    let bvh = solution::view::bvh::Bvh::build(triangles);
+    let up = DVec3::from_array(header.up_axis.vector());
+    let seen: f64 = crate::view::fibonacci_sphere(VIEW_RAYS, up)
+        .iter()
+        .filter_map(|d| bvh.closest(eye.as_vec3(), d.as_vec3(), f32::INFINITY))
+        .filter(|hit| hit.front)
+        .map(|hit| {
+            let l = corners[hit.triangle as usize];
+            let (u, v) = (f64::from(hit.u), f64::from(hit.v));
+            l[0] * (1.0 - u - v) + l[1] * u + l[2] * v
+        })
+        .sum::<f64>()
+        / VIEW_RAYS as f64;
+    (seen < DARK_VIEW_FRACTION * mean).then(|| {
+        format!(
+            "the light does not reach the view: from the camera's eye ({:.3}, {:.3}, {:.3}) the \
+             surroundings show a mean luminance of {seen:.3e}, against {mean:.3e} over all \
+             surfaces. Every emitter is enclosed away from the view, or a closed shell around \
+             the scene (a skybox mesh?) keeps the light of a sun, sky or lamp outside it from \
+             reaching what is inside; see the import's warnings, or move the camera",
+            header.camera.eye[0], header.camera.eye[1], header.camera.eye[2]
+        )
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -284,5 +394,54 @@ mod tests {
             "{ratio} against {expected}"
         );
         assert!(back < 1.0 && floor < 1.2, "back {back}, floor {floor}");
+    }
+
+    /// A solve of `scene` at draft, to its end or 200 shots, as a solution.
+    fn solved(scene: &crate::scene::Scene) -> solution::format::Solution {
+        let mut settings = crate::settings::SolverSettings::preset(crate::settings::Preset::Draft);
+        settings.max_shots = 200;
+        let mut solver = crate::solve::Solver::new(scene, &settings).unwrap();
+        while solver.step().is_some() {}
+        solver.to_solution(false)
+    }
+
+    #[test]
+    fn a_room_lit_only_by_a_sun_outside_its_closed_walls_warns_of_a_dark_view() {
+        // The closed cube's walls face in: the sun outside meets only their
+        // backs, so nothing inside receives any light.
+        let mut scene = crate::solve::tests::scene_of(
+            crate::solve::physics_tests::cube(4.0, DVec3::ZERO),
+            vec![crate::solve::tests::material("wall", 0.5, 0.0)],
+            2,
+        );
+        scene.lights = crate::solve::lights_tests::sun_lights(40.0, 100.0);
+        let warning = dark_view_warning(&solved(&scene)).expect("a dark view warns");
+        assert!(
+            warning.contains("closed shell") && warning.contains("sun"),
+            "{warning}"
+        );
+    }
+
+    #[test]
+    fn the_cornell_box_does_not_warn_of_a_dark_view() {
+        let path =
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../config/cornell_box.obj");
+        let mut scene = crate::scene::load_scene(&path, &Default::default())
+            .unwrap()
+            .scene;
+        scene.fill_default_patches(2);
+        let solution = solved(&scene);
+        assert_eq!(dark_view_warning(&solution), None);
+        // The same solution seen from outside its back wall (facing away
+        // from the box, every ray meets a back face or nothing) is dark.
+        let mut outside = solution.clone();
+        let (lo, hi) = (outside.header.bounds_min, outside.header.bounds_max);
+        let offset = outside.header.recentre_offset;
+        outside.header.camera.eye = [
+            0.5 * (lo[0] + hi[0]) as f64 + offset[0],
+            0.5 * (lo[1] + hi[1]) as f64 + offset[1],
+            hi[2] as f64 + 10.0 * (hi[2] - lo[2]) as f64 + offset[2],
+        ];
+        assert!(dark_view_warning(&outside).is_some());
     }
 }

@@ -916,6 +916,8 @@ mod directional_tests;
 #[cfg(test)]
 mod emissive_tests;
 #[cfg(test)]
+mod folded_texture_tests;
+#[cfg(test)]
 mod footprint_tests;
 #[cfg(test)]
 mod gltf_lights_tests;

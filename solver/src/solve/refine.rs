@@ -530,6 +530,7 @@ mod tests {
                 emission: DVec3::ZERO,
                 diffuse_texture: None,
                 emission_texture: None,
+                folded_texture: None,
             }],
             units_per_metre: 1.0,
             up_axis: UpAxis::PosY,

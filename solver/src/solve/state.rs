@@ -168,11 +168,7 @@ impl Materials {
                 SolveMode::Directional => m.kd,
             }
         };
-        for (s, t) in mesh.surfaces.iter().zip(&mut texturing.per_surface) {
-            if let Some(t) = t {
-                t.kd = material_kd(s.material);
-            }
-        }
+        texturing.set_mode(scene, mesh, mode);
         let albedo: Vec<DVec3> = mesh
             .surfaces
             .iter()

@@ -13,6 +13,7 @@ pub(crate) fn material(name: &str, kd: f64, emission: f64) -> Material {
         emission: DVec3::splat(emission),
         diffuse_texture: None,
         emission_texture: None,
+        folded_texture: None,
     }
 }
 

@@ -40,6 +40,7 @@
 use crate::mesh::Mesh;
 use crate::scene::{Scene, SceneTexture, UvMap};
 use glam::{DVec2, DVec3};
+use solution::format::SolveMode;
 use std::sync::Arc;
 
 /// Per patch, its mean emitted radiance when its surface has an emission
@@ -136,6 +137,37 @@ impl SurfaceTexturing {
             per_surface,
             emissive,
             offset,
+        }
+    }
+
+    /// Sets each surface's texture and factor for `mode`. Directional mode
+    /// reflects Kd ⊙ the diffuse texture (its lobe apart). Diffuse mode
+    /// reflects the material's [`crate::scene::Material::diffuse_mode_texture`]:
+    /// the diffuse texture times Kd with Ks folded in, or where glTF's
+    /// metallic-roughness texture makes the fold vary per texel, that fold
+    /// (factor 1), which also textures a surface without a base-colour
+    /// texture.
+    pub fn set_mode(&mut self, scene: &Scene, mesh: &Mesh, mode: SolveMode) {
+        for (s, t) in mesh.surfaces.iter().zip(&mut self.per_surface) {
+            let material = &scene.materials[s.material];
+            match mode {
+                SolveMode::Directional => {
+                    if let Some(t) = t {
+                        t.kd = material.kd;
+                    }
+                }
+                SolveMode::Diffuse => {
+                    let map = scene.polygons.get(s.polygon).and_then(|p| p.uv_map);
+                    *t = match (material.diffuse_mode_texture(), map) {
+                        (Some((kd, texture)), Some(map)) => Some(Textured {
+                            texture: texture.clone(),
+                            kd,
+                            map,
+                        }),
+                        _ => None,
+                    };
+                }
+            }
         }
     }
 

@@ -14,7 +14,7 @@ use std::sync::Arc;
 
 /// A 16 × 16 checkerboard of 4-texel squares, sRGB `a` where the square's
 /// (column + row) is even, `b` elsewhere.
-fn checker(a: u8, b: u8) -> Arc<SceneTexture> {
+pub(super) fn checker(a: u8, b: u8) -> Arc<SceneTexture> {
     let rgba = (0..16 * 16)
         .flat_map(|k| {
             let (x, y) = (k % 16 / 4, k / 16 / 4);
@@ -81,6 +81,13 @@ fn furnace() -> (Scene, f64, f64) {
     let m = furnace.diffuse_texture.as_ref().unwrap().texture.mean().x;
     let m_e = furnace.emission_texture.as_ref().unwrap().texture.mean().x;
     let mut scene = scene_of(cube(1.0, DVec3::ZERO), vec![furnace], 2);
+    map_each_face_once(&mut scene);
+    (scene, m, m_e)
+}
+
+/// Maps each (rectangular) face onto the unit UV square once, u along its
+/// first edge and v along its last.
+pub(super) fn map_each_face_once(scene: &mut Scene) {
     for p in &mut scene.polygons {
         let o = p.vertices[0];
         let (a, b) = (p.vertices[1] - o, p.vertices[3] - o);
@@ -91,7 +98,6 @@ fn furnace() -> (Scene, f64, f64) {
             base: DVec2::ZERO,
         });
     }
-    (scene, m, m_e)
 }
 
 /// Checks the furnace's output batch (both slots, factors Kd and Ke, no SH

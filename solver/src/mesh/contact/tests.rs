@@ -34,6 +34,7 @@ fn scene_of(polygons: Vec<Vec<DVec3>>) -> Scene {
             emission: DVec3::ZERO,
             diffuse_texture: None,
             emission_texture: None,
+            folded_texture: None,
         }],
         units_per_metre: 1.0,
         up_axis: solution::camera::UpAxis::PosY,

@@ -6,7 +6,7 @@
 use super::container::{decode_data_uri, relative_file, Buffer};
 use super::Context;
 use crate::brdf::MIN_ALPHA;
-use crate::scene::raw::RawMaterial;
+use crate::scene::raw::{MetalMap, RawMaterial};
 use crate::scene::Warning;
 use glam::{DAffine2, DVec2, DVec3};
 use std::path::{Path, PathBuf};
@@ -37,7 +37,8 @@ const UNMODELLED_MATERIAL_EXTENSIONS: &[(&str, &str)] = &[
     ("KHR_materials_dispersion", "dispersion"),
     (
         "KHR_materials_unlit",
-        "unlit shading (the surface is lit like any other)",
+        "unlit shading (the surface is lit like any other, as a diffuse surface of its base \
+         colour; an unlit textured skybox can become the sky's environment map)",
     ),
     (
         "KHR_materials_pbrSpecularGlossiness",
@@ -49,7 +50,7 @@ const UNMODELLED_MATERIAL_EXTENSIONS: &[(&str, &str)] = &[
 /// appendix B): Kd = baseColor·(1 − metallic), Ks = lerp(0.04, baseColor,
 /// metallic), α = roughness² clamped below at [`MIN_ALPHA`]. The last value
 /// says whether α was clamped.
-pub(super) fn metallic_roughness(
+pub(crate) fn metallic_roughness(
     base: DVec3,
     metallic: f64,
     roughness: f64,
@@ -140,12 +141,24 @@ pub(super) fn convert_material(
         }
         (b, _) => b,
     };
-    if pbr.metallic_roughness_texture().is_some() {
-        warn(format!(
-            "metallicRoughnessTexture ignored, the flat factors used (metallic {metallic}, \
-             roughness {roughness}): only base-colour and emissive textures are modelled"
-        ));
-    }
+    // B is metalness and G roughness (§3.9.2), read by `scene::metal_texture`
+    // at the polygon's one UV set, so it must map like the colour textures.
+    let metal = match pbr.metallic_roughness_texture() {
+        Some(info) => material_texture(ctx, buffers, &info, METALLIC_ROUGHNESS, &mut warn),
+        None => None,
+    };
+    let metal = match (metal, emissive.as_ref().or(base_colour.as_ref())) {
+        (Some(t), Some(other)) if t.uv_map != other.uv_map => {
+            warn(
+                "metallicRoughnessTexture maps differently from the colour textures (texCoord \
+                 or KHR_texture_transform) and a surface has one UV set: it is ignored and the \
+                 flat metallic and roughness factors used"
+                    .to_owned(),
+            );
+            None
+        }
+        (t, _) => t,
+    };
     if material.normal_texture().is_some() {
         warn("normal map ignored: surfaces are shaded with their geometric normals".to_owned());
     }
@@ -171,6 +184,17 @@ pub(super) fn convert_material(
             warn(format!("{extension} ignored: {what} is not modelled"));
         }
     }
+    // An unlit material shows its base colour as is (KHR_materials_unlit);
+    // lit, the nearest is a diffuse surface of that colour, without the
+    // metallic split (a metal's Kd would be 0).
+    let unlit = material.extension_value("KHR_materials_unlit").is_some();
+    // Its metalness would not apply.
+    let metal = metal.filter(|_| !unlit);
+    let (kd, ks) = if unlit {
+        (DVec3::new(r, g, b), DVec3::ZERO)
+    } else {
+        (kd, ks)
+    };
     let raw = RawMaterial {
         name,
         aliases: Vec::new(),
@@ -193,10 +217,19 @@ pub(super) fn convert_material(
             .as_ref()
             .map(|t| (t.name.clone(), ctx.source(item.clone()))),
         emission_bytes: emissive.as_ref().and_then(|t| t.bytes.clone()),
+        metal_map: metal.as_ref().map(|t| MetalMap {
+            file: t.name.clone(),
+            bytes: t.bytes.clone(),
+            source: ctx.source(item.clone()),
+            base_colour: DVec3::new(r, g, b),
+            metallic: metallic.clamp(0.0, 1.0),
+            roughness: roughness.clamp(0.0, 1.0),
+        }),
+        unlit,
     };
-    // A polygon has one UV set: the two textures' maps are equal when both
+    // A polygon has one UV set: the textures' maps are equal when several
     // are kept (above).
-    let uv_map = emissive.or(base_colour).map(|t| t.uv_map);
+    let uv_map = emissive.or(base_colour).or(metal).map(|t| t.uv_map);
     (raw, warnings, uv_map)
 }
 
@@ -209,6 +242,11 @@ struct Slot {
 const BASE_COLOUR: Slot = Slot {
     name: "baseColorTexture",
     flat: "the flat base colour",
+};
+
+const METALLIC_ROUGHNESS: Slot = Slot {
+    name: "metallicRoughnessTexture",
+    flat: "the flat metallic and roughness factors",
 };
 
 const EMISSIVE: Slot = Slot {

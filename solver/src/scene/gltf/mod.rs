@@ -26,7 +26,9 @@
 //!   MTL `Ks` is), α = roughness² (glTF roughness is perceptual; α is clamped
 //!   to [`crate::brdf::MIN_ALPHA`]), and emitted radiance
 //!   Le = emissiveFactor × `KHR_materials_emissive_strength` (× the
-//!   `emissiveTexture`, decoded from sRGB, where there is one). glTF gives
+//!   `emissiveTexture`, decoded from sRGB, where there is one). The
+//!   `metallicRoughnessTexture` is folded per texel in diffuse mode and by its
+//!   means in directional mode (`scene::metal_texture`). glTF gives
 //!   emission no absolute unit; it is taken as W·sr⁻¹·m⁻², one-sided toward
 //!   the front face, as an MTL `Ke` is.
 //! * **Units**: metres, +y up, right-handed (§3.4): the scene's
@@ -39,8 +41,8 @@
 //!
 //! Everything else is either refused (compressed meshes and textures that a
 //! file requires, since then the mesh cannot be read) or warned about once
-//! per material or feature: textures other than the base colour's, or on
-//! another set than `TEXCOORD_0` (flat factors are used), alpha modes,
+//! per material or feature: normal maps, textures on another set than
+//! `TEXCOORD_0` (flat factors are used), alpha modes,
 //! transmission, clearcoat and the other material extensions, normal maps,
 //! double-sided materials, skins, morph targets and animations.
 //!
@@ -68,8 +70,14 @@ mod lights;
 mod materials;
 mod nodes;
 
+pub(crate) use materials::{metallic_roughness, DIELECTRIC_SPECULAR};
+
 #[cfg(test)]
 mod lights_tests;
+#[cfg(test)]
+mod metal_tests;
+#[cfg(test)]
+mod skybox_tests;
 #[cfg(test)]
 mod tests;
 

@@ -14,9 +14,9 @@ use serde_json::{json, Value};
 use std::path::PathBuf;
 
 /// A glTF document and its one binary buffer, before it is written.
-struct Fixture {
-    json: Value,
-    bin: Vec<u8>,
+pub(super) struct Fixture {
+    pub json: Value,
+    pub bin: Vec<u8>,
 }
 
 /// Little-endian bytes of f32 triples.
@@ -109,13 +109,13 @@ fn glb_bytes(f: &Fixture) -> Vec<u8> {
     out
 }
 
-fn write_glb(dir: &Path, name: &str, f: &Fixture) -> PathBuf {
+pub(super) fn write_glb(dir: &Path, name: &str, f: &Fixture) -> PathBuf {
     let path = dir.join(format!("{name}.glb"));
     std::fs::write(&path, glb_bytes(f)).unwrap();
     path
 }
 
-fn load(path: &Path) -> LoadedScene {
+pub(super) fn load(path: &Path) -> LoadedScene {
     load_scene(path, &ImportOptions::default()).unwrap()
 }
 
@@ -479,7 +479,7 @@ fn unmodelled_features_are_warned_once_each_naming_the_file() {
     assert_eq!(scene.lights.lamps.len(), 1);
     let warnings = &scene.raw.warnings;
     for phrase in [
-        "metallicRoughnessTexture ignored, the flat factors used",
+        "metallicRoughnessTexture maps differently from the colour textures",
         "emissiveTexture uses TEXCOORD_1; only TEXCOORD_0 is read, so the flat emissive factor",
         "normal map ignored",
         "alpha mode BLEND ignored",
@@ -667,7 +667,7 @@ fn a_scene_config_can_name_a_gltf_file_as_geometry() {
 
 /// sRGB codes of the 2 × 2 texture of [`textured_quad`], rows from the
 /// image's top: distinct, so that a flipped or rotated lookup is caught.
-const QUAD_TEXELS: [[u8; 2]; 2] = [[255, 128], [64, 0]];
+pub(super) const QUAD_TEXELS: [[u8; 2]; 2] = [[255, 128], [64, 0]];
 
 /// The unit square in z = 0 facing +z (two triangles), `TEXCOORD_0` = (x, y)
 /// in glTF's convention (v down from the image's top row), with a white
@@ -675,7 +675,7 @@ const QUAD_TEXELS: [[u8; 2]; 2] = [[255, 128], [64, 0]];
 /// stored in a buffer view (with `mimeType`) after the geometry; and the same
 /// square, untextured and emitting, at z = 2 (the importer refuses a scene
 /// without light).
-fn textured_quad() -> Fixture {
+pub(super) fn textured_quad() -> Fixture {
     let positions = [
         [0.0, 0.0, 0.0],
         [1.0, 0.0, 0.0],

@@ -15,6 +15,7 @@ pub(super) fn material(name: &str, kd: f64, ks: f64, alpha: f64, emission: f64) 
         emission: DVec3::splat(emission),
         diffuse_texture: None,
         emission_texture: None,
+        folded_texture: None,
     }
 }
 
