@@ -11,10 +11,9 @@
 //! are nearly flat and its edges rounded, like a car's panels; its normal is
 //! the implicit surface's gradient, ∝ (sgn d_x |d_x|^{3/2} / a, …).
 
-use crate::mesh::{sub, Closure, Corner, Mesh, Vec3};
-use crate::primitives::{add_box, BoxSpec, Placement};
+use crate::mesh::{Closure, Mesh, Vec3};
+use crate::primitives::{add_box, add_mapped_sphere, BoxSpec, Placement};
 use crate::scene::{Camera, Lights, Material, Scene};
-use std::f64::consts::PI;
 
 const ROOM: [f64; 3] = [10_000.0, 4000.0, 8000.0];
 /// The body's half extents (length, height, width).
@@ -62,65 +61,6 @@ fn body_point(d: Vec3) -> (Vec3, Vec3) {
     (position, normal)
 }
 
-/// Adds the body: a UV sphere's topology (poles, rings, shared vertices)
-/// mapped by [`body_point`], wound counter-clockwise seen from outside.
-fn add_body(mesh: &mut Mesh, rings: u32) {
-    let segments = 2 * rings;
-    let corner = |mesh: &mut Mesh, d: Vec3| {
-        let (position, normal) = body_point(d);
-        Corner {
-            position: mesh.add_position(position),
-            normal: Some(mesh.add_normal(normal)),
-        }
-    };
-    let north = corner(mesh, [0.0, 1.0, 0.0]);
-    let mut ring_corners: Vec<Vec<Corner>> = Vec::new();
-    for k in 1..rings {
-        let theta = PI * k as f64 / rings as f64;
-        let ring = (0..segments)
-            .map(|i| {
-                let phi = 2.0 * PI * i as f64 / segments as f64;
-                let d = [
-                    theta.sin() * phi.cos(),
-                    theta.cos(),
-                    theta.sin() * phi.sin(),
-                ];
-                corner(mesh, d)
-            })
-            .collect();
-        ring_corners.push(ring);
-    }
-    let south = corner(mesh, [0.0, -1.0, 0.0]);
-    let centre = body_centre();
-    // The body is star-shaped about its centre, so a facet's front is the
-    // side away from it.
-    let facing = |mesh: &mut Mesh, t: [Corner; 3]| {
-        let mid: Vec3 = std::array::from_fn(|a| {
-            t.iter()
-                .map(|c| mesh.positions[c.position as usize][a])
-                .sum::<f64>()
-                / 3.0
-        });
-        mesh.triangle_facing(t, sub(mid, centre));
-    };
-    let n = segments as usize;
-    let last = ring_corners.len() - 1;
-    for i in 0..n {
-        let j = (i + 1) % n;
-        facing(mesh, [north, ring_corners[0][i], ring_corners[0][j]]);
-        facing(mesh, [south, ring_corners[last][i], ring_corners[last][j]]);
-    }
-    for r in 0..last {
-        for i in 0..n {
-            let j = (i + 1) % n;
-            let (a, b) = (ring_corners[r][i], ring_corners[r][j]);
-            let (c, d) = (ring_corners[r + 1][i], ring_corners[r + 1][j]);
-            facing(mesh, [a, c, d]);
-            facing(mesh, [a, d, b]);
-        }
-    }
-}
-
 pub fn generate(params: Params) -> Scene {
     let mut mesh = Mesh::default();
     mesh.begin_object("room", "wall", Closure::Inward);
@@ -131,7 +71,13 @@ pub fn generate(params: Params) -> Scene {
     };
     add_box(&mut mesh, &room, &Placement::IDENTITY, Closure::Inward);
     mesh.begin_object("body", "body", Closure::Outward);
-    add_body(&mut mesh, params.rings);
+    add_mapped_sphere(
+        &mut mesh,
+        body_centre(),
+        2 * params.rings,
+        params.rings,
+        body_point,
+    );
     // In a corner of the room at eye height, looking at the body.
     let eye = [1500.0, 1700.0, 1200.0];
     Scene {
