@@ -189,7 +189,7 @@ fn grouped_shooting_loses_no_energy() {
 /// rest for the rays' noise, here spread over the members). Two by two
 /// patches a face, whose first shots group with each other in recorded
 /// groups, and later ones with any patch (`group_shot.rs`; measured 0.08%
-/// and 0.95%, as when the first shots went alone). Every patch here emits, so
+/// and 0.95% with them grouped). Every patch here emits, so
 /// every member shoots uniformly, as the patch shooter's recorded emitter
 /// shots do: with quadrants shaped by vertex radiance the worst vertex was
 /// 0.64% and 2.20% off (measured; `group_pieces`), failing ρ = 0.95.
