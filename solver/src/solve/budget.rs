@@ -198,6 +198,9 @@ pub struct Counts {
     /// Σ over patches of the vertices in its gather weights.
     pub weight_entries: u64,
     pub recorded_shots: u64,
+    /// Members of the recorded groups of emitters' first shots, each kept
+    /// with its piece, tree share and record for the whole solve.
+    pub recorded_members: u64,
     /// Visibility rays per receiver (the pools' points per set).
     pub samples: u64,
     pub directional: bool,
@@ -442,7 +445,9 @@ pub fn estimate(c: &Counts) -> MemoryEstimate {
             } else {
                 0
             })
-        + c.recorded_coefficients * f64_;
+        + c.recorded_coefficients * f64_
+        + c.recorded_members
+            * (super::group_tree::bytes_per_piece() + size_of::<(u32, [u64; 3])>() as u64);
     // One shot: its pool and a result per vertex (directional: the result
     // struct and its heap block of coefficients).
     let shot = pool_bytes(c.samples, POOL_SETS)
@@ -863,6 +868,12 @@ impl Solver {
             splits: self.mesh.split_log.len() as u64,
             weight_entries: self.patches.weights.iter().map(|w| w.len() as u64).sum(),
             recorded_shots: self.record.shots.len() as u64,
+            recorded_members: self
+                .record
+                .groups
+                .iter()
+                .map(|g| g.members.len() as u64)
+                .sum(),
             samples: self.settings.samples as u64,
             directional: false,
             texture_bytes: self.texture_bytes(),

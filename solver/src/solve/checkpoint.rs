@@ -30,7 +30,10 @@
 //! mode), `SPLT` (u32 per split), `RECS` (40 bytes per recorded shot: index u64,
 //! patch u32, receivers u32, unshot 3 × f64), `RADI` (packed, 3 per vertex),
 //! `UNSH` (packed, 3 per patch), `DIRC` (packed, 3 per vertex; these three are
-//! empty in directional mode); in
+//! empty in directional mode), `RECG` (16 bytes per recorded group of
+//! emitters' first shots: index u64, receivers u32, member count u32) and
+//! `RECM` (28 bytes per member, the groups' in order: patch u32, unshot
+//! 3 × f64); in
 //! directional mode then `SHOR` (u32 order per surface), `BRDF` (one u32),
 //! `SHRA` (packed, one per radiance coefficient, its bits XOR the kept bits
 //! of the coefficient's recorded-shot part), `SHUN` (packed, one per patch
@@ -51,6 +54,7 @@
 //! The file envelope around it (magic, settings, checksum) is the command line's
 //! (`cli/solve/checkpoint.rs`).
 
+use super::shoot::RecordedGroup;
 use super::{SolveError, Solver};
 use crate::scene::Scene;
 use crate::settings::SolverSettings;
@@ -63,8 +67,9 @@ pub(super) mod precision;
 
 /// Bump when the meaning of the fields changes (3: the f64 arrays packed;
 /// 4: directional masks use only the kept bits, [`precision`]; 5: `SHSS`;
-/// 6: the set-up's `CUTI`, `CUTV` and `HIDN`).
-pub const CHECKPOINT_VERSION: u32 = 6;
+/// 6: `RECG` and `RECM`, the recorded groups; 7: the set-up's `CUTI`, `CUTV`
+/// and `HIDN`).
+pub const CHECKPOINT_VERSION: u32 = 7;
 
 /// Everything [`Solver::resume`] needs, as read back from a checkpoint. See the
 /// module documentation. (Writing streams from the solver itself:
@@ -92,6 +97,8 @@ pub struct Checkpoint {
     pub direct: Vec<DVec3>,
     /// The recorded (emitter) shots, in order.
     pub recorded: Vec<super::shoot::RecordedShot>,
+    /// The recorded groups of emitters' first shots, in order.
+    pub recorded_groups: Vec<RecordedGroup>,
     /// Directional mode's SH coefficients; absent for a diffuse solve. Its
     /// radiance and unshot coefficients are masked (see `write_checkpoint`):
     /// [`Solver::resume`] unmasks them.
@@ -443,6 +450,7 @@ impl Checkpoint {
         let radiance = r.packed_dvec3s("RADI")?;
         let patch_unshot = r.packed_dvec3s("UNSH")?;
         let direct = r.packed_dvec3s("DIRC")?;
+        let recorded_groups = read_groups(&mut r)?;
         let (directional, unshot_masked) = match mode {
             MODE_DIFFUSE => (None, Vec::new()),
             MODE_DIRECTIONAL => {
@@ -475,6 +483,7 @@ impl Checkpoint {
             patch_unshot,
             direct,
             recorded,
+            recorded_groups,
             directional,
             unshot_masked,
             setup,
@@ -556,6 +565,58 @@ fn read_setup<R: Read>(r: &mut SectionReader<'_, R>) -> Result<SetupResult, Stat
         cuts,
         hidden,
     })
+}
+
+/// The `RECG` and `RECM` sections: the recorded groups and their members.
+fn read_groups<R: Read>(r: &mut SectionReader<'_, R>) -> Result<Vec<RecordedGroup>, StateError> {
+    let heads = r.section("RECG", 16, |r| {
+        Ok((r.u64("RECG")?, r.u32("RECG")?, r.u32("RECG")?))
+    })?;
+    let members = r.section("RECM", 28, |r| {
+        Ok((
+            r.u32("RECM")?,
+            [r.u64("RECM")?, r.u64("RECM")?, r.u64("RECM")?],
+        ))
+    })?;
+    let total: u64 = heads.iter().map(|h| h.2 as u64).sum();
+    if total != members.len() as u64 {
+        return Err(StateError::Bad {
+            field: "RECM",
+            detail: format!("{} members, the groups of RECG name {total}", members.len()),
+        });
+    }
+    let mut rest = members.as_slice();
+    Ok(heads
+        .into_iter()
+        .map(|(index, receivers, count)| {
+            let (own, after) = rest.split_at(count as usize);
+            rest = after;
+            RecordedGroup {
+                index,
+                receivers,
+                members: own.to_vec(),
+            }
+        })
+        .collect())
+}
+
+/// Writes the `RECG` and `RECM` sections of `groups`.
+fn write_groups<W: Write>(
+    s: &mut SectionWriter<'_, W>,
+    groups: &[RecordedGroup],
+) -> io::Result<()> {
+    s.start(b"RECG", groups.len())?;
+    for g in groups {
+        s.u64(g.index)?;
+        s.u32(g.receivers)?;
+        s.u32(g.members.len() as u32)?;
+    }
+    s.start(b"RECM", groups.iter().map(|g| g.members.len()).sum())?;
+    for (patch, unshot) in groups.iter().flat_map(|g| &g.members) {
+        s.u32(*patch)?;
+        unshot.iter().try_for_each(|&b| s.u64(b))?;
+    }
+    Ok(())
 }
 
 /// The directional sections, and the per-patch flags of masked unshot SH.
@@ -720,6 +781,7 @@ impl Solver {
                 &[]
             },
         )?;
+        write_groups(&mut s, &self.record.groups)?;
         if let Some(d) = self.directional.as_deref() {
             let sections = d.checkpoint_sections();
             s.u32s(b"SHOR", sections.surface_order)?;
@@ -885,6 +947,7 @@ impl Solver {
             return mismatch(format!("its recorded shot {bad:?} does not fit the solve"));
         }
         solver.record.shots = checkpoint.recorded;
+        solver.restore_groups(checkpoint.recorded_groups, checkpoint.shots)?;
         solver.record.pools = solver
             .record
             .shots
@@ -944,6 +1007,43 @@ impl Solver {
         }
         solver.stats.unshot_power = solver.total_unshot_power();
         Ok(solver)
+    }
+
+    /// Takes a checkpoint's recorded groups (written by a solve of `shots`
+    /// shots) after checking that they fit the replayed mesh, and rebuilds
+    /// their members and trees as the shots built them.
+    fn restore_groups(&mut self, groups: Vec<RecordedGroup>, shots: u64) -> Result<(), SolveError> {
+        let (patches, vertices) = (
+            self.mesh.patches.len() as u32,
+            self.mesh.vertices.len() as u32,
+        );
+        let mut last = None;
+        for g in &groups {
+            let member_fits = |&(p, u): &(u32, [u64; 3])| {
+                p < patches && u.iter().all(|b| f64::from_bits(*b).is_finite())
+            };
+            if g.index >= shots
+                || last.is_some_and(|l| g.index <= l)
+                || g.receivers > vertices
+                || g.members.is_empty()
+                || !g.members.iter().all(member_fits)
+            {
+                return Err(SolveError::CheckpointMismatch(format!(
+                    "its recorded group of shot {} ({} members, {} receivers) does not fit the \
+                     solve",
+                    g.index,
+                    g.members.len(),
+                    g.receivers
+                )));
+            }
+            last = Some(g.index);
+        }
+        self.record.group_sources = groups
+            .iter()
+            .map(|g| std::sync::Arc::new(g.sources(&self.mesh)))
+            .collect();
+        self.record.groups = groups;
+        Ok(())
     }
 
     /// FNV-1a over what the mesh and the transport are built from.
@@ -1056,6 +1156,18 @@ mod tests {
                 receivers: 2,
                 unshot: [1, 2, 3],
             }],
+            recorded_groups: vec![
+                RecordedGroup {
+                    index: 5,
+                    receivers: 2,
+                    members: vec![(0, [4, 5, 6]), (0, [7, 8, 9])],
+                },
+                RecordedGroup {
+                    index: 7,
+                    receivers: 2,
+                    members: vec![(0, [10, 11, 12])],
+                },
+            ],
             directional: None,
             unshot_masked: Vec::new(),
             setup: SetupResult {
@@ -1096,6 +1208,7 @@ mod tests {
         s.packed_dvec3s(b"RADI", &c.radiance).unwrap();
         s.packed_dvec3s(b"UNSH", &c.patch_unshot).unwrap();
         s.packed_dvec3s(b"DIRC", &c.direct).unwrap();
+        write_groups(&mut s, &c.recorded_groups).unwrap();
         write_setup(
             &mut s,
             c.setup.polygons_hash,

@@ -41,7 +41,7 @@
 //! over the cluster) or, where members straddle its horizon, sampled
 //! without bias; a ray to a cluster goes to one of its members.
 //!
-//! ## What is grouped, and why an emitter's first shot is not
+//! ## What is grouped
 //!
 //! The seed is the patch with the most unshot power. It takes the patches
 //! on surfaces within [`RADIUS`] of the scene diagonal of its centre with at
@@ -58,17 +58,54 @@
 //! radiance took the Cornell box at draft from 3.19% / 3.25% MARE to 3.76% /
 //! 3.54% against the truth (wider groups, docs/lab/small-surfaces.md). Nearby members share most of their occluders, so a
 //! receiver's rays to the group see one visibility, and the mixed estimate is
-//! little noisier than the seed's own. An emitter's patch joins (or seeds) a
-//! group only after it has shot once on its own: that first shot carries its
-//! emission, is recorded and is replayed exactly to vertices that later
-//! splits create (`RecordedShot`, which names one patch and its sample pool),
-//! so direct light stays exactly as the patch shooter resolves it. A group
-//! shot is not recorded, like a reflector's shot under the patch shooter: a
-//! new vertex made by the group shot's own refinement receives it (through
+//! little noisier than the seed's own. A group shot of reflected light is not
+//! recorded, like a reflector's shot under the patch shooter: a new vertex
+//! made by the group shot's own refinement receives it (through
 //! [`Shooter`]), and a later one interpolates it. (The patch shooter records
 //! an emitter patch's later shots of reflected light too; grouped, those are
 //! interpolated like any reflector's.) A seed with no partner shoots alone,
 //! exactly as the patch shooter would, quadrants and recording included.
+//!
+//! ## Emitters' first shots
+//!
+//! An emitter patch's first shot carries its emission, and is recorded:
+//! every vertex that a later split creates receives it again instead of
+//! interpolating it, so that direct light stays resolved (`refine.rs`). Such
+//! a first shot groups only with other first shots (and a later shot only
+//! with reflectors and emitters that have had theirs), by the same rules of
+//! radius and power, and the group is recorded whole
+//! ([`super::shoot::RecordedGroup`]: its shot number, and each member's patch
+//! and unshot radiance). Its members shoot whole and uniformly, as a
+//! recorded single shot does, so the group rebuilds from its record alone
+//! (a resume rebuilds it from the checkpoint's), and its replay at a new
+//! vertex is the group shot itself there: the same members and tree, the
+//! vertex's own RNG stream, the same rays. Replays run in shot order with
+//! the recorded single shots.
+//!
+//! Before, every emitter patch shot alone first: a body of 100k emitting
+//! facets (Khronos's ToyCar, an emissive texture over the whole car) took
+//! 100k single shots before any grouping, each traced to every receiver and
+//! replayed at every new vertex, and stopped at the 20,000-shot cap with
+//! 27.4% of its power unshot (issue 42). Grouped, its first shots are a few
+//! dozen groups (docs/lab/emitter-groups.md).
+//!
+//! The direct light must stay as accurate as the single shots made it, so a
+//! recorded group differs from a reflectors' group in two ways
+//! ([`GroupShot::recorded`]). It samples no cluster that straddles a
+//! receiver's horizon: such a cluster's rays carry unequal shares of an
+//! upper bound, which on a curved emitter (a car body, a sphere) left the
+//! worst vertex's direct light −2.8% / +2.5% off the members' exact shots
+//! where the node opened to members gives −0.10% / +0.33% (test
+//! `grouped_emitters_give_the_members_exact_direct_light`). And it traces
+//! [`EMITTER_RAYS`] times `group_samples` rays per receiver (never more than
+//! its members alone would), since rays to far clusters of curved members
+//! still carry unequal shares: at 16 rays instead of 256 the worst vertex
+//! was −0.62% / +1.02% off. A group is shot once, so these rays cost little
+//! beside the members' single shots they replace. A scene whose emitter is
+//! one patch (the Cornell box's light) has no partner for it and shoots it
+//! alone, exactly as before; so does every emitter under the seed papers'
+//! form factors (`--form-factors wallace` or `hemicube`, baselines that a
+//! group, which computes exact factors, would bypass).
 //!
 //! ## Bookkeeping
 //!
@@ -102,6 +139,7 @@ use crate::geometry::visibility::Occluder;
 use crate::mesh::Mesh;
 use glam::DVec3;
 use std::f64::consts::PI;
+use std::sync::Arc;
 
 /// A member's unshot power must be at least this fraction of the seed's (a
 /// small surface's, its unshot radiance): a weaker patch adds little to the
@@ -123,6 +161,18 @@ pub const RADIUS: f64 = 0.2;
 /// medium and the 1M boxes stopped at 6.2% unshot at draft; at this cap
 /// 167 s and 5.6% in less time (docs/lab/grouped-shooters.md, "Clustered group shots").
 pub const MAX_MEMBERS: usize = 16384;
+
+/// A recorded group of emitters' first shots traces this many times
+/// `group_samples` rays per receiver ([`GroupShot::recorded`]): it carries
+/// the direct light, which the patch shooter resolves with `samples` rays
+/// per member, and its far clusters' rays carry unequal shares where the
+/// members curve (a car body). In a closed sphere of 512 emitting facets
+/// (test `grouped_emitters_give_the_members_exact_direct_light`) the worst
+/// vertex's direct light was −0.62% / +1.02% off the members' exact shots
+/// at 16 rays, −0.10% / +0.33% at 256; a group is shot once and replayed
+/// to new vertices, so the rays cost little beside the members' single
+/// shots they replace (docs/lab/emitter-groups.md).
+pub const EMITTER_RAYS: u32 = 16;
 
 /// Members farther than this many of their own diameters use the
 /// differential kernel at their centroid (see the module documentation).
@@ -348,20 +398,50 @@ pub struct GroupShot<'a> {
     /// Shot number: with the seed and the vertex id it names the RNG stream.
     pub index: u64,
     pub seed: u64,
-    /// Rays per receiver, shared among the members (`group_samples`).
+    /// Rays per receiver, shared among the members (`group_samples`; more
+    /// for a recorded group, [`GroupShot::recorded`]).
     pub samples: u32,
+    /// What a receiver's visible count is out of, for the refinement test:
+    /// `group_samples`, whatever `samples` is.
+    counted: u32,
+    /// Whether far clusters that straddle a receiver's horizon may be
+    /// sampled (`group_tree.rs`): not in a recorded group.
+    sampled: bool,
     pub shadows: bool,
     pub occluder: &'a Occluder,
     pub kd: &'a [DVec3],
-    /// In tree order (`group_tree.rs`).
-    pub members: Vec<Member>,
-    tree: MemberTree,
+    /// The members under their tree, shared with the recording when the
+    /// shot is an emitters' first (see the module documentation).
+    sources: Arc<GroupSources>,
     /// Fewer rays where the group adds little (`ray_share.rs`).
     pub ray_share: Option<super::ray_share::RayShare>,
 }
 
+/// A group's members in tree order under their tree (`group_tree.rs`):
+/// built once per shot, and kept for the whole solve by a recorded group,
+/// whose replays to new vertices share it.
+pub struct GroupSources {
+    members: Vec<Member>,
+    tree: MemberTree,
+}
+
+impl GroupSources {
+    /// The members of `pieces` under their tree.
+    pub fn new(mesh: &Mesh, pieces: &[Piece]) -> GroupSources {
+        let mut members: Vec<Member> = pieces.iter().map(|p| Member::new(mesh, p)).collect();
+        let tree = MemberTree::build(&mut members);
+        GroupSources { members, tree }
+    }
+
+    /// How many pieces shoot.
+    pub fn len(&self) -> usize {
+        self.members.len()
+    }
+}
+
 impl<'a> GroupShot<'a> {
     /// The shot of `pieces` (the seed's first).
+    #[cfg(test)]
     pub fn new(
         mesh: &Mesh,
         pieces: &[Piece],
@@ -370,19 +450,46 @@ impl<'a> GroupShot<'a> {
         occluder: &'a Occluder,
         kd: &'a [DVec3],
     ) -> GroupShot<'a> {
-        let mut members: Vec<Member> = pieces.iter().map(|p| Member::new(mesh, p)).collect();
-        let tree = MemberTree::build(&mut members);
+        let sources = Arc::new(GroupSources::new(mesh, pieces));
+        GroupShot::of(sources, index, settings, occluder, kd)
+    }
+
+    /// The shot of `sources` as shot number `index` (a recorded group's
+    /// replay is the same shot: the same members, streams and rays).
+    pub fn of(
+        sources: Arc<GroupSources>,
+        index: u64,
+        settings: &crate::settings::SolverSettings,
+        occluder: &'a Occluder,
+        kd: &'a [DVec3],
+    ) -> GroupShot<'a> {
         GroupShot {
             index,
             seed: settings.seed,
             samples: settings.group_samples.max(1),
+            counted: settings.group_samples.max(1),
+            sampled: true,
             shadows: settings.shadows,
             occluder,
             kd,
-            members,
-            tree,
+            sources,
             ray_share: None,
         }
+    }
+
+    /// This group as a recorded one, emitters' first shots: [`EMITTER_RAYS`]
+    /// times `group_samples` rays per receiver, but never more than its
+    /// members would trace alone (`samples` each), nor fewer than a group's;
+    /// and no sampled clusters, whose rays carry unequal shares (see the
+    /// module documentation, "Emitters' first shots"). Its visible counts
+    /// stay out of `group_samples`, as any group's.
+    pub fn recorded(mut self, settings: &crate::settings::SolverSettings) -> GroupShot<'a> {
+        let alone = (self.sources.len() as u64 * settings.samples as u64).min(u32::MAX as u64);
+        self.sampled = false;
+        self.samples = (self.samples.saturating_mul(EMITTER_RAYS))
+            .min(alone as u32)
+            .max(self.samples);
+        self
     }
 
     /// ΔL_v: the importance-sampled sum of the members' shots, far clusters
@@ -431,8 +538,9 @@ impl<'a> GroupShot<'a> {
         items.clear();
         // Σ_p U_p F̂_p: the members' unoccluded shots summed, the receiver's
         // ΔL without shadows.
-        let unoccluded = self.tree.items(
-            &self.members,
+        let GroupSources { members, tree } = &*self.sources;
+        let unoccluded = tree.items(
+            members,
             &Receiver {
                 q,
                 n,
@@ -440,6 +548,7 @@ impl<'a> GroupShot<'a> {
                 epsilon,
             },
             self.shadows,
+            self.sampled,
             items,
             weights,
         );
@@ -450,7 +559,7 @@ impl<'a> GroupShot<'a> {
         if !self.shadows {
             return Received {
                 radiance: kd * unoccluded,
-                visible: self.samples,
+                visible: self.counted,
                 rays: 0,
             };
         }
@@ -478,15 +587,13 @@ impl<'a> GroupShot<'a> {
             }
             match items[k] {
                 Item::Member(member) => {
-                    let m = &self.members[member as usize];
+                    let m = &members[member as usize];
                     let y = m.sample_point(q, n, epsilon, &mut rng, clipped);
                     points.push(y + m.normal * epsilon);
                     carried.push(m.colour);
                 }
                 Item::Cluster(cluster) => {
-                    let ray = self
-                        .tree
-                        .ray(&self.members, cluster, weights[k], q, n, &mut rng);
+                    let ray = tree.ray(members, cluster, weights[k], q, n, &mut rng);
                     if let Some((y, normal, colour)) = ray {
                         points.push(y + normal * epsilon);
                         carried.push(colour);
@@ -506,7 +613,11 @@ impl<'a> GroupShot<'a> {
         }
         Received {
             radiance: kd * sum * (total / rays as f64),
-            visible: visible * (self.samples / rays),
+            visible: if self.counted == self.samples {
+                visible * (self.samples / rays)
+            } else {
+                visible * self.counted / rays
+            },
             rays,
         }
     }
@@ -521,8 +632,8 @@ impl GroupShot<'_> {
         let epsilon = self.occluder.scene_epsilon();
         let (q, n) = super::shoot::receiving_point(mesh, v, epsilon);
         let (mut items, mut weights) = (Vec::new(), Vec::new());
-        self.tree.items(
-            &self.members,
+        self.sources.tree.items(
+            &self.sources.members,
             &Receiver {
                 q,
                 n,
@@ -530,6 +641,7 @@ impl GroupShot<'_> {
                 epsilon,
             },
             true,
+            self.sampled,
             &mut items,
             &mut weights,
         );
@@ -606,9 +718,17 @@ impl Solver {
     /// other member's unshot taken from the patches too. `None` (nothing
     /// taken) when no other patch qualifies (see the module documentation).
     pub(super) fn take_group(&mut self, seed: u32, unshot: DVec3) -> Option<Vec<(u32, DVec3)>> {
-        self.record
-            .emitters_shot
-            .catch_up(&self.record.shots, self.mesh.patches.len());
+        self.catch_up_emitters();
+        // An emitter's first shot groups only with other first shots, and a
+        // later shot only with reflectors and emitters that have had theirs:
+        // a recorded group is the emitters' direct light and nothing else.
+        let first = self.first_shot(seed);
+        // The seed papers' form factors (`--form-factors wallace` or
+        // `hemicube`), kept as measured baselines, reach the receivers
+        // only through single shots: their emitters shoot alone, as before.
+        if first && self.settings.form_factors != crate::settings::FormFactorMethod::Analytic {
+            return None;
+        }
         let patch = &self.mesh.patches[seed as usize];
         let power = |p: u32| {
             self.patches.shoot_area[p as usize] * self.patches.unshot[p as usize].element_sum()
@@ -627,7 +747,7 @@ impl Solver {
         let mut candidates: Vec<(f64, u32)> = surfaces
             .iter()
             .flat_map(|&s| self.patches.of_surface[s as usize].clone())
-            .filter(|&p| p != seed && self.groupable(p))
+            .filter(|&p| p != seed && self.is_first_shot(p) == first)
             .map(|p| (power(p), p))
             .filter(|&(w, p)| w >= least || self.bright_small(p, unshot))
             .collect();
@@ -712,38 +832,67 @@ impl Solver {
         pieces
     }
 
-    /// Whether patch `p` may shoot in a group: a reflector's always, an
-    /// emitter's once its emission has been shot (and recorded) on its own.
-    pub(super) fn may_group(&mut self, p: u32) -> bool {
-        self.record
-            .emitters_shot
-            .catch_up(&self.record.shots, self.mesh.patches.len());
-        self.groupable(p)
+    /// How the emitters' patches shot their emission so far: (alone, in
+    /// recorded groups), each patch counted once.
+    pub fn emitter_first_shots(&self) -> (u64, u64) {
+        let mut alone: Vec<u32> = self.record.shots.iter().map(|r| r.patch).collect();
+        alone.sort_unstable();
+        alone.dedup();
+        let grouped: usize = self.record.groups.iter().map(|g| g.members.len()).sum();
+        (alone.len() as u64, grouped as u64)
     }
 
-    /// [`Solver::may_group`] with the emitters' record caught up.
-    fn groupable(&self, p: u32) -> bool {
+    /// Whether patch `p`'s next shot is its emitter's first, its emission
+    /// not yet shot in a recorded shot or group: such shots group only with
+    /// each other, and the group is recorded (see the module documentation).
+    pub(super) fn first_shot(&mut self, p: u32) -> bool {
+        self.catch_up_emitters();
+        self.is_first_shot(p)
+    }
+
+    /// [`Solver::first_shot`] with the emitters' record caught up.
+    fn is_first_shot(&self, p: u32) -> bool {
         let surface = self.mesh.patches[p as usize].surface;
-        self.materials.emission[surface as usize] == DVec3::ZERO
-            || self.record.emitters_shot.shot[p as usize]
+        self.materials.emission[surface as usize] != DVec3::ZERO
+            && !self.record.emitters_shot.shot[p as usize]
+    }
+
+    fn catch_up_emitters(&mut self) {
+        let record = &mut self.record;
+        record
+            .emitters_shot
+            .catch_up(&record.shots, &record.groups, self.mesh.patches.len());
     }
 }
 
-/// Per patch, whether it has a recorded shot; caught up from the recorded
-/// list (append-only), so a resumed solve rebuilds it from its checkpoint.
+/// Per patch, whether it has a recorded shot, alone or in a group; caught up
+/// from the recorded lists (append-only), so a resumed solve rebuilds it
+/// from its checkpoint.
 #[derive(Default)]
 pub(super) struct EmittersShot {
     shot: Vec<bool>,
     seen: usize,
+    seen_groups: usize,
 }
 
 impl EmittersShot {
-    fn catch_up(&mut self, recorded: &[super::shoot::RecordedShot], patches: usize) {
+    fn catch_up(
+        &mut self,
+        recorded: &[super::shoot::RecordedShot],
+        groups: &[super::shoot::RecordedGroup],
+        patches: usize,
+    ) {
         self.shot.resize(patches, false);
         for r in &recorded[self.seen.min(recorded.len())..] {
             self.shot[r.patch as usize] = true;
         }
         self.seen = recorded.len();
+        for g in &groups[self.seen_groups.min(groups.len())..] {
+            for &(p, _) in &g.members {
+                self.shot[p as usize] = true;
+            }
+        }
+        self.seen_groups = groups.len();
     }
 }
 

@@ -266,6 +266,7 @@ impl MemberTree {
         members: &[Member],
         receiver: &Receiver,
         clusters: bool,
+        sample: bool,
         items: &mut Vec<Item>,
         weights: &mut Vec<f64>,
     ) -> DVec3 {
@@ -317,7 +318,7 @@ impl MemberTree {
                 // Members facing apart are parted near the root, so such a
                 // node opens; one of a single orientation that straddles
                 // q's horizon or its plane is sampled when far enough.
-                Far::Mixed if node.cone > NORMAL_SPLIT => None,
+                Far::Mixed if node.cone > NORMAL_SPLIT || !sample => None,
                 Far::Mixed => node
                     .bound(q, n)
                     .map(|weight| (sampled(stack[depth]), weight, node.colour * weight)),
@@ -690,7 +691,7 @@ mod tests {
             epsilon: 1e-6,
         };
         let (mut items, mut weights) = (Vec::new(), Vec::new());
-        let gain = tree.items(members, &receiver, true, &mut items, &mut weights);
+        let gain = tree.items(members, &receiver, true, true, &mut items, &mut weights);
         (items, weights, gain)
     }
 

@@ -453,9 +453,13 @@ impl Transport for LightsTransport {
                 &s.materials.kd,
             );
             let scan = s.touched_patches();
+            let replay_groups = s
+                .record
+                .group_replays(&s.settings, &s.occluder, &s.materials.kd);
             let replay = refine::Replay {
                 recorded: &replay_shots,
                 pools: &s.record.pools,
+                groups: &replay_groups,
                 lights: Some(&shot),
                 current_recorded: true,
             };

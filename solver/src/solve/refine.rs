@@ -46,7 +46,7 @@
 //! tested again when the shot changed one of its ends.
 
 use super::budget::SplitBudget;
-use super::group_shot::Shooter;
+use super::group_shot::{GroupShot, Shooter};
 use super::lights::LightShot;
 use super::shoot::{Received, SamplePool, Scratch, Shot};
 use crate::mesh::{Mesh, NewVertex};
@@ -245,6 +245,10 @@ pub struct Replay<'a, 'b> {
     pub recorded: &'b [Shot<'a>],
     /// Their sample pools.
     pub pools: &'b [SamplePool],
+    /// The emitters' first shots taken in groups, in order; replayed with
+    /// `recorded` in shot order, so the current shot is the last replayed
+    /// if it is recorded, alone or in a group.
+    pub groups: &'b [GroupShot<'a>],
     /// The lights' shot, which every solve with lights shoots first.
     pub lights: Option<&'b LightShot<'a>>,
     /// Whether the current shot is the last of `recorded`.
@@ -469,10 +473,20 @@ impl Field for DiffuseField<'_, '_, '_> {
                     exact += current.radiance;
                     rays += current.rays as u64;
                 }
+                let mut groups = replay.groups.iter().peekable();
+                let mut add = |received: Received| {
+                    exact += received.radiance;
+                    rays += received.rays as u64;
+                    received
+                };
                 for (r, p) in replay.recorded.iter().zip(replay.pools) {
-                    current = r.receive(mesh, nv.id, p, scratch, None);
-                    exact += current.radiance;
-                    rays += current.rays as u64;
+                    while let Some(g) = groups.next_if(|g| g.index < r.index) {
+                        add(g.receive(mesh, nv.id, scratch, None));
+                    }
+                    current = add(r.receive(mesh, nv.id, p, scratch, None));
+                }
+                for g in groups {
+                    current = add(g.receive(mesh, nv.id, scratch, None));
                 }
                 if !replay.current_recorded {
                     current = shooter.receive(mesh, nv.id, scratch, Some(prior));

@@ -3,15 +3,16 @@
 //! source may shoot with its bright neighbours (`group_shot.rs`), and only
 //! the receivers a shot touched are revisited (`footprint.rs`).
 
-use super::group_shot::{GroupShot, Shooter};
+use super::group_shot::{GroupShot, GroupSources, Shooter};
 use super::lights::LightShot;
 use super::pipeline::{Shooting, Source, Transport};
 use super::ray_share::RayShare;
 use super::refine::{self, Refined};
-use super::shoot::{RecordedShot, SamplePool, Shot};
+use super::shoot::{RecordedGroup, RecordedShot, SamplePool, Shot};
 use super::{footprint, Solver};
 use crate::settings::Shooters;
 use glam::DVec3;
+use std::sync::Arc;
 use std::time::Instant;
 
 /// Diffuse shots; between the steps of one shot they keep only the source
@@ -39,15 +40,29 @@ impl Transport for ScalarShot {
         let patch = self.patch;
         let unshot = source.unshot;
         // With grouped shooters the source may take its bright neighbours
-        // along (`group_shot.rs`); an emitter's patch shoots its emission
-        // alone first, recorded.
+        // along (`group_shot.rs`); an emitter's first shot, alone or with
+        // other emitters' first shots, is recorded.
         let grouped = s.settings.shooters == Shooters::Grouped;
-        let members = if grouped && s.may_group(patch) {
+        let first = s.first_shot(patch);
+        let members = if grouped {
             s.take_group(patch, unshot)
         } else {
             None
         };
-        let recorded = s.records(patch, members.is_none(), None);
+        let recorded = s.records(patch, members.is_none() || first, None);
+        // A recorded group is its members whole (emitters' patches shoot
+        // uniformly), built from its record so that a resume rebuilds the
+        // same tree.
+        let sources = match &members {
+            Some(m) if recorded => {
+                let record = RecordedGroup::new(s.stats.shots, s.mesh.vertices.len(), m);
+                let sources = Arc::new(record.sources(&s.mesh));
+                s.record.push_group(record, sources.clone());
+                Some(sources)
+            }
+            Some(m) => Some(Arc::new(GroupSources::new(&s.mesh, &s.group_pieces(m)))),
+            None => None,
+        };
         let mut shot = Shot::for_patch(
             &s.mesh,
             patch,
@@ -57,7 +72,7 @@ impl Transport for ScalarShot {
             &s.occluder,
             &s.materials.kd,
         );
-        if recorded {
+        if recorded && members.is_none() {
             s.record.push(&shot, patch, unshot, s.mesh.vertices.len());
         }
         // Recorded (emitter) shots stay uniform: their replay to new vertices
@@ -70,18 +85,21 @@ impl Transport for ScalarShot {
         if !recorded {
             shot.ray_share = share;
         }
-        let pieces = members.as_ref().map(|m| s.group_pieces(m));
-        let group = pieces.as_ref().map(|m| {
-            let mut group = GroupShot::new(
-                &s.mesh,
-                m,
+        let group = sources.map(|sources| {
+            let mut group = GroupShot::of(
+                sources,
                 s.stats.shots,
                 &s.settings,
                 &s.occluder,
                 &s.materials.kd,
             );
-            group.ray_share = share;
-            group
+            // A recorded group keeps every ray, as its replays do.
+            if recorded {
+                group.recorded(&s.settings)
+            } else {
+                group.ray_share = share;
+                group
+            }
         });
         let pool = match group {
             Some(_) => SamplePool::with_sets(&shot, 0),
@@ -129,9 +147,13 @@ impl Transport for ScalarShot {
         let scan = s.touched_patches();
         let upm = s.units_per_metre();
         let lights = LightShot::replay(&s.lights, &s.occluder, &s.materials.kd, &s.settings, upm);
+        let replay_groups = s
+            .record
+            .group_replays(&s.settings, &s.occluder, &s.materials.kd);
         let replay = refine::Replay {
             recorded: &replay_shots,
             pools: &s.record.pools,
+            groups: &replay_groups,
             lights: lights.as_ref(),
             current_recorded: recorded,
         };

@@ -250,6 +250,48 @@ pub struct RecordedShot {
     pub unshot: [u64; 3],
 }
 
+/// A recorded group: the first shots of emitters' patches, shot together
+/// (`group_shot.rs`, "Emitters' first shots"). Its members are the patches
+/// whole with their unshot radiance, so the group rebuilds from them alone
+/// and its replay at a new vertex is the shot itself there: the same
+/// members, tree, RNG stream and rays.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RecordedGroup {
+    /// The shot's 0-based index (its RNG streams).
+    pub index: u64,
+    /// The vertex count when it was shot, as [`RecordedShot::receivers`].
+    pub receivers: u32,
+    /// (patch, U_p as f64 bit patterns), the seed first.
+    pub members: Vec<(u32, [u64; 3])>,
+}
+
+impl RecordedGroup {
+    /// The group of `members` (patch, unshot) shot as shot `index` to the
+    /// `receivers` vertices there are.
+    pub fn new(index: u64, receivers: usize, members: &[(u32, DVec3)]) -> RecordedGroup {
+        RecordedGroup {
+            index,
+            receivers: receivers as u32,
+            members: members
+                .iter()
+                .map(|&(p, u)| (p, u.to_array().map(f64::to_bits)))
+                .collect(),
+        }
+    }
+
+    /// The members' pieces, each patch whole, and their tree.
+    pub fn sources(&self, mesh: &Mesh) -> super::group_shot::GroupSources {
+        let pieces: Vec<super::group_shot::Piece> = self
+            .members
+            .iter()
+            .map(|&(p, u)| {
+                super::group_shot::Piece::whole(mesh, p, DVec3::from_array(u.map(f64::from_bits)))
+            })
+            .collect();
+        super::group_shot::GroupSources::new(mesh, &pieces)
+    }
+}
+
 impl RecordedShot {
     pub fn unshot(&self) -> DVec3 {
         DVec3::from_array(self.unshot.map(f64::from_bits))

@@ -77,8 +77,13 @@ pub(super) struct Recording {
     pub shots: Vec<shoot::RecordedShot>,
     /// Their sample pools (rebuilt on resume, not checkpointed).
     pub pools: Vec<shoot::SamplePool>,
+    /// The emitters' first shots taken in groups, in order
+    /// (`group_shot.rs`), and their members under their trees (rebuilt on
+    /// resume, not checkpointed).
+    pub groups: Vec<shoot::RecordedGroup>,
+    pub group_sources: Vec<std::sync::Arc<group_shot::GroupSources>>,
     /// Which emitter patches have shot their emission, for grouped shooters
-    /// (derived from `shots`, so a resume rebuilds it).
+    /// (derived from `shots` and `groups`, so a resume rebuilds it).
     pub emitters_shot: group_shot::EmittersShot,
 }
 
@@ -280,6 +285,35 @@ impl Recording {
         });
         self.pools
             .push(shoot::SamplePool::with_sets(shot, shoot::REPLAY_POOL_SETS));
+    }
+
+    /// Remembers a group of emitters' first shots, `record`, whose members
+    /// shoot as `sources`.
+    pub fn push_group(
+        &mut self,
+        record: shoot::RecordedGroup,
+        sources: std::sync::Arc<group_shot::GroupSources>,
+    ) {
+        self.groups.push(record);
+        self.group_sources.push(sources);
+    }
+
+    /// The recorded groups as shots again, for their replay to new vertices
+    /// (they share the members and trees the recording keeps).
+    pub fn group_replays<'a>(
+        &self,
+        settings: &crate::settings::SolverSettings,
+        occluder: &'a crate::geometry::visibility::Occluder,
+        kd: &'a [DVec3],
+    ) -> Vec<group_shot::GroupShot<'a>> {
+        self.groups
+            .iter()
+            .zip(&self.group_sources)
+            .map(|(r, sources)| {
+                group_shot::GroupShot::of(sources.clone(), r.index, settings, occluder, kd)
+                    .recorded(settings)
+            })
+            .collect()
     }
 }
 

@@ -6,8 +6,10 @@
 //! and [`floorplan`] (a grid of rooms with thick walls and doors); and a
 //! two daylit ones lit by a sun and a sky (issue 41): [`atrium`] (a
 //! Sponza-sized open court with two storeys of arcades) and [`window_room`]
-//! (a closed room with one window); and [`office`], the floor plan
-//! furnished, for the set-up's cost (issue 42). Scenes are millimetres, +y up,
+//! (a closed room with one window); [`emissive_body`], a room lit only
+//! by a finely tessellated emitting body, ToyCar's case (issue 42); and
+//! [`office`], the floor plan furnished, for the set-up's cost (issue 42).
+//! Scenes are millimetres, +y up,
 //! written as OBJ + MTL + a TOML scene config ([`scene`]). [`bench`] drives
 //! the release `solver` over families × sizes × presets and reports cost and
 //! growth; its default families are [`Family::ALL`], the emitter-lit three.
@@ -20,6 +22,7 @@ pub mod arch;
 pub mod atrium;
 pub mod bench;
 pub mod cornell;
+pub mod emissive_body;
 pub mod floorplan;
 pub mod mesh;
 pub mod office;
@@ -56,6 +59,10 @@ pub enum Family {
     /// A closed 5.5 m room lit by sun and sky through one window, with two
     /// boxes (300 triangles by default).
     WindowRoom,
+    /// A closed 10 × 4 × 8 m room lit only by a car-sized rounded body whose
+    /// every facet emits, as ToyCar's emissive body (20 000 triangles by
+    /// default).
+    EmissiveBody,
 }
 
 impl Family {
@@ -73,6 +80,7 @@ impl Family {
             Family::Office => "office",
             Family::Atrium => "atrium",
             Family::WindowRoom => "window-room",
+            Family::EmissiveBody => "emissive-body",
         }
     }
 
@@ -82,6 +90,7 @@ impl Family {
         match self {
             Family::Atrium => 65_000,
             Family::WindowRoom => 300,
+            Family::EmissiveBody => 20_000,
             _ => 1_000,
         }
     }
@@ -101,6 +110,9 @@ pub fn generate(family: Family, triangles: usize, seed: u64) -> anyhow::Result<s
         Family::Office => office::generate(office::Params::for_triangles(triangles)),
         Family::Atrium => atrium::generate(atrium::Params::for_triangles(triangles)),
         Family::WindowRoom => window_room::generate(window_room::Params::for_triangles(triangles)),
+        Family::EmissiveBody => {
+            emissive_body::generate(emissive_body::Params::for_triangles(triangles))
+        }
     };
     let actual = scene.mesh.triangle_count();
     let error = (actual as f64 - triangles as f64).abs() / triangles as f64;

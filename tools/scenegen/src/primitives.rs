@@ -163,9 +163,29 @@ pub fn sphere_triangle_count(segments: u32, rings: u32) -> usize {
 /// and rings with shared vertices, smooth normals (the unit radius vector),
 /// wound counter-clockwise seen from outside.
 pub fn add_sphere(mesh: &mut Mesh, centre: Vec3, radius: f64, segments: u32, rings: u32) {
-    let corner = |mesh: &mut Mesh, direction: Vec3| Corner {
-        position: mesh.add_position(add(centre, direction.map(|d| d * radius))),
-        normal: Some(mesh.add_normal(direction)),
+    add_mapped_sphere(mesh, centre, segments, rings, |d| {
+        (add(centre, d.map(|x| x * radius)), d)
+    });
+}
+
+/// Adds a UV sphere's topology (segments ≥ 3, rings ≥ 2: poles and rings
+/// with shared vertices) with each unit direction d mapped by `point` to a
+/// position and a smooth normal (any length), wound counter-clockwise seen
+/// from outside: the surface must be star-shaped about `centre`, so that a
+/// facet's front is the side away from it.
+pub fn add_mapped_sphere(
+    mesh: &mut Mesh,
+    centre: Vec3,
+    segments: u32,
+    rings: u32,
+    point: impl Fn(Vec3) -> (Vec3, Vec3),
+) {
+    let corner = |mesh: &mut Mesh, direction: Vec3| {
+        let (position, normal) = point(direction);
+        Corner {
+            position: mesh.add_position(position),
+            normal: Some(mesh.add_normal(normal)),
+        }
     };
     let north = corner(mesh, [0.0, 1.0, 0.0]);
     let mut ring_corners: Vec<Vec<Corner>> = Vec::new();

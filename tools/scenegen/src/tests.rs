@@ -20,11 +20,18 @@ const DAYLIT: [(Family, usize); 4] = [
 /// The set-up benchmark's office (not in [`Family::ALL`]) at a test size.
 const OFFICE: [(Family, usize); 1] = [(Family::Office, 10_000)];
 
+/// The emissive body (issue 42, not in [`Family::ALL`] either) at a test
+/// size and its default one.
+const EMISSIVE: [(Family, usize); 2] = [
+    (Family::EmissiveBody, 5_000),
+    (Family::EmissiveBody, 20_000),
+];
+
 fn each_scene(mut check: impl FnMut(Family, usize, &Mesh)) {
     let emitter_lit = Family::ALL
         .into_iter()
         .flat_map(|family| SIZES.map(|n| (family, n)));
-    for (family, n) in emitter_lit.chain(DAYLIT).chain(OFFICE) {
+    for (family, n) in emitter_lit.chain(DAYLIT).chain(OFFICE).chain(EMISSIVE) {
         let scene = generate(family, n, 3).unwrap();
         check(family, n, &scene.mesh);
     }
@@ -302,4 +309,38 @@ fn office_furniture_rests_on_the_floor_or_on_another_piece() {
             piece.name
         );
     }
+}
+
+#[test]
+fn the_emissive_body_is_the_only_emitter_and_its_counts_fit() {
+    use crate::emissive_body::{generate as body, Params};
+    // The parameter search lands within tolerance at the sizes the lab
+    // measures (docs/lab/emitter-groups.md), and the mesh has exactly the
+    // predicted count.
+    for n in [5_000usize, 20_000, 50_000, 100_000] {
+        let p = Params::for_triangles(n);
+        let error = (p.triangle_count() as f64 - n as f64).abs() / n as f64;
+        assert!(error <= COUNT_TOLERANCE, "{} for {n}", p.triangle_count());
+    }
+    let p = Params::for_triangles(5_000);
+    let scene = body(p);
+    assert_eq!(scene.mesh.triangle_count(), p.triangle_count());
+    // One emitting material, the body's, which holds every triangle but the
+    // room's twelve; no sun or sky.
+    let emitting: Vec<&str> = scene
+        .materials
+        .iter()
+        .filter(|m| m.ke.iter().any(|&k| k > 0.0))
+        .map(|m| m.name)
+        .collect();
+    assert_eq!(emitting, ["body"]);
+    assert!(scene.lights.sun.is_none() && scene.lights.sky.is_none());
+    let body_triangles: usize = scene
+        .mesh
+        .objects
+        .iter()
+        .filter(|o| o.material == "body")
+        .map(|o| o.triangles.len())
+        .sum();
+    assert_eq!(body_triangles, p.triangle_count() - 12);
 }
