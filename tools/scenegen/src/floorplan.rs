@@ -37,6 +37,25 @@ struct Rect {
     up: bool,
 }
 
+/// The quad edge, on a geometric ladder from uncut (infinite) down to
+/// 10 mm, whose `count(edge)` is nearest `triangles`; the ladder stops once
+/// the count passes twice the target.
+pub(crate) fn nearest_edge(triangles: usize, count: impl Fn(f64) -> usize) -> f64 {
+    let mut best = (f64::INFINITY, count(f64::INFINITY).abs_diff(triangles));
+    let mut edge = HEIGHT;
+    while edge > 10.0 {
+        let n = count(edge);
+        if n.abs_diff(triangles) < best.1 {
+            best = (edge, n.abs_diff(triangles));
+        }
+        if n > 2 * triangles {
+            break;
+        }
+        edge *= 0.97;
+    }
+    best.0
+}
+
 /// The solids and rectangles of a plan, before meshing.
 pub(crate) struct Plan {
     pub(crate) walls: Vec<BoxSpec>,
@@ -49,23 +68,8 @@ impl Params {
     /// a geometric ladder from uncut down, whose count is nearest the target.
     pub fn for_triangles(triangles: usize) -> Params {
         let rooms = ((triangles as f64 / 250.0).sqrt().round() as u32).max(2);
-        let mut best = Params {
-            rooms,
-            edge: f64::INFINITY,
-        };
-        let mut edge = HEIGHT;
-        while edge > 10.0 {
-            let p = Params { rooms, edge };
-            let count = p.triangle_count();
-            if count.abs_diff(triangles) < best.triangle_count().abs_diff(triangles) {
-                best = p;
-            }
-            if count > 2 * triangles {
-                break;
-            }
-            edge *= 0.97;
-        }
-        best
+        let edge = nearest_edge(triangles, |edge| Params { rooms, edge }.triangle_count());
+        Params { rooms, edge }
     }
 
     pub(crate) fn divisions(&self, spec: &BoxSpec) -> [u32; 3] {

@@ -40,23 +40,9 @@ impl Params {
     /// ladder from uncut down, whose count is nearest the target.
     pub fn for_triangles(triangles: usize) -> Params {
         let rooms = ((triangles as f64 / (2.0 * ROOM_TRIANGLES)).sqrt().round() as u32).max(2);
-        let mut best = Params {
-            rooms,
-            edge: f64::INFINITY,
-        };
-        let mut edge = floorplan::HEIGHT;
-        while edge > 10.0 {
-            let p = Params { rooms, edge };
-            let count = p.triangle_count();
-            if count.abs_diff(triangles) < best.triangle_count().abs_diff(triangles) {
-                best = p;
-            }
-            if count > 2 * triangles {
-                break;
-            }
-            edge *= 0.97;
-        }
-        best
+        let edge =
+            floorplan::nearest_edge(triangles, |edge| Params { rooms, edge }.triangle_count());
+        Params { rooms, edge }
     }
 
     fn plan(&self) -> floorplan::Params {
