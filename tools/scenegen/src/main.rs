@@ -1,4 +1,5 @@
-//! `scenegen`: writes one scale scene (OBJ + MTL + TOML scene config).
+//! `scenegen`: writes one scale scene (OBJ + MTL + TOML scene config), with
+//! the materials `--glossy` names made glossy (scenegen::glossy).
 
 // Shipped code: Clippy checks clippy.toml's lists here (ARCHITECTURE.md's invariants).
 #![cfg_attr(not(test), warn(clippy::disallowed_methods, clippy::disallowed_macros))]
