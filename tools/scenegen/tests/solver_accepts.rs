@@ -18,6 +18,22 @@ fn json(bytes: &[u8]) -> serde_json::Value {
         .unwrap_or_else(|e| panic!("not JSON ({e}): {}", String::from_utf8_lossy(bytes)))
 }
 
+/// `solver info --json OUT`, which must succeed, as JSON.
+fn info_json(solver: &Path, out: &Path) -> serde_json::Value {
+    let info = Command::new(solver)
+        .arg("info")
+        .arg("--json")
+        .arg(out)
+        .output()
+        .unwrap();
+    assert!(
+        info.status.success(),
+        "{}",
+        String::from_utf8_lossy(&info.stderr)
+    );
+    json(&info.stdout)
+}
+
 /// `solver solve TOML --out OUT --preset draft --max-shots SHOTS --strict
 /// --threads 2 EXTRA…`, which must succeed or stop at its shot cap (status 4).
 fn solve_strictly(
@@ -68,18 +84,7 @@ fn the_solver_accepts_every_family() {
         // Three shots of the light(s) leave less than all of the power unshot.
         assert!(stats["unshot_fraction"].as_f64().unwrap() < 1.0, "{stats}");
 
-        let info = Command::new(&solver)
-            .arg("info")
-            .arg("--json")
-            .arg(&out)
-            .output()
-            .unwrap();
-        assert!(
-            info.status.success(),
-            "{}",
-            String::from_utf8_lossy(&info.stderr)
-        );
-        let header = json(&info.stdout);
+        let header = info_json(&solver, &out);
         assert_eq!(header["units_per_metre"], 1000.0, "{header}");
         // The solution's bounds span the generated geometry: same extent per
         // axis. Bounds are stored in f32 around the re-centred origin (about
@@ -131,13 +136,7 @@ fn the_solver_solves_the_daylit_families_by_their_own_lights() {
         assert_eq!(stats["shots"], 3, "{}: {stats}", family.name());
         let unshot = stats["unshot_fraction"].as_f64().unwrap();
         assert!(unshot > 0.0 && unshot < 1.0, "{}: {stats}", family.name());
-        let info = Command::new(&solver)
-            .arg("info")
-            .arg("--json")
-            .arg(&out)
-            .output()
-            .unwrap();
-        let header = json(&info.stdout);
+        let header = info_json(&solver, &out);
         assert!(
             header.get("lighting").is_some(),
             "{}: {header}",
@@ -162,18 +161,7 @@ fn the_solver_solves_a_glossy_generated_scene_directionally() {
     let paths = write_scene(&scene, dir.path(), "glossy").unwrap();
     let out = dir.path().join("glossy.sol");
     solve_strictly(&solver, family, &paths.toml, &out, 3, &[]);
-    let info = Command::new(&solver)
-        .arg("info")
-        .arg("--json")
-        .arg(&out)
-        .output()
-        .unwrap();
-    assert!(
-        info.status.success(),
-        "{}",
-        String::from_utf8_lossy(&info.stderr)
-    );
-    let header = json(&info.stdout);
+    let header = info_json(&solver, &out);
     let orders: Vec<u64> = header["batches"]
         .as_array()
         .unwrap()
