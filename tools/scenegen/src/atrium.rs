@@ -410,10 +410,11 @@ pub fn generate(params: Params) -> Scene {
             Solid::Arch(spec) => add_arch(&mut mesh, &spec),
         }
     }
-    let stone = |name, kd| Material {
-        name,
+    let stone = |name: &str, kd| Material {
+        name: name.into(),
         kd,
         ke: [0.0; 3],
+        glossy: None,
     };
     Scene {
         description: format!(

@@ -117,24 +117,28 @@ pub fn generate(count: usize, seed: u64) -> Scene {
         mesh,
         materials: vec![
             Material {
-                name: "white",
+                name: "white".into(),
                 kd: [0.725, 0.71, 0.68],
                 ke: [0.0; 3],
+                glossy: None,
             },
             Material {
-                name: "red",
+                name: "red".into(),
                 kd: [0.63, 0.065, 0.05],
                 ke: [0.0; 3],
+                glossy: None,
             },
             Material {
-                name: "green",
+                name: "green".into(),
                 kd: [0.14, 0.45, 0.091],
                 ke: [0.0; 3],
+                glossy: None,
             },
             Material {
-                name: "light",
+                name: "light".into(),
                 kd: [0.78, 0.78, 0.78],
                 ke: [17.0, 12.0, 4.0],
+                glossy: None,
             },
         ],
         // The standard Cornell box camera.

@@ -91,16 +91,18 @@ pub fn generate(params: Params) -> Scene {
         mesh,
         materials: vec![
             Material {
-                name: "wall",
+                name: "wall".into(),
                 kd: [0.7, 0.68, 0.65],
                 ke: [0.0; 3],
+                glossy: None,
             },
             // A glowing car paint: red-orange emission over a reflecting
             // body, as an emissive texture over ToyCar's body would be.
             Material {
-                name: "body",
+                name: "body".into(),
                 kd: [0.5, 0.2, 0.15],
                 ke: [4.0, 2.0, 1.0],
+                glossy: None,
             },
         ],
         camera: Camera {

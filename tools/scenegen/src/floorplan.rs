@@ -221,29 +221,34 @@ pub fn generate(params: Params) -> Scene {
 pub(crate) fn materials() -> Vec<Material> {
     vec![
         Material {
-            name: "wall",
+            name: "wall".into(),
             kd: [0.7, 0.68, 0.65],
             ke: [0.0; 3],
+            glossy: None,
         },
         Material {
-            name: "floor",
+            name: "floor".into(),
             kd: [0.45, 0.35, 0.25],
             ke: [0.0; 3],
+            glossy: None,
         },
         Material {
-            name: "threshold",
+            name: "threshold".into(),
             kd: [0.45, 0.35, 0.25],
             ke: [0.0; 3],
+            glossy: None,
         },
         Material {
-            name: "ceiling",
+            name: "ceiling".into(),
             kd: [0.8, 0.8, 0.8],
             ke: [0.0; 3],
+            glossy: None,
         },
         Material {
-            name: "light",
+            name: "light".into(),
             kd: [0.78, 0.78, 0.78],
             ke: [10.0, 10.0, 10.0],
+            glossy: None,
         },
     ]
 }

@@ -13,6 +13,9 @@
 //! written as OBJ + MTL + a TOML scene config ([`scene`]). [`bench`] drives
 //! the release `solver` over families × sizes × presets and reports cost and
 //! growth; its default families are [`Family::ALL`], the emitter-lit three.
+//! [`glossy`] (`scenegen --glossy NAME[=KS,NS]`) makes chosen materials of any
+//! family glossy (MTL `Ks`, `Ns`; the config then sets `mode = "directional"`),
+//! for glossy scale scenes (issue 43).
 
 // Shipped code: Clippy checks clippy.toml's lists here (ARCHITECTURE.md's invariants).
 #![cfg_attr(not(test), warn(clippy::disallowed_methods, clippy::disallowed_macros))]
@@ -24,6 +27,7 @@ pub mod bench;
 pub mod cornell;
 pub mod emissive_body;
 pub mod floorplan;
+pub mod glossy;
 pub mod mesh;
 pub mod office;
 pub mod primitives;
@@ -34,6 +38,8 @@ pub mod window_room;
 
 #[cfg(test)]
 mod daylit_tests;
+#[cfg(test)]
+mod glossy_tests;
 #[cfg(test)]
 mod tests;
 

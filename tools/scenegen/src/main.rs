@@ -1,4 +1,5 @@
-//! `scenegen`: writes one scale scene (OBJ + MTL + TOML scene config).
+//! `scenegen`: writes one scale scene (OBJ + MTL + TOML scene config), with
+//! the materials `--glossy` names made glossy (scenegen::glossy).
 
 // Shipped code: Clippy checks clippy.toml's lists here (ARCHITECTURE.md's invariants).
 #![cfg_attr(not(test), warn(clippy::disallowed_methods, clippy::disallowed_macros))]
@@ -6,6 +7,7 @@
 
 use anyhow::Context;
 use clap::Parser;
+use scenegen::glossy::{self, GlossyRequest};
 use scenegen::{generate, scene::write_scene, Family};
 use std::path::PathBuf;
 
@@ -34,6 +36,22 @@ struct Args {
     /// File stem (default: the family's name).
     #[arg(long)]
     name: Option<String>,
+    /// Makes a material glossy: NAME, NAME=KS,NS or NAME=R,G,B,NS; repeatable.
+    ///
+    /// KS is the glossy reflectance (grey, or R,G,B, each in [0, 1]) and NS
+    /// the MTL's Phong exponent (lobe RMS slope √(2 / (NS + 2)): 10 is broad,
+    /// 100 polished, 1000 and above near-mirror). `--glossy NAME` alone is
+    /// 0.5,100. NAME is one of the family's materials (an unknown name is an
+    /// error that lists them), or an object's name, such as the Cornell box's
+    /// `floor`, which then gets a material of its own named after it. Where
+    /// Kd + Ks would exceed 1 in a channel, Kd is scaled down, its colour kept,
+    /// and the change is printed. The config then sets mode = "directional"
+    /// (pass `--mode diffuse` to the solver to fold Ks into Kd instead): a
+    /// directional solve shows the reflections but is far slower than a
+    /// diffuse one (the glossy Cornell box at medium: 310 s against about 2 s
+    /// diffuse on two cores, docs/benchmarks.md).
+    #[arg(long, value_name = "NAME[=KS,NS]")]
+    glossy: Vec<GlossyRequest>,
 }
 
 fn main() -> anyhow::Result<()> {
@@ -41,7 +59,10 @@ fn main() -> anyhow::Result<()> {
     let triangles = args
         .triangles
         .unwrap_or_else(|| args.family.default_triangles());
-    let scene = generate(args.family, triangles, args.seed)?;
+    let mut scene = generate(args.family, triangles, args.seed)?;
+    for note in glossy::apply(&mut scene, args.family.name(), &args.glossy)? {
+        println!("{note}");
+    }
     let stem = args.name.unwrap_or_else(|| args.family.name().to_owned());
     let paths = write_scene(&scene, &args.out, &stem)
         .with_context(|| format!("writing the scene into {}", args.out.display()))?;

@@ -156,9 +156,10 @@ pub fn generate(params: Params) -> Scene {
         ("seat", [0.2, 0.25, 0.5]),
     ] {
         materials.push(Material {
-            name,
+            name: name.into(),
             kd,
             ke: [0.0; 3],
+            glossy: None,
         });
     }
     let n = params.rooms;

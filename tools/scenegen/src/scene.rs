@@ -1,9 +1,11 @@
 //! A generated scene and its files: `NAME.obj` (triangles, `vn` where a
 //! surface is smooth), `NAME.mtl` (Kd reflectance, Ke emitted radiance in
-//! W·sr⁻¹·m⁻², linear RGB, one-sided toward the winding's front) and
-//! `NAME.toml`, the solver's scene config (solver/src/scene/config.rs), which
-//! states the units (millimetres: `units_per_metre = 1000`), +y up, a camera
-//! inside the scene and, for the daylit families, a `[sun]` and a `[sky]`.
+//! W·sr⁻¹·m⁻², linear RGB, one-sided toward the winding's front; Ks and Ns
+//! for a material made glossy by [`crate::glossy`]) and `NAME.toml`, the
+//! solver's scene config (solver/src/scene/config.rs), which states the units
+//! (millimetres: `units_per_metre = 1000`), +y up, the mode (`directional`
+//! when a material is glossy, else `diffuse`), a camera inside the scene and,
+//! for the daylit families, a `[sun]` and a `[sky]`.
 
 use crate::mesh::{length, Mesh, Vec3};
 use anyhow::Context;
@@ -15,11 +17,29 @@ use std::path::{Path, PathBuf};
 /// A material as the MTL file states it.
 #[derive(Clone, Debug)]
 pub struct Material {
-    pub name: &'static str,
-    /// Diffuse reflectance, linear RGB, in [0, 1).
+    /// The MTL's `newmtl` name (a `String`: `--glossy` may name a new
+    /// material after the object it splits off, [`crate::glossy`]).
+    pub name: String,
+    /// Diffuse reflectance, linear RGB, in [0, 1); with [`Material::glossy`],
+    /// Kd + Ks ≤ 1 per channel.
     pub kd: [f64; 3],
     /// Emitted radiance, W·sr⁻¹·m⁻² (zero for a reflector).
     pub ke: [f64; 3],
+    /// The glossy lobe (`Ks`, `Ns`); `None` writes `Ks 0 0 0`, as every
+    /// family does unless `--glossy` names the material.
+    pub glossy: Option<Glossy>,
+}
+
+/// A material's glossy part as the MTL states it: the solver's
+/// `--mode directional` reflects Ks into a lobe of RMS slope
+/// α = √(2 / (Ns + 2)) (docs/guide.md, "Glossy surfaces").
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Glossy {
+    /// Glossy (specular) reflectance, linear RGB, in [0, 1].
+    pub ks: [f64; 3],
+    /// The Phong exponent: 0 is broad, hundreds are polished, thousands
+    /// near-mirrors.
+    pub ns: f64,
 }
 
 /// The initial camera written to the TOML config (scene coordinates, mm).
@@ -90,6 +110,14 @@ pub struct Scene {
     pub materials: Vec<Material>,
     pub camera: Camera,
     pub lights: Lights,
+}
+
+impl Scene {
+    /// Whether any material has a glossy part (the config then asks for
+    /// `mode = "directional"`).
+    pub fn is_glossy(&self) -> bool {
+        self.materials.iter().any(|m| m.glossy.is_some())
+    }
 }
 
 /// Where [`write_scene`] put the three files.
@@ -164,12 +192,26 @@ pub fn mtl_text(scene: &Scene) -> String {
         "# Kd: diffuse reflectance (linear RGB). Ke: emitted radiance, W*sr^-1*m^-2\n\
          # (linear RGB), one-sided toward the face's front.\n",
     );
+    // Only a scene with a glossy material says so, so that the others' files
+    // stay as they were.
+    if scene.is_glossy() {
+        s.push_str(
+            "# Ks: glossy reflectance (linear RGB), Ns: its Phong exponent; solve with\n\
+             # --mode directional (the config sets it) to see the reflections.\n",
+        );
+    }
     for m in &scene.materials {
         let _ = writeln!(
             s,
-            "\nnewmtl {}\nKd {} {} {}\nKs 0 0 0",
+            "\nnewmtl {}\nKd {} {} {}",
             m.name, m.kd[0], m.kd[1], m.kd[2]
         );
+        match &m.glossy {
+            Some(g) => {
+                let _ = writeln!(s, "Ks {} {} {}\nNs {}", g.ks[0], g.ks[1], g.ks[2], g.ns);
+            }
+            None => s.push_str("Ks 0 0 0\n"),
+        }
         if m.ke.iter().any(|&e| e > 0.0) {
             let _ = writeln!(s, "Ke {} {} {}", m.ke[0], m.ke[1], m.ke[2]);
         }
@@ -185,7 +227,7 @@ pub fn toml_text(scene: &Scene, obj_name: &str) -> String {
          geometry = [\"{obj_name}\"]\n\
          units_per_metre = 1000      # the OBJ is in millimetres\n\
          up = \"y\"\n\
-         mode = \"diffuse\"            # every material has Ks = 0\n\n\
+         {}\n\n\
          [camera]\n\
          eye = [{:.1}, {:.1}, {:.1}]\n\
          target = [{:.1}, {:.1}, {:.1}]\n\
@@ -194,6 +236,7 @@ pub fn toml_text(scene: &Scene, obj_name: &str) -> String {
          width = 512\n\
          height = 512\n",
         scene.description,
+        mode_line(scene),
         c.eye[0],
         c.eye[1],
         c.eye[2],
@@ -204,6 +247,16 @@ pub fn toml_text(scene: &Scene, obj_name: &str) -> String {
     );
     s.push_str(&lights_text(&scene.lights));
     s
+}
+
+/// The config's `mode`: diffuse unless a material is glossy, whose lobe only
+/// the directional solve shows (a diffuse solve folds Ks into Kd).
+fn mode_line(scene: &Scene) -> &'static str {
+    if scene.is_glossy() {
+        "mode = \"directional\"        # glossy materials (Ks, Ns in the MTL)"
+    } else {
+        "mode = \"diffuse\"            # every material has Ks = 0"
+    }
 }
 
 /// The `[sun]` and `[sky]` tables (empty when the scene has neither, so the

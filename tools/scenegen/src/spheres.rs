@@ -109,10 +109,10 @@ pub fn generate(params: Params) -> Scene {
         ),
         mesh,
         materials: vec![
-            Material { name: "wall", kd: [0.7, 0.68, 0.65], ke: [0.0; 3] },
-            Material { name: "sphere", kd: [0.7, 0.3, 0.2], ke: [0.0; 3] },
-            Material { name: "cylinder", kd: [0.2, 0.4, 0.7], ke: [0.0; 3] },
-            Material { name: "light", kd: [0.78, 0.78, 0.78], ke: [10.0, 10.0, 10.0] },
+            Material { name: "wall".into(), kd: [0.7, 0.68, 0.65], ke: [0.0; 3], glossy: None },
+            Material { name: "sphere".into(), kd: [0.7, 0.3, 0.2], ke: [0.0; 3], glossy: None },
+            Material { name: "cylinder".into(), kd: [0.2, 0.4, 0.7], ke: [0.0; 3], glossy: None },
+            Material { name: "light".into(), kd: [0.78, 0.78, 0.78], ke: [10.0, 10.0, 10.0], glossy: None },
         ],
         // Inside, near the z = 0 wall at eye height, looking across the room.
         camera: Camera {

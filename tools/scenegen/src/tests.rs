@@ -331,7 +331,7 @@ fn the_emissive_body_is_the_only_emitter_and_its_counts_fit() {
         .materials
         .iter()
         .filter(|m| m.ke.iter().any(|&k| k > 0.0))
-        .map(|m| m.name)
+        .map(|m| m.name.as_str())
         .collect();
     assert_eq!(emitting, ["body"]);
     assert!(scene.lights.sun.is_none() && scene.lights.sky.is_none());

@@ -165,10 +165,11 @@ pub fn generate(params: Params) -> Scene {
         };
         add_box(&mut mesh, &spec, &placement, Closure::Outward);
     }
-    let material = |name, kd| Material {
-        name,
+    let material = |name: &str, kd| Material {
+        name: name.into(),
         kd,
         ke: [0.0; 3],
+        glossy: None,
     };
     let bearing = SUN_BEARING_DEG.to_radians();
     Scene {

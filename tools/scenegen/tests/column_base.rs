@@ -43,10 +43,11 @@ fn scene() -> Scene {
         56,
         13,
     );
-    let material = |name, kd| Material {
-        name,
+    let material = |name: &str, kd| Material {
+        name: name.into(),
         kd,
         ke: [0.0; 3],
+        glossy: None,
     };
     Scene {
         description: "one column on a floor in the sun (column-base leak test)".into(),
