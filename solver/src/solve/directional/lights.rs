@@ -55,22 +55,37 @@ impl DirLights<'_> {
         v: u32,
         scratch: &mut DirScratch,
     ) -> ReceivedSh {
+        let mut coefficients = Reflector::of_vertex(mesh, self.tables, kd, v).zeroed();
+        let (visible, rays) = self.receive_into(mesh, kd, v, scratch, &mut coefficients);
+        ReceivedSh {
+            coefficients,
+            visible,
+            rays,
+        }
+    }
+
+    /// [`Self::receive`] into `out`, the vertex's slot, which it overwrites;
+    /// the visible samples and the rays traced.
+    pub(super) fn receive_into(
+        &self,
+        mesh: &Mesh,
+        kd: &[DVec3],
+        v: u32,
+        scratch: &mut DirScratch,
+        out: &mut [f64],
+    ) -> (u32, u32) {
         let reflector = Reflector::of_vertex(mesh, self.tables, kd, v);
-        let mut coefficients = reflector.zeroed();
+        out.fill(0.0);
         if !reflector.reflects() {
-            return ReceivedSh::nothing(coefficients);
+            return (0, 0);
         }
         let at = ReceivingPoint::of_vertex(mesh, v, self.lights.occluder.scene_epsilon());
         let arrival = self
             .lights
             .visit(&at, reflector.sky_rays(), &mut |toward, irradiance| {
-                reflector.add(&mut coefficients, toward, irradiance, &mut scratch.lobe);
+                reflector.add(out, toward, irradiance, &mut scratch.lobe);
             });
-        ReceivedSh {
-            coefficients,
-            visible: arrival.visible,
-            rays: arrival.rays,
-        }
+        (arrival.visible, arrival.rays)
     }
 }
 
@@ -93,6 +108,22 @@ impl DirSource<'_> {
         match self {
             DirSource::Patch(shot) => shot.receive(mesh, kd, v, scratch),
             DirSource::Lights(lights) => lights.receive(mesh, kd, v, scratch),
+        }
+    }
+
+    /// [`Self::receive`] into `out`, the vertex's slot, which it overwrites;
+    /// the visible samples and the rays traced.
+    pub(super) fn receive_into(
+        &self,
+        mesh: &Mesh,
+        kd: &[DVec3],
+        v: u32,
+        scratch: &mut DirScratch,
+        out: &mut [f64],
+    ) -> (u32, u32) {
+        match self {
+            DirSource::Patch(shot) => shot.receive_into(mesh, kd, v, scratch, out),
+            DirSource::Lights(lights) => lights.receive_into(mesh, kd, v, scratch, out),
         }
     }
 

@@ -227,11 +227,31 @@ impl<'a> DirShot<'a> {
         v: u32,
         scratch: &mut DirScratch,
     ) -> ReceivedSh {
+        let mut out = Reflector::of_vertex(mesh, self.tables, kd, v).zeroed();
+        let (visible, rays) = self.receive_into(mesh, kd, v, scratch, &mut out);
+        ReceivedSh {
+            coefficients: out,
+            visible,
+            rays,
+        }
+    }
+
+    /// [`Self::receive`] into `out`, the vertex's slot (its coefficients,
+    /// then E/π on a textured surface), which it overwrites; the visible
+    /// samples and the rays traced.
+    pub(super) fn receive_into(
+        &self,
+        mesh: &Mesh,
+        kd: &[DVec3],
+        v: u32,
+        scratch: &mut DirScratch,
+        out: &mut [f64],
+    ) -> (u32, u32) {
         let surface = mesh.vertices[v as usize].surface;
         let reflector = Reflector::of_vertex(mesh, self.tables, kd, v);
-        let mut out = reflector.zeroed();
+        out.fill(0.0);
         if surface == self.shot.source_surface || !reflector.reflects() {
-            return ReceivedSh::nothing(out);
+            return (0, 0);
         }
         // Where the light's direction matters (a glossy receiver, or a
         // source whose radiance depends on direction), samples by solid
@@ -284,13 +304,9 @@ impl<'a> DirShot<'a> {
                 .map_or(unshot, |&scale| unshot * scale);
             // Ringing of a truncated lobe below zero is not light to shoot.
             let irradiance = unshot.max(DVec3::ZERO) * PI * share;
-            reflector.add(&mut out, toward_source, irradiance, &mut scratch.lobe);
+            reflector.add(out, toward_source, irradiance, &mut scratch.lobe);
         }
         scratch.sampling.samples = samples;
-        ReceivedSh {
-            coefficients: out,
-            visible,
-            rays,
-        }
+        (visible, rays)
     }
 }

@@ -6,7 +6,7 @@
 
 use super::field::{DirField, SolverParts};
 use super::lights::{DirLights, DirSource};
-use super::receive::{DirScratch, DirShot, ReceivedSh, Tables};
+use super::receive::{DirScratch, DirShot, Tables};
 use super::{quadrant_scale, Directional, SourceChoice};
 use crate::mesh::Mesh;
 use crate::solve::checkpoint::precision::round_to_kept;
@@ -249,30 +249,49 @@ pub(super) fn receive_all(
     shot: &DirSource,
     recorded: bool,
 ) -> u64 {
-    let results: Vec<ReceivedSh> = (0..mesh.vertices.len() as u32)
+    // Each vertex receives straight into its slot of `received`: a buffer
+    // a receiver was 16 KB at order 25, allocated and freed every shot
+    // (docs/lab/glossy-profile.md: 14.5% of a glossy solve in allocation
+    // and page faults).
+    let count = mesh.vertices.len();
+    let mut slots: Vec<&mut [f64]> = Vec::with_capacity(count);
+    let mut rest = d.received.as_mut_slice();
+    for v in 0..count {
+        let end = d
+            .vertex_offset
+            .get(v + 1)
+            .copied()
+            .unwrap_or(d.vertex_offset[v] + rest.len());
+        let (slot, tail) = rest.split_at_mut(end - d.vertex_offset[v]);
+        slots.push(slot);
+        rest = tail;
+    }
+    let results: Vec<(u32, u32)> = slots
         .into_par_iter()
-        .map_init(DirScratch::default, |scratch, v| {
-            shot.receive(mesh, kd, v, scratch)
+        .enumerate()
+        .map_init(DirScratch::default, |scratch, (v, slot)| {
+            shot.receive_into(mesh, kd, v as u32, scratch, slot)
         })
         .collect();
     let mut rays = 0u64;
-    for (v, r) in results.into_iter().enumerate() {
-        let o = d.vertex_offset[v];
-        for (k, c) in r.coefficients.iter().enumerate() {
+    for (v, (visible, traced)) in results.into_iter().enumerate() {
+        let range = d.vertex_slot(mesh, v);
+        for k in range.clone() {
+            let c = d.received[k];
             // The state keeps 40 mantissa bits (`checkpoint/precision.rs`).
-            d.radiance[o + k] = round_to_kept(d.radiance[o + k] + c);
-            d.received[o + k] = *c;
+            d.radiance[k] = round_to_kept(d.radiance[k] + c);
             if recorded {
-                d.direct[o + k] += c;
+                d.direct[k] += c;
             }
         }
-        field.visible[v] = r.visible;
-        rays += r.rays as u64;
+        field.visible[v] = visible;
+        rays += traced as u64;
         // The diffuse proxies (mean radiance c₀₀ Y₀₀, or E/π on a textured
         // surface) the L = 0 refinement test reads.
         let surface = mesh.vertices[v].surface as usize;
+        let o = range.start;
         field.radiance[v] = d.diffuse_proxy(surface, &d.radiance[o..]);
-        field.received[v] = d.diffuse_proxy(surface, &r.coefficients);
+        field.received[v] = d.diffuse_proxy(surface, &d.received[range]);
     }
     rays
 }
