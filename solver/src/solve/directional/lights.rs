@@ -46,25 +46,8 @@ pub(in crate::solve) struct DirLights<'a> {
 }
 
 impl DirLights<'_> {
-    /// The lights' ΔL at vertex `v` as SH coefficients of its surface's
-    /// order.
-    pub(super) fn receive(
-        &self,
-        mesh: &Mesh,
-        kd: &[DVec3],
-        v: u32,
-        scratch: &mut DirScratch,
-    ) -> ReceivedSh {
-        let mut coefficients = Reflector::of_vertex(mesh, self.tables, kd, v).zeroed();
-        let (visible, rays) = self.receive_into(mesh, kd, v, scratch, &mut coefficients);
-        ReceivedSh {
-            coefficients,
-            visible,
-            rays,
-        }
-    }
-
-    /// [`Self::receive`] into `out`, the vertex's slot, which it overwrites;
+    /// What vertex `v` receives of the lights, as SH coefficients of its
+    /// surface's order, into `out`, the vertex's slot, which it overwrites;
     /// the visible samples and the rays traced.
     pub(super) fn receive_into(
         &self,
@@ -105,9 +88,12 @@ impl DirSource<'_> {
         v: u32,
         scratch: &mut DirScratch,
     ) -> ReceivedSh {
-        match self {
-            DirSource::Patch(shot) => shot.receive(mesh, kd, v, scratch),
-            DirSource::Lights(lights) => lights.receive(mesh, kd, v, scratch),
+        let mut coefficients = Reflector::of_vertex(mesh, self.tables(), kd, v).zeroed();
+        let (visible, rays) = self.receive_into(mesh, kd, v, scratch, &mut coefficients);
+        ReceivedSh {
+            coefficients,
+            visible,
+            rays,
         }
     }
 

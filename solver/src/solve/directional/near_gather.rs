@@ -142,14 +142,16 @@ impl<'a> NearGather<'a> {
                     .map(|i| dir_shot(&sources[i], d, tables, wanted[i] as usize, mesh))
                     .collect();
                 let mut rays = 0;
+                let mut got = Vec::new();
                 let mut gather = |v: u32, scale: f64, out: &mut Vec<f64>| {
                     for s in &shots {
-                        let got = s.receive(mesh, self.kd, v, scratch);
-                        out.resize(got.coefficients.len(), 0.0);
-                        for (o, c) in out.iter_mut().zip(&got.coefficients) {
+                        got.resize(d.vertex_slot(mesh, v as usize).len(), 0.0);
+                        let (_, traced) = s.receive_into(mesh, self.kd, v, scratch, &mut got);
+                        out.resize(got.len(), 0.0);
+                        for (o, c) in out.iter_mut().zip(&got) {
                             *o += scale * c;
                         }
-                        rays += got.rays as u64;
+                        rays += traced as u64;
                     }
                 };
                 let mut correction = Vec::new();

@@ -219,26 +219,9 @@ impl<'a> DirShot<'a> {
         }
     }
 
-    /// ΔL of vertex `v` as SH coefficients of its surface's order.
-    pub(super) fn receive(
-        &self,
-        mesh: &Mesh,
-        kd: &[DVec3],
-        v: u32,
-        scratch: &mut DirScratch,
-    ) -> ReceivedSh {
-        let mut out = Reflector::of_vertex(mesh, self.tables, kd, v).zeroed();
-        let (visible, rays) = self.receive_into(mesh, kd, v, scratch, &mut out);
-        ReceivedSh {
-            coefficients: out,
-            visible,
-            rays,
-        }
-    }
-
-    /// [`Self::receive`] into `out`, the vertex's slot (its coefficients,
-    /// then E/π on a textured surface), which it overwrites; the visible
-    /// samples and the rays traced.
+    /// ΔL of vertex `v` as SH coefficients of its surface's order, into
+    /// `out`, the vertex's slot (its coefficients, then E/π on a textured
+    /// surface), which it overwrites; the visible samples and the rays traced.
     pub(super) fn receive_into(
         &self,
         mesh: &Mesh,

@@ -118,27 +118,31 @@ impl Solver {
             let end = (start + BLOCK).min(mesh.vertices.len());
             (start as u32..end as u32)
                 .into_par_iter()
-                .map_init(DirScratch::default, |scratch, v| {
-                    let mut sum = vec![0.0; d.vertex_slot(mesh, v as usize).len()];
-                    if let Some(lights) = &lights {
-                        let got = lights.receive(mesh, kd, v, scratch);
-                        for (s, c) in sum.iter_mut().zip(&got.coefficients) {
-                            *s += c;
+                .map_init(
+                    || (DirScratch::default(), Vec::new()),
+                    |(scratch, got), v| {
+                        let mut sum = vec![0.0; d.vertex_slot(mesh, v as usize).len()];
+                        got.resize(sum.len(), 0.0);
+                        if let Some(lights) = &lights {
+                            lights.receive_into(mesh, kd, v, scratch, got);
+                            for (s, c) in sum.iter_mut().zip(got.iter()) {
+                                *s += c;
+                            }
                         }
-                    }
-                    for (i, r) in recorded.iter().enumerate() {
-                        let shot = if v >= r.receivers {
-                            &replay[i]
-                        } else {
-                            &direct[i]
-                        };
-                        let got = shot.receive(mesh, kd, v, scratch);
-                        for (s, c) in sum.iter_mut().zip(&got.coefficients) {
-                            *s += c;
+                        for (i, r) in recorded.iter().enumerate() {
+                            let shot = if v >= r.receivers {
+                                &replay[i]
+                            } else {
+                                &direct[i]
+                            };
+                            shot.receive_into(mesh, kd, v, scratch, got);
+                            for (s, c) in sum.iter_mut().zip(got.iter()) {
+                                *s += c;
+                            }
                         }
-                    }
-                    sum
-                })
+                        sum
+                    },
+                )
                 .collect_into_vec(&mut sums);
             for (v, sum) in (start..end).zip(&sums) {
                 let o = d.vertex_offset[v];
