@@ -755,3 +755,74 @@ fn the_one_call_gathers_refuse_a_scene_with_lights_naming_the_method_that_lights
         "{text}"
     );
 }
+
+/// The side walls of an upright prism of `segments` sides, radius `radius`
+/// and height `height`, standing on the floor at (x, z) = (0, 0), each wall
+/// facing out (no caps: the floor under it is the covered piece).
+fn column(radius: f64, height: f64, segments: usize) -> Vec<(Vec<DVec3>, usize)> {
+    let at = |k: usize, y: f64| {
+        let a = 2.0 * PI * k as f64 / segments as f64;
+        DVec3::new(radius * a.cos(), y, radius * a.sin())
+    };
+    (0..segments)
+        .map(|k| {
+            (
+                vec![at(k, 0.0), at(k, height), at(k + 1, height), at(k + 1, 0.0)],
+                0,
+            )
+        })
+        .collect()
+}
+
+#[test]
+fn the_floor_at_a_sunlit_column_base_takes_the_sun_on_its_sunny_side_only() {
+    // A column 0.3 m in radius and 4 m high on an open floor, the sun at 55°,
+    // stopped after the lights' shot: each floor vertex on the contact ring
+    // holds the direct light alone, exactly ρ E⊥ sin 55°/π where the column
+    // does not stand between it and the sun, 0 where it does. A ring vertex at
+    // bearing φ from the sun's is in the open when cos φ > 0 (the sun ray
+    // leaves the column), in the column's shadow when cos φ < 0; within 10°
+    // of the terminator the ray grazes the walls and is left out. The
+    // visible pieces the contact cut makes share samples only within
+    // themselves (`twins::contact_pieces`): a ring vertex that took a sample
+    // from a piece across the column drew its shadow on the sunny side
+    // (docs/lab/lights-atrium.md, "Column bases"). Tolerance: the disc's
+    // 16 samples about 55° move E by at most 2e-3 (as in
+    // `sun_lights_an_open_plane_by_the_cosine_law_and_a_shadow_has_its_area`).
+    let (elevation, irradiance, radius) = (55.0f64, 100.0, 0.3);
+    let lit = RHO * irradiance * elevation.to_radians().sin() / PI;
+    let lights = sun_lights(elevation, irradiance);
+    let toward = lights.sun.as_ref().map(|s| s.direction()).unwrap();
+    let azimuth = toward.z.atan2(toward.x);
+    let scene = open_floor(4.0, column(radius, 4.0, 24), lights);
+    let mut solver = Solver::new(&scene, &settings()).unwrap();
+    solver.step();
+    let (mut sunny, mut shaded) = (0, 0);
+    let offset = solver.offset();
+    for (v, vertex) in solver.mesh().vertices.iter().enumerate() {
+        let p = vertex.position + offset;
+        let on_ring = p.y.abs() < 1e-9 && (p.x.hypot(p.z) - radius).abs() < 1e-6;
+        // The visible pieces are the floor's smooth ones; the covered piece
+        // under the column stays flat (`mesh::contact`).
+        let surface = &solver.mesh().surfaces[vertex.surface as usize];
+        if !on_ring || surface.polygon != 0 || surface.corner_normals.is_none() {
+            continue;
+        }
+        let cos_phi = (p.z.atan2(p.x) - azimuth).cos();
+        let l = solver.vertex_radiance()[v].x;
+        if cos_phi > 10f64.to_radians().sin() {
+            sunny += 1;
+            assert!(
+                (l / lit - 1.0).abs() < 2e-3,
+                "sunny ring vertex at {p}: {l}, truth {lit}"
+            );
+        } else if cos_phi < -(10f64.to_radians().sin()) {
+            shaded += 1;
+            assert!(l < 1e-3 * lit, "shaded ring vertex at {p}: {l}, truth 0");
+        }
+    }
+    assert!(
+        sunny >= 8 && shaded >= 8,
+        "{sunny} sunny and {shaded} shaded ring vertices"
+    );
+}

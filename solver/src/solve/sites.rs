@@ -48,7 +48,9 @@
 //! vertex), only
 //! on points none of whose copies lies on a patch that refinement may
 //! split (an interpolated vertex must never be an edge's end that
-//! refinement tests), and only on points that are not hidden. Points that
+//! refinement tests), and only on points that are not hidden. A piece of a
+//! contact cut is a connected surface of its own: its points take no site
+//! across the cut (`twins::contact_pieces`). Points that
 //! must receive anyway (on a larger patch of the same surface) serve as
 //! sites for free. `site_angle = 0` turns it off.
 
@@ -403,7 +405,8 @@ fn linear_weights(kernels: &[f64], offsets: &[[f64; 2]]) -> Option<Vec<f64>> {
 
 /// The smooth surfaces of `mesh` joined where they share a point of one
 /// material (the same position to the bit: `scene::smooth` snaps a group's
-/// corners to one position). Twins alone would not do: a point's shading
+/// corners to one position); each piece of a contact cut stays a component of
+/// its own. Twins alone would not do: a point's shading
 /// normal can differ in its last bits between the polygons around it, and
 /// then they are not twins.
 fn connected_surfaces(mesh: &Mesh) -> UnionFind {
@@ -416,11 +419,11 @@ fn connected_surfaces(mesh: &Mesh) -> UnionFind {
             vertex.position.to_array().map(f64::to_bits),
         )
     };
+    let piece = super::twins::contact_pieces(mesh);
     let mut smooth: Vec<u32> = (0..mesh.vertices.len() as u32)
         .filter(|&v| {
-            mesh.surfaces[mesh.vertices[v as usize].surface as usize]
-                .corner_normals
-                .is_some()
+            let s = mesh.vertices[v as usize].surface as usize;
+            mesh.surfaces[s].corner_normals.is_some() && !piece[s]
         })
         .collect();
     smooth.sort_unstable_by_key(|&v| key(v));

@@ -20,9 +20,10 @@
 //! that could receive differently; vertices that refinement adds later
 //! receive on their own. The pieces of a polygon cut along contact lines
 //! (`mesh::contact`), which share their seams as a smooth surface does, are
-//! left alone: their seam points come from separate clipping arithmetic, so
-//! which of them agree to the bit is an accident of rounding (the Cornell
-//! box's solves are unchanged, and stay the same when the scene is moved).
+//! left alone ([`contact_pieces`]): their seam points come from separate
+//! clipping arithmetic, so which of them agree to the bit is an accident of
+//! rounding (the Cornell box's solves are unchanged, and stay the same when
+//! the scene is moved).
 //!
 //! Directional mode builds none: its coefficients live in each polygon's
 //! frame (`directional.rs`).
@@ -42,6 +43,25 @@ pub struct Twins {
     copies: usize,
 }
 
+/// Per surface of `mesh`, whether it is one of the pieces that a contact
+/// cut (`mesh::contact`) made of its input polygon. Radiance may jump across
+/// the seams between pieces: a piece may lie under what stands on the
+/// polygon, or on the far side of a shadow line, so no sample is shared
+/// across them (a visible point that took a sample from the covered piece
+/// beside it would go as dark as the floor under a column,
+/// docs/lab/lights-atrium.md, "Column bases").
+pub(super) fn contact_pieces(mesh: &Mesh) -> Vec<bool> {
+    // Per input polygon, how many surfaces it became.
+    let mut pieces: std::collections::HashMap<usize, u32> = Default::default();
+    for surface in &mesh.surfaces {
+        *pieces.entry(surface.polygon).or_default() += 1;
+    }
+    mesh.surfaces
+        .iter()
+        .map(|s| pieces[&s.polygon] > 1)
+        .collect()
+}
+
 impl Twins {
     /// The copies among `mesh`'s vertices (see the module documentation);
     /// `hidden[v]` is vertex `v`'s hiddenness.
@@ -56,16 +76,11 @@ impl Twins {
                 hidden.get(v as usize).copied().unwrap_or(false),
             )
         };
-        // Per input polygon, how many surfaces it became: more than one are
-        // the pieces of a contact cut.
-        let mut pieces: std::collections::HashMap<usize, u32> = Default::default();
-        for surface in &mesh.surfaces {
-            *pieces.entry(surface.polygon).or_default() += 1;
-        }
+        let piece = contact_pieces(mesh);
         let mut smooth: Vec<u32> = (0..mesh.vertices.len() as u32)
             .filter(|&v| {
-                let surface = &mesh.surfaces[mesh.vertices[v as usize].surface as usize];
-                surface.corner_normals.is_some() && pieces[&surface.polygon] == 1
+                let s = mesh.vertices[v as usize].surface as usize;
+                mesh.surfaces[s].corner_normals.is_some() && !piece[s]
             })
             .collect();
         // Ties by id, so each run starts at its lowest vertex.
