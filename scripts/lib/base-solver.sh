@@ -26,4 +26,9 @@ build_base_solver() {
     echo "== $(basename "$0" .sh): building the base solver ($base), release"
     (cd "$src" && CARGO_TARGET_DIR="$target" cargo build --release --locked -p solver)
     cp "$target/release/solver" "$work/base-solver"
+    # Both trees' workspace crates hash to the same artifacts in one target
+    # folder, and their fingerprints now name the base's sources, so the next
+    # build of this tree would find the base's solver fresh and keep it:
+    # forget them, so that this tree's are compiled from its own sources.
+    CARGO_TARGET_DIR="$target" cargo clean --release -p solver -p solution
 }
