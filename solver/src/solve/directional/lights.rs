@@ -24,6 +24,7 @@
 //! first of the replayed shots ([`DirSource::Lights`]).
 
 use super::field::{DirField, SolverParts};
+use super::group::DirGroup;
 use super::receive::{DirScratch, DirShot, ReceivedSh, Reflector, Tables};
 use super::shot::{finish_shot, receive_all};
 use super::Directional;
@@ -76,6 +77,8 @@ impl DirLights<'_> {
 /// lights'.
 pub(in crate::solve) enum DirSource<'a> {
     Patch(DirShot<'a>),
+    /// A group of patches of order 0 (`directional/group.rs`).
+    Group(DirGroup<'a>),
     Lights(DirLights<'a>),
 }
 
@@ -109,6 +112,7 @@ impl DirSource<'_> {
     ) -> (u32, u32) {
         match self {
             DirSource::Patch(shot) => shot.receive_into(mesh, kd, v, scratch, out),
+            DirSource::Group(group) => group.receive_into(mesh, kd, v, scratch, out),
             DirSource::Lights(lights) => lights.receive_into(mesh, kd, v, scratch, out),
         }
     }
@@ -116,6 +120,7 @@ impl DirSource<'_> {
     pub(super) fn tables(&self) -> &Tables {
         match self {
             DirSource::Patch(shot) => shot.tables,
+            DirSource::Group(group) => group.tables,
             DirSource::Lights(lights) => lights.tables,
         }
     }

@@ -8,7 +8,7 @@ use super::Directional;
 use crate::brdf::GlossyLobe;
 use crate::mesh::Mesh;
 use crate::solve::regions::QuadrantScale;
-use crate::solve::shoot::{visible_samples, SampleBy, SamplePool, SampleScratch, Shot};
+use crate::solve::shoot::{visible_samples, SampleBy, SamplePool, SampleScratch, Scratch, Shot};
 use glam::DVec3;
 use solution::sh::{self, coefficient_count, Y00};
 use std::f64::consts::PI;
@@ -31,6 +31,8 @@ pub(super) struct DirScratch {
     /// Per visible sample, its scale of the unshot radiance when the source
     /// shoots by quadrants ([`QuadrantScale::sample_scales`]); empty otherwise.
     scales: Vec<DVec3>,
+    /// A grouped shot's cut, rays and flags (`directional/group.rs`).
+    pub(super) group: Scratch,
 }
 
 /// The buffers of [`Reflector::add`].
