@@ -11,7 +11,7 @@
 //! it carries ΔE = π · colour · W / R ([`GroupShot::visit_at`]): the diffuse
 //! estimate ray by ray, unbiased for the members' summed irradiance. The
 //! receiver reflects each arriving ray's ΔE from its direction as it
-//! reflects a patch shot's sample ([`Reflector::add`]): its diffuse part
+//! reflects a patch shot's sample (`Reflector::add`): its diffuse part
 //! Kd · ΔE / π as c₀₀, its glossy lobe by the ray's incidence. So the
 //! reflected power is Ks × the incident power ray by ray, as in a patch
 //! shot, and the group's irradiance is the diffuse group's estimate.
@@ -32,13 +32,12 @@
 //!   before (a recorded group's replay would need its members' SH kept).
 //!   An emitter's later shots, of reflected light, group as a reflector's.
 
-use super::receive::{DirScratch, Reflector, Tables};
+use super::receive::{receive_arrivals, DirScratch, Tables};
 use super::Directional;
 use crate::mesh::Mesh;
 use crate::settings::Shooters;
 use crate::solve::checkpoint::precision::round_to_kept;
 use crate::solve::group_shot::{GroupShot, GroupSources};
-use crate::solve::shoot::ReceivingPoint;
 use crate::solve::Solver;
 use glam::DVec3;
 use solution::sh::Y00;
@@ -63,16 +62,18 @@ impl DirGroup<'_> {
         scratch: &mut DirScratch,
         out: &mut [f64],
     ) -> (u32, u32) {
-        let reflector = Reflector::of_vertex(mesh, self.tables, kd, v);
-        out.fill(0.0);
-        if !reflector.reflects() {
-            return (0, 0);
-        }
-        let at = ReceivingPoint::of_vertex(mesh, v, self.group.occluder.scene_epsilon());
+        let epsilon = self.group.occluder.scene_epsilon();
         let DirScratch { group, lobe, .. } = scratch;
-        self.group.visit_at(&at, group, &mut |toward, irradiance| {
-            reflector.add(out, toward, irradiance, lobe);
-        })
+        receive_arrivals(
+            mesh,
+            self.tables,
+            kd,
+            v,
+            epsilon,
+            out,
+            lobe,
+            |at, _, sink| self.group.visit_at(at, group, sink),
+        )
     }
 }
 

@@ -25,14 +25,13 @@
 
 use super::field::{DirField, SolverParts};
 use super::group::DirGroup;
-use super::receive::{DirScratch, DirShot, ReceivedSh, Reflector, Tables};
+use super::receive::{receive_arrivals, DirScratch, DirShot, ReceivedSh, Reflector, Tables};
 use super::shot::{finish_shot, receive_all};
 use super::Directional;
 use crate::mesh::Mesh;
 use crate::solve::lights::LightShot;
 use crate::solve::pipeline::{Shooting, Source, Transport};
 use crate::solve::refine::{self, Criteria, Refined, DARK_FLOOR};
-use crate::solve::shoot::ReceivingPoint;
 use crate::solve::Solver;
 use glam::DVec3;
 use std::time::Instant;
@@ -58,18 +57,21 @@ impl DirLights<'_> {
         scratch: &mut DirScratch,
         out: &mut [f64],
     ) -> (u32, u32) {
-        let reflector = Reflector::of_vertex(mesh, self.tables, kd, v);
-        out.fill(0.0);
-        if !reflector.reflects() {
-            return (0, 0);
-        }
-        let at = ReceivingPoint::of_vertex(mesh, v, self.lights.occluder.scene_epsilon());
-        let arrival = self
-            .lights
-            .visit(&at, reflector.sky_rays(), &mut |toward, irradiance| {
-                reflector.add(out, toward, irradiance, &mut scratch.lobe);
-            });
-        (arrival.visible, arrival.rays)
+        let epsilon = self.lights.occluder.scene_epsilon();
+        let lobe = &mut scratch.lobe;
+        receive_arrivals(
+            mesh,
+            self.tables,
+            kd,
+            v,
+            epsilon,
+            out,
+            lobe,
+            |at, sky, sink| {
+                let arrival = self.lights.visit(at, sky, sink);
+                (arrival.visible, arrival.rays)
+            },
+        )
     }
 }
 

@@ -8,7 +8,9 @@ use super::Directional;
 use crate::brdf::GlossyLobe;
 use crate::mesh::Mesh;
 use crate::solve::regions::QuadrantScale;
-use crate::solve::shoot::{visible_samples, SampleBy, SamplePool, SampleScratch, Scratch, Shot};
+use crate::solve::shoot::{
+    visible_samples, ReceivingPoint, SampleBy, SamplePool, SampleScratch, Scratch, Shot,
+};
 use glam::DVec3;
 use solution::sh::{self, coefficient_count, Y00};
 use std::f64::consts::PI;
@@ -159,6 +161,34 @@ impl<'t> Reflector<'t> {
             o[2] += u * e.z;
         }
     }
+}
+
+/// What vertex `v` reflects of the light that `arrive` hands it ray by ray
+/// at its receiving point (for an occluder of scene epsilon `epsilon`):
+/// `arrive(at, sky_rays, sink)` calls `sink(toward, ΔE)` for each arrival,
+/// the unit direction toward the light and its irradiance, RGB, and returns
+/// its visible count and rays traced. Into `out`, the vertex's slot, which
+/// it overwrites; a vertex that reflects nothing receives nothing.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn receive_arrivals(
+    mesh: &Mesh,
+    tables: &Tables,
+    kd: &[DVec3],
+    v: u32,
+    epsilon: f64,
+    out: &mut [f64],
+    lobe: &mut LobeScratch,
+    arrive: impl FnOnce(&ReceivingPoint, u32, &mut dyn FnMut(DVec3, DVec3)) -> (u32, u32),
+) -> (u32, u32) {
+    let reflector = Reflector::of_vertex(mesh, tables, kd, v);
+    out.fill(0.0);
+    if !reflector.reflects() {
+        return (0, 0);
+    }
+    let at = ReceivingPoint::of_vertex(mesh, v, epsilon);
+    arrive(&at, reflector.sky_rays(), &mut |toward, irradiance| {
+        reflector.add(out, toward, irradiance, lobe);
+    })
 }
 
 /// One directional shot: the diffuse [`Shot`] (geometry, samples,
