@@ -492,12 +492,19 @@ impl<'a> GroupShot<'a> {
     /// module documentation, "Emitters' first shots"). Its visible counts
     /// stay out of `group_samples`, as any group's.
     pub fn recorded(mut self, settings: &crate::settings::SolverSettings) -> GroupShot<'a> {
-        let alone = (self.sources.len() as u64 * settings.samples as u64).min(u32::MAX as u64);
         self.sampled = false;
-        self.samples = (self.samples.saturating_mul(EMITTER_RAYS))
-            .min(alone as u32)
-            .max(self.samples);
+        self.samples = self.more_rays(EMITTER_RAYS, settings);
         self
+    }
+
+    /// `factor` times the group's rays per receiver, but never more than
+    /// its members would trace alone (`samples` each), nor fewer than a
+    /// group's.
+    pub fn more_rays(&self, factor: u32, settings: &crate::settings::SolverSettings) -> u32 {
+        let alone = (self.sources.len() as u64 * settings.samples as u64).min(u32::MAX as u64);
+        (self.samples.saturating_mul(factor))
+            .min(alone as u32)
+            .max(self.samples)
     }
 
     /// ΔL_v: the importance-sampled sum of the members' shots, far clusters
@@ -565,23 +572,23 @@ impl<'a> GroupShot<'a> {
 
     /// The incident light of the group at a receiving point ray by ray, for
     /// a receiver that reflects by direction (`directional/group.rs`):
-    /// `visit(toward, irradiance)` for each of `samples` rays that arrives,
+    /// `visit(toward, irradiance)` for each of `rays` rays that arrives,
     /// with the unit direction from the point to the ray's end on a member
-    /// and the ΔE it carries, RGB, π · colour · W / R. Their sum is π times
-    /// [`GroupShot::receive_at`]'s estimate before Kd (the same rays, no ray
-    /// share); with shadows off every ray arrives. Returns the visible count
-    /// (out of `group_samples`, as [`GroupShot::receive_at`]'s) and the rays
-    /// traced.
+    /// and the ΔE it carries, RGB, π · colour · W / R. With `rays` the
+    /// group's `samples`, their sum is π times [`GroupShot::receive_at`]'s
+    /// estimate before Kd (the same rays, no ray share); with shadows off
+    /// every ray arrives. Returns the visible count (out of
+    /// `group_samples`, as [`GroupShot::receive_at`]'s) and the rays traced.
     pub fn visit_at(
         &self,
         at: &ReceivingPoint,
         scratch: &mut Scratch,
+        rays: u32,
         visit: &mut dyn FnMut(DVec3, DVec3),
     ) -> (u32, u32) {
         let Some((total, _)) = self.cut(at, scratch) else {
             return (0, 0);
         };
-        let rays = self.samples;
         self.draw(at, scratch, total, rays);
         let scale = PI * total / rays as f64;
         let mut visible = 0;
@@ -606,10 +613,10 @@ impl<'a> GroupShot<'a> {
     /// A visible count of `rays` rays out of `group_samples`, for the
     /// refinement test.
     fn visible_count(&self, visible: u32, rays: u32) -> u32 {
-        if self.counted == self.samples {
+        if self.counted == self.samples && rays <= self.samples {
             visible * (self.samples / rays)
         } else {
-            visible * self.counted / rays
+            (visible as u64 * self.counted as u64 / rays as u64) as u32
         }
     }
 

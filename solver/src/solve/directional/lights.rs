@@ -67,8 +67,8 @@ impl DirLights<'_> {
             epsilon,
             out,
             lobe,
-            |at, sky, sink| {
-                let arrival = self.lights.visit(at, sky, sink);
+            |at, reflector, sink| {
+                let arrival = self.lights.visit(at, reflector.sky_rays(), sink);
                 (arrival.visible, arrival.rays)
             },
         )

@@ -87,6 +87,11 @@ impl<'t> Reflector<'t> {
         }
     }
 
+    /// Whether it has a glossy lobe.
+    pub(super) fn glossy(&self) -> bool {
+        self.lobe.is_some()
+    }
+
     /// Whether it reflects anything (Kd or a lobe).
     pub(super) fn reflects(&self) -> bool {
         self.kd != DVec3::ZERO || self.lobe.is_some()
@@ -165,7 +170,7 @@ impl<'t> Reflector<'t> {
 
 /// What vertex `v` reflects of the light that `arrive` hands it ray by ray
 /// at its receiving point (for an occluder of scene epsilon `epsilon`):
-/// `arrive(at, sky_rays, sink)` calls `sink(toward, ΔE)` for each arrival,
+/// `arrive(at, reflector, sink)` calls `sink(toward, ΔE)` for each arrival,
 /// the unit direction toward the light and its irradiance, RGB, and returns
 /// its visible count and rays traced. Into `out`, the vertex's slot, which
 /// it overwrites; a vertex that reflects nothing receives nothing.
@@ -178,7 +183,7 @@ pub(super) fn receive_arrivals(
     epsilon: f64,
     out: &mut [f64],
     lobe: &mut LobeScratch,
-    arrive: impl FnOnce(&ReceivingPoint, u32, &mut dyn FnMut(DVec3, DVec3)) -> (u32, u32),
+    arrive: impl FnOnce(&ReceivingPoint, &Reflector, &mut dyn FnMut(DVec3, DVec3)) -> (u32, u32),
 ) -> (u32, u32) {
     let reflector = Reflector::of_vertex(mesh, tables, kd, v);
     out.fill(0.0);
@@ -186,7 +191,7 @@ pub(super) fn receive_arrivals(
         return (0, 0);
     }
     let at = ReceivingPoint::of_vertex(mesh, v, epsilon);
-    arrive(&at, reflector.sky_rays(), &mut |toward, irradiance| {
+    arrive(&at, &reflector, &mut |toward, irradiance| {
         reflector.add(out, toward, irradiance, lobe);
     })
 }

@@ -123,6 +123,7 @@ impl Transport for ShShot<'_> {
             Some(group) => DirSource::Group(DirGroup {
                 group,
                 tables: &tables,
+                glossy_rays: group::glossy_rays(group, &s.settings),
             }),
             None => DirSource::Patch(DirShot {
                 shot: &shot,
