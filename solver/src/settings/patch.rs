@@ -125,7 +125,8 @@ settings_patch! {
             long,
             value_name = "N",
             long_help = "Visibility rays per receiving vertex for a grouped shot (1 to 4096), \
-                shared among its members by what each adds. More rays lower the noise \
+                shared among its members by what each adds; a glossy receiver in directional \
+                mode traces several times as many. More rays lower the noise \
                 between seeds; time grows with N where shots are bright \
                 (docs/lab/grouped-shooters.md)."
         )]
