@@ -113,8 +113,9 @@ settings_patch! {
             long_help = "What shoots in one pass. grouped (every preset): a bright patch and \
                 its bright neighbours together, each receiver's rays shared among them \
                 by importance, far fewer passes where many small patches are lit; \
-                patch: one patch per shot, as Remington (1992). Diffuse mode only \
-                (docs/lab/grouped-shooters.md).",
+                patch: one patch per shot, as Remington (1992). In directional mode \
+                glossy sources and emitters' first shots shoot alone \
+                (docs/lab/grouped-shooters.md, docs/lab/glossy-grouped-shooters.md).",
             hide_possible_values = true
         )]
         pub shooters: Option<Shooters>,
@@ -124,7 +125,8 @@ settings_patch! {
             long,
             value_name = "N",
             long_help = "Visibility rays per receiving vertex for a grouped shot (1 to 4096), \
-                shared among its members by what each adds. More rays lower the noise \
+                shared among its members by what each adds; a glossy receiver in directional \
+                mode traces several times as many. More rays lower the noise \
                 between seeds; time grows with N where shots are bright \
                 (docs/lab/grouped-shooters.md)."
         )]

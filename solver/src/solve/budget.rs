@@ -523,11 +523,10 @@ fn output_bytes(c: &Counts) -> u64 {
     diffuse + directional + view + WRITER_BUFFER
 }
 
-/// Whether a solve with `settings` makes grouped shots: only diffuse solves
-/// do (directional ones shoot patches whatever `shooters` says).
+/// Whether a solve with `settings` makes grouped shots (a directional
+/// solve groups its order-0 sources, `directional/group.rs`).
 fn groups_shots(settings: &SolverSettings) -> bool {
     settings.shooters == crate::settings::Shooters::Grouped
-        && settings.mode != solution::format::SolveMode::Directional
 }
 
 /// The counts of a mesh not yet built: N patches per side (the solve's

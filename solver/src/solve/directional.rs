@@ -103,6 +103,9 @@ use std::f64::consts::PI;
 use std::sync::Arc;
 
 mod field;
+mod group;
+#[cfg(test)]
+mod group_tests;
 mod lights;
 mod near_gather;
 mod output;

@@ -29,7 +29,7 @@ fn run(scene: &Scene, settings: &SolverSettings) -> Solver {
 /// and in φ a trigonometric polynomial of degree ≤ order, so Gauss–Legendre
 /// with order/2 + 2 nodes and 2·order + 2 uniform azimuths are exact (to
 /// rounding): the quadrature adds no error of its own.
-fn exitance(order: u32, coefficients: &[f64]) -> DVec3 {
+pub(super) fn exitance(order: u32, coefficients: &[f64]) -> DVec3 {
     let (mu, w) = gauss_legendre_on(order as usize / 2 + 2, 0.0, 1.0);
     let n_phi = 2 * order as usize + 2;
     let mut basis = vec![0.0; coefficient_count(order)];
@@ -136,8 +136,9 @@ fn with_ks_zero_directional_mode_equals_the_diffuse_solver() {
         // And every ray: directional mode has no ray share
         // (`solve/ray_share.rs`), so the two sample the same points.
         diffuse.full_rays_above = 0.0;
-        // And one patch a shot: directional solves shoot patches whatever
-        // `shooters` says.
+        // And one patch a shot: directional mode groups its order-0
+        // sources differently (emitters' first shots alone, no ray share;
+        // `directional/group.rs`), so both shoot patch by patch.
         diffuse.shooters = crate::settings::Shooters::Patch;
         // The diffuse output weights the ambient term by each vertex's
         // enclosure (`solve/enclosure.rs`) and the directional output

@@ -120,6 +120,14 @@
 //! shoots uniformly, as alone its shots are recorded and so uniform: shaped
 //! by its vertices it took a furnace of emitting faces 2.2% off at ρ = 0.95.
 //!
+//! ## Directional mode
+//!
+//! A directional solve groups its sources of SH order 0 through the same
+//! selection, tree and rays (`directional/group.rs`): [`GroupShot::visit_at`]
+//! hands each arriving ray's direction and ΔE to the receiver, which
+//! reflects it by its lobe. Glossy sources and emitters' first shots shoot
+//! alone there.
+//!
 //! ## Rays
 //!
 //! A receiver's `group_samples` rays are shared among the members, so a
@@ -484,12 +492,19 @@ impl<'a> GroupShot<'a> {
     /// module documentation, "Emitters' first shots"). Its visible counts
     /// stay out of `group_samples`, as any group's.
     pub fn recorded(mut self, settings: &crate::settings::SolverSettings) -> GroupShot<'a> {
-        let alone = (self.sources.len() as u64 * settings.samples as u64).min(u32::MAX as u64);
         self.sampled = false;
-        self.samples = (self.samples.saturating_mul(EMITTER_RAYS))
-            .min(alone as u32)
-            .max(self.samples);
+        self.samples = self.more_rays(EMITTER_RAYS, settings);
         self
+    }
+
+    /// `factor` times the group's rays per receiver, but never more than
+    /// its members would trace alone (`samples` each), nor fewer than a
+    /// group's.
+    pub fn more_rays(&self, factor: u32, settings: &crate::settings::SolverSettings) -> u32 {
+        let alone = (self.sources.len() as u64 * settings.samples as u64).min(u32::MAX as u64);
+        (self.samples.saturating_mul(factor))
+            .min(alone as u32)
+            .max(self.samples)
     }
 
     /// ΔL_v: the importance-sampled sum of the members' shots, far clusters
@@ -515,47 +530,13 @@ impl<'a> GroupShot<'a> {
         scratch: &mut Scratch,
         prior: Option<DVec3>,
     ) -> Received {
-        let ReceivingPoint {
-            q,
-            n,
-            surface,
-            stream,
-        } = *at;
-        let kd = self.kd[surface as usize];
+        let kd = self.kd[at.surface as usize];
         if kd == DVec3::ZERO {
             return Received::default();
         }
-        let epsilon = self.occluder.scene_epsilon();
-        let Scratch {
-            points,
-            clipped,
-            flags,
-            weights,
-            items,
-            carried,
-        } = scratch;
-        weights.clear();
-        items.clear();
-        // Σ_p U_p F̂_p: the members' unoccluded shots summed, the receiver's
-        // ΔL without shadows.
-        let GroupSources { members, tree } = &*self.sources;
-        let unoccluded = tree.items(
-            members,
-            &Receiver {
-                q,
-                n,
-                surface,
-                epsilon,
-            },
-            self.shadows,
-            self.sampled,
-            items,
-            weights,
-        );
-        let total: f64 = weights.iter().sum();
-        if total.is_nan() || total <= 0.0 {
+        let Some((total, unoccluded)) = self.cut(at, scratch) else {
             return Received::default();
-        }
+        };
         if !self.shadows {
             return Received {
                 radiance: kd * unoccluded,
@@ -573,6 +554,115 @@ impl<'a> GroupShot<'a> {
             }
             _ => self.samples,
         };
+        self.draw(at, scratch, total, rays);
+        let mut sum = DVec3::ZERO;
+        let mut visible = 0;
+        for (&c, &f) in scratch.carried.iter().zip(scratch.flags.iter()) {
+            if f {
+                visible += 1;
+                sum += c;
+            }
+        }
+        Received {
+            radiance: kd * sum * (total / rays as f64),
+            visible: self.visible_count(visible, rays),
+            rays,
+        }
+    }
+
+    /// The incident light of the group at a receiving point ray by ray, for
+    /// a receiver that reflects by direction (`directional/group.rs`):
+    /// `visit(toward, irradiance)` for each of `rays` rays that arrives,
+    /// with the unit direction from the point to the ray's end on a member
+    /// and the ΔE it carries, RGB, π · colour · W / R. With `rays` the
+    /// group's `samples`, their sum is π times [`GroupShot::receive_at`]'s
+    /// estimate before Kd (the same rays, no ray share); with shadows off
+    /// every ray arrives. Returns the visible count (out of
+    /// `group_samples`, as [`GroupShot::receive_at`]'s) and the rays traced.
+    pub fn visit_at(
+        &self,
+        at: &ReceivingPoint,
+        scratch: &mut Scratch,
+        rays: u32,
+        visit: &mut dyn FnMut(DVec3, DVec3),
+    ) -> (u32, u32) {
+        let Some((total, _)) = self.cut(at, scratch) else {
+            return (0, 0);
+        };
+        self.draw(at, scratch, total, rays);
+        let scale = PI * total / rays as f64;
+        let mut visible = 0;
+        for ((&y, &c), &f) in scratch
+            .points
+            .iter()
+            .zip(&scratch.carried)
+            .zip(&scratch.flags)
+        {
+            if !f {
+                continue;
+            }
+            visible += 1;
+            if let Some(toward) = (y - at.q).try_normalize() {
+                visit(toward, c * scale);
+            }
+        }
+        let traced = if self.shadows { rays } else { 0 };
+        (self.visible_count(visible, rays), traced)
+    }
+
+    /// A visible count of `rays` rays out of `group_samples`, for the
+    /// refinement test.
+    fn visible_count(&self, visible: u32, rays: u32) -> u32 {
+        if self.counted == self.samples && rays <= self.samples {
+            visible * (self.samples / rays)
+        } else {
+            (visible as u64 * self.counted as u64 / rays as u64) as u32
+        }
+    }
+
+    /// The receiver's cut of the member tree into `scratch`'s items and
+    /// weights: their total W and the members' unoccluded shots summed,
+    /// Σ_p U_p F̂_p; `None` when the group gives the point nothing.
+    fn cut(&self, at: &ReceivingPoint, scratch: &mut Scratch) -> Option<(f64, DVec3)> {
+        let Scratch { weights, items, .. } = scratch;
+        weights.clear();
+        items.clear();
+        let GroupSources { members, tree } = &*self.sources;
+        let unoccluded = tree.items(
+            members,
+            &Receiver {
+                q: at.q,
+                n: at.n,
+                surface: at.surface,
+                epsilon: self.occluder.scene_epsilon(),
+            },
+            self.shadows,
+            self.sampled,
+            items,
+            weights,
+        );
+        let total: f64 = weights.iter().sum();
+        if total.is_nan() || total <= 0.0 {
+            return None;
+        }
+        Some((total, unoccluded))
+    }
+
+    /// Draws `rays` rays over the cut (systematic sampling of its weights,
+    /// total `total`) into `scratch`: each ray's end point and the colour it
+    /// carries if it arrives, and whether it does (every ray, shadows off).
+    fn draw(&self, at: &ReceivingPoint, scratch: &mut Scratch, total: f64, rays: u32) {
+        let ReceivingPoint { q, n, stream, .. } = *at;
+        let epsilon = self.occluder.scene_epsilon();
+        let Scratch {
+            points,
+            clipped,
+            flags,
+            weights,
+            items,
+            carried,
+        } = scratch;
+        let GroupSources { members, tree } = &*self.sources;
         let mut rng = Rng::new(self.seed, stream_id(self.index, stream as u64));
         let offset = rng.next_f64();
         points.clear();
@@ -601,24 +691,11 @@ impl<'a> GroupShot<'a> {
                 }
             }
         }
-        let origin = q + n * epsilon;
-        self.occluder.visible_each(origin, points, flags);
-        let mut sum = DVec3::ZERO;
-        let mut visible = 0;
-        for (&c, &f) in carried.iter().zip(flags.iter()) {
-            if f {
-                visible += 1;
-                sum += c;
-            }
-        }
-        Received {
-            radiance: kd * sum * (total / rays as f64),
-            visible: if self.counted == self.samples {
-                visible * (self.samples / rays)
-            } else {
-                visible * self.counted / rays
-            },
-            rays,
+        if self.shadows {
+            self.occluder.visible_each(q + n * epsilon, points, flags);
+        } else {
+            flags.clear();
+            flags.resize(points.len(), true);
         }
     }
 }
@@ -718,6 +795,18 @@ impl Solver {
     /// other member's unshot taken from the patches too. `None` (nothing
     /// taken) when no other patch qualifies (see the module documentation).
     pub(super) fn take_group(&mut self, seed: u32, unshot: DVec3) -> Option<Vec<(u32, DVec3)>> {
+        self.take_group_where(seed, unshot, |_| true)
+    }
+
+    /// [`Solver::take_group`] of the patches on surfaces `admit` accepts
+    /// alone: a directional solve groups only patches whose outgoing
+    /// radiance is the same toward every receiver (`directional/group.rs`).
+    pub(super) fn take_group_where(
+        &mut self,
+        seed: u32,
+        unshot: DVec3,
+        admit: impl Fn(u32) -> bool,
+    ) -> Option<Vec<(u32, DVec3)>> {
         self.catch_up_emitters();
         // An emitter's first shot groups only with other first shots, and a
         // later shot only with reflectors and emitters that have had theirs:
@@ -748,6 +837,7 @@ impl Solver {
             .iter()
             .flat_map(|&s| self.patches.of_surface[s as usize].clone())
             .filter(|&p| p != seed && self.is_first_shot(p) == first)
+            .filter(|&p| admit(self.mesh.patches[p as usize].surface))
             .map(|p| (power(p), p))
             .filter(|&(w, p)| w >= least || self.bright_small(p, unshot))
             .collect();

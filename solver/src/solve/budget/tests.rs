@@ -449,9 +449,10 @@ fn surface_term_matches_the_allocated_per_surface_structures() {
     );
 }
 
-/// A grouped shot's bytes are counted where shots are grouped: in a diffuse
-/// solve with `--shooters grouped`, not in a directional one (which shoots
-/// patches whatever `shooters` says) and not with the patch shooter.
+/// A grouped shot's bytes are counted where shots are grouped: with
+/// `--shooters grouped`, in a diffuse solve and in a directional one (which
+/// groups its order-0 sources, `directional/group.rs`), not with the patch
+/// shooter.
 #[test]
 fn the_group_term_follows_what_the_solve_shoots() {
     for (mode, shooters, grouped) in [
@@ -460,6 +461,11 @@ fn the_group_term_follows_what_the_solve_shoots() {
         (
             SolveMode::Directional,
             crate::settings::Shooters::Grouped,
+            true,
+        ),
+        (
+            SolveMode::Directional,
+            crate::settings::Shooters::Patch,
             false,
         ),
     ] {

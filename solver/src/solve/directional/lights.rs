@@ -24,14 +24,14 @@
 //! first of the replayed shots ([`DirSource::Lights`]).
 
 use super::field::{DirField, SolverParts};
-use super::receive::{DirScratch, DirShot, ReceivedSh, Reflector, Tables};
+use super::group::DirGroup;
+use super::receive::{receive_arrivals, DirScratch, DirShot, ReceivedSh, Reflector, Tables};
 use super::shot::{finish_shot, receive_all};
 use super::Directional;
 use crate::mesh::Mesh;
 use crate::solve::lights::LightShot;
 use crate::solve::pipeline::{Shooting, Source, Transport};
 use crate::solve::refine::{self, Criteria, Refined, DARK_FLOOR};
-use crate::solve::shoot::ReceivingPoint;
 use crate::solve::Solver;
 use glam::DVec3;
 use std::time::Instant;
@@ -57,18 +57,21 @@ impl DirLights<'_> {
         scratch: &mut DirScratch,
         out: &mut [f64],
     ) -> (u32, u32) {
-        let reflector = Reflector::of_vertex(mesh, self.tables, kd, v);
-        out.fill(0.0);
-        if !reflector.reflects() {
-            return (0, 0);
-        }
-        let at = ReceivingPoint::of_vertex(mesh, v, self.lights.occluder.scene_epsilon());
-        let arrival = self
-            .lights
-            .visit(&at, reflector.sky_rays(), &mut |toward, irradiance| {
-                reflector.add(out, toward, irradiance, &mut scratch.lobe);
-            });
-        (arrival.visible, arrival.rays)
+        let epsilon = self.lights.occluder.scene_epsilon();
+        let lobe = &mut scratch.lobe;
+        receive_arrivals(
+            mesh,
+            self.tables,
+            kd,
+            v,
+            epsilon,
+            out,
+            lobe,
+            |at, reflector, sink| {
+                let arrival = self.lights.visit(at, reflector.sky_rays(), sink);
+                (arrival.visible, arrival.rays)
+            },
+        )
     }
 }
 
@@ -76,6 +79,8 @@ impl DirLights<'_> {
 /// lights'.
 pub(in crate::solve) enum DirSource<'a> {
     Patch(DirShot<'a>),
+    /// A group of patches of order 0 (`directional/group.rs`).
+    Group(DirGroup<'a>),
     Lights(DirLights<'a>),
 }
 
@@ -109,6 +114,7 @@ impl DirSource<'_> {
     ) -> (u32, u32) {
         match self {
             DirSource::Patch(shot) => shot.receive_into(mesh, kd, v, scratch, out),
+            DirSource::Group(group) => group.receive_into(mesh, kd, v, scratch, out),
             DirSource::Lights(lights) => lights.receive_into(mesh, kd, v, scratch, out),
         }
     }
@@ -116,6 +122,7 @@ impl DirSource<'_> {
     pub(super) fn tables(&self) -> &Tables {
         match self {
             DirSource::Patch(shot) => shot.tables,
+            DirSource::Group(group) => group.tables,
             DirSource::Lights(lights) => lights.tables,
         }
     }

@@ -8,7 +8,9 @@ use super::Directional;
 use crate::brdf::GlossyLobe;
 use crate::mesh::Mesh;
 use crate::solve::regions::QuadrantScale;
-use crate::solve::shoot::{visible_samples, SampleBy, SamplePool, SampleScratch, Shot};
+use crate::solve::shoot::{
+    visible_samples, ReceivingPoint, SampleBy, SamplePool, SampleScratch, Scratch, Shot,
+};
 use glam::DVec3;
 use solution::sh::{self, coefficient_count, Y00};
 use std::f64::consts::PI;
@@ -31,6 +33,8 @@ pub(super) struct DirScratch {
     /// Per visible sample, its scale of the unshot radiance when the source
     /// shoots by quadrants ([`QuadrantScale::sample_scales`]); empty otherwise.
     scales: Vec<DVec3>,
+    /// A grouped shot's cut, rays and flags (`directional/group.rs`).
+    pub(super) group: Scratch,
 }
 
 /// The buffers of [`Reflector::add`].
@@ -81,6 +85,11 @@ impl<'t> Reflector<'t> {
             normal: s.normal,
             tangent: s.tangent,
         }
+    }
+
+    /// Whether it has a glossy lobe.
+    pub(super) fn glossy(&self) -> bool {
+        self.lobe.is_some()
     }
 
     /// Whether it reflects anything (Kd or a lobe).
@@ -157,6 +166,34 @@ impl<'t> Reflector<'t> {
             o[2] += u * e.z;
         }
     }
+}
+
+/// What vertex `v` reflects of the light that `arrive` hands it ray by ray
+/// at its receiving point (for an occluder of scene epsilon `epsilon`):
+/// `arrive(at, reflector, sink)` calls `sink(toward, ΔE)` for each arrival,
+/// the unit direction toward the light and its irradiance, RGB, and returns
+/// its visible count and rays traced. Into `out`, the vertex's slot, which
+/// it overwrites; a vertex that reflects nothing receives nothing.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn receive_arrivals(
+    mesh: &Mesh,
+    tables: &Tables,
+    kd: &[DVec3],
+    v: u32,
+    epsilon: f64,
+    out: &mut [f64],
+    lobe: &mut LobeScratch,
+    arrive: impl FnOnce(&ReceivingPoint, &Reflector, &mut dyn FnMut(DVec3, DVec3)) -> (u32, u32),
+) -> (u32, u32) {
+    let reflector = Reflector::of_vertex(mesh, tables, kd, v);
+    out.fill(0.0);
+    if !reflector.reflects() {
+        return (0, 0);
+    }
+    let at = ReceivingPoint::of_vertex(mesh, v, epsilon);
+    arrive(&at, &reflector, &mut |toward, irradiance| {
+        reflector.add(out, toward, irradiance, lobe);
+    })
 }
 
 /// One directional shot: the diffuse [`Shot`] (geometry, samples,

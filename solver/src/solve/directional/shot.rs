@@ -5,11 +5,13 @@
 //! the diffuse solve's.
 
 use super::field::{DirField, SolverParts};
+use super::group::{self, DirGroup};
 use super::lights::{DirLights, DirSource};
 use super::receive::{DirScratch, DirShot, Tables};
 use super::{quadrant_scale, Directional, SourceChoice};
 use crate::mesh::Mesh;
 use crate::solve::checkpoint::precision::round_to_kept;
+use crate::solve::group_shot::GroupShot;
 use crate::solve::lights::LightShot;
 use crate::solve::pipeline::{Shooting, Source, Transport};
 use crate::solve::refine::{self, Refined};
@@ -29,6 +31,9 @@ pub(in crate::solve) struct ShShot<'d> {
     unshot: Vec<f64>,
     /// Whether the shot is recorded (an emitter's: replayed, not summed).
     recorded: bool,
+    /// The partners a grouped shot took along, with their unshot SH
+    /// (`group.rs`); empty when the patch shoots alone.
+    taken: group::Taken,
     /// Where the coefficients of the vertices refinement creates begin;
     /// they are rounded to the kept bits once gathered.
     created_from: usize,
@@ -41,6 +46,7 @@ impl<'d> ShShot<'d> {
             patch: 0,
             unshot: Vec::new(),
             recorded: false,
+            taken: Vec::new(),
             created_from: 0,
         }
     }
@@ -67,7 +73,13 @@ impl Transport for ShShot<'_> {
     fn shoot(&mut self, s: &mut Solver, source: &Source) -> Shooting {
         let d = &mut *self.d;
         let patch = self.patch;
-        let recorded = s.records(patch, true, Some((d, self.unshot.len() as u64)));
+        // With grouped shooters an order-0 source may take its order-0
+        // neighbours along (`group.rs`); such a shot is not recorded.
+        let members = group::take(s, d, patch, &self.unshot);
+        let (sources, taken) = members.unzip();
+        self.taken = taken.unwrap_or_default();
+        let alone = sources.is_none();
+        let recorded = alone && s.records(patch, true, Some((d, self.unshot.len() as u64)));
         let shot = Shot::for_patch(
             &s.mesh,
             patch,
@@ -83,25 +95,46 @@ impl Transport for ShShot<'_> {
             d.recorded_unshot.push(self.unshot.clone());
         }
         self.recorded = recorded;
-        let pool = SamplePool::new(&shot);
+        // A group draws its own rays: the seed's shot keeps no sample sets.
+        let pool = if alone {
+            SamplePool::new(&shot)
+        } else {
+            SamplePool::with_sets(&shot, 0)
+        };
         let source_surface = shot.source_surface as usize;
         let tables = Tables::new(d, &s.mesh);
         // Recorded (emitter) shots stay uniform: refinement replays them from
         // the patch's mean alone.
-        let quadrants = if recorded || s.settings.shoots_uniformly() {
+        let quadrants = if recorded || !alone || s.settings.shoots_uniformly() {
             None
         } else {
             quadrant_scale(s.shape_view(), patch, &shot)
         };
-        let dir_shot = DirSource::Patch(DirShot {
-            shot: &shot,
-            pool: &pool,
-            unshot: &self.unshot,
-            source_order: d.surface_order[source_surface],
-            source_tangent: tables.tangent[source_surface],
-            tables: &tables,
-            quadrants: quadrants.as_ref(),
+        let group_shot = sources.map(|sources| {
+            GroupShot::of(
+                sources,
+                s.stats.shots,
+                &s.settings,
+                &s.occluder,
+                &s.materials.kd,
+            )
         });
+        let dir_shot = match &group_shot {
+            Some(group) => DirSource::Group(DirGroup {
+                group,
+                tables: &tables,
+                glossy_rays: group::glossy_rays(group, &s.settings),
+            }),
+            None => DirSource::Patch(DirShot {
+                shot: &shot,
+                pool: &pool,
+                unshot: &self.unshot,
+                source_order: d.surface_order[source_surface],
+                source_tangent: tables.tangent[source_surface],
+                tables: &tables,
+                quadrants: quadrants.as_ref(),
+            }),
+        };
         let rays = receive_all(
             &s.mesh,
             &s.materials.kd,
@@ -191,6 +224,7 @@ impl Transport for ShShot<'_> {
             for (sum, u) in d.shot_sum[range].iter_mut().zip(&self.unshot) {
                 *sum = round_to_kept(*sum + u);
             }
+            group::add_shot_sums(&s.mesh, d, &self.taken);
         }
         finish_shot(s, d, self.created_from);
     }
