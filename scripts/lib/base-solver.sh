@@ -24,11 +24,14 @@ build_base_solver() {
         echo "$commit" >"$work/base-commit"
     fi
     echo "== $(basename "$0" .sh): building the base solver ($base), release"
+    # Both trees' workspace crates hash to the same artifacts in one target
+    # folder, and cargo finds them fresh when the sources their fingerprints
+    # name (the other tree's) have not changed: it would hand this tree's
+    # solver over as the base's, and the base's back as this tree's. So the
+    # workspace crates' artifacts are forgotten before and after the base's
+    # build (the third-party crates stay shared).
+    (cd "$src" && CARGO_TARGET_DIR="$target" cargo clean --release -p solver -p solution)
     (cd "$src" && CARGO_TARGET_DIR="$target" cargo build --release --locked -p solver)
     cp "$target/release/solver" "$work/base-solver"
-    # Both trees' workspace crates hash to the same artifacts in one target
-    # folder, and their fingerprints now name the base's sources, so the next
-    # build of this tree would find the base's solver fresh and keep it:
-    # forget them, so that this tree's are compiled from its own sources.
-    CARGO_TARGET_DIR="$target" cargo clean --release -p solver -p solution
+    (cd "$src" && CARGO_TARGET_DIR="$target" cargo clean --release -p solver -p solution)
 }
