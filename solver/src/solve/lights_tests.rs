@@ -783,9 +783,9 @@ fn the_floor_at_a_sunlit_column_base_takes_the_sun_on_its_sunny_side_only() {
     // bearing φ from the sun's is in the open when cos φ > 0 (the sun ray
     // leaves the column), in the column's shadow when cos φ < 0; within 10°
     // of the terminator the ray grazes the walls and is left out. The
-    // visible pieces the contact cut makes share samples only within
-    // themselves (`twins::contact_pieces`): a ring vertex that took a sample
-    // from a piece across the column drew its shadow on the sunny side
+    // visible pieces that the contact and the sun's shadow lines cut share
+    // sites only within themselves (`sites.rs`): a ring vertex that took a
+    // sample from a piece across the column drew its shadow on the sunny side
     // (docs/lab/lights-atrium.md, "Column bases"). Tolerance: the disc's
     // 16 samples about 55° move E by at most 2e-3 (as in
     // `sun_lights_an_open_plane_by_the_cosine_law_and_a_shadow_has_its_area`).

@@ -48,9 +48,12 @@
 //! vertex), only
 //! on points none of whose copies lies on a patch that refinement may
 //! split (an interpolated vertex must never be an edge's end that
-//! refinement tests), and only on points that are not hidden. A piece of a
-//! contact cut is a connected surface of its own: its points take no site
-//! across the cut (`twins::contact_pieces`). Points that
+//! refinement tests), and only on points that are not hidden. The pieces of
+//! a polygon cut along the sun's or a lamp's shadow lines are each a connected
+//! surface of their own ([`shadow_cut_pieces`]): the radiance jumps across
+//! such a polygon's seams, and a sunlit point beside a column that took sites
+//! from the column's shaded side went as dark as its umbra
+//! (docs/lab/lights-atrium.md, "Column bases"). Points that
 //! must receive anyway (on a larger patch of the same surface) serve as
 //! sites for free. `site_angle = 0` turns it off.
 
@@ -403,10 +406,24 @@ fn linear_weights(kernels: &[f64], offsets: &[[f64; 2]]) -> Option<Vec<f64>> {
     (w.iter().all(|&w| w >= -0.25 && w.is_finite())).then_some(w)
 }
 
+/// Per surface of `mesh`, whether it is a piece of a polygon that a contact
+/// cut also cut along shadow lines (one of its pieces has an apex,
+/// `Surface::apexes`).
+fn shadow_cut_pieces(mesh: &Mesh) -> Vec<bool> {
+    let mut shadowed: std::collections::HashSet<usize> = Default::default();
+    for surface in mesh.surfaces.iter().filter(|s| !s.apexes.is_empty()) {
+        shadowed.insert(surface.polygon);
+    }
+    mesh.surfaces
+        .iter()
+        .map(|s| shadowed.contains(&s.polygon))
+        .collect()
+}
+
 /// The smooth surfaces of `mesh` joined where they share a point of one
 /// material (the same position to the bit: `scene::smooth` snaps a group's
-/// corners to one position); each piece of a contact cut stays a component of
-/// its own. Twins alone would not do: a point's shading
+/// corners to one position); each piece of a polygon cut along shadow lines
+/// stays a component of its own. Twins alone would not do: a point's shading
 /// normal can differ in its last bits between the polygons around it, and
 /// then they are not twins.
 fn connected_surfaces(mesh: &Mesh) -> UnionFind {
@@ -419,7 +436,7 @@ fn connected_surfaces(mesh: &Mesh) -> UnionFind {
             vertex.position.to_array().map(f64::to_bits),
         )
     };
-    let piece = super::twins::contact_pieces(mesh);
+    let piece = shadow_cut_pieces(mesh);
     let mut smooth: Vec<u32> = (0..mesh.vertices.len() as u32)
         .filter(|&v| {
             let s = mesh.vertices[v as usize].surface as usize;

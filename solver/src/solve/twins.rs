@@ -44,13 +44,8 @@ pub struct Twins {
 }
 
 /// Per surface of `mesh`, whether it is one of the pieces that a contact
-/// cut (`mesh::contact`) made of its input polygon. Radiance may jump across
-/// the seams between pieces: a piece may lie under what stands on the
-/// polygon, or on the far side of a shadow line, so no sample is shared
-/// across them (a visible point that took a sample from the covered piece
-/// beside it would go as dark as the floor under a column,
-/// docs/lab/lights-atrium.md, "Column bases").
-pub(super) fn contact_pieces(mesh: &Mesh) -> Vec<bool> {
+/// cut (`mesh::contact`) made of its input polygon.
+fn contact_pieces(mesh: &Mesh) -> Vec<bool> {
     // Per input polygon, how many surfaces it became.
     let mut pieces: std::collections::HashMap<usize, u32> = Default::default();
     for surface in &mesh.surfaces {
