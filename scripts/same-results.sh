@@ -10,11 +10,11 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-# dbd574c: main with issue 42's emitter groups, which changed on purpose the
-# files of scenes whose emitters have several patches (the emissive texture,
-# the floor plan); every other case matched 3f4b4d1, the base before it
-# (docs/lab/refactor-same-results.md, "Runs").
-base=${1:-${SAME_RESULTS_BASE:-dbd574c}}
+# 441625d: main with issue 43's grouped shooters in directional mode, which
+# changed on purpose the files of the two directional cases (the glossy box, the
+# textured box in directional mode); every diffuse case matched dbd574c, the base
+# before it (docs/lab/refactor-same-results.md, "Runs").
+base=${1:-${SAME_RESULTS_BASE:-441625d}}
 
 # Settings keys the refactor removed or renamed; they may differ or be missing.
 ignore_keys=shooting,shooting_tolerance,uniform_shooters,interpolated_glossy_splits
