@@ -38,7 +38,9 @@
 //! * **Shadow lines.** The visible parts are also cut along the lines that
 //!   the occluder's edges standing on each footprint corner cast from the
 //!   sun and each lamp (in both modes), and from each emitter vertex
-//!   (directional mode, [`Cuts::ShadowLines`]) ([`cut_shadow_lines`]). The
+//!   (directional mode, [`Cuts::ShadowLines`]) ([`cut_shadow_lines`]): a sun's
+//!   or a lamp's two silhouette lines, its shadow's sides, through every part
+//!   they cross, every other line through the parts at its corner only. The
 //!   corner is then an apex where the radiance's limit depends on the side:
 //!   each part keeps its own vertex there ([`Part::apexes`]), which the seam
 //!   pass does not merge.
@@ -602,7 +604,15 @@ fn cut_shadow_lines(
                 }
                 for &d in &directions {
                     let cut;
-                    (parts, cut) = cut_ray(parts, c, d, snap, floor);
+                    // A sun's or a lamp's shadow has sharp sides; an
+                    // emitter's lines bound penumbrae, at their corners.
+                    let sharp = directions.len() == 1;
+                    let reach = if sharp && silhouette(hull, c, d, tol) {
+                        Reach::Through
+                    } else {
+                        Reach::Corner
+                    };
+                    (parts, cut) = cut_ray(parts, c, d, reach, snap, floor);
                     split |= cut;
                 }
             }
@@ -632,12 +642,56 @@ fn narrow(directions: &[DVec2]) -> bool {
     hi - lo < std::f64::consts::FRAC_PI_2
 }
 
-/// Cuts the parts that the ray from corner `c` along `d` runs into; returns
-/// the parts and whether any was split.
+/// How far a shadow line cuts ([`cut_ray`]).
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Reach {
+    /// The parts at its corner only: a line inside the shadow, between
+    /// the silhouette's two, bounds no umbra far from the corner.
+    Corner,
+    /// Every part it runs through: a silhouette line is the umbra's side
+    /// all along, and the contact cut's pieces (long wedges that fan out
+    /// from a round footprint) cross it far from the corner
+    /// (docs/lab/lights-atrium.md, "Column bases").
+    Through,
+}
+
+/// Whether the line through footprint corner `c` along `d` has the whole
+/// footprint `hull` on one side (within `tol`): it is a side of the shadow.
+fn silhouette(hull: &[DVec2], c: DVec2, d: DVec2, tol: f64) -> bool {
+    let side = |v: DVec2| d.perp_dot(v - c);
+    hull.iter().all(|&v| side(v) <= tol) || hull.iter().all(|&v| side(v) >= -tol)
+}
+
+/// Whether the ray from `c` along `d` runs into the convex `part`: the line
+/// crosses its interior, and every point of that crossing lies ahead of `c`
+/// (within `eps`; the line's other half, toward the light, is no shadow's
+/// edge).
+fn ray_enters(part: &[DVec2], c: DVec2, d: DVec2, eps: f64) -> bool {
+    let side: Vec<f64> = part.iter().map(|&v| d.perp_dot(v - c)).collect();
+    let (lo, hi) = side
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &s| {
+            (lo.min(s), hi.max(s))
+        });
+    if !(lo < -eps && hi > eps) {
+        return false;
+    }
+    // Where the line crosses the part's edges, as distances along it.
+    let crossings = (0..part.len()).filter_map(|i| {
+        let j = (i + 1) % part.len();
+        let (a, b) = (side[i], side[j]);
+        ((a < 0.0) != (b < 0.0)).then(|| (part[i] + (part[j] - part[i]) * (a / (a - b)) - c).dot(d))
+    });
+    crossings.fold(f64::INFINITY, f64::min) >= -eps
+}
+
+/// Cuts the parts that the ray from corner `c` along `d` runs into, as far
+/// as `reach` says; returns the parts and whether any was split.
 fn cut_ray(
     parts: Vec<(Vec<DVec2>, bool)>,
     c: DVec2,
     d: DVec2,
+    reach: Reach,
     snap: f64,
     floor: f64,
 ) -> (Vec<(Vec<DVec2>, bool)>, bool) {
@@ -651,7 +705,11 @@ fn cut_ray(
         let touches = (0..part.len())
             .any(|i| segment_distance(c, part[i], part[(i + 1) % part.len()]) <= 1e3 * snap);
         let step = 1e-3 * ring_area(&part).abs().sqrt();
-        if covered || !touches || !inside_convex(&part, c + d * step) {
+        let enters = match reach {
+            Reach::Corner => touches && inside_convex(&part, c + d * step),
+            Reach::Through => ray_enters(&part, c, d, 1e3 * snap),
+        };
+        if covered || !enters {
             next.push((part, covered));
             continue;
         }

@@ -436,3 +436,70 @@ fn the_sun_cuts_shadow_lines_from_the_base_corners_away_from_it_in_both_modes() 
         assert!(edge, "no edge from apex {c} away from the sun");
     }
 }
+
+#[test]
+fn the_sun_cuts_a_round_base_along_its_shadow_sides_all_the_way_through() {
+    // A 24-sided column on the floor: the contact cut splits the floor along
+    // the footprint edges' lines, into wedges that fan out from the base and
+    // cross the shadow's sides far from the corners. Each side of the shadow
+    // (a line from a silhouette corner, away from the sun) must be an edge of
+    // every part it crosses, so that no part spans umbra and light: no point
+    // of the line strictly inside a part, from the corner to the floor's edge
+    // (docs/lab/lights-atrium.md, "Column bases").
+    let (centre, radius, segments) = (DVec2::new(1.0, 1.0), 0.15, 24);
+    let at = |k: usize, y: f64| {
+        let a = 2.0 * std::f64::consts::PI * k as f64 / segments as f64;
+        p(centre.x + radius * a.cos(), y, centre.y + radius * a.sin())
+    };
+    let floor = vec![p(0., 0., 0.), p(0., 0., 2.), p(2., 0., 2.), p(2., 0., 0.)];
+    let mut polygons = vec![floor];
+    polygons.extend(
+        (0..segments).map(|k| vec![at(k, 0.0), at(k, 1.0), at(k + 1, 1.0), at(k + 1, 0.0)]),
+    );
+    let mut scene = scene_of(polygons);
+    let toward = DVec3::new(0.5, 0.8, -0.3).normalize();
+    let position = crate::light::sun::SunPosition::from_direction(toward).unwrap();
+    scene.lights.sun = Some(crate::light::sun::Sun::new(position, DVec3::ONE, 0.53).unwrap());
+    let parts = conform(&scene, Cuts::Contacts);
+    let floor = parts[0].as_ref().expect("the floor is cut");
+    let away = DVec2::new(-toward.x, -toward.z).normalize();
+    let side = DVec2::new(-away.y, away.x);
+    // The tangent corners: the footprint's farthest on each side of the
+    // shadow's axis.
+    let corners: Vec<DVec2> = (0..segments)
+        .map(|k| DVec2::new(at(k, 0.).x, at(k, 0.).z))
+        .collect();
+    let extreme = |sign: f64| {
+        corners
+            .iter()
+            .copied()
+            .max_by(|a, b| {
+                (sign * side.dot(*a - centre)).total_cmp(&(sign * side.dot(*b - centre)))
+            })
+            .unwrap()
+    };
+    let inside = |ring: &[DVec3], q: DVec2| {
+        let ring: Vec<DVec2> = ring.iter().map(|v| DVec2::new(v.x, v.z)).collect();
+        let sign = (0..ring.len())
+            .map(|i| (ring[(i + 1) % ring.len()] - ring[i]).perp_dot(q - ring[i]))
+            .collect::<Vec<_>>();
+        sign.iter().all(|&s| s > 1e-9) || sign.iter().all(|&s| s < -1e-9)
+    };
+    let mut crossed = 0;
+    for sign in [-1.0, 1.0] {
+        let c = extreme(sign);
+        for k in 1..400 {
+            let q = c + away * (k as f64 * 0.005);
+            if !(0.0..=2.0).contains(&q.x) || !(0.0..=2.0).contains(&q.y) {
+                break;
+            }
+            crossed += 1;
+            let holder = floor.iter().find(|part| inside(&part.vertices, q));
+            assert!(
+                holder.is_none(),
+                "the shadow's side runs through a part at {q}"
+            );
+        }
+    }
+    assert!(crossed > 100, "{crossed} points checked");
+}
