@@ -410,12 +410,6 @@ pub fn generate(params: Params) -> Scene {
             Solid::Arch(spec) => add_arch(&mut mesh, &spec),
         }
     }
-    let stone = |name: &str, kd| Material {
-        name: name.into(),
-        kd,
-        ke: [0.0; 3],
-        glossy: None,
-    };
     Scene {
         description: format!(
             "atrium: 35 x 16 x 16 m open court, two storeys of {} bays, columns {} x {}, arches {} segments",
@@ -423,15 +417,15 @@ pub fn generate(params: Params) -> Scene {
         ),
         mesh,
         materials: vec![
-            stone("floor", [0.5, 0.47, 0.42]),
-            stone("wall", [0.6, 0.57, 0.52]),
-            stone("slab", [0.55, 0.53, 0.5]),
-            stone("column", [0.65, 0.62, 0.56]),
-            stone("arch", [0.62, 0.58, 0.5]),
-            stone("fountain", [0.45, 0.45, 0.45]),
-            stone("drape_red", [0.55, 0.12, 0.1]),
-            stone("drape_green", [0.12, 0.4, 0.15]),
-            stone("drape_blue", [0.12, 0.2, 0.5]),
+            Material::diffuse("floor", [0.5, 0.47, 0.42]),
+            Material::diffuse("wall", [0.6, 0.57, 0.52]),
+            Material::diffuse("slab", [0.55, 0.53, 0.5]),
+            Material::diffuse("column", [0.65, 0.62, 0.56]),
+            Material::diffuse("arch", [0.62, 0.58, 0.5]),
+            Material::diffuse("fountain", [0.45, 0.45, 0.45]),
+            Material::diffuse("drape_red", [0.55, 0.12, 0.1]),
+            Material::diffuse("drape_green", [0.12, 0.4, 0.15]),
+            Material::diffuse("drape_blue", [0.12, 0.2, 0.5]),
         ],
         // In the court near the west end at eye height, looking east along
         // the long axis past the fountain.

@@ -116,30 +116,10 @@ pub fn generate(count: usize, seed: u64) -> Scene {
         ),
         mesh,
         materials: vec![
-            Material {
-                name: "white".into(),
-                kd: [0.725, 0.71, 0.68],
-                ke: [0.0; 3],
-                glossy: None,
-            },
-            Material {
-                name: "red".into(),
-                kd: [0.63, 0.065, 0.05],
-                ke: [0.0; 3],
-                glossy: None,
-            },
-            Material {
-                name: "green".into(),
-                kd: [0.14, 0.45, 0.091],
-                ke: [0.0; 3],
-                glossy: None,
-            },
-            Material {
-                name: "light".into(),
-                kd: [0.78, 0.78, 0.78],
-                ke: [17.0, 12.0, 4.0],
-                glossy: None,
-            },
+            Material::diffuse("white", [0.725, 0.71, 0.68]),
+            Material::diffuse("red", [0.63, 0.065, 0.05]),
+            Material::diffuse("green", [0.14, 0.45, 0.091]),
+            Material::emitter("light", [0.78, 0.78, 0.78], [17.0, 12.0, 4.0]),
         ],
         // The standard Cornell box camera.
         camera: Camera {

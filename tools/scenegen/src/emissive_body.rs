@@ -12,7 +12,7 @@
 //! the implicit surface's gradient, ∝ (sgn d_x |d_x|^{3/2} / a, …).
 
 use crate::mesh::{Closure, Mesh, Vec3};
-use crate::primitives::{add_box, add_mapped_sphere, BoxSpec, Placement};
+use crate::primitives::{add_box_room, add_mapped_sphere};
 use crate::scene::{Camera, Lights, Material, Scene};
 
 const ROOM: [f64; 3] = [10_000.0, 4000.0, 8000.0];
@@ -63,13 +63,7 @@ fn body_point(d: Vec3) -> (Vec3, Vec3) {
 
 pub fn generate(params: Params) -> Scene {
     let mut mesh = Mesh::default();
-    mesh.begin_object("room", "wall", Closure::Inward);
-    let room = BoxSpec {
-        min: [0.0; 3],
-        max: ROOM,
-        divisions: [1, 1, 1],
-    };
-    add_box(&mut mesh, &room, &Placement::IDENTITY, Closure::Inward);
+    add_box_room(&mut mesh, ROOM);
     mesh.begin_object("body", "body", Closure::Outward);
     add_mapped_sphere(
         &mut mesh,
@@ -90,20 +84,10 @@ pub fn generate(params: Params) -> Scene {
         ),
         mesh,
         materials: vec![
-            Material {
-                name: "wall".into(),
-                kd: [0.7, 0.68, 0.65],
-                ke: [0.0; 3],
-                glossy: None,
-            },
+            Material::diffuse("wall", [0.7, 0.68, 0.65]),
             // A glowing car paint: red-orange emission over a reflecting
             // body, as an emissive texture over ToyCar's body would be.
-            Material {
-                name: "body".into(),
-                kd: [0.5, 0.2, 0.15],
-                ke: [4.0, 2.0, 1.0],
-                glossy: None,
-            },
+            Material::emitter("body", [0.5, 0.2, 0.15], [4.0, 2.0, 1.0]),
         ],
         camera: Camera {
             eye,

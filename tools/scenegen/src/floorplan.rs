@@ -220,36 +220,11 @@ pub fn generate(params: Params) -> Scene {
 /// The walls', floors', ceilings' and lights' materials.
 pub(crate) fn materials() -> Vec<Material> {
     vec![
-        Material {
-            name: "wall".into(),
-            kd: [0.7, 0.68, 0.65],
-            ke: [0.0; 3],
-            glossy: None,
-        },
-        Material {
-            name: "floor".into(),
-            kd: [0.45, 0.35, 0.25],
-            ke: [0.0; 3],
-            glossy: None,
-        },
-        Material {
-            name: "threshold".into(),
-            kd: [0.45, 0.35, 0.25],
-            ke: [0.0; 3],
-            glossy: None,
-        },
-        Material {
-            name: "ceiling".into(),
-            kd: [0.8, 0.8, 0.8],
-            ke: [0.0; 3],
-            glossy: None,
-        },
-        Material {
-            name: "light".into(),
-            kd: [0.78, 0.78, 0.78],
-            ke: [10.0, 10.0, 10.0],
-            glossy: None,
-        },
+        Material::diffuse("wall", [0.7, 0.68, 0.65]),
+        Material::diffuse("floor", [0.45, 0.35, 0.25]),
+        Material::diffuse("threshold", [0.45, 0.35, 0.25]),
+        Material::diffuse("ceiling", [0.8, 0.8, 0.8]),
+        Material::emitter("light", [0.78, 0.78, 0.78], [10.0, 10.0, 10.0]),
     ]
 }
 

@@ -155,12 +155,7 @@ pub fn generate(params: Params) -> Scene {
         ("metal", [0.3, 0.3, 0.32]),
         ("seat", [0.2, 0.25, 0.5]),
     ] {
-        materials.push(Material {
-            name: name.into(),
-            kd,
-            ke: [0.0; 3],
-            glossy: None,
-        });
+        materials.push(Material::diffuse(name, kd));
     }
     let n = params.rooms;
     Scene {

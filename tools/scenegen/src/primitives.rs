@@ -51,6 +51,19 @@ impl BoxSpec {
     }
 }
 
+/// Starts object "room" of material "wall" and adds to it a closed box from
+/// the origin to `size`, its faces inward: the room the emissive-body and
+/// spheres-room families stand in.
+pub fn add_box_room(mesh: &mut Mesh, size: [f64; 3]) {
+    mesh.begin_object("room", "wall", Closure::Inward);
+    let room = BoxSpec {
+        min: [0.0; 3],
+        max: size,
+        divisions: [1, 1, 1],
+    };
+    add_box(mesh, &room, &Placement::IDENTITY, Closure::Inward);
+}
+
 /// Adds `spec` as a closed box to the current object. `closure` Outward faces
 /// its triangles out of the solid (a block, a wall slab), Inward into it (a room).
 pub fn add_box(mesh: &mut Mesh, spec: &BoxSpec, placement: &Placement, closure: Closure) {

@@ -30,6 +30,24 @@ pub struct Material {
     pub glossy: Option<Glossy>,
 }
 
+impl Material {
+    /// A diffuse reflector of reflectance `kd`, as every family's surfaces
+    /// are unless `--glossy` names them.
+    pub fn diffuse(name: &str, kd: [f64; 3]) -> Material {
+        Material::emitter(name, kd, [0.0; 3])
+    }
+
+    /// A diffuse surface of reflectance `kd` that emits radiance `ke`.
+    pub fn emitter(name: &str, kd: [f64; 3], ke: [f64; 3]) -> Material {
+        Material {
+            name: name.into(),
+            kd,
+            ke,
+            glossy: None,
+        }
+    }
+}
+
 /// A material's glossy part as the MTL states it: the solver's
 /// `--mode directional` reflects Ks into a lobe of RMS slope
 /// α = √(2 / (Ns + 2)) (docs/guide.md, "Glossy surfaces").

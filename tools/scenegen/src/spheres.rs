@@ -7,8 +7,8 @@
 
 use crate::mesh::{Closure, Mesh};
 use crate::primitives::{
-    add_box, add_cylinder, add_horizontal_rect, add_sphere, cylinder_triangle_count,
-    sphere_triangle_count, BoxSpec, Placement,
+    add_box_room, add_cylinder, add_horizontal_rect, add_sphere, cylinder_triangle_count,
+    sphere_triangle_count,
 };
 use crate::scene::{Camera, Lights, Material, Scene};
 
@@ -63,13 +63,7 @@ impl Params {
 
 pub fn generate(params: Params) -> Scene {
     let mut mesh = Mesh::default();
-    mesh.begin_object("room", "wall", Closure::Inward);
-    let room = BoxSpec {
-        min: [0.0; 3],
-        max: ROOM,
-        divisions: [1, 1, 1],
-    };
-    add_box(&mut mesh, &room, &Placement::IDENTITY, Closure::Inward);
+    add_box_room(&mut mesh, ROOM);
     // 1 mm below the ceiling, facing down (as the Cornell light is lowered).
     mesh.begin_object("light", "light", Closure::Open);
     let (lo, hi) = (0.5 * (ROOM[0] - LIGHT_SIDE), 0.5 * (ROOM[0] + LIGHT_SIDE));
@@ -109,10 +103,10 @@ pub fn generate(params: Params) -> Scene {
         ),
         mesh,
         materials: vec![
-            Material { name: "wall".into(), kd: [0.7, 0.68, 0.65], ke: [0.0; 3], glossy: None },
-            Material { name: "sphere".into(), kd: [0.7, 0.3, 0.2], ke: [0.0; 3], glossy: None },
-            Material { name: "cylinder".into(), kd: [0.2, 0.4, 0.7], ke: [0.0; 3], glossy: None },
-            Material { name: "light".into(), kd: [0.78, 0.78, 0.78], ke: [10.0, 10.0, 10.0], glossy: None },
+            Material::diffuse("wall", [0.7, 0.68, 0.65]),
+            Material::diffuse("sphere", [0.7, 0.3, 0.2]),
+            Material::diffuse("cylinder", [0.2, 0.4, 0.7]),
+            Material::emitter("light", [0.78, 0.78, 0.78], [10.0, 10.0, 10.0]),
         ],
         // Inside, near the z = 0 wall at eye height, looking across the room.
         camera: Camera {

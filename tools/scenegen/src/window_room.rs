@@ -165,12 +165,6 @@ pub fn generate(params: Params) -> Scene {
         };
         add_box(&mut mesh, &spec, &placement, Closure::Outward);
     }
-    let material = |name: &str, kd| Material {
-        name: name.into(),
-        kd,
-        ke: [0.0; 3],
-        glossy: None,
-    };
     let bearing = SUN_BEARING_DEG.to_radians();
     Scene {
         description: format!(
@@ -179,9 +173,9 @@ pub fn generate(params: Params) -> Scene {
         ),
         mesh,
         materials: vec![
-            material("white", [0.725, 0.71, 0.68]),
-            material("red", [0.63, 0.065, 0.05]),
-            material("green", [0.14, 0.45, 0.091]),
+            Material::diffuse("white", [0.725, 0.71, 0.68]),
+            Material::diffuse("red", [0.63, 0.065, 0.05]),
+            Material::diffuse("green", [0.14, 0.45, 0.091]),
         ],
         // By the front wall at eye height, looking at the window and the sun
         // patch below it.

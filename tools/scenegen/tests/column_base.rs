@@ -43,18 +43,12 @@ fn scene() -> Scene {
         56,
         13,
     );
-    let material = |name: &str, kd| Material {
-        name: name.into(),
-        kd,
-        ke: [0.0; 3],
-        glossy: None,
-    };
     Scene {
         description: "one column on a floor in the sun (column-base leak test)".into(),
         mesh,
         materials: vec![
-            material("floor", FLOOR_KD),
-            material("column", [0.65, 0.62, 0.56]),
+            Material::diffuse("floor", FLOOR_KD),
+            Material::diffuse("column", [0.65, 0.62, 0.56]),
         ],
         camera: Camera {
             eye: [17_500.0, 3_000.0, 9_000.0],
