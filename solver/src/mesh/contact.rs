@@ -667,10 +667,10 @@ fn silhouette(hull: &[DVec2], c: DVec2, d: DVec2, tol: f64) -> bool {
 /// (within `eps`; the line's other half, toward the light, is no shadow's
 /// edge).
 fn ray_enters(part: &[DVec2], c: DVec2, d: DVec2, eps: f64) -> bool {
-    let side: Vec<f64> = part.iter().map(|&v| d.perp_dot(v - c)).collect();
-    let (lo, hi) = side
-        .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &s| {
+    let side = |i: usize| d.perp_dot(part[i] - c);
+    let (lo, hi) = (0..part.len())
+        .map(side)
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), s| {
             (lo.min(s), hi.max(s))
         });
     if !(lo < -eps && hi > eps) {
@@ -679,7 +679,7 @@ fn ray_enters(part: &[DVec2], c: DVec2, d: DVec2, eps: f64) -> bool {
     // Where the line crosses the part's edges, as distances along it.
     let crossings = (0..part.len()).filter_map(|i| {
         let j = (i + 1) % part.len();
-        let (a, b) = (side[i], side[j]);
+        let (a, b) = (side(i), side(j));
         ((a < 0.0) != (b < 0.0)).then(|| (part[i] + (part[j] - part[i]) * (a / (a - b)) - c).dot(d))
     });
     crossings.fold(f64::INFINITY, f64::min) >= -eps
