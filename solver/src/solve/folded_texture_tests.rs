@@ -8,7 +8,6 @@ use super::tests::{material, scene_of};
 use super::two_slot_tests::{checker, map_each_face_once};
 use super::*;
 use crate::reference::{Physics, RenderScene};
-use crate::settings::Preset;
 
 /// The closed unit cube, every face a metal (Kd 0, Ks 0.9: its flat fold is
 /// 0.9) emitting Le = 1, whose per-texel fold is a checkerboard of mean m;
@@ -30,11 +29,7 @@ fn a_furnace_of_folded_metal_reflects_the_folds_mean() {
     // would give 10. Tolerance as the two-slot furnace's (1%, threshold
     // 0.002). Measured at commit time: see the printed line.
     let (scene, m) = furnace();
-    let mut settings = SolverSettings::preset(Preset::Draft);
-    settings.samples = 4;
-    settings.threshold = 0.002;
-    settings.max_shots = 100_000;
-    settings.ambient = false;
+    let settings = super::physics_tests::furnace_settings(0.002);
     let mut solver = Solver::new(&scene, &settings).unwrap();
     while solver.step().is_some() {}
     let exact = 1.0 / (1.0 - m);

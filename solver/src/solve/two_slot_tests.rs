@@ -37,11 +37,7 @@ fn a_furnace_of_emitters_with_both_textures_reflects_the_diffuse_textures_mean()
     // A solve reflecting the flat Kd 1 instead would diverge (1/(1 − 1)).
     // Measured at commit time: worst vertex 2.5e-3.
     let (scene, m, m_e) = furnace();
-    let mut settings = SolverSettings::preset(Preset::Draft);
-    settings.samples = 4;
-    settings.threshold = 0.002;
-    settings.max_shots = 100_000;
-    settings.ambient = false;
+    let settings = super::physics_tests::furnace_settings(0.002);
     let mut solver = Solver::new(&scene, &settings).unwrap();
     while solver.step().is_some() {}
     let exact = 2.0 * m_e / (1.0 - m);
