@@ -20,10 +20,9 @@
 //! that could receive differently; vertices that refinement adds later
 //! receive on their own. The pieces of a polygon cut along contact lines
 //! (`mesh::contact`), which share their seams as a smooth surface does, are
-//! left alone ([`contact_pieces`]): their seam points come from separate
-//! clipping arithmetic, so which of them agree to the bit is an accident of
-//! rounding (the Cornell box's solves are unchanged, and stay the same when
-//! the scene is moved).
+//! left alone: their seam points come from separate clipping arithmetic, so
+//! which of them agree to the bit is an accident of rounding (the Cornell
+//! box's solves are unchanged, and stay the same when the scene is moved).
 //!
 //! Directional mode builds none: its coefficients live in each polygon's
 //! frame (`directional.rs`).
@@ -43,20 +42,6 @@ pub struct Twins {
     copies: usize,
 }
 
-/// Per surface of `mesh`, whether it is one of the pieces that a contact
-/// cut (`mesh::contact`) made of its input polygon.
-fn contact_pieces(mesh: &Mesh) -> Vec<bool> {
-    // Per input polygon, how many surfaces it became.
-    let mut pieces: std::collections::HashMap<usize, u32> = Default::default();
-    for surface in &mesh.surfaces {
-        *pieces.entry(surface.polygon).or_default() += 1;
-    }
-    mesh.surfaces
-        .iter()
-        .map(|s| pieces[&s.polygon] > 1)
-        .collect()
-}
-
 impl Twins {
     /// The copies among `mesh`'s vertices (see the module documentation);
     /// `hidden[v]` is vertex `v`'s hiddenness.
@@ -71,11 +56,16 @@ impl Twins {
                 hidden.get(v as usize).copied().unwrap_or(false),
             )
         };
-        let piece = contact_pieces(mesh);
+        // Per input polygon, how many surfaces it became: more than one are
+        // the pieces of a contact cut.
+        let mut pieces: std::collections::HashMap<usize, u32> = Default::default();
+        for surface in &mesh.surfaces {
+            *pieces.entry(surface.polygon).or_default() += 1;
+        }
         let mut smooth: Vec<u32> = (0..mesh.vertices.len() as u32)
             .filter(|&v| {
-                let s = mesh.vertices[v as usize].surface as usize;
-                mesh.surfaces[s].corner_normals.is_some() && !piece[s]
+                let surface = &mesh.surfaces[mesh.vertices[v as usize].surface as usize];
+                surface.corner_normals.is_some() && pieces[&surface.polygon] == 1
             })
             .collect();
         // Ties by id, so each run starts at its lowest vertex.
