@@ -113,8 +113,8 @@ settings_patch! {
             long_help = "What shoots in one pass. grouped (every preset): a bright patch and \
                 its bright neighbours together, each receiver's rays shared among them \
                 by importance, far fewer passes where many small patches are lit; \
-                patch: one patch per shot, as Remington (1992). In directional mode \
-                glossy sources and emitters' first shots shoot alone \
+                patch: one patch per shot, as Remington (1992). Emitters' first \
+                shots shoot alone in directional mode \
                 (docs/lab/grouped-shooters.md, docs/lab/glossy-grouped-shooters.md).",
             hide_possible_values = true
         )]

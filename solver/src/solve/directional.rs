@@ -475,6 +475,17 @@ impl Directional {
         self.shot_sum(mesh, p).iter().any(|&c| c != 0.0)
     }
 
+    /// The radiance a source of order `order` with unshot SH `coefficients`
+    /// shoots as, for its weight in a group: c₀₀ · Y₀₀ at order 0, else
+    /// [`Self::hemisphere_equivalent`].
+    fn source_radiance(&self, order: u32, coefficients: &[f64]) -> DVec3 {
+        if order == 0 {
+            DVec3::from_slice(&coefficients[..3]) * solution::sh::Y00
+        } else {
+            self.hemisphere_equivalent(order, coefficients)
+        }
+    }
+
     /// Unshot radiance equivalent to the upper-hemisphere power of
     /// `coefficients` (order `order`), per channel:
     /// Σ_l c_l0 ∫_{upper} Y_l0 cosθ dω / π (design notes, "Progressive

@@ -143,6 +143,7 @@ use super::Solver;
 use crate::geometry::formfactor::SourcePolygon;
 use crate::geometry::polygon::clip_to_halfspace;
 use crate::geometry::sampling::{stream_id, Rng};
+use crate::geometry::solid_angle::stratified_solid_angle_points;
 use crate::geometry::visibility::Occluder;
 use crate::mesh::Mesh;
 use glam::DVec3;
@@ -188,6 +189,8 @@ pub const FAR: f64 = 10.0;
 
 /// One patch of a group.
 pub struct Member {
+    /// The patch it is (or is a quadrant of).
+    patch: u32,
     surface: u32,
     corners: [DVec3; 4],
     corner_count: usize,
@@ -207,17 +210,26 @@ pub struct Member {
     /// U_p / |U_p|: what one ray that reaches the member carries, per unit
     /// of the receiver's total weight.
     colour: DVec3,
+    /// See [`Piece::by_solid_angle`].
+    by_solid_angle: bool,
 }
 
 /// A polygon that shoots in a group: a whole patch, or one quadrant of an
 /// unevenly lit one (`regions.rs`), with its own unshot radiance.
 #[derive(Clone, Copy, Debug)]
 pub struct Piece {
+    /// The patch it is (or is a quadrant of).
+    pub patch: u32,
     pub surface: u32,
     pub corners: [DVec3; 4],
     pub corner_count: usize,
     pub area: f64,
     pub unshot: DVec3,
+    /// Whether its rays go to points uniform in the solid angle it subtends
+    /// rather than in its area: a source whose radiance depends on direction
+    /// (`directional/group.rs`), where the kernel's weighting within it
+    /// matters.
+    pub by_solid_angle: bool,
 }
 
 impl Piece {
@@ -225,11 +237,13 @@ impl Piece {
     pub fn whole(mesh: &Mesh, patch: u32, unshot: DVec3) -> Piece {
         let p = &mesh.patches[patch as usize];
         Piece {
+            patch,
             surface: p.surface,
             corners: p.corners,
             corner_count: p.corner_count as usize,
             area: p.area,
             unshot,
+            by_solid_angle: false,
         }
     }
 }
@@ -255,6 +269,7 @@ impl Member {
             if polygon.len() > 3 { fan_area(2) } else { 0.0 },
         ];
         Member {
+            patch: piece.patch,
             surface: piece.surface,
             corners: piece.corners,
             corner_count: piece.corner_count,
@@ -267,6 +282,7 @@ impl Member {
             fan_total: (1..polygon.len() - 1).map(fan_area).sum(),
             unshot,
             colour: if sum > 0.0 { unshot / sum } else { DVec3::ZERO },
+            by_solid_angle: piece.by_solid_angle,
         }
     }
 
@@ -284,6 +300,11 @@ impl Member {
 
     pub(super) fn surface(&self) -> u32 {
         self.surface
+    }
+
+    /// The patch it is (or is a quadrant of).
+    pub(super) fn patch(&self) -> u32 {
+        self.patch
     }
 
     pub(super) fn area(&self) -> f64 {
@@ -348,6 +369,36 @@ impl Member {
         } else {
             0.0
         }
+    }
+
+    /// A point of the part of the member in front of the ray origin's
+    /// tangent plane (`origin`, ε above the receiving point, normal `n`),
+    /// uniform in the solid angle it subtends from the origin
+    /// (one stratum of `stratified_solid_angle_points`), and the ray's
+    /// factor cos θ · Ω / (π F̂) against the member's unoccluded factor
+    /// `factor` F̂ (its weight's): its mean over such points is 1, since
+    /// ∫ cos θ dω = π F̂, so a ray weighted by it and by the source's
+    /// radiance toward it estimates the kernel-weighted mean of that
+    /// radiance without bias. `None` when the part subtends no solid angle.
+    fn solid_angle_point(
+        &self,
+        origin: DVec3,
+        n: DVec3,
+        factor: f64,
+        rng: &mut Rng,
+        clipped: &mut Vec<DVec3>,
+        point: &mut Vec<DVec3>,
+    ) -> Option<(DVec3, f64)> {
+        clip_to_halfspace(self.polygon(), origin, n, clipped);
+        if clipped.len() < 3 {
+            clipped.clear();
+            clipped.extend_from_slice(self.polygon());
+        }
+        let omega = stratified_solid_angle_points(origin, clipped, 1, rng, point);
+        let y = *point.first()?;
+        let cos = (y - origin).normalize_or_zero().dot(n).max(0.0);
+        let weight = cos * omega / (PI * factor);
+        weight.is_finite().then_some((y, weight))
     }
 
     /// A uniform point on the part of the member in front of the ray origin's
@@ -444,6 +495,11 @@ impl GroupSources {
     /// How many pieces shoot.
     pub fn len(&self) -> usize {
         self.members.len()
+    }
+
+    /// The members in tree order.
+    pub(super) fn members(&self) -> &[Member] {
+        &self.members
     }
 }
 
@@ -554,7 +610,7 @@ impl<'a> GroupShot<'a> {
             }
             _ => self.samples,
         };
-        self.draw(at, scratch, total, rays);
+        self.draw(at, scratch, total, rays, false);
         let mut sum = DVec3::ZERO;
         let mut visible = 0;
         for (&c, &f) in scratch.carried.iter().zip(scratch.flags.iter()) {
@@ -572,38 +628,51 @@ impl<'a> GroupShot<'a> {
 
     /// The incident light of the group at a receiving point ray by ray, for
     /// a receiver that reflects by direction (`directional/group.rs`):
-    /// `visit(toward, irradiance)` for each of `rays` rays that arrives,
-    /// with the unit direction from the point to the ray's end on a member
-    /// and the ΔE it carries, RGB, π · colour · W / R. With `rays` the
-    /// group's `samples`, their sum is π times [`GroupShot::receive_at`]'s
-    /// estimate before Kd (the same rays, no ray share); with shadows off
-    /// every ray arrives. Returns the visible count (out of
+    /// `visit(toward, irradiance, member)` for each of `rays` rays that
+    /// arrives, with the unit direction from the point to the ray's end on a
+    /// member, the ΔE it carries, RGB, π · colour · W / R, and that member
+    /// (tree order, [`GroupSources::members`]). With `rays` the
+    /// group's `samples` and not `by_solid_angle`, their sum is π times
+    /// [`GroupShot::receive_at`]'s estimate before Kd (the same rays, no ray
+    /// share); with shadows off every ray arrives. With `by_solid_angle`
+    /// (a glossy receiver) every member's rays go by solid angle, so that the
+    /// directions within a near member are weighted by the receiver's cosine
+    /// as a patch shot's are. Returns the visible count (out of
     /// `group_samples`, as [`GroupShot::receive_at`]'s) and the rays traced.
     pub fn visit_at(
         &self,
         at: &ReceivingPoint,
         scratch: &mut Scratch,
         rays: u32,
-        visit: &mut dyn FnMut(DVec3, DVec3),
+        by_solid_angle: bool,
+        visit: &mut dyn FnMut(DVec3, DVec3, u32),
     ) -> (u32, u32) {
         let Some((total, _)) = self.cut(at, scratch) else {
             return (0, 0);
         };
-        self.draw(at, scratch, total, rays);
+        self.draw(at, scratch, total, rays, by_solid_angle);
         let scale = PI * total / rays as f64;
+        let (members, epsilon) = (&self.sources.members, self.occluder.scene_epsilon());
         let mut visible = 0;
-        for ((&y, &c), &f) in scratch
+        for (((&y, &c), &f), &member) in scratch
             .points
             .iter()
             .zip(&scratch.carried)
             .zip(&scratch.flags)
+            .zip(&scratch.ends)
         {
             if !f {
                 continue;
             }
             visible += 1;
-            if let Some(toward) = (y - at.q).try_normalize() {
-                visit(toward, c * scale);
+            // The direction to the point on the member, not to the ray's end
+            // lifted ε off it for the visibility test: near a corner, where
+            // points by solid angle lie within a few ε of the receiving
+            // point, the lift would tilt it toward grazing (a patch shot's
+            // directions are the samples' own too).
+            let on_member = y - members[member as usize].normal * epsilon;
+            if let Some(toward) = (on_member - at.q).try_normalize() {
+                visit(toward, c * scale, member);
             }
         }
         let traced = if self.shadows { rays } else { 0 };
@@ -651,7 +720,17 @@ impl<'a> GroupShot<'a> {
     /// Draws `rays` rays over the cut (systematic sampling of its weights,
     /// total `total`) into `scratch`: each ray's end point and the colour it
     /// carries if it arrives, and whether it does (every ray, shadows off).
-    fn draw(&self, at: &ReceivingPoint, scratch: &mut Scratch, total: f64, rays: u32) {
+    /// With `by_solid_angle`, every member item's rays go by solid angle
+    /// (`Member::solid_angle_point`), not only those of members that ask for
+    /// it.
+    fn draw(
+        &self,
+        at: &ReceivingPoint,
+        scratch: &mut Scratch,
+        total: f64,
+        rays: u32,
+        by_solid_angle: bool,
+    ) {
         let ReceivingPoint { q, n, stream, .. } = *at;
         let epsilon = self.occluder.scene_epsilon();
         let Scratch {
@@ -661,12 +740,15 @@ impl<'a> GroupShot<'a> {
             weights,
             items,
             carried,
+            ends,
+            solid,
         } = scratch;
         let GroupSources { members, tree } = &*self.sources;
         let mut rng = Rng::new(self.seed, stream_id(self.index, stream as u64));
         let offset = rng.next_f64();
         points.clear();
         carried.clear();
+        ends.clear();
         let last = weights.len() - 1;
         let (mut k, mut cumulative) = (0, weights[0]);
         for i in 0..rays {
@@ -678,15 +760,25 @@ impl<'a> GroupShot<'a> {
             match items[k] {
                 Item::Member(member) => {
                     let m = &members[member as usize];
-                    let y = m.sample_point(q, n, epsilon, &mut rng, clipped);
+                    let factor = weights[k] / m.unshot.element_sum();
+                    let by_solid_angle = if m.by_solid_angle || by_solid_angle {
+                        let origin = q + n * epsilon;
+                        m.solid_angle_point(origin, n, factor, &mut rng, clipped, solid)
+                    } else {
+                        None
+                    };
+                    let (y, weight) = by_solid_angle
+                        .unwrap_or_else(|| (m.sample_point(q, n, epsilon, &mut rng, clipped), 1.0));
                     points.push(y + m.normal * epsilon);
-                    carried.push(m.colour);
+                    carried.push(m.colour * weight);
+                    ends.push(member);
                 }
                 Item::Cluster(cluster) => {
                     let ray = tree.ray(members, cluster, weights[k], q, n, &mut rng);
-                    if let Some((y, normal, colour)) = ray {
+                    if let Some((y, normal, colour, member)) = ray {
                         points.push(y + normal * epsilon);
                         carried.push(colour);
+                        ends.push(member);
                     }
                 }
             }
@@ -1012,11 +1104,13 @@ mod tests {
                 corners[3] = DVec3::ZERO;
             }
             let piece = Piece {
+                patch: 0,
                 surface: 0,
                 corners,
                 corner_count,
                 area: 1.0,
                 unshot: DVec3::ONE,
+                by_solid_angle: false,
             };
             let member = Member::of(&piece, DVec3::Z);
             let (mut a, mut b) = (Rng::new(3, 9), Rng::new(3, 9));

@@ -362,8 +362,9 @@ impl MemberTree {
     /// `weight`: a member in proportion
     /// to A_p |U_p|, a uniform point y on it, and what the ray carries if it
     /// arrives (see the module documentation): (y, the member's normal, the
-    /// colour), or `None` when y cannot light q (a sampled node's member
-    /// point behind q's horizon or facing away; it carries nothing).
+    /// colour, the member in tree order), or `None` when y cannot light q
+    /// (a sampled node's member point behind q's horizon or facing away; it
+    /// carries nothing).
     pub fn ray(
         &self,
         members: &[Member],
@@ -372,7 +373,7 @@ impl MemberTree {
         q: DVec3,
         n: DVec3,
         rng: &mut Rng,
-    ) -> Option<(DVec3, DVec3, DVec3)> {
+    ) -> Option<(DVec3, DVec3, DVec3, u32)> {
         let Cluster {
             node: cluster,
             sampled,
@@ -401,7 +402,7 @@ impl MemberTree {
             }));
             m.colour() * rescale * (m.normal().dot(d) * node.strength / node.normal_sum.dot(d))
         };
-        Some((y, m.normal(), carried))
+        Some((y, m.normal(), carried, member))
     }
 }
 
@@ -638,6 +639,7 @@ mod tests {
     /// `normal`), on its own surface, with unshot radiance `unshot`.
     fn member(corners: [DVec3; 4], normal: DVec3, unshot: DVec3, surface: u32) -> Member {
         let piece = Piece {
+            patch: surface,
             surface,
             corners,
             corner_count: 4,
@@ -645,6 +647,7 @@ mod tests {
                 .cross(corners[3] - corners[0])
                 .length(),
             unshot,
+            by_solid_angle: false,
         };
         Member::of(&piece, normal)
     }
@@ -786,7 +789,7 @@ mod tests {
         for _ in 0..draws {
             let estimate =
                 match tree.ray(&members, cluster_of(items[0]), weights[0], q, n, &mut rng) {
-                    Some((_, _, carried)) => {
+                    Some((_, _, carried, _)) => {
                         let limit = members
                             .iter()
                             .map(|m| m.colour().max_element())

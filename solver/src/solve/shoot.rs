@@ -78,6 +78,10 @@ pub struct Scratch {
     pub(super) weights: Vec<f64>,
     pub(super) items: Vec<super::group_tree::Item>,
     pub(super) carried: Vec<DVec3>,
+    /// Per ray, the member (tree order) it ends on.
+    pub(super) ends: Vec<u32>,
+    /// A point drawn by solid angle (`Member::solid_angle_point`).
+    pub(super) solid: Vec<DVec3>,
 }
 
 /// How many jittered sample sets a shot draws on its source ([`SamplePool`]).

@@ -28,7 +28,7 @@ pub(super) struct ReceivedSh {
 pub(super) struct DirScratch {
     /// The visible source samples and the buffers that find them.
     sampling: SampleScratch,
-    basis: Vec<f64>,
+    pub(super) basis: Vec<f64>,
     pub(super) lobe: LobeScratch,
     /// Per visible sample, its scale of the unshot radiance when the source
     /// shoots by quadrants ([`QuadrantScale::sample_scales`]); empty otherwise.
@@ -196,6 +196,19 @@ pub(super) fn receive_arrivals(
     })
 }
 
+/// The radiance RGB of `coefficients` (order `order`, three per
+/// coefficient) toward `local`, a unit direction in their frame; `basis` is
+/// scratch.
+pub(super) fn sh_toward(order: u32, local: DVec3, coefficients: &[f64], basis: &mut Vec<f64>) -> DVec3 {
+    basis.resize(coefficient_count(order), 0.0);
+    sh::eval_basis(order, local, basis);
+    let mut u = DVec3::ZERO;
+    for (c, y) in coefficients.chunks_exact(3).zip(basis.iter()) {
+        u += DVec3::from_slice(c) * *y;
+    }
+    u
+}
+
 /// One directional shot: the diffuse [`Shot`] (geometry, samples,
 /// visibility) and the source's unshot SH.
 pub(super) struct DirShot<'a> {
@@ -299,8 +312,6 @@ impl<'a> DirShot<'a> {
                 &mut scratch.scales,
             );
         }
-        let source_count = coefficient_count(self.source_order);
-        scratch.basis.resize(source_count, 0.0);
         let samples = std::mem::take(&mut scratch.sampling.samples);
         for (i, &(p, share)) in samples.iter().enumerate() {
             let Some(toward_source) = (p - q).try_normalize() else {
@@ -311,12 +322,7 @@ impl<'a> DirShot<'a> {
                 DVec3::from_slice(&self.unshot[..3]) * Y00
             } else {
                 let local = sh::to_local(-toward_source, self.shot.normal, self.source_tangent);
-                sh::eval_basis(self.source_order, local, &mut scratch.basis);
-                let mut u = DVec3::ZERO;
-                for (c, y) in self.unshot.chunks_exact(3).zip(&scratch.basis) {
-                    u += DVec3::from_slice(c) * *y;
-                }
-                u
+                sh_toward(self.source_order, local, self.unshot, &mut scratch.basis)
             };
             let unshot = scratch
                 .scales

@@ -73,11 +73,18 @@ impl Transport for ShShot<'_> {
     fn shoot(&mut self, s: &mut Solver, source: &Source) -> Shooting {
         let d = &mut *self.d;
         let patch = self.patch;
-        // With grouped shooters an order-0 source may take its order-0
-        // neighbours along (`group.rs`); such a shot is not recorded.
-        let members = group::take(s, d, patch, &self.unshot);
-        let (sources, taken) = members.unzip();
-        self.taken = taken.unwrap_or_default();
+        // With grouped shooters a source may take its neighbours along
+        // (`group.rs`); such a shot is not recorded.
+        let (sources, group_sh) = match group::take(s, d, patch, &self.unshot) {
+            Some((sources, sh, taken)) => {
+                self.taken = taken;
+                (Some(sources), sh)
+            }
+            None => {
+                self.taken = Vec::new();
+                (None, group::GroupSh::default())
+            }
+        };
         let alone = sources.is_none();
         let recorded = alone && s.records(patch, true, Some((d, self.unshot.len() as u64)));
         let shot = Shot::for_patch(
@@ -122,6 +129,7 @@ impl Transport for ShShot<'_> {
         let dir_shot = match &group_shot {
             Some(group) => DirSource::Group(DirGroup {
                 group,
+                sh: &group_sh,
                 tables: &tables,
                 glossy_rays: group::glossy_rays(group, &s.settings),
             }),
