@@ -70,12 +70,11 @@ pub(super) struct DirGroup<'a> {
 /// A glossy receiver traces this many times `group_samples` rays of a
 /// grouped shot, but never more than the members would alone (`samples`
 /// each; [`GroupShot::more_rays`]): its lobe is built from the rays'
-/// directions, one per ray, where a diffuse receiver needs only their sum,
-/// and a patch shot gives it `samples` directions per member. The glossy
-/// room (`config/glossy_floor.toml`, draft) against its truth from the
-/// front camera: 10.77% MARE at 16 rays a glossy receiver (1×), 6.73% at
-/// 256 (16×), 6.62% patch by patch (docs/lab/glossy-grouped-shooters.md).
-pub const GLOSSY_RAYS: u32 = 16;
+/// directions, one per ray, where a diffuse receiver needs only their sum.
+/// The glossy Cornell box at medium against its truths (standard and floor
+/// cameras, MARE): 3.68% and 6.53% at 8×, 3.65% and 6.48% at 12×, 3.62% and
+/// 6.00% at 16×, in 38, 56 and 69 s (docs/lab/glossy-grouped-shooters.md).
+pub const GLOSSY_RAYS: u32 = 8;
 
 /// The rays a glossy receiver traces of `group` (see [`GLOSSY_RAYS`]).
 pub(super) fn glossy_rays(group: &GroupShot, settings: &crate::settings::SolverSettings) -> u32 {
