@@ -10,11 +10,10 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-# 441625d: main with issue 43's grouped shooters in directional mode, which
-# changed on purpose the files of the two directional cases (the glossy box, the
-# textured box in directional mode); every diffuse case matched dbd574c, the base
-# before it (docs/lab/refactor-same-results.md, "Runs").
-base=${1:-${SAME_RESULTS_BASE:-441625d}}
+# 081e01e: main with issue 43's glossy sources grouped, which changed on purpose
+# the glossy box's file; every other case matched 441625d, the base before it
+# (docs/lab/refactor-same-results.md, "Runs").
+base=${1:-${SAME_RESULTS_BASE:-081e01e}}
 
 # Settings keys the refactor removed or renamed; they may differ or be missing.
 ignore_keys=shooting,shooting_tolerance,uniform_shooters,interpolated_glossy_splits

@@ -249,7 +249,8 @@ fn group_sh(
         if source_of[i] == ORDER_ZERO {
             source_of[i] = out.sources.len() as u32;
             let u = pieces[i].1;
-            let inverse = DVec3::from_array(u.to_array().map(|c| if c > 0.0 { 1.0 / c } else { 0.0 }));
+            let inverse =
+                DVec3::from_array(u.to_array().map(|c| if c > 0.0 { 1.0 / c } else { 0.0 }));
             out.sources.push(SourceSh {
                 order,
                 normal: surface.normal,

@@ -199,7 +199,12 @@ pub(super) fn receive_arrivals(
 /// The radiance RGB of `coefficients` (order `order`, three per
 /// coefficient) toward `local`, a unit direction in their frame; `basis` is
 /// scratch.
-pub(super) fn sh_toward(order: u32, local: DVec3, coefficients: &[f64], basis: &mut Vec<f64>) -> DVec3 {
+pub(super) fn sh_toward(
+    order: u32,
+    local: DVec3,
+    coefficients: &[f64],
+    basis: &mut Vec<f64>,
+) -> DVec3 {
     basis.resize(coefficient_count(order), 0.0);
     sh::eval_basis(order, local, basis);
     let mut u = DVec3::ZERO;
