@@ -794,9 +794,22 @@ pub fn visible_samples(
     scratch: &mut SampleScratch,
     by: SampleBy,
 ) -> (DVec3, u32, u32) {
+    let at = ReceivingPoint::of_vertex(mesh, v, s.occluder.scene_epsilon());
+    visible_samples_at(s, &at, pool, scratch, by)
+}
+
+/// [`visible_samples`] at a receiving point, its random numbers from the
+/// point's stream (a vertex's id, or a small surface's, `small.rs`).
+pub fn visible_samples_at(
+    s: &Shot,
+    at: &ReceivingPoint,
+    pool: &SamplePool,
+    scratch: &mut SampleScratch,
+    by: SampleBy,
+) -> (DVec3, u32, u32) {
     scratch.samples.clear();
     scratch.occluded.clear();
-    let (q, n) = s.receiving_point(mesh, v);
+    let (q, n, v) = (at.q, at.n, at.stream);
     if s.normal.dot(q - s.centre) < -1e-6 * s.diameter {
         return (q, 0, 0);
     }

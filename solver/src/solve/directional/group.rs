@@ -44,7 +44,7 @@
 //! recorded group's replay would need its members' SH kept). An emitter's
 //! later shots, of reflected light, group as a reflector's.
 
-use super::receive::{receive_arrivals, sh_toward, DirScratch, Tables};
+use super::receive::{receive_arrivals, sh_toward, DirScratch, Receiving, Tables};
 use super::Directional;
 use crate::mesh::Mesh;
 use crate::settings::Shooters;
@@ -82,14 +82,14 @@ pub(super) fn glossy_rays(group: &GroupShot, settings: &crate::settings::SolverS
 }
 
 impl DirGroup<'_> {
-    /// ΔL of vertex `v` as SH coefficients of its surface's order, into
-    /// `out`, the vertex's slot, which it overwrites; the visible count
-    /// (out of `group_samples`) and the rays traced.
+    /// ΔL of `who` as SH coefficients of its surface's order, into `out`,
+    /// its slot, which it overwrites; the visible count (out of
+    /// `group_samples`) and the rays traced.
     pub(super) fn receive_into(
         &self,
         mesh: &Mesh,
         kd: &[DVec3],
-        v: u32,
+        who: Receiving,
         scratch: &mut DirScratch,
         out: &mut [f64],
     ) -> (u32, u32) {
@@ -101,7 +101,7 @@ impl DirGroup<'_> {
             mesh,
             self.tables,
             kd,
-            v,
+            who,
             epsilon,
             out,
             lobe,

@@ -25,7 +25,9 @@
 
 use super::field::{DirField, SolverParts};
 use super::group::DirGroup;
-use super::receive::{receive_arrivals, DirScratch, DirShot, ReceivedSh, Reflector, Tables};
+use super::receive::{
+    receive_arrivals, DirScratch, DirShot, ReceivedSh, Receiving, Reflector, Tables,
+};
 use super::shot::{finish_shot, receive_all};
 use super::Directional;
 use crate::mesh::Mesh;
@@ -46,14 +48,14 @@ pub(in crate::solve) struct DirLights<'a> {
 }
 
 impl DirLights<'_> {
-    /// What vertex `v` receives of the lights, as SH coefficients of its
-    /// surface's order, into `out`, the vertex's slot, which it overwrites;
-    /// the visible samples and the rays traced.
+    /// What `who` receives of the lights, as SH coefficients of its
+    /// surface's order, into `out`, its slot, which it overwrites; the
+    /// visible samples and the rays traced.
     pub(super) fn receive_into(
         &self,
         mesh: &Mesh,
         kd: &[DVec3],
-        v: u32,
+        who: Receiving,
         scratch: &mut DirScratch,
         out: &mut [f64],
     ) -> (u32, u32) {
@@ -63,7 +65,7 @@ impl DirLights<'_> {
             mesh,
             self.tables,
             kd,
-            v,
+            who,
             epsilon,
             out,
             lobe,
@@ -79,7 +81,7 @@ impl DirLights<'_> {
 /// lights'.
 pub(in crate::solve) enum DirSource<'a> {
     Patch(DirShot<'a>),
-    /// A group of patches of order 0 (`directional/group.rs`).
+    /// A group of patches (`directional/group.rs`).
     Group(DirGroup<'a>),
     Lights(DirLights<'a>),
 }
@@ -112,10 +114,23 @@ impl DirSource<'_> {
         scratch: &mut DirScratch,
         out: &mut [f64],
     ) -> (u32, u32) {
+        self.receive_as(mesh, kd, Receiving::Vertex(v), scratch, out)
+    }
+
+    /// What `who` receives, into `out`, its slot, which it overwrites; the
+    /// visible samples and the rays traced.
+    pub(super) fn receive_as(
+        &self,
+        mesh: &Mesh,
+        kd: &[DVec3],
+        who: Receiving,
+        scratch: &mut DirScratch,
+        out: &mut [f64],
+    ) -> (u32, u32) {
         match self {
-            DirSource::Patch(shot) => shot.receive_into(mesh, kd, v, scratch, out),
-            DirSource::Group(group) => group.receive_into(mesh, kd, v, scratch, out),
-            DirSource::Lights(lights) => lights.receive_into(mesh, kd, v, scratch, out),
+            DirSource::Patch(shot) => shot.receive_into(mesh, kd, who, scratch, out),
+            DirSource::Group(group) => group.receive_into(mesh, kd, who, scratch, out),
+            DirSource::Lights(lights) => lights.receive_into(mesh, kd, who, scratch, out),
         }
     }
 
@@ -164,7 +179,8 @@ impl Transport for DirLightsShot<'_> {
             tables: &tables,
         })];
         let kd = &s.materials.kd;
-        let rays = receive_all(&s.mesh, kd, &mut s.field, d, &replay[0], true);
+        let field = (&mut s.field, &s.sharing.small);
+        let rays = receive_all(&s.mesh, kd, field, d, &replay[0], true);
         let shot_done = Instant::now();
         self.created_from = d.radiance.len();
         // As the diffuse lights' shot (`solve/lights.rs`): the level of the

@@ -41,7 +41,7 @@
 //! with `samples` rays. The reach shrinks with the span, so the fine splits,
 //! which are most of them, see few patches.
 
-use super::receive::{DirScratch, DirShot, Tables};
+use super::receive::{DirScratch, DirShot, Receiving, Tables};
 use super::{quadrant_scale, Directional};
 use crate::geometry::polygon::bounding_sphere;
 use crate::geometry::visibility::Occluder;
@@ -146,7 +146,8 @@ impl<'a> NearGather<'a> {
                 let mut gather = |v: u32, scale: f64, out: &mut Vec<f64>| {
                     for s in &shots {
                         got.resize(d.vertex_slot(mesh, v as usize).len(), 0.0);
-                        let (_, traced) = s.receive_into(mesh, self.kd, v, scratch, &mut got);
+                        let who = Receiving::Vertex(v);
+                        let (_, traced) = s.receive_into(mesh, self.kd, who, scratch, &mut got);
                         out.resize(got.len(), 0.0);
                         for (o, c) in out.iter_mut().zip(&got) {
                             *o += scale * c;

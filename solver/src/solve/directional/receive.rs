@@ -9,7 +9,7 @@ use crate::brdf::GlossyLobe;
 use crate::mesh::Mesh;
 use crate::solve::regions::QuadrantScale;
 use crate::solve::shoot::{
-    visible_samples, ReceivingPoint, SampleBy, SamplePool, SampleScratch, Scratch, Shot,
+    visible_samples_at, ReceivingPoint, SampleBy, SamplePool, SampleScratch, Scratch, Shot,
 };
 use glam::DVec3;
 use solution::sh::{self, coefficient_count, Y00};
@@ -71,17 +71,54 @@ impl ReceivedSh {
     }
 }
 
+/// Who receives a shot: a vertex, or a small flat surface once, at its
+/// centroid, for every vertex of it (`solve/small.rs`: one element that
+/// refinement never splits, so per-vertex samples would buy only noise).
+#[derive(Clone, Copy)]
+pub(super) enum Receiving<'a> {
+    Vertex(u32),
+    Small(&'a ReceivingPoint),
+}
+
+impl Receiving<'_> {
+    /// The surface it lies on.
+    pub(super) fn surface(&self, mesh: &Mesh) -> u32 {
+        match self {
+            Receiving::Vertex(v) => mesh.vertices[*v as usize].surface,
+            Receiving::Small(at) => at.surface,
+        }
+    }
+
+    /// Its receiving point, for an occluder of scene epsilon `epsilon`.
+    pub(super) fn point(&self, mesh: &Mesh, epsilon: f64) -> ReceivingPoint {
+        match self {
+            Receiving::Vertex(v) => ReceivingPoint::of_vertex(mesh, *v, epsilon),
+            Receiving::Small(at) => **at,
+        }
+    }
+}
+
 impl<'t> Reflector<'t> {
     pub(super) fn of_vertex(mesh: &Mesh, tables: &'t Tables, kd: &[DVec3], v: u32) -> Self {
-        let surface = mesh.vertices[v as usize].surface as usize;
+        Reflector::of(mesh, tables, kd, Receiving::Vertex(v))
+    }
+
+    /// How `who` reflects: its surface's tables, and its shading normal (a
+    /// small surface's is its facet normal).
+    pub(super) fn of(mesh: &Mesh, tables: &'t Tables, kd: &[DVec3], who: Receiving) -> Self {
+        let surface = who.surface(mesh) as usize;
         let s = &mesh.surfaces[surface];
+        let shading = match who {
+            Receiving::Vertex(v) => mesh.vertices[v as usize].normal,
+            Receiving::Small(at) => at.n,
+        };
         Reflector {
             count: coefficient_count(tables.surface_order[surface]),
             textured: tables.textured[surface],
             kd: kd[surface],
             ks: tables.ks[surface],
             lobe: tables.lobes[surface].as_deref(),
-            shading: mesh.vertices[v as usize].normal,
+            shading,
             normal: s.normal,
             tangent: s.tangent,
         }
@@ -168,29 +205,29 @@ impl<'t> Reflector<'t> {
     }
 }
 
-/// What vertex `v` reflects of the light that `arrive` hands it ray by ray
-/// at its receiving point (for an occluder of scene epsilon `epsilon`):
+/// What `who` reflects of the light that `arrive` hands it ray by ray at
+/// its receiving point (for an occluder of scene epsilon `epsilon`):
 /// `arrive(at, reflector, sink)` calls `sink(toward, ΔE)` for each arrival,
 /// the unit direction toward the light and its irradiance, RGB, and returns
-/// its visible count and rays traced. Into `out`, the vertex's slot, which
-/// it overwrites; a vertex that reflects nothing receives nothing.
+/// its visible count and rays traced. Into `out`, its slot, which it
+/// overwrites; a receiver that reflects nothing receives nothing.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn receive_arrivals(
     mesh: &Mesh,
     tables: &Tables,
     kd: &[DVec3],
-    v: u32,
+    who: Receiving,
     epsilon: f64,
     out: &mut [f64],
     lobe: &mut LobeScratch,
     arrive: impl FnOnce(&ReceivingPoint, &Reflector, &mut dyn FnMut(DVec3, DVec3)) -> (u32, u32),
 ) -> (u32, u32) {
-    let reflector = Reflector::of_vertex(mesh, tables, kd, v);
+    let reflector = Reflector::of(mesh, tables, kd, who);
     out.fill(0.0);
     if !reflector.reflects() {
         return (0, 0);
     }
-    let at = ReceivingPoint::of_vertex(mesh, v, epsilon);
+    let at = who.point(mesh, epsilon);
     arrive(&at, &reflector, &mut |toward, irradiance| {
         reflector.add(out, toward, irradiance, lobe);
     })
@@ -281,12 +318,12 @@ impl<'a> DirShot<'a> {
         &self,
         mesh: &Mesh,
         kd: &[DVec3],
-        v: u32,
+        who: Receiving,
         scratch: &mut DirScratch,
         out: &mut [f64],
     ) -> (u32, u32) {
-        let surface = mesh.vertices[v as usize].surface;
-        let reflector = Reflector::of_vertex(mesh, self.tables, kd, v);
+        let surface = who.surface(mesh);
+        let reflector = Reflector::of(mesh, self.tables, kd, who);
         out.fill(0.0);
         if surface == self.shot.source_surface || !reflector.reflects() {
             return (0, 0);
@@ -302,8 +339,9 @@ impl<'a> DirShot<'a> {
         } else {
             SampleBy::Area
         };
+        let at = who.point(mesh, self.shot.occluder.scene_epsilon());
         let (q, visible, rays) =
-            visible_samples(self.shot, mesh, v, self.pool, &mut scratch.sampling, by);
+            visible_samples_at(self.shot, &at, self.pool, &mut scratch.sampling, by);
         // A source shooting by quadrants: each sample's scale is its
         // quadrant's, times the ratio that makes their unoccluded sum exact.
         scratch.scales.clear();

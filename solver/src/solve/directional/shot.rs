@@ -7,7 +7,7 @@
 use super::field::{DirField, SolverParts};
 use super::group::{self, DirGroup};
 use super::lights::{DirLights, DirSource};
-use super::receive::{DirScratch, DirShot, Tables};
+use super::receive::{DirScratch, DirShot, Receiving, Reflector, Tables};
 use super::{quadrant_scale, Directional, SourceChoice};
 use crate::mesh::Mesh;
 use crate::solve::checkpoint::precision::round_to_kept;
@@ -16,6 +16,7 @@ use crate::solve::lights::LightShot;
 use crate::solve::pipeline::{Shooting, Source, Transport};
 use crate::solve::refine::{self, Refined};
 use crate::solve::shoot::{RecordedShot, SamplePool, Shot};
+use crate::solve::small::SmallSurfaces;
 use crate::solve::state::VertexField;
 use crate::solve::Solver;
 use glam::DVec3;
@@ -146,7 +147,7 @@ impl Transport for ShShot<'_> {
         let rays = receive_all(
             &s.mesh,
             &s.materials.kd,
-            &mut s.field,
+            (&mut s.field, &s.sharing.small),
             d,
             &dir_shot,
             recorded,
@@ -282,15 +283,18 @@ fn choose_source(s: &Solver, d: &Directional) -> u32 {
 }
 
 /// Every vertex receives `shot`; returns the rays traced. A recorded shot's
-/// coefficients also join each vertex's recorded part.
+/// coefficients also join each vertex's recorded part. A small flat
+/// surface's vertices (`small`) all take the one sample at its centroid, as
+/// in a diffuse solve (`solve/small.rs`), its rays counted once.
 pub(super) fn receive_all(
     mesh: &Mesh,
     kd: &[DVec3],
-    field: &mut VertexField,
+    (field, small): (&mut VertexField, &SmallSurfaces),
     d: &mut Directional,
     shot: &DirSource,
     recorded: bool,
 ) -> u64 {
+    let (at_small, small_rays) = receive_small(mesh, kd, small, shot);
     // Each vertex receives straight into its slot of `received`: a buffer
     // a receiver was 16 KB at order 25, allocated and freed every shot
     // (docs/lab/glossy-profile.md: 14.5% of a glossy solve in allocation
@@ -312,10 +316,17 @@ pub(super) fn receive_all(
         .into_par_iter()
         .enumerate()
         .map_init(DirScratch::default, |scratch, (v, slot)| {
-            shot.receive_into(mesh, kd, v as u32, scratch, slot)
+            match small.of(mesh.vertices[v].surface) {
+                Some(k) => {
+                    let (coefficients, visible) = &at_small[k];
+                    slot.copy_from_slice(coefficients);
+                    (*visible, 0)
+                }
+                None => shot.receive_into(mesh, kd, v as u32, scratch, slot),
+            }
         })
         .collect();
-    let mut rays = 0u64;
+    let mut rays = small_rays;
     for (v, (visible, traced)) in results.into_iter().enumerate() {
         let range = d.vertex_slot(mesh, v);
         for k in range.clone() {
@@ -336,6 +347,39 @@ pub(super) fn receive_all(
         field.received[v] = d.diffuse_proxy(surface, &d.received[range]);
     }
     rays
+}
+
+/// What each small surface receives of `shot` at its one point (`small.rs`),
+/// in the order of `small.points()`: its slot's coefficients and visible
+/// count (nothing, and no ray, for a surface with no vertex); and the rays.
+fn receive_small(
+    mesh: &Mesh,
+    kd: &[DVec3],
+    small: &SmallSurfaces,
+    shot: &DirSource,
+) -> (Vec<(Vec<f64>, u32)>, u64) {
+    let mut has_vertex = vec![false; small.points().len()];
+    for vertex in &mesh.vertices {
+        if let Some(k) = small.of(vertex.surface) {
+            has_vertex[k] = true;
+        }
+    }
+    let received: Vec<(Vec<f64>, u32, u32)> = small
+        .points()
+        .par_iter()
+        .zip(&has_vertex)
+        .map_init(DirScratch::default, |scratch, (at, &has)| {
+            let who = Receiving::Small(at);
+            let mut out = Reflector::of(mesh, shot.tables(), kd, who).zeroed();
+            if !has {
+                return (out, 0, 0);
+            }
+            let (visible, rays) = shot.receive_as(mesh, kd, who, scratch, &mut out);
+            (out, visible, rays)
+        })
+        .collect();
+    let rays = received.iter().map(|r| r.2 as u64).sum();
+    (received.into_iter().map(|(c, v, _)| (c, v)).collect(), rays)
 }
 
 /// The shot's ΔL gathered into every patch's unshot SH, as the diffuse

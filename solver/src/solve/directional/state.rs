@@ -14,7 +14,7 @@
 //! the same additions in the same order gives the same bits.
 
 use super::lights::DirLights;
-use super::receive::{DirScratch, DirShot, Tables};
+use super::receive::{DirScratch, DirShot, Receiving, Tables};
 use super::{Directional, DirectionalCheckpoint};
 use crate::solve::checkpoint::precision::kept_bits;
 use crate::solve::lights::LightShot;
@@ -113,6 +113,12 @@ impl Solver {
             tables: &tables,
         });
         let (mesh, recorded) = (&self.mesh, &self.record.shots);
+        // A small surface's vertices received at its one point (`small.rs`).
+        let small = &self.sharing.small;
+        let who = |v: u32| match small.of(mesh.vertices[v as usize].surface) {
+            Some(k) => Receiving::Small(&small.points()[k]),
+            None => Receiving::Vertex(v),
+        };
         let mut sums: Vec<Vec<f64>> = Vec::new();
         for start in (0..mesh.vertices.len()).step_by(BLOCK) {
             let end = (start + BLOCK).min(mesh.vertices.len());
@@ -124,7 +130,7 @@ impl Solver {
                         let mut sum = vec![0.0; d.vertex_slot(mesh, v as usize).len()];
                         got.resize(sum.len(), 0.0);
                         if let Some(lights) = &lights {
-                            lights.receive_into(mesh, kd, v, scratch, got);
+                            lights.receive_into(mesh, kd, who(v), scratch, got);
                             for (s, c) in sum.iter_mut().zip(got.iter()) {
                                 *s += c;
                             }
@@ -135,7 +141,7 @@ impl Solver {
                             } else {
                                 &direct[i]
                             };
-                            shot.receive_into(mesh, kd, v, scratch, got);
+                            shot.receive_into(mesh, kd, who(v), scratch, got);
                             for (s, c) in sum.iter_mut().zip(got.iter()) {
                                 *s += c;
                             }
