@@ -71,11 +71,10 @@ fn light_the_square(s: &mut Solver, by_direction: bool) -> Vec<u32> {
     lit
 }
 
-/// Every floor vertex's SH after the square's patches have shot, with
-/// `shooters`: one grouped shot, or one shot per patch. With `glossy`, the
-/// square is glossy (Kd and Ks 0.25, α 0.3) and shoots L = 1 + cos θ_s
-/// ([`light_the_square`]); else diffuse, shooting 1.
-fn floor_after_the_square_shoots(shooters: Shooters, glossy: bool) -> (Vec<Vec<f64>>, u32, Solver) {
+/// Draft in directional mode without refinement or ambient term, shooting
+/// uniformly with `shooters`, 64 samples a patch shot and 1,024 rays a
+/// grouped one: one shot's light, nothing more.
+fn one_shot_settings(shooters: Shooters) -> SolverSettings {
     let mut settings = SolverSettings::preset(Preset::Draft);
     settings.mode = SolveMode::Directional;
     settings.adaptive = false;
@@ -84,6 +83,15 @@ fn floor_after_the_square_shoots(shooters: Shooters, glossy: bool) -> (Vec<Vec<f
     settings.samples = 64;
     settings.group_samples = 1024;
     settings.shooters = shooters;
+    settings
+}
+
+/// Every floor vertex's SH after the square's patches have shot, with
+/// `shooters`: one grouped shot, or one shot per patch. With `glossy`, the
+/// square is glossy (Kd and Ks 0.25, α 0.3) and shoots L = 1 + cos θ_s
+/// ([`light_the_square`]); else diffuse, shooting 1.
+fn floor_after_the_square_shoots(shooters: Shooters, glossy: bool) -> (Vec<Vec<f64>>, u32, Solver) {
+    let settings = one_shot_settings(shooters);
     let mut scene = floor_under_a_lit_square();
     if glossy {
         scene.materials[1] = glossy_square();
@@ -235,13 +243,7 @@ fn square_irradiance(q: DVec3) -> f64 {
 /// vertex 1.14%, total −0.02%.
 #[test]
 fn a_grouped_shot_of_glossy_patches_gives_the_irradiance_of_their_directional_light() {
-    let mut settings = SolverSettings::preset(Preset::Draft);
-    settings.mode = SolveMode::Directional;
-    settings.adaptive = false;
-    settings.ambient = false;
-    settings.uniform_shooters = true;
-    settings.group_samples = 1024;
-    settings.shooters = Shooters::Grouped;
+    let settings = one_shot_settings(Shooters::Grouped);
     let mut scene = floor_under_a_lit_square();
     scene.materials[0] = material("floor", 0.5, 0.0);
     scene.materials[1] = glossy_square();
@@ -277,14 +279,7 @@ fn a_grouped_shot_of_glossy_patches_gives_the_irradiance_of_their_directional_li
 /// up) that shoots L = 1 + cos θ_s, after the square has shot with
 /// `shooters`: (height, z, exitance) in the order of the mesh.
 fn wall_on_the_square(shooters: Shooters) -> Vec<(f64, f64, f64)> {
-    let mut settings = SolverSettings::preset(Preset::Draft);
-    settings.mode = SolveMode::Directional;
-    settings.adaptive = false;
-    settings.ambient = false;
-    settings.uniform_shooters = true;
-    settings.samples = 64;
-    settings.group_samples = 1024;
-    settings.shooters = shooters;
+    let settings = one_shot_settings(shooters);
     let corners = |c: [[f64; 3]; 4]| c.map(DVec3::from_array).to_vec();
     let wall = corners([
         [-0.5, 0.0, -0.5],
