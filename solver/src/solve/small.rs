@@ -343,21 +343,6 @@ mod tests {
         for _ in 0..4 {
             resumed.step();
         }
-        for v in 0..straight.mesh.vertices.len() {
-            let (a, b) = (
-                straight.directional_vertex(v),
-                resumed.directional_vertex(v),
-            );
-            assert_eq!(
-                a.0.to_array().map(f64::to_bits),
-                b.0.to_array().map(f64::to_bits)
-            );
-            assert!(
-                a.1.iter()
-                    .zip(&b.1)
-                    .all(|(x, y)| x.to_bits() == y.to_bits()),
-                "{v}"
-            );
-        }
+        super::super::tests::assert_same_directional_bits(&straight, &resumed);
     }
 }

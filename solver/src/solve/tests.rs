@@ -428,6 +428,24 @@ fn ambient_term_matches_cohen_et_al_for_uniform_unshot() {
     );
 }
 
+/// Asserts that two directional solves hold the same bits at every vertex:
+/// its diffuse proxy and its coefficients (the resume tests).
+pub(crate) fn assert_same_directional_bits(a: &Solver, b: &Solver) {
+    for v in 0..a.mesh.vertices.len() {
+        let (x, y) = (a.directional_vertex(v), b.directional_vertex(v));
+        assert_eq!(
+            x.0.to_array().map(f64::to_bits),
+            y.0.to_array().map(f64::to_bits),
+            "{v}"
+        );
+        let same =
+            x.1.iter()
+                .zip(&y.1)
+                .all(|(p, q)| p.to_bits() == q.to_bits());
+        assert!(same && x.1.len() == y.1.len(), "vertex {v}");
+    }
+}
+
 /// A closed 4 × 2.5 × 6 room (walls facing in, Kd 0.5) with a 1 m² ceiling
 /// light facing down, re-centred by (100, 0, 0).
 pub(crate) fn closed_room(camera: Option<Camera>) -> Scene {

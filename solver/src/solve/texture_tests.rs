@@ -650,19 +650,5 @@ fn directional_textured_resume_continues_bit_for_bit() {
     }
     assert!(!straight.mesh.split_log.is_empty(), "the walls refined");
     assert_eq!(straight.mesh.split_log, resumed.mesh.split_log);
-    for v in 0..straight.mesh.vertices.len() {
-        let (a, b) = (
-            straight.directional_vertex(v),
-            resumed.directional_vertex(v),
-        );
-        assert_eq!(
-            a.0.to_array().map(f64::to_bits),
-            b.0.to_array().map(f64::to_bits)
-        );
-        assert!(a
-            .1
-            .iter()
-            .zip(&b.1)
-            .all(|(x, y)| x.to_bits() == y.to_bits()));
-    }
+    crate::solve::tests::assert_same_directional_bits(&straight, &resumed);
 }

@@ -71,6 +71,20 @@ fn light_the_square(s: &mut Solver, by_direction: bool) -> Vec<u32> {
     lit
 }
 
+/// Lights the square ([`light_the_square`]) and lets it shoot: one grouped
+/// shot, or one shot per patch, each of the square's.
+fn the_square_shoots(s: &mut Solver, shooters: Shooters, by_direction: bool) {
+    let lit = light_the_square(s, by_direction);
+    let shots = match shooters {
+        Shooters::Grouped => 1,
+        Shooters::Patch => lit.len(),
+    };
+    for _ in 0..shots {
+        let report = s.step().unwrap();
+        assert!(lit.contains(&report.source.unwrap()), "{report:?}");
+    }
+}
+
 /// Draft in directional mode without refinement or ambient term, shooting
 /// uniformly with `shooters`, 64 samples a patch shot and 1,024 rays a
 /// grouped one: one shot's light, nothing more.
@@ -97,15 +111,7 @@ fn floor_after_the_square_shoots(shooters: Shooters, glossy: bool) -> (Vec<Vec<f
         scene.materials[1] = glossy_square();
     }
     let mut s = Solver::new(&scene, &settings).unwrap();
-    let lit = light_the_square(&mut s, glossy);
-    let shots = match shooters {
-        Shooters::Grouped => 1,
-        Shooters::Patch => lit.len(),
-    };
-    for _ in 0..shots {
-        let report = s.step().unwrap();
-        assert!(lit.contains(&report.source.unwrap()), "{report:?}");
-    }
+    the_square_shoots(&mut s, shooters, glossy);
     let floor: Vec<Vec<f64>> = (0..s.mesh.vertices.len() as u32)
         .filter(|&v| s.mesh.vertices[v as usize].surface == 0)
         .map(|v| s.vertex_sh(v).unwrap().1.to_vec())
@@ -249,9 +255,7 @@ fn a_grouped_shot_of_glossy_patches_gives_the_irradiance_of_their_directional_li
     scene.materials[1] = glossy_square();
     let mut s = Solver::new(&scene, &settings).unwrap();
     assert!(s.directional().unwrap().surface_orders()[1] >= 1);
-    let lit = light_the_square(&mut s, true);
-    let report = s.step().unwrap();
-    assert!(lit.contains(&report.source.unwrap()), "{report:?}");
+    the_square_shoots(&mut s, Shooters::Grouped, true);
     let t = s.timings();
     assert_eq!((t.group_shots, t.grouped_patches), (1, 16), "{t:?}");
     let (mut worst, mut total) = (0.0f64, (0.0, 0.0));
@@ -309,14 +313,7 @@ fn wall_on_the_square(shooters: Shooters) -> Vec<(f64, f64, f64)> {
     );
     scene.polygons[0].patches = 8;
     let mut s = Solver::new(&scene, &settings).unwrap();
-    let lit = light_the_square(&mut s, true);
-    let shots = match shooters {
-        Shooters::Grouped => 1,
-        Shooters::Patch => lit.len(),
-    };
-    for _ in 0..shots {
-        s.step().unwrap();
-    }
+    the_square_shoots(&mut s, shooters, true);
     let order = s.directional().unwrap().surface_orders()[0];
     (0..s.mesh.vertices.len() as u32)
         .filter(|&v| s.mesh.vertices[v as usize].surface == 0)
